@@ -1,0 +1,37 @@
+"""camjax: disc cam design with JAX.
+
+Importing camjax turns on JAX's 64-bit mode (``jax_enable_x64``): cam geometry near the
+curvature limit needs it. Ask for float32 per call (``dtype=jnp.float32``) where speed matters
+more than the last digits; the README's "Accuracy and limits" says what that costs.
+"""
+
+import jax
+
+jax.config.update("jax_enable_x64", True)
+
+from camjax import contact, geometry, laws, loads, numerics, program  # noqa: E402
+from camjax.analysis import SceneArrays, scene_arrays  # noqa: E402
+from camjax.contact import Material, hertz_line_stress  # noqa: E402
+from camjax.laws import (  # noqa: E402
+    LAWS,
+    FourierSeries,
+    Law,
+    LawValues,
+    fourier_law,
+    get_law,
+    polynomial_law,
+    stepped_law,
+)
+from camjax.loads import FollowerTrain, Guide  # noqa: E402
+from camjax.program import Kinematics, MotionProgram, Segment, joints  # noqa: E402
+from camjax.scene import Scene, SceneError, load_scene, parse_scene  # noqa: E402
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "LAWS", "FollowerTrain", "FourierSeries", "Guide", "Kinematics", "Law", "LawValues",
+    "Material", "MotionProgram", "Scene", "SceneArrays", "SceneError", "Segment", "contact",
+    "fourier_law", "geometry", "get_law", "hertz_line_stress", "joints", "laws", "load_scene",
+    "loads", "numerics", "parse_scene", "polynomial_law", "program", "scene_arrays",
+    "stepped_law",
+]

@@ -1,0 +1,415 @@
+"""Normalized motion laws p(x), x in [0, 1], p(0) = 0, p(1) = 1 (SPEC section 1).
+
+A :class:`Law` evaluates p, p', p'', p''' (derivatives with respect to x) in closed form over
+any array of x at once. Laws are immutable, hashable and compared by identity, so a program can
+carry them as static structure through ``jax.jit``; factories are cached so that the same
+exponent list or coefficient table gives the same object (and the same compiled code).
+
+Scaling to a rise of lift h over cam angle beta (radians):
+s = h p(theta/beta), s' = h p'/beta, s'' = h p''/beta**2, s''' = h p'''/beta**3.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from fractions import Fraction
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+PI = math.pi
+
+
+class LawValues(NamedTuple):
+    """A normalized law and its derivatives, each with the shape of x."""
+
+    p: jax.Array  # displacement, 0..1
+    dp: jax.Array  # dp/dx
+    d2p: jax.Array  # d2p/dx2
+    d3p: jax.Array  # d3p/dx3
+
+
+@dataclass(frozen=True, eq=False)
+class Law:
+    """A normalized rise law.
+
+    Attributes:
+      name: registry name, or a generated description for parametric laws.
+      evaluate: x -> LawValues, pure JAX, elementwise over any shape of x in [0, 1].
+      description: one line for tables and reports.
+    """
+
+    name: str
+    evaluate: Callable[[jax.Array], LawValues] = field(repr=False)
+    description: str = ""
+
+    def __call__(self, x: jax.Array) -> LawValues:
+        return self.evaluate(jnp.asarray(x))
+
+
+# ---------------------------------------------------------------------------- trigonometric
+
+
+def _harmonic(x):
+    return LawValues(
+        0.5 * (1.0 - jnp.cos(PI * x)),
+        0.5 * PI * jnp.sin(PI * x),
+        0.5 * PI**2 * jnp.cos(PI * x),
+        -0.5 * PI**3 * jnp.sin(PI * x),
+    )
+
+
+def _cycloidal(x):
+    w = 2.0 * PI
+    return LawValues(
+        x - jnp.sin(w * x) / w,
+        1.0 - jnp.cos(w * x),
+        w * jnp.sin(w * x),
+        w**2 * jnp.cos(w * x),
+    )
+
+
+def _double_harmonic(x):
+    c1, c2 = jnp.cos(PI * x), jnp.cos(2 * PI * x)
+    s1, s2 = jnp.sin(PI * x), jnp.sin(2 * PI * x)
+    return LawValues(
+        0.5 * ((1.0 - c1) - 0.25 * (1.0 - c2)),
+        0.5 * (PI * s1 - 0.5 * PI * s2),
+        0.5 * PI**2 * (c1 - c2),
+        0.5 * PI**3 * (-s1 + 2.0 * s2),
+    )
+
+
+def _double_cycloidal(x):
+    w = 2.0 * PI
+    k = 4.0 / 3.0
+    return LawValues(
+        k * ((x - jnp.sin(w * x) / w) - 0.25 * (x - jnp.sin(2 * w * x) / (2 * w))),
+        k * ((1.0 - jnp.cos(w * x)) - 0.25 * (1.0 - jnp.cos(2 * w * x))),
+        k * (w * jnp.sin(w * x) - 0.5 * w * jnp.sin(2 * w * x)),
+        k * (w**2 * jnp.cos(w * x) - w**2 * jnp.cos(2 * w * x)),
+    )
+
+
+# ------------------------------------------------------------------------------ polynomial
+
+
+def _falling(e: int, j: int) -> int:
+    """Falling factorial [e]_j = e (e-1) ... (e-j+1)."""
+    out = 1
+    for i in range(j):
+        out *= e - i
+    return out
+
+
+def polynomial_coefficients(exponents: Sequence[int]) -> tuple[Fraction, ...]:
+    """Exact coefficients c_k of f = sum c_k x**e_k with f(1) = 1, f'(1) = ... = f^(n-1)(1) = 0.
+
+    Solves sum_k c_k [e_k]_j = delta_{j0}, j = 0..n-1 (SPEC section 1) in rational arithmetic,
+    so the coefficients carry no rounding; only their evaluation does.
+    """
+    e = [int(v) for v in exponents]
+    n = len(e)
+    if n == 0:
+        raise ValueError("exponents: need at least one exponent")
+    if sorted(set(e)) != e or e[0] < 1:
+        raise ValueError(f"exponents: {list(exponents)} must be strictly increasing integers >= 1")
+    a = [[Fraction(_falling(ek, j)) for ek in e] + [Fraction(int(j == 0))] for j in range(n)]
+    for col in range(n):  # Gauss-Jordan elimination, exact
+        piv = next((r for r in range(col, n) if a[r][col] != 0), None)
+        if piv is None:
+            raise ValueError(f"exponents: {e} give a singular boundary-condition system")
+        a[col], a[piv] = a[piv], a[col]
+        a[col] = [v / a[col][col] for v in a[col]]
+        for r in range(n):
+            if r != col and a[r][col] != 0:
+                f = a[r][col]
+                a[r] = [vr - f * vc for vr, vc in zip(a[r], a[col], strict=True)]
+    return tuple(a[j][n] for j in range(n))
+
+
+def boundary_condition_number(exponents: Sequence[int]) -> float:
+    """2-norm condition number of the boundary-condition matrix [e_k]_j (float64)."""
+    e = [int(v) for v in exponents]
+    m = np.array([[_falling(ek, j) for ek in e] for j in range(len(e))], dtype=np.float64)
+    return float(np.linalg.cond(m))
+
+
+@functools.cache
+def _polynomial_law(exponents: tuple[int, ...]) -> Law:
+    coeffs = polynomial_coefficients(exponents)
+    terms = [(float(c), e) for c, e in zip(coeffs, exponents, strict=True)]
+
+    def evaluate(x):
+        out = []
+        for k in range(4):
+            acc = jnp.zeros_like(x)
+            for c, e in terms:
+                if e - k >= 0:  # skip vanished terms: x**(negative) would be inf at x = 0
+                    acc = acc + (c * _falling(e, k)) * x ** (e - k)
+            out.append(acc)
+        return LawValues(*out)
+
+    name = "poly_" + "_".join(str(e) for e in exponents)
+    desc = " ".join(f"{'+' if c >= 0 else '-'} {abs(c)}x^{e}" for c, e in zip(coeffs, exponents))
+    return Law(name, evaluate, f"polynomial {desc}")
+
+
+def polynomial_law(exponents: Sequence[int]) -> Law:
+    """The polynomial law with the given exponents (e.g. (3, 4, 5) -> 10x^3 - 15x^4 + 6x^5)."""
+    return _polynomial_law(tuple(int(e) for e in exponents))
+
+
+# --------------------------------------------------- piecewise-sine acceleration (mod. trap/sine)
+
+
+def _piecewise_sine_law(name: str, pieces: Sequence[tuple[float, float, float, float, float]], desc):
+    """Law whose acceleration is A*(c0 + c1*sin(w*(x - x0) + phi)) on [x0, x1] for each piece.
+
+    ``pieces`` = (x0, c0, c1, w, phi). Velocity and displacement are integrated exactly piece by
+    piece (continuity at each break), and A is chosen so that p(1) = 1.
+    """
+    starts = [p[0] for p in pieces] + [1.0]
+
+    def integrate(v0, s0, c0, c1, w, phi, u):
+        v = v0 + c0 * u + c1 * (math.cos(phi) - math.cos(w * u + phi)) / w
+        s = s0 + v0 * u + c0 * u * u / 2 + c1 * (
+            u * math.cos(phi) / w - (math.sin(w * u + phi) - math.sin(phi)) / w**2
+        )
+        return v, s
+
+    v0s, s0s = [], []
+    v, s = 0.0, 0.0
+    for (x0, c0, c1, w, phi), x1 in zip(pieces, starts[1:], strict=True):
+        v0s.append(v)
+        s0s.append(s)
+        v, s = integrate(v, s, c0, c1, w, phi, x1 - x0)
+    amp = 1.0 / s  # p(1) = 1
+
+    def evaluate(x):
+        out = [jnp.zeros_like(x) for _ in range(4)]
+        for i, (x0, c0, c1, w, phi) in enumerate(pieces):
+            inside = (x >= x0) & (x < starts[i + 1]) if i < len(pieces) - 1 else x >= x0
+            u = x - x0
+            sw = jnp.sin(w * u + phi)
+            cw = jnp.cos(w * u + phi)
+            vals = (
+                amp * (s0s[i] + v0s[i] * u + c0 * u * u / 2
+                       + c1 * (u * math.cos(phi) / w - (sw - math.sin(phi)) / w**2)),
+                amp * (v0s[i] + c0 * u + c1 * (math.cos(phi) - cw) / w),
+                amp * (c0 + c1 * sw),
+                amp * c1 * w * cw,
+            )
+            out = [jnp.where(inside, val, o) for val, o in zip(vals, out, strict=True)]
+        return LawValues(*out)
+
+    return Law(name, evaluate, desc)
+
+
+_W4 = 4.0 * PI
+_MOD_TRAP = _piecewise_sine_law(
+    "modified_trapezoid",
+    [
+        (0.0, 0.0, 1.0, _W4, 0.0),  # sine blend up to +A
+        (1 / 8, 1.0, 0.0, 1.0, 0.0),  # constant +A
+        (3 / 8, 0.0, 1.0, _W4, PI / 2),  # +A -> -A through a half sine
+        (5 / 8, -1.0, 0.0, 1.0, 0.0),  # constant -A
+        (7 / 8, 0.0, 1.0, _W4, -PI / 2),  # -A -> 0
+    ],
+    "modified trapezoid: cycloidal blends on [0,1/8], [3/8,5/8], [7/8,1], constant between",
+)
+_MOD_SINE = _piecewise_sine_law(
+    "modified_sine",
+    [
+        (0.0, 0.0, 1.0, _W4, 0.0),  # quarter sine of period 1/2 up to +A
+        (1 / 8, 0.0, 1.0, _W4 / 3, PI / 2),  # +A -> -A over [1/8, 7/8], period 3/2
+        (7 / 8, 0.0, 1.0, _W4, -PI / 2),  # -A -> 0
+    ],
+    "modified sine: quarter-period sine ends, long sine in the middle",
+)
+
+
+# -------------------------------------------------------------------------------- stepped
+
+_GL_NODES, _GL_WEIGHTS = np.polynomial.legendre.leggauss(32)
+
+
+def stepped_law(half_acceleration: Callable[[jax.Array], jax.Array], name: str = "stepped") -> Law:
+    """Stepped law from a half-acceleration a_A(x) on [0, 1/2], zero at both ends (SPEC 1).
+
+    p_A = c * integral_0^x (x - t) a_A(t) dt with c chosen so that p_A(1/2) = 1/2; the second half
+    by symmetry, p(x) = 1 - p_A(1 - x). The integrals use 32-point Gauss-Legendre quadrature
+    (exact for polynomial a_A up to degree 61); the jerk is ``jax.grad`` of a_A.
+
+    ``half_acceleration`` must be a pure JAX function of a scalar. The returned law is built
+    once per call: keep and reuse it so jitted programs are not recompiled.
+    """
+    nodes = jnp.asarray((_GL_NODES + 1.0) / 2.0)  # on [0, 1]
+    weights = jnp.asarray(_GL_WEIGHTS / 2.0)
+    d_accel = jnp.vectorize(jax.grad(half_acceleration))
+    accel = jnp.vectorize(half_acceleration)
+
+    def raw(x):  # unscaled p_A, p_A' for x in [0, 1/2]
+        t = x[..., None] * nodes
+        a = accel(t)
+        vel = x * jnp.sum(weights * a, axis=-1)
+        disp = x * jnp.sum(weights * (x[..., None] - t) * a, axis=-1)
+        return disp, vel
+
+    scale = 0.5 / float(raw(jnp.asarray(0.5))[0])
+    if not math.isfinite(scale):
+        raise ValueError(f"stepped law '{name}': the half acceleration integrates to zero lift")
+
+    def evaluate(x):
+        first = x <= 0.5
+        xa = jnp.where(first, x, 1.0 - x)
+        disp, vel = raw(xa)
+        a, j = accel(xa), d_accel(xa)
+        return LawValues(
+            jnp.where(first, scale * disp, 1.0 - scale * disp),
+            scale * vel,
+            jnp.where(first, scale * a, -scale * a),
+            scale * j,
+        )
+
+    return Law(name, evaluate, f"stepped law from half acceleration {name}")
+
+
+# -------------------------------------------------------------------------------- Fourier
+
+
+@dataclass(frozen=True)
+class FourierSeries:
+    """Limited Fourier series over the whole cycle: s(t) = h0 + sum_i h_i cos(i t + phi_i).
+
+    Attributes:
+      h0: mean level (units of the motion: mm, or rad for an oscillating follower).
+      harmonics: tuple of (i, h_i, phi_i) with i >= 1, phi in radians.
+    """
+
+    h0: float
+    harmonics: tuple[tuple[int, float, float], ...]
+
+    def evaluate(self, theta: jax.Array) -> LawValues:
+        """s, ds/dtheta, d2s/dtheta2, d3s/dtheta3 at cam angles ``theta`` (rad)."""
+        theta = jnp.asarray(theta)
+        out = [jnp.full_like(theta, self.h0)] + [jnp.zeros_like(theta) for _ in range(3)]
+        for i, h, phi in self.harmonics:
+            arg = i * theta + phi
+            c, s = h * jnp.cos(arg), h * jnp.sin(arg)
+            out[0] = out[0] + c
+            out[1] = out[1] - i * s
+            out[2] = out[2] - i**2 * c
+            out[3] = out[3] + i**3 * s
+        return LawValues(*out)
+
+    @classmethod
+    def from_mapping(cls, coefficients: Mapping[str, float], phases: Mapping[str, float] | None = None):
+        """From ``{"h0": .., "h1": .., "h3": ..}`` and optional ``{"phi1": ..}`` (rad)."""
+        phases = dict(phases or {})
+        h0 = float(coefficients.get("h0", 0.0))
+        harmonics = []
+        for key, value in coefficients.items():
+            if key == "h0":
+                continue
+            if not (key.startswith("h") and key[1:].isdigit() and int(key[1:]) >= 1):
+                raise ValueError(f"coefficients: key '{key}' must be h0, h1, h2, ...")
+            i = int(key[1:])
+            harmonics.append((i, float(value), float(phases.pop(f"phi{i}", 0.0))))
+        if phases:
+            raise ValueError(f"phases: {sorted(phases)} have no matching amplitude h<i>")
+        return cls(h0, tuple(sorted(harmonics)))
+
+
+# Nominal cam of the dynamic-compensation thesis (oscillating follower, amplitudes in rad).
+THESIS_NOMINAL = FourierSeries(
+    0.2417,
+    ((1, 0.2667, 0.0), (3, -0.0254, 0.0), (5, 0.0004257, 0.0), (7, -0.00004702, 0.0),
+     (9, 0.00001073, 0.0)),
+)
+FOURIER_PRESETS: dict[str, FourierSeries] = {"thesis_nominal": THESIS_NOMINAL}
+
+
+@functools.cache
+def fourier_law(series: FourierSeries) -> Law:
+    """The rising half of a limited Fourier series, normalized to a rise law.
+
+    p(x) = (S(pi (1 + x)) - S(pi)) / (S(2 pi) - S(pi)): the series from its value at pi to its
+    value at 2 pi. For a cosine series with odd harmonics and zero phases (the thesis' nominal
+    cam), a rise of 180 deg followed by a return of 180 deg reproduces the series exactly.
+    """
+    lo = series.evaluate(jnp.asarray(PI))
+    hi = series.evaluate(jnp.asarray(2 * PI))
+    span = float(hi.p - lo.p)
+    if abs(span) < 1e-300 or not math.isfinite(span):
+        raise ValueError("coefficients: the series takes the same value at 180 and 360 deg")
+
+    def evaluate(x):
+        v = series.evaluate(PI * (1.0 + x))
+        return LawValues((v.p - lo.p) / span, PI * v.dp / span, PI**2 * v.d2p / span,
+                         PI**3 * v.d3p / span)
+
+    return Law("fourier", evaluate, f"limited Fourier series, {len(series.harmonics)} harmonics")
+
+
+# ------------------------------------------------------------------------------- registry
+
+LAWS: dict[str, Law] = {
+    "harmonic": Law("harmonic", _harmonic, "simple harmonic 1/2 (1 - cos pi x)"),
+    "cycloidal": Law("cycloidal", _cycloidal, "cycloidal x - sin(2 pi x)/(2 pi)"),
+    "double_harmonic": Law("double_harmonic", _double_harmonic,
+                           "double harmonic 1/2[(1 - cos pi x) - 1/4 (1 - cos 2 pi x)]"),
+    "double_cycloidal": Law("double_cycloidal", _double_cycloidal, "double cycloidal"),
+    "modified_trapezoid": _MOD_TRAP,
+    "modified_sine": _MOD_SINE,
+}
+for _exps in [(3, 4), (4, 5), (3, 4, 5), (4, 5, 6), (3, 4, 5, 6), (4, 5, 6, 7)]:
+    LAWS[polynomial_law(_exps).name] = polynomial_law(_exps)
+
+
+def get_law(name: str) -> Law:
+    """The registered law called ``name``; ValueError naming the allowed names otherwise."""
+    try:
+        return LAWS[name]
+    except KeyError:
+        raise ValueError(f"unknown law '{name}'; allowed: {', '.join(LAWS)}") from None
+
+
+class LawSummary(NamedTuple):
+    """Peaks of a normalized law on a dense grid and its FLCD status against dwells."""
+
+    name: str
+    peak_velocity: float  # max |p'|
+    peak_accel_pos: float  # max p''
+    peak_accel_neg: float  # min p'' (negative)
+    peak_jerk: float  # max |p'''| (finite part; see end_jerk for the end values)
+    end_accel: tuple[float, float]  # p''(0), p''(1)
+    end_jerk: tuple[float, float]  # p'''(0), p'''(1)
+    flcd_against_dwells: bool  # p', p'' vanish at both ends
+    perturbation_against_dwells: bool  # p''' does not vanish at an end
+
+
+def summarize(law: Law, samples: int = 200_001, tol: float = 1e-9) -> LawSummary:
+    """Peaks of ``law`` over a grid of ``samples`` points on [0, 1] (float64 if enabled)."""
+    x = jnp.linspace(0.0, 1.0, samples)
+    v = law(x)
+    ends = law(jnp.asarray([0.0, 1.0]))
+    e_v = np.abs(np.asarray(ends.dp))
+    e_a = np.asarray(ends.d2p)
+    e_j = np.asarray(ends.d3p)
+    return LawSummary(
+        law.name,
+        float(jnp.max(jnp.abs(v.dp))),
+        float(jnp.max(v.d2p)),
+        float(jnp.min(v.d2p)),
+        float(jnp.max(jnp.abs(v.d3p))),
+        (float(e_a[0]), float(e_a[1])),
+        (float(e_j[0]), float(e_j[1])),
+        bool(np.all(e_v < tol) and np.all(np.abs(e_a) < tol)),
+        bool(np.any(np.abs(e_j) >= tol)),
+    )

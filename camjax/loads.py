@@ -1,0 +1,97 @@
+"""Kinetostatic loads on the cam and in the follower guide (SPEC section 4).
+
+SI inside: masses kg, springs N/m, lengths m, forces N, torques N m.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+
+from camjax.numerics import safe_divide
+from camjax.program import TimeKinematics
+
+
+class FollowerTrain(NamedTuple):
+    """Lumped follower train of a translating follower."""
+
+    mass_kg: float
+    spring_N_per_m: float
+    preload_mm: float  # spring compression at s = 0
+    damping_Ns_per_m: float
+    gravity_m_s2: float
+
+
+def kinetostatic_force(train: FollowerTrain, motion: TimeKinematics) -> jax.Array:
+    """Cam-follower contact force F = m y'' + c y' + k (y + x0) + m g, N (< 0: contact lost)."""
+    return (
+        train.mass_kg * motion.accel
+        + train.damping_Ns_per_m * motion.velocity
+        + train.spring_N_per_m * (motion.y + train.preload_mm * 1e-3)
+        + train.mass_kg * train.gravity_m_s2
+    )
+
+
+def cam_torque(force_N: jax.Array, motion: TimeKinematics, cam_speed_rad_s) -> jax.Array:
+    """Torque on the cam shaft from the power balance, T = F y' / omega (N m); 0 at rest."""
+    return safe_divide(force_N * motion.velocity, cam_speed_rad_s)
+
+
+def contact_margin(force_N: jax.Array) -> jax.Array:
+    """min over the cycle of the contact force (N): <= 0 means the follower jumps."""
+    return jnp.min(force_N)
+
+
+class Guide(NamedTuple):
+    """Flat-face follower stem in its guide (Chen 1982)."""
+
+    length_mm: float  # b
+    cam_friction: float  # mu0, cam / face
+    guide_friction: float  # mu, stem / guide
+    overhang_ratio: float  # xi, guide length to overhang
+
+
+class GuideReactions(NamedTuple):
+    """Per sample, N."""
+
+    cam_force: jax.Array  # F_c = b P / Gamma
+    reaction_1: jax.Array  # N1
+    reaction_2: jax.Array  # N2
+    gamma: jax.Array  # Gamma, mm (> 0 while the follower is not jammed)
+
+
+def guide_reactions(guide: Guide, load_N, contact_offset_mm) -> GuideReactions:
+    """Chen's guide reactions, as corrected in the optimal-design thesis.
+
+    Gamma = b + 2 mu a - mu mu0 b (1 + 2 xi), F_c = b P / Gamma,
+    N1 = -[a - mu0 b (1 + xi)] P / Gamma, N2 = -(a - mu0 xi b) P / Gamma.
+    Near Gamma = 0 (jamming) the forces are capped at a finite value rather than NaN.
+    """
+    b, mu0, mu, xi = guide.length_mm, guide.cam_friction, guide.guide_friction, guide.overhang_ratio
+    a = contact_offset_mm
+    gamma = b + 2.0 * mu * a - mu * mu0 * b * (1.0 + 2.0 * xi)
+    inv = safe_divide(1.0, gamma, fallback=jnp.inf)
+    inv = jnp.where(jnp.isfinite(inv), inv, jnp.finfo(jnp.result_type(inv)).max)
+    return GuideReactions(
+        b * load_N * inv,
+        -(a - mu0 * b * (1.0 + xi)) * load_N * inv,
+        -(a - mu0 * xi * b) * load_N * inv,
+        gamma,
+    )
+
+
+def jamming_limit_mm(guide: Guide) -> float:
+    """Largest contact offset (mm) on the jamming side before the stem jams in its guide.
+
+    Jamming is Gamma -> 0. With Gamma = b + 2 mu a - mu mu0 b (1 + 2 xi), Gamma > 0 holds while
+    -a < b / (2 mu) - mu0 b (1 + 2 xi) / 2: the offset a < 0 (contact on the side where friction
+    tilts the stem against the guide) is the one that can jam. The thesis prints the limit as
+    b/(2 mu) - mu0 (1 + 2 xi)/2, which is dimensionally inconsistent (a length minus a pure
+    number); the form here follows from its own corrected Gamma (README, "Physics choices").
+    """
+    b, mu0, mu, xi = guide.length_mm, guide.cam_friction, guide.guide_friction, guide.overhang_ratio
+    if mu == 0:
+        return float("inf")
+    return b / (2.0 * mu) - mu0 * b * (1.0 + 2.0 * xi) / 2.0

@@ -1,0 +1,396 @@
+"""Scenes: TOML file -> validated, immutable :class:`Scene`; decides which models are needed.
+
+Every problem is reported as one :class:`SceneError` naming the field, the value and what is
+allowed. Nothing is computed here: the scene only says what to compute.
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+from camjax.contact import Material
+from camjax.laws import FOURIER_PRESETS, LAWS, FourierSeries, fourier_law, get_law, polynomial_law
+from camjax.loads import FollowerTrain, Guide
+from camjax.program import KINDS, MotionProgram, Segment
+
+BUILTIN_SCENES = {"default": "default.toml"}
+
+
+class SceneError(ValueError):
+    """A scene that cannot be used. ``field`` is the dotted path of the offending key."""
+
+    def __init__(self, field: str, value: Any, problem: str, allowed: str | None = None,
+                 source: str | None = None):
+        self.field, self.value, self.problem, self.allowed = field, value, problem, allowed
+        self.source = source
+        where = f"{source}: " if source else ""
+        shown = "" if value is _MISSING else f" = {value!r}"
+        tail = f" (allowed: {allowed})" if allowed else ""
+        super().__init__(f"{where}{field}{shown}: {problem}{tail}")
+
+
+_MISSING = object()
+
+
+# ------------------------------------------------------------------------------ sections
+
+
+@dataclass(frozen=True)
+class MotionSpec:
+    """[motion]: cam speed, grid and program."""
+
+    rpm: float
+    samples: int
+    program: MotionProgram = field(compare=False)
+    segments: tuple[dict, ...]  # as written in the scene, for reports
+
+
+@dataclass(frozen=True)
+class FollowerSpec:
+    """[follower]: geometry and, when mass or spring is given, the lumped train for loads."""
+
+    type: str  # "flat" or "roller"
+    train: FollowerTrain | None
+    roller_radius_mm: float = 0.0
+    offset_mm: float = 0.0
+
+
+@dataclass(frozen=True)
+class ContactSpec:
+    """[contact]: Hertz line contact."""
+
+    cam_width_mm: float
+    cam: Material
+    follower: Material
+
+
+@dataclass(frozen=True)
+class DesignSpec:
+    """[design]: the optimal-design problem (SPEC 5)."""
+
+    mode: str  # "global" or "pointwise"
+    base_radius_mm: tuple[float, float]
+    face_width_mm: tuple[float, float]
+    sigma_max_MPa: float
+    alpha: float
+    gamma: float
+    solver: str = "gradient"
+    seed: int = 0
+
+
+@dataclass(frozen=True)
+class Scene:
+    """A validated scene. Optional sections are None when absent: their models are not run."""
+
+    name: str
+    motion: MotionSpec
+    follower: FollowerSpec
+    contact: ContactSpec | None = None
+    design: DesignSpec | None = None
+    guide: Guide | None = None
+
+    def needs(self) -> frozenset[str]:
+        """The models this scene requires (kinematics and geometry always)."""
+        out = {"kinematics", "geometry"}
+        if self.follower.train is not None:
+            out.add("loads")
+        if self.contact is not None:
+            out.add("contact")
+        if self.guide is not None:
+            out.add("guide")
+        if self.design is not None:
+            out.add("design")
+        return frozenset(out)
+
+
+# ------------------------------------------------------------------------------- checks
+
+
+class _Reader:
+    """Typed access to one TOML table with the dotted path of every key for messages."""
+
+    def __init__(self, table: Any, path: str, source: str | None):
+        self.path, self.source = path, source
+        if not isinstance(table, dict):
+            raise SceneError(path, table, "must be a table", source=source)
+        self.table = table
+
+    def error(self, key, value, problem, allowed=None):
+        return SceneError(f"{self.path}.{key}" if self.path else key, value, problem, allowed,
+                          self.source)
+
+    def check_keys(self, allowed: tuple[str, ...]):
+        for key in self.table:
+            if key not in allowed:
+                raise self.error(key, self.table[key], "unknown key", ", ".join(allowed))
+
+    def has(self, key):
+        return key in self.table
+
+    def number(self, key, default=_MISSING, *, low=None, high=None, low_open=False,
+               integer=False) -> float:
+        if key not in self.table:
+            if default is _MISSING:
+                raise self.error(key, _MISSING, "is required")
+            return default
+        v = self.table[key]
+        kind = "an integer" if integer else "a number"
+        if isinstance(v, bool) or not isinstance(v, int | float) or (integer and not isinstance(v, int)):
+            raise self.error(key, v, f"must be {kind}")
+        if not math.isfinite(v):
+            raise self.error(key, v, "must be finite", "finite numbers")
+        rng = f"{'>' if low_open else '>='} {low:g}" if low is not None else ""
+        if high is not None:
+            rng = f"{rng} and <= {high:g}".strip(" and") if rng else f"<= {high:g}"
+        if low is not None and (v < low or (low_open and v == low)):
+            raise self.error(key, v, "out of range", rng)
+        if high is not None and v > high:
+            raise self.error(key, v, "out of range", rng)
+        return int(v) if integer else float(v)
+
+    def choice(self, key, options, default=_MISSING) -> str:
+        if key not in self.table:
+            if default is _MISSING:
+                raise self.error(key, _MISSING, "is required", ", ".join(options))
+            return default
+        v = self.table[key]
+        if v not in options:
+            raise self.error(key, v, "is not allowed", ", ".join(options))
+        return v
+
+    def interval(self, key, default=_MISSING) -> tuple[float, float]:
+        if key not in self.table:
+            if default is _MISSING:
+                raise self.error(key, _MISSING, "is required", "[low, high]")
+            return default
+        v = self.table[key]
+        ok = (isinstance(v, list) and len(v) == 2
+              and all(isinstance(x, int | float) and not isinstance(x, bool) for x in v))
+        if not ok:
+            raise self.error(key, v, "must be a pair [low, high] of numbers")
+        lo, hi = float(v[0]), float(v[1])
+        if not (math.isfinite(lo) and math.isfinite(hi)):
+            raise self.error(key, v, "bounds must be finite")
+        if not (0 < lo <= hi):
+            raise self.error(key, v, "bounds must satisfy 0 < low <= high")
+        return lo, hi
+
+    def sub(self, key) -> _Reader:
+        return _Reader(self.table.get(key), f"{self.path}.{key}" if self.path else key, self.source)
+
+
+# ---------------------------------------------------------------------------- parsing
+
+
+def _parse_law(seg: _Reader):
+    name = seg.table.get("law")
+    if not isinstance(name, str):
+        raise seg.error("law", name, "a rise or return needs a law name",
+                        ", ".join([*LAWS, "polynomial", "fourier"]))
+    if name == "polynomial":
+        exps = seg.table.get("exponents")
+        if not (isinstance(exps, list) and exps and all(isinstance(e, int) and not isinstance(e, bool)
+                                                         for e in exps)):
+            raise seg.error("exponents", exps, "law 'polynomial' needs a list of integer exponents",
+                            "strictly increasing integers >= 1, e.g. [3, 4, 5]")
+        try:
+            return polynomial_law(exps)
+        except ValueError as exc:
+            raise seg.error("exponents", exps, str(exc).split(": ", 1)[-1]) from None
+    if name == "fourier":
+        coeffs = seg.table.get("coefficients")
+        if isinstance(coeffs, str):
+            if coeffs not in FOURIER_PRESETS:
+                raise seg.error("coefficients", coeffs, "unknown preset", ", ".join(FOURIER_PRESETS))
+            series = FOURIER_PRESETS[coeffs]
+        elif isinstance(coeffs, dict):
+            for k, v in {**coeffs, **seg.table.get("phases", {})}.items():
+                if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
+                    raise seg.error(f"coefficients.{k}", v, "must be a finite number")
+            try:
+                series = FourierSeries.from_mapping(coeffs, seg.table.get("phases"))
+                return fourier_law(series)
+            except ValueError as exc:
+                raise seg.error("coefficients", coeffs, str(exc).split(": ", 1)[-1],
+                                "{h0 = .., h1 = .., ...} with optional phases = {phi1 = ..}") from None
+        else:
+            raise seg.error("coefficients", coeffs, "law 'fourier' needs coefficients",
+                            f"a table {{h0 = .., h1 = .., ...}} or a preset: {', '.join(FOURIER_PRESETS)}")
+        return fourier_law(series)
+    for extra in ("exponents", "coefficients", "phases"):
+        if seg.has(extra):
+            raise seg.error(extra, seg.table[extra], f"only for law 'polynomial' or 'fourier', not '{name}'")
+    try:
+        return get_law(name)
+    except ValueError:
+        raise seg.error("law", name, "unknown law", ", ".join([*LAWS, "polynomial", "fourier"])) from None
+
+
+def _parse_motion(r: _Reader) -> MotionSpec:
+    r.check_keys(("rpm", "samples", "segments"))
+    rpm = r.number("rpm", low=0.0)
+    samples = r.number("samples", 360, low=1, high=10_000_000, integer=True)
+    raw = r.table.get("segments")
+    if not isinstance(raw, list) or not raw:
+        raise r.error("segments", raw if raw is not None else _MISSING, "needs a list of segments",
+                      "[{kind = 'dwell' | 'rise' | 'return', angle_deg = .., law = .., lift_mm = ..}, ...]")
+    segments = []
+    for i, item in enumerate(raw):
+        seg = _Reader(item, f"{r.path}.segments[{i}]", r.source)
+        seg.check_keys(("kind", "angle_deg", "law", "lift_mm", "exponents", "coefficients", "phases"))
+        kind = seg.choice("kind", KINDS)
+        angle = seg.number("angle_deg", low=0.0, low_open=True, high=360.0)
+        if kind == "dwell":
+            for extra in ("law", "lift_mm", "exponents", "coefficients", "phases"):
+                if seg.has(extra):
+                    raise seg.error(extra, seg.table[extra], "a dwell takes only kind and angle_deg")
+            segments.append(Segment(kind, angle))
+        else:
+            lift = seg.number("lift_mm", low=0.0, low_open=True)
+            segments.append(Segment(kind, angle, _parse_law(seg), lift))
+    try:
+        program = MotionProgram.from_segments(segments)
+    except ValueError as exc:
+        msg = str(exc)
+        fld, _, problem = msg.partition(": ")
+        total = sum(s.angle_deg for s in segments)
+        value = total if fld.endswith("angle_deg") else _MISSING
+        raise SceneError(f"{r.path}.{fld}", value, problem,
+                         "angles summing to 360" if value is not _MISSING else None, r.source) from None
+    return MotionSpec(rpm, samples, program, tuple(dict(s) for s in raw))
+
+
+def _parse_follower(r: _Reader) -> FollowerSpec:
+    r.check_keys(("type", "mass_kg", "spring_N_per_m", "preload_mm", "damping_Ns_per_m",
+                  "gravity_m_s2", "roller_radius_mm", "offset_mm"))
+    ftype = r.choice("type", ("flat", "roller"))
+    train = None
+    if r.has("mass_kg") or r.has("spring_N_per_m"):
+        train = FollowerTrain(
+            r.number("mass_kg", 0.0, low=0.0),
+            r.number("spring_N_per_m", 0.0, low=0.0),
+            r.number("preload_mm", 0.0),
+            r.number("damping_Ns_per_m", 0.0, low=0.0),
+            r.number("gravity_m_s2", 9.81),
+        )
+    else:
+        for key in ("preload_mm", "damping_Ns_per_m", "gravity_m_s2"):
+            if r.has(key):
+                raise r.error(key, r.table[key], "needs mass_kg or spring_N_per_m (loads are off)")
+    if ftype == "roller":
+        radius = r.number("roller_radius_mm", low=0.0, low_open=True)
+        offset = r.number("offset_mm", 0.0)
+        return FollowerSpec(ftype, train, radius, offset)
+    for key in ("roller_radius_mm", "offset_mm"):
+        if r.has(key):
+            raise r.error(key, r.table[key], "only for type = 'roller'")
+    return FollowerSpec(ftype, train)
+
+
+def _parse_material(r: _Reader) -> Material:
+    r.check_keys(("E_MPa", "poisson"))
+    return Material(r.number("E_MPa", low=0.0, low_open=True),
+                    r.number("poisson", low=-1.0, low_open=True, high=0.5))
+
+
+def _parse_contact(r: _Reader) -> ContactSpec:
+    r.check_keys(("cam_width_mm", "cam", "follower"))
+    return ContactSpec(r.number("cam_width_mm", low=0.0, low_open=True),
+                       _parse_material(r.sub("cam")), _parse_material(r.sub("follower")))
+
+
+def _parse_design(r: _Reader) -> DesignSpec:
+    r.check_keys(("mode", "base_radius_mm", "face_width_mm", "sigma_max_MPa", "alpha", "gamma",
+                  "solver", "seed"))
+    alpha = r.number("alpha", 1.0, low=0.0)
+    gamma = r.number("gamma", 1.0, low=0.0)
+    if alpha == 0 and gamma == 0:
+        raise r.error("alpha", 0.0, "alpha and gamma are both zero: nothing to minimize",
+                      "alpha >= 0, gamma >= 0, not both 0")
+    return DesignSpec(
+        r.choice("mode", ("global", "pointwise"), "global"),
+        r.interval("base_radius_mm"),
+        r.interval("face_width_mm"),
+        r.number("sigma_max_MPa", low=0.0, low_open=True),
+        alpha,
+        gamma,
+        r.choice("solver", ("gradient", "ga", "hybrid"), "gradient"),
+        r.number("seed", 0, low=0, integer=True),
+    )
+
+
+def _parse_guide(r: _Reader) -> Guide:
+    r.check_keys(("length_mm", "cam_friction", "guide_friction", "overhang_ratio"))
+    return Guide(r.number("length_mm", low=0.0, low_open=True), r.number("cam_friction", low=0.0),
+                 r.number("guide_friction", low=0.0), r.number("overhang_ratio", low=0.0))
+
+
+SECTIONS = ("motion", "follower", "contact", "design", "guide")
+
+
+def scene_from_dict(data: dict, name: str = "scene", source: str | None = None) -> Scene:
+    """Validate a parsed TOML document. Raises :class:`SceneError`."""
+    top = _Reader(data, "", source)
+    top.check_keys(SECTIONS)
+    if "motion" not in data:
+        raise SceneError("motion", _MISSING, "section [motion] is required", source=source)
+    if "follower" not in data:
+        raise SceneError("follower", _MISSING, "section [follower] is required", source=source)
+    motion = _parse_motion(top.sub("motion"))
+    follower = _parse_follower(top.sub("follower"))
+    contact = _parse_contact(top.sub("contact")) if "contact" in data else None
+    if contact is not None and follower.train is None:
+        raise SceneError("contact", _MISSING,
+                         "contact stress needs the follower force: give follower.mass_kg and/or "
+                         "follower.spring_N_per_m", source=source)
+    if contact is not None and follower.type != "flat":
+        raise SceneError("contact", _MISSING, "contact stress is modelled for a flat-face follower "
+                         "only", "follower.type = 'flat'", source=source)
+    design = _parse_design(top.sub("design")) if "design" in data else None
+    if design is not None:
+        if follower.type != "flat":
+            raise SceneError("design", _MISSING, "the optimal-design problem is for a flat-face "
+                             "follower", "follower.type = 'flat'", source=source)
+        if contact is None:
+            raise SceneError("design", _MISSING, "the objective needs the contact stress: add a "
+                             "[contact] section", source=source)
+    guide = _parse_guide(top.sub("guide")) if "guide" in data else None
+    if guide is not None and (follower.train is None or follower.type != "flat"):
+        raise SceneError("guide", _MISSING, "guide reactions need a flat-face follower with loads "
+                         "(follower.mass_kg and/or spring_N_per_m)", source=source)
+    return Scene(name, motion, follower, contact, design, guide)
+
+
+def parse_scene(text: str, name: str = "scene", source: str | None = None) -> Scene:
+    """Parse and validate TOML text."""
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise SceneError("toml", _MISSING, f"not valid TOML ({exc})", source=source) from None
+    return scene_from_dict(data, name, source)
+
+
+def builtin_scene_text(name: str) -> str:
+    """TOML text of a built-in scene."""
+    if name not in BUILTIN_SCENES:
+        raise SceneError("scene", name, "unknown built-in scene", ", ".join(BUILTIN_SCENES))
+    return resources.files("camjax.scenes").joinpath(BUILTIN_SCENES[name]).read_text()
+
+
+def load_scene(path_or_name: str | Path | None = None) -> Scene:
+    """Load a scene file, or a built-in scene by name (None -> the embedded default scene)."""
+    if path_or_name is None:
+        path_or_name = "default"
+    p = Path(path_or_name)
+    if str(path_or_name) in BUILTIN_SCENES and not p.is_file():
+        return parse_scene(builtin_scene_text(str(path_or_name)), str(path_or_name),
+                           f"<built-in {path_or_name}>")
+    if not p.is_file():
+        raise SceneError("scene", str(path_or_name), "no such file or built-in scene",
+                         f"a TOML file or one of {', '.join(BUILTIN_SCENES)}")
+    return parse_scene(p.read_text(), p.stem, str(p))
