@@ -1,0 +1,147 @@
+"""The ``camjax`` command line. One subcommand per job; each writes its outputs atomically.
+
+Subcommands register themselves in ``COMMANDS`` via :func:`command`: a function that adds its
+arguments to an argparse parser and returns the function that runs it.
+Bad input (scene or arguments) exits with status 2 and one message naming the field; nothing is
+written to the output folder unless the whole job succeeds.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import json
+import shutil
+import sys
+import tempfile
+from collections.abc import Callable, Iterator
+from pathlib import Path
+
+import camjax  # noqa: F401  (turns on x64 before any array is made)
+from camjax.scene import SceneError
+
+COMMANDS: dict[str, tuple[str, Callable[[argparse.ArgumentParser], Callable]]] = {}
+
+
+def command(name: str, help: str):
+    """Register a subcommand: ``setup(parser) -> run(args) -> int``."""
+
+    def deco(setup):
+        COMMANDS[name] = (help, setup)
+        return setup
+
+    return deco
+
+
+class UsageError(ValueError):
+    """Bad command-line input; the message names the option, the value and what is allowed."""
+
+
+@contextlib.contextmanager
+def staged_output(out_dir: str | Path) -> Iterator[Path]:
+    """Write into a temporary folder; move the files into ``out_dir`` only if the block succeeds."""
+    out = Path(out_dir)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(prefix=".camjax-", dir=out.parent))
+    try:
+        yield tmp
+        out.mkdir(parents=True, exist_ok=True)
+        for item in tmp.iterdir():
+            target = out / item.name
+            if target.is_dir():
+                shutil.rmtree(target)
+            shutil.move(str(item), target)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+
+
+def write_json(path: Path, data) -> None:
+    """JSON with a trailing newline; NaN/inf are refused (they would not be valid JSON)."""
+    path.write_text(json.dumps(data, indent=2, allow_nan=False) + "\n")
+
+
+def parse_float_list(option: str, text: str) -> list[float]:
+    """'1,2.5,10' -> [1.0, 2.5, 10.0], with a clear error naming the option."""
+    out = []
+    for item in text.split(","):
+        try:
+            v = float(item)
+        except ValueError:
+            raise UsageError(f"{option} = {text!r}: '{item}' is not a number "
+                             "(allowed: comma-separated numbers, e.g. 0.1,1,10)") from None
+        if v != v or v in (float("inf"), float("-inf")):
+            raise UsageError(f"{option} = {text!r}: values must be finite")
+        out.append(v)
+    return out
+
+
+# ------------------------------------------------------------------------------ commands
+
+
+@command("laws", "peak values and FLCD status of every registered motion law")
+def _setup_laws(p: argparse.ArgumentParser):
+    p.add_argument("--json", metavar="FILE", help="write the table as JSON instead of printing it")
+
+    def run(args) -> int:
+        from camjax.laws import LAWS, summarize
+
+        rows = []
+        for law in LAWS.values():
+            s = summarize(law)
+            rows.append({
+                "law": s.name,
+                "peak_velocity": s.peak_velocity,
+                "peak_accel_pos": s.peak_accel_pos,
+                "peak_accel_neg": s.peak_accel_neg,
+                "peak_jerk": s.peak_jerk,
+                "flcd_against_dwells": s.flcd_against_dwells,
+                "perturbation_against_dwells": s.perturbation_against_dwells,
+            })
+        if args.json:
+            path = Path(args.json)
+            path.parent.mkdir(parents=True, exist_ok=True)
+            write_json(path, {"normalized": True, "laws": rows})
+            print(f"wrote {path}")
+            return 0
+        head = f"{'law':20s} {'|v|max':>8s} {'+a':>9s} {'-a':>9s} {'|j|max':>9s}  FLCD  perturbation"
+        print(head)
+        print("-" * len(head))
+        for r in rows:
+            print(f"{r['law']:20s} {r['peak_velocity']:8.4f} {r['peak_accel_pos']:9.4f} "
+                  f"{r['peak_accel_neg']:9.4f} {r['peak_jerk']:9.3f}  "
+                  f"{'yes' if r['flcd_against_dwells'] else 'NO ':4s}  "
+                  f"{'yes' if r['perturbation_against_dwells'] else 'no'}")
+        print("(normalized: x in [0, 1], lift 1; FLCD and perturbation judged against dwells)")
+        return 0
+
+    return run
+
+
+# ---------------------------------------------------------------------------------- main
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="camjax", description="Disc cam design with JAX.")
+    parser.add_argument("--version", action="version", version=f"camjax {camjax.__version__}")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    for name, (help_text, setup) in COMMANDS.items():
+        p = sub.add_parser(name, help=help_text, description=help_text)
+        p.set_defaults(_run=setup(p))
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return int(args._run(args) or 0)
+    except (SceneError, UsageError) as exc:
+        print(f"camjax {args.command}: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print(f"camjax {args.command}: interrupted; nothing was written", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())
