@@ -1,5 +1,8 @@
 """Motion programs: segments over a 360 deg cycle -> s, s', s'', s''' on the angle grid (SPEC 2).
 
+A rise of lift h over beta is s = h p(x), x = (theta - start) / beta; a return is the same law
+run backwards, s = h p(1 - x) above the lower level (the course text's eq. 3.1).
+
 A :class:`MotionProgram` is a pytree: the segment kinds, angles and laws are static structure,
 the lifts are data (so ``jax.grad`` flows to them). Evaluation is one jitted call over all
 samples; the joint (FLCD) analysis uses exact one-sided limits of the laws at each joint.
@@ -142,12 +145,15 @@ def _segment_values(program: MotionProgram, i: int, x: jax.Array, base: jax.Arra
         return base + z, z, z, z
     beta = math.radians(program.angles_deg[i])
     h = program.lifts[i]
-    v = law(x)
-    sign = 1.0 if kind == "rise" else -1.0
-    p = v.p if kind == "rise" else 1.0 - v.p
-    lower = base if kind == "rise" else base - h
-    return (lower + h * p, sign * h * v.dp / beta, sign * h * v.d2p / beta**2,
-            sign * h * v.d3p / beta**3)
+    if kind == "rise":
+        v = law(x)
+        return base + h * v.p, h * v.dp / beta, h * v.d2p / beta**2, h * v.d3p / beta**3
+    # A return is the rise run backwards, g(x) = p(1 - x) (the course text's eq. 3.1). For laws
+    # antisymmetric about x = 1/2 (cycloidal, 3-4-5, ...) this equals the mirror 1 - p(x); for the
+    # others (double harmonic, 3-4, ...) only the time reversal lets a rise meet its own return
+    # without an acceleration jump.
+    v = law(1.0 - x)
+    return base - h + h * v.p, -h * v.dp / beta, h * v.d2p / beta**2, -h * v.d3p / beta**3
 
 
 def _levels(program: MotionProgram) -> list[jax.Array]:

@@ -1,0 +1,188 @@
+"""Motion laws: closed forms vs SPEC table, vs autodiff, boundary conditions, families."""
+
+import math
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from camjax.laws import (
+    LAWS,
+    THESIS_NOMINAL,
+    FourierSeries,
+    boundary_condition_number,
+    fourier_law,
+    polynomial_coefficients,
+    polynomial_law,
+    stepped_law,
+    summarize,
+)
+
+PI = math.pi
+
+# (peak |p'|, peak +p'', peak -p'', peak |p'''|) as printed in SPEC section 1, and the number of
+# significant digits printed there (the comparison tolerance is half a unit of the last digit).
+SPEC_TABLE = {
+    "harmonic": ("1.5708", "4.9348", "-4.9348", "15.503"),
+    "cycloidal": ("2", "6.2832", "-6.2832", "39.478"),
+    "double_harmonic": ("2.0405", "5.5517", "-9.8696", "42.414"),
+    "double_cycloidal": ("2.6667", "10.883", "-10.883", "105.28"),
+    "poly_3_4": ("1.7778", "4", "-12", "48"),
+    "poly_4_5": ("2.1094", "5", "-20", "120"),
+    "poly_3_4_5": ("1.875", "5.7735", "-5.7735", "60"),
+    "poly_4_5_6": ("2.0736", "5.9745", "-8.1345", "120"),
+    "poly_3_4_5_6": ("2.0736", "8.1345", "-5.9745", "120"),
+    "poly_4_5_6_7": ("2.1875", "7.5132", "-7.5132", "52.5"),
+    "modified_trapezoid": ("2.0", "4.8881", "-4.8881", "61.43"),
+    "modified_sine": ("1.76", "5.528", "-5.528", "69.5"),
+}
+
+# Exact closed-form peaks where they exist: (|p'|, +p'', -p'', |p'''|).
+CLOSED_FORM = {
+    "harmonic": (PI / 2, PI**2 / 2, -(PI**2) / 2, PI**3 / 2),
+    "cycloidal": (2.0, 2 * PI, -2 * PI, 4 * PI**2),
+    "poly_3_4": (16 / 9, 4.0, -12.0, 48.0),  # p' = 12x^2 - 12x^3 peaks at x = 2/3
+    "poly_3_4_5": (15 / 8, 10 / math.sqrt(3), -10 / math.sqrt(3), 60.0),
+    "poly_4_5_6_7": (35 / 16, None, None, 52.5),
+}
+
+
+def _half_ulp_of_print(text: str) -> float:
+    digits = text.split(".")[1] if "." in text else ""
+    return 0.5 * 10.0 ** (-len(digits)) if digits else 0.5
+
+
+@pytest.mark.parametrize("name", list(SPEC_TABLE))
+def test_peaks_match_spec_table_to_printed_digits(name):
+    s = summarize(LAWS[name])
+    got = (s.peak_velocity, s.peak_accel_pos, s.peak_accel_neg, s.peak_jerk)
+    for g, printed in zip(got, SPEC_TABLE[name], strict=True):
+        # a dense grid of 2e5 points resolves peaks to ~1e-9 relative: far below print precision
+        assert abs(g - float(printed)) <= _half_ulp_of_print(printed) + 1e-9, (name, g, printed)
+
+
+@pytest.mark.parametrize("name", list(CLOSED_FORM))
+def test_peaks_match_closed_forms(name):
+    s = summarize(LAWS[name], samples=400_001)
+    got = (s.peak_velocity, s.peak_accel_pos, s.peak_accel_neg, s.peak_jerk)
+    for g, ref in zip(got, CLOSED_FORM[name], strict=True):
+        if ref is not None:
+            # grid peak of a smooth maximum: error ~ (h/2)^2 f''/2 with h = 2.5e-6 -> < 1e-11 rel
+            assert g == pytest.approx(ref, rel=1e-9), (name, g, ref)
+
+
+@pytest.mark.parametrize("name", list(LAWS))
+def test_boundary_values(name):
+    v = LAWS[name](jnp.asarray([0.0, 1.0]))
+    np.testing.assert_allclose(v.p, [0.0, 1.0], atol=1e-14)
+    np.testing.assert_allclose(v.dp, [0.0, 0.0], atol=1e-12)
+
+
+@pytest.mark.parametrize("name", list(LAWS))
+def test_closed_form_derivatives_equal_autodiff(name):
+    law = LAWS[name]
+    # interior points away from the piecewise breaks of the modified laws (1/8, 3/8, ...)
+    x = jnp.linspace(0.0, 1.0, 97)[1:-1] + 1e-3
+
+    def comp(k):
+        return jax.vmap(jax.grad(lambda t: law(t)[k]))(x)
+
+    v = law(x)
+    for k, closed in enumerate((v.dp, v.d2p, v.d3p)):
+        ad = comp(k)
+        scale = max(1.0, float(jnp.max(jnp.abs(closed))))
+        np.testing.assert_allclose(closed, ad, rtol=0, atol=1e-10 * scale, err_msg=f"{name} order {k + 1}")
+
+
+# SPEC: harmonic violates FLCD against dwells; double harmonic violates it at its end; cycloidal
+# has a perturbation at both ends; double cycloidal and 4-5-6-7 have neither.
+FLCD_EXPECTED = {
+    "harmonic": (False, None),
+    "double_harmonic": (False, None),
+    "cycloidal": (True, True),
+    "double_cycloidal": (True, False),
+    "poly_4_5_6_7": (True, False),
+    "poly_3_4_5": (True, True),
+}
+
+
+@pytest.mark.parametrize("name", list(FLCD_EXPECTED))
+def test_flcd_statements_of_the_spec(name):
+    s = summarize(LAWS[name], samples=11)
+    flcd, pert = FLCD_EXPECTED[name]
+    assert s.flcd_against_dwells is flcd
+    if pert is not None:
+        assert s.perturbation_against_dwells is pert
+    if name == "double_harmonic":  # starts smoothly, the acceleration jumps at its end only
+        assert abs(s.end_accel[0]) < 1e-12 and s.end_accel[1] == pytest.approx(-(PI**2))
+
+
+def test_polynomial_closed_forms_from_spec():
+    # A-B-C: f = (bc/2)x^a - ac x^b + (ab/2)x^c ; A-B-C-D likewise (SPEC section 1)
+    a, b, c = 3, 4, 5
+    assert polynomial_coefficients((a, b, c)) == (b * c / 2, -a * c, a * b / 2)
+    a, b, c, d = 4, 5, 6, 7
+    ref = (b * c * d / 6, -a * c * d / 2, a * b * d / 2, -a * b * c / 6)
+    assert polynomial_coefficients((a, b, c, d)) == ref
+    # worked example 4-5-7: (35x^4 - 42x^5 + 10x^7)/3, peak p'' ~ -8.697
+    from fractions import Fraction
+
+    assert polynomial_coefficients((4, 5, 7)) == (Fraction(35, 3), Fraction(-14), Fraction(10, 3))
+    assert summarize(polynomial_law((4, 5, 7))).peak_accel_neg == pytest.approx(-8.697, abs=5e-4)
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.lists(st.integers(1, 12), min_size=1, max_size=6, unique=True))
+def test_general_polynomial_boundary_conditions(exps):
+    exps = sorted(exps)
+    law = polynomial_law(exps)
+    end = law(jnp.asarray(1.0))
+    n = len(exps)
+    # f(1) = 1 and the first n-1 derivatives vanish at 1 (up to order 3 available here)
+    assert float(end.p) == pytest.approx(1.0, abs=1e-9)
+    for k, val in enumerate((end.dp, end.d2p, end.d3p), start=1):
+        if k < n:
+            # coefficients grow like cond(system) ~ e^n; 1e-9 of the largest term bounds round-off
+            assert abs(float(val)) < 1e-9 * max(1.0, boundary_condition_number(exps))
+    assert float(law(jnp.asarray(0.0)).p) == 0.0
+
+
+def test_polynomial_rejects_bad_exponents():
+    with pytest.raises(ValueError, match="strictly increasing"):
+        polynomial_law((4, 3))
+    with pytest.raises(ValueError, match="strictly increasing"):
+        polynomial_law((0, 3))
+
+
+def test_stepped_law_matches_spec_example():
+    law = stepped_law(lambda x: x - 4 * x**3, "spec_example")
+    x = jnp.linspace(0.0, 0.5, 51)
+    v = law(x)
+    np.testing.assert_allclose(v.p, 8 / 7 * (5 * x**3 - 6 * x**5), atol=1e-14)
+    np.testing.assert_allclose(v.dp, 120 / 7 * (x**2 - 2 * x**4), atol=1e-13)
+    np.testing.assert_allclose(v.d2p, 240 / 7 * (x - 4 * x**3), atol=1e-12)
+    np.testing.assert_allclose(v.d3p, 240 / 7 * (1 - 12 * x**2), atol=1e-12)
+    # second half by symmetry: p_B(x) = 1 - p_A(1 - x), p''_B(x) = -p''_A(1 - x)
+    xb = 1.0 - x
+    vb = law(xb)
+    np.testing.assert_allclose(vb.p, 1.0 - v.p, atol=1e-14)
+    np.testing.assert_allclose(vb.d2p, -v.d2p, atol=1e-12)
+
+
+def test_fourier_preset_and_law():
+    s = THESIS_NOMINAL.evaluate(jnp.asarray([0.0, PI]))
+    # S(0) = sum of all amplitudes (cos 0 = 1), S(pi) = h0 - h1 - h3 - ... (odd harmonics)
+    amps = [h for _, h, _ in THESIS_NOMINAL.harmonics]
+    assert float(s.p[0]) == pytest.approx(0.2417 + sum(amps), abs=1e-15)
+    assert float(s.p[1]) == pytest.approx(0.2417 - sum(amps), abs=1e-15)
+    law = fourier_law(THESIS_NOMINAL)
+    x = jnp.linspace(0, 1, 11)
+    # odd-harmonic cosine series: the rising half is antisymmetric about x = 1/2
+    np.testing.assert_allclose(law(x).p + law(1 - x).p, 1.0, atol=1e-14)
+    series = FourierSeries.from_mapping({"h0": 1.0, "h2": 0.5}, {"phi2": 0.3})
+    assert series.harmonics == ((2, 0.5, 0.3),)
+    with pytest.raises(ValueError, match="phases"):
+        FourierSeries.from_mapping({"h1": 1.0}, {"phi3": 0.1})
