@@ -523,14 +523,19 @@ def jump_speed(cam: CamHarmonics, plant: Plant, closure: ForceClosure, phi: jax.
                speed_low_rad_s, speed_high_rad_s, n_grid: int = 256, n_bisect: int = 60) -> JumpSpeed:
     """Lowest speed in [low, high] where min_phi F = 0 (contact just lost).
 
-    The minimum force is not monotone in speed (resonances), so a grid of ``n_grid`` speeds
-    finds the first sign change and ``n_bisect`` bisections refine it (relative width 2^-60).
+    The minimum force is not monotone in speed (resonances), so a grid of ``n_grid`` speeds plus
+    the resonant speeds omega_n / n finds the first sign change and ``n_bisect`` bisections refine it (relative width 2^-60).
     Contact must hold at ``speed_low_rad_s``; otherwise found = False.
     """
     def fmin(w):
         return min_contact_force(cam, plant, closure, w, phi)
 
-    grid = jnp.linspace(speed_low_rad_s, speed_high_rad_s, n_grid)
+    # add the resonant speeds omega_n / n: a lightly damped window of lost contact can be far
+    # narrower than the grid spacing, and it always contains its resonance
+    wn = natural_frequency_rad_s(plant)
+    resonant = wn / jnp.arange(1, cam.cos.shape[-1], dtype=phi.dtype)
+    grid = jnp.sort(jnp.clip(jnp.concatenate([jnp.linspace(speed_low_rad_s, speed_high_rad_s, n_grid),
+                                              resonant]), speed_low_rad_s, speed_high_rad_s))
     values = jax.vmap(fmin)(grid)
     negative = values <= 0
     first = jnp.argmax(negative)

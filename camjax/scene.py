@@ -18,7 +18,7 @@ from camjax.laws import FOURIER_PRESETS, LAWS, FourierSeries, fourier_law, get_l
 from camjax.loads import FollowerTrain, Guide
 from camjax.program import KINDS, MotionProgram, Segment
 
-BUILTIN_SCENES = {"default": "default.toml"}
+BUILTIN_SCENES = {"default": "default.toml", "thesis-bench": "thesis-bench.toml"}
 
 
 class SceneError(ValueError):
@@ -83,6 +83,56 @@ class DesignSpec:
     seed: int = 0
 
 
+DYNAMICS_COMPUTE = ("compensation", "robustness", "time_domain", "drive", "nonlinear", "jump",
+                    "shaping")
+
+
+@dataclass(frozen=True)
+class DynamicsSpec:
+    """[dynamics]: follower-train dynamics (SPEC 6), SI in the units of the follower kind.
+
+    follower = "translating": motion lifts in mm (converted to m), I in kg, c in N s/m, k in N/m;
+    follower = "oscillating": motion lifts (``lift_mm``) are read as rad, I in kg m^2, c in
+    N m s/rad, k in N m/rad. Drive flexibility (I1, k01, c01) is always rotational.
+    """
+
+    follower: str  # "translating" or "oscillating"
+    I3: float  # load inertia
+    c3: float  # load damping to ground
+    k23: float  # follower-to-load stiffness
+    cam_speed_hz: float  # cam speed (from motion.rpm unless given)
+    compute: tuple[str, ...]  # subset of DYNAMICS_COMPUTE
+    I2: float = 0.0  # follower inertia (drive power balance, contact force)
+    I1: float | None = None  # cam-side inertia, kg m^2 (drive flexibility)
+    k01: float | None = None  # motor-to-cam coupling stiffness, N m/rad
+    c01: float | None = None  # coupling damping, N m s/rad
+    spring_rate: float | None = None  # force closure (jump): N/m or N m/rad
+    spring_preload: float = 0.0  # spring compression at zero follower motion, m or rad
+    follower_damping: float = 0.0  # c2 to ground on the follower
+    weight: float = 0.0  # constant load on the cam (m g, N; translating only)
+    samples: int = 720  # cam-angle grid of the dynamics
+    harmonics: int = 60  # harmonics kept from the FFT of the cam law
+    steps_per_cycle: int = 720  # RK4 steps per cam revolution
+    transient_tolerance: float = 1e-9  # time-domain runs until e^{-zeta wn t} is below this
+    max_cycles: int = 600  # cap on the simulated revolutions
+    damping_factors: tuple[float, ...] = (0.5, 0.75, 1.0, 1.5, 2.0)
+    speed_factors: tuple[float, ...] = (0.8, 0.9, 1.0, 1.1, 1.2)
+    wn_factors: tuple[float, ...] = (0.8, 0.9, 1.0, 1.1, 1.2)
+    jump_speed_range_hz: tuple[float, float] | None = None  # default: 0.05x .. 10x cam speed
+    shaping_band: tuple[float, float] = (0.9, 1.1)  # speed band, factors of the cam speed
+    shaping_harmonics: int = 15
+    shaping_steps: int = 200
+
+    @property
+    def motion_scale(self) -> float:
+        """Factor from motion-program units to SI: mm -> m (translating), rad -> rad."""
+        return 1e-3 if self.follower == "translating" else 1.0
+
+    @property
+    def has_drive(self) -> bool:
+        return self.I1 is not None
+
+
 @dataclass(frozen=True)
 class Scene:
     """A validated scene. Optional sections are None when absent: their models are not run."""
@@ -93,6 +143,7 @@ class Scene:
     contact: ContactSpec | None = None
     design: DesignSpec | None = None
     guide: Guide | None = None
+    dynamics: DynamicsSpec | None = None
 
     def needs(self) -> frozenset[str]:
         """The models this scene requires (kinematics and geometry always)."""
@@ -105,6 +156,8 @@ class Scene:
             out.add("guide")
         if self.design is not None:
             out.add("design")
+        if self.dynamics is not None:
+            out.add("dynamics")
         return frozenset(out)
 
 
@@ -330,7 +383,86 @@ def _parse_guide(r: _Reader) -> Guide:
                  r.number("guide_friction", low=0.0), r.number("overhang_ratio", low=0.0))
 
 
-SECTIONS = ("motion", "follower", "contact", "design", "guide")
+def _number_list(r: _Reader, key: str, default: tuple[float, ...]) -> tuple[float, ...]:
+    if not r.has(key):
+        return default
+    v = r.table[key]
+    ok = (isinstance(v, list) and v and all(isinstance(x, int | float) and not isinstance(x, bool)
+                                             and math.isfinite(x) and x > 0 for x in v))
+    if not ok:
+        raise r.error(key, v, "must be a non-empty list of positive numbers", "e.g. [0.9, 1.0, 1.1]")
+    return tuple(float(x) for x in v)
+
+
+def _parse_dynamics(r: _Reader, motion: MotionSpec, follower: FollowerSpec) -> DynamicsSpec:
+    r.check_keys(("follower", "I3", "c3", "k23", "I2", "I1", "k01", "c01", "cam_speed_hz", "compute",
+                  "spring_rate", "spring_preload", "follower_damping", "weight", "samples",
+                  "harmonics", "steps_per_cycle", "transient_tolerance", "max_cycles",
+                  "damping_factors", "speed_factors", "wn_factors", "jump_speed_range_hz",
+                  "shaping_band", "shaping_harmonics", "shaping_steps"))
+    kind = r.choice("follower", ("translating", "oscillating"))
+    if kind == "oscillating":
+        for i, seg in enumerate(motion.segments):
+            lift = seg.get("lift_mm", 0.0)
+            if lift > math.pi:
+                raise SceneError(f"motion.segments[{i}].lift_mm", lift, "with an oscillating follower "
+                                 "the lift is read as rad; more than half a turn is not a cam",
+                                 "lifts <= pi rad", r.source)
+    train = follower.train if kind == "translating" else None
+    default_speed = motion.rpm / 60.0
+    speed = r.number("cam_speed_hz", default_speed if default_speed > 0 else _MISSING, low=0.0,
+                     low_open=True)
+    compute = r.table.get("compute", ["compensation", "robustness", "time_domain"])
+    if not (isinstance(compute, list) and all(c in DYNAMICS_COMPUTE for c in compute)):
+        raise r.error("compute", compute, "must be a list of analyses", ", ".join(DYNAMICS_COMPUTE))
+    drive_keys = [k for k in ("I1", "k01", "c01") if r.has(k)]
+    if drive_keys and len(drive_keys) != 3:
+        raise r.error(drive_keys[0], r.table[drive_keys[0]], "drive flexibility needs all of I1, k01, c01")
+    if not drive_keys and ("drive" in compute or "nonlinear" in compute):
+        raise r.error("compute", compute, "'drive' and 'nonlinear' need the drive: give I1, k01, c01")
+    spring_default = train.spring_N_per_m if train is not None and train.spring_N_per_m > 0 else None
+    spring = r.number("spring_rate", spring_default if spring_default is not None else None, low=0.0,
+                      low_open=True)
+    if "jump" in compute and spring is None:
+        raise r.error("compute", compute, "'jump' needs a force-closure spring: give spring_rate "
+                      "(or follower.spring_N_per_m for a translating follower)")
+    samples = r.number("samples", 720, low=8, high=1_000_000, integer=True)
+    harmonics = r.number("harmonics", min(60, samples // 2 - 1), low=1, integer=True)
+    if harmonics >= samples / 2:
+        raise r.error("harmonics", harmonics, "must be below samples / 2", f"< {samples / 2:g}")
+    shaping_harmonics = r.number("shaping_harmonics", min(15, harmonics), low=1, integer=True)
+    if shaping_harmonics > harmonics:
+        raise r.error("shaping_harmonics", shaping_harmonics, "must not exceed harmonics", f"<= {harmonics}")
+    jump_range = r.interval("jump_speed_range_hz", None)
+    return DynamicsSpec(
+        kind,
+        r.number("I3", low=0.0, low_open=True),
+        r.number("c3", low=0.0),
+        r.number("k23", low=0.0, low_open=True),
+        speed,
+        tuple(dict.fromkeys(compute)),
+        r.number("I2", train.mass_kg if train is not None else 0.0, low=0.0),
+        *(r.number(k, low=0.0, low_open=(k != "c01")) if drive_keys else None for k in ("I1", "k01", "c01")),
+        spring,
+        r.number("spring_preload", train.preload_mm * 1e-3 if train is not None else 0.0),
+        r.number("follower_damping", train.damping_Ns_per_m if train is not None else 0.0, low=0.0),
+        r.number("weight", train.mass_kg * train.gravity_m_s2 if train is not None else 0.0),
+        samples,
+        harmonics,
+        r.number("steps_per_cycle", 720, low=8, high=100_000, integer=True),
+        r.number("transient_tolerance", 1e-9, low=0.0, low_open=True, high=0.5),
+        r.number("max_cycles", 600, low=2, high=100_000, integer=True),
+        _number_list(r, "damping_factors", DynamicsSpec.damping_factors),
+        _number_list(r, "speed_factors", DynamicsSpec.speed_factors),
+        _number_list(r, "wn_factors", DynamicsSpec.wn_factors),
+        jump_range,
+        r.interval("shaping_band", (0.9, 1.1)),
+        shaping_harmonics,
+        r.number("shaping_steps", 200, low=1, high=100_000, integer=True),
+    )
+
+
+SECTIONS = ("motion", "follower", "contact", "design", "guide", "dynamics")
 
 
 def scene_from_dict(data: dict, name: str = "scene", source: str | None = None) -> Scene:
@@ -363,7 +495,9 @@ def scene_from_dict(data: dict, name: str = "scene", source: str | None = None) 
     if guide is not None and (follower.train is None or follower.type != "flat"):
         raise SceneError("guide", _MISSING, "guide reactions need a flat-face follower with loads "
                          "(follower.mass_kg and/or spring_N_per_m)", source=source)
-    return Scene(name, motion, follower, contact, design, guide)
+    dynamics = (_parse_dynamics(top.sub("dynamics"), motion, follower) if "dynamics" in data
+                else None)
+    return Scene(name, motion, follower, contact, design, guide, dynamics)
 
 
 def parse_scene(text: str, name: str = "scene", source: str | None = None) -> Scene:
