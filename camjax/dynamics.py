@@ -524,7 +524,8 @@ def jump_speed(cam: CamHarmonics, plant: Plant, closure: ForceClosure, phi: jax.
     """Lowest speed in [low, high] where min_phi F = 0 (contact just lost).
 
     The minimum force is not monotone in speed (resonances), so a grid of ``n_grid`` speeds plus
-    the resonant speeds omega_n / n finds the first sign change and ``n_bisect`` bisections refine it (relative width 2^-60).
+    the resonant speeds omega_n / n finds the first sign change and ``n_bisect`` bisections
+    refine it (to a relative width 2^-60 of the grid step).
     Contact must hold at ``speed_low_rad_s``; otherwise found = False.
     """
     def fmin(w):
@@ -629,3 +630,243 @@ def shape_law(cam0: CamHarmonics, plant: Plant, speeds_rad_s: jax.Array, constra
     err = evaluate_cam(cam, constraint_phi).f - constraint_values
     return ShapingResult(cam, history, jnp.sqrt(band_tracking_ms(cam, plant, speeds_rad_s)),
                          jnp.max(jnp.abs(err)))
+
+
+# ------------------------------------------------------------------------------ scene level
+
+
+class DynamicsReport(NamedTuple):
+    """What :func:`scene_dynamics` computed: JSON-ready numbers and NumPy curves for plots."""
+
+    summary: dict  # the content of dynamics.json (floats, ints, bools, lists, None)
+    curves: dict  # name -> np.ndarray, for plots
+
+
+def plant_of(spec) -> Plant:
+    """The follower train of a :class:`~camjax.scene.DynamicsSpec`."""
+    return Plant(jnp.asarray(spec.I3), jnp.asarray(spec.c3), jnp.asarray(spec.k23))
+
+
+def drive_of(spec) -> Drive:
+    """The drive of a DynamicsSpec with drive flexibility (I1, k01, c01 given)."""
+    return Drive(jnp.asarray(spec.I1), jnp.asarray(spec.I2), jnp.asarray(spec.k01), jnp.asarray(spec.c01))
+
+
+def closure_of(spec) -> ForceClosure:
+    """The force closure of a DynamicsSpec with a spring."""
+    return ForceClosure(jnp.asarray(spec.I2), jnp.asarray(spec.spring_rate),
+                        jnp.asarray(spec.spring_preload), jnp.asarray(spec.follower_damping),
+                        jnp.asarray(spec.weight))
+
+
+def program_cam(scene, samples: int | None = None, n_harmonics: int | None = None) -> CamHarmonics:
+    """The scene's motion program as CamHarmonics in SI (m or rad), from the FFT of its samples."""
+    from camjax import program as prog
+
+    spec = scene.dynamics
+    n = spec.samples if samples is None else samples
+    kin = prog.evaluate(scene.motion.program, n)
+    return harmonics_from_samples(kin.s * spec.motion_scale, spec.harmonics if n_harmonics is None
+                                  else n_harmonics)
+
+
+def _program_values(scene, angles_rad: jax.Array) -> CamValues:
+    """Exact program law (not its harmonics) at arbitrary cam angles, SI."""
+    from camjax import program as prog
+
+    kin = prog.motion_at(scene.motion.program, jnp.rad2deg(angles_rad))
+    k = scene.dynamics.motion_scale
+    return CamValues(kin.s * k, kin.ds * k, kin.d2s * k)
+
+
+def trim_harmonics(cam: CamHarmonics, rtol: float = 1e-13) -> CamHarmonics:
+    """Drop trailing harmonics below ``rtol`` times the largest (not traceable: sets a shape)."""
+    mag = np.hypot(np.asarray(cam.cos), np.asarray(cam.sin))
+    keep = np.nonzero(mag[1:] > rtol * max(mag[1:].max(initial=0.0), 1e-300))[0]
+    return pad_harmonics(cam, int(keep[-1]) + 1 if keep.size else 1)
+
+
+def _constraints(scene) -> tuple[np.ndarray, np.ndarray]:
+    """Cam angles (rad) and levels (SI) pinned by law shaping: every joint and dwell samples."""
+    p = scene.motion.program
+    k = scene.dynamics.motion_scale
+    angles, levels, level = [], [], 0.0
+    lifts = np.asarray(p.lifts)
+    for i, (kind, start, width) in enumerate(zip(p.kinds, p.start_deg, p.angles_deg, strict=True)):
+        if kind == "dwell":
+            pts = np.linspace(start, start + width, max(2, int(width // 5) + 1))
+        else:
+            pts = np.array([start])
+        angles.extend(pts)
+        levels.extend([level] * len(pts))
+        level += lifts[i] if kind == "rise" else -lifts[i] if kind == "return" else 0.0
+    return np.deg2rad(np.mod(angles, 360.0)), np.asarray(levels) * k
+
+
+def _f(x) -> float:
+    return float(np.asarray(x))
+
+
+def scene_dynamics(scene) -> DynamicsReport:
+    """Run every analysis the scene's [dynamics] section lists. Not traceable (a report).
+
+    Raises ValueError if the scene has no [dynamics] section.
+    """
+    spec = scene.dynamics
+    if spec is None:
+        raise ValueError("scene has no [dynamics] section")
+    plant = plant_of(spec)
+    omega = TWO_PI * spec.cam_speed_hz
+    wn, zeta = natural_frequency_rad_s(plant), damping_ratio(plant)
+    phi = cam_grid(spec.samples)
+    cam = program_cam(scene)
+    nominal_err = tracking_error_harmonics(cam, cam, plant, omega)
+    n_res, r_res = resonant_harmonic(plant, omega)
+    unit = "m" if spec.follower == "translating" else "rad"
+    out: dict = {
+        "scene": scene.name,
+        "follower": spec.follower,
+        "units": {"motion": unit, "force": "N" if unit == "m" else "N m",
+                  "speed": "Hz (cam revolutions per second)"},
+        "cam_speed_hz": spec.cam_speed_hz,
+        "natural_frequency_hz": _f(wn) / TWO_PI,
+        "damping_ratio": _f(zeta),
+        "resonant_harmonic": {"n": n_res, "frequency_ratio": r_res,
+                              "amplification": _f(jnp.abs(transfer(plant, n_res * omega)))},
+        "samples": spec.samples,
+        "harmonics": spec.harmonics,
+        "nominal": {"max_tracking_error": _f(max_abs(nominal_err, phi)),
+                    "rms_tracking_error": _f(jnp.sqrt(mean_square(nominal_err)))},
+    }
+    nom_vals = evaluate_cam(cam, phi)
+    curves = {"phi_deg": np.rad2deg(np.asarray(phi)), "nominal": np.asarray(nom_vals.f),
+              "nominal_load": np.asarray(evaluate_cam(steady_state(cam, plant, omega), phi).f)}
+    comp = compensate_linear(cam, plant, omega)
+    if "compensation" in spec.compute or "robustness" in spec.compute:
+        comp_err = tracking_error_harmonics(comp, cam, plant, omega)
+        comp_time = compensate_time(_program_values(scene, phi), plant, omega)
+        mis = []
+        for est in (0.9, 1.1):
+            c_est = compensate_linear(cam, perturbed_plant(plant, 1.0, est), omega)
+            e = _f(max_abs(tracking_error_harmonics(c_est, cam, plant, omega), phi))
+            mis.append({"wn_estimate_factor": est, "compensated_max_tracking_error": e,
+                        "nominal_over_compensated": out["nominal"]["max_tracking_error"] / e})
+        out["compensated"] = {
+            "max_tracking_error": _f(max_abs(comp_err, phi)),
+            "rms_tracking_error": _f(jnp.sqrt(mean_square(comp_err))),
+            "time_form_max_difference": _f(jnp.max(jnp.abs(comp_time - evaluate_cam(comp, phi).f))),
+            "max_cam_change": _f(jnp.max(jnp.abs(evaluate_cam(comp, phi).f - nom_vals.f))),
+            "coefficients": {"cos": np.asarray(trim_harmonics(comp).cos).tolist(),
+                             "sin": np.asarray(trim_harmonics(comp).sin).tolist()},
+            "wn_misestimate": mis,
+        }
+        curves["compensated"] = np.asarray(evaluate_cam(comp, phi).f)
+    if "robustness" in spec.compute:
+        mu, lam, kap = (np.asarray(v) for v in (spec.damping_factors, spec.speed_factors,
+                                                  spec.wn_factors))
+        grid = np.asarray(robustness_grid(comp, cam, plant, omega, mu, lam, kap, phi))
+        grid_nom = np.asarray(robustness_grid(cam, cam, plant, omega, mu, lam, kap, phi))
+        out["robustness"] = [
+            {"damping_factor": float(mu[i]), "speed_factor": float(lam[j]), "wn_factor": float(kap[k]),
+             "max_tracking_error": float(grid[i, j, k]),
+             "nominal_max_tracking_error": float(grid_nom[i, j, k])}
+            for i in range(mu.size) for j in range(lam.size) for k in range(kap.size)]
+        # lambda / kappa: the compensated error depends on speed and omega_n only through their ratio
+        ratios = (lam[:, None] / kap[None, :]).ravel()
+        at_ratio = np.asarray(robustness_grid(comp, cam, plant, omega, np.array([1.0]), ratios,
+                                              np.array([1.0]), phi))[0, :, 0]
+        i1 = int(np.argmin(np.abs(mu - 1.0)))
+        diff = np.abs(grid[i1].ravel() - at_ratio)
+        out["speed_wn_equivalence"] = {
+            "max_abs_difference": float(diff.max()),
+            "max_error_where_speed_equals_wn_factor": float(max(
+                [grid[i1, j, k] for j in range(lam.size) for k in range(kap.size)
+                 if abs(lam[j] - kap[k]) < 1e-12] or [0.0])),
+            "note": "error(mu=1, lambda, kappa) vs error(mu=1, lambda/kappa, 1)",
+        }
+        curves.update(rob_mu=mu, rob_lam=lam, rob_kap=kap, rob=grid, rob_nominal=grid_nom,
+                      rob_ratio=ratios, rob_at_ratio=at_ratio)
+    if "time_domain" in spec.compute:
+        m = spec.steps_per_cycle
+        half = cam_grid(2 * m)
+        cycles = settling_cycles(plant, omega, spec.transient_tolerance, spec.max_cycles)
+        exact = _program_values(scene, half)
+        load = integrate_train(plant, exact.f, omega, cycles).angle
+        grid_m = cam_grid(m)
+        harm = evaluate_cam(steady_state(cam, plant, omega), grid_m).f
+        load_c = integrate_train(plant, compensate_time(exact, plant, omega), omega, cycles).angle
+        target = _program_values(scene, grid_m).f
+        out["time_domain"] = {
+            "method": "RK4, lax.scan, from rest",
+            "cycles": cycles, "steps_per_cycle": m,
+            "transients_decayed_to": float(math.exp(-_f(zeta * wn) * cycles * TWO_PI / omega)),
+            "nominal_max_difference_vs_harmonic": _f(jnp.max(jnp.abs(load - harm))),
+            "nominal_max_tracking_error": _f(jnp.max(jnp.abs(load - target))),
+            "compensated_max_tracking_error": _f(jnp.max(jnp.abs(load_c - target))),
+        }
+    if spec.has_drive and ("drive" in spec.compute or "nonlinear" in spec.compute):
+        drive = drive_of(spec)
+        m = spec.steps_per_cycle
+        cycles = settling_cycles(plant, omega, spec.transient_tolerance, spec.max_cycles)
+        target = evaluate_cam(cam, cam_grid(m)).f
+        cams = {"nominal": cam, "linear": comp}
+        if "nonlinear" in spec.compute:
+            nl = compensate_nonlinear(trim_harmonics(cam), drive, plant, omega, spec.harmonics,
+                                      cycles, m)
+            cams["nonlinear"] = nl.cam
+            out["nonlinear"] = {"fit_rms": _f(nl.fit_rms), "harmonics": spec.harmonics,
+                                "coefficients": {"cos": np.asarray(nl.cam.cos).tolist(),
+                                                 "sin": np.asarray(nl.cam.sin).tolist()}}
+        dr = {"cycles": cycles, "drive_natural_frequency_hz": math.sqrt(spec.k01 / spec.I1) / TWO_PI}
+        curves["drive_phi_deg"] = np.rad2deg(np.asarray(cam_grid(m)))
+        curves["drive_target"] = np.asarray(target)
+        for name, c in cams.items():
+            r = simulate_drive(trim_harmonics(c), drive, plant, omega, cycles, m)
+            dr[name] = {"max_speed_ripple": _f(jnp.max(jnp.abs(r.cam_speed - omega)) / omega),
+                        "max_tracking_error": _f(jnp.max(jnp.abs(r.load - target))),
+                        "max_cam_torque": _f(jnp.max(jnp.abs(r.cam_torque)))}
+            curves[f"drive_{name}_speed"] = np.asarray(r.cam_speed) / TWO_PI
+            curves[f"drive_{name}_load"] = np.asarray(r.load)
+        out["drive"] = dr
+        if "nonlinear" in out:
+            out["nonlinear"]["max_tracking_error"] = dr["nonlinear"]["max_tracking_error"]
+    if "jump" in spec.compute:
+        closure = closure_of(spec)
+        lo_hz, hi_hz = spec.jump_speed_range_hz or (0.05 * spec.cam_speed_hz, 10 * spec.cam_speed_hz)
+        js = jump_speed(cam, plant, closure, phi, TWO_PI * lo_hz, TWO_PI * hi_hz)
+        force = contact_force(cam, plant, closure, omega, phi)
+        speeds = np.linspace(lo_hz, hi_hz, 400)
+        fmins = np.asarray(jax.vmap(lambda w: min_contact_force(cam, plant, closure, w, phi))(
+            jnp.asarray(speeds) * TWO_PI))
+        out["jump"] = {
+            "search_range_hz": [lo_hz, hi_hz],
+            "jump_speed_hz": _f(js.speed_rad_s) / TWO_PI if bool(js.found) else None,
+            "min_contact_force": _f(jnp.min(force)),
+            "contact_lost_at_cam_speed": bool(jnp.min(force) <= 0),
+            "min_spring_preload": _f(min_preload(cam, plant, closure, omega, phi)),
+            "min_spring_rate": _f(min_spring_rate(cam, plant, closure, omega, phi)),
+        }
+        curves.update(jump_speeds_hz=speeds, jump_fmin=fmins, contact_force=np.asarray(force))
+    if "shaping" in spec.compute:
+        c_phi, c_val = _constraints(scene)
+        band = omega * jnp.linspace(spec.shaping_band[0], spec.shaping_band[1], 9)
+        cam0 = pad_harmonics(cam, spec.shaping_harmonics)
+        lift = max(float(np.max(c_val) - np.min(c_val)), 1e-300)
+        res = shape_law(cam0, plant, band, jnp.asarray(c_phi), jnp.asarray(c_val), lift,
+                        steps=spec.shaping_steps)
+        shaped = pad_harmonics(res.cam, spec.harmonics)
+        out["shaping"] = {
+            "speed_band_hz": [spec.shaping_band[0] * spec.cam_speed_hz,
+                              spec.shaping_band[1] * spec.cam_speed_hz],
+            "harmonics": spec.shaping_harmonics,
+            "initial_band_rms_tracking_error": _f(jnp.sqrt(band_tracking_ms(cam0, plant, band))),
+            "band_rms_tracking_error": _f(res.tracking_rms),
+            "max_tracking_error": _f(max_abs(tracking_error_harmonics(shaped, shaped, plant, omega),
+                                             phi)),
+            "constraint_max_violation": _f(res.constraint_max),
+            "coefficients": {"cos": np.asarray(res.cam.cos).tolist(),
+                             "sin": np.asarray(res.cam.sin).tolist()},
+        }
+        curves["shaped"] = np.asarray(evaluate_cam(shaped, phi).f)
+        curves["shaped_load"] = np.asarray(evaluate_cam(steady_state(shaped, plant, omega), phi).f)
+    return DynamicsReport(out, curves)
