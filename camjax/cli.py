@@ -178,6 +178,70 @@ def _setup_design(p: argparse.ArgumentParser):
     return run
 
 
+@command("check-extremes", "run the numerical-stability matrix and write extremes.json")
+def _setup_check_extremes(p: argparse.ArgumentParser):
+    p.add_argument("scene", nargs="?", default=None, help="scene file or built-in name (default: default)")
+    p.add_argument("--out", required=True, metavar="DIR", help="output folder")
+
+    def run(args) -> int:
+        from camjax.extremes import format_table, run_matrix
+        from camjax.scene import load_scene
+
+        scene = load_scene(args.scene)
+        cases = run_matrix(scene, progress=lambda g: print(f"  running {g} ...", file=sys.stderr))
+        failed = [c for c in cases if not c.passed]
+        with staged_output(args.out) as tmp:
+            write_json(tmp / "extremes.json", {
+                "scene": scene.name,
+                "cases": [c.as_dict() for c in cases],
+                "summary": {"cases": len(cases), "passed": len(cases) - len(failed), "failed": len(failed)},
+            })
+            (tmp / "extremes.txt").write_text(format_table(cases) + "\n")
+        print(format_table(failed) if failed else f"all {len(cases)} cases pass")
+        print(f"{len(cases) - len(failed)} passed, {len(failed)} failed; wrote {Path(args.out) / 'extremes.json'}")
+        return 1 if failed else 0
+
+    return run
+
+
+@command("dynamics", "follower-train vibration, compensation, robustness and jump of a scene")
+def _setup_dynamics(p: argparse.ArgumentParser):
+    p.add_argument("scene", help="scene TOML file with a [dynamics] section, or a built-in name "
+                   "(e.g. thesis-bench)")
+    p.add_argument("--out", required=True, metavar="DIR", help="output folder (written atomically)")
+    p.add_argument("--dpi", type=int, default=100, help="resolution of the PNG figures (default 100)")
+
+    def run(args) -> int:
+        from camjax.dynamics import scene_dynamics
+        from camjax.plots_dynamics import write_dynamics_figures
+        from camjax.scene import load_scene
+
+        if not 10 <= args.dpi <= 1000:
+            raise UsageError(f"--dpi = {args.dpi}: out of range (allowed: 10..1000)")
+        scene = load_scene(args.scene)
+        if scene.dynamics is None:
+            raise UsageError(f"scene '{scene.name}' has no [dynamics] section: nothing to compute "
+                             "(allowed: a scene with [dynamics], e.g. thesis-bench)")
+        report = scene_dynamics(scene)
+        with staged_output(args.out) as tmp:
+            write_json(tmp / "dynamics.json", report.summary)
+            names = ["dynamics.json"] + [f.name for f in write_dynamics_figures(
+                tmp, report.curves, report.summary, args.dpi)]
+        s = report.summary
+        unit = s["units"]["motion"]
+        print(f"scene {s['scene']}: f_n = {s['natural_frequency_hz']:.3f} Hz, zeta = "
+              f"{s['damping_ratio']:.5f}, harmonic {s['resonant_harmonic']['n']} of the cam at "
+              f"{s['resonant_harmonic']['frequency_ratio']:.4f} f_n")
+        line = f"max tracking error: nominal {s['nominal']['max_tracking_error']:.4g} {unit}"
+        if "compensated" in s:
+            line += f", compensated {s['compensated']['max_tracking_error']:.3g} {unit}"
+        print(line)
+        print(f"wrote {', '.join(names)} to {args.out}")
+        return 0
+
+    return run
+
+
 # ---------------------------------------------------------------------------------- main
 
 
