@@ -1,0 +1,366 @@
+"""The optimal-design problem of SPEC section 5: design pytree, objective, constraints, references.
+
+Design variables (a pytree, :class:`Design`): base radius R_b and face width L of a flat-face
+follower, in mm. More fields (offset, roller radius, law parameters) can be added to
+:class:`Design` and to the bounds; the solvers only ever ``tree_map`` over it.
+
+Objective, weights alpha (size) and gamma (stress), N = R_b,max + L_max:
+
+    F = alpha (R_b + L) / N + gamma max_theta sigma(theta) / sigma_max,
+
+with sigma(theta) = C(theta) / sqrt(rho(theta)), rho = R_b + q, q = s + s''. Constraints, all
+written ``g <= 0`` in mm (:class:`Constraints`, one value per angle):
+
+- curvature:  rho_min - rho <= 0      (rho > 0: a flat face cannot follow a concavity; rho_min
+  is a tiny margin, 1 um by default, so that "> 0" has a minimum);
+- stress:     (C / sigma_max)^2 - rho <= 0, which is sigma <= sigma_max for C >= 0 written so that
+  it is linear in R_b and stays finite where rho <= 0 (sigma itself saturates there);
+- face_width: 2 |s'| - L <= 0         (symmetric face);
+- and the box bounds of the scene, which the solvers keep by projection.
+
+Everything that does not depend on the design (q, s', C) is computed once per scene by
+:func:`problem_from_scene`; the objective is then a few flops per design and angle.
+
+Modes. **global** (the real design): one R_b and L for the whole cam, max over theta of the
+stress and every angle's constraints. **pointwise** (the source's method): the problem solved
+separately at each angle; :func:`per_angle` turns a problem on an N-angle grid into N problems on
+a one-angle grid, stacked along a leading axis, so that the same solver code ``vmap``s over
+them. On a one-angle grid the global and pointwise problems coincide.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+
+from camjax.contact import stress_from_coefficient
+from camjax.numerics import positive_part, safe_divide, smooth_max
+
+# Smallest admissible radius of curvature (mm): the strict "rho > 0" of SPEC 5 as a margin.
+RHO_MIN_MM = 1e-3
+# A design is feasible when every violation is below these (mm; MPa relative to sigma_max).
+FEASIBILITY_TOL_MM = 1e-6
+FEASIBILITY_RTOL_STRESS = 1e-6
+
+CONSTRAINT_NAMES = ("curvature", "stress", "face_width", "bounds")
+
+
+class Design(NamedTuple):
+    """One cam design (scalars), or a batch of them (arrays with leading axes)."""
+
+    base_radius_mm: jax.Array  # R_b, mm
+    face_width_mm: jax.Array  # L, mm
+
+
+class Weights(NamedTuple):
+    """Objective weights (dimensionless, >= 0, not both 0); scalars or a batch."""
+
+    alpha: jax.Array  # size
+    gamma: jax.Array  # stress
+
+
+class Problem(NamedTuple):
+    """Design-independent data of one optimal-design problem on an angle grid of n samples.
+
+    A pytree of arrays only, so it can be passed through ``jit`` and ``vmap`` (a stack of
+    problems, as :func:`per_angle` builds, has one more leading axis on every leaf).
+    """
+
+    theta_deg: jax.Array  # (n,) cam angle, degrees
+    q_mm: jax.Array  # (n,) s + s'' (mm): rho = R_b + q
+    ds_mm: jax.Array  # (n,) s' (mm/rad): contact offset from the follower axis
+    stress_coefficient: jax.Array  # (n,) C, MPa mm^0.5: sigma = C / sqrt(rho)
+    lower: Design  # lower bounds, mm
+    upper: Design  # upper bounds, mm
+    sigma_max_MPa: jax.Array  # () allowable contact stress
+    size_norm_mm: jax.Array  # () N = R_b,max + L_max
+    rho_min_mm: jax.Array  # () smallest admissible radius of curvature
+
+
+class Constraints(NamedTuple):
+    """Constraint functions g <= 0, mm, one value per angle (shape (n,) each)."""
+
+    curvature: jax.Array  # rho_min - rho
+    stress: jax.Array  # (C / sigma_max)^2 - rho
+    face_width: jax.Array  # 2 |s'| - L
+
+
+class Violation(NamedTuple):
+    """Worst violation of each constraint in physical units, 0 when satisfied (shape ())."""
+
+    curvature: jax.Array  # mm: rho_min - min rho
+    stress: jax.Array  # MPa: max sigma - sigma_max
+    face_width: jax.Array  # mm: 2 max|s'| - L
+    bounds: jax.Array  # mm: largest distance outside the box
+
+
+class Evaluation(NamedTuple):
+    """A design judged on the whole grid (true maxima; shape () each)."""
+
+    objective: jax.Array  # F
+    size_mm: jax.Array  # R_b + L
+    stress_max_MPa: jax.Array  # max_theta sigma
+    stress_max_deg: jax.Array  # where it occurs
+    rho_min_mm: jax.Array  # min_theta rho
+    violation: Violation
+    feasible: jax.Array  # bool
+
+
+# ----------------------------------------------------------------------------- building
+
+
+def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=None,
+                       rho_min_mm: float = RHO_MIN_MM) -> Problem:
+    """Problem of a scene with a [design] section (Python, not traceable: it reads the scene).
+
+    Args:
+      scene: a :class:`camjax.scene.Scene` with [contact] and [design].
+      arrays: its :class:`camjax.analysis.SceneArrays` if already computed (else computed here).
+      samples: grid size override (ignored when ``arrays`` is given).
+      dtype: floating dtype of the arrays (default float64).
+      rho_min_mm: the curvature margin of the constraint rho > 0.
+    """
+    from camjax.analysis import scene_arrays
+
+    if scene.design is None:
+        raise ValueError("scene has no [design] section: nothing to optimize")
+    if arrays is None:
+        arrays = scene_arrays(scene, samples=samples, dtype=dtype)
+    if arrays.stress_coefficient is None:
+        raise ValueError("scene has no contact stress: the objective needs [contact] and loads")
+    d = scene.design
+    kin = arrays.kin
+    dt = kin.s.dtype
+    as_ = lambda v: jnp.asarray(v, dt)  # noqa: E731
+    return Problem(
+        theta_deg=as_(arrays.theta_deg),
+        q_mm=kin.s + kin.d2s,
+        ds_mm=kin.ds,
+        stress_coefficient=as_(arrays.stress_coefficient),
+        lower=Design(as_(d.base_radius_mm[0]), as_(d.face_width_mm[0])),
+        upper=Design(as_(d.base_radius_mm[1]), as_(d.face_width_mm[1])),
+        sigma_max_MPa=as_(d.sigma_max_MPa),
+        size_norm_mm=as_(d.base_radius_mm[1] + d.face_width_mm[1]),
+        rho_min_mm=as_(rho_min_mm),
+    )
+
+
+def weights_of(alpha, gamma, dtype=None) -> Weights:
+    """Weights as arrays (any matching shapes); alpha, gamma >= 0, not both 0."""
+    dtype = dtype or jnp.result_type(float)
+    return Weights(jnp.asarray(alpha, dtype), jnp.asarray(gamma, dtype))
+
+
+def per_angle(problem: Problem) -> Problem:
+    """The n pointwise problems: every grid leaf (n,) -> (n, 1), every scalar leaf -> (n,).
+
+    ``jax.vmap(f)(per_angle(p), ...)`` solves the problem at each angle separately.
+    """
+    n = problem.theta_deg.shape[-1]
+    grid = lambda x: x[:, None]  # noqa: E731
+    scalar = lambda x: jnp.broadcast_to(x, (n,))  # noqa: E731
+    return Problem(
+        grid(problem.theta_deg), grid(problem.q_mm), grid(problem.ds_mm),
+        grid(problem.stress_coefficient),
+        jax.tree.map(scalar, problem.lower), jax.tree.map(scalar, problem.upper),
+        scalar(problem.sigma_max_MPa), scalar(problem.size_norm_mm), scalar(problem.rho_min_mm),
+    )
+
+
+def with_bounds(problem: Problem, base_radius_mm=None, face_width_mm=None) -> Problem:
+    """The same problem with other (low, high) bounds; the normalization N is kept."""
+    lower, upper = problem.lower, problem.upper
+    if base_radius_mm is not None:
+        lower = lower._replace(base_radius_mm=jnp.asarray(base_radius_mm[0], problem.q_mm.dtype))
+        upper = upper._replace(base_radius_mm=jnp.asarray(base_radius_mm[1], problem.q_mm.dtype))
+    if face_width_mm is not None:
+        lower = lower._replace(face_width_mm=jnp.asarray(face_width_mm[0], problem.q_mm.dtype))
+        upper = upper._replace(face_width_mm=jnp.asarray(face_width_mm[1], problem.q_mm.dtype))
+    return problem._replace(lower=lower, upper=upper)
+
+
+# ---------------------------------------------------------------------------- physics
+
+
+def curvature_radius(problem: Problem, design: Design) -> jax.Array:
+    """rho(theta) = R_b + s + s'' (mm), shape (n,)."""
+    return design.base_radius_mm + problem.q_mm
+
+
+def stress(problem: Problem, design: Design) -> jax.Array:
+    """Hertz contact stress sigma(theta) (MPa), shape (n,); finite (saturated) where rho <= 0."""
+    return stress_from_coefficient(problem.stress_coefficient, curvature_radius(problem, design))
+
+
+def size_term(problem: Problem, design: Design) -> jax.Array:
+    """Normalized size (R_b + L) / N (dimensionless)."""
+    return (design.base_radius_mm + design.face_width_mm) / problem.size_norm_mm
+
+
+def objective(problem: Problem, weights: Weights, design: Design,
+              stress_temperature_MPa: jax.Array | float | None = None) -> jax.Array:
+    """F = alpha (R_b + L) / N + gamma max_theta sigma / sigma_max (dimensionless, shape ()).
+
+    With ``stress_temperature_MPa`` the max is a log-sum-exp smooth max at that temperature (an
+    upper bound within T log n of the max; for gradients), otherwise the true max.
+    """
+    sigma = stress(problem, design)
+    peak = jnp.max(sigma) if stress_temperature_MPa is None else smooth_max(sigma, stress_temperature_MPa)
+    return weights.alpha * size_term(problem, design) + weights.gamma * peak / problem.sigma_max_MPa
+
+
+def constraints(problem: Problem, design: Design) -> Constraints:
+    """Every angle's constraints as g <= 0 (mm), shape (n,) each. Linear in the design."""
+    rho = curvature_radius(problem, design)
+    stress_rho = (problem.stress_coefficient / problem.sigma_max_MPa) ** 2
+    return Constraints(
+        curvature=problem.rho_min_mm - rho,
+        stress=stress_rho - rho,
+        face_width=2.0 * jnp.abs(problem.ds_mm) - design.face_width_mm,
+    )
+
+
+def bounds_violation(problem: Problem, design: Design) -> jax.Array:
+    """Largest distance (mm) of any design variable outside its box; 0 inside."""
+    below = jax.tree.map(lambda x, lo: positive_part(lo - x), design, problem.lower)
+    above = jax.tree.map(lambda x, hi: positive_part(x - hi), design, problem.upper)
+    return jnp.max(jnp.stack(jax.tree.leaves(below) + jax.tree.leaves(above)))
+
+
+def violation(problem: Problem, design: Design) -> Violation:
+    """Worst violation of each constraint in physical units (mm, MPa); zeros when feasible."""
+    rho = curvature_radius(problem, design)
+    return Violation(
+        curvature=positive_part(problem.rho_min_mm - jnp.min(rho)),
+        stress=positive_part(jnp.max(stress(problem, design)) - problem.sigma_max_MPa),
+        face_width=positive_part(jnp.max(2.0 * jnp.abs(problem.ds_mm)) - design.face_width_mm),
+        bounds=bounds_violation(problem, design),
+    )
+
+
+def is_feasible(problem: Problem, v: Violation) -> jax.Array:
+    """All violations within the tolerances (FEASIBILITY_TOL_MM; stress relative to sigma_max)."""
+    return ((v.curvature <= FEASIBILITY_TOL_MM) & (v.face_width <= FEASIBILITY_TOL_MM)
+            & (v.bounds <= FEASIBILITY_TOL_MM)
+            & (v.stress <= FEASIBILITY_RTOL_STRESS * problem.sigma_max_MPa))
+
+
+def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
+    """Objective, peak stress (and its angle), smallest rho, violations and feasibility."""
+    sigma = stress(problem, design)
+    i = jnp.argmax(sigma)
+    v = violation(problem, design)
+    return Evaluation(
+        objective=objective(problem, weights, design),
+        size_mm=design.base_radius_mm + design.face_width_mm,
+        stress_max_MPa=sigma[i],
+        stress_max_deg=problem.theta_deg[i],
+        rho_min_mm=jnp.min(curvature_radius(problem, design)),
+        violation=v,
+        feasible=is_feasible(problem, v),
+    )
+
+
+def violated_constraints(problem: Problem, v: Violation) -> list[str]:
+    """Names of the violated constraints (Python; needs concrete values)."""
+    tol = {"curvature": FEASIBILITY_TOL_MM, "face_width": FEASIBILITY_TOL_MM, "bounds": FEASIBILITY_TOL_MM,
+           "stress": FEASIBILITY_RTOL_STRESS * float(problem.sigma_max_MPa)}
+    return [name for name in CONSTRAINT_NAMES if float(getattr(v, name)) > tol[name]]
+
+
+# ------------------------------------------------------------------------- references
+
+
+def required_base_radius(problem: Problem) -> jax.Array:
+    """Smallest R_b (mm) meeting curvature and stress at every angle (ignoring the box), shape ()."""
+    need_rho = jnp.maximum(problem.rho_min_mm, (problem.stress_coefficient / problem.sigma_max_MPa) ** 2)
+    return jnp.max(need_rho - problem.q_mm)
+
+
+def required_face_width(problem: Problem) -> jax.Array:
+    """Smallest L (mm) meeting the face-width constraint at every angle, 2 max|s'|, shape ()."""
+    return jnp.max(2.0 * jnp.abs(problem.ds_mm))
+
+
+def optimal_curvature_radius(weights: Weights, coefficient, sigma_max_MPa, size_norm_mm) -> jax.Array:
+    """Unconstrained minimizer rho* of alpha rho / N + gamma C / (sigma_max sqrt(rho)), mm.
+
+    rho* = (gamma N C / (2 alpha sigma_max))^(2/3); +inf when alpha = 0 < gamma C (the stress
+    term alone wants an infinite cam), 0 when gamma C = 0 (the size term alone wants the smallest).
+    """
+    num = weights.gamma * size_norm_mm * coefficient
+    den = 2.0 * weights.alpha * sigma_max_MPa
+    ratio = safe_divide(num, den, fallback=jnp.inf)
+    ratio = jnp.where(num > 0, ratio, 0.0)
+    return jnp.where(jnp.isfinite(ratio), jnp.cbrt(jnp.where(jnp.isfinite(ratio), ratio, 0.0)) ** 2, jnp.inf)
+
+
+def pointwise_optimum(problem: Problem, weights: Weights) -> Design:
+    """Closed-form optimum of the problem at each angle separately, arrays of shape (n,).
+
+    Derivation. At one angle F(R, L) = alpha (R + L)/N + gamma C / (sigma_max sqrt(R + q)) is a
+    sum of a function of L and a function of R, and every constraint involves only one of them,
+    so the problem splits.
+
+    * L: minimize alpha L / N on [max(L_lo, 2|s'|), L_hi]: the lower end. (With alpha = 0 the
+      objective does not depend on L; we break the tie the same way, the smallest feasible L.)
+    * R: curvature and stress are both lower bounds on rho, so the feasible set is
+      [R_need, R_hi] with R_need = max(R_lo, -q + max(rho_min, (C/sigma_max)^2)). On rho > 0,
+      f(R) = alpha R / N + gamma C / (sigma_max sqrt(R + q)) is convex (linear + convex), with
+      f'(R) = alpha/N - gamma C / (2 sigma_max) rho^(-3/2) = 0 at
+      rho* = (gamma N C / (2 alpha sigma_max))^(2/3). A convex 1-D function is minimized on an
+      interval at its stationary point projected onto the interval:
+      R* = clip(-q + rho*, R_need, R_hi). alpha = 0 gives rho* = inf (R* = R_hi); gamma = 0 or
+      C = 0 gives rho* = 0 (R* = R_need).
+    * Infeasible angles (R_need > R_hi or 2|s'| > L_hi) get the closest bound, R_hi or L_hi; the
+      violation is reported by :func:`violation`, not hidden.
+
+    Per-angle: L* = clip(max(2|s'|, L_lo), -, L_hi); R* = min(max(-q + rho*, R_need), R_hi).
+    """
+    c = problem.stress_coefficient
+    rho_star = optimal_curvature_radius(weights, c, problem.sigma_max_MPa, problem.size_norm_mm)
+    need_rho = jnp.maximum(problem.rho_min_mm, (c / problem.sigma_max_MPa) ** 2)
+    r_need = jnp.maximum(problem.lower.base_radius_mm, need_rho - problem.q_mm)
+    r = jnp.minimum(jnp.maximum(rho_star - problem.q_mm, r_need), problem.upper.base_radius_mm)
+    l_need = jnp.maximum(problem.lower.face_width_mm, 2.0 * jnp.abs(problem.ds_mm))
+    length = jnp.minimum(l_need, problem.upper.face_width_mm)
+    return Design(r, length)
+
+
+def global_optimum(problem: Problem, weights: Weights, bisections: int = 200) -> Design:
+    """Exact optimum of the global problem (one R_b, L), by bisection on a convex 1-D function.
+
+    A reference that uses the structure of this two-variable problem (it does not extend to new
+    design variables; the generic solvers do not rely on it). L splits off exactly as in
+    :func:`pointwise_optimum` with 2 max|s'|. For R, g(R) = alpha R / N + gamma max_theta
+    sigma_theta(R) / sigma_max is convex (a max of convex functions plus a linear one) on the
+    feasible interval [R_need, R_hi]; its right derivative
+    g'(R) = alpha/N - gamma C_k / (2 sigma_max rho_k^(3/2)), k = argmax_theta sigma_theta(R),
+    is nondecreasing, and bisection on its sign converges to the minimizer (a kink where two
+    angles share the max included). ``bisections`` halvings of [R_need, R_hi] (200: to the last
+    bit in float64). Returns scalars.
+    """
+    lo_r = jnp.maximum(problem.lower.base_radius_mm, required_base_radius(problem))
+    hi_r = problem.upper.base_radius_mm
+    lo_r = jnp.minimum(lo_r, hi_r)  # infeasible: R_hi, reported as such
+
+    def slope(r):
+        rho = r + problem.q_mm
+        sigma = stress_from_coefficient(problem.stress_coefficient, rho)
+        k = jnp.argmax(sigma)
+        rho_k = jnp.maximum(rho[k], problem.rho_min_mm)
+        dsigma = -0.5 * problem.stress_coefficient[k] * rho_k ** -1.5
+        return weights.alpha / problem.size_norm_mm + weights.gamma * dsigma / problem.sigma_max_MPa
+
+    def halve(_, bracket):
+        a, b = bracket
+        m = 0.5 * (a + b)
+        up = slope(m) >= 0
+        return jnp.where(up, a, m), jnp.where(up, m, b)
+
+    a, b = jax.lax.fori_loop(0, bisections, halve, (lo_r, hi_r))
+    r = jnp.where(slope(lo_r) >= 0, lo_r, jnp.where(slope(hi_r) < 0, hi_r, 0.5 * (a + b)))
+    l_need = jnp.maximum(problem.lower.face_width_mm, required_face_width(problem))
+    return Design(r, jnp.minimum(l_need, problem.upper.face_width_mm))

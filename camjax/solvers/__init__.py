@@ -1,0 +1,1 @@
+"""Solvers of the optimal-design problem (:mod:`camjax.problem`)."""

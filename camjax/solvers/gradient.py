@@ -1,0 +1,295 @@
+"""Gradient solver: augmented Lagrangian over optax Rprop, projected onto the box, in one jit.
+
+The problem (:mod:`camjax.problem`) is solved for one weighting on its angle grid; batch it with
+``vmap`` (weightings, pointwise angles, or both, see :func:`solve_pointwise`, :func:`solve_sweep`).
+
+Formulation. Each design variable is mapped to the unit box, u = (x - lo) / (hi - lo), so every
+variable has the same scale whatever its bounds. The objective is normalized by alpha + gamma (same
+minimizer; every weighting from 1e-6 to 1e6 gives an O(1) function). The constraints g <= 0
+(mm, one per angle) are divided by N = R_b,max + L_max and enter an augmented Lagrangian
+
+    L_A(u; lam) = F / (alpha + gamma) + sum_i mu/2 [max(0, g_i + lam_i/mu)^2 - (lam_i/mu)^2],
+
+minimized over the box by projected optax Rprop (``optax.scale_by_rprop``): sign-based steps
+with per-variable step sizes that grow on agreement and halve on a sign change. Rprop suits this
+problem: it is invariant to the scale of the gradient (the stress term varies as rho^-3/2), it
+converges geometrically to a kink as well as to a smooth minimum (global mode uses the true max
+over angles, whose gradient is that of the argmax angle), and a box is kept by projection. The
+gradient fed to Rprop is the *projected* gradient (zero for a variable held at a bound by a
+gradient pointing outward), so a step size never grows against a bound.
+
+Multipliers are updated, lam <- clip(lam + mu g, 0, LAM_MAX), whenever the inner problem has
+converged (or after ``inner_steps`` steps); Rprop's sign memory is then cleared. Stopping rule:
+the projected-gradient norm ||pg||_inf <= ``gtol`` (or every moving variable's step below
+``xtol``: Rprop cannot move further), together with the AL residual max_i |min(-g_i, lam_i/mu)|
+<= ``ctol`` (feasibility and complementarity). The whole loop is one ``lax.while_loop`` capped at
+``max_steps``; an infeasible problem runs to the cap and is reported infeasible by name.
+
+When alpha = 0 the objective does not depend on the size; a tie-break 1e-9 (R_b + L)/N then
+picks the smallest such design, as :func:`camjax.problem.pointwise_optimum` does.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import partial
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+import optax
+
+from camjax import problem as P
+from camjax.problem import Constraints, Design, Problem, Violation, Weights
+
+LAM_MAX = 1e12  # cap on the multipliers (an infeasible problem would let them grow without end)
+MODES = ("global", "pointwise")
+TIE_BREAK = 1e-9  # weight of the size term when alpha = 0 (see module docstring)
+
+
+@dataclass(frozen=True)
+class GradientSettings:
+    """Static configuration of the gradient solver (hashable: a ``jit`` static argument).
+
+    Lengths are in units of the box (u in [0, 1]); the objective is normalized to O(1).
+    """
+
+    max_steps: int = 2000  # cap on Rprop steps in total
+    inner_steps: int = 300  # cap on steps between multiplier updates
+    initial_step: float = 0.05  # first Rprop step
+    reset_step: float = 1e-2  # cap on the step size a multiplier update restarts from
+    min_step: float = 1e-15
+    max_step: float = 0.25
+    penalty: float = 1e3  # mu, on constraints divided by N
+    gtol: float = 1e-10  # projected-gradient norm (inf-norm, unit box)
+    xtol: float = 1e-12  # Rprop step size below which a variable has stopped
+    ctol: float = 1e-12  # AL residual (constraints / N)
+    inner_rtol: float = 0.1  # inexact inner solves: stop when steps <= inner_rtol * AL residual
+
+
+DEFAULT_SETTINGS = GradientSettings()
+
+
+class GradientState(NamedTuple):
+    """Loop state (shapes for one problem; a vmapped solve adds leading axes)."""
+
+    u: Design  # () each: position in the unit box
+    rprop: optax.ScaleByRpropState  # step sizes and last updates, like ``u``
+    multipliers: Constraints  # (n,) each, >= 0
+    step: jax.Array  # () int: steps taken
+    inner_step: jax.Array  # () int: steps since the last multiplier update
+    pg_norm: jax.Array  # () inf-norm of the projected gradient at ``u``
+    residual: jax.Array  # () AL residual at ``u``
+    done: jax.Array  # () bool
+
+
+class GradientResult(NamedTuple):
+    """Outcome of one gradient solve (shape () each for one problem; vmapped: leading axes)."""
+
+    design: Design  # mm
+    objective: jax.Array  # F with the true max over angles
+    violation: Violation  # worst violation per constraint, mm / MPa
+    feasible: jax.Array  # bool
+    iterations: jax.Array  # int, Rprop steps
+    converged: jax.Array  # bool, stopping rule met before max_steps
+    projected_gradient_norm: jax.Array  # final ||pg||_inf (unit box, normalized objective)
+    multipliers: Constraints  # final multipliers, (n,) each
+
+
+# --------------------------------------------------------------------------- box maps
+
+
+def _span(problem: Problem) -> Design:
+    return jax.tree.map(lambda lo, hi: jnp.where(hi > lo, hi - lo, 1.0), problem.lower, problem.upper)
+
+
+def _u_max(problem: Problem) -> Design:
+    """1 for a variable with a proper range, 0 for one fixed by lo == hi."""
+    return jax.tree.map(lambda lo, hi: jnp.where(hi > lo, 1.0, 0.0).astype(lo.dtype),
+                        problem.lower, problem.upper)
+
+
+def to_unit(problem: Problem, design: Design) -> Design:
+    """Design (mm) -> unit box coordinates (not clipped)."""
+    return jax.tree.map(lambda x, lo, w: (x - lo) / w, design, problem.lower, _span(problem))
+
+
+def from_unit(problem: Problem, u: Design) -> Design:
+    """Unit box coordinates -> design (mm)."""
+    return jax.tree.map(lambda v, lo, w: lo + v * w, u, problem.lower, _span(problem))
+
+
+def _clip_unit(problem: Problem, u: Design) -> Design:
+    return jax.tree.map(lambda v, top: jnp.clip(v, 0.0, top), u, _u_max(problem))
+
+
+def midpoint(problem: Problem) -> Design:
+    """Centre of the box, the default start."""
+    return jax.tree.map(lambda lo, hi: 0.5 * (lo + hi), problem.lower, problem.upper)
+
+
+# ------------------------------------------------------------------------- Lagrangian
+
+
+def solver_objective(problem: Problem, weights: Weights, design: Design) -> jax.Array:
+    """F / (alpha + gamma) plus the alpha = 0 tie-break: what the solvers minimize (shape ())."""
+    total = weights.alpha + weights.gamma
+    scale = jnp.where(total > 0, total, 1.0)
+    tie = jnp.where(weights.alpha > 0, 0.0, TIE_BREAK)
+    return P.objective(problem, weights, design) / scale + tie * P.size_term(problem, design)
+
+
+def scaled_constraints(problem: Problem, design: Design) -> Constraints:
+    """g / N, dimensionless, (n,) each."""
+    return jax.tree.map(lambda g: g / problem.size_norm_mm, P.constraints(problem, design))
+
+
+def augmented_lagrangian(u: Design, problem: Problem, weights: Weights, multipliers: Constraints,
+                         penalty: float) -> tuple[jax.Array, Constraints]:
+    """L_A at unit-box point ``u``, and the scaled constraints there (aux)."""
+    design = from_unit(problem, u)
+    g = scaled_constraints(problem, design)
+    terms = jax.tree.map(
+        lambda gi, lam: jnp.sum(jnp.maximum(gi + lam / penalty, 0.0) ** 2 - (lam / penalty) ** 2),
+        g, multipliers)
+    return solver_objective(problem, weights, design) + 0.5 * penalty * sum(jax.tree.leaves(terms)), g
+
+
+def _projected_gradient(problem: Problem, u: Design, grad: Design) -> Design:
+    """Zero the components that would push a variable at a bound out of the box."""
+    return jax.tree.map(
+        lambda v, gr, top: jnp.where(((v <= 0) & (gr > 0)) | ((v >= top) & (gr < 0)), 0.0, gr),
+        u, grad, _u_max(problem))
+
+
+def _tree_max_abs(tree) -> jax.Array:
+    return jnp.max(jnp.stack([jnp.max(jnp.abs(x)) for x in jax.tree.leaves(tree)]))
+
+
+# --------------------------------------------------------------------------- init/step
+
+
+def init(problem: Problem, design: Design | None = None,
+         settings: GradientSettings = DEFAULT_SETTINGS) -> GradientState:
+    """Start at ``design`` (mm; default: the centre of the box), multipliers 0."""
+    design = midpoint(problem) if design is None else design
+    dtype = problem.q_mm.dtype
+    u = _clip_unit(problem, jax.tree.map(lambda x: jnp.asarray(x, dtype), to_unit(problem, design)))
+    rprop = optax.scale_by_rprop(settings.initial_step, min_step_size=settings.min_step,
+                                 max_step_size=settings.max_step).init(u)
+    zeros = jax.tree.map(jnp.zeros_like, P.constraints(problem, from_unit(problem, u)))
+    inf = jnp.asarray(jnp.inf, dtype)
+    return GradientState(u, rprop, zeros, jnp.asarray(0), jnp.asarray(0), inf, inf, jnp.asarray(False))
+
+
+def step(state: GradientState, problem: Problem, weights: Weights,
+         settings: GradientSettings = DEFAULT_SETTINGS) -> GradientState:
+    """One projected Rprop step on L_A, a multiplier update when the inner problem has converged."""
+    mu = settings.penalty
+    (_, g), grad = jax.value_and_grad(augmented_lagrangian, has_aux=True)(
+        state.u, problem, weights, state.multipliers, mu)
+    pg = _projected_gradient(problem, state.u, grad)
+    pg_norm = _tree_max_abs(pg)
+    residual = _tree_max_abs(jax.tree.map(lambda gi, lam: jnp.minimum(-gi, lam / mu), g, state.multipliers))
+
+    transform = optax.scale_by_rprop(settings.initial_step, min_step_size=settings.min_step,
+                                     max_step_size=settings.max_step)
+    updates, rprop = transform.update(pg, state.rprop)
+    u_next = _clip_unit(problem, jax.tree.map(lambda v, d: v - d, state.u, updates))
+    moving = jax.tree.map(lambda gr, s: jnp.where(gr != 0, s, 0.0), pg, rprop.step_sizes)
+
+    # inexact inner solves while the multipliers are far off (steps to a fraction of the residual)
+    inner_xtol = jnp.maximum(settings.xtol, settings.inner_rtol * residual)
+    stalled = (_tree_max_abs(moving) <= inner_xtol) & (state.inner_step >= 2)
+    inner_converged = (pg_norm <= settings.gtol) | stalled
+    done = inner_converged & (residual <= settings.ctol)
+    update = ~done & (inner_converged | (state.inner_step + 1 >= settings.inner_steps))
+
+    multipliers = jax.tree.map(
+        lambda lam, gi: jnp.where(update, jnp.clip(lam + mu * gi, 0.0, LAM_MAX), lam),
+        state.multipliers, g)
+    restarted = optax.ScaleByRpropState(
+        # the minimizer moves by about the residual when the multipliers change: restart the
+        # step sizes at that length (within [xtol, reset_step])
+        jax.tree.map(lambda s: jnp.maximum(s, jnp.clip(residual, 10 * settings.xtol, settings.reset_step)),
+                     rprop.step_sizes),
+        jax.tree.map(jnp.zeros_like, rprop.prev_updates))
+    rprop = jax.tree.map(lambda a, b: jnp.where(update, a, b), restarted, rprop)
+    u = jax.tree.map(lambda a, b: jnp.where(done, a, b), state.u, u_next)
+    return GradientState(
+        u, rprop, multipliers,
+        state.step + jnp.where(done, 0, 1),
+        jnp.where(update, 0, state.inner_step + 1),
+        pg_norm, residual, done)
+
+
+def postprocess(state: GradientState, problem: Problem, weights: Weights) -> GradientResult:
+    """Design in mm, judged with the true max over angles."""
+    design = from_unit(problem, state.u)
+    ev = P.evaluate(problem, weights, design)
+    return GradientResult(design, ev.objective, ev.violation, ev.feasible, state.step, state.done,
+                          state.pg_norm, state.multipliers)
+
+
+# ------------------------------------------------------------------------------ solves
+
+
+def minimize(problem: Problem, weights: Weights, init_design: Design | None = None,
+             settings: GradientSettings = DEFAULT_SETTINGS) -> GradientResult:
+    """Solve one problem (global over its angle grid) for one weighting; traceable, vmappable.
+
+    Args:
+      problem: the problem, grid arrays of shape (n,).
+      weights: scalar alpha, gamma.
+      init_design: start (mm); default the centre of the box.
+      settings: static configuration.
+    """
+    def cond(state):
+        return ~state.done & (state.step < settings.max_steps)
+
+    state = init(problem, init_design, settings)
+    state = jax.lax.while_loop(cond, partial(step, problem=problem, weights=weights, settings=settings),
+                               state)
+    return postprocess(state, problem, weights)
+
+
+@partial(jax.jit, static_argnames="settings")
+def solve_global(problem: Problem, weights: Weights, init_design: Design | None = None,
+                 settings: GradientSettings = DEFAULT_SETTINGS) -> GradientResult:
+    """Global mode, one weighting: one R_b and L for the whole cam (jitted :func:`minimize`)."""
+    return minimize(problem, weights, init_design, settings)
+
+
+def minimize_pointwise(problem: Problem, weights: Weights, init_design: Design | None = None,
+                       settings: GradientSettings = DEFAULT_SETTINGS) -> GradientResult:
+    """Pointwise mode, one weighting: the n one-angle problems at once (vmap), leaves of shape (n,).
+
+    ``init_design`` (optional) holds one start per angle, shape (n,) each. Traceable.
+    """
+    per = P.per_angle(problem)
+    if init_design is None:
+        return jax.vmap(minimize, in_axes=(0, None, None, None))(per, weights, None, settings)
+    return jax.vmap(minimize, in_axes=(0, None, 0, None))(per, weights, init_design, settings)
+
+
+@partial(jax.jit, static_argnames="settings")
+def solve_pointwise(problem: Problem, weights: Weights, init_design: Design | None = None,
+                    settings: GradientSettings = DEFAULT_SETTINGS) -> GradientResult:
+    """Jitted :func:`minimize_pointwise`."""
+    return minimize_pointwise(problem, weights, init_design, settings)
+
+
+@partial(jax.jit, static_argnames=("mode", "settings"))
+def solve_sweep(problem: Problem, weights: Weights, mode: str = "global", init_design: Design | None = None,
+                settings: GradientSettings = DEFAULT_SETTINGS) -> GradientResult:
+    """Many weightings at once: ``weights`` leaves of shape (w,); results get a leading axis w.
+
+    mode "global": leaves (w,); "pointwise": leaves (w, n) (one solve per weighting and angle).
+    ``init_design`` (optional) has the same leading axes as the result.
+    """
+    if mode not in MODES:
+        raise ValueError(f"mode: {mode!r} is not allowed; use {', '.join(MODES)}")
+    inner = minimize if mode == "global" else minimize_pointwise
+    if init_design is None:
+        return jax.vmap(lambda w: inner(problem, w, None, settings))(weights)
+    return jax.vmap(lambda w, d: inner(problem, w, d, settings))(weights, init_design)
