@@ -1,0 +1,137 @@
+"""`camjax design`: outputs, strict JSON, and clean failures (exit 2, one message, no files)."""
+
+import json
+import os
+import subprocess
+import sys
+
+import pytest
+
+from camjax import cli
+from camjax.scene import builtin_scene_text
+
+ALL_FILES = {"result.json", "svaj.png", "profile.png", "loads.png", "stress.png", "profile.csv",
+             "profile.dxf"}
+
+
+def _strict_json(path):
+    def refuse(token):
+        raise AssertionError(f"{path} holds {token}")
+
+    return json.loads(path.read_text(), parse_constant=refuse)
+
+
+@pytest.fixture(scope="session")
+def design_run(tmp_path_factory):
+    """`camjax design --out DIR` on the default scene, in process, without the disk cache."""
+    out = tmp_path_factory.mktemp("design") / "out"
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("CAMJAX_COMPILATION_CACHE", "0")
+        rc = cli.main(["design", "--out", str(out), "--dpi", "40"])
+    return rc, out
+
+
+def test_design_writes_every_declared_output(design_run):
+    rc, out = design_run
+    assert rc == 0
+    assert {p.name for p in out.iterdir()} == ALL_FILES
+    data = _strict_json(out / "result.json")
+    for block, keys in {
+        "kinematics.velocity_m_s": ("max", "max_deg", "min", "min_deg"),
+        "kinematics.accel_m_s2": ("max", "max_deg", "min", "min_deg"),
+        "kinematics.jerk_m_s3": ("max", "max_deg", "min", "min_deg"),
+        "loads.force_N": ("max", "max_deg", "min", "min_deg"),
+        "loads.torque_Nm": ("max", "max_deg", "min", "min_deg"),
+        "design": ("mode", "base_radius_mm", "face_width_mm", "objective", "feasible"),
+        "stress_MPa": ("max", "max_deg"),
+        "rho_mm": ("min", "min_deg"),
+    }.items():
+        node = data
+        for part in block.split("."):
+            node = node[part]
+        assert set(keys) <= set(node), block
+    for key in ("samples", "min_base_radius_mm", "min_base_radius_deg", "min_face_width_mm"):
+        assert key in data
+    assert {"joint_deg", "jump_s", "jump_v", "jump_a", "jump_j", "class"} <= set(data["flcd"][0])
+    # the design block and the evaluated stress describe the same cam
+    assert data["stress_MPa"]["max"] == data["design"]["peak_stress_MPa"]
+    assert data["design"]["mode"] == "global"
+
+
+def test_builtin_name_gives_the_same_result(design_run, tmp_path, monkeypatch):
+    monkeypatch.setenv("CAMJAX_COMPILATION_CACHE", "0")
+    _, out = design_run
+    assert cli.main(["design", "default", "--out", str(tmp_path), "--dpi", "40"]) == 0
+    assert _strict_json(tmp_path / "result.json") == _strict_json(out / "result.json")
+
+
+def _variant(old, new):
+    text = builtin_scene_text("default")
+    assert text.count(old) == 1, old
+    return text.replace(old, new)
+
+
+BAD_SCENES = {
+    "angles_not_360": (_variant("angle_deg = 120 }", "angle_deg = 130 }"), "motion.segments.angle_deg"),
+    "unknown_law": (_variant('law = "cycloidal", lift_mm = 5.0 },\n  { kind = "dwell"',
+                             'law = "cycloid", lift_mm = 5.0 },\n  { kind = "dwell"'),
+                    "motion.segments[1].law"),
+    "negative_lift": (_variant('angle_deg = 80, law = "cycloidal", lift_mm = 5.0',
+                               'angle_deg = 80, law = "cycloidal", lift_mm = -5.0'),
+                      "motion.segments[1].lift_mm"),
+    "non_numeric": (_variant("rpm = 240.0", 'rpm = "fast"'), "motion.rpm"),
+    "unknown_key": (_variant("mass_kg = 1.0", "mass_kg = 1.0\nmas_kg = 2.0"), "follower.mas_kg"),
+    "return_short": (_variant('angle_deg = 60, law = "cycloidal", lift_mm = 5.0',
+                              'angle_deg = 60, law = "cycloidal", lift_mm = 4.0'), "motion.segments"),
+    "not_toml": ("[motion\nrpm = 1", "toml"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(BAD_SCENES))
+def test_bad_scene_exits_2_with_one_message_and_no_files(case, tmp_path, capsys):
+    text, field = BAD_SCENES[case]
+    scene = tmp_path / "bad.toml"
+    scene.write_text(text)
+    out = tmp_path / "out"
+    assert cli.main(["design", str(scene), "--out", str(out)]) == 2
+    captured = capsys.readouterr()
+    lines = captured.err.strip().splitlines()
+    assert len(lines) == 1 and captured.out == ""
+    assert lines[0].startswith("camjax design: error: ")
+    assert f" {field}" in lines[0] and "Traceback" not in captured.err
+    assert not out.exists() or not any(out.iterdir())
+    assert [p.name for p in tmp_path.iterdir()] == ["bad.toml"]  # no staging folder left behind
+
+
+def test_failure_leaves_an_existing_output_folder_untouched(tmp_path, capsys):
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "keep.txt").write_text("previous run")
+    scene = tmp_path / "bad.toml"
+    scene.write_text(BAD_SCENES["unknown_law"][0])
+    assert cli.main(["design", str(scene), "--out", str(out)]) == 2
+    assert [p.name for p in out.iterdir()] == ["keep.txt"]
+
+
+@pytest.mark.parametrize("args, word", [(["--base-radius", "-3"], "--base-radius"),
+                                         (["--base-radius", "nan"], "--base-radius"),
+                                         (["--dpi", "5"], "--dpi"),
+                                         (["no-such-scene"], "scene")])
+def test_bad_arguments_exit_2(args, word, tmp_path, capsys):
+    out = tmp_path / "out"
+    assert cli.main(["design", *args, "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert word in err and "Traceback" not in err
+    assert not out.exists()
+
+
+def test_console_entry_point_reports_without_traceback(tmp_path):
+    # the real process: exit status 2 reaches the shell, stderr is one line
+    scene = tmp_path / "bad.toml"
+    scene.write_text(BAD_SCENES["negative_lift"][0])
+    proc = subprocess.run([sys.executable, "-m", "camjax.cli", "design", str(scene), "--out",
+                           str(tmp_path / "out")], capture_output=True, text=True,
+                          env={**os.environ, "CAMJAX_COMPILATION_CACHE": "0"}, timeout=120)
+    assert proc.returncode == 2
+    assert proc.stderr.count("\n") == 1 and "lift_mm" in proc.stderr
+    assert not (tmp_path / "out").exists()
