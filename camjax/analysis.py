@@ -48,7 +48,7 @@ def scene_arrays(scene: Scene, samples: int | None = None, dtype=None) -> SceneA
     train = scene.follower.train
     if train is not None:
         force = loads.kinetostatic_force(train, motion)
-        torque = loads.cam_torque(force, motion, omega)
+        torque = loads.cam_torque(force, kin.ds)
         if scene.contact is not None:
             c = scene.contact
             coeff = contact.stress_coefficient(force, c.cam_width_mm, c.cam, c.follower)

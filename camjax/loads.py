@@ -34,9 +34,13 @@ def kinetostatic_force(train: FollowerTrain, motion: TimeKinematics) -> jax.Arra
     )
 
 
-def cam_torque(force_N: jax.Array, motion: TimeKinematics, cam_speed_rad_s) -> jax.Array:
-    """Torque on the cam shaft from the power balance, T = F y' / omega (N m); 0 at rest."""
-    return safe_divide(force_N * motion.velocity, cam_speed_rad_s)
+def cam_torque(force_N: jax.Array, ds_mm_per_rad: jax.Array) -> jax.Array:
+    """Torque on the cam shaft from the power balance T w = F y', i.e. T = F s' (N m).
+
+    Written with s' (mm/rad) rather than y'/w so that it holds at rest and has no 1/w in its
+    gradient at vanishing speed.
+    """
+    return force_N * ds_mm_per_rad * 1e-3
 
 
 def contact_margin(force_N: jax.Array) -> jax.Array:

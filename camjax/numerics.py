@@ -56,3 +56,34 @@ def argmin_deg(values: jax.Array, theta_deg: jax.Array) -> tuple[jax.Array, jax.
     """(min, angle in degrees where it occurs) of a sampled curve."""
     i = jnp.argmin(values)
     return values[i], theta_deg[i]
+
+
+# Relative accuracy camjax documents for a contact stress (README "Accuracy and limits").
+STRESS_RTOL = {"float64": 1e-9, "float32": 1e-4}
+
+
+def stress_relative_error_bound(base_radius_mm, s, d2s, rho_mm, dtype) -> jax.Array:
+    """Round-off bound on the relative error of sigma = C / sqrt(rho), rho = R_b + s + s''.
+
+    rho is a difference of terms of size R_b + |s| + |s''|; near the curvature limit it cancels
+    and its relative error grows like eps (R_b + |s| + |s''|) / rho, halved by the square root.
+    A few ulps of the law evaluation itself are covered by the factor 4.
+    """
+    eps = jnp.finfo(dtype).eps
+    scale = jnp.abs(base_radius_mm) + jnp.abs(s) + jnp.abs(d2s)
+    return 4.0 * 0.5 * eps * safe_divide(scale, jnp.abs(rho_mm), fallback=jnp.inf)
+
+
+def precision_warning(base_radius_mm, s, d2s, rho_mm, dtype) -> str | None:
+    """A message when the dtype cannot deliver the documented stress accuracy, else None.
+
+    Not traceable (returns a Python string): call it on concrete arrays, after a solve.
+    """
+    name = jnp.dtype(dtype).name
+    bound = float(jnp.max(stress_relative_error_bound(base_radius_mm, s, d2s, rho_mm, dtype)))
+    tol = STRESS_RTOL.get(name, STRESS_RTOL["float32"])
+    if bound <= tol:
+        return None
+    return (f"{name}: the contact stress may be off by up to {bound:.1e} (relative) because the "
+            f"radius of curvature ({float(jnp.min(rho_mm)):.3g} mm) is a small difference of large "
+            f"terms; documented tolerance {tol:g}. Use float64 for designs this close to rho = 0.")

@@ -87,7 +87,7 @@ def test_gradients_finite_for_any_base_radius_lift_speed_spring(default_scene):
         f = loads.kinetostatic_force(train, motion)
         rho = geometry.flat_radius_of_curvature(rb, kin)
         sigma = contact.hertz_line_stress(f, rho, c.cam_width_mm, c.cam, c.follower)
-        torque = loads.cam_torque(f, motion, w)
+        torque = loads.cam_torque(f, kin.ds)
         return jnp.max(sigma) + jnp.max(torque)
 
     grad = jax.jit(jax.grad(peak_stress))

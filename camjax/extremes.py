@@ -1,0 +1,454 @@
+"""The numerical-stability matrix: camjax at the edges of its inputs, against float64 references.
+
+Each :class:`Case` records a computed value, an independent float64 reference (closed form,
+NumPy, or a float64 run of the same quantity for the precision table), the error, the tolerance
+with its reason, and pass/fail. ``camjax check-extremes`` runs :func:`run_matrix` and writes it.
+
+Not for ``jit``: this module drives the library from Python and reports; everything it calls is
+jitted/differentiated inside.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Iterable
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from camjax import contact, geometry, loads, program
+from camjax.analysis import scene_arrays
+from camjax.laws import LAWS, boundary_condition_number, polynomial_law
+from camjax.numerics import RHO_FLOOR_MM, STRESS_RTOL, precision_warning
+from camjax.program import MotionProgram, Segment
+from camjax.scene import Scene, load_scene
+
+
+class Case(NamedTuple):
+    """One row of the matrix."""
+
+    group: str
+    name: str
+    value: float
+    reference: float
+    error: float
+    tolerance: float
+    passed: bool
+    note: str = ""
+
+    def as_dict(self) -> dict:
+        d = self._asdict()
+        for k in ("value", "reference", "error", "tolerance"):
+            v = d[k]
+            d[k] = v if math.isfinite(v) else str(v)  # JSON has no inf/nan
+        return d
+
+
+def _case(group, name, value, reference, tol, *, relative=False, note="") -> Case:
+    value, reference = float(value), float(reference)
+    err = abs(value - reference)
+    if relative:
+        err = err / max(abs(reference), 1e-300)
+    ok = math.isfinite(value) and math.isfinite(err) and err <= tol
+    return Case(group, name, value, reference, err, float(tol), bool(ok), note)
+
+
+def _count_nonfinite(*arrays) -> int:
+    leaves = jax.tree_util.tree_leaves(arrays)
+    return int(sum(int(np.sum(~np.isfinite(np.asarray(a)))) for a in leaves))
+
+
+def _finite_case(group, name, *arrays, note="") -> Case:
+    bad = _count_nonfinite(*arrays)
+    return Case(
+        group,
+        name,
+        float(bad),
+        0.0,
+        float(bad),
+        0.0,
+        bad == 0,
+        note or "number of non-finite entries in values and gradients",
+    )
+
+
+# ------------------------------------------------------------------------------------ laws
+
+
+def law_cases() -> list[Case]:
+    """Boundary conditions at 0, 1 and 1e-15 from them; closed forms vs autodiff on a dense grid."""
+    out = []
+    ends = jnp.asarray([0.0, 1e-15, 1.0 - 1e-15, 1.0])
+    x = jnp.linspace(0.0, 1.0, 4001)
+    for name, law in LAWS.items():
+        v = law(ends)
+        bc = max(abs(float(v.p[0])), abs(float(v.p[3]) - 1.0), abs(float(v.dp[0])), abs(float(v.dp[3])))
+        # 1e-15 inside an end: p moves by at most max|p'| 1e-15 ~ 3e-15
+        near = max(abs(float(v.p[1] - v.p[0])), abs(float(v.p[2] - v.p[3])))
+        out.append(
+            _case(
+                "laws",
+                f"{name}: boundary conditions p(0)=0, p(1)=1, p'=0",
+                bc,
+                0.0,
+                1e-13,
+                note="round-off of sin/cos at the ends (a few ulps of the peak values)",
+            )
+        )
+        out.append(
+            _case(
+                "laws",
+                f"{name}: p within 1e-15 of the ends",
+                near,
+                0.0,
+                1e-14,
+                note="|p(1e-15) - p(0)| <= max|p'| * 1e-15 plus round-off",
+            )
+        )
+        vals = law(x)
+        worst = 0.0
+        for k, closed in enumerate((vals.dp, vals.d2p, vals.d3p)):
+            ad = jax.vmap(jax.grad(lambda t, k=k, law=law: law(t)[k]))(x)
+            scale = max(1.0, float(jnp.max(jnp.abs(closed))))
+            worst = max(worst, float(jnp.max(jnp.abs(closed - ad))) / scale)
+        out.append(
+            _case(
+                "laws",
+                f"{name}: closed-form derivatives vs jax.grad (4001 points)",
+                worst,
+                0.0,
+                1e-10,
+                note="relative to the peak; both are float64 evaluations of one formula",
+            )
+        )
+        out.append(_finite_case("laws", f"{name}: values and autodiff finite on [0, 1]", vals))
+    return out
+
+
+def polynomial_cases() -> list[Case]:
+    """General polynomial laws up to exponent 12: boundary residual vs condition number."""
+    out = []
+    sets = [tuple(range(3, k + 1)) for k in range(4, 13)] + [(2, 5, 9, 12), (3, 7, 11), (5, 12), (1, 12)]
+    for exps in sets:
+        law = polynomial_law(exps)
+        end = law(jnp.asarray(1.0))
+        resid = abs(float(end.p) - 1.0)
+        for k, d in enumerate((end.dp, end.d2p, end.d3p), start=1):
+            if k < len(exps):
+                resid = max(resid, abs(float(d)))
+        cond = boundary_condition_number(exps)
+        coef = sum(abs(float(c)) for c in law.description.split()[1::2] if _is_number(c)) or 1.0
+        # evaluation at x = 1 sums terms of size ~ sum |c_k| [e_k]_3: round-off ~ eps times that
+        tol = 64 * np.finfo(float).eps * coef * max(exps) ** 3
+        out.append(
+            _case(
+                "polynomials",
+                f"exponents {'-'.join(map(str, exps))} (cond {cond:.1e})",
+                resid,
+                0.0,
+                tol,
+                note=f"boundary residual; coefficients exact (rational), sum|c| = {coef:.3g}",
+            )
+        )
+    return out
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text.split("x")[0])
+        return True
+    except ValueError:
+        return False
+
+
+# -------------------------------------------------------------------------------- programs
+
+
+def _cycloid_numpy(theta_deg, rise_deg, lift):
+    """s, s' of dwell-free rise(rise_deg)-return(360-rise_deg) cycloidal program, NumPy float64."""
+    th = np.asarray(theta_deg, dtype=np.float64)
+    ret = 360.0 - rise_deg
+    s, v = np.zeros_like(th), np.zeros_like(th)
+    m = th < rise_deg
+    x = th[m] / rise_deg
+    s[m] = lift * (x - np.sin(2 * np.pi * x) / (2 * np.pi))
+    v[m] = lift * (1 - np.cos(2 * np.pi * x)) / math.radians(rise_deg)
+    x = (th[~m] - rise_deg) / ret
+    s[~m] = lift * (1 - (x - np.sin(2 * np.pi * x) / (2 * np.pi)))
+    v[~m] = -lift * (1 - np.cos(2 * np.pi * x)) / math.radians(ret)
+    return s, v
+
+
+def program_cases(sample_counts: Iterable[int] = (1, 2, 7, 360, 36_000, 360_000)) -> list[Case]:
+    """Rise angles 0.5..359 deg, lifts 1e-6..1e3 mm, grids of 1..360 000 samples."""
+    out = []
+    cyc = LAWS["cycloidal"]
+    for rise_deg in (0.5, 1.0, 90.0, 359.0, 359.5):
+        for lift in (1e-6, 1.0, 1e3):
+            prog = MotionProgram.from_segments(
+                [Segment("rise", rise_deg, cyc, lift), Segment("return", 360.0 - rise_deg, cyc, lift)]
+            )
+            for n in sample_counts:
+                if n > 36_000 and not (lift == 1.0 and rise_deg == 0.5):
+                    continue  # the largest grid once, on the hardest segment ratio
+                kin = program.evaluate(prog, n)
+                s_ref, v_ref = _cycloid_numpy(np.arange(n) * 360.0 / n, rise_deg, lift)
+                err = float(np.max(np.abs(np.asarray(kin.s) - s_ref))) / lift
+                verr = float(
+                    np.max(np.abs(np.asarray(kin.ds) - v_ref) / np.maximum(np.max(np.abs(v_ref)), 1e-300))
+                )
+                name = f"rise {rise_deg:g} deg, lift {lift:g} mm, N = {n}"
+                out.append(
+                    _case(
+                        "programs",
+                        f"{name}: s vs NumPy (relative to lift)",
+                        max(err, verr),
+                        0.0,
+                        1e-12,
+                        note="two float64 evaluations of the same closed form",
+                    )
+                )
+    # joints exactly on samples and between them
+    prog = MotionProgram.from_segments(
+        [
+            Segment("dwell", 100),
+            Segment("rise", 80, cyc, 5.0),
+            Segment("dwell", 120),
+            Segment("return", 60, cyc, 5.0),
+        ]
+    )
+    for n in (360, 7, 1000):
+        kin = program.evaluate(prog, n)
+        th = np.arange(n) * 360.0 / n
+        on = np.isin(np.round(th, 9), [100.0, 180.0, 300.0])
+        expected = np.where(th < 100, 0.0, np.where(th < 180, np.nan, np.where(th < 300, 5.0, np.nan)))
+        ok = np.isnan(expected) | (np.abs(np.asarray(kin.s) - np.nan_to_num(expected)) < 1e-12)
+        out.append(
+            Case(
+                "programs",
+                f"reference program, N = {n}: dwell levels exact ({int(on.sum())} samples on joints)",
+                float((~ok).sum()),
+                0.0,
+                float((~ok).sum()),
+                0.0,
+                bool(ok.all()),
+                "samples on a joint belong to the segment that starts there",
+            )
+        )
+    # FLCD: exact one-sided jumps, not sampled differences
+    j = {jt.joint_deg: jt for jt in program.joints(prog)}[100.0]
+    out.append(
+        _case(
+            "programs",
+            "FLCD jump of s''' at 100 deg vs h 4 pi^2 / beta^3",
+            j.jump_j,
+            5.0 * 4 * math.pi**2 / math.radians(80) ** 3,
+            1e-12,
+            relative=True,
+            note="one-sided limits of the closed form at the joint",
+        )
+    )
+    return out
+
+
+# ------------------------------------------------------------------------ geometry, stress
+
+
+def geometry_cases(scene: Scene) -> list[Case]:
+    """Base radius 1e-3x..10x the minimum, rho -> 0+, rho <= 0, gradients everywhere."""
+    out = []
+    arrays = scene_arrays(scene)
+    c = scene.contact
+    rb_min = float(geometry.flat_min_base_radius(arrays.kin)[0])
+
+    def peak_stress(rb):
+        rho = geometry.flat_radius_of_curvature(rb, arrays.kin)
+        return jnp.max(contact.stress_from_coefficient(arrays.stress_coefficient, rho))
+
+    vg = jax.jit(jax.value_and_grad(peak_stress))
+    for factor in (1e-3, 0.1, 0.5, 0.99, 1.0, 1.0 + 1e-12, 1.01, 2.0, 10.0):
+        rb = rb_min * factor
+        val, grad = vg(rb)
+        rho_min = float(jnp.min(geometry.flat_radius_of_curvature(rb, arrays.kin)))
+        feasible = rho_min > 0
+        out.append(
+            _finite_case(
+                "geometry",
+                f"R_b = {factor:g} x min ({rb:.6g} mm): sigma and "
+                f"d sigma/dR_b finite; {'feasible' if feasible else 'infeasible (rho <= 0)'}",
+                val,
+                grad,
+            )
+        )
+    # sigma ~ rho^-1/2 down to rho = 1e-12 mm
+    k = contact.compliance(c.cam, c.follower)
+    for rho in (1.0, 1e-3, 1e-6, 1e-9, 1e-12):
+        s = contact.hertz_line_stress(50.0, rho, c.cam_width_mm, c.cam, c.follower)
+        ref = 0.564 * math.sqrt(50.0 / c.cam_width_mm / (rho * float(k)))
+        out.append(
+            _case(
+                "stress",
+                f"sigma at rho = {rho:g} mm (F = 50 N)",
+                s,
+                ref,
+                1e-14,
+                relative=True,
+                note="closed form; sqrt and divide are correctly rounded",
+            )
+        )
+    sat = contact.hertz_line_stress(50.0, -1.0, c.cam_width_mm, c.cam, c.follower)
+    ref = 0.564 * math.sqrt(50.0 / c.cam_width_mm / (RHO_FLOOR_MM * float(k)))
+    out.append(
+        _case(
+            "stress",
+            "sigma at rho = -1 mm saturates at the floor value",
+            sat,
+            ref,
+            1e-14,
+            relative=True,
+            note=f"rho floored at {RHO_FLOOR_MM:g} mm: finite, flagged infeasible",
+        )
+    )
+    return out
+
+
+def speed_cases(scene: Scene) -> list[Case]:
+    """Cam speeds 0 .. 20 000 rpm: forces and torques finite, contact loss reported."""
+    out = []
+    arrays = scene_arrays(scene)
+    train = scene.follower.train
+    for rpm in (0.0, 1.0, 240.0, 2000.0, 20_000.0):
+        w = program.rpm_to_rad_s(rpm)
+
+        def peak_force(w):
+            motion = program.time_kinematics(arrays.kin, w)
+            f = loads.kinetostatic_force(train, motion)
+            return jnp.max(f) + jnp.max(loads.cam_torque(f, arrays.kin.ds))
+
+        val, grad = jax.value_and_grad(peak_force)(jnp.asarray(w))
+        motion = program.time_kinematics(arrays.kin, w)
+        margin = float(loads.contact_margin(loads.kinetostatic_force(train, motion)))
+        state = "contact kept" if margin > 0 else "contact LOST (reported)"
+        out.append(
+            _finite_case("speed", f"{rpm:g} rpm: force, torque and gradient finite; {state}", val, grad)
+        )
+    # static: force equals spring preload + weight at s = 0 (0 rpm)
+    motion = program.time_kinematics(arrays.kin, 0.0)
+    f0 = float(loads.kinetostatic_force(train, motion)[0])
+    ref = train.spring_N_per_m * train.preload_mm * 1e-3 + train.mass_kg * train.gravity_m_s2
+    out.append(_case("speed", "0 rpm: force at 0 deg = k x0 + m g", f0, ref, 1e-12, relative=True))
+    return out
+
+
+# ------------------------------------------------------------------------------ precision
+
+
+def _report_figures(scene: Scene, dtype, base_radius_mm: float) -> dict[str, float]:
+    a = scene_arrays(scene, dtype=dtype)
+    rb = jnp.asarray(base_radius_mm, dtype)
+    rho = geometry.flat_radius_of_curvature(rb, a.kin)
+    figs = {
+        "velocity max (m/s)": jnp.max(a.motion.velocity),
+        "velocity min (m/s)": jnp.min(a.motion.velocity),
+        "accel max (m/s^2)": jnp.max(a.motion.accel),
+        "accel min (m/s^2)": jnp.min(a.motion.accel),
+        "jerk max (m/s^3)": jnp.max(a.motion.jerk),
+        "jerk min (m/s^3)": jnp.min(a.motion.jerk),
+        "force max (N)": jnp.max(a.force_N),
+        "force min (N)": jnp.min(a.force_N),
+        "torque max (N m)": jnp.max(a.torque_Nm),
+        "torque min (N m)": jnp.min(a.torque_Nm),
+        "min base radius (mm)": geometry.flat_min_base_radius(a.kin)[0],
+        "min face width (mm)": geometry.flat_face_width(a.kin),
+        f"rho min at R_b = {base_radius_mm:g} (mm)": jnp.min(rho),
+        f"stress max at R_b = {base_radius_mm:g} (MPa)": jnp.max(
+            contact.stress_from_coefficient(a.stress_coefficient, rho)
+        ),
+    }
+    return {k: float(v) for k, v in figs.items()}
+
+
+def precision_cases(scene: Scene, base_radii: Iterable[float] = (28.4,), rtol32: float = 1e-5) -> list[Case]:
+    """Every reference-report figure in float32 vs float64; near rho -> 0 float32 must warn."""
+    out = []
+    for rb in base_radii:
+        f64 = _report_figures(scene, jnp.float64, rb)
+        f32 = _report_figures(scene, jnp.float32, rb)
+        for name, ref in f64.items():
+            out.append(
+                _case(
+                    "precision",
+                    f"float32 {name}",
+                    f32[name],
+                    ref,
+                    rtol32,
+                    relative=True,
+                    note="float32 eps = 1.2e-7; figures are sums of a few terms",
+                )
+            )
+    # near the curvature limit float32 loses accuracy: the guard must say so
+    a64, a32 = scene_arrays(scene), scene_arrays(scene, dtype=jnp.float32)
+    rb_min = float(geometry.flat_min_base_radius(a64.kin)[0])
+    for gap in (1e-1, 1e-2, 1e-3):
+        rb = rb_min + gap
+        s64 = contact.stress_from_coefficient(
+            a64.stress_coefficient, geometry.flat_radius_of_curvature(rb, a64.kin)
+        )
+        rho32 = geometry.flat_radius_of_curvature(jnp.float32(rb), a32.kin)
+        s32 = contact.stress_from_coefficient(a32.stress_coefficient, rho32)
+        err = abs(float(jnp.max(s32)) - float(jnp.max(s64))) / float(jnp.max(s64))
+        warned = precision_warning(jnp.float32(rb), a32.kin.s, a32.kin.d2s, rho32, jnp.float32) is not None
+        honest = warned or err <= STRESS_RTOL["float32"]
+        out.append(
+            Case(
+                "precision",
+                f"float32 stress at R_b = min + {gap:g} mm: {'warns' if warned else 'no warning'}",
+                float(jnp.max(s32)),
+                float(jnp.max(s64)),
+                err,
+                STRESS_RTOL["float32"],
+                bool(honest),
+                "passes when within tolerance or when precision_warning fires",
+            )
+        )
+    return out
+
+
+# ----------------------------------------------------------------------------------- runner
+
+
+def run_matrix(
+    scene: Scene | None = None,
+    progress: Callable[[str], None] | None = None,
+    extra_groups: Iterable[Callable[[Scene], list[Case]]] = (),
+) -> list[Case]:
+    """Run every group of the matrix on ``scene`` (default: the embedded reference scene)."""
+    scene = scene or load_scene()
+    groups: list[tuple[str, Callable[[], list[Case]]]] = [
+        ("laws", law_cases),
+        ("polynomials", polynomial_cases),
+        ("programs", program_cases),
+        ("geometry and stress", lambda: geometry_cases(scene)),
+        ("speed", lambda: speed_cases(scene)),
+        ("precision", lambda: precision_cases(scene)),
+    ]
+    groups += [(fn.__name__, lambda fn=fn: fn(scene)) for fn in extra_groups]
+    cases: list[Case] = []
+    for name, fn in groups:
+        if progress:
+            progress(name)
+        cases.extend(fn())
+    return cases
+
+
+def format_table(cases: Iterable[Case]) -> str:
+    """A short text table: group, case, value, reference, error, tolerance, PASS/FAIL."""
+    lines = [f"{'group':12s} {'case':78s} {'value':>12s} {'reference':>12s} {'error':>9s} {'tol':>8s}"]
+    for c in cases:
+        lines.append(
+            f"{c.group:12s} {c.name[:78]:78s} {c.value:12.6g} {c.reference:12.6g} {c.error:9.2e} "
+            f"{c.tolerance:8.1e} {'pass' if c.passed else 'FAIL'}"
+        )
+    return "\n".join(lines)
