@@ -178,6 +178,32 @@ def _setup_design(p: argparse.ArgumentParser):
     return run
 
 
+@command("check-extremes", "run the numerical-stability matrix and write extremes.json")
+def _setup_check_extremes(p: argparse.ArgumentParser):
+    p.add_argument("scene", nargs="?", default=None, help="scene file or built-in name (default: default)")
+    p.add_argument("--out", required=True, metavar="DIR", help="output folder")
+
+    def run(args) -> int:
+        from camjax.extremes import format_table, run_matrix
+        from camjax.scene import load_scene
+
+        scene = load_scene(args.scene)
+        cases = run_matrix(scene, progress=lambda g: print(f"  running {g} ...", file=sys.stderr))
+        failed = [c for c in cases if not c.passed]
+        with staged_output(args.out) as tmp:
+            write_json(tmp / "extremes.json", {
+                "scene": scene.name,
+                "cases": [c.as_dict() for c in cases],
+                "summary": {"cases": len(cases), "passed": len(cases) - len(failed), "failed": len(failed)},
+            })
+            (tmp / "extremes.txt").write_text(format_table(cases) + "\n")
+        print(format_table(failed) if failed else f"all {len(cases)} cases pass")
+        print(f"{len(cases) - len(failed)} passed, {len(failed)} failed; wrote {Path(args.out) / 'extremes.json'}")
+        return 1 if failed else 0
+
+    return run
+
+
 @command("dynamics", "follower-train vibration, compensation, robustness and jump of a scene")
 def _setup_dynamics(p: argparse.ArgumentParser):
     p.add_argument("scene", help="scene TOML file with a [dynamics] section, or a built-in name "

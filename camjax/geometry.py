@@ -104,8 +104,9 @@ def roller_profile(base_radius_mm, roller_radius_mm, offset_mm, kin: Kinematics)
     w = safe_sqrt(rp**2 - offset_mm**2) + kin.s
     u = kin.ds - offset_mm
     norm = safe_sqrt(w**2 + u**2)
-    # unit normal in the follower frame points from the pitch point towards the cam centre side
-    nx, ny = safe_divide(u, norm), safe_divide(w, norm)
-    px, py = offset_mm - roller_radius_mm * nx, w - roller_radius_mm * ny
+    # the pitch curve's tangent in the follower frame is (w, u); its inward unit normal (towards
+    # the cam centre) is (u, -w) / |(w, u)|
+    nx, ny = safe_divide(u, norm), safe_divide(-w, norm)
+    px, py = offset_mm + roller_radius_mm * nx, w + roller_radius_mm * ny
     c, s = jnp.cos(kin.theta), jnp.sin(kin.theta)
     return py * s + px * c, py * c - px * s

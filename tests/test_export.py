@@ -93,8 +93,6 @@ type = "flat"
     assert names == FILES - {"loads.png", "stress.png"}
 
 
-@pytest.mark.xfail(strict=True, reason="geometry.roller_profile offsets the pitch curve with the "
-                   "wrong sign of the tangential normal component (reported; geometry.py not ours)")
 def test_roller_outline_is_envelope_of_roller_circles():
     # The cam outline is the pitch curve moved by R_f along its inward normal. The normal is
     # taken here from finite differences of the pitch curve on a dense grid (independent).
