@@ -9,7 +9,7 @@ import jax
 
 jax.config.update("jax_enable_x64", True)
 
-from camjax import contact, geometry, laws, loads, numerics, program  # noqa: E402
+from camjax import contact, geometry, laws, loads, numerics, program, report  # noqa: E402
 from camjax.analysis import SceneArrays, scene_arrays  # noqa: E402
 from camjax.contact import Material, hertz_line_stress  # noqa: E402
 from camjax.laws import (  # noqa: E402
@@ -24,6 +24,7 @@ from camjax.laws import (  # noqa: E402
 )
 from camjax.loads import FollowerTrain, Guide  # noqa: E402
 from camjax.program import Kinematics, MotionProgram, Segment, joints  # noqa: E402
+from camjax.report import design_report  # noqa: E402
 from camjax.scene import Scene, SceneError, load_scene, parse_scene  # noqa: E402
 
 __version__ = "0.1.0"
@@ -33,5 +34,5 @@ __all__ = [
     "Material", "MotionProgram", "Scene", "SceneArrays", "SceneError", "Segment", "contact",
     "fourier_law", "geometry", "get_law", "hertz_line_stress", "joints", "laws", "load_scene",
     "loads", "numerics", "parse_scene", "polynomial_law", "program", "scene_arrays",
-    "stepped_law",
+    "stepped_law", "design_report", "report",
 ]
