@@ -1,0 +1,134 @@
+"""Timing and provenance: compile time apart from steady state, medians after warm-up.
+
+Every figure the benchmarks report comes from :func:`time_jit` (JAX: lower + compile timed
+alone, then the compiled executable called after warm-up) or :func:`time_python` (SciPy, NumPy:
+plain calls after warm-up). Both return a :class:`Timing` whose ``median_s`` is the figure used.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import os
+import platform
+import statistics
+import time
+from collections.abc import Callable
+from typing import Any, NamedTuple
+
+import jax
+import numpy as np
+
+
+class Timing(NamedTuple):
+    """Wall-clock times of one benchmarked call, seconds."""
+
+    compile_s: float  # jit lower + compile (0 for non-JAX code)
+    median_s: float  # median of the steady-state repeats (the reported figure)
+    min_s: float
+    repeats: int
+    samples_s: tuple  # every steady-state repeat
+
+
+def block(tree: Any) -> Any:
+    """Wait for every array of a pytree (JAX dispatch is asynchronous)."""
+    return jax.block_until_ready(tree)
+
+
+def _repeat(call: Callable[[], Any], repeats: int, min_time_s: float) -> list[float]:
+    """At least ``repeats`` timed calls, more (up to 50) while their total is under min_time_s."""
+    times: list[float] = []
+    while len(times) < repeats or (sum(times) < min_time_s and len(times) < 50):
+        t0 = time.perf_counter()
+        block(call())
+        times.append(time.perf_counter() - t0)
+    return times
+
+
+def _timing(compile_s: float, times: list[float]) -> Timing:
+    return Timing(compile_s, statistics.median(times), min(times), len(times), tuple(times))
+
+
+def time_jit(fn: Callable, *args, repeats: int = 5, warmup: int = 1, min_time_s: float = 0.2,
+             static_argnames=()) -> tuple[Timing, Any]:
+    """Time ``jax.jit(fn)``: compile (lower + compile) alone, then the median of steady calls.
+
+    Returns the timing and the output of the last call. ``args`` are passed as traced arguments
+    (never closed over), so XLA cannot constant-fold the benchmark away.
+    """
+    t0 = time.perf_counter()
+    compiled = jax.jit(fn, static_argnames=static_argnames).lower(*args).compile()
+    compile_s = time.perf_counter() - t0
+    out = None
+    for _ in range(warmup):
+        out = block(compiled(*args))
+    times = _repeat(lambda: compiled(*args), repeats, min_time_s)
+    out = block(compiled(*args))
+    return _timing(compile_s, times), out
+
+
+def time_python(call: Callable[[], Any], repeats: int = 3, warmup: int = 1,
+                min_time_s: float = 0.0) -> tuple[Timing, Any]:
+    """Median of ``repeats`` calls of a plain Python callable after ``warmup`` calls."""
+    out = None
+    for _ in range(warmup):
+        out = call()
+    times = _repeat(call, repeats, min_time_s)
+    return _timing(0.0, times), out
+
+
+def compiled_cost(fn: Callable, *args) -> dict:
+    """XLA's static cost estimate of ``jax.jit(fn)(*args)`` (flops, transcendentals, bytes)."""
+    cost = jax.jit(fn).lower(*args).compile().cost_analysis()
+    if isinstance(cost, list):  # older jax returned one dict per computation
+        cost = cost[0] if cost else {}
+    keep = ("flops", "transcendentals", "bytes accessed")
+    return {k.replace(" ", "_"): float(cost[k]) for k in keep if k in (cost or {})}
+
+
+def fusion_count(fn: Callable, *args) -> int:
+    """Number of XLA fusions in the optimized HLO of ``jax.jit(fn)(*args)`` (kernel launches)."""
+    text = jax.jit(fn).lower(*args).compile().as_text()
+    return sum(1 for line in text.splitlines() if " fusion(" in line or "= fusion" in line)
+
+
+def environment(dtype: str) -> dict:
+    """Provenance recorded in the JSON: versions, machine, CPU count, dtype, backend, date."""
+    import jaxlib
+    import scipy
+
+    try:
+        load = os.getloadavg()
+    except OSError:
+        load = None
+    return {
+        "date_utc": _dt.datetime.now(_dt.UTC).strftime("%Y-%m-%dT%H:%M:%SZ"),
+        "jax": jax.__version__,
+        "jaxlib": jaxlib.__version__,
+        "numpy": np.__version__,
+        "scipy": scipy.__version__,
+        "python": platform.python_version(),
+        "machine": f"{platform.system()} {platform.machine()} {_cpu_model()}".strip(),
+        "cpu_count": os.cpu_count(),
+        "backend": jax.default_backend(),
+        "devices": [str(d) for d in jax.devices()],
+        "dtype": dtype,
+        "x64": bool(jax.config.jax_enable_x64),
+        "load_average_at_start": load,
+    }
+
+
+def _cpu_model() -> str:
+    try:
+        with open("/proc/cpuinfo") as f:
+            for line in f:
+                if line.startswith("model name"):
+                    return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor()
+
+
+def loglog_slope(x, y) -> float:
+    """Least-squares exponent b of y ~ a x^b."""
+    x, y = np.log(np.asarray(x, float)), np.log(np.asarray(y, float))
+    return float(np.polyfit(x, y, 1)[0])
