@@ -55,11 +55,13 @@ class Plant(NamedTuple):
     stiffness: jax.Array  # k23, follower-to-load stiffness
 
 
+@jax.jit
 def natural_frequency_rad_s(plant: Plant) -> jax.Array:
     """omega_n = sqrt(k23 / I3), rad/s."""
     return jnp.sqrt(plant.stiffness / plant.inertia)
 
 
+@jax.jit
 def damping_ratio(plant: Plant) -> jax.Array:
     """zeta = c3 / (2 sqrt(k23 I3)), dimensionless."""
     return plant.damping / (2.0 * jnp.sqrt(plant.stiffness * plant.inertia))
@@ -74,6 +76,7 @@ def perturbed_plant(plant: Plant, damping_factor=1.0, wn_factor=1.0) -> Plant:
                  plant.stiffness * wn_factor**2)
 
 
+@jax.jit
 def transfer(plant: Plant, omega_rad_s: jax.Array) -> jax.Array:
     """G(i omega) = k23 / (k23 - I3 omega^2 + i c3 omega), complex, shape of ``omega_rad_s``."""
     w = jnp.asarray(omega_rad_s)
@@ -110,6 +113,7 @@ def _from_complex(z: jax.Array) -> CamHarmonics:
     return CamHarmonics(jnp.real(z), -jnp.imag(z))
 
 
+@partial(jax.jit, static_argnames="n_harmonics")
 def harmonics_from_samples(values: jax.Array, n_harmonics: int) -> CamHarmonics:
     """The first ``n_harmonics`` harmonics of a law sampled at phi_k = 2 pi k / N, k = 0..N-1.
 
@@ -153,6 +157,7 @@ def pad_harmonics(cam: CamHarmonics, n_harmonics: int) -> CamHarmonics:
     return CamHarmonics(jnp.concatenate([cam.cos, pad]), jnp.concatenate([cam.sin, pad]))
 
 
+@jax.jit
 def evaluate_cam(cam: CamHarmonics, phi: jax.Array) -> CamValues:
     """f, df/dphi, d2f/dphi2 at cam angles ``phi`` (rad, any shape)."""
     phi = jnp.asarray(phi)
@@ -183,12 +188,14 @@ def resonant_harmonic(plant: Plant, cam_speed_rad_s) -> tuple[int, float]:
 # ------------------------------------------------------------------ periodic steady state
 
 
+@jax.jit
 def steady_state(cam: CamHarmonics, plant: Plant, cam_speed_rad_s) -> CamHarmonics:
     """Load motion theta3 in periodic steady state, harmonic by harmonic: Z3_n = G(i n Omega) Z2_n."""
     n = jnp.arange(cam.cos.shape[-1])
     return _from_complex(transfer(plant, n * cam_speed_rad_s) * _complex(cam))
 
 
+@jax.jit
 def tracking_error_harmonics(cam: CamHarmonics, target: CamHarmonics, plant: Plant,
                              cam_speed_rad_s) -> CamHarmonics:
     """Harmonics of the load tracking error theta3 - target when the cam ``cam`` runs at Omega.
@@ -200,22 +207,26 @@ def tracking_error_harmonics(cam: CamHarmonics, target: CamHarmonics, plant: Pla
     return _from_complex(z)
 
 
+@jax.jit
 def mean_square(cam: CamHarmonics) -> jax.Array:
     """Mean over the cycle of f(phi)^2 by Parseval: a_0^2 + (1/2) sum_{n>=1} (a_n^2 + b_n^2)."""
     return cam.cos[0] ** 2 + 0.5 * jnp.sum(cam.cos[1:] ** 2 + cam.sin[1:] ** 2)
 
 
+@jax.jit
 def max_abs(cam: CamHarmonics, phi: jax.Array) -> jax.Array:
     """max over the grid ``phi`` of |f(phi)| (the sampled maximum; a grid of N >> 2H is tight)."""
     return jnp.max(jnp.abs(evaluate_cam(cam, phi).f))
 
 
+@jax.jit
 def compensate_linear(cam: CamHarmonics, plant: Plant, cam_speed_rad_s) -> CamHarmonics:
     """Linear feedforward: the cam Z2bar_n = Z2_n / G(i n Omega) whose load reproduces ``cam``."""
     n = jnp.arange(cam.cos.shape[-1])
     return _from_complex(_complex(cam) / transfer(plant, n * cam_speed_rad_s))
 
 
+@jax.jit
 def compensate_time(values: CamValues, plant: Plant, cam_speed_rad_s) -> jax.Array:
     """Linear feedforward in time: theta2bar = theta2 + (c3/k23) theta2' + (I3/k23) theta2''.
 
@@ -227,6 +238,7 @@ def compensate_time(values: CamValues, plant: Plant, cam_speed_rad_s) -> jax.Arr
             + plant.inertia / plant.stiffness * w**2 * values.d2f)
 
 
+@jax.jit
 def robustness_grid(cam: CamHarmonics, target: CamHarmonics, plant: Plant, cam_speed_rad_s,
                     damping_factors: jax.Array, speed_factors: jax.Array, wn_factors: jax.Array,
                     phi: jax.Array) -> jax.Array:
@@ -468,6 +480,7 @@ def compensate_nonlinear(cam: CamHarmonics, drive: Drive, plant: Plant, cam_spee
     return NonlinearCompensation(fitted, theta1, target, jnp.sqrt(jnp.mean(resid**2)))
 
 
+@partial(jax.jit, static_argnames="n_harmonics")
 def fit_harmonics(phi: jax.Array, values: jax.Array, n_harmonics: int) -> CamHarmonics:
     """Least-squares limited Fourier law through scattered samples (phi (K,) rad, values (K,))."""
     n = jnp.arange(n_harmonics + 1, dtype=phi.dtype)
@@ -491,6 +504,7 @@ class ForceClosure(NamedTuple):
     weight: jax.Array = 0.0  # constant load pressing on the cam (m g, N; 0 for oscillating)
 
 
+@jax.jit
 def contact_force(cam: CamHarmonics, plant: Plant, closure: ForceClosure, cam_speed_rad_s,
                   phi: jax.Array) -> jax.Array:
     """Cam-follower contact force of the elastic model in steady state (N or N m), shape of phi.
@@ -506,6 +520,7 @@ def contact_force(cam: CamHarmonics, plant: Plant, closure: ForceClosure, cam_sp
             + plant.stiffness * (v.f - load) + closure.weight)
 
 
+@jax.jit
 def min_contact_force(cam, plant, closure, cam_speed_rad_s, phi) -> jax.Array:
     """min over the grid ``phi`` of the contact force (N or N m): <= 0 means the follower jumps."""
     return jnp.min(contact_force(cam, plant, closure, cam_speed_rad_s, phi))
@@ -554,6 +569,7 @@ def jump_speed(cam: CamHarmonics, plant: Plant, closure: ForceClosure, phi: jax.
     return JumpSpeed(jnp.where(found, 0.5 * (lo + hi), jnp.nan), found)
 
 
+@jax.jit
 def min_preload(cam, plant, closure, cam_speed_rad_s, phi) -> jax.Array:
     """Smallest spring preload x0 keeping F >= 0 over ``phi`` at this speed (m or rad).
 
@@ -563,6 +579,7 @@ def min_preload(cam, plant, closure, cam_speed_rad_s, phi) -> jax.Array:
     return jnp.max(closure.spring_preload - f / closure.spring_rate)
 
 
+@jax.jit
 def min_spring_rate(cam, plant, closure, cam_speed_rad_s, phi) -> jax.Array:
     """Smallest spring rate k_s keeping F >= 0 at this speed with the given preload.
 
@@ -588,6 +605,7 @@ class ShapingResult(NamedTuple):
     constraint_max: jax.Array  # final max |f(phi_c) - value_c| (motion units)
 
 
+@jax.jit
 def band_tracking_ms(cam: CamHarmonics, plant: Plant, speeds_rad_s: jax.Array) -> jax.Array:
     """Mean over ``speeds_rad_s`` of the mean-square load tracking error theta3 - theta2 (Parseval)."""
     return jnp.mean(jax.vmap(lambda w: mean_square(tracking_error_harmonics(cam, cam, plant, w)))(
@@ -615,7 +633,9 @@ def shape_law(cam0: CamHarmonics, plant: Plant, speeds_rad_s: jax.Array, constra
         return (band_tracking_ms(cam, plant, speeds_rad_s) / scale**2
                 + penalty * jnp.mean(err**2) / scale**2)
 
-    opt = optax.lbfgs()
+    # backtracking (Armijo) line search: a smaller program to compile than the default zoom
+    opt = optax.lbfgs(linesearch=optax.scale_by_backtracking_linesearch(max_backtracking_steps=20,
+                                                                        store_grad=True))
     x0 = jnp.stack([cam0.cos, cam0.sin])
     value_and_grad = optax.value_and_grad_from_state(objective)
 

@@ -1,0 +1,490 @@
+"""Follower-train dynamics, jump and compensation against independent references.
+
+References: the closed-form steady state of a 1-DOF oscillator, scipy's solve_ivp, RK4's own
+convergence order, scipy's brentq on a NumPy force computed straight from the Fourier
+coefficients, and central finite differences. Tolerances are stated where they are used.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+import scipy.integrate
+import scipy.optimize
+
+import camjax
+import camjax.cli
+from camjax import dynamics as d
+from camjax.laws import THESIS_NOMINAL
+from camjax.scene import SceneError, builtin_scene_text, parse_scene
+
+W_BENCH = 2 * math.pi * 2.96
+PLANT = d.Plant(0.357, 0.205, 3050.0)
+
+
+@pytest.fixture(scope="module")
+def bench():
+    return camjax.load_scene("thesis-bench")
+
+
+@pytest.fixture(scope="module")
+def bench_cam(bench):
+    return d.program_cam(bench)
+
+
+def _series_numpy(phi, shift=math.pi):
+    """theta2 of the program straight from the thesis coefficients: S(phi + pi) - S(pi)."""
+    s = THESIS_NOMINAL
+
+    def value(x):
+        return s.h0 + sum(h * np.cos(i * x + p) for i, h, p in s.harmonics)
+
+    return value(phi + shift) - value(math.pi)
+
+
+# --------------------------------------------------------------------- bench figures
+
+
+def test_bench_scene_parses_to_the_source_data(bench):
+    spec = bench.dynamics
+    assert (spec.follower, spec.I3, spec.c3, spec.k23) == ("oscillating", 0.357, 0.205, 3050.0)
+    assert spec.cam_speed_hz == pytest.approx(2.96, rel=1e-12)
+    assert spec.motion_scale == 1.0  # lifts are rad for an oscillating follower
+    assert "dynamics" in bench.needs()
+
+
+def test_bench_natural_frequency_damping_and_resonant_harmonic():
+    fn = float(d.natural_frequency_rad_s(PLANT)) / (2 * math.pi)
+    zeta = float(d.damping_ratio(PLANT))
+    assert fn == pytest.approx(math.sqrt(3050 / 0.357) / (2 * math.pi), rel=1e-14)
+    assert fn == pytest.approx(14.71, abs=0.005)
+    assert zeta == pytest.approx(0.205 / (2 * math.sqrt(3050 * 0.357)), rel=1e-14)
+    assert zeta == pytest.approx(0.0031, abs=0.0001)
+    n, ratio = d.resonant_harmonic(PLANT, W_BENCH)
+    assert n == 5 and abs(ratio - 1) < 0.01
+
+
+def test_program_fft_reproduces_the_thesis_series(bench_cam):
+    """The 180+180 deg program of the rising half is the full series (band-limited FFT is exact)."""
+    phi = np.asarray(d.cam_grid(997))
+    got = np.asarray(d.evaluate_cam(bench_cam, phi).f)
+    np.testing.assert_allclose(got, _series_numpy(phi), rtol=0, atol=1e-14)
+
+
+def test_nominal_error_and_exact_compensation(bench_cam):
+    phi = d.cam_grid(720)
+    nominal = float(d.max_abs(d.tracking_error_harmonics(bench_cam, bench_cam, PLANT, W_BENCH), phi))
+    comp = d.compensate_linear(bench_cam, PLANT, W_BENCH)
+    compensated = float(d.max_abs(d.tracking_error_harmonics(comp, bench_cam, PLANT, W_BENCH), phi))
+    assert 0.04 < nominal < 0.06  # measured 0.04855 rad
+    # round-off: relative to the 0.48 rad motion, a few ulps at most
+    assert compensated < 1e-15 * 0.5
+
+
+def test_time_form_of_the_compensation_equals_the_harmonic_inverse(bench, bench_cam):
+    phi = d.cam_grid(512)
+    timeform = d.compensate_time(d._program_values(bench, phi), PLANT, W_BENCH)
+    harmonic = d.evaluate_cam(d.compensate_linear(bench_cam, PLANT, W_BENCH), phi).f
+    np.testing.assert_allclose(timeform, harmonic, rtol=0, atol=1e-13)
+
+
+def test_wn_misestimated_by_10_percent(bench_cam):
+    """Source 003's claim, measured: compensation cut with omega_n off by -10 % / +10 %.
+
+    The issue asks for >= 5x; camjax measures 4.26x (estimate 10 % low) and 5.75x (10 % high),
+    max |theta3 - theta2| on the true bench. The low side misses 5x; asserted as measured.
+    """
+    phi = d.cam_grid(720)
+    nominal = float(d.max_abs(d.tracking_error_harmonics(bench_cam, bench_cam, PLANT, W_BENCH), phi))
+    ratios = {}
+    for est in (0.9, 1.1):
+        c = d.compensate_linear(bench_cam, d.perturbed_plant(PLANT, 1.0, est), W_BENCH)
+        ratios[est] = nominal / float(d.max_abs(d.tracking_error_harmonics(c, bench_cam, PLANT, W_BENCH), phi))
+    assert ratios[0.9] == pytest.approx(4.256, abs=0.01)
+    assert ratios[1.1] == pytest.approx(5.753, abs=0.01)
+
+
+def test_speed_and_wn_errors_enter_only_as_their_ratio(bench_cam):
+    phi = d.cam_grid(360)
+    comp = d.compensate_linear(bench_cam, PLANT, W_BENCH)
+    lam = jnp.array([0.8, 0.9, 1.0, 1.1, 1.2])
+    kap = jnp.array([0.8, 0.9, 1.0, 1.1, 1.2])
+    grid = d.robustness_grid(comp, bench_cam, PLANT, W_BENCH, jnp.array([1.0]), lam, kap, phi)[0]
+    ratio = (lam[:, None] / kap[None, :]).ravel()
+    at_ratio = d.robustness_grid(comp, bench_cam, PLANT, W_BENCH, jnp.array([1.0]), ratio,
+                                 jnp.array([1.0]), phi)[0, :, 0]
+    np.testing.assert_allclose(grid.ravel(), at_ratio, rtol=1e-10, atol=1e-15)
+    assert float(jnp.max(jnp.diag(grid))) < 1e-15  # lambda = kappa: exact again
+    assert float(jnp.min(grid + jnp.eye(5))) > 1e-4  # off the diagonal: a real error
+
+
+# ------------------------------------------------------------ steady state, integrators
+
+
+def test_steady_state_matches_the_closed_form_1dof():
+    """theta2 = A cos(n phi + p): theta3 = A |G| cos(n phi + p + arg G), |G|, arg G by hand."""
+    plant = d.Plant(2.0, 3.0, 5000.0)
+    w, n, amp, p = 7.0, 3, 0.2, 0.4
+    a = np.zeros(6)
+    b = np.zeros(6)
+    a[n], b[n] = amp * math.cos(p), -amp * math.sin(p)
+    cam = d.CamHarmonics(jnp.asarray(a), jnp.asarray(b))
+    phi = np.linspace(0, 2 * math.pi, 50)
+    got = np.asarray(d.evaluate_cam(d.steady_state(cam, plant, w), phi).f)
+    wf = n * w
+    r = wf / math.sqrt(5000 / 2.0)
+    zeta = 3.0 / (2 * math.sqrt(5000 * 2.0))
+    mag = 1 / math.sqrt((1 - r * r) ** 2 + (2 * zeta * r) ** 2)
+    lag = math.atan2(2 * zeta * r, 1 - r * r)
+    np.testing.assert_allclose(got, amp * mag * np.cos(n * phi + p - lag), rtol=0, atol=1e-14)
+
+
+def test_rk4_matches_solve_ivp_on_a_transient(bench_cam):
+    """From rest, 2 cycles: RK4 (M = 720) against solve_ivp (DOP853, rtol 1e-12)."""
+    m, cycles = 720, 2
+    u = d.evaluate_cam(bench_cam, d.cam_grid(2 * m)).f
+    last = d.integrate_train(PLANT, u, W_BENCH, cycles)
+
+    def rhs(t, y):
+        th2 = _series_numpy(W_BENCH * t)
+        return [y[1], (3050.0 * (th2 - y[0]) - 0.205 * y[1]) / 0.357]
+
+    period = 2 * math.pi / W_BENCH
+    t_eval = period * (cycles - 1 + np.arange(m) / m)
+    sol = scipy.integrate.solve_ivp(rhs, (0, t_eval[-1]), [float(u[0]), 0.0], method="DOP853",
+                                    t_eval=t_eval, rtol=1e-12, atol=1e-14)
+    np.testing.assert_allclose(np.asarray(last.angle), sol.y[0], rtol=0, atol=2e-8)
+
+
+def test_harmonic_steady_state_agrees_with_rk4_after_transients(bench_cam):
+    """Run RK4 from rest until e^{-zeta wn t} < 1e-9; the harmonic solution is the limit.
+
+    Measured difference 1.4e-7 rad with M = 720 (2.8e-6 of the 0.049 rad error), and it falls
+    as M^-4 (RK4): the gap is the integrator's, not the steady state's.
+    """
+    cycles = d.settling_cycles(PLANT, W_BENCH, 1e-9)
+    assert 150 < cycles < 300
+    diffs = []
+    for m in (360, 720):
+        u = d.evaluate_cam(bench_cam, d.cam_grid(2 * m)).f
+        load = d.integrate_train(PLANT, u, W_BENCH, cycles).angle
+        harm = d.evaluate_cam(d.steady_state(bench_cam, PLANT, W_BENCH), d.cam_grid(m)).f
+        diffs.append(float(jnp.max(jnp.abs(load - harm))))
+    assert diffs[1] < 3e-7
+    assert 10 < diffs[0] / diffs[1] < 22  # fourth order: 2^4 = 16
+
+
+# --------------------------------------------------------------------------- jump
+
+
+def _fmin_numpy(hz, phi, ks, x0, i2):
+    """min contact force of the bench cam at each speed in ``hz`` (K,), NumPy, from the series."""
+    w = 2 * math.pi * np.atleast_1d(hz)[:, None]
+    i3, c3, k23 = 0.357, 0.205, 3050.0
+    f = _series_numpy(phi)
+    d2f = np.zeros_like(phi)
+    load = np.full((w.shape[0], phi.size), THESIS_NOMINAL.h0 - _offset())
+    for i, h, p in THESIS_NOMINAL.harmonics:
+        x = i * (phi + math.pi) + p
+        g = k23 / (k23 - i3 * (i * w) ** 2 + 1j * c3 * i * w)
+        load += np.real(h * g * np.exp(1j * x))
+        d2f += -(i**2) * h * np.cos(x)
+    force = i2 * w**2 * d2f + ks * (f + x0) + k23 * (f - load)
+    return force.min(axis=1)
+
+
+def _offset():
+    """S(pi): the program's level 0 is the series' value at 180 deg."""
+    return THESIS_NOMINAL.h0 + sum(h * math.cos(i * math.pi + p) for i, h, p in THESIS_NOMINAL.harmonics)
+
+
+def _first_negative_bracket(fmin, speeds):
+    vals = fmin(speeds)
+    k = int(np.argmax(vals <= 0))
+    assert k > 0 and vals[k] <= 0
+    return speeds[k - 1], speeds[k]
+
+
+def test_jump_speed_agrees_with_brentq(bench, bench_cam):
+    spec = bench.dynamics
+    closure = d.closure_of(spec)
+    phi = d.cam_grid(720)
+    js = d.jump_speed(bench_cam, PLANT, closure, phi, 0.1 * W_BENCH, 10 * W_BENCH)
+    assert bool(js.found)
+    hz = float(js.speed_rad_s) / (2 * math.pi)
+    phin = np.asarray(phi)
+
+    def fmin(h):
+        return _fmin_numpy(h, phin, spec.spring_rate, spec.spring_preload, spec.I2)
+
+    # bracket independently: a 1 mHz scan of the NumPy force, then brentq
+    lo, hi = _first_negative_bracket(fmin, np.arange(0.3, 10.0, 0.001))
+    root = scipy.optimize.brentq(lambda h: fmin(h)[0], lo, hi, xtol=1e-14, rtol=1e-14)
+    assert hz == pytest.approx(root, rel=1e-9)
+    assert hz == pytest.approx(2.9363, abs=1e-3)  # just below 2.96 Hz: the 5th-harmonic resonance
+
+
+def test_min_preload_and_spring_rate_put_the_force_at_zero(bench, bench_cam):
+    spec = bench.dynamics
+    closure = d.closure_of(spec)
+    phi = d.cam_grid(720)
+    x0 = d.min_preload(bench_cam, PLANT, closure, W_BENCH, phi)
+    ks = d.min_spring_rate(bench_cam, PLANT, closure, W_BENCH, phi)
+    f_x0 = d.min_contact_force(bench_cam, PLANT, closure._replace(spring_preload=x0), W_BENCH, phi)
+    f_ks = d.min_contact_force(bench_cam, PLANT, closure._replace(spring_rate=ks), W_BENCH, phi)
+    assert abs(float(f_x0)) < 1e-9 and abs(float(f_ks)) < 1e-9
+    assert float(x0) < spec.spring_preload and float(ks) < spec.spring_rate  # the scene has margin
+
+
+TRANSLATING = """
+[dynamics]
+follower = "translating"
+I3 = 0.5
+c3 = 2.0
+k23 = 2.0e5
+compute = ["compensation", "jump"]
+samples = 1024
+harmonics = 200
+"""
+
+
+def test_translating_follower_takes_its_spring_from_follower_and_jumps_at_a_root():
+    scene = parse_scene(builtin_scene_text("default") + TRANSLATING, "translating")
+    spec = scene.dynamics
+    assert spec.motion_scale == 1e-3 and spec.I2 == 1.0 and spec.spring_rate == 3004.0
+    assert spec.spring_preload == pytest.approx(0.013) and spec.weight == pytest.approx(9.81)
+    cam = d.program_cam(scene)
+    plant, closure = d.plant_of(spec), d.closure_of(spec)
+    phi = d.cam_grid(spec.samples)
+    js = d.jump_speed(cam, plant, closure, phi, 2 * math.pi * 0.5, 2 * math.pi * 40)
+    assert bool(js.found)
+    # independent: the same samples, NumPy FFT, a 1 mHz scan for the bracket, brentq
+    s = np.asarray(camjax.program.evaluate(scene.motion.program, 1024).s) * 1e-3
+    z = np.fft.rfft(s)[:201] / 1024
+    z[1:] *= 2
+    n = np.arange(201)
+    e = np.exp(1j * n[None, :] * np.asarray(phi)[:, None])  # (N, H+1)
+    f, d2f, df = np.real(e @ z), np.real(e @ (-(n**2) * z)), np.real(e @ (1j * n * z))
+
+    def fmin(hz):
+        w = 2 * math.pi * np.atleast_1d(hz)[:, None]
+        g = 2.0e5 / (2.0e5 - 0.5 * (n * w) ** 2 + 1j * 2.0 * n * w)  # (K, H+1)
+        load = np.real((g * z) @ e.T)
+        force = 1.0 * w**2 * d2f + 0.345 * w * df + 3004.0 * (f + 0.013) + 2.0e5 * (f - load) + 9.81
+        return force.min(axis=1)
+
+    hz = float(js.speed_rad_s) / (2 * math.pi)
+    lo, hi = _first_negative_bracket(fmin, np.arange(0.5, 8.0, 0.001))
+    root = scipy.optimize.brentq(lambda h: fmin(h)[0], lo, hi, xtol=1e-13, rtol=1e-13)
+    assert hz == pytest.approx(root, rel=1e-8)
+    # a narrow window at the 21st harmonic's resonance (cycloidal laws are not band-limited):
+    # the grid alone (0.15 Hz steps) would step over it; the resonant speeds catch it
+    assert round(float(d.natural_frequency_rad_s(plant)) / float(js.speed_rad_s)) == 21
+
+
+# --------------------------------------------------------------- drive and nonlinear FF
+
+
+def test_nonlinear_feedforward_removes_the_ripple_error(bench, bench_cam):
+    """With drive flexibility, the linear cam still misses; the nonlinear one tracks.
+
+    Shorter settling (1e-5) and M = 360 than the CLI to keep the test quick.
+    """
+    spec = bench.dynamics
+    drive = d.drive_of(spec)
+    cam = d.trim_harmonics(bench_cam)
+    m, cycles = 360, d.settling_cycles(PLANT, W_BENCH, 1e-5)
+    target = d.evaluate_cam(cam, d.cam_grid(m)).f
+    lin = d.compensate_linear(cam, PLANT, W_BENCH)
+    nl = d.compensate_nonlinear(cam, drive, PLANT, W_BENCH, 30, cycles, m)
+    assert float(nl.fit_rms) < 1e-12
+    errs = {}
+    for name, c in (("nominal", cam), ("linear", lin), ("nonlinear", nl.cam)):
+        r = d.simulate_drive(c, drive, PLANT, W_BENCH, cycles, m)
+        errs[name] = float(jnp.max(jnp.abs(r.load - target)))
+        ripple = float(jnp.max(jnp.abs(r.cam_speed - W_BENCH)) / W_BENCH)
+        assert 0.01 < ripple < 0.1  # the cam speed does ripple, by a few percent
+    assert errs["linear"] > 0.5 * errs["nominal"] * 0.5
+    assert errs["nonlinear"] < 1e-4 * errs["nominal"]
+
+
+def test_drive_reduces_to_the_train_when_the_coupling_is_rigid(bench_cam):
+    """Stiff, well-damped coupling: theta1 ~ Omega t and the load follows the rigid-drive train.
+
+    Explicit RK4 needs sqrt(k01/I1) dt < ~2.8: k01 = 1e6 (110 Hz drive mode, zeta 0.5) with
+    M = 720 gives 0.32. Both runs start alike, so transients cancel in the comparison.
+    """
+    drive = d.Drive(2.1, 0.126, 1e6, 1500.0)
+    m = 720
+    cam = d.trim_harmonics(bench_cam)
+    r = d.simulate_drive(cam, drive, PLANT, W_BENCH, 30, m)
+    assert float(jnp.max(jnp.abs(r.cam_speed - W_BENCH))) < 2e-3 * W_BENCH
+    u = d.evaluate_cam(cam, d.cam_grid(2 * m)).f
+    free = d.integrate_train(PLANT, u, W_BENCH, 30).angle
+    assert float(jnp.max(jnp.abs(r.load - free))) < 1e-3 * float(jnp.max(jnp.abs(free - free.mean())))
+
+
+# --------------------------------------------------------------------- gradients
+
+
+def _central(f, x, h):
+    return (f(x + h) - f(x - h)) / (2 * h)
+
+
+def test_gradient_of_the_steady_state_error_matches_finite_differences(bench_cam):
+    def ms(params):
+        k23, c3, i3 = params
+        return d.mean_square(d.tracking_error_harmonics(bench_cam, bench_cam, d.Plant(i3, c3, k23),
+                                                        W_BENCH))
+
+    x = jnp.array([3050.0, 0.205, 0.357])
+    g = jax.grad(ms)(x)
+    for i, h in enumerate((1e-2, 1e-6, 1e-6)):
+        e = jnp.zeros(3).at[i].set(h)
+        fd = (ms(x + e) - ms(x - e)) / (2 * h)
+        assert float(g[i]) == pytest.approx(float(fd), rel=1e-6)
+
+
+def test_gradient_through_rk4_scan_matches_finite_differences(bench_cam):
+    u = d.evaluate_cam(bench_cam, d.cam_grid(180)).f
+
+    def final(k23):
+        return jnp.sum(d.integrate_train(d.Plant(0.357, 0.205, k23), u, W_BENCH, 3).angle ** 2)
+
+    g = float(jax.grad(final)(3050.0))
+    fd = float(_central(final, 3050.0, 1e-2))
+    assert g == pytest.approx(fd, rel=1e-6)
+
+
+def test_gradient_of_the_jump_force_and_band_objective(bench, bench_cam):
+    spec = bench.dynamics
+    closure = d.closure_of(spec)
+    phi = d.cam_grid(360)
+
+    def mean_force(w):
+        return jnp.mean(d.contact_force(bench_cam, PLANT, closure, w, phi) ** 2)
+
+    assert float(jax.grad(mean_force)(W_BENCH)) == pytest.approx(
+        float(_central(mean_force, W_BENCH, 1e-5)), rel=1e-6)
+    band = W_BENCH * jnp.linspace(0.9, 1.1, 5)
+
+    def band_obj(a5):
+        cam = bench_cam._replace(cos=bench_cam.cos.at[5].set(a5))
+        return d.band_tracking_ms(cam, PLANT, band)
+
+    a5 = float(bench_cam.cos[5])
+    assert float(jax.grad(band_obj)(a5)) == pytest.approx(float(_central(band_obj, a5, 1e-7)), rel=1e-6)
+
+
+def test_law_shaping_lowers_band_vibration_and_keeps_the_lift(bench, bench_cam):
+    c_phi, c_val = d._constraints(bench)
+    np.testing.assert_allclose(c_val, [0.0, 0.48337882], atol=1e-12)
+    band = W_BENCH * jnp.linspace(0.9, 1.1, 9)
+    cam0 = d.pad_harmonics(bench_cam, 15)
+    res = d.shape_law(cam0, PLANT, band, jnp.asarray(c_phi), jnp.asarray(c_val), 0.48, steps=100)
+    before = float(jnp.sqrt(d.band_tracking_ms(cam0, PLANT, band)))
+    assert float(res.tracking_rms) < 0.6 * before  # measured 0.0073 vs 0.0158 rad
+    assert float(res.constraint_max) < 1e-5  # quadratic penalty: ~1e-6 rad after 100 steps
+
+
+# ------------------------------------------------------------------- scene and CLI
+
+
+@pytest.mark.parametrize("extra, field", [
+    ('bogus = 1', "dynamics.bogus"),
+    ('I1 = 2.0', "dynamics.I1"),
+    ('compute = ["jump"]', "dynamics.compute"),
+    ('compute = ["drive"]', "dynamics.compute"),
+    ('compute = ["everything"]', "dynamics.compute"),
+    ('samples = 64\nharmonics = 40', "dynamics.harmonics"),
+    ('I3 = 0.0', "dynamics.I3"),
+])
+def test_dynamics_section_errors_name_the_field(extra, field):
+    base = {"follower": '"oscillating"', "I3": "0.3", "c3": "0.1", "k23": "1000.0"}
+    key = extra.split(" = ")[0]
+    lines = [f"{k} = {v}" for k, v in base.items() if k != key] + [extra]
+    text = builtin_scene_text("default").replace("lift_mm = 5.0", "lift_mm = 0.5")  # rad
+    text += "\n[dynamics]\n" + "\n".join(lines) + "\n"
+    with pytest.raises(SceneError) as err:
+        parse_scene(text)
+    assert err.value.field == field
+
+
+def test_oscillating_lift_beyond_pi_is_refused():
+    text = builtin_scene_text("default").replace("lift_mm = 5.0", "lift_mm = 4.0")
+    text += "[dynamics]\nfollower = \"oscillating\"\nI3 = 0.3\nc3 = 0.1\nk23 = 1000.0\n"
+    with pytest.raises(SceneError, match="read as rad"):
+        parse_scene(text)
+
+
+SMALL_BENCH = """
+[dynamics]
+follower = "oscillating"
+I3 = 0.357
+c3 = 0.205
+k23 = 3050.0
+I2 = 0.126
+I1 = 2.1
+k01 = 3000.0
+c01 = 10.0
+spring_rate = 300.0
+spring_preload = 0.5
+samples = 256
+harmonics = 24
+steps_per_cycle = 180
+transient_tolerance = 1e-3
+shaping_harmonics = 11
+shaping_steps = 30
+compute = ["compensation", "robustness", "time_domain", "drive", "nonlinear", "jump", "shaping"]
+speed_factors = [0.9, 1.0, 1.1]
+wn_factors = [0.9, 1.0, 1.1]
+damping_factors = [0.5, 1.0, 2.0]
+"""
+
+
+def test_cli_dynamics_writes_json_and_figures(tmp_path):
+    text = builtin_scene_text("thesis-bench")
+    text = text[: text.index("\n[dynamics]\n")] + SMALL_BENCH
+    path = tmp_path / "bench.toml"
+    path.write_text(text)
+    out = tmp_path / "out"
+    assert camjax.cli.main(["dynamics", str(path), "--out", str(out), "--dpi", "40"]) == 0
+    data = json.loads((out / "dynamics.json").read_text())
+    assert data["natural_frequency_hz"] == pytest.approx(14.71, abs=0.01)
+    assert data["damping_ratio"] == pytest.approx(0.0031, abs=1e-4)
+    assert data["compensated"]["max_tracking_error"] < 1e-15 < data["nominal"]["max_tracking_error"]
+    assert len(data["robustness"]) == 27
+    assert set(data["robustness"][0]) >= {"damping_factor", "speed_factor", "wn_factor", "max_tracking_error"}
+    for key in ("time_domain", "drive", "nonlinear", "jump", "shaping", "speed_wn_equivalence"):
+        assert key in data
+    for name in ("motion", "compensated_cam", "robustness", "drive", "jump"):
+        assert (out / f"dynamics_{name}.png").stat().st_size > 1000
+
+
+def test_cli_dynamics_refuses_a_scene_without_dynamics(tmp_path, capsys):
+    assert camjax.cli.main(["dynamics", "default", "--out", str(tmp_path / "o")]) == 2
+    assert "no [dynamics] section" in capsys.readouterr().err
+    assert not (tmp_path / "o").exists()
+
+
+def test_a_scene_without_dynamics_traces_no_dynamics_code(monkeypatch, tmp_path, default_scene):
+    """Every function of camjax.dynamics is replaced by a counter; the design path must not call one."""
+    calls = []
+    for name in dir(d):
+        obj = getattr(d, name)
+        if callable(obj) and getattr(obj, "__module__", None) == d.__name__ and not isinstance(obj, type):
+            def spy(*a, _name=name, **k):
+                calls.append(_name)
+                raise AssertionError(f"dynamics.{_name} called for a scene without [dynamics]")
+            monkeypatch.setattr(d, name, spy)
+    assert "dynamics" not in default_scene.needs()
+    assert default_scene.dynamics is None
+    camjax.scene_arrays(default_scene)
+    if "design" in camjax.cli.COMMANDS:
+        assert camjax.cli.main(["design", "--out", str(tmp_path / "design")]) == 0
+    assert calls == []
