@@ -36,3 +36,12 @@ __all__ = [
     "loads", "numerics", "parse_scene", "polynomial_law", "program", "scene_arrays",
     "stepped_law", "design_report", "report",
 ]
+
+
+def __getattr__(name):
+    # camjax.dynamics loads lazily: a scene without [dynamics] never imports its models (or optax)
+    if name == "dynamics":
+        import importlib
+
+        return importlib.import_module("camjax.dynamics")
+    raise AttributeError(f"module 'camjax' has no attribute {name!r}")

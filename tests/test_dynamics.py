@@ -488,3 +488,17 @@ def test_a_scene_without_dynamics_traces_no_dynamics_code(monkeypatch, tmp_path,
     if "design" in camjax.cli.COMMANDS:
         assert camjax.cli.main(["design", "--out", str(tmp_path / "design")]) == 0
     assert calls == []
+
+
+def test_the_design_path_does_not_even_import_the_dynamics_models(tmp_path):
+    """In a fresh process, `camjax design` on the default scene leaves camjax.dynamics unloaded."""
+    import subprocess
+    import sys
+
+    code = ("import sys, camjax, camjax.cli\n"
+            f"assert camjax.cli.main(['design', '--out', {str(tmp_path / 'd')!r}]) == 0\n"
+            "assert 'dynamics' not in camjax.load_scene().needs()\n"
+            "print('LOADED' if 'camjax.dynamics' in sys.modules else 'NOT LOADED')\n")
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert run.returncode == 0, run.stderr
+    assert run.stdout.strip().endswith("NOT LOADED")
