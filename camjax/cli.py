@@ -222,6 +222,7 @@ def _setup_dynamics(p: argparse.ArgumentParser):
         if scene.dynamics is None:
             raise UsageError(f"scene '{scene.name}' has no [dynamics] section: nothing to compute "
                              "(allowed: a scene with [dynamics], e.g. thesis-bench)")
+        enable_compilation_cache()
         report = scene_dynamics(scene)
         with staged_output(args.out) as tmp:
             write_json(tmp / "dynamics.json", report.summary)
