@@ -57,6 +57,7 @@ class BlockTask:
     first_weighting: int
     spec: SweepSpec = field(default_factory=SweepSpec)
     cache_dir: str | None = None
+    shard: bool = True
 
 
 def scene_digest(text: str) -> str:
@@ -171,6 +172,7 @@ def solve_block(task: BlockTask) -> list[dict]:
     face_width_mm, size_mm, stress_max_MPa, feasible, ...).
     """
     configure_worker(task.cache_dir)
+    import jax
     import jax.numpy as jnp
 
     import camjax  # noqa: F401  (x64)
@@ -182,10 +184,18 @@ def solve_block(task: BlockTask) -> list[dict]:
     problem = problem_from_scene(scene, samples=spec.samples or None)
     pairs = jnp.asarray(task.weightings, problem.q_mm.dtype).reshape(-1, 2)
     weights = weights_of(pairs[:, 0], pairs[:, 1])
+    mesh = None
+    if task.shard and jax.local_device_count() > 1:
+        from camjax.scaleout import sharding
+
+        mesh = sharding.device_mesh()
     if spec.solver == "gradient":
         from camjax.solvers import gradient
 
-        result = gradient.solve_sweep(problem, weights, spec.mode)
+        if mesh is None:
+            result = gradient.solve_sweep(problem, weights, spec.mode)
+        else:
+            result = sharding.sharded_gradient_sweep(mesh, problem, weights, spec.mode)
     else:
         from camjax.solvers import ga
 
@@ -195,7 +205,10 @@ def solve_block(task: BlockTask) -> list[dict]:
         if overrides:
             settings = ga.GASettings(**{**asdict(settings), **overrides})
         keys = ga.weighting_keys(spec.seed, len(task.weightings), task.first_weighting)
-        result = ga.solve(keys, problem, weights, spec.mode, settings)
+        if mesh is None:
+            result = ga.solve(keys, problem, weights, spec.mode, settings)
+        else:
+            result = sharding.sharded_ga_solve(mesh, keys, problem, weights, spec.mode, settings)
     records = _records(task, problem, weights, result)
     _stress_at(problem, records)
     return records

@@ -1,0 +1,186 @@
+"""The solvers' batch axes laid out over the devices of one host (CPU cores or GPUs).
+
+A sweep's arrays have a **weighting** axis (one independent problem per (alpha, gamma)) and,
+inside it, a **population** axis (GA members; in pointwise mode, the per-angle problems of the
+gradient solver). :func:`device_mesh` arranges the local devices as a 2-D
+:class:`jax.sharding.Mesh` with those two axis names; the functions here place their inputs with
+``NamedSharding`` and call the same jitted solvers, and XLA's SPMD partitioner splits the work.
+Nothing in the solvers changes, so the results equal the unsharded ones: the fitness bit for
+bit (per-member arithmetic; no reduction crosses a device), the solvers to rounding (1e-12 in
+float64; a reduction over a sharded population may be summed in another order).
+
+The weighting axis needs no communication at all. Sharding the GA's population costs one
+all-gather of the (population,) objective and violation per generation (selection ranks the
+whole population) and pays off for populations of thousands. Axes that do not divide by the
+mesh are padded by repeating the last weighting (results trimmed); a population must divide.
+
+On CPU, XLA gives one device per process unless told otherwise: set
+``jax.config.update("jax_num_cpu_devices", N)`` (or
+``XLA_FLAGS=--xla_force_host_platform_device_count=N``) before JAX starts its backend.
+"""
+
+from __future__ import annotations
+
+from functools import partial
+
+import jax
+import jax.numpy as jnp
+from jax.sharding import AxisType, Mesh, NamedSharding
+from jax.sharding import PartitionSpec as PS
+
+from camjax import problem as P
+from camjax.problem import Problem, Weights
+from camjax.solvers import ga, gradient
+
+WEIGHTINGS = "weightings"
+POPULATION = "population"
+
+
+def device_mesh(population_devices: int = 1, devices=None) -> Mesh:
+    """Mesh (weightings x population) over ``devices`` (default: every local device).
+
+    Args:
+      population_devices: devices along the population axis (must divide the device count);
+        the rest go to the weighting axis. 1 (default): weightings only, no communication.
+    """
+    devices = list(jax.local_devices() if devices is None else devices)
+    if population_devices < 1 or len(devices) % population_devices:
+        raise ValueError(f"population_devices: {population_devices} must divide the {len(devices)} devices")
+    shape = (len(devices) // population_devices, population_devices)
+    return jax.make_mesh(shape, (WEIGHTINGS, POPULATION), axis_types=(AxisType.Auto, AxisType.Auto),
+                         devices=devices)
+
+
+def _pad_leading(tree, multiple: int):
+    """Pad every leaf's axis 0 to a multiple by repeating its last entry; returns (tree, size)."""
+    n = jax.tree.leaves(tree)[0].shape[0]
+    extra = -n % multiple
+    if extra == 0:
+        return tree, n
+    return jax.tree.map(lambda x: jnp.concatenate([x, jnp.repeat(x[-1:], extra, axis=0)]), tree), n
+
+
+def _trim(tree, n: int):
+    return jax.tree.map(lambda x: x[:n], tree)
+
+
+def _place(mesh: Mesh, tree, *spec):
+    return jax.device_put(tree, NamedSharding(mesh, PS(*spec)))
+
+
+# ----------------------------------------------------------------------------- fitness
+
+
+@jax.jit
+def _batched_fitness(problem: Problem, weights: Weights, genes: jax.Array):
+    return jax.vmap(ga.fitness, in_axes=(None, 0, 0))(problem, weights, genes)
+
+
+def sharded_fitness(mesh: Mesh, problem: Problem, weights: Weights, genes: jax.Array):
+    """GA fitness of populations for many weightings, over the mesh.
+
+    Args:
+      weights: leaves of shape (w,).
+      genes: (w, p, d) unit-box genes; w split over "weightings", p over "population" (p must
+        divide by the population axis size).
+    Returns (objective, violation), each (w, p), equal bit for bit to ``vmap(ga.fitness)``.
+    """
+    if genes.shape[1] % mesh.shape[POPULATION]:
+        raise ValueError(f"population {genes.shape[1]} must divide by the mesh's {mesh.shape[POPULATION]} "
+                         "population devices")
+    (weights, genes), w = _pad_leading((weights, genes), mesh.shape[WEIGHTINGS])
+    out = _batched_fitness(problem, _place(mesh, weights, WEIGHTINGS),
+                           _place(mesh, genes, WEIGHTINGS, POPULATION))
+    return _trim(out, w)
+
+
+# ----------------------------------------------------------------------- gradient sweep
+
+
+@partial(jax.jit, static_argnames=("settings",))
+def _pointwise_sweep(per: Problem, weights: Weights, settings: gradient.GradientSettings):
+    """(w, n) solves: the per-angle problems ``per`` (leading axis n) for every weighting."""
+    over_angles = jax.vmap(gradient.minimize, in_axes=(0, None, None, None))
+    return jax.vmap(over_angles, in_axes=(None, 0, None, None))(per, weights, None, settings)
+
+
+def sharded_gradient_sweep(mesh: Mesh, problem: Problem, weights: Weights, mode: str = "global",
+                           settings: gradient.GradientSettings = gradient.DEFAULT_SETTINGS
+                           ) -> gradient.GradientResult:
+    """:func:`camjax.solvers.gradient.solve_sweep` with the weightings (and angles) over the mesh.
+
+    Global mode: weightings over every device of the mesh. Pointwise mode: weightings over
+    "weightings", the per-angle problems over "population" (the angle count need not divide:
+    it is padded by repeating the last angle's problem). Leaves (w,) / (w, n) as unsharded.
+    """
+    if mode == "global":
+        (weights,), w = _pad_leading((weights,), mesh.size)
+        weights = _place(mesh, weights, (WEIGHTINGS, POPULATION))
+        return _trim(gradient.solve_sweep(problem, weights, "global", None, settings), w)
+    if mode != "pointwise":
+        raise ValueError(f"mode: {mode!r} is not allowed; use {', '.join(gradient.MODES)}")
+    (weights,), w = _pad_leading((weights,), mesh.shape[WEIGHTINGS])
+    per, n = _pad_leading(P.per_angle(problem), mesh.shape[POPULATION])
+    out = _pointwise_sweep(_place(mesh, per, POPULATION), _place(mesh, weights, WEIGHTINGS), settings)
+    return jax.tree.map(lambda x: x[:w, :n], out)
+
+
+# -------------------------------------------------------------------------------- GA
+
+
+def _run_on_mesh(key, problem: Problem, weights: Weights, settings: ga.GASettings, mesh: Mesh) -> ga.GAResult:
+    """:func:`camjax.solvers.ga.run` with the population pinned to the mesh's population axis.
+
+    The same ``ga_init`` / ``ga_step`` / ``best``; only sharding constraints are added, so the
+    random stream and every arithmetic step are those of the unsharded run.
+    """
+    members = NamedSharding(mesh, PS(POPULATION))
+
+    def pin(state: ga.GAState) -> ga.GAState:
+        return state._replace(
+            genes=jax.lax.with_sharding_constraint(state.genes, NamedSharding(mesh, PS(POPULATION, None))),
+            objective=jax.lax.with_sharding_constraint(state.objective, members),
+            violation=jax.lax.with_sharding_constraint(state.violation, members))
+
+    def body(state, _):
+        state = pin(ga.ga_step(state, problem, weights, settings))
+        return state, ga.best(state)[1]
+
+    state = pin(ga.ga_init(key, problem, weights, settings))
+    state, history = jax.lax.scan(body, state, None, length=settings.generations)
+    genes, _, _ = ga.best(state)
+    design = ga._from_genes(problem, genes)
+    ev = P.evaluate(problem, weights, design)
+    return ga.GAResult(design, ev.objective, ev.violation, ev.feasible, state.generation, history)
+
+
+@partial(jax.jit, static_argnames=("settings", "mesh"))
+def _ga_on_mesh(keys, problem: Problem, weights: Weights, settings: ga.GASettings, mesh: Mesh):
+    one = partial(_run_on_mesh, settings=settings, mesh=mesh)
+    return jax.vmap(one, in_axes=(0, None, 0), spmd_axis_name=WEIGHTINGS)(keys, problem, weights)
+
+
+def sharded_ga_solve(mesh: Mesh, keys: jax.Array, problem: Problem, weights: Weights, mode: str = "global",
+                     settings: ga.GASettings = ga.DEFAULT_SETTINGS) -> ga.GAResult:
+    """:func:`camjax.solvers.ga.solve` with weightings and population over the mesh.
+
+    Global mode: ``keys`` and ``weights`` (w,) over "weightings", each population over
+    "population" (``settings.population`` must divide by its size; a population axis of size 1
+    is plain weighting sharding). Pointwise mode: the weightings over every device (the per-angle
+    populations are small). Leaves (w,) / (w, n) as unsharded; equal to :func:`ga.solve` to
+    rounding.
+    """
+    if mode == "pointwise":
+        (keys, weights), w = _pad_leading((keys, weights), mesh.size)
+        spread = (WEIGHTINGS, POPULATION)
+        return _trim(ga.solve(_place(mesh, keys, spread), problem, _place(mesh, weights, spread),
+                              "pointwise", settings), w)
+    if mode != "global":
+        raise ValueError(f"mode: {mode!r} is not allowed; use global, pointwise")
+    if settings.population % mesh.shape[POPULATION]:
+        raise ValueError(f"population {settings.population} must divide by the mesh's "
+                         f"{mesh.shape[POPULATION]} population devices")
+    (keys, weights), w = _pad_leading((keys, weights), mesh.shape[WEIGHTINGS])
+    out = _ga_on_mesh(_place(mesh, keys, WEIGHTINGS), problem, _place(mesh, weights, WEIGHTINGS),
+                      settings, mesh)
+    return _trim(out, w)

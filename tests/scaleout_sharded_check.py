@@ -1,0 +1,73 @@
+"""Run in a fresh process by tests/test_distributed.py: sharded vs unsharded on 4 CPU host devices.
+
+JAX fixes its device count when the backend starts, so this cannot run inside the pytest
+process (which has one device and must keep it). Prints one JSON object on the last line.
+"""
+
+import json
+import sys
+
+import jax
+
+jax.config.update("jax_num_cpu_devices", 4)
+
+import jax.numpy as jnp  # noqa: E402
+
+import camjax  # noqa: E402, F401  (x64)
+from camjax.problem import problem_from_scene, weights_of  # noqa: E402
+from camjax.scaleout import sharding  # noqa: E402
+from camjax.scaleout.blocks import BlockTask, SweepSpec, solve_block  # noqa: E402
+from camjax.scene import builtin_scene_text  # noqa: E402
+from camjax.solvers import ga  # noqa: E402
+
+
+def _numbers_differ(a: list[dict], b: list[dict]) -> float:
+    """Largest relative difference of any numeric field of two record lists (inf if keys differ)."""
+    worst = 0.0
+    for ra, rb in zip(a, b, strict=True):
+        if ra.keys() != rb.keys():
+            return float("inf")
+        for k, va in ra.items():
+            vb = rb[k]
+            if isinstance(va, float):
+                worst = max(worst, abs(va - vb) / max(1.0, abs(va)))
+            elif va != vb:
+                return float("inf")
+    return worst
+
+
+def main() -> dict:
+    out = {"devices": jax.local_device_count()}
+    problem = problem_from_scene(camjax.load_scene())
+    w = 6  # does not divide 4: exercises the padding
+    weights = weights_of(jnp.logspace(-1, 1, w), jnp.ones(w))
+    genes = jax.random.uniform(jax.random.key(1), (w, 64, 2), dtype=problem.q_mm.dtype)
+    unsharded = sharding._batched_fitness(problem, weights, genes)
+    for pd in (1, 2, 4):
+        mesh = sharding.device_mesh(pd)
+        got = sharding.sharded_fitness(mesh, problem, weights, genes)
+        out[f"fitness_bitwise_{pd}"] = all(bool(jnp.array_equal(a, b)) for a, b in zip(unsharded, got, strict=True))
+        out[f"fitness_shards_{pd}"] = len(got[0].sharding.device_set) if pd > 1 else None
+
+    settings = ga.GASettings(population=32, generations=30)
+    keys = ga.weighting_keys(0, w)
+    ref = ga.solve(keys, problem, weights, "global", settings)
+    got = sharding.sharded_ga_solve(sharding.device_mesh(2), keys, problem, weights, "global", settings)
+    out["ga_population_sharded_max_diff_mm"] = max(
+        float(jnp.max(jnp.abs(a - b))) for a, b in zip(ref.design, got.design, strict=True))
+
+    text = builtin_scene_text("default")
+    pairs = tuple((float(a), 1.0) for a in jnp.logspace(-1, 1.5, w).tolist())
+    for solver, mode in (("gradient", "global"), ("gradient", "pointwise"), ("ga", "global")):
+        spec = SweepSpec(solver=solver, mode=mode, ga_population=32, ga_generations=40)
+        task = BlockTask(0, "default", text, pairs, 0, spec)
+        plain = solve_block(BlockTask(**{**task.__dict__, "shard": False}))
+        spread = solve_block(task)
+        out[f"records_{solver}_{mode}_rel_diff"] = _numbers_differ(plain, spread)
+        out[f"records_{solver}_{mode}_count"] = len(spread)
+    return out
+
+
+if __name__ == "__main__":
+    print(json.dumps(main()))
+    sys.stdout.flush()

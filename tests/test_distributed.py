@@ -1,0 +1,188 @@
+"""Scale-out: sharded vs unsharded (4 CPU host devices), process pool and Ray vs sequential,
+killed workers, retries, resume. The sequential in-process sweep is the reference throughout."""
+
+import json
+import os
+import subprocess
+import sys
+from functools import partial
+from pathlib import Path
+
+import pytest
+
+# tests/ is on sys.path (pytest's default import mode); spawned workers inherit it, Ray workers
+# get it through PYTHONPATH, so the fault-injecting block function unpickles by reference.
+from scaleout_helpers import crash_once
+
+from camjax.scaleout import (
+    BlockStore,
+    ManifestMismatch,
+    ProcessMap,
+    SequentialMap,
+    SweepSpec,
+    make_blocks,
+    run_blocks,
+    solve_block,
+)
+from camjax.scene import builtin_scene_text
+
+TESTS = Path(__file__).parent
+WEIGHTINGS = [(10.0 ** e, 1.0) for e in (-1.0, -0.5, 0.0, 0.25, 0.5, 1.0, 1.5, 2.0)]
+BLOCK_SIZE = 2  # 4 blocks
+SCENES = [("default", builtin_scene_text("default"))]
+
+
+def _blocks(cache_dir=None, spec=None):
+    return make_blocks(SCENES, WEIGHTINGS, BLOCK_SIZE, spec or SweepSpec(), cache_dir=cache_dir)
+
+
+@pytest.fixture(scope="module")
+def reference(tmp_path_factory):
+    """Records of the sequential sweep, block by block."""
+    folder = tmp_path_factory.mktemp("sequential")
+    run = run_blocks(_blocks(), folder, SequentialMap(), block_size=BLOCK_SIZE)
+    assert run.complete and run.computed == [0, 1, 2, 3]
+    store = BlockStore(folder)
+    return {i: store.read_block(i)["records"] for i in range(4)}
+
+
+def _records_by_block(folder) -> dict:
+    store = BlockStore(folder)
+    return {i: store.read_block(i)["records"] for i in sorted(store.finished())}
+
+
+def test_reference_is_a_pareto_front(reference):
+    # more weight on size -> smaller cam and higher stress (the trade the sweep exists to show)
+    recs = [r for i in sorted(reference) for r in reference[i]]
+    assert [r["weighting"] for r in recs] == list(range(len(WEIGHTINGS)))
+    sizes = [r["size_mm"] for r in recs]
+    stresses = [r["stress_max_MPa"] for r in recs]
+    assert sizes == sorted(sizes, reverse=True) and sizes[0] > sizes[-1]
+    assert stresses == sorted(stresses) and stresses[0] < stresses[-1]
+
+
+def test_sharded_equals_unsharded_on_4_host_devices():
+    # a fresh interpreter: the device count is fixed when JAX starts its backend
+    proc = subprocess.run([sys.executable, str(TESTS / "scaleout_sharded_check.py")],
+                          capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    res = json.loads(proc.stdout.strip().splitlines()[-1])
+    assert res["devices"] == 4
+    for pd in (1, 2):
+        assert res[f"fitness_bitwise_{pd}"] is True
+    assert res["fitness_shards_2"] == 4  # really spread over the 4 devices
+    assert res["ga_population_sharded_max_diff_mm"] <= 1e-12
+    for key in ("gradient_global", "gradient_pointwise", "ga_global"):
+        assert res[f"records_{key}_count"] == 6
+        assert res[f"records_{key}_rel_diff"] <= 1e-12, key
+
+
+def test_process_pool_survives_a_killed_worker(reference, tmp_path):
+    marker = tmp_path / "crashed"
+    backend = ProcessMap(workers=2)
+    try:
+        run = run_blocks(_blocks(cache_dir=str(tmp_path / "jax-cache")), tmp_path / "sweep", backend,
+                         block_size=BLOCK_SIZE,
+                         block_fn=partial(crash_once, victim=2, marker=str(marker)))
+    finally:
+        backend.close()
+    assert marker.exists()  # the worker really died
+    assert run.complete and run.computed == [0, 1, 2, 3]
+    assert 2 in run.retried
+    assert _records_by_block(tmp_path / "sweep") == reference
+    assert any((tmp_path / "jax-cache").iterdir())  # workers wrote the shared compilation cache
+
+
+# Ray launches its processes with fork+exec; JAX's warning about os.fork does not apply to that
+@pytest.mark.filterwarnings("ignore:os.fork:RuntimeWarning")
+def test_ray_sweep_matches_sequential_and_survives_a_killed_worker(reference, tmp_path):
+    pytest.importorskip("ray")
+    from camjax.scaleout import RayMap
+
+    marker = tmp_path / "crashed"
+    path = os.pathsep.join([str(TESTS), os.environ.get("PYTHONPATH", "")])
+    backend = RayMap(workers=2, runtime_env={"env_vars": {"PYTHONPATH": path}})
+    try:
+        run = run_blocks(_blocks(cache_dir=str(tmp_path / "jax-cache")), tmp_path / "sweep", backend,
+                         block_size=BLOCK_SIZE,
+                         block_fn=partial(crash_once, victim=1, marker=str(marker)))
+    finally:
+        backend.close()
+    assert marker.exists()
+    assert run.complete and run.computed == [0, 1, 2, 3]
+    assert run.retried == [1]  # only the killed block ran twice: no finished block was lost
+    store = BlockStore(tmp_path / "sweep")
+    assert [store.read_block(i)["attempts"] for i in range(4)] == [1, 2, 1, 1]
+    assert _records_by_block(tmp_path / "sweep") == reference
+
+
+class _Interrupt(BaseException):
+    """Stands for Ctrl-C / a killed driver: not an Exception, so nothing catches it."""
+
+
+def test_interrupted_sweep_resumes_without_recomputing(reference, tmp_path):
+    calls = []
+
+    def interrupted_after_two(task):
+        if len(calls) == 2:
+            raise _Interrupt
+        calls.append(task.index)
+        return solve_block(task)
+
+    with pytest.raises(_Interrupt):
+        run_blocks(_blocks(), tmp_path, SequentialMap(), block_size=BLOCK_SIZE, block_fn=interrupted_after_two)
+    store = BlockStore(tmp_path)
+    assert store.finished() == {0, 1}
+    before = {i: store.block_path(i).read_bytes() for i in (0, 1)}
+    assert not list(store.blocks_dir.glob("*.tmp"))  # no half-written block
+
+    resumed = []
+
+    def counting(task):
+        resumed.append(task.index)
+        return solve_block(task)
+
+    run = run_blocks(_blocks(), tmp_path, SequentialMap(), block_size=BLOCK_SIZE, resume=True,
+                     block_fn=counting)
+    assert resumed == [2, 3] and run.skipped == [0, 1] and run.computed == [2, 3]
+    assert {i: store.block_path(i).read_bytes() for i in (0, 1)} == before  # untouched
+    assert _records_by_block(tmp_path) == reference
+
+    again = run_blocks(_blocks(), tmp_path, SequentialMap(), block_size=BLOCK_SIZE, resume=True,
+                       block_fn=counting)
+    assert again.computed == [] and again.skipped == [0, 1, 2, 3] and resumed == [2, 3]
+
+
+def test_resume_with_other_parameters_is_refused(reference, tmp_path):
+    run_blocks(_blocks()[:1], tmp_path, SequentialMap(), block_size=BLOCK_SIZE)
+    other = make_blocks(SCENES, WEIGHTINGS, 4, SweepSpec())
+    with pytest.raises(ManifestMismatch, match="block_size"):
+        run_blocks(other, tmp_path, SequentialMap(), block_size=4, resume=True)
+    with pytest.raises(ManifestMismatch, match="spec"):
+        run_blocks(_blocks(spec=SweepSpec(solver="ga")), tmp_path, SequentialMap(), block_size=BLOCK_SIZE,
+                   resume=True)
+    with pytest.raises(ManifestMismatch, match="--resume"):
+        run_blocks(_blocks(), tmp_path, SequentialMap(), block_size=BLOCK_SIZE)
+
+
+def test_failing_block_is_retried_then_recorded_and_finished_on_resume(reference, tmp_path):
+    attempts = []
+
+    def always_fails_on_3(task):
+        if task.index == 3:
+            attempts.append(task.index)
+            raise RuntimeError("solver blew up")
+        return solve_block(task)
+
+    run = run_blocks(_blocks(), tmp_path, SequentialMap(), block_size=BLOCK_SIZE, attempts=3,
+                     block_fn=always_fails_on_3)
+    assert attempts == [3, 3, 3]  # bounded retries
+    assert not run.complete and list(run.failed) == [3] and "solver blew up" in run.failed[3]
+    store = BlockStore(tmp_path)
+    assert store.finished() == {0, 1, 2}
+    error = json.loads(store.error_path(3).read_text())
+    assert error["attempts"] == 3 and "RuntimeError: solver blew up" in error["error"]
+
+    run = run_blocks(_blocks(), tmp_path, SequentialMap(), block_size=BLOCK_SIZE, resume=True)
+    assert run.complete and run.computed == [3] and not store.error_path(3).exists()
+    assert _records_by_block(tmp_path) == reference
