@@ -727,6 +727,11 @@ def _f(x) -> float:
     return float(np.asarray(x))
 
 
+def _finite_or_none(x) -> float | None:
+    v = _f(x)
+    return v if math.isfinite(v) else None
+
+
 def scene_dynamics(scene) -> DynamicsReport:
     """Run every analysis the scene's [dynamics] section lists. Not traceable (a report).
 
@@ -864,7 +869,8 @@ def scene_dynamics(scene) -> DynamicsReport:
             "min_contact_force": _f(jnp.min(force)),
             "contact_lost_at_cam_speed": bool(jnp.min(force) <= 0),
             "min_spring_preload": _f(min_preload(cam, plant, closure, omega, phi)),
-            "min_spring_rate": _f(min_spring_rate(cam, plant, closure, omega, phi)),
+            # inf (no rate helps: the spring is slack somewhere) is written as null
+            "min_spring_rate": _finite_or_none(min_spring_rate(cam, plant, closure, omega, phi)),
         }
         curves.update(jump_speeds_hz=speeds, jump_fmin=fmins, contact_force=np.asarray(force))
     if "shaping" in spec.compute:

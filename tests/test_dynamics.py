@@ -16,6 +16,8 @@ import numpy as np
 import pytest
 import scipy.integrate
 import scipy.optimize
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import camjax
 import camjax.cli
@@ -301,7 +303,7 @@ def test_nonlinear_feedforward_removes_the_ripple_error(bench, bench_cam):
     m, cycles = 360, d.settling_cycles(PLANT, W_BENCH, 1e-5)
     target = d.evaluate_cam(cam, d.cam_grid(m)).f
     lin = d.compensate_linear(cam, PLANT, W_BENCH)
-    nl = d.compensate_nonlinear(cam, drive, PLANT, W_BENCH, 30, cycles, m)
+    nl = d.compensate_nonlinear(cam, drive, PLANT, W_BENCH, 60, cycles, m)
     assert float(nl.fit_rms) < 1e-12
     errs = {}
     for name, c in (("nominal", cam), ("linear", lin), ("nonlinear", nl.cam)):
@@ -381,6 +383,42 @@ def test_gradient_of_the_jump_force_and_band_objective(bench, bench_cam):
     assert float(jax.grad(band_obj)(a5)) == pytest.approx(float(_central(band_obj, a5, 1e-7)), rel=1e-6)
 
 
+def test_gradient_through_the_drive_model_matches_finite_differences(bench, bench_cam):
+    cam = d.trim_harmonics(bench_cam)
+
+    def ripple(k01):
+        r = d.simulate_drive(cam, d.Drive(2.1, 0.126, k01, 10.0), PLANT, W_BENCH, 2, 90)
+        return jnp.mean((r.cam_speed - W_BENCH) ** 2)
+
+    g = float(jax.grad(ripple)(3000.0))
+    assert g == pytest.approx(float(_central(ripple, 3000.0, 1e-2)), rel=1e-5)
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.floats(0.05, 5.0), st.floats(0.0, 50.0), st.floats(1e2, 1e6), st.floats(0.5, 50.0),
+       st.lists(st.floats(-1.0, 1.0), min_size=12, max_size=12))
+def test_compensation_round_trips_for_any_plant_and_law(inertia, damping, stiffness, omega, coefs):
+    """steady_state(compensate_linear(cam)) == cam for every plant, speed and law (relative 1e-9)."""
+    a = jnp.asarray([0.3, *coefs[:5]])
+    b = jnp.asarray([0.0, *coefs[6:11]])
+    cam = d.CamHarmonics(a, b)
+    plant = d.Plant(inertia, damping, stiffness)
+    back = d.steady_state(d.compensate_linear(cam, plant, omega), plant, omega)
+    scale = float(jnp.max(jnp.abs(a)) + jnp.max(jnp.abs(b)))
+    np.testing.assert_allclose(back.cos, a, atol=1e-9 * scale)
+    np.testing.assert_allclose(back.sin, b, atol=1e-9 * scale)
+
+
+def test_kernels_do_not_retrace_for_new_parameter_values(bench_cam):
+    phi = d.cam_grid(360)
+    d.max_abs(d.tracking_error_harmonics(bench_cam, bench_cam, PLANT, W_BENCH), phi)
+    before = d.tracking_error_harmonics._cache_size(), d.max_abs._cache_size()
+    for k in (2000.0, 2500.0, 4000.0):
+        d.max_abs(d.tracking_error_harmonics(bench_cam, bench_cam, PLANT._replace(stiffness=k), 1.1 * k),
+                  phi)
+    assert (d.tracking_error_harmonics._cache_size(), d.max_abs._cache_size()) == before
+
+
 def test_law_shaping_lowers_band_vibration_and_keeps_the_lift(bench, bench_cam):
     c_phi, c_val = d._constraints(bench)
     np.testing.assert_allclose(c_val, [0.0, 0.48337882], atol=1e-12)
@@ -434,12 +472,9 @@ k01 = 3000.0
 c01 = 10.0
 spring_rate = 300.0
 spring_preload = 0.5
-samples = 256
-harmonics = 24
-steps_per_cycle = 180
-transient_tolerance = 1e-3
-shaping_harmonics = 11
-shaping_steps = 30
+steps_per_cycle = 360
+transient_tolerance = 1e-5
+shaping_steps = 100
 compute = ["compensation", "robustness", "time_domain", "drive", "nonlinear", "jump", "shaping"]
 speed_factors = [0.9, 1.0, 1.1]
 wn_factors = [0.9, 1.0, 1.1]
@@ -448,6 +483,7 @@ damping_factors = [0.5, 1.0, 2.0]
 
 
 def test_cli_dynamics_writes_json_and_figures(tmp_path):
+    """The bench with a shorter settling; grid sizes match the tests above so kernels are reused."""
     text = builtin_scene_text("thesis-bench")
     text = text[: text.index("\n[dynamics]\n")] + SMALL_BENCH
     path = tmp_path / "bench.toml"
