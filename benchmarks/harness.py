@@ -69,11 +69,16 @@ def time_jit(fn: Callable, *args, repeats: int = 5, warmup: int = 1, min_time_s:
 def time_python(call: Callable[[], Any], repeats: int = 3, warmup: int = 1,
                 min_time_s: float = 0.0) -> tuple[Timing, Any]:
     """Median of ``repeats`` calls of a plain Python callable after ``warmup`` calls."""
-    out = None
+    outputs = []
+
+    def keep():
+        outputs.append(call())
+        return outputs[-1]
+
     for _ in range(warmup):
-        out = call()
-    times = _repeat(call, repeats, min_time_s)
-    return _timing(0.0, times), out
+        keep()
+    times = _repeat(keep, repeats, min_time_s)
+    return _timing(0.0, times), outputs[-1]
 
 
 def compiled_cost(fn: Callable, *args) -> dict:
