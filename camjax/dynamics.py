@@ -860,7 +860,13 @@ def scene_dynamics(scene) -> DynamicsReport:
         lo_hz, hi_hz = spec.jump_speed_range_hz or (0.05 * spec.cam_speed_hz, 10 * spec.cam_speed_hz)
         js = jump_speed(cam, plant, closure, phi, TWO_PI * lo_hz, TWO_PI * hi_hz)
         force = contact_force(cam, plant, closure, omega, phi)
-        speeds = np.linspace(lo_hz, hi_hz, 400)
+        # plot grid: even steps plus every resonant speed and a close look around the jump
+        res_hz = _f(wn) / TWO_PI / np.arange(1, spec.harmonics + 1)
+        speeds = [np.linspace(lo_hz, hi_hz, 400), res_hz * 0.999, res_hz, res_hz * 1.001]
+        if bool(js.found):
+            j_hz = _f(js.speed_rad_s) / TWO_PI
+            speeds.append(np.linspace(0.98 * j_hz, 1.02 * j_hz, 81))
+        speeds = np.unique(np.clip(np.concatenate(speeds), lo_hz, hi_hz))
         fmins = np.asarray(jax.vmap(lambda w: min_contact_force(cam, plant, closure, w, phi))(
             jnp.asarray(speeds) * TWO_PI))
         out["jump"] = {

@@ -134,6 +134,10 @@ def jump_figure(curves: dict, summary: dict) -> Figure:
         ax.axvline(j, color="C3", linestyle="--", label=f"contact lost from {j:.4g} Hz")
         ax.legend(fontsize=8)
     ax.axvline(summary["cam_speed_hz"], color="0.5", linestyle=":")
+    # resonances reach far below zero: a symmetric log scale keeps the sign change readable
+    fmin = curves["jump_fmin"]
+    ax.set_yscale("symlog", linthresh=max(float(np.median(np.abs(fmin))), 1e-12))
+    ax.set_xscale("log")
     ax.set_xlabel("cam speed (Hz)")
     ax.set_ylabel(f"min contact force over the cycle ({force})")
     ax.grid(True, alpha=0.3)
