@@ -14,12 +14,19 @@ Two independent layers, both on engines the user already runs:
 """
 
 from camjax.scaleout.backends import BACKENDS, Outcome, ProcessMap, RayMap, SequentialMap, make_backend
-from camjax.scaleout.blocks import BlockTask, SweepSpec, configure_worker, make_blocks, solve_block
-from camjax.scaleout.driver import SweepRun, run_blocks
+from camjax.scaleout.blocks import (
+    BlockTask,
+    SweepSpec,
+    configure_worker,
+    make_blocks,
+    pareto_records,
+    solve_block,
+)
+from camjax.scaleout.driver import SweepRun, run_blocks, sweep_blocks
 from camjax.scaleout.store import BlockStore, ManifestMismatch
 
 __all__ = [
     "BACKENDS", "BlockStore", "BlockTask", "ManifestMismatch", "Outcome", "ProcessMap", "RayMap",
     "SequentialMap", "SweepRun", "SweepSpec", "configure_worker", "make_backend", "make_blocks",
-    "run_blocks", "solve_block",
+    "pareto_records", "run_blocks", "solve_block", "sweep_blocks",
 ]

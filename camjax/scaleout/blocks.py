@@ -16,7 +16,7 @@ import os
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field
 
-SOLVERS = ("gradient", "ga")
+SOLVERS = ("gradient", "ga", "hybrid")  # as camjax.solvers.sweep.SOLVERS
 MODES = ("global", "pointwise")
 
 
@@ -24,13 +24,14 @@ MODES = ("global", "pointwise")
 class SweepSpec:
     """What every block of a sweep shares: solver, mode and its settings (results depend on it).
 
-    ``ga_population`` / ``ga_generations`` of 0 keep the GA's defaults.
+    ``ga_population`` / ``ga_generations`` of 0 keep the preset's.
     """
 
-    solver: str = "gradient"  # "gradient" or "ga"
+    solver: str = "gradient"  # "gradient", "ga" or "hybrid"
     mode: str = "global"  # "global" or "pointwise"
     seed: int = 0  # GA seed; weighting i of the sweep uses fold_in(key(seed), i)
     samples: int = 0  # angle grid override; 0 keeps the scene's
+    ga_preset: str = "default"  # a key of camjax.solvers.ga.PRESETS
     ga_population: int = 0
     ga_generations: int = 0
 
@@ -58,6 +59,7 @@ class BlockTask:
     spec: SweepSpec = field(default_factory=SweepSpec)
     cache_dir: str | None = None
     shard: bool = True
+    pad_to: int = 0  # solve this many weightings (the last repeated) so every block compiles alike
 
 
 def scene_digest(text: str) -> str:
@@ -82,7 +84,7 @@ def make_blocks(scenes: Sequence[tuple[str, str]], weightings: Sequence[tuple[fl
     for name, text in scenes:
         for start in range(0, len(pairs), block_size):
             blocks.append(BlockTask(len(blocks), name, text, pairs[start:start + block_size], start,
-                                    spec, cache_dir))
+                                    spec, cache_dir, pad_to=block_size))
     return blocks
 
 
@@ -108,107 +110,72 @@ def configure_worker(cache_dir: str | None) -> None:
     _CONFIGURED_CACHE.append(cache_dir)
 
 
-def _float(x) -> float:
-    return float(x)
-
-
-def _records(task: BlockTask, problem, weights, result) -> list[dict]:
-    """One JSON record per weighting. Pointwise mode: the source's design, max over angles."""
-    import numpy as np
-
-    spec = task.spec
-    design = result.design
-    out = []
-    for i, (alpha, gamma) in enumerate(task.weightings):
-        rec = {
-            "scene": task.scene_name,
-            "weighting": task.first_weighting + i,
-            "alpha": alpha,
-            "gamma": gamma,
-            "solver": spec.solver,
-            "mode": spec.mode,
-        }
-        if spec.mode == "global":
-            rec.update(
-                base_radius_mm=_float(design.base_radius_mm[i]),
-                face_width_mm=_float(design.face_width_mm[i]),
-                objective=_float(result.objective[i]),
-                feasible=bool(result.feasible[i]),
-                violated=[name for name, v in zip(result.violation._fields, result.violation, strict=True)
-                          if float(v[i]) > 0],
-            )
-        else:
-            r = np.asarray(design.base_radius_mm[i])
-            length = np.asarray(design.face_width_mm[i])
-            rec.update(
-                base_radius_mm=float(r.max()),
-                base_radius_deg=float(np.asarray(problem.theta_deg)[r.argmax()]),
-                face_width_mm=float(length.max()),
-                face_width_deg=float(np.asarray(problem.theta_deg)[length.argmax()]),
-                feasible=bool(np.all(np.asarray(result.feasible[i]))),
-            )
-        rec["size_mm"] = rec["base_radius_mm"] + rec["face_width_mm"]
-        out.append(rec)
-    return out
-
-
-def _stress_at(problem, records: list[dict]) -> None:
-    """Peak contact stress (MPa) of each record's (R_b, L) over the whole grid (the Pareto y-axis)."""
-    import jax.numpy as jnp
-
-    from camjax import problem as P
-
-    r = jnp.asarray([rec["base_radius_mm"] for rec in records])
-    peak = jnp.max(P.stress(problem, P.Design(r[:, None], 0.0 * r[:, None])), axis=-1)
-    for rec, s in zip(records, peak.tolist(), strict=True):
-        rec["stress_max_MPa"] = s
-
-
 def solve_block(task: BlockTask) -> list[dict]:
     """The pure block function: rebuild the scene's problem and solve every weighting of the block.
 
-    Runs anywhere camjax is installed (top-level, picklable). Returns one record per weighting
-    (plain dicts: scene, weighting index, alpha, gamma, solver, mode, base_radius_mm,
-    face_width_mm, size_mm, stress_max_MPa, feasible, ...).
+    Runs anywhere camjax is installed (top level, picklable). One compiled call of
+    :func:`camjax.solvers.sweep.solve_batch` for the block; weighting i of the sweep uses the key
+    fold_in(key(seed), i), as :func:`camjax.solvers.sweep.sweep` does, so the records equal that
+    sweep's whatever the block size. Returns one record per weighting: the fields of
+    :meth:`camjax.solvers.sweep.SweepResult.records` except "pareto" (a property of the whole
+    sweep, decided by :func:`pareto_records`), plus scene, weighting index, solver and mode.
     """
     configure_worker(task.cache_dir)
     import jax
     import jax.numpy as jnp
+    import numpy as np
 
     import camjax  # noqa: F401  (x64)
-    from camjax.problem import problem_from_scene, weights_of
+    from camjax.problem import Weights, problem_from_scene
     from camjax.scene import parse_scene
+    from camjax.solvers import ga
+    from camjax.solvers.sweep import SweepResult, solve_batch
 
     spec = task.spec
     scene = parse_scene(task.scene_text, task.scene_name, f"<sweep block {task.index}>")
     problem = problem_from_scene(scene, samples=spec.samples or None)
-    pairs = jnp.asarray(task.weightings, problem.q_mm.dtype).reshape(-1, 2)
-    weights = weights_of(pairs[:, 0], pairs[:, 1])
-    mesh = None
+    dtype = problem.q_mm.dtype
+    count = len(task.weightings)
+    # the short last block is padded by repeating its last weighting: one compiled program for all
+    idx = np.minimum(np.arange(max(count, task.pad_to)), count - 1)
+    pairs = np.asarray(task.weightings, float).reshape(-1, 2)[idx]
+    weights = Weights(jnp.asarray(pairs[:, 0], dtype), jnp.asarray(pairs[:, 1], dtype))
+    keys = ga.weighting_keys(spec.seed, count, task.first_weighting)[idx]
     if task.shard and jax.local_device_count() > 1:
-        from camjax.scaleout import sharding
+        from camjax.scaleout.sharding import spread_weightings
 
-        mesh = sharding.device_mesh()
-    if spec.solver == "gradient":
-        from camjax.solvers import gradient
-
-        if mesh is None:
-            result = gradient.solve_sweep(problem, weights, spec.mode)
-        else:
-            result = sharding.sharded_gradient_sweep(mesh, problem, weights, spec.mode)
-    else:
-        from camjax.solvers import ga
-
-        settings = ga.DEFAULT_SETTINGS
-        overrides = {k: v for k, v in (("population", spec.ga_population),
-                                       ("generations", spec.ga_generations)) if v}
-        if overrides:
-            settings = ga.GASettings(**{**asdict(settings), **overrides})
-        keys = ga.weighting_keys(spec.seed, len(task.weightings), task.first_weighting)
-        if mesh is None:
-            result = ga.solve(keys, problem, weights, spec.mode, settings)
-        else:
-            result = sharding.sharded_ga_solve(mesh, keys, problem, weights, spec.mode, settings)
-    records = _records(task, problem, weights, result)
-    _stress_at(problem, records)
+        weights, keys = spread_weightings((weights, keys))[0]
+    result = solve_batch(problem, weights, keys, spec.mode, spec.solver, ga_settings(spec))
+    result = jax.tree.map(lambda x: np.asarray(x)[:count], result)
+    records = SweepResult(result, np.zeros(count, bool)).records()
+    for i, rec in enumerate(records):
+        del rec["pareto"]
+        rec.update(scene=task.scene_name, weighting=task.first_weighting + i, solver=spec.solver,
+                   mode=spec.mode)
     return records
+
+
+def ga_settings(spec: SweepSpec):
+    """The GA settings of a sweep: the preset with the spec's population / generations."""
+    from camjax.solvers import ga
+
+    settings = ga.PRESETS[spec.ga_preset]
+    overrides = {k: v for k, v in (("population", spec.ga_population),
+                                   ("generations", spec.ga_generations)) if v}
+    return ga.GASettings(**{**asdict(settings), **overrides}) if overrides else settings
+
+
+def pareto_records(records: list[dict]) -> list[dict]:
+    """Records of a whole sweep with "pareto": non-dominated in (size, peak stress) within its scene."""
+    import numpy as np
+
+    from camjax.solvers.sweep import pareto_mask
+
+    out = [dict(r) for r in records]
+    for scene in dict.fromkeys(r["scene"] for r in out):
+        rows = [r for r in out if r["scene"] == scene]
+        column = lambda key, rows=rows: np.array([r[key] for r in rows])  # noqa: E731
+        mask = pareto_mask(column("size_mm"), column("stress_max_MPa"), column("feasible"))
+        for r, on_front in zip(rows, mask.tolist(), strict=True):
+            r["pareto"] = on_front
+    return out

@@ -13,7 +13,8 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import NamedTuple
 
-from camjax.scaleout.blocks import BlockTask, solve_block
+from camjax.scaleout.backends import make_backend
+from camjax.scaleout.blocks import BlockTask, SweepSpec, make_blocks, pareto_records, solve_block
 from camjax.scaleout.store import BlockStore, manifest_of
 
 DEFAULT_ATTEMPTS = 3  # first try + 2 retries
@@ -83,3 +84,32 @@ def run_blocks(blocks: Sequence[BlockTask], folder: str | Path, backend, *, bloc
         store.write_error(task, errors[task.index], tries[task.index])
     retried = sorted(i for i, n in tries.items() if n > 1)
     return SweepRun(sorted(computed), skipped, failed, retried)
+
+
+def sweep_blocks(scenes: Sequence[tuple[str, str]], alphas, gammas, folder: str | Path, *,
+                 spec: SweepSpec | None = None, backend: str = "sequential", workers: int | None = None,
+                 address: str | None = None, block_size: int = 64, resume: bool = False,
+                 attempts: int = DEFAULT_ATTEMPTS, cache_dir: str | None = None,
+                 progress: Callable[[str], None] | None = None) -> tuple[SweepRun, list[dict]]:
+    """Every (alpha, gamma) pair of two lists (alpha-major, as :func:`camjax.solvers.sweep.sweep`)
+    for every scene, in blocks on the named backend; the records with the Pareto flag when complete.
+
+    Args:
+      scenes: (name, TOML text) pairs.
+      backend: "sequential", "process" (``workers`` spawned processes) or "ray" (``address`` of
+        a running cluster, or a local instance with ``workers`` CPUs).
+      cache_dir: persistent JAX compilation cache shared by the workers.
+    Returns (what ran, records of every finished block with "pareto"; [] if some block failed).
+    """
+    from camjax.solvers.sweep import weight_grid
+
+    a, g = weight_grid(alphas, gammas)
+    blocks = make_blocks(scenes, list(zip(a.tolist(), g.tolist(), strict=True)), block_size,
+                         spec or SweepSpec(), cache_dir)
+    engine = make_backend(backend, workers=workers, address=address)
+    try:
+        run = run_blocks(blocks, folder, engine, block_size=block_size, resume=resume, attempts=attempts,
+                         progress=progress)
+    finally:
+        engine.close()
+    return run, (pareto_records(BlockStore(folder).records()) if run.complete else [])

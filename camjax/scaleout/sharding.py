@@ -68,6 +68,18 @@ def _place(mesh: Mesh, tree, *spec):
     return jax.device_put(tree, NamedSharding(mesh, PS(*spec)))
 
 
+def spread_weightings(tree, mesh: Mesh | None = None):
+    """Place arrays with a leading weighting axis (weights, keys) over every device of the mesh.
+
+    Returns (placed tree, w): the axis is padded to a multiple of the device count by repeating
+    its last entry; keep ``[:w]`` of the results. A jitted solver called with these inputs (e.g.
+    :func:`camjax.solvers.sweep.solve_batch`) runs its weightings spread over the devices.
+    """
+    mesh = device_mesh() if mesh is None else mesh
+    tree, w = _pad_leading(tree, mesh.size)
+    return _place(mesh, tree, (WEIGHTINGS, POPULATION)), w
+
+
 # ----------------------------------------------------------------------------- fitness
 
 
@@ -134,6 +146,7 @@ def _run_on_mesh(key, problem: Problem, weights: Weights, settings: ga.GASetting
     The same ``ga_init`` / ``ga_step`` / ``best``; only sharding constraints are added, so the
     random stream and every arithmetic step are those of the unsharded run.
     """
+    ga.check_settings(settings)
     members = NamedSharding(mesh, PS(POPULATION))
 
     def pin(state: ga.GAState) -> ga.GAState:
