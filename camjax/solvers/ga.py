@@ -158,6 +158,7 @@ def _smallest(key: jax.Array, count: int) -> jax.Array:
 
 
 _GOLDEN = 0x9E3779B97F4A7C15
+_GOLDEN_2 = 0xD1B54A32D192ED03
 
 
 def _splitmix64(x: jax.Array) -> jax.Array:
@@ -178,8 +179,9 @@ def random_words(stream: jax.Array, generation: jax.Array, shape: tuple[int, ...
     """
     n = math.prod(shape)
     half = (n + 1) // 2
-    counter = (generation.astype(jnp.uint64) * jnp.uint64(half) + jnp.arange(half, dtype=jnp.uint64))
-    z = _splitmix64(stream + (counter + jnp.uint64(1)) * jnp.uint64(_GOLDEN))
+    # a sub-stream per generation (hashed, so generations never share counters), then counters
+    sub = _splitmix64(stream + (generation.astype(jnp.uint64) + jnp.uint64(1)) * jnp.uint64(_GOLDEN_2))
+    z = _splitmix64(sub + (jnp.arange(half, dtype=jnp.uint64) + jnp.uint64(1)) * jnp.uint64(_GOLDEN))
     words = jnp.concatenate([(z >> 32).astype(jnp.uint32), z.astype(jnp.uint32)])
     return words[:n].reshape(shape)
 
@@ -195,13 +197,14 @@ def _uniform(bits: jax.Array, dtype) -> jax.Array:
 def ga_init(key: jax.Array, problem: Problem, weights: Weights, settings: GASettings = DEFAULT_SETTINGS,
             seed_design: Design | None = None) -> GAState:
     """Uniform random population in the box (member 0 = ``seed_design`` when given)."""
-    k_stream, sub = jax.random.split(key)
+    stream = jax.random.bits(key, (), jnp.uint64)
     top = _gene_max(problem)
-    genes = jax.random.uniform(sub, (settings.population, top.shape[0]), dtype=problem.q_mm.dtype) * top
+    # the steps use counters 0 .. generations - 1; the initial population takes the next one
+    first = random_words(stream, jnp.asarray(settings.generations), (settings.population, top.shape[0]))
+    genes = _uniform(first, problem.q_mm.dtype) * top
     if seed_design is not None:
         genes = genes.at[0].set(jnp.clip(_to_genes(problem, seed_design), 0.0, top))
     obj, vio = fitness(problem, weights, genes)
-    stream = jax.random.bits(k_stream, (), jnp.uint64)
     return GAState(genes, obj, vio, stream, jnp.asarray(0))
 
 
@@ -215,13 +218,13 @@ def ga_step(state: GAState, problem: Problem, weights: Weights,
             settings: GASettings = DEFAULT_SETTINGS) -> GAState:
     """One generation: elitism, tournaments, crossover, mutation, evaluation.
 
-    All random numbers of a generation are one block of k + 3d + 1 words per child
+    All random numbers of a generation are one block of k + 4d + 1 words per child
     (:func:`random_words`).
     """
     p, d = state.genes.shape
     k, n_child = settings.tournament, p - settings.elite
     dtype = state.genes.dtype
-    bits = random_words(state.stream, state.generation, (n_child, k + 3 * d + 1))
+    bits = random_words(state.stream, state.generation, (n_child, k + 4 * d + 1))
     rank_key = deb_key(state.objective, state.violation)
     elites = state.genes[_smallest(rank_key, settings.elite)]
 
@@ -232,12 +235,14 @@ def ga_step(state: GAState, problem: Problem, weights: Weights,
     parents = state.genes[winner[..., 0]]  # (n_child, 2, d)
 
     u = _uniform(bits[:, k:], dtype)
-    blend, cross_u, mut_u, normal_u = u[:, :d], u[:, d], u[:, d + 1: 2 * d + 1], u[:, 2 * d + 1:]
+    blend, cross_u, mut_u = u[:, :d], u[:, d], u[:, d + 1: 2 * d + 1]
+    radius_u, angle_u = u[:, 2 * d + 1: 3 * d + 1], u[:, 3 * d + 1:]
     r = -settings.blend + (1.0 + 2.0 * settings.blend) * blend
     mixed = parents[:, 0] + r * (parents[:, 1] - parents[:, 0])
     children = jnp.where((cross_u < settings.crossover)[:, None], mixed, parents[:, 0])
 
-    kick = mutation_scale(settings, state.generation) * jax.scipy.special.ndtri(normal_u)
+    normal = jnp.sqrt(-2.0 * jnp.log(radius_u)) * jnp.cos(2.0 * jnp.pi * angle_u)  # Box-Muller
+    kick = mutation_scale(settings, state.generation) * normal
     children = children + jnp.where(mut_u < settings.mutation_rate, kick, 0.0)
     children = jnp.clip(children, 0.0, _gene_max(problem))
 
