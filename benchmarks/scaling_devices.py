@@ -1,0 +1,161 @@
+"""Scale-out measured: a weight sweep on 1 -> 2 local processes and on 1 -> N XLA host devices.
+
+``python benchmarks/scaling_devices.py --out scaling_devices.json [--quick]``
+
+Processes: the same block sweep (``camjax.scaleout.sweep_blocks``) on the sequential backend
+(one process) and on a spawn process pool of 2, wall time of the whole sweep including worker
+start-up, both with the persistent compilation cache already warm (as on a second run); the
+workers' summed block time is reported apart, so start-up overhead is visible.
+
+Devices: one batched ``solve_batch`` call over all weightings in a fresh interpreter per device
+count N (``jax_num_cpu_devices = N``; weightings spread over the N devices by
+``camjax.scaleout.sharding.spread_weightings``), median of repeats after a warm-up call.
+
+Efficiency = t(1) / (k * t(k)). A host device is not a core: with C physical cores, N > C
+devices cannot beat C x. The load average is recorded: on a shared machine other work takes
+cores from the parallel runs first.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+
+def _device_child(devices: int, solver: str, mode: str, weightings: int, repeats: int) -> dict:
+    """Runs in a fresh interpreter: time one batched solve over ``devices`` host devices."""
+    import jax
+
+    jax.config.update("jax_num_cpu_devices", devices)
+    import jax.numpy as jnp
+
+    import camjax
+    from camjax.problem import Weights, problem_from_scene
+    from camjax.scaleout.sharding import spread_weightings
+    from camjax.solvers import ga
+    from camjax.solvers.sweep import solve_batch
+
+    problem = problem_from_scene(camjax.load_scene())
+    alpha = jnp.logspace(-2, 2, weightings)
+    weights = Weights(alpha, jnp.ones_like(alpha))
+    keys = ga.weighting_keys(0, weightings)
+    if devices > 1:
+        (weights, keys), _ = spread_weightings((weights, keys))
+
+    def call():
+        return jax.block_until_ready(solve_batch(problem, weights, keys, mode, solver))
+
+    start = time.perf_counter()
+    call()
+    first = time.perf_counter() - start
+    times = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        call()
+        times.append(time.perf_counter() - start)
+    return {"devices": jax.local_device_count(), "first_call_s": first,
+            "median_s": statistics.median(times), "samples_s": times}
+
+
+def measure_devices(counts: list[int], solver: str, mode: str, weightings: int, repeats: int) -> list[dict]:
+    rows = []
+    for n in counts:
+        proc = subprocess.run(
+            [sys.executable, __file__, "--child-devices", str(n), "--solver", solver, "--mode", mode,
+             "--weightings", str(weightings), "--repeats", str(repeats)],
+            capture_output=True, text=True, check=True, env={**os.environ, "CAMJAX_COMPILATION_CACHE": "0"})
+        rows.append(json.loads(proc.stdout.strip().splitlines()[-1]))
+    base = rows[0]["median_s"]
+    for r in rows:
+        r["speedup"] = base / r["median_s"]
+        r["efficiency"] = r["speedup"] / r["devices"]
+    return rows
+
+
+def measure_processes(workers: list[int], solver: str, mode: str, weightings: int,
+                      block_size: int) -> list[dict]:
+    from camjax.scaleout import BlockStore, SweepSpec, sweep_blocks
+    from camjax.scene import builtin_scene_text
+
+    scenes = [("default", builtin_scene_text("default"))]
+    alphas = [10 ** (-2 + 4 * i / max(weightings - 1, 1)) for i in range(weightings)]
+    spec = SweepSpec(solver=solver, mode=mode)
+    with tempfile.TemporaryDirectory(prefix="camjax-scaling-") as tmp:
+        cache = str(Path(tmp) / "jax-cache")
+        # warm the persistent cache with one block (every block has the same shape)
+        sweep_blocks(scenes, alphas[:block_size], [1.0], Path(tmp) / "warm", spec=spec,
+                     block_size=block_size, cache_dir=cache, backend="process", workers=1)
+        rows = []
+        for k in workers:
+            folder = Path(tmp) / f"sweep-{k}"
+            backend = "sequential" if k == 1 else "process"
+            start = time.perf_counter()
+            run, records = sweep_blocks(scenes, alphas, [1.0], folder, spec=spec, block_size=block_size,
+                                        cache_dir=cache, backend=backend, workers=k)
+            wall = time.perf_counter() - start
+            assert run.complete and len(records) == weightings
+            store = BlockStore(folder)
+            busy = sum(store.read_block(i)["seconds"] for i in store.finished())
+            rows.append({"processes": k, "backend": backend, "wall_s": wall, "block_seconds_sum": busy,
+                         "blocks": len(store.finished())})
+    base = rows[0]["wall_s"]
+    for r in rows:
+        r["speedup"] = base / r["wall_s"]
+        r["efficiency"] = r["speedup"] / r["processes"]
+    return rows
+
+
+def main() -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--out", type=Path, help="JSON file to write")
+    p.add_argument("--quick", action="store_true", help="small sweep (smoke run)")
+    p.add_argument("--solver", default="ga")
+    p.add_argument("--mode", default="global")
+    p.add_argument("--weightings", type=int, default=None)
+    p.add_argument("--block-size", type=int, default=32)
+    p.add_argument("--devices", default="1,2,4", help="host device counts to compare")
+    p.add_argument("--repeats", type=int, default=3)
+    p.add_argument("--child-devices", type=int, default=0, help=argparse.SUPPRESS)
+    args = p.parse_args()
+    if args.child_devices:
+        print(json.dumps(_device_child(args.child_devices, args.solver, args.mode, args.weightings,
+                                       args.repeats)))
+        return 0
+
+    w = args.weightings or (64 if args.quick else 512)
+    devices = measure_devices([int(n) for n in args.devices.split(",")], args.solver, args.mode,
+                              w, args.repeats)
+    processes = measure_processes([1, 2], args.solver, args.mode, w, args.block_size)
+    data = {
+        "benchmark": "scaling_devices",
+        "solver": args.solver, "mode": args.mode, "weightings": w, "block_size": args.block_size,
+        "cpu_count": os.cpu_count(), "load_average_1_5_15": os.getloadavg(), "platform": platform.platform(),
+        "python": platform.python_version(), "jax": __import__("jax").__version__,
+        "devices": devices, "processes": processes,
+    }
+    print(f"weight sweep: {w} weightings, solver {args.solver}, mode {args.mode}, {os.cpu_count()} CPUs, "
+          f"load average {os.getloadavg()[0]:.1f} (other work on the machine skews every figure)")
+    print(f"{'host devices':>12s} {'time (s)':>9s} {'speedup':>8s} {'efficiency':>10s}")
+    for r in devices:
+        print(f"{r['devices']:12d} {r['median_s']:9.3f} {r['speedup']:8.2f} {r['efficiency']:10.0%}")
+    print(f"{'processes':>12s} {'wall (s)':>9s} {'speedup':>8s} {'efficiency':>10s}  (block seconds summed)")
+    for r in processes:
+        print(f"{r['processes']:12d} {r['wall_s']:9.2f} {r['speedup']:8.2f} {r['efficiency']:10.0%}  "
+              f"({r['block_seconds_sum']:.2f} s in {r['blocks']} blocks)")
+    if args.out:
+        args.out.parent.mkdir(parents=True, exist_ok=True)
+        args.out.write_text(json.dumps(data, indent=1) + "\n")
+        print(f"wrote {args.out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
