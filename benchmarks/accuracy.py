@@ -45,10 +45,12 @@ def design_figures(program, design, scene, samples: int, dtype) -> dict:
     need = -(problem.q_mm)
     best = P.global_optimum(problem, weights)
     d = jax.tree.map(lambda x: jnp.asarray(x, dtype), design)
-    return {"min_base_radius_mm": jnp.max(need),
-            "optimal_base_radius_mm": best.base_radius_mm,
-            "peak_force_N": jnp.max(arrays.force_N),
-            "peak_stress_MPa": jnp.max(P.stress(problem, d))}
+    return {
+        "min_base_radius_mm": jnp.max(need),
+        "optimal_base_radius_mm": best.base_radius_mm,
+        "peak_force_N": jnp.max(arrays.force_N),
+        "peak_stress_MPa": jnp.max(P.stress(problem, d)),
+    }
 
 
 def _errors(values: dict, reference: dict) -> dict:
@@ -77,22 +79,38 @@ def grid_trade(scene, ref: dict, ref_design, samples, repeats: int) -> list[dict
         for n in samples:
             fn = partial(design_figures, scene=scene, samples=n, dtype=dtype)
             t, out = time_jit(fn, scene.motion.program, ref_design, repeats=repeats)
-            rows.append({"knob": "grid", "samples": n, "dtype": jnp.dtype(dtype).name,
-                         "time_s": t.median_s, "compile_s": t.compile_s,
-                         "default": n == DEFAULT_SAMPLES and dtype == jnp.float64, **_errors(out, ref)})
+            rows.append(
+                {
+                    "knob": "grid",
+                    "samples": n,
+                    "dtype": jnp.dtype(dtype).name,
+                    "time_s": t.median_s,
+                    "compile_s": t.compile_s,
+                    "default": n == DEFAULT_SAMPLES and dtype == jnp.float64,
+                    **_errors(out, ref),
+                }
+            )
     return rows
 
 
 def _solver_row(knob: str, label: str, t, design, problem, weights, ref: dict, default: bool) -> dict:
     exact = P.global_optimum(problem, weights)
     r = float(design.base_radius_mm)
-    return {"knob": knob, "setting": label, "samples": DEFAULT_SAMPLES, "dtype": "float64",
-            "time_s": t.median_s, "compile_s": t.compile_s, "default": default,
-            "optimal_base_radius_mm": r,
-            "optimal_base_radius_mm_abs_error": abs(r - ref["optimal_base_radius_mm"]),
-            "optimal_base_radius_mm_rel_error": abs(r - ref["optimal_base_radius_mm"]) / ref["optimal_base_radius_mm"],
-            "solver_abs_error_mm": abs(r - float(exact.base_radius_mm)),
-            "max_rel_error": abs(r - ref["optimal_base_radius_mm"]) / ref["optimal_base_radius_mm"]}
+    return {
+        "knob": knob,
+        "setting": label,
+        "samples": DEFAULT_SAMPLES,
+        "dtype": "float64",
+        "time_s": t.median_s,
+        "compile_s": t.compile_s,
+        "default": default,
+        "optimal_base_radius_mm": r,
+        "optimal_base_radius_mm_abs_error": abs(r - ref["optimal_base_radius_mm"]),
+        "optimal_base_radius_mm_rel_error": abs(r - ref["optimal_base_radius_mm"])
+        / ref["optimal_base_radius_mm"],
+        "solver_abs_error_mm": abs(r - float(exact.base_radius_mm)),
+        "max_rel_error": abs(r - ref["optimal_base_radius_mm"]) / ref["optimal_base_radius_mm"],
+    }
 
 
 def solver_trade(scene, ref: dict, quick: bool, repeats: int) -> list[dict]:
@@ -101,24 +119,55 @@ def solver_trade(scene, ref: dict, quick: bool, repeats: int) -> list[dict]:
     weights = P.weights_of(1.0, 1.0)
     rows = []
     default_steps = gradient.DEFAULT_SETTINGS.max_steps
-    steps = (20, 200, default_steps) if quick else (10, 20, 40, 80, 160, 400, 1000, default_steps)
+    steps = (20, default_steps) if quick else (10, 20, 40, 80, 160, 400, 1000, default_steps)
     for k in sorted(set(steps)):
         settings = dataclasses.replace(gradient.DEFAULT_SETTINGS, max_steps=k)
         fn = partial(gradient.minimize, settings=settings)
         t, res = time_jit(fn, problem, weights, repeats=repeats)
-        rows.append(_solver_row("gradient", f"max_steps={k} (used {int(res.iterations)})", t, res.design,
-                                problem, weights, ref, k == default_steps))
+        rows.append(
+            _solver_row(
+                "gradient",
+                f"max_steps={k} (used {int(res.iterations)})",
+                t,
+                res.design,
+                problem,
+                weights,
+                ref,
+                k == default_steps,
+            )
+        )
     d = ga.DEFAULT_SETTINGS
-    combos = ([(d.population, d.generations)] if quick else
-              [(20, 50), (20, 200), (48, 60), (d.population, d.generations), (48, 400), (200, 120), (200, 400),
-               (1000, 400)])
+    combos = (
+        [(d.population, d.generations)]
+        if quick
+        else [
+            (20, 50),
+            (20, 200),
+            (48, 60),
+            (d.population, d.generations),
+            (48, 400),
+            (200, 120),
+            (200, 400),
+            (1000, 400),
+        ]
+    )
     key = jax.random.key(0)
     for pop, gens in combos:
         settings = dataclasses.replace(d, population=pop, generations=gens)
         fn = partial(ga.run, settings=settings)
         t, res = time_jit(fn, key, problem, weights, repeats=repeats)
-        rows.append(_solver_row("ga", f"population={pop} generations={gens}", t, res.design, problem, weights,
-                                ref, (pop, gens) == (d.population, d.generations)))
+        rows.append(
+            _solver_row(
+                "ga",
+                f"population={pop} generations={gens}",
+                t,
+                res.design,
+                problem,
+                weights,
+                ref,
+                (pop, gens) == (d.population, d.generations),
+            )
+        )
     return rows
 
 
@@ -129,7 +178,14 @@ def run(scene, quick: bool) -> dict:
     grid = grid_trade(scene, ref, ref_design, samples, repeats=3 if quick else 5)
     solvers = solver_trade(scene, ref, quick, repeats=3)
     default = next(r for r in grid if r["default"])
-    return {"reference": {"samples": REFERENCE_SAMPLES, "dtype": "float64", **ref,
-                          "design_mm": [float(ref_design.base_radius_mm), float(ref_design.face_width_mm)]},
-            "default_max_rel_error": default["max_rel_error"],
-            "grid": grid, "solvers": solvers}
+    return {
+        "reference": {
+            "samples": REFERENCE_SAMPLES,
+            "dtype": "float64",
+            **ref,
+            "design_mm": [float(ref_design.base_radius_mm), float(ref_design.face_width_mm)],
+        },
+        "default_max_rel_error": default["max_rel_error"],
+        "grid": grid,
+        "solvers": solvers,
+    }

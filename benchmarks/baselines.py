@@ -30,7 +30,9 @@ def sweep_slsqp(problem, weightings, starts_per_weighting: int = 1) -> Loop:
     np_p = ref.NumpyProblem(problem)
     centre = 0.5 * (np_p.lower + np_p.upper)
     fracs = [0.5, 0.25, 0.75, 0.95][:starts_per_weighting]
-    starts = [np_p.lower + f * (np_p.upper - np_p.lower) for f in fracs] if starts_per_weighting > 1 else [centre]
+    starts = (
+        [np_p.lower + f * (np_p.upper - np_p.lower) for f in fracs] if starts_per_weighting > 1 else [centre]
+    )
 
     def solve():
         return np.array([ref.global_slsqp(np_p, a, g, starts) for a, g in weightings])
@@ -48,4 +50,4 @@ def sweep_de(problem, weightings, seed: int = 0) -> Loop:
         out = [ref.global_de(np_p, a, g, seed=seed + i) for i, (a, g) in enumerate(weightings)]
         return np.array([x for x, _ in out]), int(sum(n for _, n in out))
 
-    return Loop(solve, "benchmarks.scipy_reference.global_de (SciPy defaults: tol 0.01, popsize 15, polish)")
+    return Loop(solve, "benchmarks.scipy_reference.global_de (tol 1e-8, popsize 15, polish)")

@@ -55,7 +55,10 @@ def central_difference(f, problem, weights, design, step: float) -> np.ndarray:
         xp, xm = x.copy(), x.copy()
         xp[i] += h
         xm[i] -= h
-        fp, fm = fj(problem, weights, P.Design(*map(jnp.asarray, xp))), fj(problem, weights, P.Design(*map(jnp.asarray, xm)))
+        fp, fm = (
+            fj(problem, weights, P.Design(*map(jnp.asarray, xp))),
+            fj(problem, weights, P.Design(*map(jnp.asarray, xm))),
+        )
         out.append((float(fp) - float(fm)) / (2 * h))
     return np.array(out)
 
@@ -84,8 +87,9 @@ def run(scene, quick: bool) -> dict:
     designs = fz.random_designs(problem, population)
     fd_designs = fz.random_designs(problem, 8 if quick else 32, seed=1)
     # keep FD points on the smooth, feasible side (rho > 0 everywhere): R_b above the curvature need
-    fd_designs = fd_designs._replace(base_radius_mm=jnp.maximum(fd_designs.base_radius_mm,
-                                                                P.required_base_radius(problem) + 0.5))
+    fd_designs = fd_designs._replace(
+        base_radius_mm=jnp.maximum(fd_designs.base_radius_mm, P.required_base_radius(problem) + 0.5)
+    )
     out = {}
     for name, f in _functions(problem, weights).items():
         t_f, _ = time_jit(f, problem, weights, one, repeats=20)
@@ -95,12 +99,15 @@ def run(scene, quick: bool) -> dict:
         t_vf, _ = time_jit(vf, problem, weights, designs, repeats=5)
         t_vg, _ = time_jit(vg, problem, weights, designs, repeats=5)
         out[name] = {
-            "single_value_s": t_f.median_s, "single_value_and_grad_s": t_g.median_s,
+            "single_value_s": t_f.median_s,
+            "single_value_and_grad_s": t_g.median_s,
             "single_ratio": t_g.median_s / t_f.median_s,
             "population": population,
-            "population_value_s": t_vf.median_s, "population_value_and_grad_s": t_vg.median_s,
+            "population_value_s": t_vf.median_s,
+            "population_value_and_grad_s": t_vg.median_s,
             "population_ratio": t_vg.median_s / t_vf.median_s,
-            "compile_value_s": t_f.compile_s, "compile_value_and_grad_s": t_g.compile_s,
+            "compile_value_s": t_f.compile_s,
+            "compile_value_and_grad_s": t_g.compile_s,
             "fd_agreement": agreement(f, problem, weights, fd_designs),
         }
     out["max_fd_rel_diff"] = max(out[k]["fd_agreement"]["max_rel_diff"] for k in ("objective", "lagrangian"))

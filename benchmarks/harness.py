@@ -48,8 +48,9 @@ def _timing(compile_s: float, times: list[float]) -> Timing:
     return Timing(compile_s, statistics.median(times), min(times), len(times), tuple(times))
 
 
-def time_jit(fn: Callable, *args, repeats: int = 5, warmup: int = 1, min_time_s: float = 0.2,
-             static_argnames=()) -> tuple[Timing, Any]:
+def time_jit(
+    fn: Callable, *args, repeats: int = 5, warmup: int = 1, min_time_s: float = 0.2, static_argnames=()
+) -> tuple[Timing, Any]:
     """Time ``jax.jit(fn)``: compile (lower + compile) alone, then the median of steady calls.
 
     Returns the timing and the output of the last call. ``args`` are passed as traced arguments
@@ -66,8 +67,9 @@ def time_jit(fn: Callable, *args, repeats: int = 5, warmup: int = 1, min_time_s:
     return _timing(compile_s, times), out
 
 
-def time_python(call: Callable[[], Any], repeats: int = 3, warmup: int = 1,
-                min_time_s: float = 0.0) -> tuple[Timing, Any]:
+def time_python(
+    call: Callable[[], Any], repeats: int = 3, warmup: int = 1, min_time_s: float = 0.0
+) -> tuple[Timing, Any]:
     """Median of ``repeats`` calls of a plain Python callable after ``warmup`` calls."""
     outputs = []
 

@@ -14,18 +14,35 @@ def speed_accuracy(accuracy: dict, path: Path) -> Path:
     """Max relative error vs steady-state time, log axes; defaults marked with a star."""
     fig, ax = plt.subplots(figsize=(7.5, 5))
     series = [("grid", "float64", "o-", "grid N, float64"), ("grid", "float32", "s--", "grid N, float32")]
-    for knob, dtype, style, label in series:
+    for _knob, dtype, style, label in series:
         rows = [r for r in accuracy["grid"] if r["dtype"] == dtype]
-        ax.plot([r["time_s"] for r in rows], [max(r["max_rel_error"], 1e-17) for r in rows], style, label=label)
+        ax.plot(
+            [r["time_s"] for r in rows], [max(r["max_rel_error"], 1e-17) for r in rows], style, label=label
+        )
         for r in rows:
-            ax.annotate(str(r["samples"]), (r["time_s"], max(r["max_rel_error"], 1e-17)), fontsize=7,
-                        textcoords="offset points", xytext=(3, 3))
-    for knob, style, label in (("gradient", "^-", "gradient solver: iterations"), ("ga", "v-", "GA: population x generations")):
+            ax.annotate(
+                str(r["samples"]),
+                (r["time_s"], max(r["max_rel_error"], 1e-17)),
+                fontsize=7,
+                textcoords="offset points",
+                xytext=(3, 3),
+            )
+    for knob, style, label in (
+        ("gradient", "^-", "gradient solver: iterations"),
+        ("ga", "v-", "GA: population x generations"),
+    ):
         rows = sorted([r for r in accuracy["solvers"] if r["knob"] == knob], key=lambda r: r["time_s"])
-        ax.plot([r["time_s"] for r in rows], [max(r["max_rel_error"], 1e-17) for r in rows], style, label=label)
+        ax.plot(
+            [r["time_s"] for r in rows], [max(r["max_rel_error"], 1e-17) for r in rows], style, label=label
+        )
     defaults = [r for r in accuracy["grid"] + accuracy["solvers"] if r.get("default")]
-    ax.plot([r["time_s"] for r in defaults], [max(r["max_rel_error"], 1e-17) for r in defaults], "k*",
-            markersize=14, label="defaults")
+    ax.plot(
+        [r["time_s"] for r in defaults],
+        [max(r["max_rel_error"], 1e-17) for r in defaults],
+        "k*",
+        markersize=14,
+        label="defaults",
+    )
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.set_xlabel("steady-state time per call (s), after compile")
@@ -44,10 +61,12 @@ def scaling(fitness: dict, path: Path) -> Path:
     fig, (a, b) = plt.subplots(1, 2, figsize=(11, 4.5))
     rows = fitness["by_population"]
     pops = [r["population"] for r in rows]
-    for key, style, label in (("library_evals_per_s", "o-", "camjax GA fitness (vmap)"),
-                              ("library_blocked_evals_per_s", "d-", "camjax GA fitness, blocked"),
-                              ("fused_evals_per_s", "s-", "hand-fused kernel"),
-                              ("numpy_evals_per_s", "^--", "vectorized NumPy")):
+    for key, style, label in (
+        ("library_evals_per_s", "o-", "camjax GA fitness (vmap)"),
+        ("library_blocked_evals_per_s", "d-", "camjax GA fitness, blocked"),
+        ("fused_evals_per_s", "s-", "hand-fused kernel"),
+        ("numpy_evals_per_s", "^--", "vectorized NumPy"),
+    ):
         pts = [(r["population"], r[key]) for r in rows if key in r]
         if pts:
             a.plot(*zip(*pts, strict=True), style, label=label)
@@ -58,10 +77,12 @@ def scaling(fitness: dict, path: Path) -> Path:
     a.set_ylabel("design-angle evaluations / s")
     a.legend(fontsize=8)
     a.grid(True, which="both", alpha=0.3)
-    for key, rows_n, style, label in (("library_evals_per_s", fitness["by_samples_float64"], "o-", "camjax float64"),
-                                      ("fused_evals_per_s", fitness["by_samples_float64"], "s-", "fused float64"),
-                                      ("library_evals_per_s", fitness["by_samples_float32"], "o--", "camjax float32"),
-                                      ("fused_evals_per_s", fitness["by_samples_float32"], "s--", "fused float32")):
+    for key, rows_n, style, label in (
+        ("library_evals_per_s", fitness["by_samples_float64"], "o-", "camjax float64"),
+        ("fused_evals_per_s", fitness["by_samples_float64"], "s-", "fused float64"),
+        ("library_evals_per_s", fitness["by_samples_float32"], "o--", "camjax float32"),
+        ("fused_evals_per_s", fitness["by_samples_float32"], "s--", "fused float32"),
+    ):
         b.plot([r["samples"] for r in rows_n], [r[key] for r in rows_n], style, label=label)
     b.set_xscale("log")
     b.set_yscale("log")

@@ -37,7 +37,9 @@ def run(scene, quick: bool) -> dict:
         "max_abs_diff_base_radius_mm": float(np.max(np.abs(r_jax - x_sp[:, 0]))),
         "max_abs_diff_face_width_mm": float(np.max(np.abs(l_jax - x_sp[:, 1]))),
         "camjax_vs_closed_form_mm": float(max(np.max(np.abs(r_jax - r_ex)), np.max(np.abs(l_jax - l_ex)))),
-        "scipy_vs_closed_form_mm": float(max(np.max(np.abs(x_sp[:, 0] - r_ex)), np.max(np.abs(x_sp[:, 1] - l_ex)))),
+        "scipy_vs_closed_form_mm": float(
+            max(np.max(np.abs(x_sp[:, 0] - r_ex)), np.max(np.abs(x_sp[:, 1] - l_ex)))
+        ),
         "camjax_max_iterations": int(np.max(np.asarray(res.iterations))),
         "camjax_median_iterations": float(np.median(np.asarray(res.iterations))),
         "camjax_s_per_iteration": t_jax.median_s / max(int(np.max(np.asarray(res.iterations))), 1),

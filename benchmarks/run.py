@@ -39,6 +39,7 @@ INFO = (
     ("fitness.fused_evaluations_per_s", "hand-fused kernel, evals/s (same run)"),
     ("fitness.library_blocked_evaluations_per_s", "camjax fitness evaluated in blocks, evals/s"),
     ("fitness.fused_numpy_ratio", "hand-fused kernel vs NumPy (x)"),
+    ("fitness.numpy_ratio_same_algorithm", "camjax vs NumPy of the library's algorithm (x)"),
     ("fitness.population_exponent_fused", "fused kernel cost exponent in population"),
     ("fitness.samples_exponent_fused", "fused kernel cost exponent in N"),
     ("gradients.grad_cost_ratio", "value+grad / value, population (x)"),
@@ -66,8 +67,15 @@ def evaluate_targets(data: dict) -> list[dict]:
         else:
             ok = value >= threshold if op == ">=" else value <= threshold
             status = "pass" if ok else "MISS"
-        out.append({"key": path, "target": f"{op} {threshold:g}", "measured": value, "status": status,
-                    "description": text})
+        out.append(
+            {
+                "key": path,
+                "target": f"{op} {threshold:g}",
+                "measured": value,
+                "status": status,
+                "description": text,
+            }
+        )
     return out
 
 
@@ -82,8 +90,10 @@ def _fmt(v) -> str:
 def print_table(data: dict) -> None:
     """Readable summary on stdout."""
     env = data["environment"]
-    print(f"\ncamjax benchmarks ({'quick' if data['quick'] else 'full'} run, {env['date_utc']}, "
-          f"{env['machine']}, {env['cpu_count']} CPUs, jax {env['jax']}, {env['backend']}, {env['dtype']})")
+    print(
+        f"\ncamjax benchmarks ({'quick' if data['quick'] else 'full'} run, {env['date_utc']}, "
+        f"{env['machine']}, {env['cpu_count']} CPUs, jax {env['jax']}, {env['backend']}, {env['dtype']})"
+    )
     print(f"{'target':<52} {'goal':>10} {'measured':>11}  status")
     for t in data["targets"]:
         print(f"{t['description']:<52} {t['target']:>10} {_fmt(t['measured']):>11}  {t['status']}")
@@ -94,16 +104,21 @@ def print_table(data: dict) -> None:
     if "by_population" in fit:
         print(f"\n{'population':>10} {'camjax/s':>10} {'blocked/s':>10} {'fused/s':>10} {'numpy/s':>10}")
         for r in fit["by_population"]:
-            print(f"{r['population']:>10} {_fmt(r['library_evals_per_s']):>10} "
-                  f"{_fmt(r['library_blocked_evals_per_s']):>10} {_fmt(r['fused_evals_per_s']):>10} "
-                  f"{_fmt(r.get('numpy_evals_per_s')):>10}")
+            print(
+                f"{r['population']:>10} {_fmt(r['library_evals_per_s']):>10} "
+                f"{_fmt(r['library_blocked_evals_per_s']):>10} {_fmt(r['fused_evals_per_s']):>10} "
+                f"{_fmt(r.get('numpy_evals_per_s')):>10}"
+            )
     acc = data.get("accuracy", {})
     if "grid" in acc:
         print(f"\n{'knob':<9} {'setting':<32} {'dtype':<8} {'time_s':>9} {'max rel err':>11}")
         for r in acc["grid"] + acc["solvers"]:
             setting = r.get("setting", f"N={r['samples']}")
             mark = " *default" if r.get("default") else ""
-            print(f"{r['knob']:<9} {setting:<32} {r['dtype']:<8} {r['time_s']:>9.3g} {r['max_rel_error']:>11.2e}{mark}")
+            print(
+                f"{r['knob']:<9} {setting:<32} {r['dtype']:<8} {r['time_s']:>9.3g} "
+                f"{r['max_rel_error']:>11.2e}{mark}"
+            )
     for name in ("pointwise", "sweep"):
         section = data.get(name, {})
         scalars = {k: v for k, v in section.items() if not isinstance(v, dict | list)}
@@ -124,15 +139,20 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="smoke run, < 2 minutes")
     parser.add_argument("--out", type=Path, required=True, help="JSON file to write")
-    parser.add_argument("--plots-dir", type=Path, default=None, help="where to draw the plots (default: next to --out)")
+    parser.add_argument(
+        "--plots-dir", type=Path, default=None, help="where to draw the plots (default: next to --out)"
+    )
     parser.add_argument("--only", nargs="*", default=None, help="run only these benchmarks")
     args = parser.parse_args(argv)
     t0 = time.perf_counter()
     scene = camjax.load_scene()
-    data = {"quick": args.quick, "environment": environment("float64"),
-            "notes": "Every time is a median of repeated calls after warm-up; *_compile_s is jit lower+compile "
-                     "alone. Figures come from this one run (other processes may share the CPU: see "
-                     "environment.load_average_at_start)."}
+    data = {
+        "quick": args.quick,
+        "environment": environment("float64"),
+        "notes": "Every time is a median of repeated calls after warm-up; *_compile_s is jit lower+compile "
+        "alone. Figures come from this one run (other processes may share the CPU: see "
+        "environment.load_average_at_start).",
+    }
     for name, bench in BENCHMARKS:
         if args.only and name not in args.only:
             continue

@@ -26,15 +26,18 @@ def blocked(fn, block: int = FUSED_BLOCK):
     and the population exceeds ~1e4 rows (measured; see the README); blocks of ~2k designs keep
     it on its fast path. Pads the population to a multiple of the block with copies of design 0.
     """
+
     def run(scene, weights, designs):
         pop = designs.base_radius_mm.shape[0]
         b = min(block, pop)
         chunks = -(-pop // b)
         pad = chunks * b - pop
-        padded = jax.tree.map(lambda x: jnp.concatenate([x, jnp.broadcast_to(x[:1], (pad,))])
-                              .reshape(chunks, b), designs)
+        padded = jax.tree.map(
+            lambda x: jnp.concatenate([x, jnp.broadcast_to(x[:1], (pad,))]).reshape(chunks, b), designs
+        )
         out = jax.lax.map(lambda d: fn(scene, weights, type(designs)(*d)), tuple(padded))
         return jax.tree.map(lambda x: x.reshape(-1)[:pop], out)
+
     return run
 
 
@@ -47,6 +50,7 @@ def measure_population(problem, weights, populations, numpy_max_pop: int, repeat
     n = problem.q_mm.shape[0]
     scene = fz.fused_scene(problem)
     np_scene = fz.numpy_scene(scene)
+    np_problem = fz.numpy_problem(problem)
     a, g = float(weights.alpha), float(weights.gamma)
     fused = blocked(fz.fused_fitness)
     library_blocked = blocked(fz.library_fitness)
@@ -57,19 +61,34 @@ def measure_population(problem, weights, populations, numpy_max_pop: int, repeat
         t_lib, out_lib = time_jit(fz.library_fitness, problem, weights, designs, repeats=reps)
         t_fused, out_fused = time_jit(fused, scene, weights, designs, repeats=reps)
         t_blk, _ = time_jit(library_blocked, problem, weights, designs, repeats=reps)
-        row = {"population": pop, "samples": n,
-               "library_s": t_lib.median_s, "library_compile_s": t_lib.compile_s,
-               "library_evals_per_s": _rate(pop, n, t_lib.median_s),
-               "fused_s": t_fused.median_s, "fused_compile_s": t_fused.compile_s,
-               "fused_evals_per_s": _rate(pop, n, t_fused.median_s),
-               "library_blocked_s": t_blk.median_s, "library_blocked_evals_per_s": _rate(pop, n, t_blk.median_s),
-               "fused_vs_library_max_abs_diff": fz.max_disagreement(out_lib, out_fused)}
+        row = {
+            "population": pop,
+            "samples": n,
+            "library_s": t_lib.median_s,
+            "library_compile_s": t_lib.compile_s,
+            "library_evals_per_s": _rate(pop, n, t_lib.median_s),
+            "fused_s": t_fused.median_s,
+            "fused_compile_s": t_fused.compile_s,
+            "fused_evals_per_s": _rate(pop, n, t_fused.median_s),
+            "library_blocked_s": t_blk.median_s,
+            "library_blocked_evals_per_s": _rate(pop, n, t_blk.median_s),
+            "fused_vs_library_max_abs_diff": fz.max_disagreement(out_lib, out_fused),
+        }
         if pop <= numpy_max_pop:
             r, length = np.asarray(designs.base_radius_mm), np.asarray(designs.face_width_mm)
-            t_np, out_np = time_python(lambda r=r, length=length: fz.numpy_fitness(np_scene, a, g, r, length),
-                                       repeats=reps)
-            row.update(numpy_s=t_np.median_s, numpy_evals_per_s=_rate(pop, n, t_np.median_s),
-                       numpy_vs_library_max_abs_diff=fz.max_disagreement(out_lib, out_np))
+            t_np, out_np = time_python(
+                lambda r=r, length=length: fz.numpy_fitness(np_scene, a, g, r, length), repeats=reps
+            )
+            t_npa, _ = time_python(
+                lambda r=r, length=length: fz.numpy_fitness_per_angle(np_problem, a, g, r, length),
+                repeats=reps,
+            )
+            row.update(numpy_per_angle_evals_per_s=_rate(pop, n, t_npa.median_s))
+            row.update(
+                numpy_s=t_np.median_s,
+                numpy_evals_per_s=_rate(pop, n, t_np.median_s),
+                numpy_vs_library_max_abs_diff=fz.max_disagreement(out_lib, out_np),
+            )
         rows.append(row)
     return rows
 
@@ -84,9 +103,17 @@ def measure_samples(scene_obj, weights, sample_sizes, population: int, repeats: 
         designs = fz.random_designs(problem, population)
         t_lib, _ = time_jit(fz.library_fitness, problem, w, designs, repeats=repeats)
         t_fused, _ = time_jit(fused, fz.fused_scene(problem), w, designs, repeats=repeats)
-        rows.append({"population": population, "samples": n, "dtype": jnp.dtype(dtype).name,
-                     "library_s": t_lib.median_s, "library_evals_per_s": _rate(population, n, t_lib.median_s),
-                     "fused_s": t_fused.median_s, "fused_evals_per_s": _rate(population, n, t_fused.median_s)})
+        rows.append(
+            {
+                "population": population,
+                "samples": n,
+                "dtype": jnp.dtype(dtype).name,
+                "library_s": t_lib.median_s,
+                "library_evals_per_s": _rate(population, n, t_lib.median_s),
+                "fused_s": t_fused.median_s,
+                "fused_evals_per_s": _rate(population, n, t_fused.median_s),
+            }
+        )
     return rows
 
 
@@ -94,11 +121,18 @@ def profile(problem, weights, population: int) -> dict:
     """XLA's static cost analysis and fusion count of each kernel at one population size."""
     designs = fz.random_designs(problem, population)
     scene = fz.fused_scene(problem)
-    kernels = {"library": (fz.library_fitness, problem), "library_blocked": (blocked(fz.library_fitness), problem),
-               "fused": (fz.fused_fitness, scene), "fused_blocked": (blocked(fz.fused_fitness), scene)}
+    kernels = {
+        "library": (fz.library_fitness, problem),
+        "library_blocked": (blocked(fz.library_fitness), problem),
+        "fused": (fz.fused_fitness, scene),
+        "fused_blocked": (blocked(fz.fused_fitness), scene),
+    }
     out = {"population": population, "samples": int(problem.q_mm.shape[0])}
     for name, (fn, data) in kernels.items():
-        out[name] = {**compiled_cost(fn, data, weights, designs), "fusions": fusion_count(fn, data, weights, designs)}
+        out[name] = {
+            **compiled_cost(fn, data, weights, designs),
+            "fusions": fusion_count(fn, data, weights, designs),
+        }
     return out
 
 
@@ -114,13 +148,15 @@ def run(scene_obj, quick: bool) -> dict:
     problem = P.problem_from_scene(scene_obj)
     weights = P.weights_of(1.0, 1.0)
     pops = [10, 1000, 10**4] if quick else [10, 100, 1000, 10**4, 10**5, 10**6]
-    by_pop = measure_population(problem, weights, pops, numpy_max_pop=10**4 if quick else 10**5,
-                                repeats=3 if quick else 5)
+    by_pop = measure_population(
+        problem, weights, pops, numpy_max_pop=10**4 if quick else 10**5, repeats=3 if quick else 5
+    )
     sizes = [360, 3600] if quick else [90, 180, 360, 720, 3600, 36000]
     n_pop = 1000 if quick else 10**4
     by_n = measure_samples(scene_obj, weights, sizes, n_pop, repeats=3, dtype=jnp.float64)
-    by_n32 = measure_samples(scene_obj, weights, sizes if not quick else sizes[:1], n_pop, repeats=3,
-                             dtype=jnp.float32)
+    by_n32 = measure_samples(
+        scene_obj, weights, sizes if not quick else sizes[:1], n_pop, repeats=3, dtype=jnp.float32
+    )
 
     prof = profile(problem, weights, 10**4 if quick else 10**5)
     big = [r for r in by_pop if 10**4 <= r["population"] <= 10**6]
@@ -130,13 +166,15 @@ def run(scene_obj, quick: bool) -> dict:
     return {
         "evaluations_per_s": lib_rate,
         "evaluations_per_s_note": "camjax GA fitness (vmap of ga.design_fitness), float64, N=360: the "
-                                  "lowest rate over populations 1e4..%d" % max(r["population"] for r in big),
+        f"lowest rate over populations 1e4..{max(r['population'] for r in big)}",
         "fused_evaluations_per_s": fused_rate,
         "fraction_of_fused": lib_rate / fused_rate,
         "numpy_evaluations_per_s": at["numpy_evals_per_s"],
         "numpy_ratio": at["library_evals_per_s"] / at["numpy_evals_per_s"],
         "numpy_ratio_note": "camjax library / vectorized NumPy rate at population 1e4, N=360",
         "fused_numpy_ratio": at["fused_evals_per_s"] / at["numpy_evals_per_s"],
+        "numpy_ratio_same_algorithm": at["library_evals_per_s"] / at["numpy_per_angle_evals_per_s"],
+        "numpy_per_angle_evaluations_per_s": at["numpy_per_angle_evals_per_s"],
         "population_exponent_library": _exponent(by_pop, "population", "library_s", 1000),
         "population_exponent_fused": _exponent(by_pop, "population", "fused_s", 1000),
         "samples_exponent_library": _exponent(by_n, "samples", "library_s", 360),
