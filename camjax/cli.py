@@ -184,7 +184,7 @@ def _setup_check_extremes(p: argparse.ArgumentParser):
     p.add_argument("--out", required=True, metavar="DIR", help="output folder")
 
     def run(args) -> int:
-        from camjax.extremes import format_table, run_matrix
+        from camjax.extremes import format_markdown, format_table, run_matrix
         from camjax.scene import load_scene
 
         scene = load_scene(args.scene)
@@ -197,6 +197,7 @@ def _setup_check_extremes(p: argparse.ArgumentParser):
                 "summary": {"cases": len(cases), "passed": len(cases) - len(failed), "failed": len(failed)},
             })
             (tmp / "extremes.txt").write_text(format_table(cases) + "\n")
+            (tmp / "extremes.md").write_text(format_markdown(cases) + "\n")
         print(format_table(failed) if failed else f"all {len(cases)} cases pass")
         print(f"{len(cases) - len(failed)} passed, {len(failed)} failed; wrote {Path(args.out) / 'extremes.json'}")
         return 1 if failed else 0

@@ -452,3 +452,30 @@ def format_table(cases: Iterable[Case]) -> str:
             f"{c.tolerance:8.1e} {'pass' if c.passed else 'FAIL'}"
         )
     return "\n".join(lines)
+
+
+def format_markdown(cases: list[Case]) -> str:
+    """Markdown summary for the README: per-group results and the float32/float64 table."""
+    groups: dict[str, list[Case]] = {}
+    for c in cases:
+        groups.setdefault(c.group, []).append(c)
+    lines = ["| group | cases | passed | largest error / tolerance |", "|---|---:|---:|---:|"]
+    for g, cs in groups.items():
+        ratio = max(
+            (c.error / c.tolerance if c.tolerance > 0 else (0.0 if c.error == 0 else math.inf)) for c in cs
+        )
+        lines.append(f"| {g} | {len(cs)} | {sum(c.passed for c in cs)} | {ratio:.2g} |")
+    prec = [c for c in cases if c.group == "precision"]
+    if prec:
+        lines += [
+            "",
+            "| figure (reference scene) | float64 | float32 | relative difference | tolerance | |",
+            "|---|---:|---:|---:|---:|---|",
+        ]
+        for c in prec:
+            label = c.name.removeprefix("float32 ")
+            lines.append(
+                f"| {label} | {c.reference:.7g} | {c.value:.7g} | {c.error:.1e} | {c.tolerance:.0e} | "
+                f"{'pass' if c.passed else 'FAIL'} |"
+            )
+    return "\n".join(lines)
