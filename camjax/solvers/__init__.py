@@ -5,7 +5,8 @@
 - :mod:`~camjax.solvers.ga`: a real-coded GA whose population is evaluated in one vectorized
   call, batched over weightings (and angles in pointwise mode);
 - :mod:`~camjax.solvers.sweep`: one entry point for every solver (gradient, ga, hybrid) and mode
-  (global, pointwise): :func:`solve`, :func:`solve_batch`, :func:`sweep`, :func:`plot_pareto`;
+  (global, pointwise): :func:`solve`, :func:`solve_batch`, ``sweep.sweep`` (``run_sweep``),
+  :func:`plot_pareto`;
 - :mod:`~camjax.solvers.scipy_baseline`: the same problems with ``scipy.optimize`` (SLSQP per
   angle, differential evolution), an independent check and the benchmarks' competitor.
 """
@@ -22,11 +23,14 @@ from camjax.solvers.sweep import (
     plot_pareto,
     solve,
     solve_batch,
-    sweep,
     weight_grid,
 )
 
+# ``camjax.solvers.sweep`` stays the module; its function is ``camjax.solvers.sweep.sweep``
+# (also exported as ``run_sweep``).
+from camjax.solvers.sweep import sweep as run_sweep  # noqa: E402
+
 __all__ = [
     "MODES", "SOLVERS", "DesignResult", "GASettings", "GradientSettings", "SweepResult", "ga", "gradient",
-    "pareto_mask", "plot_pareto", "solve", "solve_batch", "sweep", "weight_grid",
+    "pareto_mask", "plot_pareto", "run_sweep", "solve", "solve_batch", "weight_grid",
 ]

@@ -18,6 +18,7 @@ Not traceable (SciPy): call with concrete arrays. Requires scipy (an optional de
 from __future__ import annotations
 
 import time
+import warnings
 from typing import NamedTuple
 
 import numpy as np
@@ -118,7 +119,7 @@ def _slsqp_one(d: _Data, alpha: float, gamma: float, x0, ftol: float, maxiter: i
 
 
 def slsqp_pointwise(problem: Problem, alpha: float, gamma: float, angles=None, *, x0=None,
-                    ftol: float = 1e-14, maxiter: int = 500) -> BaselineResult:
+                    ftol: float = 1e-12, maxiter: int = 500) -> BaselineResult:
     """SLSQP separately at each angle (a Python loop, as the source's fmincon loop).
 
     Args:
@@ -159,9 +160,13 @@ def _de_one(d: _Data, alpha: float, gamma: float, seed: int, popsize: int, maxit
     def worst(x):  # min over every constraint row: >= 0 when feasible
         return float(np.min(_constraint_rows(d, x)))
 
-    res = differential_evolution(lambda x: objective(d, alpha, gamma, x), list(zip(d.lo, d.hi, strict=True)),
-                                 constraints=[NonlinearConstraint(worst, 0.0, np.inf)], seed=seed,
-                                 popsize=popsize, maxiter=maxiter, tol=tol, polish=True)
+    with warnings.catch_warnings():
+        # the trust-constr polish warns that the (linear) constraint has a zero quasi-Newton update
+        warnings.filterwarnings("ignore", message="delta_grad == 0.0", category=UserWarning)
+        res = differential_evolution(lambda x: objective(d, alpha, gamma, x),
+                                     list(zip(d.lo, d.hi, strict=True)),
+                                     constraints=[NonlinearConstraint(worst, 0.0, np.inf)], seed=seed,
+                                     popsize=popsize, maxiter=maxiter, tol=tol, polish=True)
     return res.x, bool(res.success), int(res.nit)
 
 

@@ -1,0 +1,117 @@
+"""solve / sweep API: reference figures, one compiled program for 100+ weightings, Pareto front, JSON."""
+
+import json
+
+import numpy as np
+import pytest
+
+from camjax import problem as P
+from camjax.solvers import sweep as S
+
+
+@pytest.fixture(scope="module")
+def problem(default_scene, default_arrays):
+    return P.problem_from_scene(default_scene, default_arrays)
+
+
+@pytest.fixture(scope="module")
+def big_sweep(problem):
+    """11 x 11 = 121 weightings, alpha and gamma from 0.01 to 100, global gradient, one chunk."""
+    grid = np.logspace(-2, 2, 11)
+    S.solve_batch.clear_cache()
+    result = S.sweep(problem, grid, grid, chunk_size=128)
+    return result
+
+
+def test_sweep_of_121_weightings_is_one_compiled_program(big_sweep):
+    assert big_sweep.results.batch_size == 121
+    assert S.solve_batch._cache_size() == 1
+    assert bool(np.all(big_sweep.results.feasible))
+
+
+def test_sweep_shows_the_size_stress_trade(big_sweep):
+    """Larger alpha / gamma -> smaller cam and higher peak stress (SPEC 7, the source's trade)."""
+    r = big_sweep.results
+    ratio = np.asarray(r.alpha) / np.asarray(r.gamma)
+    order = np.argsort(ratio, kind="stable")
+    size = np.asarray(r.base_radius_mm + r.face_width_mm)[order]
+    stress = np.asarray(r.stress_max_MPa)[order]
+    assert np.all(np.diff(size) <= 1e-6) and np.all(np.diff(stress) >= -1e-6)
+    assert size[0] - size[-1] > 10.0 and stress[-1] > 5 * stress[0]
+    # the face width is the same for every weighting
+    np.testing.assert_allclose(np.asarray(r.face_width_mm), 19.098593171, atol=1e-6)
+
+
+def test_sweep_matches_single_solves(problem, big_sweep):
+    records = big_sweep.records()
+    for k in (0, 60, 120):
+        rec = records[k]
+        one = S.solve(problem, rec["alpha"], rec["gamma"])
+        assert one.to_json(problem)["base_radius_mm"] == pytest.approx(rec["base_radius_mm"], abs=1e-8)
+
+
+def test_pareto_mask_against_brute_force():
+    rng = np.random.default_rng(0)
+    size, stress = rng.random(40), rng.random(40)
+    feasible = rng.random(40) > 0.2
+    mask = S.pareto_mask(size, stress, feasible)
+    for i in range(40):
+        dominated = any(feasible[j] and size[j] <= size[i] and stress[j] <= stress[i]
+                        and (size[j] < size[i] or stress[j] < stress[i]) for j in range(40))
+        assert mask[i] == (feasible[i] and not dominated)
+
+
+def test_records_json_and_plot(big_sweep, tmp_path):
+    data = big_sweep.to_json()
+    text = json.dumps(data, allow_nan=False)
+    rec = json.loads(text)["records"][0]
+    for key in ("alpha", "gamma", "base_radius_mm", "face_width_mm", "stress_max_MPa", "objective", "feasible"):
+        assert key in rec
+    assert sum(r["pareto"] for r in data["records"]) >= 5
+    path = tmp_path / "pareto.png"
+    S.plot_pareto(big_sweep, path)
+    assert path.stat().st_size > 10_000
+
+
+def test_reference_pointwise_design_json(problem):
+    res = S.solve(problem, 1.0, 1.0, mode="pointwise")
+    d = res.to_json(problem)
+    assert d["mode"] == "pointwise" and d["solver"] == "gradient" and d["feasible"] and d["converged"]
+    assert d["base_radius_mm"] == pytest.approx(28.39697, abs=1e-5) and d["base_radius_deg"] == 315.0
+    assert d["face_width_mm"] == pytest.approx(19.09859, abs=1e-5) and d["face_width_deg"] == 330.0
+    assert len(d["pointwise"]["base_radius_mm"]) == 360
+    json.dumps(d, allow_nan=False)
+
+
+def test_chunking_does_not_change_results(problem):
+    """GA keys come from the weighting's index: chunk sizes 2 and 3 give the same designs."""
+    from camjax.solvers import ga
+
+    small = ga.GASettings(population=12, generations=15)
+    a = S.sweep(problem, [1.0, 2.0, 4.0], [1.0], solver="ga", chunk_size=3, ga_settings=small)
+    b = S.sweep(problem, [1.0, 2.0, 4.0], [1.0], solver="ga", chunk_size=2, ga_settings=small, progress=False)
+    np.testing.assert_array_equal(np.asarray(a.results.base_radius_mm), np.asarray(b.results.base_radius_mm))
+
+
+def test_hybrid_polishes_the_ga(problem):
+    res = S.solve(problem, 10.0, 1.0, solver="hybrid")
+    ref = P.global_optimum(problem, P.weights_of(10.0, 1.0))
+    assert float(res.base_radius_mm) == pytest.approx(float(ref.base_radius_mm), abs=1e-6)
+    assert bool(res.converged) and int(res.iterations) > 200  # GA generations + gradient steps
+
+
+def test_infeasible_design_names_the_constraint(problem):
+    tight = P.with_bounds(problem, face_width_mm=(5.0, 10.0))
+    d = S.solve(tight, 1.0, 1.0).to_json(tight)
+    assert d["feasible"] is False and d["violated"] == ["face_width"]
+    assert d["constraint_violation"]["face_width_mm"] == pytest.approx(19.098593 - 10.0, abs=1e-5)
+
+
+def test_bad_weights_are_refused(problem):
+    with pytest.raises(ValueError, match="nothing to minimize"):
+        S.solve(problem, 0.0, 0.0)
+    with pytest.raises(ValueError, match=">= 0"):
+        S.sweep(problem, [-1.0], [1.0])
+    with pytest.raises(ValueError, match="solver"):
+        S.solve(problem, 1.0, 1.0, solver="annealing")
+    assert S.weight_grid([1, 2], [3, 4, 5])[0].tolist() == [1, 1, 1, 2, 2, 2]
