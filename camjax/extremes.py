@@ -416,6 +416,138 @@ def precision_cases(scene: Scene, base_radii: Iterable[float] = (28.4,), rtol32:
     return out
 
 
+# ---------------------------------------------------------------------------- optimization
+
+
+def optimization_cases(scene: Scene) -> list[Case]:
+    """Weights 0 and 1e-6..1e6, unreachable sigma_max, collapsed bounds, tiny populations, one
+    weighting, one angle, and GA determinism; references from the exact global optimum."""
+    from camjax import problem as pb
+    from camjax.solvers import ga, sweep
+
+    out = []
+    prob = pb.problem_from_scene(scene)
+    for alpha, gamma in [
+        (0.0, 1.0),
+        (1.0, 0.0),
+        (1e-6, 1.0),
+        (1.0, 1e-6),
+        (1e6, 1.0),
+        (1.0, 1e6),
+        (1.0, 1.0),
+    ]:
+        res = sweep.solve(prob, alpha, gamma)
+        ref = pb.global_optimum(prob, pb.weights_of(alpha, gamma))
+        out.append(
+            _case(
+                "optimization",
+                f"global gradient, alpha = {alpha:g}, gamma = {gamma:g}: R_b vs exact",
+                res.base_radius_mm,
+                ref.base_radius_mm,
+                1e-4,
+                note="exact optimum by bisection on the convex 1-D problem",
+            )
+        )
+        out.append(
+            _finite_case(
+                "optimization",
+                f"alpha = {alpha:g}, gamma = {gamma:g}: result finite",
+                res.objective,
+                res.base_radius_mm,
+                res.face_width_mm,
+                res.violation,
+            )
+        )
+    # sigma_max below any achievable stress: infeasible, named, finite
+    tight = prob._replace(sigma_max_MPa=jnp.asarray(1.0, prob.q_mm.dtype))
+    res = sweep.solve(tight, 1.0, 1.0)
+    names = pb.violated_constraints(tight, res.violation)
+    out.append(
+        Case(
+            "optimization",
+            f"sigma_max = 1 MPa: infeasible, violated {names}",
+            float(res.feasible),
+            0.0,
+            float(res.feasible),
+            0.0,
+            (not bool(res.feasible)) and names == ["stress"],
+            "feasible flag 0 and exactly the stress constraint named",
+        )
+    )
+    out.append(_finite_case("optimization", "sigma_max = 1 MPa: result finite", res.objective, res.violation))
+    # bounds collapsed to a point
+    point = pb.with_bounds(prob, base_radius_mm=(30.0, 30.0), face_width_mm=(20.0, 20.0))
+    res = sweep.solve(point, 1.0, 1.0)
+    out.append(
+        _case(
+            "optimization",
+            "bounds collapsed to R_b = 30, L = 20: R_b",
+            res.base_radius_mm,
+            30.0,
+            0.0,
+            note="the only admissible point, exactly",
+        )
+    )
+    # GA with population 1 and 2, a single weighting, one angle
+    try:  # a population of one cannot select or recombine: it must be refused by name
+        sweep.solve(prob, 1.0, 1.0, solver="ga", ga_settings=ga.GASettings(population=1, elite=1))
+        message = ""
+    except ValueError as exc:
+        message = str(exc)
+    refused = message.startswith("population")
+    out.append(
+        Case(
+            "optimization",
+            f"GA population 1: refused ({message or 'not refused'})",
+            float(not refused),
+            0.0,
+            float(not refused),
+            0.0,
+            refused,
+            "a clear error naming the field",
+        )
+    )
+    res = sweep.solve(
+        prob, 1.0, 1.0, solver="ga", ga_settings=ga.GASettings(population=2, generations=20, elite=1)
+    )
+    out.append(
+        _finite_case(
+            "optimization", "GA population 2: result finite", res.objective, res.base_radius_mm, res.violation
+        )
+    )
+    one = pb.problem_from_scene(scene, samples=1)
+    res = sweep.solve(one, 1.0, 1.0, mode="pointwise")
+    ref = pb.pointwise_optimum(one, pb.weights_of(1.0, 1.0))
+    out.append(
+        _case(
+            "optimization",
+            "single-angle grid (N = 1), pointwise: R_b vs closed form",
+            res.base_radius_mm,
+            float(jnp.max(ref.base_radius_mm)),
+            1e-6,
+        )
+    )
+    a = sweep.solve(prob, 1.0, 1.0, solver="ga", seed=7)
+    b = sweep.solve(prob, 1.0, 1.0, solver="ga", seed=7)
+    same = all(
+        np.array_equal(np.asarray(x), np.asarray(y))
+        for x, y in zip(jax.tree_util.tree_leaves(a), jax.tree_util.tree_leaves(b), strict=True)
+    )
+    out.append(
+        Case(
+            "determinism",
+            "GA seed 7 twice: bitwise identical results",
+            float(not same),
+            0.0,
+            float(not same),
+            0.0,
+            same,
+            "every leaf of the result compared with array_equal",
+        )
+    )
+    return out
+
+
 # ----------------------------------------------------------------------------------- runner
 
 
@@ -434,6 +566,8 @@ def run_matrix(
         ("speed", lambda: speed_cases(scene)),
         ("precision", lambda: precision_cases(scene)),
     ]
+    if scene.design is not None and scene.contact is not None:
+        groups.append(("optimization", lambda: optimization_cases(scene)))
     groups += [(fn.__name__, lambda fn=fn: fn(scene)) for fn in extra_groups]
     cases: list[Case] = []
     for name, fn in groups:
