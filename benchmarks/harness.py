@@ -139,3 +139,42 @@ def loglog_slope(x, y) -> float:
     """Least-squares exponent b of y ~ a x^b."""
     x, y = np.log(np.asarray(x, float)), np.log(np.asarray(y, float))
     return float(np.polyfit(x, y, 1)[0])
+
+
+def profile_thunks(fn: Callable, *args, calls: int = 3, top: int = 8) -> list[dict]:
+    """Where the time goes: a ``jax.profiler`` trace of ``calls`` steady calls of ``jax.jit(fn)``,
+    summarized as the ``top`` XLA:CPU thunks/fusions by time per call (ms) on any thread.
+
+    Python-side and bookkeeping events are left out; ``threads`` counts the distinct threads a
+    thunk ran on (the 2 CPUs' worker pool shows as several).
+    """
+    import collections
+    import glob
+    import tempfile
+
+    compiled = jax.jit(fn).lower(*args).compile()
+    block(compiled(*args))
+    total: collections.Counter = collections.Counter()
+    threads: dict = collections.defaultdict(set)
+    skip = ("python", "block_until_ready", "ThunkExecutor", "Await", "trace", "PjitFunction")
+    with tempfile.TemporaryDirectory() as tmp:
+        with jax.profiler.trace(tmp):
+            for _ in range(calls):
+                block(compiled(*args))
+        paths = sorted(glob.glob(f"{tmp}/**/*.xplane.pb", recursive=True))
+        if not paths:
+            return []
+        data = jax.profiler.ProfileData.from_file(paths[-1])
+        for plane in data.planes:
+            for line in plane.lines:
+                if line.name == "python":
+                    continue
+                for ev in line.events:
+                    if ev.name.startswith("end:") or any(s in ev.name for s in skip):
+                        continue
+                    total[ev.name] += ev.duration_ns
+                    threads[ev.name].add(line.name)
+    return [
+        {"thunk": name, "ms_per_call": ns / calls / 1e6, "threads": len(threads[name])}
+        for name, ns in total.most_common(top)
+    ]

@@ -13,7 +13,14 @@ import jax.numpy as jnp
 import numpy as np
 
 from benchmarks import fitness as fz
-from benchmarks.harness import compiled_cost, fusion_count, loglog_slope, time_jit, time_python
+from benchmarks.harness import (
+    compiled_cost,
+    fusion_count,
+    loglog_slope,
+    profile_thunks,
+    time_jit,
+    time_python,
+)
 from camjax import problem as P
 
 FUSED_BLOCK = 2048  # designs per block of the fused kernel (see blocked())
@@ -132,6 +139,7 @@ def profile(problem, weights, population: int) -> dict:
         out[name] = {
             **compiled_cost(fn, data, weights, designs),
             "fusions": fusion_count(fn, data, weights, designs),
+            "thunks": profile_thunks(fn, data, weights, designs),
         }
     return out
 

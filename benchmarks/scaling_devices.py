@@ -61,17 +61,37 @@ def _device_child(devices: int, solver: str, mode: str, weightings: int, repeats
         start = time.perf_counter()
         call()
         times.append(time.perf_counter() - start)
-    return {"devices": jax.local_device_count(), "first_call_s": first,
-            "median_s": statistics.median(times), "samples_s": times}
+    return {
+        "devices": jax.local_device_count(),
+        "first_call_s": first,
+        "median_s": statistics.median(times),
+        "samples_s": times,
+    }
 
 
 def measure_devices(counts: list[int], solver: str, mode: str, weightings: int, repeats: int) -> list[dict]:
     rows = []
     for n in counts:
         proc = subprocess.run(
-            [sys.executable, __file__, "--child-devices", str(n), "--solver", solver, "--mode", mode,
-             "--weightings", str(weightings), "--repeats", str(repeats)],
-            capture_output=True, text=True, check=True, env={**os.environ, "CAMJAX_COMPILATION_CACHE": "0"})
+            [
+                sys.executable,
+                __file__,
+                "--child-devices",
+                str(n),
+                "--solver",
+                solver,
+                "--mode",
+                mode,
+                "--weightings",
+                str(weightings),
+                "--repeats",
+                str(repeats),
+            ],
+            capture_output=True,
+            text=True,
+            check=True,
+            env={**os.environ, "CAMJAX_COMPILATION_CACHE": "0"},
+        )
         rows.append(json.loads(proc.stdout.strip().splitlines()[-1]))
     base = rows[0]["median_s"]
     for r in rows:
@@ -80,8 +100,9 @@ def measure_devices(counts: list[int], solver: str, mode: str, weightings: int, 
     return rows
 
 
-def measure_processes(workers: list[int], solver: str, mode: str, weightings: int,
-                      block_size: int) -> list[dict]:
+def measure_processes(
+    workers: list[int], solver: str, mode: str, weightings: int, block_size: int
+) -> list[dict]:
     from camjax.scaleout import BlockStore, SweepSpec, sweep_blocks
     from camjax.scene import builtin_scene_text
 
@@ -91,21 +112,46 @@ def measure_processes(workers: list[int], solver: str, mode: str, weightings: in
     with tempfile.TemporaryDirectory(prefix="camjax-scaling-") as tmp:
         cache = str(Path(tmp) / "jax-cache")
         # warm the persistent cache with one block (every block has the same shape)
-        sweep_blocks(scenes, alphas[:block_size], [1.0], Path(tmp) / "warm", spec=spec,
-                     block_size=block_size, cache_dir=cache, backend="process", workers=1)
+        sweep_blocks(
+            scenes,
+            alphas[:block_size],
+            [1.0],
+            Path(tmp) / "warm",
+            spec=spec,
+            block_size=block_size,
+            cache_dir=cache,
+            backend="process",
+            workers=1,
+        )
         rows = []
         for k in workers:
             folder = Path(tmp) / f"sweep-{k}"
             backend = "sequential" if k == 1 else "process"
             start = time.perf_counter()
-            run, records = sweep_blocks(scenes, alphas, [1.0], folder, spec=spec, block_size=block_size,
-                                        cache_dir=cache, backend=backend, workers=k)
+            run, records = sweep_blocks(
+                scenes,
+                alphas,
+                [1.0],
+                folder,
+                spec=spec,
+                block_size=block_size,
+                cache_dir=cache,
+                backend=backend,
+                workers=k,
+            )
             wall = time.perf_counter() - start
             assert run.complete and len(records) == weightings
             store = BlockStore(folder)
             busy = sum(store.read_block(i)["seconds"] for i in store.finished())
-            rows.append({"processes": k, "backend": backend, "wall_s": wall, "block_seconds_sum": busy,
-                         "blocks": len(store.finished())})
+            rows.append(
+                {
+                    "processes": k,
+                    "backend": backend,
+                    "wall_s": wall,
+                    "block_seconds_sum": busy,
+                    "blocks": len(store.finished()),
+                }
+            )
     base = rows[0]["wall_s"]
     for r in rows:
         r["speedup"] = base / r["wall_s"]
@@ -126,30 +172,45 @@ def main() -> int:
     p.add_argument("--child-devices", type=int, default=0, help=argparse.SUPPRESS)
     args = p.parse_args()
     if args.child_devices:
-        print(json.dumps(_device_child(args.child_devices, args.solver, args.mode, args.weightings,
-                                       args.repeats)))
+        print(
+            json.dumps(
+                _device_child(args.child_devices, args.solver, args.mode, args.weightings, args.repeats)
+            )
+        )
         return 0
 
     w = args.weightings or (64 if args.quick else 512)
-    devices = measure_devices([int(n) for n in args.devices.split(",")], args.solver, args.mode,
-                              w, args.repeats)
+    devices = measure_devices(
+        [int(n) for n in args.devices.split(",")], args.solver, args.mode, w, args.repeats
+    )
     processes = measure_processes([1, 2], args.solver, args.mode, w, args.block_size)
     data = {
         "benchmark": "scaling_devices",
-        "solver": args.solver, "mode": args.mode, "weightings": w, "block_size": args.block_size,
-        "cpu_count": os.cpu_count(), "load_average_1_5_15": os.getloadavg(), "platform": platform.platform(),
-        "python": platform.python_version(), "jax": __import__("jax").__version__,
-        "devices": devices, "processes": processes,
+        "solver": args.solver,
+        "mode": args.mode,
+        "weightings": w,
+        "block_size": args.block_size,
+        "cpu_count": os.cpu_count(),
+        "load_average_1_5_15": os.getloadavg(),
+        "platform": platform.platform(),
+        "python": platform.python_version(),
+        "jax": __import__("jax").__version__,
+        "devices": devices,
+        "processes": processes,
     }
-    print(f"weight sweep: {w} weightings, solver {args.solver}, mode {args.mode}, {os.cpu_count()} CPUs, "
-          f"load average {os.getloadavg()[0]:.1f} (other work on the machine skews every figure)")
+    print(
+        f"weight sweep: {w} weightings, solver {args.solver}, mode {args.mode}, {os.cpu_count()} CPUs, "
+        f"load average {os.getloadavg()[0]:.1f} (other work on the machine skews every figure)"
+    )
     print(f"{'host devices':>12s} {'time (s)':>9s} {'speedup':>8s} {'efficiency':>10s}")
     for r in devices:
         print(f"{r['devices']:12d} {r['median_s']:9.3f} {r['speedup']:8.2f} {r['efficiency']:10.0%}")
     print(f"{'processes':>12s} {'wall (s)':>9s} {'speedup':>8s} {'efficiency':>10s}  (block seconds summed)")
     for r in processes:
-        print(f"{r['processes']:12d} {r['wall_s']:9.2f} {r['speedup']:8.2f} {r['efficiency']:10.0%}  "
-              f"({r['block_seconds_sum']:.2f} s in {r['blocks']} blocks)")
+        print(
+            f"{r['processes']:12d} {r['wall_s']:9.2f} {r['speedup']:8.2f} {r['efficiency']:10.0%}  "
+            f"({r['block_seconds_sum']:.2f} s in {r['blocks']} blocks)"
+        )
     if args.out:
         args.out.parent.mkdir(parents=True, exist_ok=True)
         args.out.write_text(json.dumps(data, indent=1) + "\n")
