@@ -147,6 +147,7 @@ def _setup_design(p: argparse.ArgumentParser):
     p.add_argument("--base-radius", type=float, default=None, metavar="MM",
                    help="evaluate and draw at this base radius instead of the design's")
     p.add_argument("--dpi", type=int, default=100, help="resolution of the PNG figures (default 100)")
+    add_design_options(p)
 
     def run(args) -> int:
         from camjax.export import write_design_files
@@ -158,7 +159,7 @@ def _setup_design(p: argparse.ArgumentParser):
             raise UsageError(f"--base-radius = {r!r}: must be a finite number > 0 (mm)")
         if not 10 <= args.dpi <= 1000:
             raise UsageError(f"--dpi = {args.dpi}: out of range (allowed: 10..1000)")
-        scene = load_scene(args.scene)
+        scene = apply_design_options(load_scene(args.scene), args)
         enable_compilation_cache()
         result = analyse(scene, base_radius_mm=r)
         with staged_output(args.out) as tmp:
@@ -173,6 +174,114 @@ def _setup_design(p: argparse.ArgumentParser):
                   f"{g['face_width_mm']:.4f} mm, objective {g['objective']:.5f}, "
                   f"feasible {g['feasible']}")
         print(f"wrote {', '.join(names)} to {args.out}")
+        return 0
+
+    return run
+
+
+def add_design_options(p: argparse.ArgumentParser, weights: bool = True) -> None:
+    """--mode, --solver, --seed (and --alpha, --gamma): overrides of the scene's [design] section."""
+    tail = " (default: the scene's [design] value)"
+    p.add_argument("--mode", choices=("global", "pointwise"), default=None,
+                   help="one R_b, L for the whole cam, or the source's per-angle method" + tail)
+    p.add_argument("--solver", choices=("gradient", "ga", "hybrid"), default=None,
+                   help="augmented-Lagrangian gradient solver, vectorized GA, or GA + gradient polish" + tail)
+    p.add_argument("--seed", type=int, default=None, help="seed of the GA and hybrid solvers" + tail)
+    if weights:
+        p.add_argument("--alpha", type=float, default=None, help="weight of the size term" + tail)
+        p.add_argument("--gamma", type=float, default=None, help="weight of the stress term" + tail)
+
+
+def _check_weight(option: str, value: float) -> None:
+    if not (value == value and 0 <= value < float("inf")):
+        raise UsageError(f"{option} = {value!r}: must be a finite number >= 0")
+
+
+def apply_design_options(scene, args):
+    """The scene with its [design] overridden by --mode/--alpha/--gamma/--solver/--seed."""
+    import dataclasses
+
+    given = {k: getattr(args, k, None) for k in ("mode", "alpha", "gamma", "solver", "seed")}
+    given = {k: v for k, v in given.items() if v is not None}
+    if not given:
+        return scene
+    if scene.design is None:
+        options = ", ".join(f"--{k}" for k in given)
+        raise UsageError(f"{options}: scene '{scene.name}' has no [design] section to override "
+                         "(add one with bounds and sigma_max_MPa)")
+    for k in ("alpha", "gamma"):
+        if k in given:
+            _check_weight(f"--{k}", given[k])
+    if given.get("seed", 0) < 0:
+        raise UsageError(f"--seed = {given['seed']}: must be >= 0")
+    design = dataclasses.replace(scene.design, **given)
+    if design.alpha == 0 and design.gamma == 0:
+        raise UsageError("--alpha/--gamma: alpha = gamma = 0 leaves nothing to minimize "
+                         "(allowed: alpha >= 0, gamma >= 0, not both 0)")
+    return dataclasses.replace(scene, design=design)
+
+
+@command("sweep", "solve every (alpha, gamma) pair of two lists: pareto.json and pareto.png")
+def _setup_sweep(p: argparse.ArgumentParser):
+    p.add_argument("scene", nargs="?", default=None,
+                   help="scene TOML file or built-in scene name (default: the embedded default scene)")
+    p.add_argument("--alpha", required=True, metavar="LIST",
+                   help="size weights, comma-separated, e.g. 0.1,1,10")
+    p.add_argument("--gamma", required=True, metavar="LIST", help="stress weights, comma-separated")
+    p.add_argument("--out", required=True, metavar="DIR", help="output folder (written atomically)")
+    add_design_options(p, weights=False)
+    p.add_argument("--chunk-size", type=int, default=128, metavar="W",
+                   help="weightings per compiled call (default 128; a progress bar when there are more)")
+    p.add_argument("--dpi", type=int, default=120, help="resolution of pareto.png (default 120)")
+
+    def run(args) -> int:
+        import time
+
+        from camjax.problem import problem_from_scene
+        from camjax.scene import load_scene
+        from camjax.solvers.sweep import plot_pareto, sweep
+
+        alphas = parse_float_list("--alpha", args.alpha)
+        gammas = parse_float_list("--gamma", args.gamma)
+        for option, values in (("--alpha", alphas), ("--gamma", gammas)):
+            bad = [v for v in values if v < 0]
+            if bad:
+                raise UsageError(f"{option} = {','.join(f'{v:g}' for v in values)}: {bad[0]:g} is "
+                                 "negative (allowed: numbers >= 0)")
+        if 0.0 in alphas and 0.0 in gammas:
+            raise UsageError("--alpha/--gamma: the pair alpha = 0, gamma = 0 leaves nothing to "
+                             "minimize (drop 0 from one of the lists)")
+        if not 1 <= args.chunk_size <= 100_000:
+            raise UsageError(f"--chunk-size = {args.chunk_size}: out of range (allowed: 1..100000)")
+        if not 10 <= args.dpi <= 1000:
+            raise UsageError(f"--dpi = {args.dpi}: out of range (allowed: 10..1000)")
+        if args.seed is not None and args.seed < 0:
+            raise UsageError(f"--seed = {args.seed}: must be >= 0")
+        scene = load_scene(args.scene)
+        if scene.design is None:
+            raise UsageError(f"scene '{scene.name}' has no [design] section: a sweep needs its bounds "
+                             "and sigma_max_MPa")
+        d = scene.design
+        mode, solver = args.mode or d.mode, args.solver or d.solver
+        seed = d.seed if args.seed is None else args.seed
+        enable_compilation_cache()
+        start = time.perf_counter()
+        problem = problem_from_scene(scene)
+        result = sweep(problem, alphas, gammas, mode=mode, solver=solver, seed=seed,
+                       chunk_size=args.chunk_size)
+        seconds = time.perf_counter() - start
+        data = {"scene": scene.name, "mode": mode, "solver": solver, "seed": seed,
+                "alphas": alphas, "gammas": gammas, "seconds": seconds, "records": result.records()}
+        with staged_output(args.out) as tmp:
+            write_json(tmp / "pareto.json", data)
+            fig = plot_pareto(result)
+            fig.savefig(tmp / "pareto.png", dpi=args.dpi)
+        recs = data["records"]
+        feasible = sum(r["feasible"] for r in recs)
+        front = sum(r["pareto"] for r in recs)
+        print(f"sweep ({solver}, {mode}) of {len(recs)} weightings in {seconds:.2f} s: "
+              f"{feasible} feasible, {front} on the non-dominated front")
+        print(f"wrote pareto.json, pareto.png to {args.out}")
         return 0
 
     return run

@@ -242,61 +242,51 @@ def objective_value(scene: Scene, base_radius_mm: float, face_width_mm: float,
 
 
 def design_block(scene: Scene, arrays: SceneArrays) -> dict[str, Any] | None:
-    """The reported design (R_b, L) of a scene with a [design] section; None without one.
+    """The optimized design (R_b, L) of a scene with a [design] section; None without one.
 
-    This is the one function an optimizer replaces. For now it reports the smallest feasible
-    design: per angle the curvature needs R_b >= -(s + s'') and the stress sigma = C/sqrt(rho)
-    <= sigma_max needs rho >= (C/sigma_max)^2, so R_b = max(lower bound, max_theta of both);
-    L = max(lower bound, 2 max|s'|). Global and pointwise modes agree for this rule (the
-    pointwise design is the largest per-angle minimum, which is the global minimum).
-    Feasible means rho > 0 and sigma <= sigma_max everywhere with both variables within bounds.
+    Solved by :func:`camjax.solvers.sweep.solve` with the scene's mode, alpha, gamma, solver and
+    seed (SPEC 5; keys of :meth:`camjax.solvers.sweep.DesignResult.to_json`: mode, solver,
+    base_radius_mm, face_width_mm, objective, feasible, violated, iterations, ..., and in
+    pointwise mode base_radius_deg, face_width_deg and the per-angle ``pointwise`` arrays).
+    Added for the report: ``peak_stress_MPa`` (the design's peak stress computed exactly as the
+    report's stress curve), the smallest admissible R_b and L (``required_*``) with the
+    constraint that binds there, and ``violations`` as readable sentences.
     """
     if scene.design is None:
         return None
-    d, kin, t = scene.design, arrays.kin, np.asarray(arrays.theta_deg)
-    rb_lo, rb_hi = d.base_radius_mm
-    l_lo, l_hi = d.face_width_mm
-    need_rho = -(kin.s + kin.d2s)  # R_b where rho = 0
-    need_sigma = (arrays.stress_coefficient / d.sigma_max_MPa) ** 2 + need_rho  # where sigma = max
-    need = np.maximum(np.asarray(need_rho), np.asarray(need_sigma))
-    i = int(np.argmax(need))
-    required = float(need[i])
-    required += 1e-12 * max(1.0, abs(required))  # rho > 0 strictly where the force is zero
-    base_radius = min(max(rb_lo, required), rb_hi)
-    required_width = _f(geometry.flat_face_width(kin, symmetric=True))
-    face_width = min(max(l_lo, required_width), l_hi)
+    from camjax import problem as P
+    from camjax.solvers.sweep import solve
 
-    rho = geometry.flat_radius_of_curvature(base_radius, kin)
-    sigma = contact.stress_from_coefficient(arrays.stress_coefficient, rho)
-    sigma_peak = _f(jnp.max(sigma))
-    violations = []
+    d, kin, t = scene.design, arrays.kin, np.asarray(arrays.theta_deg)
+    problem = P.problem_from_scene(scene, arrays)
+    out = solve(problem, d.alpha, d.gamma, mode=d.mode, solver=d.solver, seed=d.seed).to_json(problem)
+
+    rho = geometry.flat_radius_of_curvature(out["base_radius_mm"], kin)
+    sigma_peak = _f(jnp.max(contact.stress_from_coefficient(arrays.stress_coefficient, rho)))
+    stress_rho = np.asarray((arrays.stress_coefficient / d.sigma_max_MPa) ** 2)
+    need = np.maximum(float(problem.rho_min_mm), stress_rho) - np.asarray(problem.q_mm)
+    i = int(np.argmax(need))
+    required, required_width = float(need[i]), _f(P.required_face_width(problem))
+    rb_hi, l_hi = d.base_radius_mm[1], d.face_width_mm[1]
+    sentences = {
+        "curvature": f"rho <= {float(problem.rho_min_mm):g} mm somewhere (min rho "
+                     f"{out['rho_min_mm']:.6g} mm): the flat face cannot follow the profile",
+        "stress": f"peak stress {sigma_peak:.6g} MPa > sigma_max {d.sigma_max_MPa:g} MPa",
+        "face_width": f"face width needs {required_width:.6g} mm > upper bound {l_hi:g} mm",
+        "bounds": "a design variable is outside its bounds",
+    }
+    violations = [sentences[name] for name in out["violated"]]
     if required > rb_hi:
-        violations.append(f"base radius needs {required:.6g} mm > upper bound {rb_hi:g} mm")
-    if required_width > l_hi:
-        violations.append(f"face width needs {required_width:.6g} mm > upper bound {l_hi:g} mm")
-    if _f(jnp.min(rho)) <= 0:
-        violations.append("rho <= 0 somewhere (the flat face cannot follow the profile)")
-    if sigma_peak > d.sigma_max_MPa * (1 + FEASIBILITY_RTOL):
-        violations.append(f"peak stress {sigma_peak:.6g} MPa > sigma_max {d.sigma_max_MPa:g} MPa")
-    return {
-        "mode": d.mode,
-        "solver": SOLVER_NONE,
-        "base_radius_mm": base_radius,
-        "face_width_mm": face_width,
-        "objective": objective_value(scene, base_radius, face_width, sigma_peak),
-        "feasible": not violations,
-        "violations": violations,
+        violations.insert(0, f"base radius needs {required:.6g} mm > upper bound {rb_hi:g} mm")
+    out.update({
         "peak_stress_MPa": sigma_peak,
-        "sigma_max_MPa": d.sigma_max_MPa,
-        "alpha": d.alpha,
-        "gamma": d.gamma,
-        "base_radius_bounds_mm": list(d.base_radius_mm),
-        "face_width_bounds_mm": list(d.face_width_mm),
+        "violations": violations,
         "required_base_radius_mm": required,
         "required_base_radius_deg": _f(t[i]),
-        "binding_constraint": "stress" if float(need_sigma[i]) >= float(need_rho[i]) else "curvature",
+        "binding_constraint": "stress" if stress_rho[i] >= float(problem.rho_min_mm) else "curvature",
         "required_face_width_mm": required_width,
-    }
+    })
+    return out
 
 
 def drawing_base_radius(scene: Scene, arrays: SceneArrays, design: dict | None,
