@@ -115,3 +115,43 @@ def test_bad_weights_are_refused(problem):
     with pytest.raises(ValueError, match="solver"):
         S.solve(problem, 1.0, 1.0, solver="annealing")
     assert S.weight_grid([1, 2], [3, 4, 5])[0].tolist() == [1, 1, 1, 2, 2, 2]
+
+
+# ------------------------------------------------------------------------------------- CLI
+
+
+def test_cli_sweep_writes_pareto_json_and_png(tmp_path):
+    from camjax import cli
+
+    out = tmp_path / "sweep"
+    assert cli.main(["sweep", "--alpha", "0.1,1,10", "--gamma", "1,2", "--out", str(out)]) == 0
+    data = json.loads((out / "pareto.json").read_text())
+    assert len(data["records"]) == 6
+    assert [(r["alpha"], r["gamma"]) for r in data["records"][:2]] == [(0.1, 1.0), (0.1, 2.0)]
+    assert (out / "pareto.png").stat().st_size > 10_000
+
+
+@pytest.mark.parametrize("alpha,gamma,message", [
+    ("1,abc", "1", "'abc' is not a number"),
+    ("1,", "1", "is not a number"),
+    ("-1", "1", "negative"),
+    ("0,1", "0", "nothing to minimize"),
+    ("1", "inf", "finite"),
+])
+def test_cli_sweep_bad_lists_exit_2_and_write_nothing(tmp_path, capsys, alpha, gamma, message):
+    from camjax import cli
+
+    out = tmp_path / "never"
+    assert cli.main(["sweep", "--alpha", alpha, "--gamma", gamma, "--out", str(out)]) == 2
+    assert message in capsys.readouterr().err
+    assert not out.exists()
+
+
+def test_cli_design_overrides_are_validated(tmp_path, capsys):
+    from camjax import cli
+
+    out = tmp_path / "never"
+    assert cli.main(["design", "--out", str(out), "--alpha", "0", "--gamma", "0"]) == 2
+    assert "nothing to minimize" in capsys.readouterr().err
+    assert cli.main(["design", "--out", str(out), "--gamma", "-2"]) == 2
+    assert not out.exists()
