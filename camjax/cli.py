@@ -160,6 +160,11 @@ def _setup_design(p: argparse.ArgumentParser):
         if not 10 <= args.dpi <= 1000:
             raise UsageError(f"--dpi = {args.dpi}: out of range (allowed: 10..1000)")
         scene = apply_design_options(load_scene(args.scene), args)
+        dyn = getattr(scene, "dynamics", None)
+        if dyn is not None and dyn.follower == "oscillating":
+            raise UsageError(f"scene {scene.name}: dynamics.follower = 'oscillating' (motion in rad); the "
+                             "disc-cam geometry of `design` is for translating followers in mm "
+                             f"(allowed: use `camjax dynamics {args.scene or scene.name}`)")
         enable_compilation_cache()
         result = analyse(scene, base_radius_mm=r)
         with staged_output(args.out) as tmp:

@@ -135,3 +135,13 @@ def test_console_entry_point_reports_without_traceback(tmp_path):
     assert proc.returncode == 2
     assert proc.stderr.count("\n") == 1 and "lift_mm" in proc.stderr
     assert not (tmp_path / "out").exists()
+
+
+def test_design_refuses_an_oscillating_follower_scene(tmp_path, capsys):
+    from camjax import cli
+
+    out = tmp_path / "tb"
+    assert cli.main(["design", "thesis-bench", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "dynamics.follower = 'oscillating'" in err and "camjax dynamics" in err
+    assert not out.exists()
