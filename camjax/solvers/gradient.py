@@ -1,4 +1,4 @@
-"""Gradient solver: augmented Lagrangian over optax Rprop, projected onto the box, in one jit.
+"""Gradient solver: augmented Lagrangian over a secant-accelerated optax Rprop, projected, in one jit.
 
 The problem (:mod:`camjax.problem`) is solved for one weighting on its angle grid; batch it with
 ``vmap`` (weightings, pointwise angles, or both, see :func:`solve_pointwise`, :func:`solve_sweep`).
@@ -10,16 +10,20 @@ minimizer; every weighting from 1e-6 to 1e6 gives an O(1) function). The constra
 
     L_A(u; lam) = F / (alpha + gamma) + sum_i mu/2 [max(0, g_i + lam_i/mu)^2 - (lam_i/mu)^2],
 
-minimized over the box by projected optax Rprop (``optax.scale_by_rprop``): sign-based steps
-with per-variable step sizes that grow on agreement and halve on a sign change. Rprop suits this
-problem: it is invariant to the scale of the gradient (the stress term varies as rho^-3/2), it
-converges geometrically to a kink as well as to a smooth minimum (global mode uses the true max
-over angles, whose gradient is that of the argmax angle), and a box is kept by projection. The
-gradient fed to Rprop is the *projected* gradient (zero for a variable held at a bound by a
-gradient pointing outward), so a step size never grows against a bound.
+minimized over the box by projected Rprop: sign-based steps with per-variable step sizes that
+grow on agreement and halve on a sign change. Rprop suits this problem: it is invariant to the
+scale of the gradient (the stress term varies as rho^-3/2), it converges to a kink as well as to
+a smooth minimum (global mode uses the true max over angles, whose gradient is that of the argmax
+angle), and a box is kept by projection. Plain Rprop only halves its way to the optimum (about
+20 steps per decimal digit), so :func:`scale_by_secant_rprop` (an optax ``GradientTransformation``)
+takes a secant-Newton step inside the Rprop step size wherever the curvature along a variable is
+positive: superlinear near a smooth optimum, Rprop elsewhere (``secant=False`` gives plain
+``optax.scale_by_rprop``; ~8x more steps). The gradient fed to it is the *projected* gradient
+(zero for a variable held at a bound by a gradient pointing outward), so a step size never grows
+against a bound.
 
 Multipliers are updated, lam <- clip(lam + mu g, 0, LAM_MAX), whenever the inner problem has
-converged (or after ``inner_steps`` steps); Rprop's sign memory is then cleared. Stopping rule:
+converged (or after ``inner_steps`` steps); the transform's memory is then cleared. Stopping rule:
 the projected-gradient norm ||pg||_inf <= ``gtol`` (or every moving variable's step below
 ``xtol``: Rprop cannot move further), together with the AL residual max_i |min(-g_i, lam_i/mu)|
 <= ``ctol`` (feasibility and complementarity). The whole loop is one ``lax.while_loop`` capped at
@@ -54,7 +58,7 @@ class GradientSettings:
     Lengths are in units of the box (u in [0, 1]); the objective is normalized to O(1).
     """
 
-    max_steps: int = 2000  # cap on Rprop steps in total
+    max_steps: int = 2000  # cap on steps in total
     inner_steps: int = 300  # cap on steps between multiplier updates
     initial_step: float = 0.05  # first Rprop step
     reset_step: float = 1e-2  # cap on the step size a multiplier update restarts from
@@ -65,6 +69,7 @@ class GradientSettings:
     xtol: float = 1e-12  # Rprop step size below which a variable has stopped
     ctol: float = 1e-12  # AL residual (constraints / N)
     inner_rtol: float = 0.1  # inexact inner solves: stop when steps <= inner_rtol * AL residual
+    secant: bool = True  # secant-Newton steps inside Rprop's trust region (False: plain optax Rprop)
 
 
 DEFAULT_SETTINGS = GradientSettings()
@@ -74,7 +79,7 @@ class GradientState(NamedTuple):
     """Loop state (shapes for one problem; a vmapped solve adds leading axes)."""
 
     u: Design  # () each: position in the unit box
-    rprop: optax.ScaleByRpropState  # step sizes and last updates, like ``u``
+    rprop: ScaleBySecantRpropState  # step sizes, previous gradient and point, like ``u``
     multipliers: Constraints  # (n,) each, >= 0
     step: jax.Array  # () int: steps taken
     inner_step: jax.Array  # () int: steps since the last multiplier update
@@ -94,6 +99,59 @@ class GradientResult(NamedTuple):
     converged: jax.Array  # bool, stopping rule met before max_steps
     projected_gradient_norm: jax.Array  # final ||pg||_inf (unit box, normalized objective)
     multipliers: Constraints  # final multipliers, (n,) each
+
+
+# ------------------------------------------------------------------ secant-Rprop transform
+
+
+class ScaleBySecantRpropState(NamedTuple):
+    """Per-variable state (pytrees like the parameters)."""
+
+    step_sizes: optax.Updates  # trust-region radius (Rprop step size)
+    prev_grads: optax.Updates  # gradient at the previous point (0: none)
+    prev_params: optax.Params  # the previous point
+
+
+def scale_by_secant_rprop(initial_step: float, eta_minus: float = 0.5, eta_plus: float = 1.2,
+                          min_step: float = 1e-15, max_step: float = 0.25) -> optax.GradientTransformation:
+    """Rprop whose step is a secant-Newton step when the curvature along a variable is known.
+
+    Per variable: the step size adapts as in Rprop (x eta_plus when the gradient keeps its sign,
+    x eta_minus when it flips). The curvature h = (g - g_prev) / (x - x_prev) is estimated from
+    the last two points; where h > 0 the step is -g / h clipped to the step size (a trust
+    region), else Rprop's -sign(g) step (and no move on a sign flip, iRprop-). Far from the
+    optimum this is Rprop (scale-free, robust to a stress that varies as rho^-3/2); close to a
+    smooth optimum the secant steps converge superlinearly instead of Rprop's halving, and at a
+    kink the flips shrink the trust region as in Rprop. Returns the *update* (to be added), like
+    ``optax.scale_by_rprop`` followed by ``optax.scale(-1)``; needs ``params``.
+    """
+
+    def init_fn(params):
+        return ScaleBySecantRpropState(optax.tree.full_like(params, initial_step),
+                                       optax.tree.zeros_like(params), params)
+
+    def update_fn(grads, state, params=None):
+        if params is None:
+            raise ValueError("scale_by_secant_rprop needs params")
+
+        def leaf(g, g0, x, x0, step):
+            flip = g * g0
+            step = jnp.where(flip > 0, step * eta_plus, jnp.where(flip < 0, step * eta_minus, step))
+            step = jnp.clip(step, min_step, max_step)
+            dx, dg = x - x0, g - g0
+            known = (dx != 0) & (g0 != 0)
+            h = jnp.where(known, dg / jnp.where(known, dx, 1.0), 0.0)
+            newton = h > 0
+            secant = jnp.clip(-g / jnp.where(newton, h, 1.0), -step, step)
+            update = jnp.where(newton, secant, jnp.where(flip < 0, 0.0, -jnp.sign(g) * step))
+            return update, step
+
+        args = (grads, state.prev_grads, params, state.prev_params, state.step_sizes)
+        updates = jax.tree.map(lambda *a: leaf(*a)[0], *args)
+        steps = jax.tree.map(lambda *a: leaf(*a)[1], *args)  # same ops: XLA computes them once
+        return updates, ScaleBySecantRpropState(steps, grads, params)
+
+    return optax.GradientTransformation(init_fn, update_fn)
 
 
 # --------------------------------------------------------------------------- box maps
@@ -175,8 +233,7 @@ def init(problem: Problem, design: Design | None = None,
     design = midpoint(problem) if design is None else design
     dtype = problem.q_mm.dtype
     u = _clip_unit(problem, jax.tree.map(lambda x: jnp.asarray(x, dtype), to_unit(problem, design)))
-    rprop = optax.scale_by_rprop(settings.initial_step, min_step_size=settings.min_step,
-                                 max_step_size=settings.max_step).init(u)
+    rprop = _transform(settings).init(u)
     zeros = jax.tree.map(jnp.zeros_like, P.constraints(problem, from_unit(problem, u)))
     inf = jnp.asarray(jnp.inf, dtype)
     return GradientState(u, rprop, zeros, jnp.asarray(0), jnp.asarray(0), inf, inf, jnp.asarray(False))
@@ -192,10 +249,8 @@ def step(state: GradientState, problem: Problem, weights: Weights,
     pg_norm = _tree_max_abs(pg)
     residual = _tree_max_abs(jax.tree.map(lambda gi, lam: jnp.minimum(-gi, lam / mu), g, state.multipliers))
 
-    transform = optax.scale_by_rprop(settings.initial_step, min_step_size=settings.min_step,
-                                     max_step_size=settings.max_step)
-    updates, rprop = transform.update(pg, state.rprop)
-    u_next = _clip_unit(problem, jax.tree.map(lambda v, d: v - d, state.u, updates))
+    updates, rprop = _transform(settings).update(pg, state.rprop, state.u)
+    u_next = _clip_unit(problem, jax.tree.map(lambda v, d: v + d, state.u, updates))
     moving = jax.tree.map(lambda gr, s: jnp.where(gr != 0, s, 0.0), pg, rprop.step_sizes)
 
     # inexact inner solves while the multipliers are far off (steps to a fraction of the residual)
@@ -208,12 +263,12 @@ def step(state: GradientState, problem: Problem, weights: Weights,
     multipliers = jax.tree.map(
         lambda lam, gi: jnp.where(update, jnp.clip(lam + mu * gi, 0.0, LAM_MAX), lam),
         state.multipliers, g)
-    restarted = optax.ScaleByRpropState(
+    restarted = ScaleBySecantRpropState(
         # the minimizer moves by about the residual when the multipliers change: restart the
-        # step sizes at that length (within [xtol, reset_step])
+        # step sizes at that length (within [xtol, reset_step]) and forget the old curvature
         jax.tree.map(lambda s: jnp.maximum(s, jnp.clip(residual, 10 * settings.xtol, settings.reset_step)),
                      rprop.step_sizes),
-        jax.tree.map(jnp.zeros_like, rprop.prev_updates))
+        jax.tree.map(jnp.zeros_like, rprop.prev_grads), rprop.prev_params)
     rprop = jax.tree.map(lambda a, b: jnp.where(update, a, b), restarted, rprop)
     u = jax.tree.map(lambda a, b: jnp.where(done, a, b), state.u, u_next)
     return GradientState(
@@ -221,6 +276,14 @@ def step(state: GradientState, problem: Problem, weights: Weights,
         state.step + jnp.where(done, 0, 1),
         jnp.where(update, 0, state.inner_step + 1),
         pg_norm, residual, done)
+
+
+def _transform(settings: GradientSettings) -> optax.GradientTransformation:
+    if settings.secant:
+        return scale_by_secant_rprop(settings.initial_step, min_step=settings.min_step,
+                                     max_step=settings.max_step)
+    return optax.chain(optax.scale_by_rprop(settings.initial_step, min_step_size=settings.min_step,
+                                            max_step_size=settings.max_step), optax.scale(-1.0))
 
 
 def postprocess(state: GradientState, problem: Problem, weights: Weights) -> GradientResult:
