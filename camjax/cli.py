@@ -238,6 +238,9 @@ def _setup_sweep(p: argparse.ArgumentParser):
     p.add_argument("--chunk-size", type=int, default=128, metavar="W",
                    help="weightings per compiled call (default 128; a progress bar when there are more)")
     p.add_argument("--dpi", type=int, default=120, help="resolution of pareto.png (default 120)")
+    from camjax.scaleout import command as scaleout
+
+    scaleout.add_options(p)
 
     def run(args) -> int:
         import time
@@ -269,11 +272,19 @@ def _setup_sweep(p: argparse.ArgumentParser):
         d = scene.design
         mode, solver = args.mode or d.mode, args.solver or d.solver
         seed = d.seed if args.seed is None else args.seed
+        scaleout.check(args, UsageError)
         enable_compilation_cache()
         start = time.perf_counter()
-        problem = problem_from_scene(scene)
-        result = sweep(problem, alphas, gammas, mode=mode, solver=solver, seed=seed,
-                       chunk_size=args.chunk_size)
+        if scaleout.requested(args):  # blocks on a backend, stored in --out as they finish
+            import jax
+
+            result = scaleout.run_sweep(args, scene, scaleout.scene_text(args.scene), alphas, gammas,
+                                        mode=mode, solver=solver, seed=seed, usage_error=UsageError,
+                                        cache_dir=jax.config.jax_compilation_cache_dir)
+        else:
+            problem = problem_from_scene(scene)
+            result = sweep(problem, alphas, gammas, mode=mode, solver=solver, seed=seed,
+                           chunk_size=args.chunk_size)
         seconds = time.perf_counter() - start
         data = {"scene": scene.name, "mode": mode, "solver": solver, "seed": seed,
                 "alphas": alphas, "gammas": gammas, "seconds": seconds, "records": result.records()}

@@ -197,3 +197,28 @@ def test_failing_block_is_retried_then_recorded_and_finished_on_resume(reference
     run = run_blocks(_blocks(), tmp_path, SequentialMap(), block_size=BLOCK_SIZE, resume=True)
     assert run.complete and run.computed == [3] and not store.error_path(3).exists()
     assert _records_by_block(tmp_path) == reference
+
+
+def test_cli_block_sweep_equals_in_process_sweep_and_resumes(tmp_path, capsys):
+    from camjax.cli import main
+
+    args = ["sweep", "--alpha", "0.1,1,10", "--gamma", "1,2"]
+    assert main(args + ["--out", str(tmp_path / "plain")]) == 0
+    out = tmp_path / "blocks"
+    assert main(args + ["--out", str(out), "--backend", "sequential", "--block-size", "4"]) == 0
+    plain = json.loads((tmp_path / "plain" / "pareto.json").read_text())["records"]
+    assert json.loads((out / "pareto.json").read_text())["records"] == plain
+
+    store = BlockStore(out)
+    kept = store.block_path(0).stat().st_mtime_ns, store.block_path(0).read_bytes()
+    store.block_path(1).unlink()  # as if the sweep had been interrupted before block 1
+    capsys.readouterr()
+    assert main(args + ["--out", str(out), "--backend", "sequential", "--block-size", "4", "--resume"]) == 0
+    err = capsys.readouterr().err
+    assert "resumed: 1 blocks read" in err and "block 1:" in err and "block 0:" not in err
+    assert (store.block_path(0).stat().st_mtime_ns, store.block_path(0).read_bytes()) == kept
+    assert json.loads((out / "pareto.json").read_text())["records"] == plain
+
+    # other weightings into the same folder: refused, exit 2, nothing rewritten
+    assert main(["sweep", "--alpha", "0.1,1", "--gamma", "1,2", "--out", str(out), "--resume"]) == 2
+    assert "other parameters" in capsys.readouterr().err
