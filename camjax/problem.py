@@ -36,7 +36,7 @@ import jax
 import jax.numpy as jnp
 
 from camjax.contact import stress_from_coefficient
-from camjax.numerics import positive_part, safe_divide, smooth_max
+from camjax.numerics import RHO_FLOOR_MM, positive_part, safe_divide, safe_sqrt, smooth_max
 
 # Smallest admissible radius of curvature (mm): the strict "rho > 0" of SPEC 5 as a margin.
 RHO_MIN_MM = 1e-3
@@ -194,6 +194,17 @@ def stress(problem: Problem, design: Design) -> jax.Array:
     return stress_from_coefficient(problem.stress_coefficient, curvature_radius(problem, design))
 
 
+def peak_stress(problem: Problem, design: Design) -> jax.Array:
+    """max_theta sigma (MPa), shape (), computed as sqrt(max_theta C^2 / rho).
+
+    sqrt is monotone, so this is the max of :func:`stress` (to rounding) with one division per
+    angle and a single square root: the inner loop of a population's fitness. Its gradient is
+    that of the argmax angle, -C / (2 rho^(3/2)).
+    """
+    rho = jnp.maximum(curvature_radius(problem, design), RHO_FLOOR_MM)
+    return safe_sqrt(jnp.max(problem.stress_coefficient**2 / rho))
+
+
 def size_term(problem: Problem, design: Design) -> jax.Array:
     """Normalized size (R_b + L) / N (dimensionless)."""
     return (design.base_radius_mm + design.face_width_mm) / problem.size_norm_mm
@@ -206,8 +217,10 @@ def objective(problem: Problem, weights: Weights, design: Design,
     With ``stress_temperature_MPa`` the max is a log-sum-exp smooth max at that temperature (an
     upper bound within T log n of the max; for gradients), otherwise the true max.
     """
-    sigma = stress(problem, design)
-    peak = jnp.max(sigma) if stress_temperature_MPa is None else smooth_max(sigma, stress_temperature_MPa)
+    if stress_temperature_MPa is None:
+        peak = peak_stress(problem, design)
+    else:
+        peak = smooth_max(stress(problem, design), stress_temperature_MPa)
     return weights.alpha * size_term(problem, design) + weights.gamma * peak / problem.sigma_max_MPa
 
 
@@ -219,6 +232,22 @@ def constraints(problem: Problem, design: Design) -> Constraints:
         curvature=problem.rho_min_mm - rho,
         stress=stress_rho - rho,
         face_width=2.0 * jnp.abs(problem.ds_mm) - design.face_width_mm,
+    )
+
+
+def constraint_maxima(problem: Problem, design: Design) -> Constraints:
+    """max_theta of each constraint of :func:`constraints`, shape () each, in O(1) per design.
+
+    Every constraint is (design-independent per-angle term) - (one design variable), so its
+    max over angles is the max of the first term (computed once; XLA hoists it out of a batch
+    of designs) minus the variable. This is what keeps a population's fitness one pass over the
+    angles (for the peak stress) instead of four.
+    """
+    return Constraints(
+        curvature=problem.rho_min_mm - design.base_radius_mm - jnp.min(problem.q_mm),
+        stress=jnp.max((problem.stress_coefficient / problem.sigma_max_MPa) ** 2 - problem.q_mm)
+        - design.base_radius_mm,
+        face_width=jnp.max(2.0 * jnp.abs(problem.ds_mm)) - design.face_width_mm,
     )
 
 

@@ -40,7 +40,7 @@ import jax.numpy as jnp
 
 from camjax import problem as P
 from camjax.problem import Design, Problem, Violation, Weights
-from camjax.solvers.gradient import from_unit, scaled_constraints, solver_objective, to_unit
+from camjax.solvers.gradient import from_unit, solver_objective, to_unit
 
 
 @dataclass(frozen=True)
@@ -123,9 +123,13 @@ def _gene_max(problem: Problem) -> jax.Array:
 
 
 def design_fitness(problem: Problem, weights: Weights, design: Design) -> tuple[jax.Array, jax.Array]:
-    """(objective as minimized, total scaled violation) of one design; shape () each."""
-    g = scaled_constraints(problem, design)
-    total = sum(jnp.max(jnp.maximum(gi, 0.0)) for gi in jax.tree.leaves(g))
+    """(objective as minimized, total scaled violation) of one design; shape () each.
+
+    One pass over the angles: the peak stress (:func:`camjax.problem.peak_stress`); the
+    constraints' maxima over angles come from :func:`camjax.problem.constraint_maxima`.
+    """
+    g = P.constraint_maxima(problem, design)
+    total = sum(jnp.maximum(gi, 0.0) for gi in jax.tree.leaves(g)) / problem.size_norm_mm
     return solver_objective(problem, weights, design), total
 
 
