@@ -89,3 +89,43 @@ def test_float32_problem_runs(default_scene):
     res = G.solve_global(prob, P.weights_of(np.float32(1.0), np.float32(1.0)))
     assert res.design.base_radius_mm.dtype == np.float32
     assert float(res.design.base_radius_mm) == pytest.approx(28.39697, abs=1e-3)
+
+
+def test_plain_rprop_variant_agrees(problem):
+    """secant=False is optax's own Rprop: slower, same optimum."""
+    w = P.weights_of(1.0, 1.0)
+    plain = G.solve_global(problem, w, settings=G.GradientSettings(secant=False))
+    fast = G.solve_global(problem, w)
+    ref = P.global_optimum(problem, w)
+    assert float(plain.design.base_radius_mm) == pytest.approx(float(ref.base_radius_mm), abs=1e-6)
+    assert bool(plain.converged) and int(plain.iterations) > int(fast.iterations)
+
+
+def test_transform_without_secant_is_irprop_minus():
+    """secant=False is iRprop- as torch.optim.Rprop computes it. (optax 0.2.8's scale_by_rprop
+    emits each update one step late, optax PR #1725, so it is not the reference here.)"""
+    import jax.numpy as jnp
+
+    tx = G.scale_by_secant_rprop(0.1, secant=False)
+    x = jnp.zeros(1)
+    state = tx.init(x)
+    out = []
+    for g in [1.0, 1.0, 1.0, -1.0, 1.0]:
+        u, state = tx.update(jnp.array([g]), state, x)
+        out.append(float(u[0]))
+    np.testing.assert_allclose(out, [-0.1, -0.12, -0.144, 0.0, -0.072], rtol=1e-14)
+
+    # and against a NumPy iRprop- on a random gradient sequence
+    rng = np.random.default_rng(0)
+    step, prev = np.full(5, 0.1), np.zeros(5)
+    x = jnp.zeros(5)
+    state = tx.init(x)
+    for _ in range(40):
+        g = rng.normal(size=5) * (rng.random(5) > 0.2)
+        flip = g * prev
+        step = np.clip(np.where(flip > 0, step * 1.2, np.where(flip < 0, step * 0.5, step)), 1e-15, 0.25)
+        expect = np.where(flip < 0, 0.0, -np.sign(g) * step)
+        prev = np.where(flip < 0, 0.0, g)
+        u, state = tx.update(jnp.asarray(g), state, x)
+        np.testing.assert_allclose(np.asarray(u), expect, rtol=1e-15, atol=0)
+        x = x + u

@@ -146,3 +146,14 @@ def _lagrangian_grad_eval(problem, w, r, length):
     lam = jax.tree.map(jnp.ones_like, P.constraints(problem, G.from_unit(problem, u)))
     val, grad = jax.value_and_grad(lambda v: G.augmented_lagrangian(v, problem, w, lam, 1e3)[0])(u)
     return val, grad, P.evaluate(problem, w, G.from_unit(problem, u))
+
+
+def test_fast_reductions_equal_the_per_angle_definitions(problem):
+    """peak_stress and constraint_maxima (the GA's one-pass fitness) = max of the per-angle curves."""
+    for r in (3.0, 24.0, 28.4, 40.0):  # infeasible (rho < 0 somewhere) to comfortable
+        x = P.Design(jnp.asarray(r), jnp.asarray(15.0))
+        assert float(P.peak_stress(problem, x)) == pytest.approx(float(jnp.max(P.stress(problem, x))), rel=1e-14)
+        full = P.constraints(problem, x)
+        fast = P.constraint_maxima(problem, x)
+        for a, b in zip(jax.tree.leaves(full), jax.tree.leaves(fast), strict=True):
+            assert float(b) == pytest.approx(float(jnp.max(a)), abs=1e-12)

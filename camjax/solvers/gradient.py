@@ -18,9 +18,10 @@ angle), and a box is kept by projection. Plain Rprop only halves its way to the 
 20 steps per decimal digit), so :func:`scale_by_secant_rprop` (an optax ``GradientTransformation``)
 takes a secant-Newton step inside the Rprop step size wherever the curvature along a variable is
 positive: superlinear near a smooth optimum, Rprop elsewhere (``secant=False`` gives plain
-``optax.scale_by_rprop``; ~8x more steps). The gradient fed to it is the *projected* gradient
-(zero for a variable held at a bound by a gradient pointing outward), so a step size never grows
-against a bound.
+iRprop-, ~8x more steps; optax 0.2.8's own ``scale_by_rprop`` emits each update one step late,
+optax PR #1725, so it is not used). The gradient fed to it is the
+*projected* gradient (zero for a variable held at a bound by a gradient pointing outward), so a
+step size never grows against a bound.
 
 Multipliers are updated, lam <- clip(lam + mu g, 0, LAM_MAX), whenever the inner problem has
 converged (or after ``inner_steps`` steps); the transform's memory is then cleared. Stopping rule:
@@ -69,7 +70,7 @@ class GradientSettings:
     xtol: float = 1e-12  # Rprop step size below which a variable has stopped
     ctol: float = 1e-12  # AL residual (constraints / N)
     inner_rtol: float = 0.1  # inexact inner solves: stop when steps <= inner_rtol * AL residual
-    secant: bool = True  # secant-Newton steps inside Rprop's trust region (False: plain optax Rprop)
+    secant: bool = True  # secant-Newton steps inside Rprop's trust region (False: plain Rprop)
 
 
 DEFAULT_SETTINGS = GradientSettings()
@@ -113,7 +114,8 @@ class ScaleBySecantRpropState(NamedTuple):
 
 
 def scale_by_secant_rprop(initial_step: float, eta_minus: float = 0.5, eta_plus: float = 1.2,
-                          min_step: float = 1e-15, max_step: float = 0.25) -> optax.GradientTransformation:
+                          min_step: float = 1e-15, max_step: float = 0.25,
+                          secant: bool = True) -> optax.GradientTransformation:
     """Rprop whose step is a secant-Newton step when the curvature along a variable is known.
 
     Per variable: the step size adapts as in Rprop (x eta_plus when the gradient keeps its sign,
@@ -122,8 +124,8 @@ def scale_by_secant_rprop(initial_step: float, eta_minus: float = 0.5, eta_plus:
     region), else Rprop's -sign(g) step (and no move on a sign flip, iRprop-). Far from the
     optimum this is Rprop (scale-free, robust to a stress that varies as rho^-3/2); close to a
     smooth optimum the secant steps converge superlinearly instead of Rprop's halving, and at a
-    kink the flips shrink the trust region as in Rprop. Returns the *update* (to be added), like
-    ``optax.scale_by_rprop`` followed by ``optax.scale(-1)``; needs ``params``.
+    kink the flips shrink the trust region as in Rprop. Returns the *update* (to be added);
+    needs ``params``. With ``secant=False`` it is plain iRprop- (as ``torch.optim.Rprop``; tested).
     """
 
     def init_fn(params):
@@ -141,15 +143,18 @@ def scale_by_secant_rprop(initial_step: float, eta_minus: float = 0.5, eta_plus:
             dx, dg = x - x0, g - g0
             known = (dx != 0) & (g0 != 0)
             h = jnp.where(known, dg / jnp.where(known, dx, 1.0), 0.0)
-            newton = h > 0
-            secant = jnp.clip(-g / jnp.where(newton, h, 1.0), -step, step)
-            update = jnp.where(newton, secant, jnp.where(flip < 0, 0.0, -jnp.sign(g) * step))
-            return update, step
+            newton = (h > 0) if secant else jnp.zeros_like(h, dtype=bool)
+            newton_step = jnp.clip(-g / jnp.where(newton, h, 1.0), -step, step)
+            update = jnp.where(newton, newton_step, jnp.where(flip < 0, 0.0, -jnp.sign(g) * step))
+            # after a flip without a secant step, iRprop- forgets the gradient (no double halving)
+            g = jnp.where(newton | (flip >= 0), g, 0.0)
+            return update, step, g
 
         args = (grads, state.prev_grads, params, state.prev_params, state.step_sizes)
         updates = jax.tree.map(lambda *a: leaf(*a)[0], *args)
         steps = jax.tree.map(lambda *a: leaf(*a)[1], *args)  # same ops: XLA computes them once
-        return updates, ScaleBySecantRpropState(steps, grads, params)
+        memory = jax.tree.map(lambda *a: leaf(*a)[2], *args)
+        return updates, ScaleBySecantRpropState(steps, memory, params)
 
     return optax.GradientTransformation(init_fn, update_fn)
 
@@ -279,11 +284,8 @@ def step(state: GradientState, problem: Problem, weights: Weights,
 
 
 def _transform(settings: GradientSettings) -> optax.GradientTransformation:
-    if settings.secant:
-        return scale_by_secant_rprop(settings.initial_step, min_step=settings.min_step,
-                                     max_step=settings.max_step)
-    return optax.chain(optax.scale_by_rprop(settings.initial_step, min_step_size=settings.min_step,
-                                            max_step_size=settings.max_step), optax.scale(-1.0))
+    return scale_by_secant_rprop(settings.initial_step, min_step=settings.min_step,
+                                 max_step=settings.max_step, secant=settings.secant)
 
 
 def postprocess(state: GradientState, problem: Problem, weights: Weights) -> GradientResult:
