@@ -165,8 +165,14 @@ def main() -> int:
     p.add_argument("--quick", action="store_true", help="small sweep (smoke run)")
     p.add_argument("--solver", default="ga")
     p.add_argument("--mode", default="global")
-    p.add_argument("--weightings", type=int, default=None)
-    p.add_argument("--block-size", type=int, default=32)
+    p.add_argument("--weightings", type=int, default=None, help="of the device runs (default 2048)")
+    p.add_argument(
+        "--process-weightings",
+        type=int,
+        default=None,
+        help="of the process runs (default 8192: worker start-up is a few seconds)",
+    )
+    p.add_argument("--block-size", type=int, default=256)
     p.add_argument("--devices", default="1,2,4", help="host device counts to compare")
     p.add_argument("--repeats", type=int, default=3)
     p.add_argument("--child-devices", type=int, default=0, help=argparse.SUPPRESS)
@@ -179,17 +185,20 @@ def main() -> int:
         )
         return 0
 
-    w = args.weightings or (64 if args.quick else 512)
+    w = args.weightings or (64 if args.quick else 2048)
+    wp = args.process_weightings or (256 if args.quick else 8192)
+    block = min(args.block_size, wp)
     devices = measure_devices(
         [int(n) for n in args.devices.split(",")], args.solver, args.mode, w, args.repeats
     )
-    processes = measure_processes([1, 2], args.solver, args.mode, w, args.block_size)
+    processes = measure_processes([1, 2], args.solver, args.mode, wp, block)
     data = {
         "benchmark": "scaling_devices",
         "solver": args.solver,
         "mode": args.mode,
-        "weightings": w,
-        "block_size": args.block_size,
+        "device_weightings": w,
+        "process_weightings": wp,
+        "block_size": block,
         "cpu_count": os.cpu_count(),
         "load_average_1_5_15": os.getloadavg(),
         "platform": platform.platform(),
@@ -205,6 +214,7 @@ def main() -> int:
     print(f"{'host devices':>12s} {'time (s)':>9s} {'speedup':>8s} {'efficiency':>10s}")
     for r in devices:
         print(f"{r['devices']:12d} {r['median_s']:9.3f} {r['speedup']:8.2f} {r['efficiency']:10.0%}")
+    print(f"block sweep of {wp} weightings in blocks of {block} (wall time incl. worker start-up):")
     print(f"{'processes':>12s} {'wall (s)':>9s} {'speedup':>8s} {'efficiency':>10s}  (block seconds summed)")
     for r in processes:
         print(

@@ -11,6 +11,7 @@ weighting.
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import os
 from collections.abc import Sequence
@@ -110,6 +111,16 @@ def configure_worker(cache_dir: str | None) -> None:
     _CONFIGURED_CACHE.append(cache_dir)
 
 
+@functools.lru_cache(maxsize=8)
+def _problem(scene_text: str, scene_name: str, samples: int):
+    """The scene's problem, built once per worker process and scene (blocks of a scene share it)."""
+    from camjax.problem import problem_from_scene
+    from camjax.scene import parse_scene
+
+    scene = parse_scene(scene_text, scene_name, f"<sweep scene {scene_name}>")
+    return problem_from_scene(scene, samples=samples or None)
+
+
 def solve_block(task: BlockTask) -> list[dict]:
     """The pure block function: rebuild the scene's problem and solve every weighting of the block.
 
@@ -126,14 +137,12 @@ def solve_block(task: BlockTask) -> list[dict]:
     import numpy as np
 
     import camjax  # noqa: F401  (x64)
-    from camjax.problem import Weights, problem_from_scene
-    from camjax.scene import parse_scene
+    from camjax.problem import Weights
     from camjax.solvers import ga
     from camjax.solvers.sweep import SweepResult, solve_batch
 
     spec = task.spec
-    scene = parse_scene(task.scene_text, task.scene_name, f"<sweep block {task.index}>")
-    problem = problem_from_scene(scene, samples=spec.samples or None)
+    problem = _problem(task.scene_text, task.scene_name, spec.samples)
     dtype = problem.q_mm.dtype
     count = len(task.weightings)
     # the short last block is padded by repeating its last weighting: one compiled program for all
