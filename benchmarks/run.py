@@ -39,7 +39,6 @@ INFO = (
     ("fitness.fused_evaluations_per_s", "hand-fused kernel, evals/s (same run)"),
     ("fitness.library_blocked_evaluations_per_s", "camjax fitness evaluated in blocks, evals/s"),
     ("fitness.fused_numpy_ratio", "hand-fused kernel vs NumPy (x)"),
-    ("fitness.numpy_ratio_same_algorithm", "camjax vs NumPy of the library's algorithm (x)"),
     ("fitness.population_exponent_fused", "fused kernel cost exponent in population"),
     ("fitness.samples_exponent_fused", "fused kernel cost exponent in N"),
     ("gradients.grad_cost_ratio", "value+grad / value, population (x)"),

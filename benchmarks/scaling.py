@@ -57,7 +57,6 @@ def measure_population(problem, weights, populations, numpy_max_pop: int, repeat
     n = problem.q_mm.shape[0]
     scene = fz.fused_scene(problem)
     np_scene = fz.numpy_scene(scene)
-    np_problem = fz.numpy_problem(problem)
     a, g = float(weights.alpha), float(weights.gamma)
     fused = blocked(fz.fused_fitness)
     library_blocked = blocked(fz.library_fitness)
@@ -66,7 +65,12 @@ def measure_population(problem, weights, populations, numpy_max_pop: int, repeat
         designs = fz.random_designs(problem, pop)
         reps = repeats if pop < 10**6 else 1
         t_lib, out_lib = time_jit(fz.library_fitness, problem, weights, designs, repeats=reps)
-        t_fused, out_fused = time_jit(fused, scene, weights, designs, repeats=reps)
+        # the reference is the faster of the fused kernel as written and in blocks (see blocked())
+        t_fused, out_fused = min(
+            time_jit(fused, scene, weights, designs, repeats=reps),
+            time_jit(fz.fused_fitness, scene, weights, designs, repeats=reps),
+            key=lambda t_out: t_out[0].median_s,
+        )
         t_blk, _ = time_jit(library_blocked, problem, weights, designs, repeats=reps)
         row = {
             "population": pop,
@@ -86,11 +90,6 @@ def measure_population(problem, weights, populations, numpy_max_pop: int, repeat
             t_np, out_np = time_python(
                 lambda r=r, length=length: fz.numpy_fitness(np_scene, a, g, r, length), repeats=reps
             )
-            t_npa, _ = time_python(
-                lambda r=r, length=length: fz.numpy_fitness_per_angle(np_problem, a, g, r, length),
-                repeats=reps,
-            )
-            row.update(numpy_per_angle_evals_per_s=_rate(pop, n, t_npa.median_s))
             row.update(
                 numpy_s=t_np.median_s,
                 numpy_evals_per_s=_rate(pop, n, t_np.median_s),
@@ -160,7 +159,7 @@ def run(scene_obj, quick: bool) -> dict:
         problem, weights, pops, numpy_max_pop=10**4 if quick else 10**5, repeats=3 if quick else 5
     )
     sizes = [360, 3600] if quick else [90, 180, 360, 720, 3600, 36000]
-    n_pop = 1000 if quick else 10**4
+    n_pop = 1000  # 36 000 angles x 1e3 designs = 3.6e7 design-angles per call already
     by_n = measure_samples(scene_obj, weights, sizes, n_pop, repeats=3, dtype=jnp.float64)
     by_n32 = measure_samples(
         scene_obj, weights, sizes if not quick else sizes[:1], n_pop, repeats=3, dtype=jnp.float32
@@ -181,8 +180,6 @@ def run(scene_obj, quick: bool) -> dict:
         "numpy_ratio": at["library_evals_per_s"] / at["numpy_evals_per_s"],
         "numpy_ratio_note": "camjax library / vectorized NumPy rate at population 1e4, N=360",
         "fused_numpy_ratio": at["fused_evals_per_s"] / at["numpy_evals_per_s"],
-        "numpy_ratio_same_algorithm": at["library_evals_per_s"] / at["numpy_per_angle_evals_per_s"],
-        "numpy_per_angle_evaluations_per_s": at["numpy_per_angle_evals_per_s"],
         "population_exponent_library": _exponent(by_pop, "population", "library_s", 1000),
         "population_exponent_fused": _exponent(by_pop, "population", "fused_s", 1000),
         "samples_exponent_library": _exponent(by_n, "samples", "library_s", 360),
