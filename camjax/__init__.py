@@ -9,7 +9,7 @@ import jax
 
 jax.config.update("jax_enable_x64", True)
 
-from camjax import contact, geometry, laws, loads, numerics, program, report  # noqa: E402
+from camjax import contact, geometry, laws, loads, numerics, problem, program, report  # noqa: E402
 from camjax.analysis import SceneArrays, scene_arrays  # noqa: E402
 from camjax.contact import Material, hertz_line_stress  # noqa: E402
 from camjax.laws import (  # noqa: E402
@@ -23,6 +23,7 @@ from camjax.laws import (  # noqa: E402
     stepped_law,
 )
 from camjax.loads import FollowerTrain, Guide  # noqa: E402
+from camjax.problem import Design, Problem, Weights, problem_from_scene  # noqa: E402
 from camjax.program import Kinematics, MotionProgram, Segment, joints  # noqa: E402
 from camjax.report import design_report  # noqa: E402
 from camjax.scene import Scene, SceneError, load_scene, parse_scene  # noqa: E402
@@ -35,13 +36,14 @@ __all__ = [
     "fourier_law", "geometry", "get_law", "hertz_line_stress", "joints", "laws", "load_scene",
     "loads", "numerics", "parse_scene", "polynomial_law", "program", "scene_arrays",
     "stepped_law", "design_report", "report",
+    "Design", "Problem", "Weights", "problem", "problem_from_scene", "solvers",
 ]
 
 
 def __getattr__(name):
     # camjax.dynamics loads lazily: a scene without [dynamics] never imports its models (or optax)
-    if name == "dynamics":
+    if name in ("dynamics", "solvers"):  # solvers: optax loads only when a solver is used
         import importlib
 
-        return importlib.import_module("camjax.dynamics")
+        return importlib.import_module(f"camjax.{name}")
     raise AttributeError(f"module 'camjax' has no attribute {name!r}")
