@@ -302,17 +302,26 @@ def sweep(problem: Problem, alphas, gammas, *, mode: str = "global", solver: str
 # ---------------------------------------------------------------------------------- plot
 
 
-def _label_points(size, stress, front, max_labels: int) -> list[tuple[int, int]]:
-    """(index, number of other weightings at the same point) to label: one per distinct point,
-    every point of the front first, then others thinned to about ``max_labels`` labels."""
-    scale = max(np.ptp(size), 1e-12), max(np.ptp(stress), 1e-12)
-    cells = np.stack([np.round(size / scale[0], 6), np.round(stress / scale[1], 6)], axis=1)
-    _, first, counts = np.unique(cells, axis=0, return_index=True, return_counts=True)
-    groups = dict(zip(first.tolist(), (counts - 1).tolist(), strict=True))
-    on_front = [i for i in groups if front[i]]
-    others = [i for i in groups if not front[i]]
-    step = max(1, len(others) // max(1, max_labels - len(on_front)))
-    return [(i, groups[i]) for i in sorted(on_front + others[::step])]
+def _label_points(size, stress, front, max_labels: int, near: float = 0.025) -> list[tuple[int, int]]:
+    """(index, number of other weightings it stands for) of the points to label.
+
+    Points closer than ``near`` (fraction of each axis range) share one label, e.g. weightings
+    with the same alpha/gamma ratio; points of the front are labelled first, then the others,
+    up to about ``max_labels`` labels.
+    """
+    x = (size - size.min()) / max(np.ptp(size), 1e-12)
+    y = (stress - stress.min()) / max(np.ptp(stress), 1e-12)
+    order = [*np.flatnonzero(front), *np.flatnonzero(~front)]
+    labels: list[list[int]] = []  # [index, count]
+    for i in order:
+        for lab in labels:
+            if abs(x[i] - x[lab[0]]) < near and abs(y[i] - y[lab[0]]) < near:
+                lab[1] += 1
+                break
+        else:
+            if len(labels) < max_labels or front[i]:
+                labels.append([int(i), 0])
+    return [(i, k) for i, k in labels]
 
 
 def plot_pareto(sweep_result: SweepResult, path=None, *, max_labels: int = 24, title: str | None = None):
