@@ -1,4 +1,4 @@
-"""Gradient solver: augmented Lagrangian over a secant-accelerated optax Rprop, projected, in one jit.
+"""Gradient solver: augmented Lagrangian over a secant-accelerated Rprop (an optax transform), in one jit.
 
 The problem (:mod:`camjax.problem`) is solved for one weighting on its angle grid; batch it with
 ``vmap`` (weightings, pointwise angles, or both, see :func:`solve_pointwise`, :func:`solve_sweep`).
