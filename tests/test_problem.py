@@ -91,7 +91,10 @@ def test_reference_case_reproduces_source_figures(problem):
 @pytest.mark.parametrize("alpha,gamma", [(1.0, 1.0), (10.0, 1.0), (1.0, 10.0), (1.0, 0.0), (3.0, 0.7)])
 def test_global_optimum_matches_dense_scan(problem, alpha, gamma):
     d = P.global_optimum(problem, P.weights_of(alpha, gamma))
-    assert float(d.base_radius_mm) == pytest.approx(_dense_scan_global(problem, alpha, gamma), abs=1e-4)
+    scan = _dense_scan_global(problem, alpha, gamma)
+    assert float(d.base_radius_mm) == pytest.approx(scan, abs=1e-4)
+    solved = G.solve_global(problem, P.weights_of(alpha, gamma))  # the gradient solver, directly
+    assert float(solved.design.base_radius_mm) == pytest.approx(scan, abs=1e-4)
     assert float(d.face_width_mm) == pytest.approx(2 * float(jnp.max(jnp.abs(problem.ds_mm))), abs=1e-12)
 
 
