@@ -41,6 +41,7 @@ INFO = (
     ("fitness.fused_numpy_ratio", "hand-fused kernel vs NumPy (x)"),
     ("fitness.population_exponent_fused", "fused kernel cost exponent in population"),
     ("fitness.samples_exponent_fused", "fused kernel cost exponent in N"),
+    ("fitness.samples_exponent_library_360_to_3600", "camjax cost exponent in N, 360..3600"),
     ("gradients.grad_cost_ratio", "value+grad / value, population (x)"),
     ("gradients.max_fd_rel_diff", "jax.grad vs central FD, max rel diff"),
     ("accuracy.default_max_rel_error", "default grid (N=360, f64) max rel error"),

@@ -143,6 +143,20 @@ def profile(problem, weights, population: int) -> dict:
     return out
 
 
+def angle_cliff(scene_obj, weights, population: int = 1000, sizes=(14400, 18000)) -> dict:
+    """The same fitness HLO just below and above ~16k angles: thunk times (see the README)."""
+    out = {"population": population}
+    for n in sizes:
+        problem = P.problem_from_scene(scene_obj, samples=n)
+        designs = fz.random_designs(problem, population)
+        t, _ = time_jit(fz.library_fitness, problem, weights, designs, repeats=3)
+        out[str(n)] = {
+            "library_evals_per_s": _rate(population, n, t.median_s),
+            "thunks": profile_thunks(fz.library_fitness, problem, weights, designs, top=2),
+        }
+    return out
+
+
 def _exponent(rows, key_x, key_t, x_min) -> float | None:
     pts = [(r[key_x], r[key_t]) for r in rows if r[key_x] >= x_min and key_t in r]
     if len(pts) < 2:
@@ -184,6 +198,10 @@ def run(scene_obj, quick: bool) -> dict:
         "population_exponent_fused": _exponent(by_pop, "population", "fused_s", 1000),
         "samples_exponent_library": _exponent(by_n, "samples", "library_s", 360),
         "samples_exponent_fused": _exponent(by_n, "samples", "fused_s", 360),
+        "samples_exponent_library_360_to_3600": _exponent(
+            [r for r in by_n if r["samples"] <= 3600], "samples", "library_s", 360
+        ),
+        "angle_cliff": angle_cliff(scene_obj, weights) if not quick else None,
         "library_blocked_evaluations_per_s": min(r["library_blocked_evals_per_s"] for r in big),
         "population_exponent_library_blocked": _exponent(by_pop, "population", "library_blocked_s", 1000),
         "profile": prof,

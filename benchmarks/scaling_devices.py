@@ -9,7 +9,9 @@ workers' summed block time is reported apart, so start-up overhead is visible.
 
 Devices: one batched ``solve_batch`` call over all weightings in a fresh interpreter per device
 count N (``jax_num_cpu_devices = N``; weightings spread over the N devices by
-``camjax.scaleout.sharding.spread_weightings``), median of repeats after a warm-up call.
+``camjax.scaleout.sharding.spread_weightings``), fastest of the repeats after a warm-up call.
+Every configuration runs ``--rounds`` times interleaved and the fastest run counts, because
+other work on a shared machine only ever adds time.
 
 Efficiency = t(1) / (k * t(k)). A host device is not a core: with C physical cores, N > C
 devices cannot beat C x. The load average is recorded: on a shared machine other work takes
@@ -65,13 +67,18 @@ def _device_child(devices: int, solver: str, mode: str, weightings: int, repeats
         "devices": jax.local_device_count(),
         "first_call_s": first,
         "median_s": statistics.median(times),
+        "min_s": min(times),
         "samples_s": times,
     }
 
 
-def measure_devices(counts: list[int], solver: str, mode: str, weightings: int, repeats: int) -> list[dict]:
-    rows = []
-    for n in counts:
+def measure_devices(
+    counts: list[int], solver: str, mode: str, weightings: int, repeats: int, rounds: int
+) -> list[dict]:
+    """Each device count in a fresh interpreter, ``rounds`` times interleaved; the fastest call
+    counts (other work on the machine only ever adds time)."""
+    best: dict[int, dict] = {}
+    for n in [n for _ in range(rounds) for n in counts]:
         proc = subprocess.run(
             [
                 sys.executable,
@@ -92,17 +99,21 @@ def measure_devices(counts: list[int], solver: str, mode: str, weightings: int, 
             check=True,
             env={**os.environ, "CAMJAX_COMPILATION_CACHE": "0"},
         )
-        rows.append(json.loads(proc.stdout.strip().splitlines()[-1]))
-    base = rows[0]["median_s"]
+        row = json.loads(proc.stdout.strip().splitlines()[-1])
+        if n not in best or row["min_s"] < best[n]["min_s"]:
+            best[n] = row
+    rows = [best[n] for n in counts]
+    base = rows[0]["min_s"]
     for r in rows:
-        r["speedup"] = base / r["median_s"]
+        r["speedup"] = base / r["min_s"]
         r["efficiency"] = r["speedup"] / r["devices"]
     return rows
 
 
 def measure_processes(
-    workers: list[int], solver: str, mode: str, weightings: int, block_size: int
+    workers: list[int], solver: str, mode: str, weightings: int, block_size: int, rounds: int
 ) -> list[dict]:
+    """The whole block sweep per process count, ``rounds`` times interleaved; the fastest counts."""
     from camjax.scaleout import BlockStore, SweepSpec, sweep_blocks
     from camjax.scene import builtin_scene_text
 
@@ -123,9 +134,9 @@ def measure_processes(
             backend="process",
             workers=1,
         )
-        rows = []
-        for k in workers:
-            folder = Path(tmp) / f"sweep-{k}"
+        best: dict[int, dict] = {}
+        for attempt, k in enumerate([k for _ in range(rounds) for k in workers]):
+            folder = Path(tmp) / f"sweep-{attempt}"
             backend = "sequential" if k == 1 else "process"
             start = time.perf_counter()
             run, records = sweep_blocks(
@@ -143,15 +154,16 @@ def measure_processes(
             assert run.complete and len(records) == weightings
             store = BlockStore(folder)
             busy = sum(store.read_block(i)["seconds"] for i in store.finished())
-            rows.append(
-                {
-                    "processes": k,
-                    "backend": backend,
-                    "wall_s": wall,
-                    "block_seconds_sum": busy,
-                    "blocks": len(store.finished()),
-                }
-            )
+            row = {
+                "processes": k,
+                "backend": backend,
+                "wall_s": wall,
+                "block_seconds_sum": busy,
+                "blocks": len(store.finished()),
+            }
+            if k not in best or wall < best[k]["wall_s"]:
+                best[k] = row
+    rows = [best[k] for k in workers]
     base = rows[0]["wall_s"]
     for r in rows:
         r["speedup"] = base / r["wall_s"]
@@ -174,7 +186,10 @@ def main() -> int:
     )
     p.add_argument("--block-size", type=int, default=256)
     p.add_argument("--devices", default="1,2,4", help="host device counts to compare")
-    p.add_argument("--repeats", type=int, default=3)
+    p.add_argument("--repeats", type=int, default=3, help="timed calls per device run")
+    p.add_argument(
+        "--rounds", type=int, default=2, help="interleaved runs per configuration; the fastest counts"
+    )
     p.add_argument("--child-devices", type=int, default=0, help=argparse.SUPPRESS)
     args = p.parse_args()
     if args.child_devices:
@@ -189,9 +204,9 @@ def main() -> int:
     wp = args.process_weightings or (256 if args.quick else 8192)
     block = min(args.block_size, wp)
     devices = measure_devices(
-        [int(n) for n in args.devices.split(",")], args.solver, args.mode, w, args.repeats
+        [int(n) for n in args.devices.split(",")], args.solver, args.mode, w, args.repeats, args.rounds
     )
-    processes = measure_processes([1, 2], args.solver, args.mode, wp, block)
+    processes = measure_processes([1, 2], args.solver, args.mode, wp, block, args.rounds)
     data = {
         "benchmark": "scaling_devices",
         "solver": args.solver,
@@ -213,7 +228,7 @@ def main() -> int:
     )
     print(f"{'host devices':>12s} {'time (s)':>9s} {'speedup':>8s} {'efficiency':>10s}")
     for r in devices:
-        print(f"{r['devices']:12d} {r['median_s']:9.3f} {r['speedup']:8.2f} {r['efficiency']:10.0%}")
+        print(f"{r['devices']:12d} {r['min_s']:9.3f} {r['speedup']:8.2f} {r['efficiency']:10.0%}")
     print(f"block sweep of {wp} weightings in blocks of {block} (wall time incl. worker start-up):")
     print(f"{'processes':>12s} {'wall (s)':>9s} {'speedup':>8s} {'efficiency':>10s}  (block seconds summed)")
     for r in processes:
