@@ -71,6 +71,7 @@ class GradientSettings:
     ctol: float = 1e-12  # AL residual (constraints / N)
     inner_rtol: float = 0.1  # inexact inner solves: stop when steps <= inner_rtol * AL residual
     secant: bool = True  # secant-Newton steps inside Rprop's trust region (False: plain Rprop)
+    aggregate_constraints: bool = True  # one multiplier per constraint (max over angles; exact here)
 
 
 DEFAULT_SETTINGS = GradientSettings()
@@ -81,7 +82,7 @@ class GradientState(NamedTuple):
 
     u: Design  # () each: position in the unit box
     rprop: ScaleBySecantRpropState  # step sizes, previous gradient and point, like ``u``
-    multipliers: Constraints  # (n,) each, >= 0
+    multipliers: Constraints  # (n,) each, or () with aggregate_constraints; >= 0
     step: jax.Array  # () int: steps taken
     inner_step: jax.Array  # () int: steps since the last multiplier update
     pg_norm: jax.Array  # () inf-norm of the projected gradient at ``u``
@@ -99,7 +100,7 @@ class GradientResult(NamedTuple):
     iterations: jax.Array  # int, Rprop steps
     converged: jax.Array  # bool, stopping rule met before max_steps
     projected_gradient_norm: jax.Array  # final ||pg||_inf (unit box, normalized objective)
-    multipliers: Constraints  # final multipliers, (n,) each
+    multipliers: Constraints  # final multipliers, (n,) or () each
 
 
 # ------------------------------------------------------------------ secant-Rprop transform
@@ -202,16 +203,26 @@ def solver_objective(problem: Problem, weights: Weights, design: Design) -> jax.
     return P.objective(problem, weights, design) / scale + tie * P.size_term(problem, design)
 
 
-def scaled_constraints(problem: Problem, design: Design) -> Constraints:
-    """g / N, dimensionless, (n,) each."""
-    return jax.tree.map(lambda g: g / problem.size_norm_mm, P.constraints(problem, design))
+def scaled_constraints(problem: Problem, design: Design, aggregate: bool = False) -> Constraints:
+    """g / N, dimensionless: (n,) each, or their maxima over angles, () each, with ``aggregate``.
+
+    Every constraint is a design-independent per-angle term minus one design variable, so its max
+    over angles (:func:`camjax.problem.constraint_maxima`) is exact and as smooth as the
+    constraint itself: one multiplier per constraint instead of one per angle, same optimum.
+    """
+    c = P.constraint_maxima(problem, design) if aggregate else P.constraints(problem, design)
+    return jax.tree.map(lambda g: g / problem.size_norm_mm, c)
 
 
 def augmented_lagrangian(u: Design, problem: Problem, weights: Weights, multipliers: Constraints,
-                         penalty: float) -> tuple[jax.Array, Constraints]:
-    """L_A at unit-box point ``u``, and the scaled constraints there (aux)."""
+                         penalty: float, aggregate: bool = False) -> tuple[jax.Array, Constraints]:
+    """L_A at unit-box point ``u``, and the scaled constraints there (aux).
+
+    ``multipliers`` match :func:`scaled_constraints` (per angle, or per constraint with
+    ``aggregate``).
+    """
     design = from_unit(problem, u)
-    g = scaled_constraints(problem, design)
+    g = scaled_constraints(problem, design, aggregate)
     terms = jax.tree.map(
         lambda gi, lam: jnp.sum(jnp.maximum(gi + lam / penalty, 0.0) ** 2 - (lam / penalty) ** 2),
         g, multipliers)
@@ -239,7 +250,8 @@ def init(problem: Problem, design: Design | None = None,
     dtype = problem.q_mm.dtype
     u = _clip_unit(problem, jax.tree.map(lambda x: jnp.asarray(x, dtype), to_unit(problem, design)))
     rprop = _transform(settings).init(u)
-    zeros = jax.tree.map(jnp.zeros_like, P.constraints(problem, from_unit(problem, u)))
+    zeros = jax.tree.map(jnp.zeros_like,
+                         scaled_constraints(problem, from_unit(problem, u), settings.aggregate_constraints))
     inf = jnp.asarray(jnp.inf, dtype)
     return GradientState(u, rprop, zeros, jnp.asarray(0), jnp.asarray(0), inf, inf, jnp.asarray(False))
 
@@ -249,7 +261,7 @@ def step(state: GradientState, problem: Problem, weights: Weights,
     """One projected Rprop step on L_A, a multiplier update when the inner problem has converged."""
     mu = settings.penalty
     (_, g), grad = jax.value_and_grad(augmented_lagrangian, has_aux=True)(
-        state.u, problem, weights, state.multipliers, mu)
+        state.u, problem, weights, state.multipliers, mu, settings.aggregate_constraints)
     pg = _projected_gradient(problem, state.u, grad)
     pg_norm = _tree_max_abs(pg)
     residual = _tree_max_abs(jax.tree.map(lambda gi, lam: jnp.minimum(-gi, lam / mu), g, state.multipliers))
