@@ -129,3 +129,14 @@ def test_transform_without_secant_is_irprop_minus():
         u, state = tx.update(jnp.asarray(g), state, x)
         np.testing.assert_allclose(np.asarray(u), expect, rtol=1e-15, atol=0)
         x = x + u
+
+
+def test_per_angle_multipliers_agree(problem):
+    """aggregate_constraints=False (one multiplier per angle and constraint): same optimum."""
+    w = P.weights_of(10.0, 1.0)
+    res = G.solve_global(problem, w, settings=G.GradientSettings(aggregate_constraints=False))
+    assert res.multipliers.face_width.shape == problem.q_mm.shape
+    ref = P.global_optimum(problem, w)
+    assert float(res.design.base_radius_mm) == pytest.approx(float(ref.base_radius_mm), abs=1e-6)
+    assert float(res.design.face_width_mm) == pytest.approx(float(ref.face_width_mm), abs=1e-6)
+    assert bool(res.converged)
