@@ -192,7 +192,10 @@ def check_choice(name: str, value: str, allowed: tuple[str, ...]) -> None:
 def solve(problem: Problem, alpha: float = 1.0, gamma: float = 1.0, *, mode: str = "global",
           solver: str = "gradient", seed: int = 0, ga_settings: ga.GASettings = ga.DEFAULT_SETTINGS,
           gradient_settings: gradient.GradientSettings = gradient.DEFAULT_SETTINGS) -> DesignResult:
-    """Solve one weighting (a batch of one); returns a single :class:`DesignResult`."""
+    """Solve one weighting (a batch of one); returns a single :class:`DesignResult`.
+
+    A Python entry point (it checks the weights on concrete values); trace :func:`solve_batch`.
+    """
     _check_weights([alpha], [gamma])
     dtype = problem.q_mm.dtype
     weights = Weights(jnp.asarray([alpha], dtype), jnp.asarray([gamma], dtype))
@@ -270,7 +273,8 @@ def sweep(problem: Problem, alphas, gammas, *, mode: str = "global", solver: str
     Every chunk has the same shape (the last is padded by repeating its final weighting), so the
     program compiles once; a tqdm progress bar (stderr) runs over the chunks when there is more
     than one (``progress`` forces it on or off). Weighting i uses the key fold_in(key(seed), i),
-    so results do not depend on the chunk size.
+    so results do not depend on the chunk size. Python (chunks, NumPy results): not traceable;
+    :func:`solve_batch` is the traceable core.
     """
     from tqdm.auto import tqdm
 
