@@ -324,7 +324,8 @@ def _setup_check_extremes(p: argparse.ArgumentParser):
             (tmp / "extremes.txt").write_text(format_table(cases) + "\n")
             (tmp / "extremes.md").write_text(format_markdown(cases) + "\n")
         print(format_table(failed) if failed else f"all {len(cases)} cases pass")
-        print(f"{len(cases) - len(failed)} passed, {len(failed)} failed; wrote {Path(args.out) / 'extremes.json'}")
+        written = Path(args.out) / "extremes.json"
+        print(f"{len(cases) - len(failed)} passed, {len(failed)} failed; wrote {written}")
         return 1 if failed else 0
 
     return run

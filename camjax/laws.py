@@ -156,7 +156,7 @@ def _polynomial_law(exponents: tuple[int, ...]) -> Law:
         return LawValues(*out)
 
     name = "poly_" + "_".join(str(e) for e in exponents)
-    desc = " ".join(f"{'+' if c >= 0 else '-'} {abs(c)}x^{e}" for c, e in zip(coeffs, exponents))
+    desc = " ".join(f"{'+' if c >= 0 else '-'} {abs(c)}x^{e}" for c, e in zip(coeffs, exponents, strict=True))
     return Law(name, evaluate, f"polynomial {desc}")
 
 
