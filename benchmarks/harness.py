@@ -121,7 +121,28 @@ def environment(dtype: str) -> dict:
         "dtype": dtype,
         "x64": bool(jax.config.jax_enable_x64),
         "load_average_at_start": load,
+        **_git_state(),
     }
+
+
+def _git_state() -> dict:
+    """Commit of the working tree the run measured, and whether camjax/ had local changes."""
+    import subprocess
+
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+    def git(*args):
+        return subprocess.run(
+            ["git", "-C", root, *args], capture_output=True, text=True, timeout=10
+        ).stdout.strip()
+
+    try:
+        return {
+            "git_commit": git("rev-parse", "HEAD"),
+            "camjax_locally_modified": bool(git("status", "--porcelain", "camjax")),
+        }
+    except (OSError, subprocess.SubprocessError):
+        return {}
 
 
 def _cpu_model() -> str:
