@@ -148,6 +148,7 @@ def main(argv=None) -> int:
     scene = camjax.load_scene()
     data = {
         "quick": args.quick,
+        "out": str(args.out),
         "environment": environment("float64"),
         "notes": "Every time is a median of repeated calls after warm-up; *_compile_s is jit lower+compile "
         "alone. Figures come from this one run (other processes may share the CPU: see "
