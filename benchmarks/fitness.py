@@ -64,11 +64,9 @@ def library_fitness(problem: Problem, weights: Weights, designs: Design) -> tupl
     return jax.vmap(design_fitness, in_axes=(None, None, 0))(problem, weights, designs)
 
 
-def fused_fitness(scene: FusedScene, weights: Weights, designs: Design) -> tuple[jax.Array, jax.Array]:
-    """The hand-fused kernel: one pass over (population, N), one reduction (alpha > 0 assumed)."""
+def _fitness_from_peak(scene: FusedScene, weights: Weights, designs: Design, peak: jax.Array):
+    """(objective, violation) of a population given its peak stresses (population,)."""
     r, length = designs.base_radius_mm, designs.face_width_mm
-    rho = r[:, None] + scene.q_mm[None, :]
-    peak = jnp.sqrt(jnp.max(scene.coefficient_sq[None, :] / jnp.maximum(rho, RHO_FLOOR_MM), axis=1))
     objective = (
         weights.alpha * (r + length) / scene.size_norm_mm + weights.gamma * peak / scene.sigma_max_MPa
     ) / (weights.alpha + weights.gamma)
@@ -78,6 +76,32 @@ def fused_fitness(scene: FusedScene, weights: Weights, designs: Design) -> tuple
         + jnp.maximum(scene.width_need_mm - length, 0.0)
     ) / scene.size_norm_mm
     return objective, violation
+
+
+def fused_fitness(scene: FusedScene, weights: Weights, designs: Design) -> tuple[jax.Array, jax.Array]:
+    """The hand-fused kernel: one pass over (population, N), one reduction (alpha > 0 assumed)."""
+    rho = designs.base_radius_mm[:, None] + scene.q_mm[None, :]
+    peak = jnp.sqrt(jnp.max(scene.coefficient_sq[None, :] / jnp.maximum(rho, RHO_FLOOR_MM), axis=1))
+    return _fitness_from_peak(scene, weights, designs, peak)
+
+
+def tiled_fitness(scene: FusedScene, weights: Weights, designs: Design, tile: int = 7200):
+    """The fused kernel with the angles reduced tile by tile (``lax.map``; N divisible by tile).
+
+    Each tile is its own reduction of <= ``tile`` angles: this keeps XLA:CPU's YNNPACK reduce on
+    its fast path for long grids (it slows ~10x once a row passes ~16k angles; see the README).
+    """
+    n = scene.q_mm.shape[0]
+    tile = min(tile, n)
+    q = scene.q_mm.reshape(n // tile, tile)
+    c2 = scene.coefficient_sq.reshape(n // tile, tile)
+    r = designs.base_radius_mm
+
+    def tile_max(qc):
+        return jnp.max(qc[1][None, :] / jnp.maximum(r[:, None] + qc[0][None, :], RHO_FLOOR_MM), axis=1)
+
+    peak = jnp.sqrt(jnp.max(jax.lax.map(tile_max, (q, c2)), axis=0))
+    return _fitness_from_peak(scene, weights, designs, peak)
 
 
 def numpy_fitness(scene: dict, alpha: float, gamma: float, r: np.ndarray, length: np.ndarray):
@@ -121,6 +145,7 @@ def max_disagreement(a: tuple, b: tuple) -> float:
 __all__ = [
     "FusedScene",
     "fused_fitness",
+    "tiled_fitness",
     "fused_scene",
     "library_fitness",
     "max_disagreement",

@@ -110,16 +110,21 @@ def measure_devices(
     return rows
 
 
-_SPIN = "import time\nt = time.perf_counter()\nx = 0\nfor i in range(20_000_000):\n    x += i\n" \
-        "print(time.perf_counter() - t)"
+_SPIN = (
+    "import time\nt = time.perf_counter()\nx = 0\nfor i in range(20_000_000):\n    x += i\n"
+    "print(time.perf_counter() - t)"
+)
 
 
 def free_cores(k: int = 2) -> dict:
     """Control: how many cores the machine gives us right now. A pure-Python loop in 1 process,
     then in k at once; free cores ~ k * t(1) / t(k) (k on an idle machine with k cores)."""
+
     def spin(count: int) -> float:
-        procs = [subprocess.Popen([sys.executable, "-c", _SPIN], stdout=subprocess.PIPE, text=True)
-                 for _ in range(count)]
+        procs = [
+            subprocess.Popen([sys.executable, "-c", _SPIN], stdout=subprocess.PIPE, text=True)
+            for _ in range(count)
+        ]
         return max(float(p.communicate()[0]) for p in procs)
 
     one, many = spin(1), spin(k)
@@ -255,8 +260,10 @@ def main() -> int:
             f"{r['processes']:12d} {r['wall_s']:9.2f} {r['speedup']:8.2f} {r['efficiency']:10.0%}  "
             f"({r['block_seconds_sum']:.2f} s in {r['blocks']} blocks)"
         )
-    print(f"control: free cores {control['free_cores']:.2f} before, {control_after['free_cores']:.2f} after "
-          "(pure-Python loop in 1 vs 2 processes; 2.0 on an idle 2-core machine)")
+    print(
+        f"control: free cores {control['free_cores']:.2f} before, {control_after['free_cores']:.2f} after "
+        "(pure-Python loop in 1 vs 2 processes; 2.0 on an idle 2-core machine)"
+    )
     if args.out:
         args.out.parent.mkdir(parents=True, exist_ok=True)
         args.out.write_text(json.dumps(data, indent=1) + "\n")

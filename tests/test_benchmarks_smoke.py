@@ -23,7 +23,8 @@ def test_fitness_implementations_agree():
     fused = scaling.blocked(fz.fused_fitness, block=16)(fz.fused_scene(problem), weights, designs)
     r, length = np.asarray(designs.base_radius_mm), np.asarray(designs.face_width_mm)
     numpy = fz.numpy_fitness(fz.numpy_scene(fz.fused_scene(problem)), 1.0, 1.0, r, length)
-    for other in (fused, numpy):
+    tiled = fz.tiled_fitness(fz.fused_scene(problem), weights, designs, tile=30)
+    for other in (fused, numpy, tiled):
         assert fz.max_disagreement(lib, other) < 1e-9
 
 
