@@ -19,7 +19,7 @@ from camjax.problem import problem_from_scene, weights_of  # noqa: E402
 from camjax.scaleout import sharding  # noqa: E402
 from camjax.scaleout.blocks import BlockTask, SweepSpec, solve_block  # noqa: E402
 from camjax.scene import builtin_scene_text  # noqa: E402
-from camjax.solvers import ga  # noqa: E402
+from camjax.solvers import ga, gradient  # noqa: E402
 
 
 def _numbers_differ(a: list[dict], b: list[dict]) -> float:
@@ -61,6 +61,14 @@ def main() -> dict:
         float(jnp.max(jnp.abs(a - b))) for a, b in zip(ref.design, got.design, strict=True))
 
     lap("ga")
+    coarse = problem_from_scene(camjax.load_scene(), samples=90)  # pointwise: 90 problems per weighting
+    two = weights_of(jnp.asarray([0.3, 3.0]), jnp.ones(2))
+    ref = gradient.solve_sweep(coarse, two, "pointwise")
+    got = sharding.sharded_gradient_sweep(sharding.device_mesh(2), coarse, two, "pointwise")
+    out["gradient_pointwise_sharded_max_diff_mm"] = max(
+        float(jnp.max(jnp.abs(a - b))) for a, b in zip(ref.design, got.design, strict=True))
+    out["gradient_pointwise_shape"] = list(got.design.base_radius_mm.shape)
+    lap("gradient pointwise")
     text = builtin_scene_text("default")
     pairs = tuple((float(a), 1.0) for a in jnp.logspace(-1, 1.5, w).tolist())
     for solver, mode in (("gradient", "global"), ("ga", "global")):
