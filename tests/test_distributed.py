@@ -116,6 +116,10 @@ def test_ray_sweep_matches_sequential_and_survives_a_killed_worker(reference, tm
     path = os.pathsep.join([str(TESTS), os.environ.get("PYTHONPATH", "")])
     backend = RayMap(workers=2, runtime_env={"env_vars": {"PYTHONPATH": path}})
     try:
+        import ray
+
+        # the local instance stays on loopback (Ray would otherwise use the host's interface)
+        assert {node["NodeManagerAddress"] for node in ray.nodes()} == {"127.0.0.1"}
         run = run_blocks(_blocks(cache_dir=str(tmp_path / "jax-cache")), tmp_path / "sweep", backend,
                          block_size=BLOCK_SIZE,
                          block_fn=partial(crash_once, victim=1, marker=str(marker)))

@@ -105,6 +105,9 @@ class ProcessMap:
             self._pool = None
 
 
+_RAY_SINGLE_NODE_ENV = "RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER"
+
+
 class RayMap:
     """Tasks on a Ray cluster: an existing one (``address``) or a local one started here.
 
@@ -118,10 +121,19 @@ class RayMap:
 
     def __init__(self, address: str | None = None, workers: int | None = None,
                  runtime_env: dict | None = None):
+        if address is None:
+            # Ray turns 127.0.0.1 into the host's interface address unless it runs as a
+            # single-node instance; this switch (read when ray is imported, and inherited by its
+            # workers) keeps a local instance's traffic on loopback.
+            os.environ.setdefault(_RAY_SINGLE_NODE_ENV, "0")
         try:
             import ray
         except ImportError:
             raise ImportError("the ray backend needs Ray: pip install 'camjax[ray]'") from None
+        if address is None and not ray.is_initialized():
+            constants = getattr(getattr(ray, "_private", None), "ray_constants", None)
+            if constants is not None and hasattr(constants, "ENABLE_RAY_CLUSTER"):
+                constants.ENABLE_RAY_CLUSTER = False  # ray was imported before the switch was set
         self._ray = ray
         self._started_here = False
         if not ray.is_initialized():
