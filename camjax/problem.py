@@ -36,7 +36,7 @@ import jax
 import jax.numpy as jnp
 
 from camjax.contact import stress_from_coefficient
-from camjax.numerics import RHO_FLOOR_MM, positive_part, safe_divide, safe_sqrt, smooth_max
+from camjax.numerics import RHO_FLOOR_MM, max_over_angles, positive_part, safe_divide, safe_sqrt, smooth_max
 
 # Smallest admissible radius of curvature (mm): the strict "rho > 0" of SPEC 5 as a margin.
 RHO_MIN_MM = 1e-3
@@ -201,8 +201,10 @@ def peak_stress(problem: Problem, design: Design) -> jax.Array:
     angle and a single square root: the inner loop of a population's fitness. Its gradient is
     that of the argmax angle, -C / (2 rho^(3/2)).
     """
-    rho = jnp.maximum(curvature_radius(problem, design), RHO_FLOOR_MM)
-    return safe_sqrt(jnp.max(problem.stress_coefficient**2 / rho))
+    def ratio(c, q):  # C^2 / rho; padding (C = 0) gives 0 <= the max
+        return c**2 / jnp.maximum(design.base_radius_mm + q, RHO_FLOOR_MM)
+
+    return safe_sqrt(max_over_angles(ratio, problem.stress_coefficient, problem.q_mm))
 
 
 def size_term(problem: Problem, design: Design) -> jax.Array:
