@@ -118,6 +118,31 @@ def _slsqp_one(d: _Data, alpha: float, gamma: float, x0, ftol: float, maxiter: i
     return res.x[:2], bool(res.success), int(res.nit)
 
 
+def _whole(d: _Data, alpha: float, gamma: float, solve_one) -> BaselineResult:
+    """Time ``solve_one() -> (x, ok, nit)`` on the whole problem; scalars in the result."""
+    start = time.perf_counter()
+    x, ok, nit = solve_one()
+    seconds = time.perf_counter() - start
+    return BaselineResult(np.asarray(x[0]), np.asarray(x[1]), np.asarray(objective(d, alpha, gamma, x)),
+                          np.asarray(ok), np.asarray(nit), seconds)
+
+
+def _per_angle(d: _Data, alpha: float, gamma: float, angles, solve_one) -> BaselineResult:
+    """Time ``solve_one(d_k) -> (x, ok, nit)`` angle by angle (a Python loop, as the source did)."""
+    idx = np.arange(d.q.size) if angles is None else np.asarray(angles, int)
+    out = np.zeros((idx.size, 2))
+    ok = np.zeros(idx.size, bool)
+    nit = np.zeros(idx.size, int)
+    obj = np.zeros(idx.size)
+    start = time.perf_counter()
+    for j, k in enumerate(idx):
+        dk = _at(d, int(k))
+        out[j], ok[j], nit[j] = solve_one(dk)
+        obj[j] = objective(dk, alpha, gamma, out[j])
+    seconds = time.perf_counter() - start
+    return BaselineResult(out[:, 0], out[:, 1], obj, ok, nit, seconds)
+
+
 def slsqp_pointwise(problem: Problem, alpha: float, gamma: float, angles=None, *, x0=None,
                     ftol: float = 1e-12, maxiter: int = 500) -> BaselineResult:
     """SLSQP separately at each angle (a Python loop, as the source's fmincon loop).
@@ -127,19 +152,8 @@ def slsqp_pointwise(problem: Problem, alpha: float, gamma: float, angles=None, *
       x0: start (R_b, L) in mm, default the centre of the box.
     """
     d = _data(problem)
-    idx = np.arange(d.q.size) if angles is None else np.asarray(angles, int)
     x0 = 0.5 * (d.lo + d.hi) if x0 is None else np.asarray(x0, float)
-    out = np.zeros((idx.size, 2))
-    ok = np.zeros(idx.size, bool)
-    nit = np.zeros(idx.size, int)
-    obj = np.zeros(idx.size)
-    start = time.perf_counter()
-    for j, k in enumerate(idx):
-        dk = _at(d, int(k))
-        out[j], ok[j], nit[j] = _slsqp_one(dk, alpha, gamma, x0, ftol, maxiter)
-        obj[j] = objective(dk, alpha, gamma, out[j])
-    seconds = time.perf_counter() - start
-    return BaselineResult(out[:, 0], out[:, 1], obj, ok, nit, seconds)
+    return _per_angle(d, alpha, gamma, angles, lambda dk: _slsqp_one(dk, alpha, gamma, x0, ftol, maxiter))
 
 
 def slsqp_global(problem: Problem, alpha: float, gamma: float, *, x0=None, ftol: float = 1e-14,
@@ -147,11 +161,7 @@ def slsqp_global(problem: Problem, alpha: float, gamma: float, *, x0=None, ftol:
     """SLSQP on the global problem (epigraph form: one t >= sigma(theta) row per angle)."""
     d = _data(problem)
     x0 = 0.5 * (d.lo + d.hi) if x0 is None else np.asarray(x0, float)
-    start = time.perf_counter()
-    x, ok, nit = _slsqp_one(d, alpha, gamma, x0, ftol, maxiter)
-    seconds = time.perf_counter() - start
-    return BaselineResult(np.asarray(x[0]), np.asarray(x[1]), np.asarray(objective(d, alpha, gamma, x)),
-                          np.asarray(ok), np.asarray(nit), seconds)
+    return _whole(d, alpha, gamma, lambda: _slsqp_one(d, alpha, gamma, x0, ftol, maxiter))
 
 
 def _de_one(d: _Data, alpha: float, gamma: float, seed: int, popsize: int, maxiter: int, tol: float):
@@ -175,11 +185,7 @@ def differential_evolution_global(problem: Problem, alpha: float, gamma: float, 
                                   tol: float = 1e-10) -> BaselineResult:
     """``scipy.optimize.differential_evolution`` on the global problem (true max over angles)."""
     d = _data(problem)
-    start = time.perf_counter()
-    x, ok, nit = _de_one(d, alpha, gamma, seed, popsize, maxiter, tol)
-    seconds = time.perf_counter() - start
-    return BaselineResult(np.asarray(x[0]), np.asarray(x[1]), np.asarray(objective(d, alpha, gamma, x)),
-                          np.asarray(ok), np.asarray(nit), seconds)
+    return _whole(d, alpha, gamma, lambda: _de_one(d, alpha, gamma, seed, popsize, maxiter, tol))
 
 
 def differential_evolution_pointwise(problem: Problem, alpha: float, gamma: float, angles=None, *,
@@ -187,15 +193,5 @@ def differential_evolution_pointwise(problem: Problem, alpha: float, gamma: floa
                                      tol: float = 1e-10) -> BaselineResult:
     """Differential evolution separately at each angle (a Python loop; slow: seconds per angle)."""
     d = _data(problem)
-    idx = np.arange(d.q.size) if angles is None else np.asarray(angles, int)
-    out = np.zeros((idx.size, 2))
-    ok = np.zeros(idx.size, bool)
-    nit = np.zeros(idx.size, int)
-    obj = np.zeros(idx.size)
-    start = time.perf_counter()
-    for j, k in enumerate(idx):
-        dk = _at(d, int(k))
-        out[j], ok[j], nit[j] = _de_one(dk, alpha, gamma, seed, popsize, maxiter, tol)
-        obj[j] = objective(dk, alpha, gamma, out[j])
-    seconds = time.perf_counter() - start
-    return BaselineResult(out[:, 0], out[:, 1], obj, ok, nit, seconds)
+    return _per_angle(d, alpha, gamma, angles,
+                      lambda dk: _de_one(dk, alpha, gamma, seed, popsize, maxiter, tol))
