@@ -95,11 +95,37 @@ def test_time_form_of_the_compensation_equals_the_harmonic_inverse(bench, bench_
     np.testing.assert_allclose(timeform, harmonic, rtol=0, atol=1e-13)
 
 
+def _ratio_numpy(est: float, grid: int = 720) -> float:
+    """Independent reference: nominal / compensated max tracking error, harmonic by harmonic.
+
+    theta2 = S(phi + pi) - S(pi) has amplitude -h_n (odd n) on cos(n phi). The load follows
+    G_true(i n W) times the cam's harmonic; the nominal cam's error is (G_true - 1) a_n, the
+    cam compensated with an estimate whose omega_n is est x the true one errs by (G_true/G_est - 1) a_n.
+    """
+    i3, c3, k23 = 0.357, 0.205, 3050.0
+
+    def g(k, c, n):
+        w = n * W_BENCH
+        return k / (k - i3 * w**2 + 1j * c * w)
+
+    phi = 2 * np.pi * np.arange(grid) / grid
+    nominal = np.zeros(grid)
+    compensated = np.zeros(grid)
+    for n, h, _ in THESIS_NOMINAL.harmonics:
+        a = h * (-1) ** n  # cos(n (phi + pi)) = (-1)^n cos(n phi)
+        gt, ge = g(k23, c3, n), g(k23 * est**2, c3 * est, n)
+        nominal += np.real(a * (gt - 1) * np.exp(1j * n * phi))
+        compensated += np.real(a * (gt / ge - 1) * np.exp(1j * n * phi))
+    return np.max(np.abs(nominal)) / np.max(np.abs(compensated))
+
+
 def test_wn_misestimated_by_10_percent(bench_cam):
     """Source 003's claim, measured: compensation cut with omega_n off by -10 % / +10 %.
 
-    The issue asks for >= 5x; camjax measures 4.26x (estimate 10 % low) and 5.75x (10 % high),
-    max |theta3 - theta2| on the true bench. The low side misses 5x; asserted as measured.
+    The issue asks for >= 5x; the physics gives 4.26x with the estimate 10 % low (the 5th harmonic
+    sits on resonance, where G_true / G_est is about -18) and 5.75x with it 10 % high. camjax's
+    figures are checked against an independent harmonic-by-harmonic NumPy computation; the low
+    side's miss is asserted as a miss so a change that hides it fails.
     """
     phi = d.cam_grid(720)
     nominal = float(d.max_abs(d.tracking_error_harmonics(bench_cam, bench_cam, PLANT, W_BENCH), phi))
@@ -107,8 +133,9 @@ def test_wn_misestimated_by_10_percent(bench_cam):
     for est in (0.9, 1.1):
         c = d.compensate_linear(bench_cam, d.perturbed_plant(PLANT, 1.0, est), W_BENCH)
         ratios[est] = nominal / float(d.max_abs(d.tracking_error_harmonics(c, bench_cam, PLANT, W_BENCH), phi))
-    assert ratios[0.9] == pytest.approx(4.256, abs=0.01)
-    assert ratios[1.1] == pytest.approx(5.753, abs=0.01)
+        # same grid, same harmonics (the FFT of the sampled series is exact for 9 harmonics)
+        assert ratios[est] == pytest.approx(_ratio_numpy(est), rel=1e-9)
+    assert ratios[0.9] < 5.0 < ratios[1.1]
 
 
 def test_speed_and_wn_errors_enter_only_as_their_ratio(bench_cam):
