@@ -4,6 +4,7 @@ import json
 
 import numpy as np
 import pytest
+from conftest import numpy_reference_optimum
 
 from camjax import problem as P
 from camjax.solvers import sweep as S
@@ -77,8 +78,9 @@ def test_reference_pointwise_design_json(problem):
     res = S.solve(problem, 1.0, 1.0, mode="pointwise")
     d = res.to_json(problem)
     assert d["mode"] == "pointwise" and d["solver"] == "gradient" and d["feasible"] and d["converged"]
-    assert d["base_radius_mm"] == pytest.approx(28.39697, abs=1e-5) and d["base_radius_deg"] == 315.0
-    assert d["face_width_mm"] == pytest.approx(19.09859, abs=1e-5) and d["face_width_deg"] == 330.0
+    ref = numpy_reference_optimum(1.0, 1.0)  # independent NumPy closed form (conftest)
+    assert d["base_radius_mm"] == pytest.approx(ref[0], abs=1e-6) and d["base_radius_deg"] == ref[1]
+    assert d["face_width_mm"] == pytest.approx(ref[2], abs=1e-6) and d["face_width_deg"] == ref[3]
     assert len(d["pointwise"]["base_radius_mm"]) == 360
     json.dumps(d, allow_nan=False)
 
