@@ -197,9 +197,9 @@ class _Reader:
             raise self.error(key, v, f"must be {kind}")
         if not math.isfinite(v):
             raise self.error(key, v, "must be finite", "finite numbers")
-        rng = f"{'>' if low_open else '>='} {low:g}" if low is not None else ""
-        if high is not None:
-            rng = f"{rng} and <= {high:g}".strip(" and") if rng else f"<= {high:g}"
+        parts = [f"{'>' if low_open else '>='} {low:g}"] if low is not None else []
+        parts += [f"<= {high:g}"] if high is not None else []
+        rng = " and ".join(parts)
         if low is not None and (v < low or (low_open and v == low)):
             raise self.error(key, v, "out of range", rng)
         if high is not None and v > high:
