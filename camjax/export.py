@@ -68,7 +68,8 @@ def write_figures(folder: Path, curves: DesignCurves, dpi: int = 100) -> list[Pa
 
 
 def write_design_files(folder: str | Path, curves: DesignCurves, dpi: int = 100) -> list[Path]:
-    """Figures, profile.csv and profile.dxf into ``folder``; the written paths."""
+    """Figures, profile.csv and profile.dxf into ``folder`` (created if needed); the written paths."""
     folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
     return [*write_figures(folder, curves, dpi), write_profile_csv(folder / "profile.csv", curves),
             write_profile_dxf(folder / "profile.dxf", curves)]

@@ -21,7 +21,7 @@ def default_report(default_scene, default_arrays):
 
 @pytest.fixture(scope="session")
 def written(default_report, tmp_path_factory):
-    folder = tmp_path_factory.mktemp("export")
+    folder = tmp_path_factory.mktemp("export") / "not" / "yet"  # write_design_files creates it
     paths = export.write_design_files(folder, default_report.curves, dpi=40)
     return folder, paths
 
