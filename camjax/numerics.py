@@ -33,14 +33,6 @@ def floor_positive(x: jax.Array, floor: float) -> jax.Array:
     return jnp.where(x > floor, x, floor)
 
 
-def smooth_max(x: jax.Array, temperature: jax.Array | float, axis: int | None = None) -> jax.Array:
-    """Log-sum-exp upper bound on max(x): max(x) <= smooth_max(x) <= max(x) + T*log(n).
-
-    Use it for gradients only; report ``jnp.max``. ``temperature`` is in the units of ``x``.
-    """
-    return temperature * jax.nn.logsumexp(x / temperature, axis=axis)
-
-
 def positive_part(x: jax.Array) -> jax.Array:
     """max(x, 0): the violation of a constraint written as x <= 0."""
     return jnp.maximum(x, 0.0)

@@ -36,7 +36,7 @@ import jax
 import jax.numpy as jnp
 
 from camjax.contact import stress_from_coefficient
-from camjax.numerics import RHO_FLOOR_MM, max_over_angles, positive_part, safe_divide, safe_sqrt, smooth_max
+from camjax.numerics import RHO_FLOOR_MM, max_over_angles, positive_part, safe_divide, safe_sqrt
 
 # Smallest admissible radius of curvature (mm): the strict "rho > 0" of SPEC 5 as a margin.
 RHO_MIN_MM = 1e-3
@@ -212,17 +212,9 @@ def size_term(problem: Problem, design: Design) -> jax.Array:
     return (design.base_radius_mm + design.face_width_mm) / problem.size_norm_mm
 
 
-def objective(problem: Problem, weights: Weights, design: Design,
-              stress_temperature_MPa: jax.Array | float | None = None) -> jax.Array:
-    """F = alpha (R_b + L) / N + gamma max_theta sigma / sigma_max (dimensionless, shape ()).
-
-    With ``stress_temperature_MPa`` the max is a log-sum-exp smooth max at that temperature (an
-    upper bound within T log n of the max; for gradients), otherwise the true max.
-    """
-    if stress_temperature_MPa is None:
-        peak = peak_stress(problem, design)
-    else:
-        peak = smooth_max(stress(problem, design), stress_temperature_MPa)
+def objective(problem: Problem, weights: Weights, design: Design) -> jax.Array:
+    """F = alpha (R_b + L) / N + gamma max_theta sigma / sigma_max (dimensionless, shape ()), true max."""
+    peak = peak_stress(problem, design)
     return weights.alpha * size_term(problem, design) + weights.gamma * peak / problem.sigma_max_MPa
 
 

@@ -165,10 +165,9 @@ def sharded_gradient_sweep(mesh: Mesh, problem: Problem, weights: Weights, mode:
 def _run_on_mesh(key, problem: Problem, weights: Weights, settings: ga.GASettings, mesh: Mesh) -> ga.GAResult:
     """:func:`camjax.solvers.ga.run` with the population pinned to the mesh's population axis.
 
-    The same ``ga_init`` / ``ga_step`` / ``best``; only sharding constraints are added, so the
-    random stream and every arithmetic step are those of the unsharded run.
+    Only sharding constraints are added, so the random stream and every arithmetic step are those
+    of the unsharded run.
     """
-    ga.check_settings(settings)
     members = NamedSharding(mesh, PS(POPULATION))
 
     def pin(state: ga.GAState) -> ga.GAState:
@@ -177,16 +176,7 @@ def _run_on_mesh(key, problem: Problem, weights: Weights, settings: ga.GASetting
             objective=jax.lax.with_sharding_constraint(state.objective, members),
             violation=jax.lax.with_sharding_constraint(state.violation, members))
 
-    def body(state, _):
-        state = pin(ga.ga_step(state, problem, weights, settings))
-        return state, ga.best(state)[1]
-
-    state = pin(ga.ga_init(key, problem, weights, settings))
-    state, history = jax.lax.scan(body, state, None, length=settings.generations)
-    genes, _, _ = ga.best(state)
-    design = ga._from_genes(problem, genes)
-    ev = P.evaluate(problem, weights, design)
-    return ga.GAResult(design, ev.objective, ev.violation, ev.feasible, state.generation, history)
+    return ga.run(key, problem, weights, settings, constrain=pin)
 
 
 @partial(jax.jit, static_argnames=("settings", "mesh"))
@@ -211,7 +201,7 @@ def sharded_ga_solve(mesh: Mesh, keys: jax.Array, problem: Problem, weights: Wei
         return _trim(ga.solve(_place(mesh, keys, spread), problem, _place(mesh, weights, spread),
                               "pointwise", settings), w)
     if mode != "global":
-        raise ValueError(f"mode: {mode!r} is not allowed; use global, pointwise")
+        raise ValueError(f"mode: {mode!r} is not allowed; use {', '.join(gradient.MODES)}")
     if settings.population % mesh.shape[POPULATION]:
         raise ValueError(f"population {settings.population} must divide by the mesh's "
                          f"{mesh.shape[POPULATION]} population devices")

@@ -31,6 +31,7 @@ crossover 0.8, elite 2, MATLAB's default 100 x (number of variables) generations
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from functools import partial
 from typing import NamedTuple
@@ -40,6 +41,7 @@ import jax.numpy as jnp
 
 from camjax import problem as P
 from camjax.problem import Design, Problem, Violation, Weights
+from camjax.solvers import gradient
 from camjax.solvers.gradient import from_unit, solver_objective, to_unit
 
 
@@ -265,15 +267,21 @@ def best(state: GAState) -> tuple[jax.Array, jax.Array, jax.Array]:
 
 
 def run(key: jax.Array, problem: Problem, weights: Weights, settings: GASettings = DEFAULT_SETTINGS,
-        seed_design: Design | None = None) -> GAResult:
-    """The whole GA for one problem and weighting as one ``lax.scan``; traceable, vmappable."""
+        seed_design: Design | None = None,
+        constrain: Callable[[GAState], GAState] | None = None) -> GAResult:
+    """The whole GA for one problem and weighting as one ``lax.scan``; traceable, vmappable.
+
+    ``constrain`` is applied to the state after ``ga_init`` and after every ``ga_step`` (the
+    sharded solve pins the population to devices with it); it must not change values.
+    """
     check_settings(settings)
+    constrain = constrain or (lambda state: state)
 
     def body(state, _):
-        state = ga_step(state, problem, weights, settings)
+        state = constrain(ga_step(state, problem, weights, settings))
         return state, best(state)[1]
 
-    state = ga_init(key, problem, weights, settings, seed_design)
+    state = constrain(ga_init(key, problem, weights, settings, seed_design))
     state, history = jax.lax.scan(body, state, None, length=settings.generations)
     genes, _, _ = best(state)
     design = _from_genes(problem, genes)
@@ -302,7 +310,7 @@ def solve(keys: jax.Array, problem: Problem, weights: Weights, mode: str = "glob
 
     mode "global": leaves (w,); "pointwise": leaves (w, n). Layout (w, [n,] population, genes).
     """
+    if mode not in gradient.MODES:
+        raise ValueError(f"mode: {mode!r} is not allowed; use {', '.join(gradient.MODES)}")
     one = run if mode == "global" else run_pointwise
-    if mode not in ("global", "pointwise"):
-        raise ValueError(f"mode: {mode!r} is not allowed; use global, pointwise")
     return jax.vmap(one, in_axes=(0, None, 0, None))(keys, problem, weights, settings)

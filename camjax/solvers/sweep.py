@@ -29,7 +29,7 @@ from camjax.problem import Design, Problem, Violation, Weights
 from camjax.solvers import ga, gradient
 
 SOLVERS = ("gradient", "ga", "hybrid")
-MODES = ("global", "pointwise")
+MODES = gradient.MODES
 DEFAULT_CHUNK = 128  # weightings per compiled call of a sweep
 
 
@@ -198,7 +198,7 @@ def solve(problem: Problem, alpha: float = 1.0, gamma: float = 1.0, *, mode: str
     """
     _check_weights([alpha], [gamma])
     dtype = problem.q_mm.dtype
-    weights = Weights(jnp.asarray([alpha], dtype), jnp.asarray([gamma], dtype))
+    weights = P.weights_of([alpha], [gamma], dtype)
     res = solve_batch(problem, weights, ga.weighting_keys(seed, 1), mode, solver, ga_settings,
                       gradient_settings)
     return res[0]
@@ -289,13 +289,13 @@ def sweep(problem: Problem, alphas, gammas, *, mode: str = "global", solver: str
     n_chunks = -(-total // chunk)
     dtype = problem.q_mm.dtype
     parts = []
+    keys_all = ga.weighting_keys(seed, total)  # one key per weighting: independent of chunking
     show = n_chunks > 1 if progress is None else progress
     for c in tqdm(range(n_chunks), desc=f"sweep ({solver}, {mode})", unit="chunk", disable=not show):
         lo, hi = c * chunk, min((c + 1) * chunk, total)
         idx = np.minimum(np.arange(lo, lo + chunk), hi - 1)  # pad by repeating the last weighting
-        weights = Weights(jnp.asarray(a[idx], dtype), jnp.asarray(g[idx], dtype))
-        keys = jax.vmap(lambda i: jax.random.fold_in(jax.random.key(seed), i))(jnp.asarray(idx))
-        res = solve_batch(problem, weights, keys, mode, solver, ga_settings, gradient_settings)
+        weights = P.weights_of(a[idx], g[idx], dtype)
+        res = solve_batch(problem, weights, keys_all[idx], mode, solver, ga_settings, gradient_settings)
         parts.append(jax.tree.map(lambda x, n=hi - lo: np.asarray(x)[:n], res))
     results = jax.tree.map(lambda *xs: np.concatenate(xs, axis=0), *parts)
     mask = pareto_mask(results.base_radius_mm + results.face_width_mm, results.stress_max_MPa,
