@@ -37,8 +37,6 @@ import jax.numpy as jnp
 import numpy as np
 import optax
 
-from camjax.laws import FourierSeries
-
 TWO_PI = 2.0 * math.pi
 
 # ------------------------------------------------------------------------------ the plant
@@ -126,26 +124,6 @@ def harmonics_from_samples(values: jax.Array, n_harmonics: int) -> CamHarmonics:
     z = jnp.fft.rfft(values)[: n_harmonics + 1] / n
     z = z.at[1:].multiply(2.0)
     return CamHarmonics(jnp.real(z), -jnp.imag(z).at[0].set(0.0))
-
-
-def harmonics_from_series(series: FourierSeries, n_harmonics: int | None = None,
-                          shift_rad: float = 0.0) -> CamHarmonics:
-    """A :class:`~camjax.laws.FourierSeries` as CamHarmonics, evaluated at phi + ``shift_rad``.
-
-    h cos(i (phi + shift) + phi_i) = h cos(psi) cos(i phi) - h sin(psi) sin(i phi),
-    psi = i shift + phi_i. Not traceable (reads Python floats); build it once per scene.
-    """
-    top = max([i for i, _, _ in series.harmonics], default=0)
-    n_h = top if n_harmonics is None else int(n_harmonics)
-    a, b = np.zeros(n_h + 1), np.zeros(n_h + 1)
-    a[0] = series.h0
-    for i, h, phase in series.harmonics:
-        if i > n_h:
-            raise ValueError(f"n_harmonics: {n_h} is below the series' harmonic {i}")
-        psi = i * shift_rad + phase
-        a[i] += h * math.cos(psi)
-        b[i] -= h * math.sin(psi)
-    return CamHarmonics(jnp.asarray(a), jnp.asarray(b))
 
 
 def pad_harmonics(cam: CamHarmonics, n_harmonics: int) -> CamHarmonics:

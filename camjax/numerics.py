@@ -38,18 +38,6 @@ def positive_part(x: jax.Array) -> jax.Array:
     return jnp.maximum(x, 0.0)
 
 
-def argmax_deg(values: jax.Array, theta_deg: jax.Array) -> tuple[jax.Array, jax.Array]:
-    """(max, angle in degrees where it occurs) of a sampled curve."""
-    i = jnp.argmax(values)
-    return values[i], theta_deg[i]
-
-
-def argmin_deg(values: jax.Array, theta_deg: jax.Array) -> tuple[jax.Array, jax.Array]:
-    """(min, angle in degrees where it occurs) of a sampled curve."""
-    i = jnp.argmin(values)
-    return values[i], theta_deg[i]
-
-
 # Relative accuracy camjax documents for a contact stress (README "Accuracy and limits").
 STRESS_RTOL = {"float64": 1e-9, "float32": 1e-4}
 

@@ -231,7 +231,8 @@ def classify_jump(jumps: Sequence[float], scale: Sequence[float], rtol: float = 
     gap = displacement jump, shock = velocity jump, jerk = acceleration jump (forbidden by the
     FLCD), perturbation = jump in s''' only (allowed, reported), ok = none.
     """
-    for name, jump, ref in zip(("gap", "shock", "jerk", "perturbation"), jumps, scale, strict=True):
+    # FLCD_CLASSES from the worst (a jump in s) down to "ok"
+    for name, jump, ref in zip(FLCD_CLASSES[:0:-1], jumps, scale, strict=True):
         if abs(jump) > rtol * max(ref, 1e-300):
             return name
     return "ok"

@@ -26,10 +26,8 @@ from camjax.analysis import SceneArrays, scene_arrays
 from camjax.program import joints
 from camjax.scene import Scene
 
-SOLVER_NONE = "none (minimum feasible design; optimizer not yet wired)"
 PRESSURE_ANGLE_LIMIT_DEG = 30.0  # rule of thumb for a translating roller follower (SPEC 3)
 DRAWING_MARGIN_MM = 1.0  # without a [design], draw at the smallest admissible R_b + this, rounded up
-FEASIBILITY_RTOL = 1e-9  # relative slack on sigma <= sigma_max (rounding at the binding angle)
 FLCD_UNITS = {"jump_s": "mm", "jump_v": "mm/rad", "jump_a": "mm/rad^2", "jump_j": "mm/rad^3"}
 
 
@@ -233,14 +231,6 @@ def face_width_block(scene: Scene, arrays: SceneArrays) -> dict[str, Any]:
 # ------------------------------------------------------------------------------ design
 
 
-def objective_value(scene: Scene, base_radius_mm: float, face_width_mm: float,
-                    peak_stress_MPa: float) -> float:
-    """F = alpha (R_b + L)/(R_b,max + L_max) + gamma sigma/sigma_max (SPEC 5), dimensionless."""
-    d = scene.design
-    size = (base_radius_mm + face_width_mm) / (d.base_radius_mm[1] + d.face_width_mm[1])
-    return d.alpha * size + d.gamma * peak_stress_MPa / d.sigma_max_MPa
-
-
 def design_block(scene: Scene, arrays: SceneArrays) -> dict[str, Any] | None:
     """The optimized design (R_b, L) of a scene with a [design] section; None without one.
 
@@ -289,8 +279,8 @@ def design_block(scene: Scene, arrays: SceneArrays) -> dict[str, Any] | None:
     return out
 
 
-def drawing_base_radius(scene: Scene, arrays: SceneArrays, design: dict | None,
-                        min_base_radius_mm: float, override_mm: float | None = None) -> tuple[float, str]:
+def drawing_base_radius(design: dict | None, min_base_radius_mm: float,
+                        override_mm: float | None = None) -> tuple[float, str]:
     """Base radius (mm) the geometry is evaluated and drawn at, and where it comes from."""
     if override_mm is not None:
         return float(override_mm), "option --base-radius"
@@ -450,8 +440,7 @@ def analyse(scene: Scene, arrays: SceneArrays | None = None, *, base_radius_mm: 
     design = design_block(scene, arrays)
     if design is not None:
         data["design"] = design
-    radius, source = drawing_base_radius(scene, arrays, design, minimum["min_base_radius_mm"],
-                                         base_radius_mm)
+    radius, source = drawing_base_radius(design, minimum["min_base_radius_mm"], base_radius_mm)
     width = design["face_width_mm"] if design is not None else None
     curves = evaluate_design(scene, arrays, radius, width)
     data["evaluated_at"] = {"base_radius_mm": radius, "face_width_mm": curves.face_width_mm,
