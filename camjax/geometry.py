@@ -17,7 +17,7 @@ from typing import NamedTuple
 import jax
 import jax.numpy as jnp
 
-from camjax.numerics import safe_divide, safe_sqrt
+from camjax.numerics import capped_divide, safe_divide, safe_sqrt
 from camjax.program import Kinematics
 
 # ------------------------------------------------------------------------- flat face
@@ -85,8 +85,7 @@ def roller_geometry(base_radius_mm, roller_radius_mm, offset_mm, kin: Kinematics
     phi = jnp.arctan2(u, w)
     num = (w**2 + u**2) ** 1.5
     den = w**2 + u * (2.0 * kin.ds - offset_mm) - w * kin.d2s
-    rho = safe_divide(num, den, fallback=jnp.inf)
-    rho = jnp.where(jnp.isfinite(rho), rho, jnp.finfo(jnp.result_type(rho)).max)
+    rho = capped_divide(num, den)
     return RollerGeometry(phi, rho, jnp.abs(rho) - roller_radius_mm)
 
 

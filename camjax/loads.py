@@ -10,7 +10,7 @@ from typing import NamedTuple
 import jax
 import jax.numpy as jnp
 
-from camjax.numerics import safe_divide
+from camjax.numerics import capped_divide
 from camjax.program import TimeKinematics
 
 
@@ -76,8 +76,7 @@ def guide_reactions(guide: Guide, load_N, contact_offset_mm) -> GuideReactions:
     b, mu0, mu, xi = guide.length_mm, guide.cam_friction, guide.guide_friction, guide.overhang_ratio
     a = contact_offset_mm
     gamma = b + 2.0 * mu * a - mu * mu0 * b * (1.0 + 2.0 * xi)
-    inv = safe_divide(1.0, gamma, fallback=jnp.inf)
-    inv = jnp.where(jnp.isfinite(inv), inv, jnp.finfo(jnp.result_type(inv)).max)
+    inv = capped_divide(1.0, gamma)
     return GuideReactions(
         b * load_N * inv,
         -(a - mu0 * b * (1.0 + xi)) * load_N * inv,

@@ -28,6 +28,19 @@ def safe_divide(num: jax.Array, den: jax.Array, fallback: float = 0.0) -> jax.Ar
     return jnp.where(nonzero, num / jnp.where(nonzero, den, 1.0), fallback)
 
 
+def capped_divide(num: jax.Array, den: jax.Array) -> jax.Array:
+    """num / den, saturated at +/- the dtype's largest finite value where it would overflow.
+
+    For quantities that legitimately blow up (a radius of curvature at an inflection, a guide
+    force at jamming): finite in value and gradient for every input, den = 0 included (+max
+    for 0 / 0). Double-where: the division never sees a denominator that would overflow.
+    """
+    cap = jnp.finfo(jnp.result_type(num, den, float)).max
+    over = jnp.abs(den) * cap <= jnp.abs(num)
+    sign = jnp.where((num < 0) != (den < 0), -1.0, 1.0)
+    return jnp.where(over, sign * cap, num / jnp.where(over, 1.0, den))
+
+
 def floor_positive(x: jax.Array, floor: float) -> jax.Array:
     """max(x, floor) whose gradient is 1 above the floor and exactly 0 below it."""
     return jnp.where(x > floor, x, floor)

@@ -40,3 +40,16 @@ def test_peak_stress_on_a_long_grid_is_the_max_of_the_stress():
     design = P.Design(jnp.asarray(28.0), jnp.asarray(20.0))
     direct = jnp.max(P.stress(prob, design))
     assert float(P.peak_stress(prob, design)) == pytest.approx(float(direct), rel=1e-15)
+
+
+def test_capped_divide_saturates_with_finite_gradients():
+    from camjax.numerics import capped_divide
+
+    big = float(np.finfo(np.float64).max)
+    den = jnp.asarray([2.0, -4.0, 1e-300, -1e-300, 0.0])  # normal numbers: XLA:CPU flushes subnormals
+    got = capped_divide(1e10, den)
+    np.testing.assert_array_equal(got, [5e9, -2.5e9, big, -big, big])
+    # 1e10 / 1e-300 overflows: saturated, and the gradient must not be 0 * inf = nan
+    g = jax.vmap(jax.grad(lambda d: capped_divide(1e10, d)))(den)
+    assert np.all(np.isfinite(g)) and float(g[0]) == pytest.approx(-2.5e9)
+    assert float(capped_divide(0.0, 0.0)) == big
