@@ -83,7 +83,7 @@ def test_nominal_error_and_exact_compensation(bench_cam):
     nominal = float(d.max_abs(d.tracking_error_harmonics(bench_cam, bench_cam, PLANT, W_BENCH), phi))
     comp = d.compensate_linear(bench_cam, PLANT, W_BENCH)
     compensated = float(d.max_abs(d.tracking_error_harmonics(comp, bench_cam, PLANT, W_BENCH), phi))
-    assert 0.04 < nominal < 0.06  # measured 0.04855 rad
+    assert nominal == pytest.approx(_errors_numpy(1.0)[0], rel=1e-9)  # independent NumPy, same grid
     # round-off: relative to the 0.48 rad motion, a few ulps at most
     assert compensated < 1e-15 * 0.5
 
@@ -95,8 +95,8 @@ def test_time_form_of_the_compensation_equals_the_harmonic_inverse(bench, bench_
     np.testing.assert_allclose(timeform, harmonic, rtol=0, atol=1e-13)
 
 
-def _ratio_numpy(est: float, grid: int = 720) -> float:
-    """Independent reference: nominal / compensated max tracking error, harmonic by harmonic.
+def _errors_numpy(est: float, grid: int = 720) -> tuple[float, float]:
+    """Independent reference: (nominal, compensated) max tracking error, harmonic by harmonic.
 
     theta2 = S(phi + pi) - S(pi) has amplitude -h_n (odd n) on cos(n phi). The load follows
     G_true(i n W) times the cam's harmonic; the nominal cam's error is (G_true - 1) a_n, the
@@ -116,7 +116,12 @@ def _ratio_numpy(est: float, grid: int = 720) -> float:
         gt, ge = g(k23, c3, n), g(k23 * est**2, c3 * est, n)
         nominal += np.real(a * (gt - 1) * np.exp(1j * n * phi))
         compensated += np.real(a * (gt / ge - 1) * np.exp(1j * n * phi))
-    return np.max(np.abs(nominal)) / np.max(np.abs(compensated))
+    return float(np.max(np.abs(nominal))), float(np.max(np.abs(compensated)))
+
+
+def _ratio_numpy(est: float) -> float:
+    nominal, compensated = _errors_numpy(est)
+    return nominal / compensated
 
 
 def test_wn_misestimated_by_10_percent(bench_cam):
@@ -338,7 +343,8 @@ def test_nonlinear_feedforward_removes_the_ripple_error(bench, bench_cam):
         errs[name] = float(jnp.max(jnp.abs(r.load - target)))
         ripple = float(jnp.max(jnp.abs(r.cam_speed - W_BENCH)) / W_BENCH)
         assert 0.01 < ripple < 0.1  # the cam speed does ripple, by a few percent
-    assert errs["linear"] > 0.5 * errs["nominal"] * 0.5
+    # the linear cam ignores the speed ripple: it leaves a sizeable part of the error (measured 59 %)
+    assert errs["linear"] > 0.25 * errs["nominal"]
     assert errs["nonlinear"] < 1e-4 * errs["nominal"]
 
 
@@ -425,15 +431,16 @@ def test_gradient_through_the_drive_model_matches_finite_differences(bench, benc
 @given(st.floats(0.05, 5.0), st.floats(0.0, 50.0), st.floats(1e2, 1e6), st.floats(0.5, 50.0),
        st.lists(st.floats(-1.0, 1.0), min_size=12, max_size=12))
 def test_compensation_round_trips_for_any_plant_and_law(inertia, damping, stiffness, omega, coefs):
-    """steady_state(compensate_linear(cam)) == cam for every plant, speed and law (relative 1e-9)."""
+    """steady_state(compensate_linear(cam)) == cam for every plant, speed and law (relative 1e-13)."""
     a = jnp.asarray([0.3, *coefs[:5]])
     b = jnp.asarray([0.0, *coefs[6:11]])
     cam = d.CamHarmonics(a, b)
     plant = d.Plant(inertia, damping, stiffness)
     back = d.steady_state(d.compensate_linear(cam, plant, omega), plant, omega)
     scale = float(jnp.max(jnp.abs(a)) + jnp.max(jnp.abs(b)))
-    np.testing.assert_allclose(back.cos, a, atol=1e-9 * scale)
-    np.testing.assert_allclose(back.sin, b, atol=1e-9 * scale)
+    # dividing by G and multiplying by the same G: a few ulps (measured <= 2e-16 relative)
+    np.testing.assert_allclose(back.cos, a, atol=1e-13 * scale)
+    np.testing.assert_allclose(back.sin, b, atol=1e-13 * scale)
 
 
 def test_kernels_do_not_retrace_for_new_parameter_values(bench_cam):
@@ -448,7 +455,8 @@ def test_kernels_do_not_retrace_for_new_parameter_values(bench_cam):
 
 def test_law_shaping_lowers_band_vibration_and_keeps_the_lift(bench, bench_cam):
     c_phi, c_val = d._constraints(bench)
-    np.testing.assert_allclose(c_val, [0.0, 0.48337882], atol=1e-12)
+    lift = 2 * sum(h for _, h, _ in THESIS_NOMINAL.harmonics)  # S(2 pi) - S(pi), odd harmonics
+    np.testing.assert_allclose(c_val, [0.0, lift], atol=1e-12)
     band = W_BENCH * jnp.linspace(0.9, 1.1, 9)
     cam0 = d.pad_harmonics(bench_cam, 15)
     res = d.shape_law(cam0, PLANT, band, jnp.asarray(c_phi), jnp.asarray(c_val), 0.48, steps=100)

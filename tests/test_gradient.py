@@ -93,7 +93,7 @@ def test_float32_problem_runs(default_scene):
 
 
 def test_plain_rprop_variant_agrees(problem):
-    """secant=False is optax's own Rprop: slower, same optimum."""
+    """secant=False is the plain iRprop- rule (camjax's own, not optax's): slower, same optimum."""
     w = P.weights_of(1.0, 1.0)
     plain = G.solve_global(problem, w, settings=G.GradientSettings(secant=False))
     fast = G.solve_global(problem, w)

@@ -22,7 +22,6 @@ def test_slsqp_pointwise_matches_closed_form(problem, alpha, gamma):
     ref = P.pointwise_optimum(problem, P.weights_of(alpha, gamma))
     np.testing.assert_allclose(res.base_radius_mm, np.asarray(ref.base_radius_mm)[angles], atol=1e-5)
     np.testing.assert_allclose(res.face_width_mm, np.asarray(ref.face_width_mm)[angles], atol=1e-5)
-    assert res.seconds > 0
 
 
 @pytest.mark.parametrize("alpha,gamma", [(1.0, 1.0), (10.0, 1.0)])
