@@ -157,11 +157,9 @@ def _setup_design(p: argparse.ArgumentParser):
         r = args.base_radius
         if r is not None and not (r == r and 0 < r < float("inf")):
             raise UsageError(f"--base-radius = {r!r}: must be a finite number > 0 (mm)")
-        if not 10 <= args.dpi <= 1000:
-            raise UsageError(f"--dpi = {args.dpi}: out of range (allowed: 10..1000)")
+        check_dpi(args.dpi)
         scene = apply_design_options(load_scene(args.scene), args)
-        dyn = getattr(scene, "dynamics", None)
-        if dyn is not None and dyn.follower == "oscillating":
+        if scene.dynamics is not None and scene.dynamics.follower == "oscillating":
             raise UsageError(f"scene {scene.name}: dynamics.follower = 'oscillating' (motion in rad); the "
                              "disc-cam geometry of `design` is for translating followers in mm "
                              f"(allowed: use `camjax dynamics {args.scene or scene.name}`)")
@@ -200,6 +198,12 @@ def add_design_options(p: argparse.ArgumentParser, weights: bool = True) -> None
 def _check_weight(option: str, value: float) -> None:
     if not (value == value and 0 <= value < float("inf")):
         raise UsageError(f"{option} = {value!r}: must be a finite number >= 0")
+
+
+def check_dpi(dpi: int) -> None:
+    """--dpi must be 10..1000."""
+    if not 10 <= dpi <= 1000:
+        raise UsageError(f"--dpi = {dpi}: out of range (allowed: 10..1000)")
 
 
 def apply_design_options(scene, args):
@@ -261,17 +265,15 @@ def _setup_sweep(p: argparse.ArgumentParser):
                              "minimize (drop 0 from one of the lists)")
         if not 1 <= args.chunk_size <= 100_000:
             raise UsageError(f"--chunk-size = {args.chunk_size}: out of range (allowed: 1..100000)")
-        if not 10 <= args.dpi <= 1000:
-            raise UsageError(f"--dpi = {args.dpi}: out of range (allowed: 10..1000)")
-        if args.seed is not None and args.seed < 0:
-            raise UsageError(f"--seed = {args.seed}: must be >= 0")
+        check_dpi(args.dpi)
         scene = load_scene(args.scene)
         if scene.design is None:
             raise UsageError(f"scene '{scene.name}' has no [design] section: a sweep needs its bounds "
                              "and sigma_max_MPa")
-        d = scene.design
-        mode, solver = args.mode or d.mode, args.solver or d.solver
-        seed = d.seed if args.seed is None else args.seed
+        # --alpha/--gamma are lists here: only mode, solver and seed override the scene
+        overrides = argparse.Namespace(mode=args.mode, solver=args.solver, seed=args.seed)
+        d = apply_design_options(scene, overrides).design
+        mode, solver, seed = d.mode, d.solver, d.seed
         scaleout.check(args, UsageError)
         enable_compilation_cache()
         start = time.perf_counter()
@@ -343,8 +345,7 @@ def _setup_dynamics(p: argparse.ArgumentParser):
         from camjax.plots_dynamics import write_dynamics_figures
         from camjax.scene import load_scene
 
-        if not 10 <= args.dpi <= 1000:
-            raise UsageError(f"--dpi = {args.dpi}: out of range (allowed: 10..1000)")
+        check_dpi(args.dpi)
         scene = load_scene(args.scene)
         if scene.dynamics is None:
             raise UsageError(f"scene '{scene.name}' has no [dynamics] section: nothing to compute "
