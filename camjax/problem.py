@@ -221,11 +221,10 @@ def objective(problem: Problem, weights: Weights, design: Design) -> jax.Array:
 def constraints(problem: Problem, design: Design) -> Constraints:
     """Every angle's constraints as g <= 0 (mm), shape (n,) each. Linear in the design."""
     rho = curvature_radius(problem, design)
-    stress_rho = (problem.stress_coefficient / problem.sigma_max_MPa) ** 2
     return Constraints(
         curvature=problem.rho_min_mm - rho,
-        stress=stress_rho - rho,
-        face_width=2.0 * jnp.abs(problem.ds_mm) - design.face_width_mm,
+        stress=stress_rho_need(problem) - rho,
+        face_width=face_width_need(problem) - design.face_width_mm,
     )
 
 
@@ -239,9 +238,8 @@ def constraint_maxima(problem: Problem, design: Design) -> Constraints:
     """
     return Constraints(
         curvature=problem.rho_min_mm - design.base_radius_mm - jnp.min(problem.q_mm),
-        stress=jnp.max((problem.stress_coefficient / problem.sigma_max_MPa) ** 2 - problem.q_mm)
-        - design.base_radius_mm,
-        face_width=jnp.max(2.0 * jnp.abs(problem.ds_mm)) - design.face_width_mm,
+        stress=jnp.max(stress_rho_need(problem) - problem.q_mm) - design.base_radius_mm,
+        face_width=required_face_width(problem) - design.face_width_mm,
     )
 
 
@@ -254,11 +252,11 @@ def bounds_violation(problem: Problem, design: Design) -> jax.Array:
 
 def violation(problem: Problem, design: Design) -> Violation:
     """Worst violation of each constraint in physical units (mm, MPa); zeros when feasible."""
-    rho = curvature_radius(problem, design)
+    g = constraint_maxima(problem, design)
     return Violation(
-        curvature=positive_part(problem.rho_min_mm - jnp.min(rho)),
-        stress=positive_part(jnp.max(stress(problem, design)) - problem.sigma_max_MPa),
-        face_width=positive_part(jnp.max(2.0 * jnp.abs(problem.ds_mm)) - design.face_width_mm),
+        curvature=positive_part(g.curvature),
+        stress=positive_part(jnp.max(stress(problem, design)) - problem.sigma_max_MPa),  # in MPa
+        face_width=positive_part(g.face_width),
         bounds=bounds_violation(problem, design),
     )
 
@@ -296,15 +294,29 @@ def violated_constraints(problem: Problem, v: Violation) -> list[str]:
 # ------------------------------------------------------------------------- references
 
 
+def stress_rho_need(problem: Problem) -> jax.Array:
+    """Smallest rho (mm) with sigma <= sigma_max at each angle, (C / sigma_max)^2, shape (n,)."""
+    return (problem.stress_coefficient / problem.sigma_max_MPa) ** 2
+
+
+def rho_need(problem: Problem) -> jax.Array:
+    """Smallest admissible rho (mm) at each angle: curvature margin and stress, shape (n,)."""
+    return jnp.maximum(problem.rho_min_mm, stress_rho_need(problem))
+
+
+def face_width_need(problem: Problem) -> jax.Array:
+    """Face width (mm) the contact offset needs at each angle, 2|s'|, shape (n,)."""
+    return 2.0 * jnp.abs(problem.ds_mm)
+
+
 def required_base_radius(problem: Problem) -> jax.Array:
     """Smallest R_b (mm) meeting curvature and stress at every angle (ignoring the box), shape ()."""
-    need_rho = jnp.maximum(problem.rho_min_mm, (problem.stress_coefficient / problem.sigma_max_MPa) ** 2)
-    return jnp.max(need_rho - problem.q_mm)
+    return jnp.max(rho_need(problem) - problem.q_mm)
 
 
 def required_face_width(problem: Problem) -> jax.Array:
     """Smallest L (mm) meeting the face-width constraint at every angle, 2 max|s'|, shape ()."""
-    return jnp.max(2.0 * jnp.abs(problem.ds_mm))
+    return jnp.max(face_width_need(problem))
 
 
 def optimal_curvature_radius(weights: Weights, coefficient, sigma_max_MPa, size_norm_mm) -> jax.Array:
@@ -344,10 +356,9 @@ def pointwise_optimum(problem: Problem, weights: Weights) -> Design:
     """
     c = problem.stress_coefficient
     rho_star = optimal_curvature_radius(weights, c, problem.sigma_max_MPa, problem.size_norm_mm)
-    need_rho = jnp.maximum(problem.rho_min_mm, (c / problem.sigma_max_MPa) ** 2)
-    r_need = jnp.maximum(problem.lower.base_radius_mm, need_rho - problem.q_mm)
+    r_need = jnp.maximum(problem.lower.base_radius_mm, rho_need(problem) - problem.q_mm)
     r = jnp.minimum(jnp.maximum(rho_star - problem.q_mm, r_need), problem.upper.base_radius_mm)
-    l_need = jnp.maximum(problem.lower.face_width_mm, 2.0 * jnp.abs(problem.ds_mm))
+    l_need = jnp.maximum(problem.lower.face_width_mm, face_width_need(problem))
     length = jnp.minimum(l_need, problem.upper.face_width_mm)
     return Design(r, length)
 
