@@ -253,8 +253,8 @@ def design_block(scene: Scene, arrays: SceneArrays) -> dict[str, Any] | None:
 
     rho = geometry.flat_radius_of_curvature(out["base_radius_mm"], kin)
     sigma_peak = _f(jnp.max(contact.stress_from_coefficient(arrays.stress_coefficient, rho)))
-    stress_rho = np.asarray((arrays.stress_coefficient / d.sigma_max_MPa) ** 2)
-    need = np.maximum(float(problem.rho_min_mm), stress_rho) - np.asarray(problem.q_mm)
+    stress_rho = np.asarray(P.stress_rho_need(problem))
+    need = np.asarray(P.rho_need(problem) - problem.q_mm)  # max over angles: P.required_base_radius
     i = int(np.argmax(need))
     required, required_width = float(need[i]), _f(P.required_face_width(problem))
     rb_hi, l_hi = d.base_radius_mm[1], d.face_width_mm[1]
