@@ -748,6 +748,8 @@ def scene_dynamics(scene) -> DynamicsReport:
     if "compensation" in spec.compute or "robustness" in spec.compute:
         comp_err = tracking_error_harmonics(comp, cam, plant, omega)
         comp_time = compensate_time(_program_values(scene, phi), plant, omega)
+        comp_vals = np.asarray(evaluate_cam(comp, phi).f)
+        comp_trim = trim_harmonics(comp)
         mis = []
         for est in (0.9, 1.1):
             c_est = compensate_linear(cam, perturbed_plant(plant, 1.0, est), omega)
@@ -757,13 +759,13 @@ def scene_dynamics(scene) -> DynamicsReport:
         out["compensated"] = {
             "max_tracking_error": _f(max_abs(comp_err, phi)),
             "rms_tracking_error": _f(jnp.sqrt(mean_square(comp_err))),
-            "time_form_max_difference": _f(jnp.max(jnp.abs(comp_time - evaluate_cam(comp, phi).f))),
-            "max_cam_change": _f(jnp.max(jnp.abs(evaluate_cam(comp, phi).f - nom_vals.f))),
-            "coefficients": {"cos": np.asarray(trim_harmonics(comp).cos).tolist(),
-                             "sin": np.asarray(trim_harmonics(comp).sin).tolist()},
+            "time_form_max_difference": float(np.max(np.abs(np.asarray(comp_time) - comp_vals))),
+            "max_cam_change": float(np.max(np.abs(comp_vals - np.asarray(nom_vals.f)))),
+            "coefficients": {"cos": np.asarray(comp_trim.cos).tolist(),
+                             "sin": np.asarray(comp_trim.sin).tolist()},
             "wn_misestimate": mis,
         }
-        curves["compensated"] = np.asarray(evaluate_cam(comp, phi).f)
+        curves["compensated"] = comp_vals
     if "robustness" in spec.compute:
         mu, lam, kap = (np.asarray(v) for v in (spec.damping_factors, spec.speed_factors,
                                                   spec.wn_factors))
@@ -789,10 +791,12 @@ def scene_dynamics(scene) -> DynamicsReport:
         }
         curves.update(rob_mu=mu, rob_lam=lam, rob_kap=kap, rob=grid, rob_nominal=grid_nom,
                       rob_ratio=ratios, rob_at_ratio=at_ratio)
-    if "time_domain" in spec.compute:
-        m = spec.steps_per_cycle
-        half = cam_grid(2 * m)
+    m = spec.steps_per_cycle
+    needs_drive = spec.has_drive and ("drive" in spec.compute or "nonlinear" in spec.compute)
+    if "time_domain" in spec.compute or needs_drive:
         cycles = settling_cycles(plant, omega, spec.transient_tolerance, spec.max_cycles)
+    if "time_domain" in spec.compute:
+        half = cam_grid(2 * m)
         exact = _program_values(scene, half)
         load = integrate_train(plant, exact.f, omega, cycles).angle
         grid_m = cam_grid(m)
@@ -807,10 +811,8 @@ def scene_dynamics(scene) -> DynamicsReport:
             "nominal_max_tracking_error": _f(jnp.max(jnp.abs(load - target))),
             "compensated_max_tracking_error": _f(jnp.max(jnp.abs(load_c - target))),
         }
-    if spec.has_drive and ("drive" in spec.compute or "nonlinear" in spec.compute):
+    if needs_drive:
         drive = drive_of(spec)
-        m = spec.steps_per_cycle
-        cycles = settling_cycles(plant, omega, spec.transient_tolerance, spec.max_cycles)
         target = evaluate_cam(cam, cam_grid(m)).f
         cams = {"nominal": cam, "linear": comp}
         if "nonlinear" in spec.compute:

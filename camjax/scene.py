@@ -421,8 +421,7 @@ def _parse_dynamics(r: _Reader, motion: MotionSpec, follower: FollowerSpec) -> D
     if not drive_keys and ("drive" in compute or "nonlinear" in compute):
         raise r.error("compute", compute, "'drive' and 'nonlinear' need the drive: give I1, k01, c01")
     spring_default = train.spring_N_per_m if train is not None and train.spring_N_per_m > 0 else None
-    spring = r.number("spring_rate", spring_default if spring_default is not None else None, low=0.0,
-                      low_open=True)
+    spring = r.number("spring_rate", spring_default, low=0.0, low_open=True)
     if "jump" in compute and spring is None:
         raise r.error("compute", compute, "'jump' needs a force-closure spring: give spring_rate "
                       "(or follower.spring_N_per_m for a translating follower)")
