@@ -37,6 +37,8 @@ import jax.numpy as jnp
 import numpy as np
 import optax
 
+from camjax import program as prog
+
 TWO_PI = 2.0 * math.pi
 
 # ------------------------------------------------------------------------------ the plant
@@ -659,8 +661,6 @@ def closure_of(spec) -> ForceClosure:
 
 def program_cam(scene, samples: int | None = None, n_harmonics: int | None = None) -> CamHarmonics:
     """The scene's motion program as CamHarmonics in SI (m or rad), from the FFT of its samples."""
-    from camjax import program as prog
-
     spec = scene.dynamics
     n = spec.samples if samples is None else samples
     kin = prog.evaluate(scene.motion.program, n)
@@ -670,8 +670,6 @@ def program_cam(scene, samples: int | None = None, n_harmonics: int | None = Non
 
 def _program_values(scene, angles_rad: jax.Array) -> CamValues:
     """Exact program law (not its harmonics) at arbitrary cam angles, SI."""
-    from camjax import program as prog
-
     kin = prog.motion_at(scene.motion.program, jnp.rad2deg(angles_rad))
     k = scene.dynamics.motion_scale
     return CamValues(kin.s * k, kin.ds * k, kin.d2s * k)
@@ -687,18 +685,13 @@ def trim_harmonics(cam: CamHarmonics, rtol: float = 1e-13) -> CamHarmonics:
 def _constraints(scene) -> tuple[np.ndarray, np.ndarray]:
     """Cam angles (rad) and levels (SI) pinned by law shaping: every joint and dwell samples."""
     p = scene.motion.program
-    k = scene.dynamics.motion_scale
-    angles, levels, level = [], [], 0.0
-    lifts = np.asarray(p.lifts)
-    for i, (kind, start, width) in enumerate(zip(p.kinds, p.start_deg, p.angles_deg, strict=True)):
-        if kind == "dwell":
-            pts = np.linspace(start, start + width, max(2, int(width // 5) + 1))
-        else:
-            pts = np.array([start])
-        angles.extend(pts)
-        levels.extend([level] * len(pts))
-        level += lifts[i] if kind == "rise" else -lifts[i] if kind == "return" else 0.0
-    return np.deg2rad(np.mod(angles, 360.0)), np.asarray(levels) * k
+    angles = []
+    for kind, start, width in zip(p.kinds, p.start_deg, p.angles_deg, strict=True):
+        angles.extend(np.linspace(start, start + width, max(2, int(width // 5) + 1)) if kind == "dwell"
+                      else [start])
+    angles_deg = np.mod(np.asarray(angles), 360.0)
+    levels = np.asarray(prog.motion_at(p, angles_deg).s) * scene.dynamics.motion_scale
+    return np.deg2rad(angles_deg), levels
 
 
 def _f(x) -> float:
