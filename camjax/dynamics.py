@@ -390,14 +390,12 @@ def simulate_drive(cam: CamHarmonics, drive: Drive, plant: Plant, cam_speed_rad_
 
     y, _ = jax.lax.scan(cycle, y0, None, length=n_cycles - 1)
     _, last = jax.lax.scan(step_time, y, jnp.arange(m))
-    theta1 = cam_grid(m, zero.dtype) + last.cam_lag
+    motor = cam_grid(m, zero.dtype)
+    theta1 = motor + last.cam_lag
     v = evaluate_cam(cam, theta1)
     rate = last.cam_rate
     spring = plant.stiffness * (v.f - last.load)
-    drive_torque = (-drive.coupling_stiffness * last.cam_lag
-                    - drive.coupling_damping * (rate - omega))
-    eff = drive.cam_inertia + drive.follower_inertia * v.df**2
-    accel1 = (drive_torque - v.df * (drive.follower_inertia * v.d2f * rate**2 + spring)) / eff
+    accel1 = rhs(motor, last, None).cam_rate  # the drive equation, elementwise over the cycle
     accel2 = v.d2f * rate**2 + v.df * accel1
     torque = v.df * (drive.follower_inertia * accel2 + spring)
     return DriveResponse(theta1, rate, v.f, last.load, torque)
