@@ -26,7 +26,6 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from camjax import problem as P
 from camjax.numerics import RHO_FLOOR_MM
 from camjax.problem import Design, Problem, Weights
 
@@ -85,7 +84,10 @@ def fused_fitness(scene: FusedScene, weights: Weights, designs: Design) -> tuple
     return _fitness_from_peak(scene, weights, designs, peak)
 
 
-def tiled_fitness(scene: FusedScene, weights: Weights, designs: Design, tile: int = 7200):
+TILE = 7200  # angles per tile of the tiled reference kernel
+
+
+def tiled_fitness(scene: FusedScene, weights: Weights, designs: Design, tile: int = TILE):
     """The fused kernel with the angles reduced tile by tile (``lax.map``; N divisible by tile).
 
     Each tile is its own reduction of <= ``tile`` angles: this keeps XLA:CPU's YNNPACK reduce on
@@ -152,5 +154,4 @@ __all__ = [
     "numpy_fitness",
     "numpy_scene",
     "random_designs",
-    "P",
 ]

@@ -163,7 +163,7 @@ def angle_cliff(
     t_tiled, out_tiled = time_jit(fz.tiled_fitness, fz.fused_scene(problem), weights, designs, repeats=3)
     out["tiled"] = {
         "samples": tiled_n,
-        "tile": 7200,
+        "tile": fz.TILE,
         "library_evals_per_s": _rate(population, tiled_n, t_lib.median_s),
         "tiled_evals_per_s": _rate(population, tiled_n, t_tiled.median_s),
         "tiled_vs_library_max_abs_diff": fz.max_disagreement(out_lib, out_tiled),
