@@ -49,7 +49,7 @@ def _timing(compile_s: float, times: list[float]) -> Timing:
 
 
 def time_jit(
-    fn: Callable, *args, repeats: int = 5, warmup: int = 1, min_time_s: float = 0.2, static_argnames=()
+    fn: Callable, *args, repeats: int = 5, warmup: int = 1, min_time_s: float = 0.2
 ) -> tuple[Timing, Any]:
     """Time ``jax.jit(fn)``: compile (lower + compile) alone, then the median of steady calls.
 
@@ -57,7 +57,7 @@ def time_jit(
     (never closed over), so XLA cannot constant-fold the benchmark away.
     """
     t0 = time.perf_counter()
-    compiled = jax.jit(fn, static_argnames=static_argnames).lower(*args).compile()
+    compiled = compile_for(fn, *args)
     compile_s = time.perf_counter() - t0
     out = None
     for _ in range(warmup):
@@ -83,18 +83,23 @@ def time_python(
     return _timing(0.0, times), outputs[-1]
 
 
-def compiled_cost(fn: Callable, *args) -> dict:
-    """XLA's static cost estimate of ``jax.jit(fn)(*args)`` (flops, transcendentals, bytes)."""
-    cost = jax.jit(fn).lower(*args).compile().cost_analysis()
+def compile_for(fn: Callable, *args):
+    """``jax.jit(fn)`` lowered and compiled for ``args``: the executable the helpers below inspect."""
+    return jax.jit(fn).lower(*args).compile()
+
+
+def compiled_cost(compiled) -> dict:
+    """XLA's static cost estimate of a compiled program (flops, transcendentals, bytes)."""
+    cost = compiled.cost_analysis()
     if isinstance(cost, list):  # older jax returned one dict per computation
         cost = cost[0] if cost else {}
     keep = ("flops", "transcendentals", "bytes accessed")
     return {k.replace(" ", "_"): float(cost[k]) for k in keep if k in (cost or {})}
 
 
-def fusion_count(fn: Callable, *args) -> int:
-    """Number of XLA fusions in the optimized HLO of ``jax.jit(fn)(*args)`` (kernel launches)."""
-    text = jax.jit(fn).lower(*args).compile().as_text()
+def fusion_count(compiled) -> int:
+    """Number of XLA fusions in a compiled program's optimized HLO (kernel launches)."""
+    text = compiled.as_text()
     return sum(1 for line in text.splitlines() if " fusion(" in line or "= fusion" in line)
 
 
@@ -162,8 +167,8 @@ def loglog_slope(x, y) -> float:
     return float(np.polyfit(x, y, 1)[0])
 
 
-def profile_thunks(fn: Callable, *args, calls: int = 3, top: int = 8) -> list[dict]:
-    """Where the time goes: a ``jax.profiler`` trace of ``calls`` steady calls of ``jax.jit(fn)``,
+def profile_thunks(compiled, *args, calls: int = 3, top: int = 8) -> list[dict]:
+    """Where the time goes: a ``jax.profiler`` trace of ``calls`` steady calls of ``compiled``,
     summarized as the ``top`` XLA:CPU thunks/fusions by time per call (ms) on any thread.
 
     Python-side and bookkeeping events are left out; ``threads`` counts the distinct threads a
@@ -173,7 +178,6 @@ def profile_thunks(fn: Callable, *args, calls: int = 3, top: int = 8) -> list[di
     import glob
     import tempfile
 
-    compiled = jax.jit(fn).lower(*args).compile()
     block(compiled(*args))
     total: collections.Counter = collections.Counter()
     threads: dict = collections.defaultdict(set)

@@ -14,6 +14,7 @@ import numpy as np
 
 from benchmarks import fitness as fz
 from benchmarks.harness import (
+    compile_for,
     compiled_cost,
     fusion_count,
     loglog_slope,
@@ -135,10 +136,11 @@ def profile(problem, weights, population: int) -> dict:
     }
     out = {"population": population, "samples": int(problem.q_mm.shape[0])}
     for name, (fn, data) in kernels.items():
+        compiled = compile_for(fn, data, weights, designs)
         out[name] = {
-            **compiled_cost(fn, data, weights, designs),
-            "fusions": fusion_count(fn, data, weights, designs),
-            "thunks": profile_thunks(fn, data, weights, designs),
+            **compiled_cost(compiled),
+            "fusions": fusion_count(compiled),
+            "thunks": profile_thunks(compiled, data, weights, designs),
         }
     return out
 
@@ -155,7 +157,8 @@ def angle_cliff(
         t, _ = time_jit(fz.library_fitness, problem, weights, designs, repeats=3)
         out[str(n)] = {
             "library_evals_per_s": _rate(population, n, t.median_s),
-            "thunks": profile_thunks(fz.library_fitness, problem, weights, designs, top=2),
+            "thunks": profile_thunks(compile_for(fz.library_fitness, problem, weights, designs), problem,
+                                     weights, designs, top=2),
         }
     problem = P.problem_from_scene(scene_obj, samples=tiled_n)
     designs = fz.random_designs(problem, population)
