@@ -228,3 +228,11 @@ def test_cli_block_sweep_equals_in_process_sweep_and_resumes(tmp_path, capsys):
     # other weightings into the same folder: refused, exit 2, nothing rewritten
     assert main(["sweep", "--alpha", "0.1,1", "--gamma", "1,2", "--out", str(out), "--resume"]) == 2
     assert "other parameters" in capsys.readouterr().err
+
+
+def test_block_spec_choices_match_the_solvers():
+    # blocks.py keeps jax-free copies (workers import it before jax); they must not drift
+    from camjax.scaleout import blocks
+    from camjax.solvers import sweep
+
+    assert blocks.SOLVERS == sweep.SOLVERS and blocks.MODES == sweep.MODES
