@@ -69,6 +69,17 @@ def main() -> dict:
         float(jnp.max(jnp.abs(a - b))) for a, b in zip(ref.design, got.design, strict=True))
     out["gradient_pointwise_shape"] = list(got.design.base_radius_mm.shape)
     lap("gradient pointwise")
+    ref = gradient.solve_sweep(problem, weights, "global")
+    got = sharding.sharded_gradient_sweep(sharding.device_mesh(2), problem, weights, "global")
+    out["gradient_global_sharded_max_diff_mm"] = max(
+        float(jnp.max(jnp.abs(a - b))) for a, b in zip(ref.design, got.design, strict=True))
+    small = ga.GASettings(population=16, generations=10)
+    ref = ga.solve(ga.weighting_keys(0, 2), coarse, two, "pointwise", small)
+    got = sharding.sharded_ga_solve(sharding.device_mesh(2), ga.weighting_keys(0, 2), coarse, two, "pointwise",
+                                    small)
+    out["ga_pointwise_sharded_max_diff_mm"] = max(
+        float(jnp.max(jnp.abs(a - b))) for a, b in zip(ref.design, got.design, strict=True))
+    lap("gradient global, ga pointwise")
     text = builtin_scene_text("default")
     pairs = tuple((float(a), 1.0) for a in jnp.logspace(-1, 1.5, w).tolist())
     for solver, mode in (("gradient", "global"), ("ga", "global")):
