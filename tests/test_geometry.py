@@ -75,7 +75,8 @@ def test_profile_curvature_matches_rho(default_arrays):
     rho_fd = (xd**2 + yd**2) ** 1.5 / np.abs(xd * ydd - yd * xdd)
     rho = np.asarray(geometry.flat_radius_of_curvature(rb, kin))
     inner = slice(10, -10)
-    np.testing.assert_allclose(rho_fd[inner], rho[inner], rtol=2e-3)  # O(dt^2) differencing
+    # O(dt^2) differencing, worst next to the joints where s''' jumps (measured 1.8e-4)
+    np.testing.assert_allclose(rho_fd[inner], rho[inner], rtol=5e-4)
 
 
 def test_roller_zero_offset_matches_spec_formula(default_arrays):
