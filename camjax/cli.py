@@ -185,9 +185,11 @@ def _setup_design(p: argparse.ArgumentParser):
 def add_design_options(p: argparse.ArgumentParser, weights: bool = True) -> None:
     """--mode, --solver, --seed (and --alpha, --gamma): overrides of the scene's [design] section."""
     tail = " (default: the scene's [design] value)"
-    p.add_argument("--mode", choices=("global", "pointwise"), default=None,
+    from camjax.solvers.registry import MODES, SOLVERS
+
+    p.add_argument("--mode", choices=MODES, default=None,
                    help="one R_b, L for the whole cam, or the source's per-angle method" + tail)
-    p.add_argument("--solver", choices=("gradient", "ga", "hybrid"), default=None,
+    p.add_argument("--solver", choices=SOLVERS, default=None,
                    help="augmented-Lagrangian gradient solver, vectorized GA, or GA + gradient polish" + tail)
     p.add_argument("--seed", type=int, default=None, help="seed of the GA and hybrid solvers" + tail)
     if weights:

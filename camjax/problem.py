@@ -26,6 +26,12 @@ stress and every angle's constraints. **pointwise** (the source's method): the p
 separately at each angle; :func:`per_angle` turns a problem on an N-angle grid into N problems on
 a one-angle grid, stacked along a leading axis, so that the same solver code ``vmap``s over
 them. On a one-angle grid the global and pointwise problems coincide.
+
+This module is the flat-face *problem family* of :mod:`camjax.solvers.base` (the protocol the
+solvers reach a problem through): :func:`bounds`, :func:`size_norm`, :func:`objective`,
+:func:`size_term`, :func:`constraints`, :func:`constraint_maxima`, :func:`evaluate`,
+:func:`per_angle`, :func:`condense_pointwise`, :func:`violated_constraints`,
+:func:`solution_json` and :func:`record`.
 """
 
 from __future__ import annotations
@@ -34,6 +40,7 @@ from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 from camjax.contact import stress_from_coefficient
 from camjax.numerics import RHO_FLOOR_MM, max_over_angles, positive_part, safe_divide, safe_sqrt
@@ -398,3 +405,73 @@ def global_optimum(problem: Problem, weights: Weights, bisections: int = 200) ->
     r = jnp.where(slope(lo_r) >= 0, lo_r, jnp.where(slope(hi_r) < 0, hi_r, 0.5 * (a + b)))
     l_need = jnp.maximum(problem.lower.face_width_mm, required_face_width(problem))
     return Design(r, jnp.minimum(l_need, problem.upper.face_width_mm))
+
+
+# ------------------------------------------------------------------- family protocol
+
+
+def bounds(problem: Problem) -> tuple[Design, Design]:
+    """(lower, upper) box bounds of the design, mm."""
+    return problem.lower, problem.upper
+
+
+def size_norm(problem: Problem) -> jax.Array:
+    """N = R_b,max + L_max (mm): the length the constraints are divided by, shape ()."""
+    return problem.size_norm_mm
+
+
+def condense_pointwise(problem: Problem, per_angle_design: Design) -> tuple[Design, dict]:
+    """The whole-cam design of a pointwise solve: the largest R_b and the largest L over angles.
+
+    SPEC 5: reported with the angles where they occur (the first such angle on ties).
+    ``per_angle_design`` has leaves (n,); returns scalars and the extras
+    {base_radius_deg, face_width_deg, theta_deg}.
+    """
+    i = jnp.argmax(per_angle_design.base_radius_mm)
+    j = jnp.argmax(per_angle_design.face_width_mm)
+    design = Design(per_angle_design.base_radius_mm[i], per_angle_design.face_width_mm[j])
+    extras = {"base_radius_deg": problem.theta_deg[i], "face_width_deg": problem.theta_deg[j],
+              "theta_deg": problem.theta_deg}
+    return design, extras
+
+
+def _f(x) -> float:
+    v = float(np.asarray(x))
+    if not np.isfinite(v):
+        raise ValueError(f"non-finite value {v} in a design result")
+    return v
+
+
+def solution_json(problem: Problem, solution) -> dict:
+    """The flat-face keys of result.json's design block, for one :class:`camjax.solvers.base.Solution`."""
+    d, ev, v = solution.design, solution.evaluation, solution.violation
+    out = {
+        "base_radius_mm": _f(d.base_radius_mm),
+        "face_width_mm": _f(d.face_width_mm),
+        "size_mm": _f(d.base_radius_mm + d.face_width_mm),
+        "constraint_violation": {"curvature_mm": _f(v.curvature), "stress_MPa": _f(v.stress),
+                                 "face_width_mm": _f(v.face_width), "bounds_mm": _f(v.bounds)},
+        "stress_max_MPa": _f(ev.stress_max_MPa),
+        "stress_max_deg": _f(ev.stress_max_deg),
+        "rho_min_mm": _f(ev.rho_min_mm),
+        "sigma_max_MPa": _f(problem.sigma_max_MPa),
+        "base_radius_bounds_mm": [_f(problem.lower.base_radius_mm), _f(problem.upper.base_radius_mm)],
+        "face_width_bounds_mm": [_f(problem.lower.face_width_mm), _f(problem.upper.face_width_mm)],
+    }
+    if solution.mode == "pointwise":
+        out["base_radius_deg"] = _f(solution.extras["base_radius_deg"])
+        out["face_width_deg"] = _f(solution.extras["face_width_deg"])
+        out["pointwise"] = {
+            "theta_deg": np.asarray(solution.extras["theta_deg"], float).tolist(),
+            "base_radius_mm": np.asarray(solution.pointwise.base_radius_mm, float).tolist(),
+            "face_width_mm": np.asarray(solution.pointwise.face_width_mm, float).tolist(),
+        }
+    return out
+
+
+def record(solution) -> dict:
+    """The flat-face keys of a pareto.json row (one solution): the design, size and peak stress."""
+    d, ev = solution.design, solution.evaluation
+    return {"base_radius_mm": _f(d.base_radius_mm), "face_width_mm": _f(d.face_width_mm),
+            "size_mm": _f(d.base_radius_mm + d.face_width_mm),
+            "stress_max_MPa": _f(ev.stress_max_MPa), "stress_max_deg": _f(ev.stress_max_deg)}

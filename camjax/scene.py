@@ -17,6 +17,7 @@ from camjax.contact import Material
 from camjax.laws import FOURIER_PRESETS, LAWS, FourierSeries, fourier_law, get_law, polynomial_law
 from camjax.loads import FollowerTrain, Guide
 from camjax.program import KINDS, MotionProgram, Segment
+from camjax.solvers.registry import MODES, SOLVERS
 
 BUILTIN_SCENES = {"default": "default.toml", "thesis-bench": "thesis-bench.toml"}
 
@@ -366,13 +367,13 @@ def _parse_design(r: _Reader) -> DesignSpec:
         raise r.error("alpha", 0.0, "alpha and gamma are both zero: nothing to minimize",
                       "alpha >= 0, gamma >= 0, not both 0")
     return DesignSpec(
-        r.choice("mode", ("global", "pointwise"), "global"),
+        r.choice("mode", MODES, "global"),
         r.interval("base_radius_mm"),
         r.interval("face_width_mm"),
         r.number("sigma_max_MPa", low=0.0, low_open=True),
         alpha,
         gamma,
-        r.choice("solver", ("gradient", "ga", "hybrid"), "gradient"),
+        r.choice("solver", SOLVERS, "gradient"),
         r.number("seed", 0, low=0, integer=True),
     )
 

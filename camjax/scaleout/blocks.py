@@ -17,8 +17,7 @@ import os
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field
 
-SOLVERS = ("gradient", "ga", "hybrid")  # as camjax.solvers.sweep.SOLVERS
-MODES = ("global", "pointwise")
+from camjax.solvers.registry import MODES, SOLVERS, check_choice
 
 
 @dataclass(frozen=True)
@@ -37,10 +36,8 @@ class SweepSpec:
     ga_generations: int = 0
 
     def __post_init__(self):
-        if self.solver not in SOLVERS:
-            raise ValueError(f"solver: {self.solver!r} is not allowed; use {', '.join(SOLVERS)}")
-        if self.mode not in MODES:
-            raise ValueError(f"mode: {self.mode!r} is not allowed; use {', '.join(MODES)}")
+        check_choice("solver", self.solver, SOLVERS)
+        check_choice("mode", self.mode, MODES)
 
 
 @dataclass(frozen=True)
@@ -125,11 +122,12 @@ def solve_block(task: BlockTask) -> list[dict]:
     """The pure block function: rebuild the scene's problem and solve every weighting of the block.
 
     Runs anywhere camjax is installed (top level, picklable). One compiled call of
-    :func:`camjax.solvers.sweep.solve_batch` for the block; weighting i of the sweep uses the key
+    :func:`camjax.solvers.base.solve_batch` for the block; weighting i of the sweep uses the key
     fold_in(key(seed), i), as :func:`camjax.solvers.sweep.sweep` does, so the records equal that
     sweep's whatever the block size. Returns one record per weighting: the fields of
     :meth:`camjax.solvers.sweep.SweepResult.records` except "pareto" (a property of the whole
     sweep, decided by :func:`pareto_records`), plus scene, weighting index, solver and mode.
+    The solver and mode are checked against :mod:`camjax.solvers.registry` by :class:`SweepSpec`.
     """
     configure_worker(task.cache_dir)
     import jax
@@ -138,27 +136,27 @@ def solve_block(task: BlockTask) -> list[dict]:
 
     import camjax  # noqa: F401  (x64)
     from camjax.problem import Weights
-    from camjax.solvers import ga
-    from camjax.solvers.sweep import SweepResult, solve_batch
+    from camjax.solvers.base import Settings, solve_batch, weighting_keys
+    from camjax.solvers.sweep import records_of
 
     spec = task.spec
     problem = _problem(task.scene_text, task.scene_name, spec.samples)
-    dtype = problem.q_mm.dtype
+    dtype = jax.tree.leaves(problem.lower)[0].dtype
     count = len(task.weightings)
     # the short last block is padded by repeating its last weighting: one compiled program for all
     idx = np.minimum(np.arange(max(count, task.pad_to)), count - 1)
     pairs = np.asarray(task.weightings, float).reshape(-1, 2)[idx]
     weights = Weights(jnp.asarray(pairs[:, 0], dtype), jnp.asarray(pairs[:, 1], dtype))
-    keys = ga.weighting_keys(spec.seed, count, task.first_weighting)[idx]
+    keys = weighting_keys(spec.seed, count, task.first_weighting)[idx]
     if task.shard and jax.local_device_count() > 1:
         from camjax.scaleout.sharding import spread_weightings
 
         weights, keys = spread_weightings((weights, keys))[0]
-    result = solve_batch(problem, weights, keys, spec.mode, spec.solver, ga_settings(spec))
+    result = solve_batch(problem, weights, keys, spec.mode, spec.solver,
+                         Settings.of_solvers(ga=ga_settings(spec)))
     result = jax.tree.map(lambda x: np.asarray(x)[:count], result)
-    records = SweepResult(result, np.zeros(count, bool)).records()
+    records = records_of(problem, result)
     for i, rec in enumerate(records):
-        del rec["pareto"]
         rec.update(scene=task.scene_name, weighting=task.first_weighting + i, solver=spec.solver,
                    mode=spec.mode)
     return records

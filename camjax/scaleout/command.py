@@ -84,19 +84,14 @@ def run_sweep(args, scene, scene_text: str, alphas, gammas, *, mode: str, solver
 
 def sweep_result_from_records(records: list[dict], mode: str, solver: str):
     """A :class:`camjax.solvers.sweep.SweepResult` rebuilt from block records (for pareto.json and
-    the plot). Fields the records do not hold (iterations, rho_min, violations) are NaN / 0."""
+    the plot): the records themselves, their "pareto" flags as the mask."""
     import numpy as np
 
-    from camjax.problem import Violation
-    from camjax.solvers.sweep import DesignResult, SweepResult
+    from camjax.solvers.sweep import SweepResult
 
-    col = lambda key, dtype=float: np.array([r[key] for r in records], dtype)  # noqa: E731
-    nan = np.full(len(records), np.nan)
-    result = DesignResult(
-        mode, solver, col("alpha"), col("gamma"), col("base_radius_mm"), col("face_width_mm"),
-        col("objective"), col("feasible", bool), np.zeros(len(records), int), None,
-        col("stress_max_MPa"), col("stress_max_deg"), nan, Violation(nan, nan, nan, nan))
-    return SweepResult(result, col("pareto", bool))
+    block_keys = ("pareto", "scene", "weighting", "solver", "mode")  # added by the blocks, not per design
+    rows = [{k: v for k, v in r.items() if k not in block_keys} for r in records]
+    return SweepResult(mode, solver, rows, np.array([r["pareto"] for r in records], bool))
 
 
 def scene_text(path_or_name: str | None) -> str:

@@ -29,9 +29,10 @@ import jax.numpy as jnp
 from jax.sharding import AxisType, Mesh, NamedSharding
 from jax.sharding import PartitionSpec as PS
 
-from camjax import problem as P
 from camjax.problem import Problem, Weights
 from camjax.solvers import ga, gradient
+from camjax.solvers.base import family_of
+from camjax.solvers.registry import MODES, check_choice
 
 WEIGHTINGS = "weightings"
 POPULATION = "population"
@@ -147,14 +148,14 @@ def sharded_gradient_sweep(mesh: Mesh, problem: Problem, weights: Weights, mode:
     "weightings", the per-angle problems over "population" (the angle count need not divide:
     it is padded by repeating the last angle's problem). Leaves (w,) / (w, n) as unsharded.
     """
+    check_choice("mode", mode, MODES)
     if mode == "global":
         (weights,), w = _pad_leading((weights,), mesh.size)
         weights = _place(mesh, weights, (WEIGHTINGS, POPULATION))
         return _trim(gradient.solve_sweep(problem, weights, "global", None, settings), w)
-    if mode != "pointwise":
-        raise ValueError(f"mode: {mode!r} is not allowed; use {', '.join(gradient.MODES)}")
+    # pointwise: the per-angle problems get their own mesh axis (a layout, not another solver)
     (weights,), w = _pad_leading((weights,), mesh.shape[WEIGHTINGS])
-    per, n = _pad_leading(P.per_angle(problem), mesh.shape[POPULATION])
+    per, n = _pad_leading(family_of(problem).per_angle(problem), mesh.shape[POPULATION])
     out = _pointwise_sweep(_place(mesh, per, POPULATION), _place(mesh, weights, WEIGHTINGS), settings)
     return jax.tree.map(lambda x: x[:w, :n], out)
 
@@ -195,13 +196,12 @@ def sharded_ga_solve(mesh: Mesh, keys: jax.Array, problem: Problem, weights: Wei
     populations are small). Leaves (w,) / (w, n) as unsharded; equal to :func:`ga.solve` to
     rounding.
     """
+    check_choice("mode", mode, MODES)
     if mode == "pointwise":
         (keys, weights), w = _pad_leading((keys, weights), mesh.size)
         spread = (WEIGHTINGS, POPULATION)
         return _trim(ga.solve(_place(mesh, keys, spread), problem, _place(mesh, weights, spread),
                               "pointwise", settings), w)
-    if mode != "global":
-        raise ValueError(f"mode: {mode!r} is not allowed; use {', '.join(gradient.MODES)}")
     if settings.population % mesh.shape[POPULATION]:
         raise ValueError(f"population {settings.population} must divide by the mesh's "
                          f"{mesh.shape[POPULATION]} population devices")

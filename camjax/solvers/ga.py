@@ -39,10 +39,10 @@ from typing import NamedTuple
 import jax
 import jax.numpy as jnp
 
-from camjax import problem as P
 from camjax.problem import Design, Problem, Violation, Weights
-from camjax.solvers import gradient
-from camjax.solvers.gradient import from_unit, solver_objective, to_unit
+from camjax.solvers.base import Raw, family_of, in_mode
+from camjax.solvers.base import weighting_keys as weighting_keys
+from camjax.solvers.gradient import from_unit, problem_dtype, solver_objective, to_unit
 
 
 @dataclass(frozen=True)
@@ -112,13 +112,14 @@ def _to_genes(problem: Problem, design: Design) -> jax.Array:
 def _from_genes(problem: Problem, genes: jax.Array) -> Design:
     """Genes (..., d) -> design in mm (leaves of shape (...))."""
     leaves = [genes[..., i] for i in range(genes.shape[-1])]
-    return from_unit(problem, jax.tree.unflatten(jax.tree.structure(problem.lower), leaves))
+    return from_unit(problem, jax.tree.unflatten(jax.tree.structure(family_of(problem).bounds(problem)[0]), leaves))
 
 
 def _gene_max(problem: Problem) -> jax.Array:
     """(d,) upper end of each gene: 1, or 0 for a variable fixed by lo == hi."""
+    lower, upper = family_of(problem).bounds(problem)
     return jnp.stack([jnp.where(hi > lo, 1.0, 0.0) for lo, hi in
-                      zip(jax.tree.leaves(problem.lower), jax.tree.leaves(problem.upper), strict=True)])
+                      zip(jax.tree.leaves(lower), jax.tree.leaves(upper), strict=True)])
 
 
 # ----------------------------------------------------------------------------- fitness
@@ -127,11 +128,12 @@ def _gene_max(problem: Problem) -> jax.Array:
 def design_fitness(problem: Problem, weights: Weights, design: Design) -> tuple[jax.Array, jax.Array]:
     """(objective as minimized, total scaled violation) of one design; shape () each.
 
-    One pass over the angles: the peak stress (:func:`camjax.problem.peak_stress`); the
-    constraints' maxima over angles come from :func:`camjax.problem.constraint_maxima`.
+    One pass over the angles (flat face: the peak stress, :func:`camjax.problem.peak_stress`);
+    the constraints' maxima over angles come from the family's ``constraint_maxima``.
     """
-    g = P.constraint_maxima(problem, design)
-    total = sum(jnp.maximum(gi, 0.0) for gi in jax.tree.leaves(g)) / problem.size_norm_mm
+    family = family_of(problem)
+    g = family.constraint_maxima(problem, design)
+    total = sum(jnp.maximum(gi, 0.0) for gi in jax.tree.leaves(g)) / family.size_norm(problem)
     return solver_objective(problem, weights, design), total
 
 
@@ -207,7 +209,7 @@ def ga_init(key: jax.Array, problem: Problem, weights: Weights, settings: GASett
     top = _gene_max(problem)
     # the steps use counters 0 .. generations - 1; the initial population takes the next one
     first = random_words(stream, jnp.asarray(settings.generations), (settings.population, top.shape[0]))
-    genes = _uniform(first, problem.q_mm.dtype) * top
+    genes = _uniform(first, problem_dtype(problem)) * top
     if seed_design is not None:
         genes = genes.at[0].set(jnp.clip(_to_genes(problem, seed_design), 0.0, top))
     obj, vio = fitness(problem, weights, genes)
@@ -285,22 +287,17 @@ def run(key: jax.Array, problem: Problem, weights: Weights, settings: GASettings
     state, history = jax.lax.scan(body, state, None, length=settings.generations)
     genes, _, _ = best(state)
     design = _from_genes(problem, genes)
-    ev = P.evaluate(problem, weights, design)
+    ev = family_of(problem).evaluate(problem, weights, design)
     return GAResult(design, ev.objective, ev.violation, ev.feasible, state.generation, history)
-
-
-def weighting_keys(seed: int, count: int, offset: int = 0) -> jax.Array:
-    """One key per weighting, fold_in(key(seed), offset + i): independent of chunking."""
-    base = jax.random.key(seed)
-    return jax.vmap(lambda i: jax.random.fold_in(base, i))(jnp.arange(offset, offset + count))
 
 
 def run_pointwise(key: jax.Array, problem: Problem, weights: Weights,
                   settings: GASettings = DEFAULT_SETTINGS) -> GAResult:
-    """Pointwise mode for one weighting: one population per angle (vmap), leaves of shape (n,)."""
-    per = P.per_angle(problem)
-    keys = jax.vmap(lambda i: jax.random.fold_in(key, i))(jnp.arange(per.q_mm.shape[0]))
-    return jax.vmap(run, in_axes=(0, 0, None, None))(keys, per, weights, settings)
+    """Pointwise mode for one weighting: one population per angle (vmap), leaves of shape (n,).
+
+    Angle i uses the key fold_in(key, i) (:func:`camjax.solvers.base.in_mode`).
+    """
+    return in_mode(lambda p, w, k, init=None: run(k, p, w, settings), "pointwise")(problem, weights, key)
 
 
 @partial(jax.jit, static_argnames=("mode", "settings"))
@@ -309,8 +306,18 @@ def solve(keys: jax.Array, problem: Problem, weights: Weights, mode: str = "glob
     """All weightings at once: ``weights`` leaves (w,), ``keys`` (w,) -> results with leading axis w.
 
     mode "global": leaves (w,); "pointwise": leaves (w, n). Layout (w, [n,] population, genes).
+    The GA's raw results; :func:`camjax.solvers.base.solve_batch` gives
+    :class:`~camjax.solvers.base.Solution` s.
     """
-    if mode not in gradient.MODES:
-        raise ValueError(f"mode: {mode!r} is not allowed; use {', '.join(gradient.MODES)}")
-    one = run if mode == "global" else run_pointwise
-    return jax.vmap(one, in_axes=(0, None, 0, None))(keys, problem, weights, settings)
+    one = in_mode(lambda p, w, k, init=None: run(k, p, w, settings), mode)
+    return jax.vmap(one, in_axes=(None, 0, 0))(problem, weights, keys)
+
+
+def run_one(problem: Problem, weights: Weights, key: jax.Array, settings, init: Design | None = None) -> Raw:
+    """The solver protocol of :mod:`camjax.solvers.base`: :func:`run` with ``settings.of("ga")``.
+
+    ``init`` (optional) seeds member 0 of the population. A fixed budget of generations: no
+    convergence flag (status max_steps when feasible).
+    """
+    res = run(key, problem, weights, settings.of("ga"), seed_design=init)
+    return Raw(res.design, res.iterations, None)

@@ -44,11 +44,10 @@ import jax
 import jax.numpy as jnp
 import optax
 
-from camjax import problem as P
 from camjax.problem import Constraints, Design, Problem, Violation, Weights
+from camjax.solvers.base import Raw, family_of, in_mode
 
 LAM_MAX = 1e12  # cap on the multipliers (an infeasible problem would let them grow without end)
-MODES = ("global", "pointwise")
 TIE_BREAK = 1e-9  # weight of the size term when alpha = 0 (see module docstring)
 
 
@@ -164,23 +163,25 @@ def scale_by_secant_rprop(initial_step: float, eta_minus: float = 0.5, eta_plus:
 
 
 def _span(problem: Problem) -> Design:
-    return jax.tree.map(lambda lo, hi: jnp.where(hi > lo, hi - lo, 1.0), problem.lower, problem.upper)
+    return jax.tree.map(lambda lo, hi: jnp.where(hi > lo, hi - lo, 1.0), *family_of(problem).bounds(problem))
 
 
 def _u_max(problem: Problem) -> Design:
     """1 for a variable with a proper range, 0 for one fixed by lo == hi."""
     return jax.tree.map(lambda lo, hi: jnp.where(hi > lo, 1.0, 0.0).astype(lo.dtype),
-                        problem.lower, problem.upper)
+                        *family_of(problem).bounds(problem))
 
 
 def to_unit(problem: Problem, design: Design) -> Design:
     """Design (mm) -> unit box coordinates (not clipped)."""
-    return jax.tree.map(lambda x, lo, w: (x - lo) / w, design, problem.lower, _span(problem))
+    lower = family_of(problem).bounds(problem)[0]
+    return jax.tree.map(lambda x, lo, w: (x - lo) / w, design, lower, _span(problem))
 
 
 def from_unit(problem: Problem, u: Design) -> Design:
     """Unit box coordinates -> design (mm)."""
-    return jax.tree.map(lambda v, lo, w: lo + v * w, u, problem.lower, _span(problem))
+    lower = family_of(problem).bounds(problem)[0]
+    return jax.tree.map(lambda v, lo, w: lo + v * w, u, lower, _span(problem))
 
 
 def _clip_unit(problem: Problem, u: Design) -> Design:
@@ -189,7 +190,7 @@ def _clip_unit(problem: Problem, u: Design) -> Design:
 
 def midpoint(problem: Problem) -> Design:
     """Centre of the box, the default start."""
-    return jax.tree.map(lambda lo, hi: 0.5 * (lo + hi), problem.lower, problem.upper)
+    return jax.tree.map(lambda lo, hi: 0.5 * (lo + hi), *family_of(problem).bounds(problem))
 
 
 # ------------------------------------------------------------------------- Lagrangian
@@ -200,18 +201,21 @@ def solver_objective(problem: Problem, weights: Weights, design: Design) -> jax.
     total = weights.alpha + weights.gamma
     scale = jnp.where(total > 0, total, 1.0)
     tie = jnp.where(weights.alpha > 0, 0.0, TIE_BREAK)
-    return P.objective(problem, weights, design) / scale + tie * P.size_term(problem, design)
+    family = family_of(problem)
+    return family.objective(problem, weights, design) / scale + tie * family.size_term(problem, design)
 
 
 def scaled_constraints(problem: Problem, design: Design, aggregate: bool = False) -> Constraints:
     """g / N, dimensionless: (n,) each, or their maxima over angles, () each, with ``aggregate``.
 
     Every constraint is a design-independent per-angle term minus one design variable, so its max
-    over angles (:func:`camjax.problem.constraint_maxima`) is exact and as smooth as the
+    over angles (the family's ``constraint_maxima``) is exact and as smooth as the
     constraint itself: one multiplier per constraint instead of one per angle, same optimum.
     """
-    c = P.constraint_maxima(problem, design) if aggregate else P.constraints(problem, design)
-    return jax.tree.map(lambda g: g / problem.size_norm_mm, c)
+    family = family_of(problem)
+    c = family.constraint_maxima(problem, design) if aggregate else family.constraints(problem, design)
+    norm = family.size_norm(problem)
+    return jax.tree.map(lambda g: g / norm, c)
 
 
 def augmented_lagrangian(u: Design, problem: Problem, weights: Weights, multipliers: Constraints,
@@ -247,7 +251,7 @@ def init(problem: Problem, design: Design | None = None,
          settings: GradientSettings = DEFAULT_SETTINGS) -> GradientState:
     """Start at ``design`` (mm; default: the centre of the box), multipliers 0."""
     design = midpoint(problem) if design is None else design
-    dtype = problem.q_mm.dtype
+    dtype = problem_dtype(problem)
     u = _clip_unit(problem, jax.tree.map(lambda x: jnp.asarray(x, dtype), to_unit(problem, design)))
     rprop = _transform(settings).init(u)
     zeros = jax.tree.map(jnp.zeros_like,
@@ -303,7 +307,7 @@ def _transform(settings: GradientSettings) -> optax.GradientTransformation:
 def postprocess(state: GradientState, problem: Problem, weights: Weights) -> GradientResult:
     """Design in mm, judged with the true max over angles."""
     design = from_unit(problem, state.u)
-    ev = P.evaluate(problem, weights, design)
+    ev = family_of(problem).evaluate(problem, weights, design)
     return GradientResult(design, ev.objective, ev.violation, ev.feasible, state.step, state.done,
                           state.pg_norm, state.multipliers)
 
@@ -343,10 +347,8 @@ def minimize_pointwise(problem: Problem, weights: Weights, init_design: Design |
 
     ``init_design`` (optional) holds one start per angle, shape (n,) each. Traceable.
     """
-    per = P.per_angle(problem)
-    if init_design is None:
-        return jax.vmap(minimize, in_axes=(0, None, None, None))(per, weights, None, settings)
-    return jax.vmap(minimize, in_axes=(0, None, 0, None))(per, weights, init_design, settings)
+    run = in_mode(lambda p, w, _key, init=None: minimize(p, w, init, settings), "pointwise")
+    return run(problem, weights, jax.random.key(0), init_design)
 
 
 @partial(jax.jit, static_argnames="settings")
@@ -361,12 +363,27 @@ def solve_sweep(problem: Problem, weights: Weights, mode: str = "global", init_d
                 settings: GradientSettings = DEFAULT_SETTINGS) -> GradientResult:
     """Many weightings at once: ``weights`` leaves of shape (w,); results get a leading axis w.
 
-    mode "global": leaves (w,); "pointwise": leaves (w, n) (one solve per weighting and angle).
-    ``init_design`` (optional) has the same leading axes as the result.
+    mode "global": leaves (w,); "pointwise": leaves (w, n) (one solve per weighting and angle;
+    the mode is applied by :func:`camjax.solvers.base.in_mode`). ``init_design`` (optional) has
+    the same leading axes as the result. The solver's raw results; :func:`camjax.solvers.base.solve_batch`
+    gives :class:`~camjax.solvers.base.Solution` s.
     """
-    if mode not in MODES:
-        raise ValueError(f"mode: {mode!r} is not allowed; use {', '.join(MODES)}")
-    inner = minimize if mode == "global" else minimize_pointwise
+    inner = in_mode(lambda p, w, _key, init=None: minimize(p, w, init, settings), mode)
+    key = jax.random.key(0)  # unused: the gradient solver is deterministic
     if init_design is None:
-        return jax.vmap(lambda w: inner(problem, w, None, settings))(weights)
-    return jax.vmap(lambda w, d: inner(problem, w, d, settings))(weights, init_design)
+        return jax.vmap(lambda w: inner(problem, w, key))(weights)
+    return jax.vmap(lambda w, d: inner(problem, w, key, d))(weights, init_design)
+
+
+def problem_dtype(problem) -> jnp.dtype:
+    """Floating dtype of a problem (that of its bounds)."""
+    return jax.tree.leaves(family_of(problem).bounds(problem)[0])[0].dtype
+
+
+def run_one(problem: Problem, weights: Weights, key: jax.Array, settings, init: Design | None = None) -> Raw:
+    """The solver protocol of :mod:`camjax.solvers.base`: :func:`minimize` with ``settings.of("gradient")``.
+
+    ``key`` is unused (deterministic). Converged when the stopping rule was met before max_steps.
+    """
+    res = minimize(problem, weights, init, settings.of("gradient"))
+    return Raw(res.design, res.iterations, res.converged)

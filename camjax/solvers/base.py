@@ -1,0 +1,337 @@
+"""One result type and one entry point for every solver, mode and problem family.
+
+:func:`solve` (one weighting, Python) and :func:`solve_batch` (a batch of weightings, one jitted
+program) run any registered solver (:data:`camjax.solvers.registry.SOLVERS`) in either mode
+(:data:`~camjax.solvers.registry.MODES`) on any registered problem family and return a
+:class:`Solution`. The choice between the global and the pointwise problem is made here only
+(:func:`in_mode`, :func:`_solution`): a solver is written for one problem on its angle grid.
+
+Solver protocol (a module named in :data:`camjax.solvers.registry.SOLVER_MODULES`):
+
+- ``DEFAULT_SETTINGS``: a hashable settings object (a ``jit`` static argument);
+- ``run_one(problem, weights, key, settings, init=None) -> Raw``: solve one problem for one
+  weighting, traceable and vmappable; ``settings`` is a :class:`Settings` (``settings.of(name)``
+  gives a solver's own settings), ``key`` a PRNG key (ignored by deterministic solvers),
+  ``init`` an optional start design. It must reach the problem only through its family module
+  (:func:`family_of`) and treat the design as a pytree (``jax.tree.map``).
+
+Problem-family protocol (a module named in :data:`camjax.solvers.registry.FAMILY_MODULES`; the
+flat-face one is :mod:`camjax.problem`). It provides:
+
+- ``Problem``: the problem's pytree type (NamedTuple of arrays, the key :func:`family_of`
+  dispatches on); ``Design``: the design pytree of named variables (mm);
+- ``bounds(problem) -> (lower: Design, upper: Design)`` box bounds, mm (lo == hi fixes a variable);
+- ``size_norm(problem) -> ()`` the length (mm) the constraints are divided by (g / N);
+- ``objective(problem, weights, design) -> ()`` the dimensionless objective F (true max over angles);
+- ``size_term(problem, design) -> ()`` the normalized size (the alpha = 0 tie-break);
+- ``constraints(problem, design) -> NamedTuple`` of (n,) arrays g <= 0 (mm), one per angle;
+- ``constraint_maxima(problem, design) -> NamedTuple`` of () arrays: their maxima over angles;
+- ``evaluate(problem, weights, design) -> Evaluation`` with at least ``objective``,
+  ``violation`` (a NamedTuple of worst violations) and ``feasible`` (bool), plus anything the
+  report needs (peak stress, ...);
+- ``per_angle(problem) -> Problem`` the n one-angle problems stacked on a leading axis;
+- ``condense_pointwise(problem, per_angle_design) -> (Design, dict)`` the whole-cam design of a
+  pointwise solve and extra arrays to report (e.g. the angles where each variable peaks);
+- ``violated_constraints(problem, violation) -> list[str]`` (Python) names of violated constraints;
+- ``solution_json(problem, solution) -> dict`` (Python) the family's keys of result.json's design
+  block (design variables, constraint violations, evaluation figures, bounds, pointwise arrays);
+- ``record(solution) -> dict`` (Python) the family's keys of a pareto.json row; it must contain
+  ``size_mm`` and ``stress_max_MPa`` (the two objectives of the Pareto front).
+
+Weights (:class:`camjax.problem.Weights`: alpha for size, gamma for stress) are shared by every
+family.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import importlib
+import time
+from dataclasses import dataclass
+from functools import partial
+from typing import Any, NamedTuple
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from camjax.problem import Weights, weights_of
+from camjax.solvers.registry import (
+    CONVERGED,
+    FAMILY_MODULES,
+    INFEASIBLE,
+    MAX_STEPS,
+    MODES,
+    SOLVER_MODULES,
+    SOLVERS,
+    check_choice,
+    check_weights,
+    status_name,
+)
+
+__all__ = [
+    "CONVERGED", "INFEASIBLE", "MAX_STEPS", "Raw", "Settings", "Solution", "Timings", "family_of",
+    "in_mode", "solve", "solve_batch", "solver_module", "status_name", "weighting_keys",
+]
+
+
+# ------------------------------------------------------------------------------ registry
+
+
+_FAMILIES: dict[type, Any] = {}
+
+
+def family_of(problem):
+    """The family module of a problem, found by its type (Python, at trace time)."""
+    if not _FAMILIES:
+        for path in FAMILY_MODULES.values():
+            module = importlib.import_module(path)
+            _FAMILIES[module.Problem] = module
+    try:
+        return _FAMILIES[type(problem)]
+    except KeyError:
+        raise TypeError(f"problem: {type(problem).__name__} is not a registered problem family "
+                        f"({', '.join(FAMILY_MODULES)})") from None
+
+
+def solver_module(name: str):
+    """The module of a registered solver."""
+    check_choice("solver", name, SOLVERS)
+    return importlib.import_module(SOLVER_MODULES[name])
+
+
+@dataclass(frozen=True)
+class Settings:
+    """Static settings of every solver (hashable): per-solver overrides of their DEFAULT_SETTINGS.
+
+    ``Settings.of_solvers(ga=GASettings(...))``; ``settings.of("ga")`` gives the GA's settings.
+    """
+
+    overrides: tuple[tuple[str, Any], ...] = ()
+
+    @classmethod
+    def of_solvers(cls, **by_solver) -> Settings:
+        for name in by_solver:
+            check_choice("settings", name, SOLVERS)
+        return cls(tuple(sorted((k, v) for k, v in by_solver.items() if v is not None)))
+
+    def of(self, name: str):
+        return dict(self.overrides).get(name, solver_module(name).DEFAULT_SETTINGS)
+
+
+DEFAULT_SETTINGS = Settings()
+
+
+class Raw(NamedTuple):
+    """What a solver's ``run_one`` returns for one problem and weighting (shape () each)."""
+
+    design: Any  # the family's Design, mm
+    iterations: jax.Array  # int: steps or generations
+    converged: jax.Array | None  # bool: the stopping rule was met; None for a fixed-budget solver
+
+
+# ------------------------------------------------------------------------------ result
+
+
+@dataclass(frozen=True)
+class Timings:
+    """Wall-clock seconds of a :func:`solve` call (Python floats; never traced)."""
+
+    compile_s: float  # tracing and compilation (0 when the program was already compiled)
+    run_s: float  # the compiled program, to the results on the host
+
+
+@partial(jax.tree_util.register_dataclass,
+         data_fields=["alpha", "gamma", "design", "objective", "violation", "feasible", "status",
+                      "iterations", "converged", "evaluation", "pointwise", "extras"],
+         meta_fields=["mode", "solver", "timings"])
+@dataclass(frozen=True)
+class Solution:
+    """A solved design (scalars), or a batch of them (leading axis w on every array).
+
+    The family's design variables and evaluation figures read as attributes too
+    (``solution.base_radius_mm`` is ``solution.design.base_radius_mm``, ``solution.stress_max_MPa``
+    is ``solution.evaluation.stress_max_MPa``; pointwise extras likewise).
+    """
+
+    mode: str
+    solver: str
+    alpha: jax.Array
+    gamma: jax.Array
+    design: Any  # the family's Design, mm (pointwise: the condensed whole-cam design)
+    objective: jax.Array  # F of the design (true max over angles)
+    violation: Any  # the family's Violation: worst violation per constraint
+    feasible: jax.Array  # bool
+    status: jax.Array  # int32: CONVERGED, MAX_STEPS or INFEASIBLE
+    iterations: jax.Array  # int: steps, generations, or their sum (hybrid); max over angles (pointwise)
+    converged: jax.Array | None  # bool (every angle), None for a fixed-budget solver
+    evaluation: Any  # the family's Evaluation of ``design`` on the whole grid
+    pointwise: Any = None  # pointwise mode: the per-angle designs, (n,) each
+    extras: dict | None = None  # pointwise mode: the family's extra arrays (angles of the peaks, ...)
+    timings: Timings | None = None  # filled in by :func:`solve`
+
+    def __getattr__(self, name: str):
+        if name.startswith("_"):
+            raise AttributeError(name)
+        for part in (self.__dict__.get("design"), self.__dict__.get("evaluation")):
+            if part is not None and name in getattr(part, "_fields", ()):
+                return getattr(part, name)
+        extras = self.__dict__.get("extras")
+        if extras and name in extras:
+            return extras[name]
+        raise AttributeError(f"Solution has no field {name!r}")
+
+    def __getitem__(self, i) -> Solution:
+        """Entry i of a batch."""
+        return jax.tree.map(lambda x: x[i], self)
+
+    @property
+    def batch_size(self) -> int | None:
+        """w for a batch, None for a single result."""
+        return None if np.ndim(self.objective) == 0 else int(np.shape(self.objective)[0])
+
+    @property
+    def status_name(self) -> str:
+        """"converged", "max_steps" or "infeasible" (single result)."""
+        return status_name(self.status)
+
+    def violated(self, problem) -> list[str]:
+        """Names of the violated constraints (single result)."""
+        return family_of(problem).violated_constraints(problem, self.violation)
+
+    def to_json(self, problem) -> dict[str, Any]:
+        """Plain dict (floats, bools, lists) of a single result; strict JSON (no NaN/inf)."""
+        out = {"mode": self.mode, "solver": self.solver, "alpha": _f(self.alpha), "gamma": _f(self.gamma),
+               "objective": _f(self.objective), "feasible": bool(self.feasible),
+               "status": self.status_name, "violated": self.violated(problem),
+               "iterations": int(self.iterations),
+               "converged": None if self.converged is None else bool(self.converged)}
+        out.update(family_of(problem).solution_json(problem, self))
+        return out
+
+    def record(self, problem) -> dict[str, Any]:
+        """One pareto.json row of a single result (without "pareto")."""
+        return {"alpha": _f(self.alpha), "gamma": _f(self.gamma),
+                **family_of(problem).record(self),
+                "objective": _f(self.objective), "feasible": bool(self.feasible),
+                "status": self.status_name}
+
+
+def _f(x) -> float:
+    v = float(np.asarray(x))
+    if not np.isfinite(v):
+        raise ValueError(f"non-finite value {v} in a design result")
+    return v
+
+
+# --------------------------------------------------------------------------------- modes
+
+
+def in_mode(run_one, mode: str):
+    """``run_one(problem, weights, key, init)`` solved in ``mode``: the one place modes differ.
+
+    "global": ``run_one`` itself (one design for the whole grid). "pointwise": ``run_one`` vmapped
+    over the family's :func:`per_angle` problems, angle i with the key fold_in(key, i) and
+    ``init`` (if any) holding one start per angle; results get a leading axis n.
+    """
+    check_choice("mode", mode, MODES)
+    if mode == "global":
+        return run_one
+
+    def pointwise(problem, weights, key, init=None):
+        per = family_of(problem).per_angle(problem)
+        n = jax.tree.leaves(per)[0].shape[0]
+        keys = jax.vmap(lambda i: jax.random.fold_in(key, i))(jnp.arange(n))
+        return jax.vmap(run_one, in_axes=(0, None, 0, None if init is None else 0))(per, weights, keys, init)
+
+    return pointwise
+
+
+def _status(feasible, converged) -> jax.Array:
+    done = jnp.asarray(False) if converged is None else converged
+    return jnp.where(~feasible, INFEASIBLE, jnp.where(done, CONVERGED, MAX_STEPS)).astype(jnp.int32)
+
+
+def _solution(problem, weights: Weights, raw: Raw, mode: str, solver: str) -> Solution:
+    """Judge a raw result on the whole grid (a pointwise one condensed first); traceable."""
+    family = family_of(problem)
+    design, per_angle, extras = raw.design, None, None
+    iterations, converged = raw.iterations, raw.converged
+    if mode == "pointwise":
+        per_angle = raw.design
+        design, extras = family.condense_pointwise(problem, per_angle)
+        iterations = jnp.max(iterations)
+        converged = None if converged is None else jnp.all(converged)
+    ev = family.evaluate(problem, weights, design)
+    return Solution(mode, solver, weights.alpha, weights.gamma, design, ev.objective, ev.violation,
+                    ev.feasible, _status(ev.feasible, converged), iterations, converged, ev, per_angle,
+                    extras)
+
+
+def solve_one(problem, weights: Weights, key: jax.Array, *, mode: str = "global", solver: str = "gradient",
+              settings: Settings = DEFAULT_SETTINGS) -> Solution:
+    """One weighting (scalar alpha, gamma), any registered solver and mode; traceable, vmappable."""
+    module = solver_module(solver)
+    run = in_mode(lambda p, w, k, init=None: module.run_one(p, w, k, settings, init), mode)
+    return _solution(problem, weights, run(problem, weights, key), mode, solver)
+
+
+@partial(jax.jit, static_argnames=("mode", "solver", "settings"))
+def solve_batch(problem, weights: Weights, keys: jax.Array, mode: str = "global", solver: str = "gradient",
+                settings: Settings = DEFAULT_SETTINGS) -> Solution:
+    """Every weighting of a batch in one compiled program.
+
+    Args:
+      problem: a registered family's problem (grid arrays (n,)).
+      weights: alpha, gamma of shape (w,).
+      keys: (w,) PRNG keys (used by the GA and hybrid solvers), e.g. :func:`weighting_keys`.
+      mode: a name of :data:`camjax.solvers.registry.MODES`.
+      solver: a name of :data:`camjax.solvers.registry.SOLVERS`.
+      settings: :class:`Settings` (per-solver overrides).
+    Returns:
+      a :class:`Solution` with leading axis w.
+    """
+    check_choice("mode", mode, MODES)
+    check_choice("solver", solver, SOLVERS)
+    one = partial(solve_one, mode=mode, solver=solver, settings=settings)
+    return jax.vmap(one, in_axes=(None, 0, 0))(problem, weights, keys)
+
+
+def weighting_keys(seed: int, count: int, offset: int = 0) -> jax.Array:
+    """One key per weighting, fold_in(key(seed), offset + i): independent of chunking."""
+    base = jax.random.key(seed)
+    return jax.vmap(lambda i: jax.random.fold_in(base, i))(jnp.arange(offset, offset + count))
+
+
+_COMPILED: dict = {}
+
+
+def _signature(tree):
+    leaves, treedef = jax.tree.flatten(tree)
+    return treedef, tuple((np.shape(x), str(jnp.result_type(x))) for x in leaves)
+
+
+def solve(problem, weights: Weights | tuple[float, float] = (1.0, 1.0), *, mode: str = "global",
+          solver: str = "gradient", seed: int = 0, settings: Settings = DEFAULT_SETTINGS) -> Solution:
+    """Solve one weighting; returns a single :class:`Solution` with its :class:`Timings`.
+
+    ``weights``: a scalar :class:`~camjax.problem.Weights` or an (alpha, gamma) pair. A Python
+    entry point (it checks the weights on concrete values and times compile and run); trace
+    :func:`solve_one` or :func:`solve_batch` instead.
+    """
+    check_choice("mode", mode, MODES)
+    check_choice("solver", solver, SOLVERS)
+    alpha, gamma = (float(weights[0]), float(weights[1]))
+    check_weights([alpha], [gamma])
+    dtype = jax.tree.leaves(family_of(problem).bounds(problem)[0])[0].dtype
+    args = (problem, weights_of([alpha], [gamma], dtype), weighting_keys(seed, 1))
+    cache_key = (_signature(args), mode, solver, settings)
+    t0 = time.perf_counter()
+    compiled = _COMPILED.get(cache_key)
+    if compiled is None:
+        compiled = solve_batch.lower(*args, mode, solver, settings).compile()
+        _COMPILED[cache_key] = compiled
+    t1 = time.perf_counter()
+    res = jax.block_until_ready(compiled(*args))
+    t2 = time.perf_counter()
+    return dataclasses.replace(res[0], timings=Timings(t1 - t0, t2 - t1))

@@ -1,0 +1,25 @@
+"""Hybrid solver: the GA's global search, then a gradient polish from its best design.
+
+The solver protocol of :mod:`camjax.solvers.base`; settings are the GA's and the gradient
+solver's (``settings.of("ga")``, ``settings.of("gradient")``).
+"""
+
+from __future__ import annotations
+
+import jax
+
+from camjax.problem import Design, Weights
+from camjax.solvers import ga, gradient
+from camjax.solvers.base import Raw
+
+DEFAULT_SETTINGS = None  # the hybrid has no settings of its own
+
+
+def run_one(problem, weights: Weights, key: jax.Array, settings, init: Design | None = None) -> Raw:
+    """GA from ``init`` (if given), then the gradient solver from the GA's best design.
+
+    Iterations: generations + gradient steps; converged: the gradient stopping rule was met.
+    """
+    found = ga.run(key, problem, weights, settings.of("ga"), seed_design=init)
+    polished = gradient.minimize(problem, weights, found.design, settings.of("gradient"))
+    return Raw(polished.design, found.iterations + polished.iterations, polished.converged)
