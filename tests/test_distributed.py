@@ -232,9 +232,16 @@ def test_cli_block_sweep_equals_in_process_sweep_and_resumes(tmp_path, capsys):
     assert "other parameters" in capsys.readouterr().err
 
 
-def test_block_spec_choices_match_the_solvers():
-    # blocks.py keeps jax-free copies (workers import it before jax); they must not drift
+def test_mode_and_solver_names_come_from_the_registry():
+    # one list of names: the block spec, the sweep, the CLI and scene parsing all read the registry
+    from camjax.cli import build_parser
     from camjax.scaleout import blocks
-    from camjax.solvers import sweep
+    from camjax.solvers import registry, sweep
 
-    assert blocks.SOLVERS == sweep.SOLVERS and blocks.MODES == sweep.MODES
+    assert blocks.SOLVERS is registry.SOLVERS and blocks.MODES is registry.MODES
+    assert sweep.SOLVERS is registry.SOLVERS and sweep.MODES is registry.MODES
+    design = build_parser()._subparsers._group_actions[0].choices["design"]
+    choices = {a.dest: a.choices for a in design._actions if a.dest in ("mode", "solver")}
+    assert choices == {"mode": registry.MODES, "solver": registry.SOLVERS}
+    with pytest.raises(ValueError, match="solver: 'newton' is not allowed; use gradient, ga, hybrid"):
+        SweepSpec(solver="newton")
