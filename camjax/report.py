@@ -235,7 +235,7 @@ def design_block(scene: Scene, arrays: SceneArrays) -> dict[str, Any] | None:
     """The optimized design (R_b, L) of a scene with a [design] section; None without one.
 
     Solved by :func:`camjax.solvers.sweep.solve` with the scene's mode, alpha, gamma, solver and
-    seed (SPEC 5; keys of :meth:`camjax.solvers.sweep.DesignResult.to_json`: mode, solver,
+    seed (SPEC 5; keys of :meth:`camjax.solvers.base.Solution.to_json`: mode, solver,
     base_radius_mm, face_width_mm, objective, feasible, violated, iterations, ..., and in
     pointwise mode base_radius_deg, face_width_deg and the per-angle ``pointwise`` arrays).
     Added for the report: ``peak_stress_MPa`` (the design's peak stress computed exactly as the

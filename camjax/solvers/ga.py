@@ -112,7 +112,8 @@ def _to_genes(problem: Problem, design: Design) -> jax.Array:
 def _from_genes(problem: Problem, genes: jax.Array) -> Design:
     """Genes (..., d) -> design in mm (leaves of shape (...))."""
     leaves = [genes[..., i] for i in range(genes.shape[-1])]
-    return from_unit(problem, jax.tree.unflatten(jax.tree.structure(family_of(problem).bounds(problem)[0]), leaves))
+    lower = family_of(problem).bounds(problem)[0]
+    return from_unit(problem, jax.tree.unflatten(jax.tree.structure(lower), leaves))
 
 
 def _gene_max(problem: Problem) -> jax.Array:

@@ -124,8 +124,8 @@ def sweep(problem, alphas, gammas, *, mode: str = "global", solver: str = "gradi
         parts.append(jax.tree.map(lambda x, n=hi - lo: np.asarray(x)[:n], res))
     results = jax.tree.map(lambda *xs: np.concatenate(xs, axis=0), *parts)
     rows = records_of(problem, results)
-    result = SweepResult(mode, solver, rows, np.zeros(len(rows), bool), results)
-    mask = pareto_mask(result.column("size_mm"), result.column("stress_max_MPa"), result.column("feasible", bool))
+    column = SweepResult(mode, solver, rows, np.zeros(len(rows), bool)).column
+    mask = pareto_mask(column("size_mm"), column("stress_max_MPa"), column("feasible", bool))
     return SweepResult(mode, solver, rows, mask, results)
 
 
