@@ -39,7 +39,9 @@ flat-face one is :mod:`camjax.problem`). It provides:
   ``size_mm`` and ``stress_max_MPa`` (the two objectives of the Pareto front).
 
 Weights (:class:`camjax.problem.Weights`: alpha for size, gamma for stress) are shared by every
-family.
+family. Starts come from the bounds (the gradient solver: the centre of the box; the GA: uniform
+in it), so a family needs no initial design; the solvers map every variable to the unit box, so
+a family needs no scaling of its variables either.
 """
 
 from __future__ import annotations
