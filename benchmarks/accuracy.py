@@ -21,7 +21,7 @@ import jax
 import jax.numpy as jnp
 
 from benchmarks.harness import time_jit
-from camjax import analysis
+from camjax import evaluate
 from camjax import problem as P
 from camjax.solvers import ga, gradient
 
@@ -39,7 +39,7 @@ def _with_program(scene, program):
 def design_figures(program, design, scene, samples: int, dtype) -> dict:
     """Scene -> the four figures on an N-sample grid (traceable; ``scene`` and N are static)."""
     sc = _with_program(scene, program)
-    arrays = analysis.scene_arrays(sc, samples=samples, dtype=dtype)
+    arrays = evaluate.scene_arrays(sc, samples=samples, dtype=dtype)
     problem = P.problem_from_scene(sc, arrays)
     weights = P.weights_of(1.0, 1.0, dtype)
     need = -(problem.q_mm)

@@ -9,9 +9,9 @@ import jax
 
 jax.config.update("jax_enable_x64", True)
 
-from camjax import contact, geometry, laws, loads, numerics, problem, program, report  # noqa: E402
-from camjax.analysis import SceneArrays, scene_arrays  # noqa: E402
+from camjax import contact, geometry, laws, loads, numerics, problem, program  # noqa: E402
 from camjax.contact import Material, hertz_line_stress  # noqa: E402
+from camjax.evaluate import DesignCurves, SceneArrays, evaluate_design, scene_arrays  # noqa: E402
 from camjax.laws import (  # noqa: E402
     LAWS,
     FourierSeries,
@@ -23,9 +23,10 @@ from camjax.laws import (  # noqa: E402
     stepped_law,
 )
 from camjax.loads import FollowerTrain, Guide  # noqa: E402
+from camjax.output import report  # noqa: E402
+from camjax.pipeline import DesignRun, Report, analyse, design_report, run_design  # noqa: E402
 from camjax.problem import Design, Problem, Weights, problem_from_scene  # noqa: E402
 from camjax.program import Kinematics, MotionProgram, Segment, joints  # noqa: E402
-from camjax.report import design_report  # noqa: E402
 from camjax.scene import Scene, SceneError, load_scene, parse_scene  # noqa: E402
 
 __version__ = "0.1.0"
@@ -35,7 +36,8 @@ __all__ = [
     "Material", "MotionProgram", "Scene", "SceneArrays", "SceneError", "Segment", "contact",
     "fourier_law", "geometry", "get_law", "hertz_line_stress", "joints", "laws", "load_scene",
     "loads", "numerics", "parse_scene", "polynomial_law", "program", "scene_arrays",
-    "stepped_law", "design_report", "report",
+    "stepped_law", "design_report", "report", "DesignCurves", "DesignRun", "Report", "analyse",
+    "evaluate_design", "run_design",
     "Design", "Problem", "Weights", "problem", "problem_from_scene", "solvers",
 ]
 

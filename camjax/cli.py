@@ -18,6 +18,7 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import camjax  # noqa: F401  (turns on x64 before any array is made)
+from camjax import runtime
 from camjax.scene import SceneError
 
 COMMANDS: dict[str, tuple[str, Callable[[argparse.ArgumentParser], Callable]]] = {}
@@ -117,28 +118,6 @@ def _setup_laws(p: argparse.ArgumentParser):
     return run
 
 
-def enable_compilation_cache() -> None:
-    """Persist compiled kernels between runs (a fresh process then starts in ~0.5 s, not ~2 s).
-
-    Folder: $CAMJAX_COMPILATION_CACHE, else ~/.cache/camjax/jax; set CAMJAX_COMPILATION_CACHE=0
-    to switch it off. A folder configured through JAX itself (JAX_COMPILATION_CACHE_DIR) wins.
-    """
-    import os
-
-    import jax
-
-    setting = os.environ.get("CAMJAX_COMPILATION_CACHE")
-    if setting in ("0", "") or jax.config.jax_compilation_cache_dir:
-        return
-    folder = Path(setting) if setting else Path.home() / ".cache" / "camjax" / "jax"
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-    except OSError:
-        return  # read-only home: run without the cache
-    jax.config.update("jax_compilation_cache_dir", str(folder))
-    jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)
-
-
 @command("design", "report, plots, profile CSV and DXF of a scene's cam design")
 def _setup_design(p: argparse.ArgumentParser):
     p.add_argument("scene", nargs="?", default=None,
@@ -150,8 +129,8 @@ def _setup_design(p: argparse.ArgumentParser):
     add_design_options(p)
 
     def run(args) -> int:
-        from camjax.export import write_design_files
-        from camjax.report import analyse
+        from camjax.output.export import write_design_files
+        from camjax.pipeline import analyse
         from camjax.scene import load_scene
 
         r = args.base_radius
@@ -163,7 +142,7 @@ def _setup_design(p: argparse.ArgumentParser):
             raise UsageError(f"scene {scene.name}: dynamics.follower = 'oscillating' (motion in rad); the "
                              "disc-cam geometry of `design` is for translating followers in mm "
                              f"(allowed: use `camjax dynamics {args.scene or scene.name}`)")
-        enable_compilation_cache()
+        runtime.enable_compilation_cache()
         result = analyse(scene, base_radius_mm=r)
         with staged_output(args.out) as tmp:
             write_json(tmp / "result.json", result.data)
@@ -277,7 +256,7 @@ def _setup_sweep(p: argparse.ArgumentParser):
         d = apply_design_options(scene, overrides).design
         mode, solver, seed = d.mode, d.solver, d.seed
         scaleout.check(args, UsageError)
-        enable_compilation_cache()
+        runtime.enable_compilation_cache()
         start = time.perf_counter()
         if scaleout.requested(args):  # blocks on a backend, stored in --out as they finish
             import jax
@@ -352,7 +331,7 @@ def _setup_dynamics(p: argparse.ArgumentParser):
         if scene.dynamics is None:
             raise UsageError(f"scene '{scene.name}' has no [dynamics] section: nothing to compute "
                              "(allowed: a scene with [dynamics], e.g. thesis-bench)")
-        enable_compilation_cache()
+        runtime.enable_compilation_cache()
         report = scene_dynamics(scene)
         with staged_output(args.out) as tmp:
             write_json(tmp / "dynamics.json", report.summary)

@@ -19,7 +19,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from camjax import contact, geometry, loads, program
-from camjax.analysis import scene_arrays
+from camjax.evaluate import scene_arrays
 from camjax.laws import LAWS, boundary_condition_number, polynomial_coefficients, polynomial_law
 from camjax.numerics import RHO_FLOOR_MM, STRESS_RTOL, precision_warning
 from camjax.program import MotionProgram, Segment

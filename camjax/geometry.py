@@ -20,6 +20,8 @@ import jax.numpy as jnp
 from camjax.numerics import capped_divide, safe_divide, safe_sqrt
 from camjax.program import Kinematics
 
+PRESSURE_ANGLE_LIMIT_DEG = 30.0  # rule of thumb for a translating roller follower (SPEC 3)
+
 # ------------------------------------------------------------------------- flat face
 
 

@@ -17,11 +17,11 @@ from camjax.program import TimeKinematics
 class FollowerTrain(NamedTuple):
     """Lumped follower train of a translating follower."""
 
-    mass_kg: float
-    spring_N_per_m: float
-    preload_mm: float  # spring compression at s = 0
-    damping_Ns_per_m: float
-    gravity_m_s2: float
+    mass_kg: float = 0.0
+    spring_N_per_m: float = 0.0
+    preload_mm: float = 0.0  # spring compression at s = 0
+    damping_Ns_per_m: float = 0.0
+    gravity_m_s2: float = 9.81
 
 
 def kinetostatic_force(train: FollowerTrain, motion: TimeKinematics) -> jax.Array:

@@ -124,12 +124,12 @@ def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=
 
     Args:
       scene: a :class:`camjax.scene.Scene` with [contact] and [design].
-      arrays: its :class:`camjax.analysis.SceneArrays` if already computed (else computed here).
+      arrays: its :class:`camjax.evaluate.SceneArrays` if already computed (else computed here).
       samples: grid size override (ignored when ``arrays`` is given).
       dtype: floating dtype of the arrays (default float64).
       rho_min_mm: the curvature margin of the constraint rho > 0.
     """
-    from camjax.analysis import scene_arrays
+    from camjax.evaluate import scene_arrays
 
     if scene.design is None:
         raise ValueError("scene has no [design] section: nothing to optimize")

@@ -46,9 +46,9 @@ class MotionSpec:
     """[motion]: cam speed, grid and program."""
 
     rpm: float
-    samples: int
     program: MotionProgram = field(compare=False)
     segments: tuple[dict, ...]  # as written in the scene, for reports
+    samples: int = 360  # cam-angle grid size N
 
 
 @dataclass(frozen=True)
@@ -56,7 +56,7 @@ class FollowerSpec:
     """[follower]: geometry and, when mass or spring is given, the lumped train for loads."""
 
     type: str  # "flat" or "roller"
-    train: FollowerTrain | None
+    train: FollowerTrain | None = None
     roller_radius_mm: float = 0.0
     offset_mm: float = 0.0
 
@@ -74,12 +74,12 @@ class ContactSpec:
 class DesignSpec:
     """[design]: the optimal-design problem (SPEC 5)."""
 
-    mode: str  # "global" or "pointwise"
-    base_radius_mm: tuple[float, float]
-    face_width_mm: tuple[float, float]
+    base_radius_mm: tuple[float, float]  # bounds [low, high]
+    face_width_mm: tuple[float, float]  # bounds [low, high]
     sigma_max_MPa: float
-    alpha: float
-    gamma: float
+    mode: str = "global"  # or "pointwise"
+    alpha: float = 1.0  # weight of the size term
+    gamma: float = 1.0  # weight of the stress term
     solver: str = "gradient"
     seed: int = 0
 
@@ -163,6 +163,14 @@ class Scene:
 
 
 # ------------------------------------------------------------------------------- checks
+
+
+_DEFAULT = object()  # a key the scene leaves out: the dataclass's default applies
+
+
+def _build(cls, **values):
+    """``cls(**values)`` without the keys the scene left out: defaults are written only in ``cls``."""
+    return cls(**{k: v for k, v in values.items() if v is not _DEFAULT})
 
 
 class _Reader:
@@ -288,7 +296,7 @@ def _parse_law(seg: _Reader):
 def _parse_motion(r: _Reader) -> MotionSpec:
     r.check_keys(("rpm", "samples", "segments"))
     rpm = r.number("rpm", low=0.0)
-    samples = r.number("samples", 360, low=1, high=10_000_000, integer=True)
+    samples = r.number("samples", _DEFAULT, low=1, high=10_000_000, integer=True)
     raw = r.table.get("segments")
     if not isinstance(raw, list) or not raw:
         raise r.error("segments", raw if raw is not None else _MISSING, "needs a list of segments",
@@ -316,7 +324,8 @@ def _parse_motion(r: _Reader) -> MotionSpec:
         value = total if fld.endswith("angle_deg") else _MISSING
         raise SceneError(f"{r.path}.{fld}", value, problem,
                          "angles summing to 360" if value is not _MISSING else None, r.source) from None
-    return MotionSpec(rpm, samples, program, tuple(dict(s) for s in raw))
+    return _build(MotionSpec, rpm=rpm, program=program, segments=tuple(dict(s) for s in raw),
+                  samples=samples)
 
 
 def _parse_follower(r: _Reader) -> FollowerSpec:
@@ -325,25 +334,26 @@ def _parse_follower(r: _Reader) -> FollowerSpec:
     ftype = r.choice("type", ("flat", "roller"))
     train = None
     if r.has("mass_kg") or r.has("spring_N_per_m"):
-        train = FollowerTrain(
-            r.number("mass_kg", 0.0, low=0.0),
-            r.number("spring_N_per_m", 0.0, low=0.0),
-            r.number("preload_mm", 0.0),
-            r.number("damping_Ns_per_m", 0.0, low=0.0),
-            r.number("gravity_m_s2", 9.81),
+        train = _build(
+            FollowerTrain,
+            mass_kg=r.number("mass_kg", _DEFAULT, low=0.0),
+            spring_N_per_m=r.number("spring_N_per_m", _DEFAULT, low=0.0),
+            preload_mm=r.number("preload_mm", _DEFAULT),
+            damping_Ns_per_m=r.number("damping_Ns_per_m", _DEFAULT, low=0.0),
+            gravity_m_s2=r.number("gravity_m_s2", _DEFAULT),
         )
     else:
         for key in ("preload_mm", "damping_Ns_per_m", "gravity_m_s2"):
             if r.has(key):
                 raise r.error(key, r.table[key], "needs mass_kg or spring_N_per_m (loads are off)")
     if ftype == "roller":
-        radius = r.number("roller_radius_mm", low=0.0, low_open=True)
-        offset = r.number("offset_mm", 0.0)
-        return FollowerSpec(ftype, train, radius, offset)
+        return _build(FollowerSpec, type=ftype, train=train,
+                      roller_radius_mm=r.number("roller_radius_mm", low=0.0, low_open=True),
+                      offset_mm=r.number("offset_mm", _DEFAULT))
     for key in ("roller_radius_mm", "offset_mm"):
         if r.has(key):
             raise r.error(key, r.table[key], "only for type = 'roller'")
-    return FollowerSpec(ftype, train)
+    return FollowerSpec(type=ftype, train=train)
 
 
 def _parse_material(r: _Reader) -> Material:
@@ -354,28 +364,28 @@ def _parse_material(r: _Reader) -> Material:
 
 def _parse_contact(r: _Reader) -> ContactSpec:
     r.check_keys(("cam_width_mm", "cam", "follower"))
-    return ContactSpec(r.number("cam_width_mm", low=0.0, low_open=True),
-                       _parse_material(r.sub("cam")), _parse_material(r.sub("follower")))
+    return ContactSpec(cam_width_mm=r.number("cam_width_mm", low=0.0, low_open=True),
+                       cam=_parse_material(r.sub("cam")), follower=_parse_material(r.sub("follower")))
 
 
 def _parse_design(r: _Reader) -> DesignSpec:
     r.check_keys(("mode", "base_radius_mm", "face_width_mm", "sigma_max_MPa", "alpha", "gamma",
                   "solver", "seed"))
-    alpha = r.number("alpha", 1.0, low=0.0)
-    gamma = r.number("gamma", 1.0, low=0.0)
-    if alpha == 0 and gamma == 0:
+    spec = _build(
+        DesignSpec,
+        base_radius_mm=r.interval("base_radius_mm"),
+        face_width_mm=r.interval("face_width_mm"),
+        sigma_max_MPa=r.number("sigma_max_MPa", low=0.0, low_open=True),
+        mode=r.choice("mode", MODES, _DEFAULT),
+        alpha=r.number("alpha", _DEFAULT, low=0.0),
+        gamma=r.number("gamma", _DEFAULT, low=0.0),
+        solver=r.choice("solver", SOLVERS, _DEFAULT),
+        seed=r.number("seed", _DEFAULT, low=0, integer=True),
+    )
+    if spec.alpha == 0 and spec.gamma == 0:
         raise r.error("alpha", 0.0, "alpha and gamma are both zero: nothing to minimize",
                       "alpha >= 0, gamma >= 0, not both 0")
-    return DesignSpec(
-        r.choice("mode", MODES, "global"),
-        r.interval("base_radius_mm"),
-        r.interval("face_width_mm"),
-        r.number("sigma_max_MPa", low=0.0, low_open=True),
-        alpha,
-        gamma,
-        r.choice("solver", SOLVERS, "gradient"),
-        r.number("seed", 0, low=0, integer=True),
-    )
+    return spec
 
 
 def _parse_guide(r: _Reader) -> Guide:

@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 import camjax
-from camjax import report
+from camjax import pipeline
+from camjax.output import report
 from camjax.scene import builtin_scene_text, parse_scene
 
 # Reference case (SPEC 5), written out independently of the scene file.
@@ -60,7 +61,7 @@ def without_section(text, section):
 
 @pytest.fixture(scope="session")
 def default_report(default_scene, default_arrays):
-    return report.analyse(default_scene, default_arrays)
+    return pipeline.analyse(default_scene, default_arrays)
 
 
 @pytest.fixture(scope="session")
@@ -188,7 +189,7 @@ def test_design_beyond_bounds_is_reported_infeasible():
     # sigma_max = 300 MPa needs rho >= (C/300)^2 >~ 1.2 mm -> beyond R_b <= 25
     scene = scene_with(("sigma_max_MPa = 1230.0", "sigma_max_MPa = 300.0"),
                        ("base_radius_mm = [5.0, 40.0]", "base_radius_mm = [5.0, 25.0]"))
-    d = report.design_report(scene)["design"]
+    d = pipeline.design_report(scene)["design"]
     assert d["feasible"] is False
     assert d["base_radius_mm"] == 25.0
     assert d["required_base_radius_mm"] > 25.0
@@ -200,7 +201,7 @@ def test_design_beyond_bounds_is_reported_infeasible():
 def test_lower_bound_wins_when_larger():
     scene = scene_with(("base_radius_mm = [5.0, 40.0]", "base_radius_mm = [30.0, 40.0]"),
                        ("face_width_mm = [5.0, 25.0]", "face_width_mm = [22.0, 25.0]"))
-    d = report.design_report(scene)["design"]
+    d = pipeline.design_report(scene)["design"]
     assert (d["base_radius_mm"], d["face_width_mm"], d["feasible"]) == (30.0, 22.0, True)
 
 
@@ -212,7 +213,7 @@ def test_no_contact_means_no_stress_computed():
     scene = parse_scene(text, "nocontact")
     arrays = camjax.scene_arrays(scene)
     assert arrays.stress_coefficient is None  # nothing computed, not merely not reported
-    r = report.analyse(scene, arrays)
+    r = pipeline.analyse(scene, arrays)
     assert "contact" not in r.data["models"]
     for key in ("stress_MPa", "design"):
         assert key not in r.data
@@ -230,14 +231,14 @@ def test_no_mass_means_no_loads():
     scene = parse_scene(text, "kinematic")
     arrays = camjax.scene_arrays(scene)
     assert arrays.force_N is None and arrays.torque_Nm is None
-    data = report.design_report(scene, arrays)
+    data = pipeline.design_report(scene, arrays)
     assert "loads" not in data and "stress_MPa" not in data
     assert data["models"] == ["geometry", "kinematics"]
 
 
 def test_loss_of_contact_located():
     scene = scene_with(("spring_N_per_m = 3004.0", "spring_N_per_m = 100.0"))
-    data = report.design_report(scene)
+    data = pipeline.design_report(scene)
     grid = np.arange(360.0)
     s, ds, d2s = reference_motion(grid)
     force = MASS * d2s * OMEGA**2 * 1e-3 + DAMPING * ds * OMEGA * 1e-3 + 100.0 * (s * 1e-3 + PRELOAD_M) \
@@ -263,7 +264,7 @@ overhang_ratio = {xi}
 def test_guide_jamming_check_agrees_with_gamma(b, mu0, mu, xi):
     text = without_section(builtin_scene_text("default"), "design") + GUIDE.format(b=b, mu0=mu0, mu=mu,
                                                                                    xi=xi)
-    data = report.design_report(parse_scene(text, "guide"))
+    data = pipeline.design_report(parse_scene(text, "guide"))
     loads = data["loads"]
     _, ds, _ = reference_motion(np.arange(360.0))
     gamma = b + 2 * mu * ds - mu * mu0 * b * (1 + 2 * xi)  # Gamma in NumPy, a = s'
@@ -279,7 +280,7 @@ def test_guide_jamming_check_agrees_with_gamma(b, mu0, mu, xi):
 def test_frictionless_guide_never_jams_and_stays_valid_json():
     text = without_section(builtin_scene_text("default"), "design") + GUIDE.format(b=40, mu0=0.1, mu=0.0,
                                                                                    xi=0.5)
-    data = report.design_report(parse_scene(text, "guide"))
+    data = pipeline.design_report(parse_scene(text, "guide"))
     assert data["loads"]["jamming_limit_mm"] is None
     assert data["loads"]["jamming"]["jams"] is False
     json.dumps(data, allow_nan=False)
@@ -304,7 +305,7 @@ offset_mm = 3
 def test_roller_min_base_radius_puts_pressure_angle_on_limit():
     scene = parse_scene(ROLLER, "roller")
     arrays = camjax.scene_arrays(scene)
-    data = report.design_report(scene, arrays)
+    data = pipeline.design_report(scene, arrays)
     s, ds = np.asarray(arrays.kin.s), np.asarray(arrays.kin.ds)
 
     def max_phi_deg(rb):  # pressure angle in NumPy, SPEC 3 with offset e = 3, R_f = 8

@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import functools
 import hashlib
-import os
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field
 
@@ -100,11 +99,9 @@ def configure_worker(cache_dir: str | None) -> None:
     """
     if cache_dir is None or cache_dir in _CONFIGURED_CACHE:
         return
-    import jax
+    from camjax.runtime import use_compilation_cache
 
-    os.makedirs(cache_dir, exist_ok=True)
-    jax.config.update("jax_compilation_cache_dir", cache_dir)
-    jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)
+    use_compilation_cache(cache_dir)
     _CONFIGURED_CACHE.append(cache_dir)
 
 

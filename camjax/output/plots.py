@@ -1,6 +1,6 @@
 """Figures of a design report: motion (s, v, a, j), cam profile, loads, contact stress.
 
-Each function takes :class:`camjax.report.DesignCurves` and returns a matplotlib ``Figure``
+Each function takes :class:`camjax.evaluate.DesignCurves` and returns a matplotlib ``Figure``
 built without pyplot (no global state, no GUI backend: ``Figure.savefig`` renders with Agg), so
 that plotting is safe in scripts, tests and threads. Saving is the caller's job (``export.py``).
 Angles are in degrees on every horizontal axis; the vertical dotted lines mark segment joints.
@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 from matplotlib.figure import Figure
 
-from camjax.report import DesignCurves
+from camjax.evaluate import DesignCurves
 
 _JOINT_STYLE = {"color": "0.6", "linestyle": ":", "linewidth": 0.8}
 _SIZE = (7.0, 6.0)

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from camjax.report import DesignCurves
+from camjax.evaluate import DesignCurves
 
 CSV_FORMAT = "%.12f"  # 1e-12 mm: far below any machining tolerance, round-trips the geometry
 
@@ -56,8 +56,8 @@ def write_profile_dxf(path: Path, curves: DesignCurves) -> Path:
 
 
 def write_figures(folder: Path, curves: DesignCurves, dpi: int = 100) -> list[Path]:
-    """PNG of every figure the scene declares (see :func:`camjax.plots.design_figures`)."""
-    from camjax.plots import design_figures  # matplotlib is imported only when drawing
+    """PNG of every figure the scene declares (see :func:`camjax.output.plots.design_figures`)."""
+    from camjax.output.plots import design_figures  # matplotlib is imported only when drawing
 
     out = []
     for name, fig in design_figures(curves).items():

@@ -1,0 +1,130 @@
+"""Scene -> arrays -> curves: what a scene's models give, and what plots and export read.
+
+:func:`scene_arrays` computes the design-independent arrays once per scene. Only what the scene
+declares is computed: a scene without loads gets no force, one without [contact] no stress
+coefficient. Everything downstream (geometry at a trial base radius, the objective, the report)
+reads from :class:`SceneArrays`. :func:`evaluate_design` adds the geometry, stress and roller
+quantities at one base radius as :class:`DesignCurves`, the NumPy arrays plots and export draw.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from camjax import contact, geometry, loads, program
+from camjax.program import Kinematics, TimeKinematics
+from camjax.scene import Scene
+
+
+class SceneArrays(NamedTuple):
+    """Per-sample arrays of a scene (shape (N,) each; None where the scene does not ask)."""
+
+    theta_deg: jax.Array  # cam angle, degrees
+    kin: Kinematics  # s, s', s'', s''' (mm, per rad)
+    motion: TimeKinematics  # y, y', y'', y''' (SI) at the scene's speed
+    cam_speed_rad_s: jax.Array
+    force_N: jax.Array | None  # kinetostatic contact force
+    torque_Nm: jax.Array | None  # cam torque
+    stress_coefficient: jax.Array | None  # C with sigma = C / sqrt(rho), MPa mm^0.5
+
+
+def scene_arrays(scene: Scene, samples: int | None = None, dtype=None) -> SceneArrays:
+    """Evaluate a scene's motion and, when declared, its loads and contact coefficient.
+
+    Args:
+      scene: a validated scene.
+      samples: override the scene's grid size N.
+      dtype: floating dtype (default: float64 when x64 is on). float32 halves memory and is
+        about 3x faster with sin/cos, at ~1e-7 relative accuracy; see the README's limits.
+    """
+    dtype = dtype or jnp.result_type(float)
+    n = scene.motion.samples if samples is None else int(samples)
+    prog = jax.tree_util.tree_map(lambda x: jnp.asarray(x, dtype), scene.motion.program)
+    kin = program.evaluate(prog, n)
+    omega = jnp.asarray(program.rpm_to_rad_s(scene.motion.rpm), dtype)
+    motion = program.time_kinematics(kin, omega)
+    force = torque = coeff = None
+    train = scene.follower.train
+    if train is not None:
+        force = loads.kinetostatic_force(train, motion)
+        torque = loads.cam_torque(force, kin.ds)
+        if scene.contact is not None:
+            c = scene.contact
+            coeff = contact.stress_coefficient(force, c.cam_width_mm, c.cam, c.follower)
+    theta_deg = program.sample_angles_deg(n, dtype)
+    return SceneArrays(theta_deg, kin, motion, omega, force, torque, coeff)
+
+
+class DesignCurves(NamedTuple):
+    """Everything plots and export need at one design, as NumPy arrays of shape (N,) or scalars.
+
+    Optional entries are None when the scene does not ask for the model.
+    """
+
+    theta_deg: np.ndarray  # cam angle, deg
+    s_mm: np.ndarray
+    ds_mm: np.ndarray  # mm/rad
+    d2s_mm: np.ndarray  # mm/rad^2
+    velocity_m_s: np.ndarray
+    accel_m_s2: np.ndarray
+    jerk_m_s3: np.ndarray
+    segment_starts_deg: tuple[float, ...]
+    follower_type: str  # "flat" or "roller"
+    base_radius_mm: float
+    face_width_mm: float | None  # flat face only
+    profile_x_mm: np.ndarray  # cam outline, cam coordinates (geometry.py convention)
+    profile_y_mm: np.ndarray
+    rho_mm: np.ndarray | None  # flat face: radius of curvature of the cam profile
+    force_N: np.ndarray | None
+    torque_Nm: np.ndarray | None
+    stress_MPa: np.ndarray | None
+    sigma_max_MPa: float | None  # allowed stress of the [design], for plots
+    roller_radius_mm: float | None
+    offset_mm: float | None
+    pitch_x_mm: np.ndarray | None  # roller: pitch curve
+    pitch_y_mm: np.ndarray | None
+    pressure_angle_deg: np.ndarray | None
+    pitch_rho_mm: np.ndarray | None
+    undercut_margin_mm: np.ndarray | None
+
+
+def _np(x):
+    return None if x is None else np.asarray(x)
+
+
+def evaluate_design(scene: Scene, arrays: SceneArrays, base_radius_mm: float,
+                    face_width_mm: float | None = None) -> DesignCurves:
+    """Geometry, stress and roller quantities at one base radius (mm)."""
+    kin, f = arrays.kin, scene.follower
+    rho = stress = pitch_x = pitch_y = phi = pitch_rho = margin = None
+    if f.type == "flat":
+        x, y = geometry.flat_profile(base_radius_mm, kin)
+        rho = geometry.flat_radius_of_curvature(base_radius_mm, kin)
+        if arrays.stress_coefficient is not None:
+            stress = contact.stress_from_coefficient(arrays.stress_coefficient, rho)
+        if face_width_mm is None:
+            face_width_mm = float(np.asarray(geometry.flat_face_width(kin, symmetric=True)))
+    else:
+        rf, e = f.roller_radius_mm, f.offset_mm
+        x, y = geometry.roller_profile(base_radius_mm, rf, e, kin)
+        pitch_x, pitch_y = geometry.roller_pitch_curve(base_radius_mm, rf, e, kin)
+        g = geometry.roller_geometry(base_radius_mm, rf, e, kin)
+        phi, pitch_rho, margin = jnp.rad2deg(g.pressure_angle), g.pitch_radius_of_curvature, \
+            g.undercut_margin
+        face_width_mm = None
+    m = arrays.motion
+    return DesignCurves(
+        np.asarray(arrays.theta_deg), np.asarray(kin.s), np.asarray(kin.ds), np.asarray(kin.d2s),
+        np.asarray(m.velocity), np.asarray(m.accel), np.asarray(m.jerk),
+        scene.motion.program.start_deg, f.type, float(base_radius_mm),
+        None if face_width_mm is None else float(face_width_mm),
+        np.asarray(x), np.asarray(y), _np(rho), _np(arrays.force_N), _np(arrays.torque_Nm),
+        _np(stress), None if scene.design is None else scene.design.sigma_max_MPa,
+        f.roller_radius_mm if f.type == "roller" else None,
+        f.offset_mm if f.type == "roller" else None,
+        _np(pitch_x), _np(pitch_y), _np(phi), _np(pitch_rho), _np(margin),
+    )

@@ -1,0 +1,6 @@
+"""What a design run writes: the JSON report, the figures and the profile files.
+
+``report`` formats a :class:`camjax.pipeline.DesignRun` as a JSON-ready dict, ``plots`` draws
+:class:`camjax.evaluate.DesignCurves` (matplotlib loads only when drawing) and ``export`` writes
+the profile CSV, DXF and the PNG figures.
+"""

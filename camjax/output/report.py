@@ -1,0 +1,281 @@
+"""Design report: a :class:`camjax.pipeline.DesignRun` -> a JSON-ready dict.
+
+Formatting only: every block condenses arrays the pipeline already computed into plain values
+(degrees, SI or the unit in the key) with no NaN or infinity, so that :func:`build_report` can be
+written as strict JSON. Nothing here solves, draws or writes files (the pipeline solves;
+``plots.py``, ``export.py`` and ``cli.py`` draw and write).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from camjax import geometry, loads
+from camjax.evaluate import DesignCurves, SceneArrays
+from camjax.geometry import PRESSURE_ANGLE_LIMIT_DEG
+from camjax.program import joints
+from camjax.scene import DesignSpec, Scene
+
+if TYPE_CHECKING:  # the pipeline hands its result down; nothing here calls back into it
+    from camjax.pipeline import DesignRun, DesignSolution, MinBaseRadius
+
+FLCD_UNITS = {"jump_s": "mm", "jump_v": "mm/rad", "jump_a": "mm/rad^2", "jump_j": "mm/rad^3"}
+
+
+# ------------------------------------------------------------------------------ extrema
+
+
+def _f(x) -> float:
+    """A scalar as a Python float (JSON)."""
+    return float(np.asarray(x))
+
+
+def extrema(values, theta_deg) -> dict[str, float]:
+    """{max, max_deg, min, min_deg} of a sampled curve; the first sample wins on ties."""
+    v, t = np.asarray(values), np.asarray(theta_deg)
+    i, j = int(np.argmax(v)), int(np.argmin(v))
+    return {"max": _f(v[i]), "max_deg": _f(t[i]), "min": _f(v[j]), "min_deg": _f(t[j])}
+
+
+def peak(values, theta_deg) -> dict[str, float]:
+    """{max, max_deg} of a sampled curve."""
+    e = extrema(values, theta_deg)
+    return {"max": e["max"], "max_deg": e["max_deg"]}
+
+
+def trough(values, theta_deg) -> dict[str, float]:
+    """{min, min_deg} of a sampled curve."""
+    e = extrema(values, theta_deg)
+    return {"min": e["min"], "min_deg": e["min_deg"]}
+
+
+def _negative_ranges_deg(values, theta_deg) -> list[list[float]]:
+    """[first, last] sample angles (deg) of each run where values < 0, wrapping over 360."""
+    neg = np.asarray(values) < 0
+    t = np.asarray(theta_deg)
+    if not neg.any():
+        return []
+    if neg.all():
+        return [[_f(t[0]), _f(t[-1])]]
+    start = int(np.argmin(neg))  # a sample with contact; walk the cycle from there
+    order = np.roll(np.arange(len(t)), -start)
+    runs, current = [], None
+    for k in order:
+        if neg[k]:
+            current = [_f(t[k]), _f(t[k])] if current is None else [current[0], _f(t[k])]
+        elif current is not None:
+            runs.append(current)
+            current = None
+    if current is not None:
+        runs.append(current)
+    return runs
+
+
+# ------------------------------------------------------------------------ report pieces
+
+
+def kinematics_block(arrays: SceneArrays) -> dict[str, Any]:
+    """Follower motion extrema: displacement (mm), velocity, acceleration, jerk (SI), angles in deg."""
+    t, m, k = arrays.theta_deg, arrays.motion, arrays.kin
+    return {
+        "displacement_mm": extrema(k.s, t),
+        "velocity_m_s": extrema(m.velocity, t),
+        "accel_m_s2": extrema(m.accel, t),
+        "jerk_m_s3": extrema(m.jerk, t),
+        "velocity_mm_per_rad": extrema(k.ds, t),
+        "accel_mm_per_rad2": extrema(k.d2s, t),
+    }
+
+
+def flcd_block(scene: Scene) -> list[dict[str, Any]]:
+    """Jumps of s, s', s'', s''' (mm, per rad; see FLCD_UNITS) and their FLCD class at every joint."""
+    return [
+        {"joint_deg": j.joint_deg, "before_segment": j.before, "after_segment": j.after,
+         "jump_s": j.jump_s, "jump_v": j.jump_v, "jump_a": j.jump_a, "jump_j": j.jump_j,
+         "class": j.flcd_class}
+        for j in joints(scene.motion.program)
+    ]
+
+
+def loads_block(scene: Scene, arrays: SceneArrays) -> dict[str, Any] | None:
+    """Force, torque, contact-loss check and (with a [guide]) guide reactions; None without loads."""
+    if arrays.force_N is None:
+        return None
+    t, force = arrays.theta_deg, arrays.force_N
+    out: dict[str, Any] = {
+        "force_N": extrema(force, t),
+        "torque_Nm": extrema(arrays.torque_Nm, t),
+        "contact": {
+            "min_force_N": _f(loads.contact_margin(force)),
+            "min_force_deg": trough(force, t)["min_deg"],
+            "lost": bool(np.any(np.asarray(force) < 0)),
+            "lost_ranges_deg": _negative_ranges_deg(force, t),
+        },
+    }
+    if scene.guide is not None:
+        out.update(guide_block(scene, arrays))
+    return out
+
+
+def guide_block(scene: Scene, arrays: SceneArrays) -> dict[str, Any]:
+    """Chen's guide reactions with P = the follower force and a = s' (mm), and the jamming check.
+
+    The stem can jam only with the contact on the side a < 0 (see
+    :func:`camjax.loads.jamming_limit_mm`); the check compares max(-a) with that limit and, as an
+    independent statement of the same condition, reports min Gamma (> 0 while not jammed).
+    """
+    guide, t = scene.guide, arrays.theta_deg
+    offset = geometry.flat_contact_offset(arrays.kin)
+    r = loads.guide_reactions(guide, arrays.force_N, offset)
+    limit = loads.jamming_limit_mm(guide)
+    worst = trough(offset, t)  # most negative offset = furthest onto the jamming side
+    reach = -worst["min"]
+    gamma_min = trough(r.gamma, t)
+    jams = bool(gamma_min["min"] <= 0.0)
+    return {
+        "guide_reactions": {
+            "cam_force_N": extrema(r.cam_force, t),
+            "reaction_1_N": extrema(r.reaction_1, t),
+            "reaction_2_N": extrema(r.reaction_2, t),
+            "gamma_mm": gamma_min,
+        },
+        "jamming_limit_mm": limit if math.isfinite(limit) else None,
+        "jamming": {
+            "offset_on_jamming_side_mm": reach,
+            "offset_on_jamming_side_deg": worst["min_deg"],
+            "margin_mm": (limit - reach) if math.isfinite(limit) else None,
+            "jams": jams,
+            "note": ("limit b/(2 mu) - mu0 b (1 + 2 xi)/2 from the corrected Gamma; "
+                     "null limit = frictionless guide, never jams"),
+        },
+    }
+
+
+# ------------------------------------------------------------------------- base radius
+
+
+def min_base_radius_block(follower_type: str, minimum: MinBaseRadius) -> dict[str, Any]:
+    """Smallest admissible base radius (mm), the cam angle (deg) where it binds, and the rule."""
+    if follower_type == "flat":
+        rule = "flat face: rho = R_b + s + s'' >= 0 at every sample"
+    else:
+        rule = (f"roller: |pressure angle| <= {PRESSURE_ANGLE_LIMIT_DEG:g} deg "
+                "and no undercut at every sample (bisection)")
+    return {"min_base_radius_mm": minimum.radius_mm, "min_base_radius_deg": minimum.angle_deg,
+            "min_base_radius_rule": rule}
+
+
+def face_width_block(scene: Scene, arrays: SceneArrays) -> dict[str, Any]:
+    """Minimum flat-face width (mm): symmetric 2 max|s'| and asymmetric max s' - min s'."""
+    if scene.follower.type != "flat":
+        return {}
+    t, kin = arrays.theta_deg, arrays.kin
+    return {
+        "min_face_width_mm": _f(geometry.flat_face_width(kin, symmetric=True)),
+        "min_face_width_asymmetric_mm": _f(geometry.flat_face_width(kin, symmetric=False)),
+        "contact_offset_mm": extrema(geometry.flat_contact_offset(kin), t),
+    }
+
+
+# ------------------------------------------------------------------------------ design
+
+
+def design_block(spec: DesignSpec, solution: DesignSolution) -> dict[str, Any]:
+    """The solver's result with the report's additions.
+
+    Added to the solver's JSON: ``peak_stress_MPa`` (the design's peak stress computed exactly as
+    the report's stress curve), the smallest admissible R_b and L (``required_*``) with the
+    constraint that binds there, and ``violations`` as readable sentences.
+    """
+    out = dict(solution.result)
+    sigma_peak, required = solution.peak_stress_MPa, solution.required_base_radius_mm
+    required_width = solution.required_face_width_mm
+    rb_hi, l_hi = spec.base_radius_mm[1], spec.face_width_mm[1]
+    sentences = {
+        "curvature": f"rho <= {solution.rho_min_limit_mm:g} mm somewhere (min rho "
+                     f"{out['rho_min_mm']:.6g} mm): the flat face cannot follow the profile",
+        "stress": f"peak stress {sigma_peak:.6g} MPa > sigma_max {spec.sigma_max_MPa:g} MPa",
+        "face_width": f"face width needs {required_width:.6g} mm > upper bound {l_hi:g} mm",
+        "bounds": "a design variable is outside its bounds",
+    }
+    violations = [sentences[name] for name in out["violated"]]
+    if required > rb_hi:
+        violations.insert(0, f"base radius needs {required:.6g} mm > upper bound {rb_hi:g} mm")
+    out.update({
+        "peak_stress_MPa": sigma_peak,
+        "violations": violations,
+        "required_base_radius_mm": required,
+        "required_base_radius_deg": solution.required_base_radius_deg,
+        "binding_constraint": solution.binding_constraint,
+        "required_face_width_mm": required_width,
+    })
+    return out
+
+
+# -------------------------------------------------------------------------- evaluation
+
+
+def evaluated_block(curves: DesignCurves) -> dict[str, Any]:
+    """Stress, curvature and roller figures at the evaluated design."""
+    t = curves.theta_deg
+    out: dict[str, Any] = {}
+    if curves.rho_mm is not None:
+        out["rho_mm"] = trough(curves.rho_mm, t)
+    if curves.stress_MPa is not None:
+        out["stress_MPa"] = peak(curves.stress_MPa, t)
+    if curves.follower_type == "roller":
+        phi = curves.pressure_angle_deg
+        i = int(np.argmax(np.abs(phi)))
+        j = int(np.argmin(np.abs(curves.pitch_rho_mm)))
+        out["roller"] = {
+            "roller_radius_mm": curves.roller_radius_mm,
+            "offset_mm": curves.offset_mm,
+            "pressure_angle_deg": {**extrema(phi, t), "max_abs": _f(abs(phi[i])),
+                                   "max_abs_deg": _f(t[i])},
+            "pressure_angle_limit_deg": PRESSURE_ANGLE_LIMIT_DEG,
+            "pressure_angle_ok": bool(abs(phi[i]) <= PRESSURE_ANGLE_LIMIT_DEG),
+            "pitch_rho_mm": {"min_abs": _f(abs(curves.pitch_rho_mm[j])), "min_abs_deg": _f(t[j]),
+                             "concave": bool(np.any(curves.pitch_rho_mm < 0))},
+            "undercut_margin_mm": trough(curves.undercut_margin_mm, t),
+            "undercut": bool(np.any(curves.undercut_margin_mm <= 0)),
+        }
+    return out
+
+
+# ------------------------------------------------------------------------------ report
+
+
+def build_report(scene: Scene, run: DesignRun) -> dict[str, Any]:
+    """The report of a scene's design run as a plain, JSON-ready dict."""
+    import camjax  # the version lives in the package
+
+    arrays = run.arrays
+    data: dict[str, Any] = {
+        "camjax_version": camjax.__version__,
+        "scene": scene.name,
+        "dtype": str(arrays.kin.s.dtype),
+        "models": sorted(scene.needs()),
+        "samples": int(arrays.theta_deg.shape[0]),
+        "cam_speed_rpm": scene.motion.rpm,
+        "cam_speed_rad_s": _f(arrays.cam_speed_rad_s),
+        "follower_type": scene.follower.type,
+        "segments": [dict(s) for s in scene.motion.segments],
+        "kinematics": kinematics_block(arrays),
+        "flcd": flcd_block(scene),
+        "flcd_units": FLCD_UNITS,
+    }
+    block = loads_block(scene, arrays)
+    if block is not None:
+        data["loads"] = block
+    data.update(min_base_radius_block(scene.follower.type, run.min_base_radius))
+    data.update(face_width_block(scene, arrays))
+    if run.design is not None:
+        data["design"] = design_block(scene.design, run.design)
+    data["evaluated_at"] = {"base_radius_mm": run.base_radius_mm,
+                            "face_width_mm": run.curves.face_width_mm,
+                            "source": run.base_radius_source}
+    data.update(evaluated_block(run.curves))
+    return data
