@@ -9,16 +9,13 @@ written to the output folder unless the whole job succeeds.
 from __future__ import annotations
 
 import argparse
-import contextlib
-import json
-import shutil
 import sys
-import tempfile
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from pathlib import Path
 
 import camjax  # noqa: F401  (turns on x64 before any array is made)
 from camjax import runtime
+from camjax.output.files import staged_output, write_json
 from camjax.scene import SceneError
 
 COMMANDS: dict[str, tuple[str, Callable[[argparse.ArgumentParser], Callable]]] = {}
@@ -36,29 +33,6 @@ def command(name: str, help: str):
 
 class UsageError(ValueError):
     """Bad command-line input; the message names the option, the value and what is allowed."""
-
-
-@contextlib.contextmanager
-def staged_output(out_dir: str | Path) -> Iterator[Path]:
-    """Write into a temporary folder; move the files into ``out_dir`` only if the block succeeds."""
-    out = Path(out_dir)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=".camjax-", dir=out.parent))
-    try:
-        yield tmp
-        out.mkdir(parents=True, exist_ok=True)
-        for item in tmp.iterdir():
-            target = out / item.name
-            if target.is_dir():
-                shutil.rmtree(target)
-            shutil.move(str(item), target)
-    finally:
-        shutil.rmtree(tmp, ignore_errors=True)
-
-
-def write_json(path: Path, data) -> None:
-    """JSON with a trailing newline; NaN/inf are refused (they would not be valid JSON)."""
-    path.write_text(json.dumps(data, indent=2, allow_nan=False) + "\n")
 
 
 def parse_float_list(option: str, text: str) -> list[float]:
@@ -230,9 +204,9 @@ def _setup_sweep(p: argparse.ArgumentParser):
     def run(args) -> int:
         import time
 
-        from camjax.problem import problem_from_scene
+        from camjax.pipeline import sweep_scene
         from camjax.scene import load_scene
-        from camjax.solvers.sweep import plot_pareto, sweep
+        from camjax.solvers.sweep import plot_pareto
 
         alphas = parse_float_list("--alpha", args.alpha)
         gammas = parse_float_list("--gamma", args.gamma)
@@ -265,9 +239,8 @@ def _setup_sweep(p: argparse.ArgumentParser):
                                         mode=mode, solver=solver, seed=seed, usage_error=UsageError,
                                         cache_dir=jax.config.jax_compilation_cache_dir)
         else:
-            problem = problem_from_scene(scene)
-            result = sweep(problem, alphas, gammas, mode=mode, solver=solver, seed=seed,
-                           chunk_size=args.chunk_size)
+            result = sweep_scene(scene, alphas, gammas, mode=mode, solver=solver, seed=seed,
+                                 chunk_size=args.chunk_size)
         seconds = time.perf_counter() - start
         data = {"scene": scene.name, "mode": mode, "solver": solver, "seed": seed,
                 "alphas": alphas, "gammas": gammas, "seconds": seconds, "records": result.records()}

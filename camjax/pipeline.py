@@ -187,6 +187,19 @@ def run_design(scene: Scene, arrays: SceneArrays | None = None, *,
     return DesignRun(arrays, minimum, design, radius, source, curves)
 
 
+def sweep_scene(scene: Scene, alphas, gammas, *, mode: str, solver: str, seed: int = 0,
+                chunk_size: int = 128):
+    """Solve the scene's [design] problem for every (alpha, gamma) pair of two lists, in this process.
+
+    Returns :class:`camjax.solvers.sweep.SweepResult` (its ``records()`` are the JSON rows).
+    """
+    from camjax.problem import problem_from_scene
+    from camjax.solvers.sweep import sweep
+
+    problem = problem_from_scene(scene)
+    return sweep(problem, alphas, gammas, mode=mode, solver=solver, seed=seed, chunk_size=chunk_size)
+
+
 class Report(NamedTuple):
     """A scene's report (JSON-ready dict) with the curves and arrays behind it."""
 
