@@ -1,0 +1,118 @@
+"""Package layout: data flows one way (scene -> evaluate -> pipeline -> output -> cli), and the
+result comparison script behind "behaviour unchanged" finds every difference it should."""
+
+import ast
+import importlib.util
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+PACKAGE = ROOT / "camjax"
+
+# module (dotted prefix) -> modules it must not import: the stages after it in the chain
+LATER = {
+    "camjax.evaluate": ("camjax.problem", "camjax.solvers", "camjax.pipeline", "camjax.output",
+                        "camjax.cli"),
+    "camjax.output": ("camjax.problem", "camjax.solvers", "camjax.pipeline", "camjax.cli",
+                      "camjax.scaleout"),
+    "camjax.pipeline": ("camjax.cli", "camjax.scaleout"),
+    "camjax.runtime": ("camjax.",),  # set-up only: must load before anything it could configure
+}
+
+
+def _runtime_imports(path: Path) -> set[str]:
+    """Modules a file imports at run time (``if TYPE_CHECKING:`` blocks are annotations only)."""
+    tree = ast.parse(path.read_text())
+    skip = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test):
+            skip.update(id(n) for n in ast.walk(node))
+    names = set()
+    for node in ast.walk(tree):
+        if id(node) in skip:
+            continue
+        if isinstance(node, ast.Import):
+            names.update(a.name for a in node.names)
+        elif isinstance(node, ast.ImportFrom) and node.module:
+            names.add(node.module)
+            names.update(f"{node.module}.{a.name}" for a in node.names)  # from camjax import x
+    return names
+
+
+def _module_name(path: Path) -> str:
+    parts = path.relative_to(ROOT).with_suffix("").parts
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+@pytest.mark.parametrize("path", sorted(PACKAGE.rglob("*.py")), ids=lambda p: str(p.relative_to(ROOT)))
+def test_no_module_reaches_back_up_the_chain(path):
+    name = _module_name(path)
+    forbidden = [bad for prefix, bads in LATER.items() if name == prefix or name.startswith(prefix + ".")
+                 for bad in bads]
+    wrong = sorted(m for m in _runtime_imports(path) for bad in forbidden
+                   if m == bad.rstrip(".") or m.startswith(bad if bad.endswith(".") else bad + "."))
+    assert not wrong, f"{name} imports {wrong}: a later stage of scene -> pipeline -> output -> cli"
+
+
+def test_the_chain_check_sees_a_violation(tmp_path):
+    # the check above must be able to fail: a TYPE_CHECKING import is ignored, a real one is not
+    f = tmp_path / "m.py"
+    f.write_text("from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    from camjax.pipeline import A\n"
+                 "from camjax import pipeline\n")
+    assert _runtime_imports(f) >= {"camjax", "camjax.pipeline"}
+    f.write_text("from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    from camjax.pipeline import A\n")
+    assert not any(m.startswith("camjax") for m in _runtime_imports(f))
+
+
+# ------------------------------------------------------------------------ compare_results
+
+
+@pytest.fixture(scope="module")
+def compare():
+    spec = importlib.util.spec_from_file_location("compare_results",
+                                                  ROOT / "validation" / "compare_results.py")
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module
+    spec.loader.exec_module(module)
+    return module
+
+
+OLD = {"a": 1.0, "b": {"c": [1, 2.5, {"d": "x"}], "seconds": 3.0}, "flag": True}
+
+
+def test_identical_documents_have_no_differences(compare):
+    assert compare.differences(OLD, {**OLD}) == []
+
+
+def test_every_kind_of_difference_is_listed_by_key_path(compare):
+    new = {"a": 1.0 + 2.0**-52, "b": {"c": [1, 2.5, {"d": "y"}], "seconds": 3.0}, "flag": 1, "e": 0}
+    assert compare.differences(OLD, new) == [
+        "a: 1.0 != 1.0000000000000002",  # one ulp: floats compare exactly by default
+        "b.c[2].d: 'x' != 'y'",
+        "e: only in NEW",
+        "flag: True != 1",  # bool and int differ in JSON even though True == 1 in Python
+    ]
+    assert compare.differences(OLD, {"b": OLD["b"]}) == ["a: only in OLD", "flag: only in OLD"]
+    assert compare.differences([1, 2], [1, 2, 3]) == ["<root>: list length 2 != 3"]
+    assert compare.differences(1, 1.0) == ["<root>: 1 (int) != 1.0 (float)"]
+
+
+def test_rtol_and_ignore(compare):
+    new = {**OLD, "a": 1.0 + 1e-10, "b": {**OLD["b"], "seconds": 9.0}}
+    assert compare.differences(OLD, new, rtol=1e-9, ignore=frozenset({"seconds"})) == []
+    assert compare.differences(OLD, new, rtol=1e-11, ignore=frozenset({"b.seconds"})) == \
+        ["a: 1.0 != 1.0000000001"]
+
+
+def test_script_exit_status(compare, tmp_path, capsys):
+    import json
+
+    old, new = tmp_path / "old.json", tmp_path / "new.json"
+    old.write_text(json.dumps(OLD))
+    new.write_text(json.dumps({**OLD, "a": 2.0}))
+    assert compare.main([str(old), str(old)]) == 0
+    assert compare.main([str(old), str(new)]) == 1
+    assert "a: 1.0 != 2.0" in capsys.readouterr().out
+    assert compare.main([str(old), str(new), "--ignore", "a"]) == 0
