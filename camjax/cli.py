@@ -150,11 +150,6 @@ def add_design_options(p: argparse.ArgumentParser, weights: bool = True) -> None
         p.add_argument("--gamma", type=float, default=None, help="weight of the stress term" + tail)
 
 
-def _check_weight(option: str, value: float) -> None:
-    if not (value == value and 0 <= value < float("inf")):
-        raise UsageError(f"{option} = {value!r}: must be a finite number >= 0")
-
-
 def check_dpi(dpi: int) -> None:
     """--dpi must be 10..1000."""
     if not 10 <= dpi <= 1000:
@@ -163,7 +158,7 @@ def check_dpi(dpi: int) -> None:
 
 def apply_design_options(scene, args):
     """The scene with its [design] overridden by --mode/--alpha/--gamma/--solver/--seed."""
-    import dataclasses
+    from camjax.scene import with_design
 
     given = {k: getattr(args, k, None) for k in ("mode", "alpha", "gamma", "solver", "seed")}
     given = {k: v for k, v in given.items() if v is not None}
@@ -173,16 +168,11 @@ def apply_design_options(scene, args):
         options = ", ".join(f"--{k}" for k in given)
         raise UsageError(f"{options}: scene '{scene.name}' has no [design] section to override "
                          "(add one with bounds and sigma_max_MPa)")
-    for k in ("alpha", "gamma"):
-        if k in given:
-            _check_weight(f"--{k}", given[k])
-    if given.get("seed", 0) < 0:
-        raise UsageError(f"--seed = {given['seed']}: must be >= 0")
-    design = dataclasses.replace(scene.design, **given)
-    if design.alpha == 0 and design.gamma == 0:
-        raise UsageError("--alpha/--gamma: alpha = gamma = 0 leaves nothing to minimize "
-                         "(allowed: alpha >= 0, gamma >= 0, not both 0)")
-    return dataclasses.replace(scene, design=design)
+    try:  # the scene parser's own checks: one set of rules for the file and the options
+        return with_design(scene, **given)
+    except SceneError as exc:
+        option, allowed = exc.field.rpartition(".")[2], f" (allowed: {exc.allowed})" if exc.allowed else ""
+        raise UsageError(f"--{option} = {exc.value!r}: {exc.problem}{allowed}") from None
 
 
 @command("sweep", "solve every (alpha, gamma) pair of two lists: pareto.json and pareto.png")

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import math
 import tomllib
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields, replace
 from importlib import resources
 from pathlib import Path
 from typing import Any
@@ -508,6 +508,20 @@ def scene_from_dict(data: dict, name: str = "scene", source: str | None = None) 
     dynamics = (_parse_dynamics(top.sub("dynamics"), motion, follower) if "dynamics" in data
                 else None)
     return Scene(name, motion, follower, contact, design, guide, dynamics)
+
+
+def with_design(scene: Scene, **overrides) -> Scene:
+    """The scene with some [design] keys replaced, checked by the same rules as a scene file.
+
+    Raises :class:`SceneError` naming ``design.<key>`` (and nothing is changed) when a value is
+    not allowed, e.g. ``alpha = gamma = 0``.
+    """
+    if scene.design is None:
+        raise SceneError("design", _MISSING, "the scene has no [design] section to override")
+    table = {f.name: getattr(scene.design, f.name) for f in fields(DesignSpec)}
+    table = {k: list(v) if isinstance(v, tuple) else v for k, v in table.items()}
+    design = _parse_design(_Reader({**table, **overrides}, "design", None))
+    return replace(scene, design=design)
 
 
 def parse_scene(text: str, name: str = "scene", source: str | None = None) -> Scene:

@@ -123,3 +123,18 @@ def test_absent_sections_compute_nothing():
 def test_unknown_builtin_and_missing_file(tmp_path):
     with pytest.raises(SceneError, match="no such file"):
         camjax.load_scene(tmp_path / "nope.toml")
+
+
+def test_design_overrides_are_checked_by_the_scene_rules():
+    from camjax.scene import with_design
+
+    scene = camjax.load_scene("default")
+    assert with_design(scene) == scene  # the spec round-trips through the parser unchanged
+    changed = with_design(scene, alpha=2.0, seed=4, mode="pointwise")
+    assert (changed.design.alpha, changed.design.seed, changed.design.mode) == (2.0, 4, "pointwise")
+    assert changed.design.gamma == scene.design.gamma
+    for bad, field in (({"alpha": -1.0}, "design.alpha"), ({"seed": 1.5}, "design.seed"),
+                       ({"alpha": 0.0, "gamma": 0.0}, "design.alpha"), ({"solver": "newton"}, "design.solver")):
+        with pytest.raises(SceneError) as info:
+            with_design(scene, **bad)
+        assert info.value.field == field
