@@ -9,7 +9,19 @@ import jax
 
 jax.config.update("jax_enable_x64", True)
 
-from camjax import contact, geometry, laws, loads, numerics, problem, program  # noqa: E402
+from camjax import (  # noqa: E402
+    contact,
+    evaluate,
+    geometry,
+    laws,
+    loads,
+    numerics,
+    output,
+    pipeline,
+    problem,
+    program,
+    runtime,
+)
 from camjax.contact import Material, hertz_line_stress  # noqa: E402
 from camjax.evaluate import DesignCurves, SceneArrays, evaluate_design, scene_arrays  # noqa: E402
 from camjax.laws import (  # noqa: E402
@@ -37,7 +49,7 @@ __all__ = [
     "fourier_law", "geometry", "get_law", "hertz_line_stress", "joints", "laws", "load_scene",
     "loads", "numerics", "parse_scene", "polynomial_law", "program", "scene_arrays",
     "stepped_law", "design_report", "report", "DesignCurves", "DesignRun", "Report", "analyse",
-    "evaluate_design", "run_design",
+    "evaluate_design", "run_design", "evaluate", "output", "pipeline", "runtime",
     "Design", "Problem", "Weights", "problem", "problem_from_scene", "solvers",
 ]
 
