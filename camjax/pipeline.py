@@ -13,7 +13,9 @@ Data flows one way and each step is a pure function:
    JSON-ready dict.
 
 :func:`run_design` runs 1-4 and returns a :class:`DesignRun`; :func:`analyse` adds the report
-dict. Nothing here draws or writes files (``camjax.output`` and ``cli.py`` do).
+dict. :func:`sweep_scene` solves the [design] problem for many weightings in this process (the
+CLI hands blocks to ``camjax.scaleout`` instead when asked). Nothing here draws or writes files
+(``camjax.output`` and ``cli.py`` do).
 """
 
 from __future__ import annotations
