@@ -5,7 +5,8 @@ import math
 import ezdxf
 import numpy as np
 import pytest
-from test_report import ROLLER, reference_motion
+from reference import reference_motion
+from test_report import ROLLER
 
 import camjax
 from camjax import pipeline

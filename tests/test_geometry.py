@@ -6,6 +6,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
+from reference import reference_motion
 
 from camjax import geometry
 from camjax.laws import get_law
@@ -27,9 +28,7 @@ def test_min_base_radius_dense_independent():
     # dense NumPy search over the return (the binding segment): the continuous minimum lies
     # within the 1 deg grid's resolution of the sampled one
     x = np.linspace(0, 1, 600_001)
-    h, beta = 5.0, math.radians(60)
-    s = h * (1 - (x - np.sin(2 * np.pi * x) / (2 * np.pi)))
-    a = -h * 2 * np.pi * np.sin(2 * np.pi * x) / beta**2
+    s, _, a = reference_motion(300.0 + 60.0 * x)  # the return, 300..360 deg
     dense = np.max(-(s + a))
     kin = evaluate(MotionProgram.from_segments(
         [Segment("dwell", 100), Segment("rise", 80, get_law("cycloidal"), 5.0), Segment("dwell", 120),

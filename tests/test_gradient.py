@@ -5,7 +5,7 @@ import dataclasses
 import jax
 import numpy as np
 import pytest
-from conftest import numpy_reference_optimum
+from reference import numpy_reference_optimum
 
 import camjax
 from camjax import problem as P

@@ -12,20 +12,14 @@ from camjax import contact, geometry, loads
 from camjax.numerics import RHO_FLOOR_MM
 
 
-def test_reference_force_and_torque(default_arrays):
+def test_reference_force_and_torque(default_arrays, reference_1deg):
     f = np.asarray(default_arrays.force_N)
     # SPEC 5: peak cam force 68.45 N at 344 deg (within 0.05 N)
     assert f.max() == pytest.approx(68.45, abs=0.05)
     assert int(np.argmax(f)) == 344
-    # independent recomputation at 344 deg from the closed-form cycloid (SI)
+    # independent recomputation from the closed-form cycloid (tests/reference.py)
+    np.testing.assert_allclose(f, reference_1deg.force_N, rtol=1e-12)
     w = 8 * math.pi
-    x = (344 - 300) / 60
-    beta = math.radians(60)
-    s = 5.0 * (1 - (x - math.sin(2 * math.pi * x) / (2 * math.pi)))
-    v = -5.0 * (1 - math.cos(2 * math.pi * x)) / beta
-    a = -5.0 * 2 * math.pi * math.sin(2 * math.pi * x) / beta**2
-    ref = 1.0 * a * w**2 * 1e-3 + 0.345 * v * w * 1e-3 + 3004 * (s + 13.0) * 1e-3 + 9.81
-    assert f[344] == pytest.approx(ref, rel=1e-12)
     t = np.asarray(default_arrays.torque_Nm)
     np.testing.assert_allclose(t, f * np.asarray(default_arrays.motion.velocity) / w, rtol=1e-12)
 

@@ -8,9 +8,9 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
-from conftest import numpy_reference_optimum
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from reference import numpy_reference_optimum
 
 from camjax import problem as P
 from camjax.solvers import gradient as G
@@ -81,7 +81,7 @@ def test_reference_case_reproduces_source_figures(problem):
                 float(problem.theta_deg[j]))
 
     r, r_deg, length, l_deg = largest(1.0, 1.0)
-    ref = numpy_reference_optimum(1.0, 1.0)  # independent NumPy closed form (conftest)
+    ref = numpy_reference_optimum(1.0, 1.0)  # independent NumPy closed form (tests/reference.py)
     assert 28.3 <= r <= 28.4 and r == pytest.approx(ref[0], abs=1e-9) and r_deg == ref[1] == 315.0
     assert length == pytest.approx(ref[2], abs=1e-12) and l_deg == ref[3] == 330.0
     assert largest(10.0, 1.0)[0] == pytest.approx(numpy_reference_optimum(10.0, 1.0)[0], abs=1e-9)

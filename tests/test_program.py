@@ -6,6 +6,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
+from reference import reference_motion
 
 from camjax.laws import get_law, polynomial_law
 from camjax.program import MotionProgram, Segment, evaluate, joints, motion_at, time_kinematics
@@ -21,29 +22,10 @@ def ref_program(law="cycloidal", lift=5.0):
     )
 
 
-def numpy_cycloid_reference(theta_deg):
-    """Independent NumPy evaluation of the reference program (SPEC 5), per radian."""
-    th = np.asarray(theta_deg, dtype=float)
-    s, v, a = (np.zeros_like(th) for _ in range(3))
-    h, b1, b2 = 5.0, math.radians(80), math.radians(60)
-    m = (th >= 100) & (th < 180)
-    x = (th[m] - 100) / 80
-    s[m] = h * (x - np.sin(2 * np.pi * x) / (2 * np.pi))
-    v[m] = h * (1 - np.cos(2 * np.pi * x)) / b1
-    a[m] = h * 2 * np.pi * np.sin(2 * np.pi * x) / b1**2
-    s[(th >= 180) & (th < 300)] = h
-    m = th >= 300
-    x = (th[m] - 300) / 60
-    s[m] = h * (1 - (x - np.sin(2 * np.pi * x) / (2 * np.pi)))
-    v[m] = -h * (1 - np.cos(2 * np.pi * x)) / b2
-    a[m] = -h * 2 * np.pi * np.sin(2 * np.pi * x) / b2**2
-    return s, v, a
-
-
 @pytest.mark.parametrize("n", [360, 1000, 36000])
 def test_reference_program_matches_numpy(n):
     kin = evaluate(ref_program(), n)
-    s, v, a = numpy_cycloid_reference(np.arange(n) * 360.0 / n)
+    s, v, a = reference_motion(np.arange(n) * 360.0 / n)
     np.testing.assert_allclose(kin.s, s, atol=1e-12)
     np.testing.assert_allclose(kin.ds, v, atol=1e-12)
     np.testing.assert_allclose(kin.d2s, a, atol=1e-11)
@@ -118,7 +100,7 @@ def test_samples_between_and_on_boundaries():
     prog = ref_program()
     # 7 samples: none on a joint except 0 deg
     kin = evaluate(prog, 7)
-    ref = numpy_cycloid_reference(np.arange(7) * 360 / 7)
+    ref = reference_motion(np.arange(7) * 360 / 7)
     np.testing.assert_allclose(kin.s, ref[0], atol=1e-12)
     # exactly on a joint: the sample belongs to the segment that starts there
     at = motion_at(prog, jnp.asarray([100.0, 180.0, 300.0]))

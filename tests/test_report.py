@@ -1,46 +1,24 @@
-"""The design report against the reference case (SPEC 5) and independent NumPy computations."""
+"""The design report against the reference case (SPEC 5) and independent NumPy computations
+(tests/reference.py)."""
 
 import json
 import math
 
 import numpy as np
 import pytest
+from reference import (
+    CAM_SPEED_RAD_S,
+    LIFT_MM,
+    SIGMA_MAX_MPA,
+    hertz_stress_MPa,
+    reference_force,
+    reference_motion,
+)
 
 import camjax
 from camjax import pipeline
 from camjax.output import report
 from camjax.scene import builtin_scene_text, parse_scene
-
-# Reference case (SPEC 5), written out independently of the scene file.
-H_MM = 5.0
-RISE = (100.0, 80.0)  # start, span (deg)
-RETURN = (300.0, 60.0)
-OMEGA = 240 * 2 * math.pi / 60  # rad/s
-MASS, SPRING, PRELOAD_M, DAMPING, G = 1.0, 3004.0, 13e-3, 0.345, 9.81
-WIDTH_MM, NU1, NU2, E1, E2 = 10.0, 0.3, 0.26, 2.1e5, 1.15e5
-SIGMA_MAX = 1230.0
-
-
-def reference_motion(theta_deg):
-    """s (mm), s' (mm/rad), s'' (mm/rad^2) of the reference program, closed-form cycloids in NumPy."""
-    t = np.asarray(theta_deg, dtype=float) % 360.0
-    s, ds, d2s = np.zeros_like(t), np.zeros_like(t), np.zeros_like(t)
-    s[(t >= RISE[0] + RISE[1]) & (t < RETURN[0])] = H_MM
-    for (start, span), sign in ((RISE, 1.0), (RETURN, -1.0)):
-        beta = math.radians(span)
-        inside = (t >= start) & (t < start + span)
-        x = (t[inside] - start) / span
-        p = x - np.sin(2 * np.pi * x) / (2 * np.pi)
-        s[inside] = H_MM * p if sign > 0 else H_MM * (1 - p)
-        ds[inside] = sign * H_MM * (1 - np.cos(2 * np.pi * x)) / beta
-        d2s[inside] = sign * H_MM * 2 * np.pi * np.sin(2 * np.pi * x) / beta**2
-    return s, ds, d2s
-
-
-def reference_force(theta_deg):
-    s, ds, d2s = reference_motion(theta_deg)
-    y, v, a = s * 1e-3, ds * OMEGA * 1e-3, d2s * OMEGA**2 * 1e-3
-    return MASS * a + DAMPING * v + SPRING * (y + PRELOAD_M) + MASS * G
 
 
 def scene_with(*replacements, name="variant"):
@@ -75,7 +53,7 @@ def data(default_report):
 def test_velocity_matches_reference(data):
     # closed form: v = h p'max / beta * omega, p'max = 2 for the cycloid, at mid-segment
     v = data["kinematics"]["velocity_m_s"]
-    assert v["max"] == pytest.approx(H_MM * 1e-3 * 2 / math.radians(80) * OMEGA, rel=1e-12)
+    assert v["max"] == pytest.approx(LIFT_MM * 1e-3 * 2 / math.radians(80) * CAM_SPEED_RAD_S, rel=1e-12)
     assert v["max"] == pytest.approx(0.18, abs=5e-3)  # source: 0.18 m/s at 140 deg
     assert v["max_deg"] == 140.0
     assert v["min"] == pytest.approx(-0.24, rel=1e-12)  # source prints -0.239 (rounded)
@@ -86,7 +64,7 @@ def test_acceleration_matches_reference(data):
     # closed form 2 pi h / beta^2 omega^2 = 18.0956 m/s^2; the source prints 18.098, 0.013 % off
     # (rounding of pi or omega in its tables), so it is checked to 3e-3 m/s^2 only.
     a = data["kinematics"]["accel_m_s2"]
-    exact = 2 * math.pi * H_MM * 1e-3 / math.radians(60) ** 2 * OMEGA**2
+    exact = 2 * math.pi * LIFT_MM * 1e-3 / math.radians(60) ** 2 * CAM_SPEED_RAD_S**2
     assert a["max"] == pytest.approx(exact, rel=1e-12)
     assert a["min"] == pytest.approx(-exact, rel=1e-12)
     assert abs(a["max"] - 18.098) < 3e-3
@@ -104,12 +82,11 @@ def test_rise_acceleration_peaks_at_120_not_119():
     assert e["max"] == pytest.approx(10.176, abs=5e-3)
 
 
-def test_peak_force_matches_reference(data):
+def test_peak_force_matches_reference(data, reference_1deg):
     f = data["loads"]["force_N"]
     assert f["max"] == pytest.approx(68.45, abs=0.05)
     assert f["max_deg"] == 344.0
-    grid = np.arange(360.0)
-    independent = reference_force(grid)
+    independent = reference_1deg.force_N
     assert f["max"] == pytest.approx(independent.max(), rel=1e-12)
     assert data["loads"]["contact"]["lost"] is False
     assert data["loads"]["contact"]["min_force_N"] == pytest.approx(independent.min(), rel=1e-12)
@@ -133,7 +110,7 @@ def test_min_base_radius_matches_dense_numpy(data):
 
 def test_face_width_is_twice_largest_offset(data):
     # symmetric face 2 max|s'|: the return's peak offset 2h/beta; asymmetric max s' - min s'
-    ret, rise = 2 * H_MM / math.radians(60), 2 * H_MM / math.radians(80)
+    ret, rise = 2 * LIFT_MM / math.radians(60), 2 * LIFT_MM / math.radians(80)
     assert data["min_face_width_mm"] == pytest.approx(2 * ret, rel=1e-12)
     assert data["min_face_width_mm"] == pytest.approx(19.1, abs=0.01)  # source: L ~ 19.1 at 330 deg
     assert data["min_face_width_asymmetric_mm"] == pytest.approx(ret + rise, rel=1e-12)
@@ -146,42 +123,36 @@ def test_flcd_joints_of_reference_program(data):
     for j in joints.values():
         assert j["class"] == "perturbation"  # cycloid: s, s', s'' continuous, s''' jumps
     # jump of s''' entering the rise: h p'''(0) / beta^3 with p'''(0) = 4 pi^2
-    assert joints[100.0]["jump_j"] == pytest.approx(H_MM * 4 * np.pi**2 / math.radians(80) ** 3,
+    assert joints[100.0]["jump_j"] == pytest.approx(LIFT_MM * 4 * np.pi**2 / math.radians(80) ** 3,
                                                     rel=1e-12)
-    assert joints[300.0]["jump_j"] == pytest.approx(-H_MM * 4 * np.pi**2 / math.radians(60) ** 3,
+    assert joints[300.0]["jump_j"] == pytest.approx(-LIFT_MM * 4 * np.pi**2 / math.radians(60) ** 3,
                                                     rel=1e-12)
 
 
 # ---------------------------------------------------------------------------------- design
 
 
-def hertz_numpy(force_N, rho_mm):
-    k = (1 - NU1**2) / E1 + (1 - NU2**2) / E2
-    return 0.564 * np.sqrt(force_N / WIDTH_MM / (rho_mm * k))
-
-
-def test_design_is_the_optimum_of_an_independent_dense_scan(data):
+def test_design_is_the_optimum_of_an_independent_dense_scan(data, reference_1deg):
     d = data["design"]
     assert d["solver"] == "gradient" and d["mode"] == "global"
     assert d["feasible"] is True and d["violations"] == []
-    grid = np.arange(360.0)
-    s, ds, d2s = reference_motion(grid)
-    force = reference_force(grid)
+    s, ds, d2s = reference_1deg.s_mm, reference_1deg.ds_mm, reference_1deg.d2s_mm
+    force = reference_1deg.force_N
     # F(R) = (R + L)/65 + max_theta sigma(R)/1230 with L = 2 max|s'|, scanned in NumPy on a
     # 1e-5 mm grid around the optimum over the feasible R (rho > 0 and sigma <= sigma_max)
     width = 2 * np.max(np.abs(ds))
     radii = np.arange(24.2, 32.0, 1e-5)
-    peak = np.array([hertz_numpy(force, r + s + d2s).max() for r in radii[::100]])
-    coarse = radii[::100][np.argmin((radii[::100] + width) / 65.0 + peak / SIGMA_MAX)]
+    peak = np.array([hertz_stress_MPa(force, r + s + d2s).max() for r in radii[::100]])
+    coarse = radii[::100][np.argmin((radii[::100] + width) / 65.0 + peak / SIGMA_MAX_MPA)]
     fine = np.arange(coarse - 2e-3, coarse + 2e-3, 1e-6)
-    objective = np.array([(r + width) / 65.0 + hertz_numpy(force, r + s + d2s).max() / SIGMA_MAX for r in fine])
+    objective = np.array([(r + width) / 65.0 + hertz_stress_MPa(force, r + s + d2s).max() / SIGMA_MAX_MPA for r in fine])
     best = fine[np.argmin(objective)]
     # a 1e-6 mm scan of a smooth convex function: the minimizer is within a few grid steps
     assert d["base_radius_mm"] == pytest.approx(best, abs=1e-5)
     assert d["face_width_mm"] == pytest.approx(width, rel=1e-12)
-    at = hertz_numpy(force, d["base_radius_mm"] + s + d2s)
+    at = hertz_stress_MPa(force, d["base_radius_mm"] + s + d2s)
     assert data["stress_MPa"]["max"] == pytest.approx(at.max(), rel=1e-9)
-    assert d["objective"] == pytest.approx((d["base_radius_mm"] + width) / 65.0 + at.max() / SIGMA_MAX, rel=1e-9)
+    assert d["objective"] == pytest.approx((d["base_radius_mm"] + width) / 65.0 + at.max() / SIGMA_MAX_MPA, rel=1e-9)
     assert d["objective"] <= objective.min() + 1e-12
 
 
@@ -240,9 +211,7 @@ def test_loss_of_contact_located():
     scene = scene_with(("spring_N_per_m = 3004.0", "spring_N_per_m = 100.0"))
     data = pipeline.design_report(scene)
     grid = np.arange(360.0)
-    s, ds, d2s = reference_motion(grid)
-    force = MASS * d2s * OMEGA**2 * 1e-3 + DAMPING * ds * OMEGA * 1e-3 + 100.0 * (s * 1e-3 + PRELOAD_M) \
-        + MASS * G
+    force = reference_force(grid, spring_N_per_m=100.0)
     c = data["loads"]["contact"]
     assert c["lost"] is True
     assert c["min_force_N"] == pytest.approx(force.min(), rel=1e-12)

@@ -4,7 +4,7 @@ import json
 
 import numpy as np
 import pytest
-from conftest import numpy_reference_optimum
+from reference import numpy_reference_optimum
 
 from camjax import problem as P
 from camjax.solvers import sweep as S
@@ -78,7 +78,7 @@ def test_reference_pointwise_design_json(problem):
     res = S.solve(problem, 1.0, 1.0, mode="pointwise")
     d = res.to_json(problem)
     assert d["mode"] == "pointwise" and d["solver"] == "gradient" and d["feasible"] and d["converged"]
-    ref = numpy_reference_optimum(1.0, 1.0)  # independent NumPy closed form (conftest)
+    ref = numpy_reference_optimum(1.0, 1.0)  # independent NumPy closed form (tests/reference.py)
     assert d["base_radius_mm"] == pytest.approx(ref[0], abs=1e-6) and d["base_radius_deg"] == ref[1]
     assert d["face_width_mm"] == pytest.approx(ref[2], abs=1e-6) and d["face_width_deg"] == ref[3]
     assert len(d["pointwise"]["base_radius_mm"]) == 360
