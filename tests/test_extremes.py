@@ -1,5 +1,6 @@
 """Numerical stability at the extremes: property tests and the stability matrix."""
 
+import json
 import math
 
 import jax
@@ -8,13 +9,15 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from reference import reference_motion
 
 import camjax
 from camjax import contact, geometry, loads, program
-from camjax.extremes import _cycloid_numpy, run_matrix
 from camjax.laws import LAWS
 from camjax.numerics import precision_warning
 from camjax.program import MotionProgram, Segment
+from validation import extremes
+from validation.extremes import run_matrix
 
 LAW_NAMES = sorted(LAWS)
 
@@ -24,6 +27,7 @@ def matrix(default_scene):
     return run_matrix(default_scene)
 
 
+@pytest.mark.slow
 def test_matrix_has_no_failure_and_no_nonfinite(matrix):
     failed = [c for c in matrix if not c.passed]
     assert not failed, "\n".join(f"{c.group}: {c.name}: {c.value} vs {c.reference}" for c in failed)
@@ -41,6 +45,7 @@ def test_every_law_finite_and_bounded_for_all_x(name, x):
     assert float(v.dp) >= -1e-12
 
 
+@pytest.mark.slow
 @settings(max_examples=25, deadline=None)
 @given(st.floats(0.5, 359.5), st.floats(1e-6, 1e3), st.integers(1, 5000))
 def test_programs_match_numpy_for_any_angle_lift_grid(rise_deg, lift, n):
@@ -49,7 +54,7 @@ def test_programs_match_numpy_for_any_angle_lift_grid(rise_deg, lift, n):
         [Segment("rise", rise_deg, cyc, lift), Segment("return", 360.0 - rise_deg, cyc, lift)]
     )
     kin = program.evaluate(prog, n)
-    s_ref, v_ref = _cycloid_numpy(np.arange(n) * 360.0 / n, rise_deg, lift)
+    s_ref, v_ref, _ = reference_motion(np.arange(n) * 360.0 / n, lift, (0.0, rise_deg), (rise_deg, 360.0 - rise_deg))
     np.testing.assert_allclose(kin.s, s_ref, atol=1e-12 * lift)
     # the derivative carries 1/beta: relative to its own peak
     np.testing.assert_allclose(kin.ds, v_ref, atol=1e-12 * max(np.max(np.abs(v_ref)), 1e-300))
@@ -113,7 +118,7 @@ def test_nan_or_inf_in_a_scene_is_rejected_with_the_field():
 
 
 def test_check_extremes_command_writes_report(tmp_path, monkeypatch):
-    from camjax import cli, extremes
+    from camjax import cli
 
     # the full matrix runs in test_matrix_has_no_failure...; here only the command's plumbing
     monkeypatch.setattr(
@@ -125,8 +130,72 @@ def test_check_extremes_command_writes_report(tmp_path, monkeypatch):
         ],
     )
     rc = cli.main(["check-extremes", "--out", str(tmp_path / "x")])
-    import json
-
     data = json.loads((tmp_path / "x" / "extremes.json").read_text())
     assert rc == 1 and data["summary"] == {"cases": 2, "passed": 1, "failed": 1}
+    assert data["skipped"] == []  # the default scene declares every model the matrix uses
     assert (tmp_path / "x" / "extremes.txt").read_text().count("FAIL") == 1
+
+
+def _without(text, section):
+    head, _, rest = text.partition(f"[{section}]")
+    _, nxt, tail = rest.partition("\n[")
+    return head + (nxt + tail if nxt else "")
+
+
+def test_groups_needing_an_undeclared_model_are_skipped_with_the_reason():
+    text = camjax.scene.builtin_scene_text("default")
+    no_contact = camjax.parse_scene(_without(_without(text, "design"), "contact"), "nocontact")
+    skipped = {s["group"]: s["reason"] for s in extremes.skipped_groups(no_contact)}
+    assert sorted(skipped) == ["geometry and stress", "optimization", "precision"]
+    assert all("[contact]" in r and "'nocontact'" in r for r in skipped.values())
+    assert "[design]" in skipped["optimization"]
+    kinematic = _without(_without(text, "design"), "contact")
+    for line in ("mass_kg = 1.0\n", "spring_N_per_m = 3004.0\n", "preload_mm = 13.0\n",
+                 "damping_Ns_per_m = 0.345\n", "gravity_m_s2 = 9.81\n"):
+        kinematic = kinematic.replace(line, "")
+    skipped = extremes.skipped_groups(camjax.parse_scene(kinematic, "kinematic"))
+    assert [s["group"] for s in skipped] == ["geometry and stress", "speed", "precision", "optimization"]
+    assert "follower.mass_kg" in skipped[1]["reason"]
+    assert extremes.skipped_groups(camjax.load_scene()) == []
+
+
+def test_check_extremes_reports_skipped_groups(tmp_path, monkeypatch, capsys):
+    from camjax import cli
+
+    seen = []
+    monkeypatch.setattr(extremes, "run_matrix",
+                        lambda scene, progress=None: seen.append(scene.name) or [extremes._case("d", "a", 1, 1, 0)])
+    scene = tmp_path / "nocontact.toml"
+    scene.write_text(_without(_without(camjax.scene.builtin_scene_text("default"), "design"), "contact"))
+    rc = cli.main(["check-extremes", str(scene), "--out", str(tmp_path / "x")])
+    err = capsys.readouterr().err
+    data = json.loads((tmp_path / "x" / "extremes.json").read_text())
+    assert rc == 0 and seen == ["nocontact"]
+    assert [s["group"] for s in data["skipped"]] == ["geometry and stress", "precision", "optimization"]
+    for s in data["skipped"]:
+        assert f"skipping {s['group']}: {s['reason']}" in err
+
+
+@pytest.mark.slow
+def test_check_extremes_runs_on_a_scene_without_contact(tmp_path):
+    # the real matrix (no stubs) on a scene without [contact]: the groups it can run, no crash
+    from camjax import cli
+
+    scene = tmp_path / "nocontact.toml"
+    scene.write_text(_without(_without(camjax.scene.builtin_scene_text("default"), "design"), "contact"))
+    assert cli.main(["check-extremes", str(scene), "--out", str(tmp_path / "x")]) == 0
+    data = json.loads((tmp_path / "x" / "extremes.json").read_text())
+    assert {c["group"] for c in data["cases"]} == {"laws", "polynomials", "programs", "speed"}
+    assert data["summary"]["failed"] == 0
+
+
+def test_check_extremes_without_the_validation_folder_is_one_line(tmp_path, monkeypatch, capsys):
+    # an installed wheel has camjax/ but no validation/ beside it
+    from camjax import cli
+
+    monkeypatch.setattr(cli, "__file__", str(tmp_path / "site-packages" / "camjax" / "cli.py"))
+    rc = cli.main(["check-extremes", "--out", str(tmp_path / "x")])
+    err = capsys.readouterr().err
+    assert rc == 2 and len(err.strip().splitlines()) == 1
+    assert "validation" in err and "source checkout" in err and "Traceback" not in err
+    assert not (tmp_path / "x").exists()

@@ -3,6 +3,11 @@
 Each :class:`Case` records a computed value, an independent float64 reference (closed form,
 NumPy, or a float64 run of the same quantity for the precision table), the error, the tolerance
 with its reason, and pass/fail. ``camjax check-extremes`` runs :func:`run_matrix` and writes it.
+A group that needs a model the scene does not declare (loads, [contact], [design]) is skipped;
+:func:`skipped_groups` says which and why.
+
+This module lives beside the package, not in it: it is a test framework, shipped with the source
+checkout (``pip install -e .``) and not with an installed wheel.
 
 Not for ``jit``: this module drives the library from Python and reports; everything it calls is
 jitted/differentiated inside.
@@ -543,29 +548,65 @@ def optimization_cases(scene: Scene) -> list[Case]:
 # ----------------------------------------------------------------------------------- runner
 
 
+class Group(NamedTuple):
+    """One group of the matrix and the scene models it needs (names as in :meth:`Scene.needs`)."""
+
+    name: str
+    needs: frozenset[str]
+    run: Callable[[Scene], list[Case]]
+
+
+# What each model means in a scene file, for the line that says why a group was skipped.
+_MODEL_SOURCE = {
+    "loads": "the follower train (follower.mass_kg and/or follower.spring_N_per_m)",
+    "contact": "a [contact] section",
+    "design": "a [design] section",
+}
+
+GROUPS: tuple[Group, ...] = (
+    Group("laws", frozenset(), lambda scene: law_cases()),
+    Group("polynomials", frozenset(), lambda scene: polynomial_cases()),
+    Group("programs", frozenset(), lambda scene: program_cases()),
+    Group("geometry and stress", frozenset({"loads", "contact"}), geometry_cases),
+    Group("speed", frozenset({"loads"}), speed_cases),
+    Group("precision", frozenset({"loads", "contact"}), precision_cases),
+    Group("optimization", frozenset({"loads", "contact", "design"}), optimization_cases),
+)
+
+
+def _missing(scene: Scene, group: Group) -> list[str]:
+    return sorted(group.needs - scene.needs())
+
+
+def skipped_groups(scene: Scene) -> list[dict[str, str]]:
+    """The groups :func:`run_matrix` skips on ``scene``: ``{"group": name, "reason": sentence}``."""
+    out = []
+    for group in GROUPS:
+        missing = _missing(scene, group)
+        if missing:
+            wants = ", ".join(f"{m} ({_MODEL_SOURCE[m]})" for m in missing)
+            out.append({"group": group.name, "reason": f"needs {wants}, which scene {scene.name!r} "
+                        "does not declare"})
+    return out
+
+
 def run_matrix(
     scene: Scene | None = None,
     progress: Callable[[str], None] | None = None,
     extra_groups: Iterable[Callable[[Scene], list[Case]]] = (),
 ) -> list[Case]:
-    """Run every group of the matrix on ``scene`` (default: the embedded reference scene)."""
+    """Run every group of the matrix that ``scene`` supports (default: the embedded reference scene).
+
+    Groups needing a model the scene lacks are left out (see :func:`skipped_groups`).
+    """
     scene = scene or load_scene()
-    groups: list[tuple[str, Callable[[], list[Case]]]] = [
-        ("laws", law_cases),
-        ("polynomials", polynomial_cases),
-        ("programs", program_cases),
-        ("geometry and stress", lambda: geometry_cases(scene)),
-        ("speed", lambda: speed_cases(scene)),
-        ("precision", lambda: precision_cases(scene)),
-    ]
-    if scene.design is not None and scene.contact is not None:
-        groups.append(("optimization", lambda: optimization_cases(scene)))
-    groups += [(fn.__name__, lambda fn=fn: fn(scene)) for fn in extra_groups]
+    groups = [g for g in GROUPS if not _missing(scene, g)]
+    groups += [Group(fn.__name__, frozenset(), fn) for fn in extra_groups]
     cases: list[Case] = []
-    for name, fn in groups:
+    for group in groups:
         if progress:
-            progress(name)
-        cases.extend(fn())
+            progress(group.name)
+        cases.extend(group.run(scene))
     return cases
 
 
