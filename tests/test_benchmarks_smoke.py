@@ -5,6 +5,7 @@ from pathlib import Path
 
 import jax.numpy as jnp
 import numpy as np
+import pytest
 
 import camjax
 
@@ -15,6 +16,7 @@ from benchmarks import harness, run, scaling  # noqa: E402
 from camjax import problem as P  # noqa: E402
 
 
+@pytest.mark.slow
 def test_fitness_implementations_agree():
     problem = P.problem_from_scene(camjax.load_scene(), samples=90)
     weights = P.weights_of(1.0, 1.0)

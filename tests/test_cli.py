@@ -31,6 +31,7 @@ def design_run(tmp_path_factory):
     return rc, out
 
 
+@pytest.mark.slow
 def test_design_writes_every_declared_output(design_run):
     rc, out = design_run
     assert rc == 0
@@ -58,6 +59,7 @@ def test_design_writes_every_declared_output(design_run):
     assert data["design"]["mode"] == "global"
 
 
+@pytest.mark.slow
 def test_builtin_name_gives_the_same_result(design_run, tmp_path, monkeypatch):
     monkeypatch.setenv("CAMJAX_COMPILATION_CACHE", "0")
     _, out = design_run
@@ -125,6 +127,7 @@ def test_bad_arguments_exit_2(args, word, tmp_path, capsys):
     assert not out.exists()
 
 
+@pytest.mark.slow
 def test_console_entry_point_reports_without_traceback(tmp_path):
     # the real process: exit status 2 reaches the shell, stderr is one line
     scene = tmp_path / "bad.toml"

@@ -72,6 +72,7 @@ def test_block_sweep_equals_the_in_process_sweep(reference):
     assert stresses == sorted(stresses) and stresses[0] < stresses[-1]
 
 
+@pytest.mark.slow
 def test_sharded_equals_unsharded_on_4_host_devices():
     # a fresh interpreter: the device count is fixed when JAX starts its backend
     proc = subprocess.run([sys.executable, str(TESTS / "scaleout_sharded_check.py")],
@@ -92,6 +93,7 @@ def test_sharded_equals_unsharded_on_4_host_devices():
         assert res[f"records_{key}_rel_diff"] <= 1e-12, key
 
 
+@pytest.mark.slow
 def test_process_pool_survives_a_killed_worker(reference, tmp_path):
     marker = tmp_path / "crashed"
     backend = ProcessMap(workers=2)
@@ -109,6 +111,7 @@ def test_process_pool_survives_a_killed_worker(reference, tmp_path):
 
 
 # Ray launches its processes with fork+exec; JAX's warning about os.fork does not apply to that
+@pytest.mark.slow
 @pytest.mark.filterwarnings("ignore:os.fork:RuntimeWarning")
 def test_ray_sweep_matches_sequential_and_survives_a_killed_worker(reference, tmp_path):
     pytest.importorskip("ray")
@@ -207,6 +210,7 @@ def test_failing_block_is_retried_then_recorded_and_finished_on_resume(reference
     assert _records_by_block(tmp_path) == reference
 
 
+@pytest.mark.slow
 def test_cli_block_sweep_equals_in_process_sweep_and_resumes(tmp_path, capsys):
     from camjax.cli import main
 

@@ -287,6 +287,7 @@ harmonics = 200
 """
 
 
+@pytest.mark.slow
 def test_translating_follower_takes_its_spring_from_follower_and_jumps_at_a_root():
     scene = parse_scene(builtin_scene_text("default") + TRANSLATING, "translating")
     spec = scene.dynamics
@@ -324,6 +325,7 @@ def test_translating_follower_takes_its_spring_from_follower_and_jumps_at_a_root
 # --------------------------------------------------------------- drive and nonlinear FF
 
 
+@pytest.mark.slow
 def test_nonlinear_feedforward_removes_the_ripple_error(bench, bench_cam):
     """With drive flexibility, the linear cam still misses; the nonlinear one tracks.
 
@@ -396,6 +398,7 @@ def test_gradient_through_rk4_scan_matches_finite_differences(bench_cam):
     assert g == pytest.approx(fd, rel=1e-6)
 
 
+@pytest.mark.slow
 def test_gradient_of_the_jump_force_and_band_objective(bench, bench_cam):
     spec = bench.dynamics
     closure = d.closure_of(spec)
@@ -416,6 +419,7 @@ def test_gradient_of_the_jump_force_and_band_objective(bench, bench_cam):
     assert float(jax.grad(band_obj)(a5)) == pytest.approx(float(_central(band_obj, a5, 1e-7)), rel=1e-6)
 
 
+@pytest.mark.slow
 def test_gradient_through_the_drive_model_matches_finite_differences(bench, bench_cam):
     cam = d.trim_harmonics(bench_cam)
 
@@ -453,6 +457,7 @@ def test_kernels_do_not_retrace_for_new_parameter_values(bench_cam):
     assert (d.tracking_error_harmonics._cache_size(), d.max_abs._cache_size()) == before
 
 
+@pytest.mark.slow
 def test_law_shaping_lowers_band_vibration_and_keeps_the_lift(bench, bench_cam):
     c_phi, c_val = d._constraints(bench)
     lift = 2 * sum(h for _, h, _ in THESIS_NOMINAL.harmonics)  # S(2 pi) - S(pi), odd harmonics
@@ -517,6 +522,7 @@ damping_factors = [0.5, 1.0, 2.0]
 """
 
 
+@pytest.mark.slow
 def test_cli_dynamics_writes_json_and_figures(tmp_path):
     """The bench with a shorter settling; grid sizes match the tests above so kernels are reused."""
     text = builtin_scene_text("thesis-bench")
@@ -543,6 +549,7 @@ def test_cli_dynamics_refuses_a_scene_without_dynamics(tmp_path, capsys):
     assert not (tmp_path / "o").exists()
 
 
+@pytest.mark.slow
 def test_the_design_path_does_not_even_import_the_dynamics_models(tmp_path):
     """In a fresh process, `camjax design` on the default scene leaves camjax.dynamics unloaded:
     a scene without [dynamics] cannot trace (or even import) any dynamics code."""
