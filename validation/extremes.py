@@ -558,9 +558,9 @@ class Group(NamedTuple):
 
 # What each model means in a scene file, for the line that says why a group was skipped.
 _MODEL_SOURCE = {
-    "loads": "the follower train (follower.mass_kg and/or follower.spring_N_per_m)",
-    "contact": "a [contact] section",
-    "design": "a [design] section",
+    "loads": "loads (follower.mass_kg and/or follower.spring_N_per_m)",
+    "contact": "contact stress (a [contact] section)",
+    "design": "a design problem (a [design] section)",
 }
 
 GROUPS: tuple[Group, ...] = (
@@ -575,7 +575,7 @@ GROUPS: tuple[Group, ...] = (
 
 
 def _missing(scene: Scene, group: Group) -> list[str]:
-    return sorted(group.needs - scene.needs())
+    return [m for m in _MODEL_SOURCE if m in group.needs and m not in scene.needs()]
 
 
 def skipped_groups(scene: Scene) -> list[dict[str, str]]:
@@ -584,9 +584,10 @@ def skipped_groups(scene: Scene) -> list[dict[str, str]]:
     for group in GROUPS:
         missing = _missing(scene, group)
         if missing:
-            wants = ", ".join(f"{m} ({_MODEL_SOURCE[m]})" for m in missing)
-            out.append({"group": group.name, "reason": f"needs {wants}, which scene {scene.name!r} "
-                        "does not declare"})
+            wants = [_MODEL_SOURCE[m] for m in missing]
+            wants = " and ".join([", ".join(wants[:-1]), wants[-1]] if len(wants) > 1 else wants)
+            out.append({"group": group.name,
+                        "reason": f"needs {wants}, not declared by scene {scene.name!r}"})
     return out
 
 
