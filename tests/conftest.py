@@ -3,6 +3,8 @@
 Shared fixtures: the default scene, its arrays, and the reference case in NumPy (tests/reference.py).
 """
 
+import os
+
 import jax
 import pytest
 from reference import reference_case
@@ -12,6 +14,24 @@ import camjax  # noqa: F401  (enables x64)
 
 def pytest_configure(config):
     assert jax.config.jax_enable_x64, "camjax tests run in float64"
+    _persistent_compilation_cache(config)
+
+
+def _persistent_compilation_cache(config) -> None:
+    """Keep compiled kernels between test runs, in .pytest_cache/d/jax-compilation.
+
+    XLA compiles are most of the suite's time; with them cached, a repeated quick loop
+    (``-m "not slow"``) runs far faster. Turned on here, before any test, so a session does not
+    depend on which CLI test first turns on the command's own cache. CAMJAX_COMPILATION_CACHE=0 (or
+    ``-p no:cacheprovider``) runs without it, and then no CLI test turns one on either.
+    """
+    cache = getattr(config, "cache", None)
+    if os.environ.get("CAMJAX_COMPILATION_CACHE") == "0" or cache is None:
+        os.environ["CAMJAX_COMPILATION_CACHE"] = "0"
+        return
+    if not jax.config.jax_compilation_cache_dir:  # one set through JAX itself wins
+        jax.config.update("jax_compilation_cache_dir", str(cache.mkdir("jax-compilation")))
+        jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)
 
 
 @pytest.fixture(scope="session")

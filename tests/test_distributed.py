@@ -54,6 +54,7 @@ def _records_by_block(folder) -> dict:
     return {i: store.read_block(i)["records"] for i in sorted(store.finished())}
 
 
+@pytest.mark.slow
 def test_block_sweep_equals_the_in_process_sweep(reference):
     # the blocks, each rebuilt from the scene text, give the records of camjax.solvers.sweep.sweep
     recs = pareto_records([r for i in sorted(reference) for r in reference[i]])
@@ -142,6 +143,7 @@ class _Interrupt(BaseException):
     """Stands for Ctrl-C / a killed driver: not an Exception, so nothing catches it."""
 
 
+@pytest.mark.slow
 def test_interrupted_sweep_resumes_without_recomputing(reference, tmp_path):
     calls = []
 
@@ -175,6 +177,7 @@ def test_interrupted_sweep_resumes_without_recomputing(reference, tmp_path):
     assert again.computed == [] and again.skipped == [0, 1, 2, 3] and resumed == [2, 3]
 
 
+@pytest.mark.slow
 def test_resume_with_other_parameters_is_refused(reference, tmp_path):
     run_blocks(_blocks()[:1], tmp_path, SequentialMap(), block_size=BLOCK_SIZE)
     other = make_blocks(SCENES, WEIGHTINGS, 4, SweepSpec())
@@ -187,6 +190,7 @@ def test_resume_with_other_parameters_is_refused(reference, tmp_path):
         run_blocks(_blocks(), tmp_path, SequentialMap(), block_size=BLOCK_SIZE)
 
 
+@pytest.mark.slow
 def test_failing_block_is_retried_then_recorded_and_finished_on_resume(reference, tmp_path):
     attempts = []
 

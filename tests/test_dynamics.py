@@ -88,6 +88,7 @@ def test_nominal_error_and_exact_compensation(bench_cam):
     assert compensated < 1e-15 * 0.5
 
 
+@pytest.mark.slow
 def test_time_form_of_the_compensation_equals_the_harmonic_inverse(bench, bench_cam):
     phi = d.cam_grid(512)
     timeform = d.compensate_time(d._program_values(bench, phi), PLANT, W_BENCH)
@@ -195,6 +196,7 @@ def test_rk4_matches_solve_ivp_on_a_transient(bench_cam):
     np.testing.assert_allclose(np.asarray(last.angle), sol.y[0], rtol=0, atol=2e-8)
 
 
+@pytest.mark.slow
 def test_harmonic_steady_state_agrees_with_rk4_after_transients(bench_cam):
     """Run RK4 from rest until e^{-zeta wn t} < 1e-9; the harmonic solution is the limit.
 
@@ -244,6 +246,7 @@ def _first_negative_bracket(fmin, speeds):
     return speeds[k - 1], speeds[k]
 
 
+@pytest.mark.slow
 def test_jump_speed_agrees_with_brentq(bench, bench_cam):
     spec = bench.dynamics
     closure = d.closure_of(spec)
@@ -263,6 +266,7 @@ def test_jump_speed_agrees_with_brentq(bench, bench_cam):
     assert hz == pytest.approx(2.9363, abs=1e-3)  # just below 2.96 Hz: the 5th-harmonic resonance
 
 
+@pytest.mark.slow
 def test_min_preload_and_spring_rate_put_the_force_at_zero(bench, bench_cam):
     spec = bench.dynamics
     closure = d.closure_of(spec)
@@ -350,6 +354,7 @@ def test_nonlinear_feedforward_removes_the_ripple_error(bench, bench_cam):
     assert errs["nonlinear"] < 1e-4 * errs["nominal"]
 
 
+@pytest.mark.slow
 def test_drive_reduces_to_the_train_when_the_coupling_is_rigid(bench_cam):
     """Stiff, well-damped coupling: theta1 ~ Omega t and the load follows the rigid-drive train.
 
@@ -387,6 +392,7 @@ def test_gradient_of_the_steady_state_error_matches_finite_differences(bench_cam
         assert float(g[i]) == pytest.approx(float(fd), rel=1e-6)
 
 
+@pytest.mark.slow
 def test_gradient_through_rk4_scan_matches_finite_differences(bench_cam):
     u = d.evaluate_cam(bench_cam, d.cam_grid(180)).f
 

@@ -60,6 +60,7 @@ def test_programs_match_numpy_for_any_angle_lift_grid(rise_deg, lift, n):
     np.testing.assert_allclose(kin.ds, v_ref, atol=1e-12 * max(np.max(np.abs(v_ref)), 1e-300))
 
 
+@pytest.mark.slow
 @settings(max_examples=40, deadline=None)
 @given(st.floats(-3.0, 1.0), st.floats(0.0, 20_000.0))
 def test_stress_force_and_gradients_finite_for_any_radius_and_speed(log_factor, rpm):

@@ -24,6 +24,7 @@ def test_slsqp_pointwise_matches_closed_form(problem, alpha, gamma):
     np.testing.assert_allclose(res.face_width_mm, np.asarray(ref.face_width_mm)[angles], atol=1e-5)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("alpha,gamma", [(1.0, 1.0), (10.0, 1.0)])
 def test_global_gradient_agrees_with_slsqp_and_differential_evolution(problem, alpha, gamma):
     ours = G.solve_global(problem, P.weights_of(alpha, gamma))
@@ -36,6 +37,7 @@ def test_global_gradient_agrees_with_slsqp_and_differential_evolution(problem, a
     assert float(ours.objective) <= float(de.objective) + 1e-9
 
 
+@pytest.mark.slow
 def test_differential_evolution_pointwise_at_the_binding_angles(problem):
     res = SB.differential_evolution_pointwise(problem, 1.0, 1.0, [315], seed=0, popsize=10)
     ref = P.pointwise_optimum(problem, P.weights_of(1.0, 1.0))
