@@ -10,6 +10,7 @@ import pytest
 from reference import reference_case
 
 import camjax  # noqa: F401  (enables x64)
+from camjax.runtime import use_compilation_cache
 
 
 def pytest_configure(config):
@@ -30,8 +31,7 @@ def _persistent_compilation_cache(config) -> None:
         os.environ["CAMJAX_COMPILATION_CACHE"] = "0"
         return
     if not jax.config.jax_compilation_cache_dir:  # one set through JAX itself wins
-        jax.config.update("jax_compilation_cache_dir", str(cache.mkdir("jax-compilation")))
-        jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)
+        use_compilation_cache(cache.mkdir("jax-compilation"))
 
 
 @pytest.fixture(scope="session")

@@ -122,6 +122,7 @@ def test_bad_weights_are_refused(problem):
 # ------------------------------------------------------------------------------------- CLI
 
 
+@pytest.mark.slow
 def test_cli_sweep_writes_pareto_json_and_png(tmp_path):
     from camjax import cli
 
