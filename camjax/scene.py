@@ -102,7 +102,7 @@ class DynamicsSpec:
     c3: float  # load damping to ground
     k23: float  # follower-to-load stiffness
     cam_speed_hz: float  # cam speed (from motion.rpm unless given)
-    compute: tuple[str, ...]  # subset of DYNAMICS_COMPUTE
+    compute: tuple[str, ...] = ("compensation", "robustness", "time_domain")  # of DYNAMICS_COMPUTE
     I2: float = 0.0  # follower inertia (drive power balance, contact force)
     I1: float | None = None  # cam-side inertia, kg m^2 (drive flexibility)
     k01: float | None = None  # motor-to-cam coupling stiffness, N m/rad
@@ -112,7 +112,7 @@ class DynamicsSpec:
     follower_damping: float = 0.0  # c2 to ground on the follower
     weight: float = 0.0  # constant load on the cam (m g, N; translating only)
     samples: int = 720  # cam-angle grid of the dynamics
-    harmonics: int = 60  # harmonics kept from the FFT of the cam law
+    harmonics: int = 60  # harmonics kept from the FFT of the cam law (below samples / 2)
     steps_per_cycle: int = 720  # RK4 steps per cam revolution
     transient_tolerance: float = 1e-9  # time-domain runs until e^{-zeta wn t} is below this
     max_cycles: int = 600  # cap on the simulated revolutions
@@ -121,7 +121,7 @@ class DynamicsSpec:
     wn_factors: tuple[float, ...] = (0.8, 0.9, 1.0, 1.1, 1.2)
     jump_speed_range_hz: tuple[float, float] | None = None  # default: 0.05x .. 10x cam speed
     shaping_band: tuple[float, float] = (0.9, 1.1)  # speed band, factors of the cam speed
-    shaping_harmonics: int = 15
+    shaping_harmonics: int = 15  # at most harmonics
     shaping_steps: int = 200
 
     @property
@@ -394,9 +394,7 @@ def _parse_guide(r: _Reader) -> Guide:
                  r.number("guide_friction", low=0.0), r.number("overhang_ratio", low=0.0))
 
 
-def _number_list(r: _Reader, key: str, default: tuple[float, ...]) -> tuple[float, ...]:
-    if not r.has(key):
-        return default
+def _number_list(r: _Reader, key: str) -> tuple[float, ...]:
     v = r.table[key]
     ok = (isinstance(v, list) and v and all(isinstance(x, int | float) and not isinstance(x, bool)
                                              and math.isfinite(x) and x > 0 for x in v))
@@ -406,6 +404,8 @@ def _number_list(r: _Reader, key: str, default: tuple[float, ...]) -> tuple[floa
 
 
 def _parse_dynamics(r: _Reader, motion: MotionSpec, follower: FollowerSpec) -> DynamicsSpec:
+    """Only the keys the scene gives (and what other sections imply) override the defaults of
+    :class:`DynamicsSpec`, which are written there once."""
     r.check_keys(("follower", "I3", "c3", "k23", "I2", "I1", "k01", "c01", "cam_speed_hz", "compute",
                   "spring_rate", "spring_preload", "follower_damping", "weight", "samples",
                   "harmonics", "steps_per_cycle", "transient_tolerance", "max_cycles",
@@ -419,57 +419,65 @@ def _parse_dynamics(r: _Reader, motion: MotionSpec, follower: FollowerSpec) -> D
                 raise SceneError(f"motion.segments[{i}].lift_mm", lift, "with an oscillating follower "
                                  "the lift is read as rad; more than half a turn is not a cam",
                                  "lifts <= pi rad", r.source)
-    train = follower.train if kind == "translating" else None
     default_speed = motion.rpm / 60.0
-    speed = r.number("cam_speed_hz", default_speed if default_speed > 0 else _MISSING, low=0.0,
-                     low_open=True)
-    compute = r.table.get("compute", ["compensation", "robustness", "time_domain"])
+    kw: dict[str, Any] = {
+        "follower": kind,
+        "I3": r.number("I3", low=0.0, low_open=True),
+        "c3": r.number("c3", low=0.0),
+        "k23": r.number("k23", low=0.0, low_open=True),
+        "cam_speed_hz": r.number("cam_speed_hz", default_speed if default_speed > 0 else _MISSING,
+                                 low=0.0, low_open=True),
+    }
+    compute = r.table.get("compute", list(DynamicsSpec.compute))
     if not (isinstance(compute, list) and all(c in DYNAMICS_COMPUTE for c in compute)):
         raise r.error("compute", compute, "must be a list of analyses", ", ".join(DYNAMICS_COMPUTE))
+    kw["compute"] = tuple(dict.fromkeys(compute))
     drive_keys = [k for k in ("I1", "k01", "c01") if r.has(k)]
     if drive_keys and len(drive_keys) != 3:
         raise r.error(drive_keys[0], r.table[drive_keys[0]], "drive flexibility needs all of I1, k01, c01")
     if not drive_keys and ("drive" in compute or "nonlinear" in compute):
         raise r.error("compute", compute, "'drive' and 'nonlinear' need the drive: give I1, k01, c01")
-    spring_default = train.spring_N_per_m if train is not None and train.spring_N_per_m > 0 else None
-    spring = r.number("spring_rate", spring_default, low=0.0, low_open=True)
-    if "jump" in compute and spring is None:
+    for k in drive_keys:
+        kw[k] = r.number(k, low=0.0, low_open=(k != "c01"))
+    # a translating follower's [follower] train supplies the closure and the follower inertia
+    train = follower.train if kind == "translating" else None
+    if train is not None:
+        kw.update(I2=train.mass_kg, spring_preload=train.preload_mm * 1e-3,
+                  follower_damping=train.damping_Ns_per_m, weight=train.mass_kg * train.gravity_m_s2)
+        if train.spring_N_per_m > 0:
+            kw["spring_rate"] = train.spring_N_per_m
+    for key, low in (("I2", 0.0), ("spring_preload", None), ("follower_damping", 0.0), ("weight", None)):
+        if r.has(key):
+            kw[key] = r.number(key, low=low)
+    if r.has("spring_rate"):
+        kw["spring_rate"] = r.number("spring_rate", low=0.0, low_open=True)
+    if "jump" in compute and kw.get("spring_rate") is None:
         raise r.error("compute", compute, "'jump' needs a force-closure spring: give spring_rate "
                       "(or follower.spring_N_per_m for a translating follower)")
-    samples = r.number("samples", 720, low=8, high=1_000_000, integer=True)
-    harmonics = r.number("harmonics", min(60, samples // 2 - 1), low=1, integer=True)
+    for key, low, high in (("samples", 8, 1_000_000), ("steps_per_cycle", 8, 100_000),
+                           ("max_cycles", 2, 100_000), ("shaping_steps", 1, 100_000)):
+        if r.has(key):
+            kw[key] = r.number(key, low=low, high=high, integer=True)
+    samples = kw.get("samples", DynamicsSpec.samples)
+    # a coarse grid lowers the default harmonics (and with them the shaping harmonics)
+    harmonics = (r.number("harmonics", low=1, integer=True) if r.has("harmonics")
+                 else min(DynamicsSpec.harmonics, samples // 2 - 1))
     if harmonics >= samples / 2:
         raise r.error("harmonics", harmonics, "must be below samples / 2", f"< {samples / 2:g}")
-    shaping_harmonics = r.number("shaping_harmonics", min(15, harmonics), low=1, integer=True)
+    shaping_harmonics = (r.number("shaping_harmonics", low=1, integer=True) if r.has("shaping_harmonics")
+                         else min(DynamicsSpec.shaping_harmonics, harmonics))
     if shaping_harmonics > harmonics:
         raise r.error("shaping_harmonics", shaping_harmonics, "must not exceed harmonics", f"<= {harmonics}")
-    jump_range = r.interval("jump_speed_range_hz", None)
-    return DynamicsSpec(
-        kind,
-        r.number("I3", low=0.0, low_open=True),
-        r.number("c3", low=0.0),
-        r.number("k23", low=0.0, low_open=True),
-        speed,
-        tuple(dict.fromkeys(compute)),
-        r.number("I2", train.mass_kg if train is not None else 0.0, low=0.0),
-        *(r.number(k, low=0.0, low_open=(k != "c01")) if drive_keys else None for k in ("I1", "k01", "c01")),
-        spring,
-        r.number("spring_preload", train.preload_mm * 1e-3 if train is not None else 0.0),
-        r.number("follower_damping", train.damping_Ns_per_m if train is not None else 0.0, low=0.0),
-        r.number("weight", train.mass_kg * train.gravity_m_s2 if train is not None else 0.0),
-        samples,
-        harmonics,
-        r.number("steps_per_cycle", 720, low=8, high=100_000, integer=True),
-        r.number("transient_tolerance", 1e-9, low=0.0, low_open=True, high=0.5),
-        r.number("max_cycles", 600, low=2, high=100_000, integer=True),
-        _number_list(r, "damping_factors", DynamicsSpec.damping_factors),
-        _number_list(r, "speed_factors", DynamicsSpec.speed_factors),
-        _number_list(r, "wn_factors", DynamicsSpec.wn_factors),
-        jump_range,
-        r.interval("shaping_band", (0.9, 1.1)),
-        shaping_harmonics,
-        r.number("shaping_steps", 200, low=1, high=100_000, integer=True),
-    )
+    kw.update(harmonics=harmonics, shaping_harmonics=shaping_harmonics)
+    if r.has("transient_tolerance"):
+        kw["transient_tolerance"] = r.number("transient_tolerance", low=0.0, low_open=True, high=0.5)
+    for key in ("damping_factors", "speed_factors", "wn_factors"):
+        if r.has(key):
+            kw[key] = _number_list(r, key)
+    for key in ("jump_speed_range_hz", "shaping_band"):
+        if r.has(key):
+            kw[key] = r.interval(key)
+    return DynamicsSpec(**kw)
 
 
 SECTIONS = ("motion", "follower", "contact", "design", "guide", "dynamics")

@@ -23,7 +23,7 @@ import camjax
 import camjax.cli
 from camjax import dynamics as d
 from camjax.laws import THESIS_NOMINAL
-from camjax.scene import SceneError, builtin_scene_text, parse_scene
+from camjax.scene import DynamicsSpec, SceneError, builtin_scene_text, parse_scene
 
 W_BENCH = 2 * math.pi * 2.96
 PLANT = d.Plant(0.357, 0.205, 3050.0)
@@ -91,7 +91,7 @@ def test_nominal_error_and_exact_compensation(bench_cam):
 @pytest.mark.slow
 def test_time_form_of_the_compensation_equals_the_harmonic_inverse(bench, bench_cam):
     phi = d.cam_grid(512)
-    timeform = d.compensate_time(d._program_values(bench, phi), PLANT, W_BENCH)
+    timeform = d.compensate_time(d.program_values(bench, phi), PLANT, W_BENCH)
     harmonic = d.evaluate_cam(d.compensate_linear(bench_cam, PLANT, W_BENCH), phi).f
     np.testing.assert_allclose(timeform, harmonic, rtol=0, atol=1e-13)
 
@@ -203,7 +203,7 @@ def test_harmonic_steady_state_agrees_with_rk4_after_transients(bench_cam):
     Measured difference 1.4e-7 rad with M = 720 (2.8e-6 of the 0.049 rad error), and it falls
     as M^-4 (RK4): the gap is the integrator's, not the steady state's.
     """
-    cycles = d.settling_cycles(PLANT, W_BENCH, 1e-9)
+    cycles = d.settling_cycles(PLANT, W_BENCH, 1e-9, DynamicsSpec.max_cycles)
     assert 150 < cycles < 300
     diffs = []
     for m in (360, 720):
@@ -338,7 +338,7 @@ def test_nonlinear_feedforward_removes_the_ripple_error(bench, bench_cam):
     spec = bench.dynamics
     drive = d.drive_of(spec)
     cam = d.trim_harmonics(bench_cam)
-    m, cycles = 360, d.settling_cycles(PLANT, W_BENCH, 1e-5)
+    m, cycles = 360, d.settling_cycles(PLANT, W_BENCH, 1e-5, DynamicsSpec.max_cycles)
     target = d.evaluate_cam(cam, d.cam_grid(m)).f
     lin = d.compensate_linear(cam, PLANT, W_BENCH)
     nl = d.compensate_nonlinear(cam, drive, PLANT, W_BENCH, 60, cycles, m)
@@ -465,7 +465,7 @@ def test_kernels_do_not_retrace_for_new_parameter_values(bench_cam):
 
 @pytest.mark.slow
 def test_law_shaping_lowers_band_vibration_and_keeps_the_lift(bench, bench_cam):
-    c_phi, c_val = d._constraints(bench)
+    c_phi, c_val = d.shaping_constraints(bench)
     lift = 2 * sum(h for _, h, _ in THESIS_NOMINAL.harmonics)  # S(2 pi) - S(pi), odd harmonics
     np.testing.assert_allclose(c_val, [0.0, lift], atol=1e-12)
     band = W_BENCH * jnp.linspace(0.9, 1.1, 9)
