@@ -306,7 +306,6 @@ def _setup_dynamics(p: argparse.ArgumentParser):
 
     def run(args) -> int:
         from camjax.dynamics import scene_dynamics
-        from camjax.plots_dynamics import write_dynamics_figures
         from camjax.scene import load_scene
 
         check_dpi(args.dpi)
@@ -315,11 +314,33 @@ def _setup_dynamics(p: argparse.ArgumentParser):
             raise UsageError(f"scene '{scene.name}' has no [dynamics] section: nothing to compute "
                              "(allowed: a scene with [dynamics], e.g. thesis-bench)")
         runtime.enable_compilation_cache()
-        report = scene_dynamics(scene)
+
+        def progress(line: str) -> None:  # one write per line: two threads report
+            sys.stderr.write(f"camjax dynamics: {line}\n")
+            sys.stderr.flush()
+
+        rendered: dict[str, bytes] = {}
+
+        def figures(steady):  # runs while the time-domain analyses finish in a second thread
+            from camjax.plots_dynamics import render_dynamics_figures  # matplotlib: ~0.5 s
+
+            progress("figures")
+            rendered.update(render_dynamics_figures(steady.curves, steady.summary, args.dpi))
+
+        report = scene_dynamics(scene, progress, figures)
+        if report.settling is not None and not report.settling.settled:
+            st = report.settling
+            needs = (f"needs {st.cycles_needed} cycles" if st.cycles_needed is not None
+                     else "an undamped train never settles")
+            progress(f"warning: max_cycles = {st.cycles} stopped the time-domain runs before the "
+                     f"transient decayed ({needs}; residual factor {st.residual_factor:.3g} > "
+                     f"transient_tolerance = {scene.dynamics.transient_tolerance:g}); raise max_cycles")
+        from camjax.plots_dynamics import write_dynamics_figures
+
         with staged_output(args.out) as tmp:
             write_json(tmp / "dynamics.json", report.summary)
             names = ["dynamics.json"] + [f.name for f in write_dynamics_figures(
-                tmp, report.curves, report.summary, args.dpi)]
+                tmp, report.curves, report.summary, args.dpi, rendered)]
         s = report.summary
         unit = s["units"]["motion"]
         print(f"scene {s['scene']}: f_n = {s['natural_frequency_hz']:.3f} Hz, zeta = "

@@ -7,6 +7,8 @@ renders with Agg). :func:`write_dynamics_figures` saves the ones the report has 
 
 from __future__ import annotations
 
+import io
+from collections.abc import Iterable
 from pathlib import Path
 
 import numpy as np
@@ -144,17 +146,38 @@ def jump_figure(curves: dict, summary: dict) -> Figure:
     return fig
 
 
-def write_dynamics_figures(folder: Path, curves: dict, summary: dict, dpi: int = 100) -> list[Path]:
-    """Save every figure the report has data for as PNG in ``folder``; return the paths."""
-    figures = [("dynamics_motion.png", motion_figure, "nominal_load")]
-    figures += [("dynamics_compensated_cam.png", compensation_figure, "compensated"),
-                ("dynamics_robustness.png", robustness_figure, "rob"),
-                ("dynamics_drive.png", drive_figure, "drive_target"),
-                ("dynamics_jump.png", jump_figure, "jump_fmin")]
+FIGURES = (("dynamics_motion.png", motion_figure, "nominal_load"),
+           ("dynamics_compensated_cam.png", compensation_figure, "compensated"),
+           ("dynamics_robustness.png", robustness_figure, "rob"),
+           ("dynamics_drive.png", drive_figure, "drive_target"),
+           ("dynamics_jump.png", jump_figure, "jump_fmin"))
+"""(file name, figure function, the curve it needs), in the order they are written."""
+
+
+def render_dynamics_figures(curves: dict, summary: dict, dpi: int = 100,
+                            skip: Iterable[str] = ()) -> dict[str, bytes]:
+    """PNG bytes of every figure the report has data for, by file name (``skip``: names left out)."""
+    out = {}
+    for name, make, key in FIGURES:
+        if key in curves and name not in skip:
+            buffer = io.BytesIO()
+            make(curves, summary).savefig(buffer, format="png", dpi=dpi)
+            out[name] = buffer.getvalue()
+    return out
+
+
+def write_dynamics_figures(folder: Path, curves: dict, summary: dict, dpi: int = 100,
+                           rendered: dict[str, bytes] | None = None) -> list[Path]:
+    """Save every figure the report has data for as PNG in ``folder``; return the paths.
+
+    ``rendered``: figures already drawn (:func:`render_dynamics_figures`), written as they are.
+    """
+    pngs = dict(rendered or {})
+    pngs.update(render_dynamics_figures(curves, summary, dpi, skip=pngs))
     out = []
-    for name, make, key in figures:
-        if key in curves:
+    for name, _make, _key in FIGURES:
+        if name in pngs:
             path = Path(folder) / name
-            make(curves, summary).savefig(path, dpi=dpi)
+            path.write_bytes(pngs[name])
             out.append(path)
     return out

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import jax
@@ -406,18 +407,23 @@ def nonlinear(ctx: Context, settle: Settling) -> Nonlinear:
     return Nonlinear(_f(nl.fit_rms), spec.harmonics, nl.cam)
 
 
-def drive(ctx: Context, settle: Settling, nonlinear_cam: CamHarmonics | None = None) -> DriveResult:
-    """The nominal, linear (and nonlinear, when given) cams on the flexible drive."""
+def drive(ctx: Context, settle: Settling,
+          nonlinear_cam: Callable[[], CamHarmonics] | None = None) -> DriveResult:
+    """The nominal, linear (and nonlinear, when given) cams on the flexible drive.
+
+    ``nonlinear_cam`` is called after the other two runs: it may wait for the nonlinear
+    compensation computed meanwhile in another thread.
+    """
     spec, plant, omega, m = ctx.spec, ctx.plant, ctx.omega, ctx.spec.steps_per_cycle
     dr = drive_of(spec)
     grid_m = cam_grid(m)
     target = evaluate_cam(ctx.cam, grid_m).f
-    cams = {"nominal": ctx.cam, "linear": ctx.linear}
+    cams = {"nominal": lambda: ctx.cam, "linear": lambda: ctx.linear}
     if nonlinear_cam is not None:
         cams["nonlinear"] = nonlinear_cam
     runs = {}
-    for name, c in cams.items():
-        r = simulate_drive(trim_harmonics(c), dr, plant, omega, settle.cycles, m)
+    for name, get_cam in cams.items():
+        r = simulate_drive(trim_harmonics(get_cam()), dr, plant, omega, settle.cycles, m)
         runs[name] = DriveRun(_f(jnp.max(jnp.abs(r.cam_speed - omega)) / omega),
                               _f(jnp.max(jnp.abs(r.load - target))), _f(jnp.max(jnp.abs(r.cam_torque))),
                               np.asarray(r.cam_speed) / TWO_PI, np.asarray(r.load))
@@ -554,10 +560,35 @@ class DynamicsReport:
         return c
 
 
-def scene_dynamics(scene, progress: Callable[[str], None] | None = None) -> DynamicsReport:
+def _time_domain_runs(ctx: Context, settle: Settling, train: bool, with_drive: bool,
+                      say: Callable[[str], None]) -> dict:
+    """The time-domain entries (time_domain, nonlinear, drive) in their order of dependence."""
+    runs = f"{settle.cycles} cycles x {ctx.spec.steps_per_cycle} RK4 steps"
+    parts: dict = {}
+    nl = None
+    if with_drive and "nonlinear" in ctx.spec.compute:
+        # the nonlinear compensation runs beside the train and the first two drive runs
+        say(f"nonlinear ({runs})")
+        nl = ThreadPoolExecutor(1, thread_name_prefix="camjax-rk4-nl").submit(nonlinear, ctx, settle)
+    if train:
+        say(f"time_domain ({runs})")
+        parts["time_domain"] = time_domain(ctx, settle)
+    if with_drive:
+        say(f"drive ({runs} per cam)")
+        parts["drive"] = drive(ctx, settle, None if nl is None else lambda: nl.result().cam)
+    if nl is not None:
+        parts["nonlinear"] = nl.result()
+    return parts
+
+
+def scene_dynamics(scene, progress: Callable[[str], None] | None = None,
+                   meanwhile: Callable[[DynamicsReport], None] | None = None) -> DynamicsReport:
     """Run every analysis the scene's [dynamics] section lists. Not traceable (a report).
 
-    ``progress``, when given, is called with one line before each analysis.
+    ``progress``, when given, is called with one line before each analysis. ``meanwhile``, when
+    given, is called with the report of the steady-state analyses (time_domain, nonlinear and
+    drive still None) while the time-domain runs finish in a second thread: work that needs only
+    those (figures) overlaps the long RK4 loops.
     Raises ValueError if the scene has no [dynamics] section.
     """
     spec = scene.dynamics
@@ -568,34 +599,33 @@ def scene_dynamics(scene, progress: Callable[[str], None] | None = None) -> Dyna
     ctx = context(scene)
     nom = nominal(ctx)
     parts: dict = {}
+    needs_drive = spec.has_drive and ("drive" in compute or "nonlinear" in compute)
+    timed = None
+    if "time_domain" in compute or needs_drive:
+        settle = settling(ctx.plant, ctx.omega, spec.transient_tolerance, spec.max_cycles)
+        parts.update(settling=settle, max_cycles=spec.max_cycles,
+                     transient_tolerance=spec.transient_tolerance)
+        # the RK4 runs are long, sequential loops in XLA (which releases the GIL): run them in a
+        # thread so that the steady-state analyses below trace and run meanwhile
+        timed = ThreadPoolExecutor(1, thread_name_prefix="camjax-rk4").submit(
+            _time_domain_runs, ctx, settle, "time_domain" in compute, needs_drive, say)
     if "compensation" in compute or "robustness" in compute:
         say("compensation")
         parts["compensation"] = compensation(ctx, nom)
     if "robustness" in compute:
         say("robustness")
         parts["robustness"] = robustness(ctx)
-    needs_drive = spec.has_drive and ("drive" in compute or "nonlinear" in compute)
-    if "time_domain" in compute or needs_drive:
-        settle = settling(ctx.plant, ctx.omega, spec.transient_tolerance, spec.max_cycles)
-        parts.update(settling=settle, max_cycles=spec.max_cycles,
-                     transient_tolerance=spec.transient_tolerance)
-        runs = f"{settle.cycles} cycles x {spec.steps_per_cycle} RK4 steps"
-    if "time_domain" in compute:
-        say(f"time_domain ({runs})")
-        parts["time_domain"] = time_domain(ctx, settle)
-    if needs_drive:
-        nl_cam = None
-        if "nonlinear" in compute:
-            say(f"nonlinear ({runs})")
-            parts["nonlinear"] = nl = nonlinear(ctx, settle)
-            nl_cam = nl.cam
-        say(f"drive ({runs} per cam)")
-        parts["drive"] = drive(ctx, settle, nl_cam)
-    if "jump" in compute:
         say("jump")
         parts["jump"] = jump(ctx)
     if "shaping" in compute:
         say(f"shaping ({spec.shaping_steps} L-BFGS steps)")
         parts["shaping"] = shaping(ctx)
-    return DynamicsReport(scene.name, spec.follower, spec.cam_speed_hz, spec.samples, spec.harmonics,
-                          nom, **parts)
+    def report() -> DynamicsReport:
+        return DynamicsReport(scene.name, spec.follower, spec.cam_speed_hz, spec.samples, spec.harmonics,
+                              nom, **parts)
+
+    if meanwhile is not None:
+        meanwhile(report())
+    if timed is not None:
+        parts.update(timed.result())
+    return report()

@@ -1,0 +1,97 @@
+"""Wall time of camjax CLI commands against ``python -c "import jax"`` on the same machine.
+
+``python benchmarks/cli_timing.py [--runs 3] [--out FILE.json]`` prints (and writes) JSON:
+``cli.import_jax_s`` (median of the import runs) and, per command, ``cli.<name>_s`` and
+``cli.<name>_over_import`` (median of warm runs / median import time), with the per-phase
+lines the command printed on stderr timed as they arrived (``cli.<name>_phases_s``). Each
+command runs once untimed first so that the compilation cache is warm. CPU time (user + sys of
+the child) is reported beside the wall time (``cli.<name>_cpu_s``): on a shared machine the wall
+time also measures the other processes.
+
+One function per command (:func:`dynamics`); add another the same way.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import resource
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def _run(argv: list[str]) -> tuple[float, float, list[tuple[float, str]]]:
+    """(wall s, child CPU s, [(s since start, stderr line)]) of one run from the repository root."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    start = time.perf_counter()
+    proc = subprocess.Popen(argv, cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    lines = [(time.perf_counter() - start, line.rstrip("\n")) for line in proc.stderr]
+    if proc.wait() != 0:
+        raise RuntimeError(f"{' '.join(argv)} exited {proc.returncode}: {lines[-3:]}")
+    wall = time.perf_counter() - start
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    return wall, cpu, lines
+
+
+def _median_runs(argv: list[str], runs: int, warmup: bool = True) -> dict:
+    if warmup:
+        _run(argv)
+    results = [_run(argv) for _ in range(runs)]
+    walls = [r[0] for r in results]
+    pick = results[walls.index(sorted(walls)[len(walls) // 2])]
+    return {"wall_s": statistics.median(walls), "cpu_s": statistics.median(r[1] for r in results),
+            "walls_s": walls, "phases_s": pick[2]}
+
+
+def import_jax(runs: int) -> dict:
+    """``python -c "import jax"``: the reference every command is divided by."""
+    r = _median_runs([sys.executable, "-c", "import jax"], runs)
+    return {"cli.import_jax_s": r["wall_s"], "cli.import_jax_cpu_s": r["cpu_s"]}
+
+
+def dynamics(runs: int, reference: dict) -> dict:
+    """``camjax dynamics thesis-bench`` (this checkout's package, a temporary output folder)."""
+    with tempfile.TemporaryDirectory(prefix="camjax-cli-timing-") as tmp:
+        r = _median_runs([sys.executable, "-m", "camjax.cli", "dynamics", "thesis-bench",
+                          "--out", str(Path(tmp) / "out")], runs)
+    phases = {}
+    for (t, line), (t_next, _) in zip(r["phases_s"], [*r["phases_s"][1:], (r["wall_s"], "")], strict=True):
+        phases[line.removeprefix("camjax dynamics: ")] = round(t_next - t, 3)
+    return {"cli.dynamics_s": r["wall_s"], "cli.dynamics_walls_s": r["walls_s"],
+            "cli.dynamics_cpu_s": r["cpu_s"],
+            "cli.dynamics_over_import": r["wall_s"] / reference["cli.import_jax_s"],
+            "cli.dynamics_cpu_over_import": r["cpu_s"] / reference["cli.import_jax_cpu_s"],
+            "cli.dynamics_phases_s": phases}
+
+
+COMMANDS = {"dynamics": dynamics}
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--runs", type=int, default=3, help="timed warm runs per command (default 3)")
+    parser.add_argument("--out", type=Path, help="also write the JSON here")
+    parser.add_argument("commands", nargs="*", default=list(COMMANDS), help=f"of {', '.join(COMMANDS)}")
+    args = parser.parse_args(argv)
+    result = {"cpu_count": os.cpu_count(), "load_average_1min": os.getloadavg()[0]}
+    result.update(import_jax(args.runs))
+    for name in args.commands:
+        result.update(COMMANDS[name](args.runs, result))
+    result["load_average_1min_after"] = os.getloadavg()[0]
+    text = json.dumps(result, indent=2)
+    print(text)
+    if args.out:
+        args.out.write_text(text + "\n")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
