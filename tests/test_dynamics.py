@@ -179,6 +179,55 @@ def test_steady_state_matches_the_closed_form_1dof():
     np.testing.assert_allclose(got, amp * mag * np.cos(n * phi + p - lag), rtol=0, atol=1e-14)
 
 
+def _forced_oscillator_error(steps_per_cycle: int) -> tuple[float, float, float]:
+    """x'' + 2 zeta wn x' + wn^2 x = cos(w t) from rest through periodic_rk4, 20 cycles of
+    M steps: (max |x - x_ss| over the last cycle, |X|, wn h) against the closed-form steady
+    state x_ss = Re[X e^{i w t}], X = 1 / (wn^2 - w^2 + 2 i zeta wn w)."""
+    wn, zeta, w = 2 * math.pi * 3.0, 0.1, 2 * math.pi * 1.0
+    dt = 2 * math.pi / w / steps_per_cycle
+
+    def rhs(step, t, y, _):
+        time_s = step * dt + t
+        return jnp.stack([y[1], jnp.cos(w * time_s) - 2 * zeta * wn * y[1] - wn**2 * y[0]])
+
+    # transient e^{-zeta wn t} after 20 periods: e^{-37.7} = 4e-17, far below the RK4 error
+    last = d.periodic_rk4(rhs, jnp.zeros(2), dt, steps_per_cycle, 20)
+    x_amp = 1.0 / complex(wn**2 - w**2, 2 * zeta * wn * w)
+    t = np.arange(steps_per_cycle) * dt
+    exact = np.real(x_amp * np.exp(1j * w * t))
+    return float(np.max(np.abs(np.asarray(last[:, 0]) - exact))), abs(x_amp), wn * dt
+
+
+def test_periodic_rk4_reproduces_the_forced_oscillator_steady_state():
+    """Settle-then-record on a damped oscillator under harmonic forcing, against the closed form.
+
+    RK4 reproduces e^{lambda h} up to its (lambda h)^5 / 120 term per step, so the steady state
+    carries an error of order |X| (wn h)^4 / 120 (global order 4): that is the tolerance
+    (measured: about 1/6 of it). Halving h must divide the error by 2^4 = 16 (14..18 allowed:
+    the next term is O(h^5)).
+    """
+    err_200, x_amp, wn_h = _forced_oscillator_error(200)
+    assert err_200 <= x_amp * wn_h**4 / 120
+    err_400, _, _ = _forced_oscillator_error(400)
+    assert 14.0 < err_200 / err_400 < 18.0
+
+
+def test_settling_counts_cycles_and_says_when_max_cycles_cuts_it_short():
+    """cycles_needed = ceil(ln(1/tol) / (zeta wn T)) + 1 by hand for the bench (zeta wn from
+    c3 / (2 I3)); a cap below it gives settled = False and the residual e^{-zeta wn T cycles}."""
+    decay = 0.205 / (2 * 0.357)  # zeta wn = c3 / (2 I3), 1/s
+    period = 2 * math.pi / W_BENCH
+    needed = math.ceil(math.log(1e9) / (decay * period)) + 1
+    full = d.settling(PLANT, W_BENCH, 1e-9, 10 * needed)
+    assert (full.cycles, full.cycles_needed, full.settled) == (needed, needed, True)
+    assert full.residual_factor <= 1e-9
+    cut = d.settling(PLANT, W_BENCH, 1e-9, 20)
+    assert (cut.cycles, cut.cycles_needed, cut.settled) == (20, needed, False)
+    assert cut.residual_factor == pytest.approx(math.exp(-decay * period * 20), rel=1e-12)
+    undamped = d.settling(d.Plant(0.357, 0.0, 3050.0), W_BENCH, 1e-9, 50)
+    assert (undamped.cycles, undamped.cycles_needed, undamped.settled) == (50, None, False)
+
+
 def test_rk4_matches_solve_ivp_on_a_transient(bench_cam):
     """From rest, 2 cycles: RK4 (M = 720) against solve_ivp (DOP853, rtol 1e-12)."""
     m, cycles = 720, 2
@@ -547,6 +596,39 @@ def test_cli_dynamics_writes_json_and_figures(tmp_path):
         assert key in data
     for name in ("motion", "compensated_cam", "robustness", "drive", "jump"):
         assert (out / f"dynamics_{name}.png").stat().st_size > 1000
+    assert data["settling"]["settled"] is True
+    assert data["settling"]["cycles"] == data["time_domain"]["cycles"] == data["drive"]["cycles"]
+
+
+def test_cli_dynamics_warns_when_max_cycles_stops_the_transient(tmp_path, capsys):
+    """max_cycles = 3 on the bench (it needs 120 cycles for a tolerance of 1e-5): one warning
+    line on stderr, dynamics.json says settled = false with the residual e^{-zeta wn 3 T}."""
+    text = builtin_scene_text("thesis-bench")
+    text = text[: text.index("\n[dynamics]\n")] + """
+[dynamics]
+follower = "oscillating"
+I3 = 0.357
+c3 = 0.205
+k23 = 3050.0
+samples = 128
+harmonics = 20
+steps_per_cycle = 64
+transient_tolerance = 1e-5
+max_cycles = 3
+compute = ["time_domain"]
+"""
+    path = tmp_path / "bench.toml"
+    path.write_text(text)
+    assert camjax.cli.main(["dynamics", str(path), "--out", str(tmp_path / "out"), "--dpi", "30"]) == 0
+    warnings = [line for line in capsys.readouterr().err.splitlines() if "warning" in line]
+    assert len(warnings) == 1 and "max_cycles = 3" in warnings[0]
+    data = json.loads((tmp_path / "out" / "dynamics.json").read_text())
+    decay = 0.205 / (2 * 0.357)  # zeta wn = c3 / (2 I3)
+    assert data["settling"]["settled"] is False
+    assert data["settling"]["cycles"] == data["time_domain"]["cycles"] == 3
+    assert data["settling"]["cycles_needed"] == math.ceil(math.log(1e5) / (decay * 2 * math.pi / W_BENCH)) + 1
+    assert data["settling"]["residual_factor"] == pytest.approx(math.exp(-decay * 3 * 2 * math.pi / W_BENCH),
+                                                                rel=1e-12)
 
 
 def test_cli_dynamics_refuses_a_scene_without_dynamics(tmp_path, capsys):
