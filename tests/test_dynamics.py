@@ -637,6 +637,46 @@ def test_cli_dynamics_refuses_a_scene_without_dynamics(tmp_path, capsys):
     assert not (tmp_path / "o").exists()
 
 
+BASE_KEYS = {"scene", "follower", "units", "cam_speed_hz", "natural_frequency_hz", "damping_ratio",
+             "resonant_harmonic", "samples", "harmonics", "nominal"}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("entry, keys", [
+    ("compensation", {"compensated"}),
+    ("robustness", {"compensated", "robustness", "speed_wn_equivalence"}),
+    ("time_domain", {"time_domain", "settling"}),
+    ("drive", {"drive", "settling"}),
+    ("nonlinear", {"nonlinear", "drive", "settling"}),
+    ("jump", {"jump"}),
+    ("shaping", {"shaping"}),
+])
+def test_each_compute_entry_runs_alone_and_writes_only_its_keys(entry, keys):
+    """compute = [entry]: the report holds that analysis (and what it needs), nothing else."""
+    text = builtin_scene_text("thesis-bench")
+    text = text[: text.index("\n[dynamics]\n")] + f"""
+[dynamics]
+follower = "oscillating"
+I3 = 0.357
+c3 = 0.205
+k23 = 3050.0
+I2 = 0.126
+I1 = 2.1
+k01 = 3000.0
+c01 = 10.0
+spring_rate = 300.0
+spring_preload = 0.5
+samples = 128
+harmonics = 20
+steps_per_cycle = 64
+transient_tolerance = 0.01
+shaping_steps = 5
+compute = ["{entry}"]
+"""
+    report = d.scene_dynamics(parse_scene(text, "bench"))
+    assert set(report.summary) == BASE_KEYS | keys
+
+
 @pytest.mark.slow
 def test_the_design_path_does_not_even_import_the_dynamics_models(tmp_path):
     """In a fresh process, `camjax design` on the default scene leaves camjax.dynamics unloaded:

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass
 
 import jax
@@ -560,6 +560,15 @@ class DynamicsReport:
         return c
 
 
+def _start(fn, *args) -> Future:
+    """``fn(*args)`` in a thread of its own: XLA releases the GIL while it computes, so a long
+    XLA loop there overlaps the tracing, the other analyses and the figures in the caller."""
+    pool = ThreadPoolExecutor(1, thread_name_prefix="camjax-dynamics")
+    future = pool.submit(fn, *args)
+    pool.shutdown(wait=False)
+    return future
+
+
 def _time_domain_runs(ctx: Context, settle: Settling, train: bool, with_drive: bool,
                       say: Callable[[str], None]) -> dict:
     """The time-domain entries (time_domain, nonlinear, drive) in their order of dependence."""
@@ -569,7 +578,7 @@ def _time_domain_runs(ctx: Context, settle: Settling, train: bool, with_drive: b
     if with_drive and "nonlinear" in ctx.spec.compute:
         # the nonlinear compensation runs beside the train and the first two drive runs
         say(f"nonlinear ({runs})")
-        nl = ThreadPoolExecutor(1, thread_name_prefix="camjax-rk4-nl").submit(nonlinear, ctx, settle)
+        nl = _start(nonlinear, ctx, settle)
     if train:
         say(f"time_domain ({runs})")
         parts["time_domain"] = time_domain(ctx, settle)
@@ -585,10 +594,11 @@ def scene_dynamics(scene, progress: Callable[[str], None] | None = None,
                    meanwhile: Callable[[DynamicsReport], None] | None = None) -> DynamicsReport:
     """Run every analysis the scene's [dynamics] section lists. Not traceable (a report).
 
-    ``progress``, when given, is called with one line before each analysis. ``meanwhile``, when
-    given, is called with the report of the steady-state analyses (time_domain, nonlinear and
-    drive still None) while the time-domain runs finish in a second thread: work that needs only
-    those (figures) overlaps the long RK4 loops.
+    The long XLA loops (the time-domain runs, the jump search) run in threads of their own.
+    ``progress``, when given, is called with one line as each analysis starts. ``meanwhile``,
+    when given, is called with the report of the analyses done in this thread (compensation,
+    robustness, shaping; the others still None) while the threads finish: work that needs only
+    those (figures) overlaps the long loops.
     Raises ValueError if the scene has no [dynamics] section.
     """
     spec = scene.dynamics
@@ -599,33 +609,32 @@ def scene_dynamics(scene, progress: Callable[[str], None] | None = None,
     ctx = context(scene)
     nom = nominal(ctx)
     parts: dict = {}
+    threads: list[Future] = []
     needs_drive = spec.has_drive and ("drive" in compute or "nonlinear" in compute)
-    timed = None
     if "time_domain" in compute or needs_drive:
         settle = settling(ctx.plant, ctx.omega, spec.transient_tolerance, spec.max_cycles)
         parts.update(settling=settle, max_cycles=spec.max_cycles,
                      transient_tolerance=spec.transient_tolerance)
-        # the RK4 runs are long, sequential loops in XLA (which releases the GIL): run them in a
-        # thread so that the steady-state analyses below trace and run meanwhile
-        timed = ThreadPoolExecutor(1, thread_name_prefix="camjax-rk4").submit(
-            _time_domain_runs, ctx, settle, "time_domain" in compute, needs_drive, say)
+        threads.append(_start(_time_domain_runs, ctx, settle, "time_domain" in compute, needs_drive, say))
+    if "jump" in compute:
+        say("jump")
+        threads.append(_start(lambda: {"jump": jump(ctx)}))
     if "compensation" in compute or "robustness" in compute:
         say("compensation")
         parts["compensation"] = compensation(ctx, nom)
     if "robustness" in compute:
         say("robustness")
         parts["robustness"] = robustness(ctx)
-        say("jump")
-        parts["jump"] = jump(ctx)
     if "shaping" in compute:
         say(f"shaping ({spec.shaping_steps} L-BFGS steps)")
         parts["shaping"] = shaping(ctx)
+
     def report() -> DynamicsReport:
         return DynamicsReport(scene.name, spec.follower, spec.cam_speed_hz, spec.samples, spec.harmonics,
                               nom, **parts)
 
     if meanwhile is not None:
         meanwhile(report())
-    if timed is not None:
-        parts.update(timed.result())
+    for thread in threads:
+        parts.update(thread.result())
     return report()
