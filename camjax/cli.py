@@ -322,7 +322,7 @@ def _setup_dynamics(p: argparse.ArgumentParser):
         rendered: dict[str, bytes] = {}
 
         def figures(steady):  # runs while the time-domain analyses finish in a second thread
-            from camjax.plots_dynamics import render_dynamics_figures  # matplotlib: ~0.5 s
+            from camjax.output.plots_dynamics import render_dynamics_figures  # matplotlib: ~0.5 s
 
             progress("figures")
             rendered.update(render_dynamics_figures(steady.curves, steady.summary, args.dpi))
@@ -335,7 +335,7 @@ def _setup_dynamics(p: argparse.ArgumentParser):
             progress(f"warning: max_cycles = {st.cycles} stopped the time-domain runs before the "
                      f"transient decayed ({needs}; residual factor {st.residual_factor:.3g} > "
                      f"transient_tolerance = {scene.dynamics.transient_tolerance:g}); raise max_cycles")
-        from camjax.plots_dynamics import write_dynamics_figures
+        from camjax.output.plots_dynamics import write_dynamics_figures
 
         with staged_output(args.out) as tmp:
             write_json(tmp / "dynamics.json", report.summary)

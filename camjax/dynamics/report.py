@@ -541,7 +541,7 @@ class DynamicsReport:
 
     @property
     def curves(self) -> dict:
-        """name -> NumPy curve, for the figures (:mod:`camjax.plots_dynamics`)."""
+        """name -> NumPy curve, for the figures (:mod:`camjax.output.plots_dynamics`)."""
         n = self.nominal
         c = {"phi_deg": n.phi_deg, "nominal": n.cam, "nominal_load": n.load}
         if self.compensation is not None:

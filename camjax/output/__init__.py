@@ -3,4 +3,5 @@
 ``report`` formats a :class:`camjax.pipeline.DesignRun` as a JSON-ready dict, ``plots`` draws
 :class:`camjax.evaluate.DesignCurves` (matplotlib loads only when drawing) and ``export`` writes
 the profile CSV, DXF and the PNG figures; ``files`` stages a job's folder and writes strict JSON.
+``plots_dynamics`` draws the figures of a :class:`camjax.dynamics.DynamicsReport`.
 """
