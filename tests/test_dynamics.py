@@ -600,6 +600,7 @@ def test_cli_dynamics_writes_json_and_figures(tmp_path):
     assert data["settling"]["cycles"] == data["time_domain"]["cycles"] == data["drive"]["cycles"]
 
 
+@pytest.mark.slow
 def test_cli_dynamics_warns_when_max_cycles_stops_the_transient(tmp_path, capsys):
     """max_cycles = 3 on the bench (it needs 120 cycles for a tolerance of 1e-5): one warning
     line on stderr, dynamics.json says settled = false with the residual e^{-zeta wn 3 T}."""
