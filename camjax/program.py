@@ -187,6 +187,27 @@ def motion_at(program: MotionProgram, theta_deg: jax.Array) -> Kinematics:
     return Kinematics(jnp.deg2rad(theta_deg), *outs)
 
 
+def segment_motion(program: MotionProgram, segment: int, theta_deg: jax.Array) -> Kinematics:
+    """Segment ``segment`` (a Python int) of the program at cam angles ``theta_deg`` (deg, any shape).
+
+    Unlike :func:`motion_at` nothing is selected by angle: the segment's closed form is used for
+    every angle, so at its ends (theta = start or start + angle) this gives the exact one-sided
+    limits from inside the segment, and ``jax.jvp`` in ``theta_deg`` differentiates the closed
+    form (the derivative of s''' included). Angles are meant to lie in the segment; outside it
+    the formulas are continued as written. Inside a segment the values equal :func:`motion_at`'s.
+    """
+    theta_deg = jnp.asarray(theta_deg, dtype=program.lifts.dtype)
+    lo, width = program.start_deg[segment], program.angles_deg[segment]
+    x = (theta_deg - lo) / width  # motion_at's expression, so interior values agree bitwise
+    vals = _segment_values(program, segment, x, _levels(program)[segment])
+    return Kinematics(jnp.deg2rad(theta_deg), *vals)
+
+
+def segment_bounds_deg(program: MotionProgram) -> tuple[tuple[float, float], ...]:
+    """(start, end) of every segment, degrees (Python floats: static structure)."""
+    return tuple((lo, lo + width) for lo, width in zip(program.start_deg, program.angles_deg, strict=True))
+
+
 def sample_angles_deg(samples: int, dtype=None) -> jax.Array:
     """The angle grid theta_k = k * 360 / N, k = 0..N-1, degrees."""
     return jnp.arange(samples, dtype=dtype) * (360.0 / samples)
