@@ -9,6 +9,7 @@ quantities at one base radius as :class:`DesignCurves`, the NumPy arrays plots a
 
 from __future__ import annotations
 
+from functools import partial
 from typing import NamedTuple
 
 import jax
@@ -16,8 +17,63 @@ import jax.numpy as jnp
 import numpy as np
 
 from camjax import contact, geometry, loads, program
-from camjax.program import Kinematics, TimeKinematics
+from camjax import extrema as extrema_mod
+from camjax.contact import Material
+from camjax.loads import FollowerTrain, Guide
+from camjax.program import Kinematics, MotionProgram, TimeKinematics
 from camjax.scene import Scene
+
+
+class SceneModel(NamedTuple):
+    """A scene's per-angle models in closed form (a pytree), for extrema refined off the grid.
+
+    None where the scene does not declare the model (as in :class:`SceneArrays`).
+    """
+
+    program: MotionProgram
+    cam_speed_rad_s: jax.Array
+    train: FollowerTrain | None
+    cam_width_mm: jax.Array | None  # [contact]
+    cam: Material | None
+    follower: Material | None
+    guide: Guide | None
+
+
+class PointValues(NamedTuple):
+    """The scene's quantities at some cam angles of one segment (shapes of the angles)."""
+
+    kin: Kinematics
+    force_N: jax.Array | None
+    torque_Nm: jax.Array | None
+    stress_coefficient: jax.Array | None
+
+
+def scene_model(scene: Scene, dtype=None) -> SceneModel:
+    """The closed-form models a scene declares, as arrays of ``dtype`` (default float64)."""
+    dtype = dtype or jnp.result_type(float)
+    as_ = partial(jax.tree_util.tree_map, lambda x: jnp.asarray(x, dtype))
+    c = scene.contact
+    train = scene.follower.train
+    return SceneModel(
+        as_(scene.motion.program), jnp.asarray(program.rpm_to_rad_s(scene.motion.rpm), dtype),
+        None if train is None else as_(train),
+        None if c is None or train is None else jnp.asarray(c.cam_width_mm, dtype),
+        None if c is None or train is None else as_(c.cam),
+        None if c is None or train is None else as_(c.follower),
+        None if scene.guide is None or train is None else as_(scene.guide))
+
+
+def model_at(model: SceneModel, segment: int, theta_deg: jax.Array) -> PointValues:
+    """Kinematics, force, torque and stress coefficient on segment ``segment`` (Python int) at
+    cam angles ``theta_deg`` (deg, inside the segment; its ends give one-sided limits)."""
+    kin = program.segment_motion(model.program, segment, theta_deg)
+    force = torque = coeff = None
+    if model.train is not None:
+        force = loads.kinetostatic_force(model.train, program.time_kinematics(kin, model.cam_speed_rad_s))
+        torque = loads.cam_torque(force, kin.ds)
+        if model.cam_width_mm is not None:
+            coeff = contact.stress_coefficient(force, model.cam_width_mm, model.cam, model.follower)
+    return PointValues(kin, force, torque, coeff)
 
 
 class SceneArrays(NamedTuple):
@@ -30,9 +86,11 @@ class SceneArrays(NamedTuple):
     force_N: jax.Array | None  # kinetostatic contact force
     torque_Nm: jax.Array | None  # cam torque
     stress_coefficient: jax.Array | None  # C with sigma = C / sqrt(rho), MPa mm^0.5
+    model: SceneModel | None = None  # closed forms behind the arrays; None: extrema on the grid
 
 
-def scene_arrays(scene: Scene, samples: int | None = None, dtype=None) -> SceneArrays:
+def scene_arrays(scene: Scene, samples: int | None = None, dtype=None, extrema: str | None = None
+                 ) -> SceneArrays:
     """Evaluate a scene's motion and, when declared, its loads and contact coefficient.
 
     Args:
@@ -40,7 +98,12 @@ def scene_arrays(scene: Scene, samples: int | None = None, dtype=None) -> SceneA
       samples: override the scene's grid size N.
       dtype: floating dtype (default: float64 when x64 is on). float32 halves memory and is
         about 3x faster with sin/cos, at ~1e-7 relative accuracy; see the README's limits.
+      extrema: "exact" (every max/min over the angle refined off the grid) or "grid" (the
+        samples' own); default the scene's ``[motion] extrema``.
     """
+    mode = scene.motion.extrema if extrema is None else extrema
+    if mode not in extrema_mod.EXTREMA_MODES:
+        raise ValueError(f"extrema: '{mode}' is not allowed; use {', '.join(extrema_mod.EXTREMA_MODES)}")
     dtype = dtype or jnp.result_type(float)
     n = scene.motion.samples if samples is None else int(samples)
     prog = jax.tree_util.tree_map(lambda x: jnp.asarray(x, dtype), scene.motion.program)
@@ -56,7 +119,8 @@ def scene_arrays(scene: Scene, samples: int | None = None, dtype=None) -> SceneA
             c = scene.contact
             coeff = contact.stress_coefficient(force, c.cam_width_mm, c.cam, c.follower)
     theta_deg = program.sample_angles_deg(n, dtype)
-    return SceneArrays(theta_deg, kin, motion, omega, force, torque, coeff)
+    model = scene_model(scene, dtype) if mode == "exact" else None
+    return SceneArrays(theta_deg, kin, motion, omega, force, torque, coeff, model)
 
 
 class DesignCurves(NamedTuple):
@@ -128,3 +192,98 @@ def evaluate_design(scene: Scene, arrays: SceneArrays, base_radius_mm: float,
         f.offset_mm if f.type == "roller" else None,
         _np(pitch_x), _np(pitch_y), _np(phi), _np(pitch_rho), _np(margin),
     )
+
+
+# ------------------------------------------------------------------------------ extrema
+
+KINEMATIC_CURVES = ("s", "ds", "d2s", "d3s")  # mm, mm/rad, mm/rad^2, mm/rad^3
+LOAD_CURVES = ("force", "torque")  # N, N m
+GUIDE_CURVES = ("cam_force", "reaction_1", "reaction_2", "gamma")  # N, N, N, mm (GuideReactions)
+
+
+class Extremes(NamedTuple):
+    """Max and min of one curve over the cam angle and where they occur (Python floats, deg)."""
+
+    max: float
+    max_deg: float
+    min: float
+    min_deg: float
+
+
+def _curve(name: str, p: PointValues, guide: Guide | None, base_radius_mm) -> jax.Array:
+    """One named curve from the point values (grid arrays or closed-form points alike)."""
+    if name in KINEMATIC_CURVES:
+        return getattr(p.kin, name)
+    if name == "force":
+        return p.force_N
+    if name == "torque":
+        return p.torque_Nm
+    if name == "q":  # s + s'' (mm): the flat face's rho = R_b + q
+        return p.kin.s + p.kin.d2s
+    if name == "stress":  # flat-face contact stress at base_radius_mm, MPa
+        return contact.stress_from_coefficient(p.stress_coefficient, base_radius_mm + p.kin.s + p.kin.d2s)
+    if name in GUIDE_CURVES:
+        return getattr(loads.guide_reactions(guide, p.force_N, geometry.flat_contact_offset(p.kin)), name)
+    raise ValueError(f"curve: unknown name '{name}'")
+
+
+def curve_names(scene: Scene, arrays: SceneArrays, with_stress: bool = True) -> tuple[str, ...]:
+    """The curves a scene's report takes extrema of (``q`` and ``stress``: flat face only)."""
+    names = list(KINEMATIC_CURVES)
+    if arrays.force_N is not None:
+        names += LOAD_CURVES
+        if scene.guide is not None:
+            names += GUIDE_CURVES
+    if scene.follower.type == "flat":
+        names.append("q")
+        if with_stress and arrays.stress_coefficient is not None:
+            names.append("stress")
+    return tuple(names)
+
+
+@partial(jax.jit, static_argnames=("names",))
+def _refined_extremes(model: SceneModel, grid: jax.Array, base_radius_mm, names: tuple[str, ...]):
+    """Max and min of every named curve, refined off the grid ``grid`` (Q, N), in one program.
+
+    One refinement per (curve, sense): the function refined is w . curves with w = +-e_q, so a
+    single vmapped :func:`camjax.extrema.refine_max` covers them all.
+    """
+    count = len(names)
+
+    def fn(segment, theta_deg, params):
+        m, radius, w = params
+        p = model_at(m, segment, theta_deg)
+        return jnp.tensordot(w, jnp.stack([_curve(n, p, m.guide, radius) for n in names]), axes=1)
+
+    bounds = program.segment_bounds_deg(model.program)
+    weights = jnp.concatenate([jnp.eye(count, dtype=grid.dtype), -jnp.eye(count, dtype=grid.dtype)])
+    dwells = extrema_mod.dwells(model.program)  # every curve here is a function of the motion
+    e = jax.vmap(lambda w: extrema_mod.refine_max(fn, (model, base_radius_mm, w), bounds, w @ grid,
+                                                  constant=dwells))(weights)
+    return e.value[:count], e.angle_deg[:count], -e.value[count:], e.angle_deg[count:]
+
+
+def curve_extremes(arrays: SceneArrays, names: tuple[str, ...], base_radius_mm: float | None = None
+                   ) -> dict[str, Extremes]:
+    """Max and min over the cam angle of each named curve (see :func:`curve_names`).
+
+    Exact (refined off the grid, :mod:`camjax.extrema`) when the arrays carry their
+    :class:`SceneModel`, else the samples' own (the first sample wins on ties). ``base_radius_mm``
+    is where ``stress`` is taken. Python (returns floats); the refinement itself is one jitted call.
+    """
+    radius = 0.0 if base_radius_mm is None else float(base_radius_mm)
+    model = arrays.model
+    guide = None if model is None else model.guide
+    grid_point = PointValues(arrays.kin, arrays.force_N, arrays.torque_Nm, arrays.stress_coefficient)
+    if model is None and any(n in GUIDE_CURVES for n in names):
+        raise ValueError("curve_extremes: the guide curves need the scene model (exact extrema)")
+    grid = jnp.stack([_curve(n, grid_point, guide, radius) for n in names])
+    if model is None:
+        g, t = np.asarray(grid), np.asarray(arrays.theta_deg)
+        i, j = np.argmax(g, axis=1), np.argmin(g, axis=1)
+        rows = np.arange(len(names))
+        hi, hi_deg, lo, lo_deg = g[rows, i], t[i], g[rows, j], t[j]
+    else:
+        hi, hi_deg, lo, lo_deg = (np.asarray(a) for a in _refined_extremes(model, grid, radius, names))
+    return {n: Extremes(float(hi[k]), float(hi_deg[k]), float(lo[k]), float(lo_deg[k]))
+            for k, n in enumerate(names)}

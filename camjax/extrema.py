@@ -40,6 +40,8 @@ from camjax.program import Kinematics, MotionProgram
 # bisection (the fallback, e.g. at a kink of f') shrink a 2-degree bracket to 2e-6 deg, where a
 # smooth maximum's value is exact to ~1e-15 relative (the error is quadratic in the angle).
 ITERATIONS = 20
+# Values of the scene's [motion] extrema switch: refined off the grid, or the grid's samples.
+EXTREMA_MODES = ("exact", "grid")
 # Steps in which a candidate's two-sample bracket is scanned for the sign change of f'.
 SCAN_POINTS = 8
 # Local maxima refined per segment: the best and the runner-up.
@@ -154,7 +156,8 @@ def _refine_segment(fn, segment, a0, c, b0, params, iterations, points):
 
 
 def refine_max(fn: SegmentFunction, params: Any, bounds_deg, grid_values: jax.Array, *,
-               candidates: int = CANDIDATES, iterations: int = ITERATIONS) -> Extremum:
+               candidates: int = CANDIDATES, iterations: int = ITERATIONS,
+               constant: tuple[bool, ...] | None = None) -> Extremum:
     """The continuous max over the cam angle of a function known in closed form per segment.
 
     Args:
@@ -167,6 +170,8 @@ def refine_max(fn: SegmentFunction, params: Any, bounds_deg, grid_values: jax.Ar
         caller already has it: it only locates the candidates.
       candidates: local maxima refined per segment.
       iterations: Newton/bisection steps per candidate (fixed, so the call vmaps predictably).
+      constant: static flags, one per segment, for segments on which ``fn`` is known to be
+        constant (a dwell, for a function of the motion alone): only their start is evaluated.
 
     Returns:
       :class:`Extremum` (value, angle_deg). The value is never below any grid sample's value of
@@ -176,9 +181,13 @@ def refine_max(fn: SegmentFunction, params: Any, bounds_deg, grid_values: jax.Ar
     n = grid_values.shape[0]
     ranges = segment_sample_ranges(bounds_deg, n)
     angles, values = [], []
+    constant = constant or (False,) * len(bounds_deg)
     for j, (bounds, sample_range) in enumerate(zip(bounds_deg, ranges, strict=True)):
-        a0, c, b0 = _brackets(fn, j, bounds, sample_range, grid_values, candidates, frozen)
-        best = jax.lax.stop_gradient(_refine_segment(fn, j, a0, c, b0, frozen, iterations, SCAN_POINTS))
+        if constant[j]:
+            best = jnp.asarray(bounds[0], grid_values.dtype)
+        else:
+            a0, c, b0 = _brackets(fn, j, bounds, sample_range, grid_values, candidates, frozen)
+            best = jax.lax.stop_gradient(_refine_segment(fn, j, a0, c, b0, frozen, iterations, SCAN_POINTS))
         angles.append(best)
         values.append(fn(j, best, params))  # envelope theorem: live params, frozen angle
     angles, values = jnp.stack(angles), jnp.stack(values)
@@ -209,18 +218,24 @@ def max_of(program: MotionProgram, quantity: Quantity, grid_values: jax.Array, p
     """Continuous max over the cam angle of ``quantity(kin, params)``, a function of the motion.
 
     ``grid_values`` is the quantity on the program's N-sample grid (``quantity(evaluate(program,
-    N), params)``); gradients flow to the program's lifts and to ``params``. Keyword arguments
-    as :func:`refine_max`.
+    N), params)``); gradients flow to the program's lifts and to ``params``. The quantity must
+    depend on the motion (s and its derivatives), not on ``kin.theta`` itself: dwells are taken
+    as constant. Keyword arguments as :func:`refine_max`.
     """
     return refine_max(_program_function(quantity), (program, params), program_mod.segment_bounds_deg(program),
-                      grid_values, **kwargs)
+                      grid_values, constant=dwells(program), **kwargs)
 
 
 def min_of(program: MotionProgram, quantity: Quantity, grid_values: jax.Array, params: Any = None,
            **kwargs) -> Extremum:
     """Continuous min over the cam angle of ``quantity(kin, params)``; see :func:`max_of`."""
     return refine_min(_program_function(quantity), (program, params), program_mod.segment_bounds_deg(program),
-                      grid_values, **kwargs)
+                      grid_values, constant=dwells(program), **kwargs)
+
+
+def dwells(program: MotionProgram) -> tuple[bool, ...]:
+    """Which segments are dwells (static): every function of the motion is constant on them."""
+    return tuple(kind == "dwell" for kind in program.kinds)
 
 
 def grid_max(grid_values: jax.Array) -> Extremum:
@@ -235,5 +250,5 @@ def grid_min(grid_values: jax.Array) -> Extremum:
     return Extremum(grid_values[i], i * (360.0 / grid_values.shape[0]))
 
 
-__all__ = ["CANDIDATES", "ITERATIONS", "Extremum", "grid_max", "grid_min", "max_of", "min_of",
-           "refine_max", "refine_min", "segment_sample_ranges"]
+__all__ = ["CANDIDATES", "EXTREMA_MODES", "ITERATIONS", "Extremum", "dwells", "grid_max", "grid_min",
+           "max_of", "min_of", "refine_max", "refine_min", "segment_sample_ranges"]

@@ -28,7 +28,15 @@ import jax.numpy as jnp
 import numpy as np
 
 from camjax import contact, geometry
-from camjax.evaluate import DesignCurves, SceneArrays, evaluate_design, scene_arrays
+from camjax.evaluate import (
+    DesignCurves,
+    Extremes,
+    SceneArrays,
+    curve_extremes,
+    curve_names,
+    evaluate_design,
+    scene_arrays,
+)
 from camjax.geometry import PRESSURE_ANGLE_LIMIT_DEG
 from camjax.scene import Scene
 
@@ -91,6 +99,9 @@ def min_base_radius(scene: Scene, arrays: SceneArrays) -> MinBaseRadius:
     """
     t = np.asarray(arrays.theta_deg)
     if scene.follower.type == "flat":
+        if arrays.model is not None:  # exact: max_theta -(s + s'') refined off the grid
+            q = curve_extremes(arrays, ("q",))["q"]
+            return MinBaseRadius(-q.min, q.min_deg)
         r, i = geometry.flat_min_base_radius(arrays.kin)
         return MinBaseRadius(_f(r), _f(t[int(i)]))
     r = _roller_min_base_radius(scene, arrays)
@@ -166,6 +177,7 @@ class DesignRun(NamedTuple):
     base_radius_mm: float  # where the curves are evaluated and drawn
     base_radius_source: str  # why that radius
     curves: DesignCurves
+    extremes: dict[str, Extremes]  # max/min of each of evaluate.curve_names; stress at base_radius_mm
 
 
 def run_design(scene: Scene, arrays: SceneArrays | None = None, *,
@@ -186,7 +198,8 @@ def run_design(scene: Scene, arrays: SceneArrays | None = None, *,
     radius, source = drawing_base_radius(design, minimum.radius_mm, base_radius_mm)
     width = design.result["face_width_mm"] if design is not None else None
     curves = evaluate_design(scene, arrays, radius, width)
-    return DesignRun(arrays, minimum, design, radius, source, curves)
+    extremes = curve_extremes(arrays, curve_names(scene, arrays), radius)
+    return DesignRun(arrays, minimum, design, radius, source, curves, extremes)
 
 
 def sweep_scene(scene: Scene, alphas, gammas, *, mode: str, solver: str, seed: int = 0,

@@ -36,7 +36,7 @@ solvers reach a problem through): :func:`bounds`, :func:`size_norm`, :func:`obje
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import jax
 import jax.numpy as jnp
@@ -84,6 +84,20 @@ class Problem(NamedTuple):
     sigma_max_MPa: jax.Array  # () allowable contact stress
     size_norm_mm: jax.Array  # () N = R_b,max + L_max
     rho_min_mm: jax.Array  # () smallest admissible radius of curvature
+    exact: ExactExtrema | None = None  # closed forms for extrema off the grid; None: the grid's
+
+
+class ExactExtrema(NamedTuple):
+    """What makes a problem's maxima over the angle exact (``[motion] extrema = "exact"``).
+
+    The constraint maxima do not depend on the design: refined once per scene. The peak stress
+    does (rho = R_b + q): :func:`exact_peak_stress` refines it per design from ``model``.
+    """
+
+    model: Any  # camjax.evaluate.SceneModel: the scene's closed forms
+    q_min_mm: jax.Array  # () min_theta (s + s''), mm
+    stress_need_mm: jax.Array  # () max_theta ((C / sigma_max)^2 - q), mm
+    face_width_need_mm: jax.Array  # () 2 max_theta |s'|, mm
 
 
 class Constraints(NamedTuple):
@@ -151,7 +165,41 @@ def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=
         sigma_max_MPa=as_(d.sigma_max_MPa),
         size_norm_mm=as_(d.base_radius_mm[1] + d.face_width_mm[1]),
         rho_min_mm=as_(rho_min_mm),
+        exact=None if arrays.model is None else _exact_extrema(arrays, as_(d.sigma_max_MPa)),
     )
+
+
+def _problem_curves(p, sigma_max_MPa) -> jax.Array:
+    """(-q, stress need (C / sigma_max)^2 - q, s') stacked, from point or grid values (mm)."""
+    q = p.kin.s + p.kin.d2s
+    return jnp.stack([-q, (p.stress_coefficient / sigma_max_MPa) ** 2 - q, p.kin.ds])
+
+
+@jax.jit
+def _exact_maxima(model, sigma_max_MPa, grid):
+    """max -q, max stress need, max s', max -s' refined off the grid (3, N): shape (4,)."""
+    from camjax import extrema
+    from camjax.evaluate import model_at
+    from camjax.program import segment_bounds_deg
+
+    def fn(segment, theta_deg, params):
+        m, sigma, w = params
+        return jnp.tensordot(w, _problem_curves(model_at(m, segment, theta_deg), sigma), axes=1)
+
+    eye = jnp.eye(3, dtype=grid.dtype)
+    rows = jnp.concatenate([eye, -eye[2:]])
+    bounds, dwells = segment_bounds_deg(model.program), extrema.dwells(model.program)
+    return jax.vmap(lambda w: extrema.refine_max(fn, (model, sigma_max_MPa, w), bounds, w @ grid,
+                                                 constant=dwells).value)(rows)
+
+
+def _exact_extrema(arrays, sigma_max_MPa) -> ExactExtrema:
+    """The design-independent maxima of the problem, refined off the grid (one jitted call)."""
+    from camjax.evaluate import PointValues
+
+    grid = _problem_curves(PointValues(arrays.kin, None, None, arrays.stress_coefficient), sigma_max_MPa)
+    e = _exact_maxima(arrays.model, sigma_max_MPa, grid)
+    return ExactExtrema(arrays.model, -e[0], e[1], 2.0 * jnp.maximum(jnp.maximum(e[2], e[3]), 0.0))
 
 
 def weights_of(alpha, gamma, dtype=None) -> Weights:
@@ -244,10 +292,22 @@ def constraint_maxima(problem: Problem, design: Design) -> Constraints:
     angles (for the peak stress) instead of four.
     """
     return Constraints(
-        curvature=problem.rho_min_mm - design.base_radius_mm - jnp.min(problem.q_mm),
-        stress=jnp.max(stress_rho_need(problem) - problem.q_mm) - design.base_radius_mm,
+        curvature=problem.rho_min_mm - design.base_radius_mm - q_min(problem),
+        stress=stress_need_max(problem) - design.base_radius_mm,
         face_width=required_face_width(problem) - design.face_width_mm,
     )
+
+
+def q_min(problem: Problem) -> jax.Array:
+    """min_theta (s + s'') (mm), exact when the problem carries :class:`ExactExtrema`, shape ()."""
+    return jnp.min(problem.q_mm) if problem.exact is None else problem.exact.q_min_mm
+
+
+def stress_need_max(problem: Problem) -> jax.Array:
+    """max_theta ((C / sigma_max)^2 - q) (mm): the R_b the stress limit needs; exact likewise."""
+    if problem.exact is None:
+        return jnp.max(stress_rho_need(problem) - problem.q_mm)
+    return problem.exact.stress_need_mm
 
 
 def bounds_violation(problem: Problem, design: Design) -> jax.Array:
@@ -260,9 +320,13 @@ def bounds_violation(problem: Problem, design: Design) -> jax.Array:
 def violation(problem: Problem, design: Design) -> Violation:
     """Worst violation of each constraint in physical units (mm, MPa); zeros when feasible."""
     g = constraint_maxima(problem, design)
+    if problem.exact is None:
+        peak = jnp.max(stress(problem, design))
+    else:
+        peak = exact_peak_stress(problem, design).value
     return Violation(
         curvature=positive_part(g.curvature),
-        stress=positive_part(jnp.max(stress(problem, design)) - problem.sigma_max_MPa),  # in MPa
+        stress=positive_part(peak - problem.sigma_max_MPa),  # in MPa
         face_width=positive_part(g.face_width),
         bounds=bounds_violation(problem, design),
     )
@@ -276,16 +340,25 @@ def is_feasible(problem: Problem, v: Violation) -> jax.Array:
 
 
 def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
-    """Objective, peak stress (and its angle), smallest rho, violations and feasibility."""
-    sigma = stress(problem, design)
-    i = jnp.argmax(sigma)
+    """Objective, peak stress (and its angle), smallest rho, violations and feasibility.
+
+    Exact (refined off the grid) when the problem carries :class:`ExactExtrema`.
+    """
     v = violation(problem, design)
+    if problem.exact is None:
+        sigma = stress(problem, design)
+        i = jnp.argmax(sigma)
+        peak, peak_deg = sigma[i], problem.theta_deg[i]
+        f = objective(problem, weights, design)
+    else:
+        peak, peak_deg = exact_peak_stress(problem, design)
+        f = weights.alpha * size_term(problem, design) + weights.gamma * peak / problem.sigma_max_MPa
     return Evaluation(
-        objective=objective(problem, weights, design),
+        objective=f,
         size_mm=design.base_radius_mm + design.face_width_mm,
-        stress_max_MPa=sigma[i],
-        stress_max_deg=problem.theta_deg[i],
-        rho_min_mm=jnp.min(curvature_radius(problem, design)),
+        stress_max_MPa=peak,
+        stress_max_deg=peak_deg,
+        rho_min_mm=design.base_radius_mm + q_min(problem),
         violation=v,
         feasible=is_feasible(problem, v),
     )
@@ -318,12 +391,83 @@ def face_width_need(problem: Problem) -> jax.Array:
 
 def required_base_radius(problem: Problem) -> jax.Array:
     """Smallest R_b (mm) meeting curvature and stress at every angle (ignoring the box), shape ()."""
-    return jnp.max(rho_need(problem) - problem.q_mm)
+    if problem.exact is None:
+        return jnp.max(rho_need(problem) - problem.q_mm)
+    return jnp.maximum(problem.rho_min_mm - problem.exact.q_min_mm, problem.exact.stress_need_mm)
 
 
 def required_face_width(problem: Problem) -> jax.Array:
     """Smallest L (mm) meeting the face-width constraint at every angle, 2 max|s'|, shape ()."""
-    return jnp.max(face_width_need(problem))
+    return jnp.max(face_width_need(problem)) if problem.exact is None else problem.exact.face_width_need_mm
+
+
+def exact_peak_stress(problem: Problem, design: Design):
+    """max_theta sigma (MPa) and its angle (deg), refined off the grid: an
+    :class:`camjax.extrema.Extremum`. Needs ``problem.exact``. The gradient in the design is
+    the envelope theorem's, -C / (2 rho^(3/2)) at the refined angle.
+    """
+    from camjax import extrema
+    from camjax.contact import stress_from_coefficient as sigma_of
+    from camjax.evaluate import model_at
+    from camjax.program import segment_bounds_deg
+
+    model = problem.exact.model
+
+    def fn(segment, theta_deg, params):
+        m, radius = params
+        p = model_at(m, segment, theta_deg)
+        return sigma_of(p.stress_coefficient, radius + p.kin.s + p.kin.d2s)
+
+    return extrema.refine_max(fn, (model, design.base_radius_mm), segment_bounds_deg(model.program),
+                              stress(problem, design), constant=extrema.dwells(model.program))
+
+
+# Secant steps of :func:`polish` (superlinear from the solver's design: ~1e-3 -> 1e-15 in ~6).
+POLISH_STEPS = 10
+
+
+def polish(problem: Problem, weights: Weights, design: Design) -> Design:
+    """The exact optimum near a solver's design, when the problem carries :class:`ExactExtrema`.
+
+    L: the objective grows with L, so the optimum is the smallest feasible L, clip(2 max|s'|,
+    L_lo, L_hi), exact. R_b: g(R) = alpha R / N + gamma sigma_peak(R) / sigma_max is convex on
+    the feasible [R_need, R_hi] (as in :func:`global_optimum`); its derivative, by the envelope
+    theorem at the refined peak, is nondecreasing. A secant on g' safeguarded by bisection in
+    the bracket that the solver's R splits off [R_need, R_hi] converges to the minimizer; an
+    end is kept when g' does not change sign there. Without ``problem.exact`` the
+    design is returned unchanged. Traceable and vmappable (fixed step count).
+    """
+    if problem.exact is None:
+        return design
+    width = jnp.clip(required_face_width(problem), problem.lower.face_width_mm, problem.upper.face_width_mm)
+    lo = jnp.minimum(jnp.maximum(problem.lower.base_radius_mm, required_base_radius(problem)),
+                     problem.upper.base_radius_mm)
+    hi = problem.upper.base_radius_mm
+
+    def slope(r):
+        peak_slope = jax.grad(lambda x: exact_peak_stress(problem, Design(x, width)).value)(r)
+        return weights.alpha / problem.size_norm_mm + weights.gamma * peak_slope / problem.sigma_max_MPa
+
+    g_lo, g_hi = slope(lo), slope(hi)
+    # the solver's R splits the bracket: the secant starts next to the minimizer
+    r0 = jnp.clip(design.base_radius_mm, lo, hi)
+    g0 = slope(r0)
+    a, ga = jnp.where(g0 < 0, r0, lo), jnp.where(g0 < 0, g0, g_lo)
+    b, gb = jnp.where(g0 < 0, hi, r0), jnp.where(g0 < 0, g_hi, g0)
+
+    def step(_, state):
+        a, b, x0, g0, x1, g1 = state
+        # secant through the last two iterates; bisection when it leaves the bracket
+        x = x1 - g1 * safe_divide(x1 - x0, g1 - g0)
+        x = jnp.where((x > a) & (x < b), x, 0.5 * (a + b))
+        gx = slope(x)
+        a, b = jnp.where(gx < 0, x, a), jnp.where(gx < 0, b, x)
+        return a, b, x1, g1, x, gx
+
+    # the first secant runs through the bracket ends (a regula falsi step)
+    _, _, _, _, x, _ = jax.lax.fori_loop(0, POLISH_STEPS, step, (a, b, a, ga, b, gb))
+    radius = jnp.where(g_lo >= 0, lo, jnp.where(g_hi <= 0, hi, x))
+    return Design(jax.lax.stop_gradient(radius), width)
 
 
 def optimal_curvature_radius(weights: Weights, coefficient, sigma_max_MPa, size_norm_mm) -> jax.Array:

@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from camjax.contact import Material
+from camjax.extrema import EXTREMA_MODES
 from camjax.laws import FOURIER_PRESETS, LAWS, FourierSeries, fourier_law, get_law, polynomial_law
 from camjax.loads import FollowerTrain, Guide
 from camjax.program import KINDS, MotionProgram, Segment
@@ -49,6 +50,7 @@ class MotionSpec:
     program: MotionProgram = field(compare=False)
     segments: tuple[dict, ...]  # as written in the scene, for reports
     samples: int = 360  # cam-angle grid size N
+    extrema: str = "exact"  # "exact": max/min over the angle refined off the grid; "grid": samples
 
 
 @dataclass(frozen=True)
@@ -294,9 +296,10 @@ def _parse_law(seg: _Reader):
 
 
 def _parse_motion(r: _Reader) -> MotionSpec:
-    r.check_keys(("rpm", "samples", "segments"))
+    r.check_keys(("rpm", "samples", "segments", "extrema"))
     rpm = r.number("rpm", low=0.0)
     samples = r.number("samples", _DEFAULT, low=1, high=10_000_000, integer=True)
+    extrema = r.choice("extrema", EXTREMA_MODES, _DEFAULT)
     raw = r.table.get("segments")
     if not isinstance(raw, list) or not raw:
         raise r.error("segments", raw if raw is not None else _MISSING, "needs a list of segments",
@@ -325,7 +328,7 @@ def _parse_motion(r: _Reader) -> MotionSpec:
         raise SceneError(f"{r.path}.{fld}", value, problem,
                          "angles summing to 360" if value is not _MISSING else None, r.source) from None
     return _build(MotionSpec, rpm=rpm, program=program, segments=tuple(dict(s) for s in raw),
-                  samples=samples)
+                  samples=samples, extrema=extrema)
 
 
 def _parse_follower(r: _Reader) -> FollowerSpec:

@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from camjax import geometry, loads
-from camjax.evaluate import DesignCurves, SceneArrays
+from camjax.evaluate import DesignCurves, Extremes, SceneArrays
 from camjax.geometry import PRESSURE_ANGLE_LIMIT_DEG
 from camjax.program import joints
 from camjax.scene import DesignSpec, Scene
@@ -52,6 +52,16 @@ def trough(values, theta_deg) -> dict[str, float]:
     return {"min": e["min"], "min_deg": e["min_deg"]}
 
 
+def scaled(e: Extremes, factor: float = 1.0, offset: float = 0.0) -> dict[str, float]:
+    """{max, max_deg, min, min_deg} of ``factor * curve + offset`` (factor > 0) from the curve's extremes.
+
+    The multiplication is the one the SI curves are computed with (e.g. ``ds * w * 1e-3``), so a
+    grid extremum is the same float as the SI array's own.
+    """
+    return {"max": e.max * factor + offset, "max_deg": e.max_deg,
+            "min": e.min * factor + offset, "min_deg": e.min_deg}
+
+
 def _negative_ranges_deg(values, theta_deg) -> list[list[float]]:
     """[first, last] sample angles (deg) of each run where values < 0, wrapping over 360."""
     neg = np.asarray(values) < 0
@@ -77,17 +87,28 @@ def _negative_ranges_deg(values, theta_deg) -> list[list[float]]:
 # ------------------------------------------------------------------------ report pieces
 
 
-def kinematics_block(arrays: SceneArrays) -> dict[str, Any]:
-    """Follower motion extrema: displacement (mm), velocity, acceleration, jerk (SI), angles in deg."""
-    t, m, k = arrays.theta_deg, arrays.motion, arrays.kin
+def kinematics_block(arrays: SceneArrays, extremes: dict[str, Extremes]) -> dict[str, Any]:
+    """Follower motion extrema: displacement (mm), velocity, acceleration, jerk (SI), angles in deg.
+
+    The SI extrema are the per-radian ones times w^k 1e-3 (w > 0: the same angles).
+    """
+    w = _f(arrays.cam_speed_rad_s)
     return {
-        "displacement_mm": extrema(k.s, t),
-        "velocity_m_s": extrema(m.velocity, t),
-        "accel_m_s2": extrema(m.accel, t),
-        "jerk_m_s3": extrema(m.jerk, t),
-        "velocity_mm_per_rad": extrema(k.ds, t),
-        "accel_mm_per_rad2": extrema(k.d2s, t),
+        "displacement_mm": scaled(extremes["s"]),
+        "velocity_m_s": _si(extremes["ds"], w, 1),
+        "accel_m_s2": _si(extremes["d2s"], w, 2),
+        "jerk_m_s3": _si(extremes["d3s"], w, 3),
+        "velocity_mm_per_rad": scaled(extremes["ds"]),
+        "accel_mm_per_rad2": scaled(extremes["d2s"]),
     }
+
+
+def _si(e: Extremes, w: float, order: int) -> dict[str, float]:
+    """Extremes of s^(k) (mm/rad^k) as m/s^k at cam speed w, multiplied as time_kinematics does."""
+    def conv(v):
+        return float(np.float64(v) * np.float64(w) ** order * 1e-3)
+
+    return {"max": conv(e.max), "max_deg": e.max_deg, "min": conv(e.min), "min_deg": e.min_deg}
 
 
 def flcd_block(scene: Scene) -> list[dict[str, Any]]:
@@ -100,48 +121,60 @@ def flcd_block(scene: Scene) -> list[dict[str, Any]]:
     ]
 
 
-def loads_block(scene: Scene, arrays: SceneArrays) -> dict[str, Any] | None:
-    """Force, torque, contact-loss check and (with a [guide]) guide reactions; None without loads."""
+def loads_block(scene: Scene, arrays: SceneArrays, extremes: dict[str, Extremes]) -> dict[str, Any] | None:
+    """Force, torque, contact-loss check and (with a [guide]) guide reactions; None without loads.
+
+    ``lost_ranges_deg`` are runs of samples with F < 0; ``lost`` also counts a refined minimum
+    below 0 that falls between samples.
+    """
     if arrays.force_N is None:
         return None
     t, force = arrays.theta_deg, arrays.force_N
+    f = extremes["force"]
     out: dict[str, Any] = {
-        "force_N": extrema(force, t),
-        "torque_Nm": extrema(arrays.torque_Nm, t),
+        "force_N": scaled(f),
+        "torque_Nm": scaled(extremes["torque"]),
         "contact": {
-            "min_force_N": _f(loads.contact_margin(force)),
-            "min_force_deg": trough(force, t)["min_deg"],
-            "lost": bool(np.any(np.asarray(force) < 0)),
+            "min_force_N": f.min,
+            "min_force_deg": f.min_deg,
+            "lost": bool(np.any(np.asarray(force) < 0) or f.min < 0),
             "lost_ranges_deg": _negative_ranges_deg(force, t),
         },
     }
     if scene.guide is not None:
-        out.update(guide_block(scene, arrays))
+        out.update(guide_block(scene, arrays, extremes))
     return out
 
 
-def guide_block(scene: Scene, arrays: SceneArrays) -> dict[str, Any]:
+def guide_block(scene: Scene, arrays: SceneArrays, extremes: dict[str, Extremes] | None = None
+                ) -> dict[str, Any]:
     """Chen's guide reactions with P = the follower force and a = s' (mm), and the jamming check.
 
     The stem can jam only with the contact on the side a < 0 (see
     :func:`camjax.loads.jamming_limit_mm`); the check compares max(-a) with that limit and, as an
     independent statement of the same condition, reports min Gamma (> 0 while not jammed).
+    With ``extremes`` holding the guide curves (exact extrema) they are read from there.
     """
     guide, t = scene.guide, arrays.theta_deg
-    offset = geometry.flat_contact_offset(arrays.kin)
-    r = loads.guide_reactions(guide, arrays.force_N, offset)
     limit = loads.jamming_limit_mm(guide)
-    worst = trough(offset, t)  # most negative offset = furthest onto the jamming side
-    reach = -worst["min"]
-    gamma_min = trough(r.gamma, t)
+    if extremes is not None and "cam_force" in extremes:
+        reactions = {f"{name}_N": scaled(extremes[name])
+                     for name in ("cam_force", "reaction_1", "reaction_2")}
+        g = extremes["gamma"]
+        gamma_min = {"min": g.min, "min_deg": g.min_deg}
+        offset = extremes["ds"]  # the contact offset is s'
+        worst = {"min": offset.min, "min_deg": offset.min_deg}
+    else:
+        offset = geometry.flat_contact_offset(arrays.kin)
+        r = loads.guide_reactions(guide, arrays.force_N, offset)
+        reactions = {"cam_force_N": extrema(r.cam_force, t), "reaction_1_N": extrema(r.reaction_1, t),
+                     "reaction_2_N": extrema(r.reaction_2, t)}
+        worst = trough(offset, t)
+        gamma_min = trough(r.gamma, t)
+    reach = -worst["min"]  # most negative offset = furthest onto the jamming side
     jams = bool(gamma_min["min"] <= 0.0)
     return {
-        "guide_reactions": {
-            "cam_force_N": extrema(r.cam_force, t),
-            "reaction_1_N": extrema(r.reaction_1, t),
-            "reaction_2_N": extrema(r.reaction_2, t),
-            "gamma_mm": gamma_min,
-        },
+        "guide_reactions": {**reactions, "gamma_mm": gamma_min},
         "jamming_limit_mm": limit if math.isfinite(limit) else None,
         "jamming": {
             "offset_on_jamming_side_mm": reach,
@@ -160,7 +193,7 @@ def guide_block(scene: Scene, arrays: SceneArrays) -> dict[str, Any]:
 def min_base_radius_block(follower_type: str, minimum: MinBaseRadius) -> dict[str, Any]:
     """Smallest admissible base radius (mm), the cam angle (deg) where it binds, and the rule."""
     if follower_type == "flat":
-        rule = "flat face: rho = R_b + s + s'' >= 0 at every sample"
+        rule = "flat face: rho = R_b + s + s'' >= 0 at every cam angle"
     else:
         rule = (f"roller: |pressure angle| <= {PRESSURE_ANGLE_LIMIT_DEG:g} deg "
                 "and no undercut at every sample (bisection)")
@@ -168,15 +201,19 @@ def min_base_radius_block(follower_type: str, minimum: MinBaseRadius) -> dict[st
             "min_base_radius_rule": rule}
 
 
-def face_width_block(scene: Scene, arrays: SceneArrays) -> dict[str, Any]:
-    """Minimum flat-face width (mm): symmetric 2 max|s'| and asymmetric max s' - min s'."""
+def face_width_block(scene: Scene, extremes: dict[str, Extremes]) -> dict[str, Any]:
+    """Minimum flat-face width (mm): symmetric 2 max|s'| and asymmetric max s' - min s'.
+
+    The contact offset is s' (:func:`camjax.geometry.flat_contact_offset`), so both come from
+    the extremes of s'.
+    """
     if scene.follower.type != "flat":
         return {}
-    t, kin = arrays.theta_deg, arrays.kin
+    v = extremes["ds"]
     return {
-        "min_face_width_mm": _f(geometry.flat_face_width(kin, symmetric=True)),
-        "min_face_width_asymmetric_mm": _f(geometry.flat_face_width(kin, symmetric=False)),
-        "contact_offset_mm": extrema(geometry.flat_contact_offset(kin), t),
+        "min_face_width_mm": 2.0 * max(v.max, -v.min, 0.0),
+        "min_face_width_asymmetric_mm": v.max - v.min,
+        "contact_offset_mm": scaled(v),
     }
 
 
@@ -218,14 +255,16 @@ def design_block(spec: DesignSpec, solution: DesignSolution) -> dict[str, Any]:
 # -------------------------------------------------------------------------- evaluation
 
 
-def evaluated_block(curves: DesignCurves) -> dict[str, Any]:
-    """Stress, curvature and roller figures at the evaluated design."""
+def evaluated_block(curves: DesignCurves, extremes: dict[str, Extremes]) -> dict[str, Any]:
+    """Stress, curvature and roller figures at the evaluated design (rho = R_b + q, q = s + s'')."""
     t = curves.theta_deg
     out: dict[str, Any] = {}
     if curves.rho_mm is not None:
-        out["rho_mm"] = trough(curves.rho_mm, t)
+        q = extremes["q"]
+        out["rho_mm"] = {"min": curves.base_radius_mm + q.min, "min_deg": q.min_deg}
     if curves.stress_MPa is not None:
-        out["stress_MPa"] = peak(curves.stress_MPa, t)
+        e = extremes["stress"]
+        out["stress_MPa"] = {"max": e.max, "max_deg": e.max_deg}
     if curves.follower_type == "roller":
         phi = curves.pressure_angle_deg
         i = int(np.argmax(np.abs(phi)))
@@ -263,19 +302,20 @@ def build_report(scene: Scene, run: DesignRun) -> dict[str, Any]:
         "cam_speed_rad_s": _f(arrays.cam_speed_rad_s),
         "follower_type": scene.follower.type,
         "segments": [dict(s) for s in scene.motion.segments],
-        "kinematics": kinematics_block(arrays),
+        "extrema": "grid" if arrays.model is None else "exact",
+        "kinematics": kinematics_block(arrays, run.extremes),
         "flcd": flcd_block(scene),
         "flcd_units": FLCD_UNITS,
     }
-    block = loads_block(scene, arrays)
+    block = loads_block(scene, arrays, run.extremes)
     if block is not None:
         data["loads"] = block
     data.update(min_base_radius_block(scene.follower.type, run.min_base_radius))
-    data.update(face_width_block(scene, arrays))
+    data.update(face_width_block(scene, run.extremes))
     if run.design is not None:
         data["design"] = design_block(scene.design, run.design)
     data["evaluated_at"] = {"base_radius_mm": run.base_radius_mm,
                             "face_width_mm": run.curves.face_width_mm,
                             "source": run.base_radius_source}
-    data.update(evaluated_block(run.curves))
+    data.update(evaluated_block(run.curves, run.extremes))
     return data

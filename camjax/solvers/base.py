@@ -37,6 +37,8 @@ flat-face one is :mod:`camjax.problem`). It provides:
   block (design variables, constraint violations, evaluation figures, bounds, pointwise arrays);
 - ``record(solution) -> dict`` (Python) the family's keys of a pareto.json row; it must contain
   ``size_mm`` and ``stress_max_MPa`` (the two objectives of the Pareto front).
+- optionally ``polish(problem, weights, design) -> Design``: the exact optimum near a solver's
+  global-mode design (the solvers may search on the sample grid; :func:`_solution` polishes).
 
 Weights (:class:`camjax.problem.Weights`: alpha for size, gamma for stress) are shared by every
 family. Starts come from the bounds (the gradient solver: the centre of the box; the GA: uniform
@@ -264,6 +266,8 @@ def _solution(problem, weights: Weights, raw: Raw, mode: str, solver: str) -> So
         design, extras = family.condense_pointwise(problem, per_angle)
         iterations = jnp.max(iterations)
         converged = None if converged is None else jnp.all(converged)
+    elif hasattr(family, "polish"):  # exact extrema: the final answer is the continuous optimum
+        design = family.polish(problem, weights, design)
     ev = family.evaluate(problem, weights, design)
     return Solution(mode, solver, weights.alpha, weights.gamma, design, ev.objective, ev.violation,
                     ev.feasible, _status(ev.feasible, converged), iterations, converged, ev, per_angle,
