@@ -228,11 +228,12 @@ def _curve(name: str, p: PointValues, guide: Guide | None, base_radius_mm) -> ja
 
 
 def curve_names(scene: Scene, arrays: SceneArrays, with_stress: bool = True) -> tuple[str, ...]:
-    """The curves a scene's report takes extrema of (``q`` and ``stress``: flat face only)."""
+    """The curves a scene's report takes extrema of (``q`` and ``stress``: flat face only; the
+    guide's reactions only with exact extrema: on the grid the report computes them itself)."""
     names = list(KINEMATIC_CURVES)
     if arrays.force_N is not None:
         names += LOAD_CURVES
-        if scene.guide is not None:
+        if scene.guide is not None and arrays.model is not None:
             names += GUIDE_CURVES
     if scene.follower.type == "flat":
         names.append("q")

@@ -98,6 +98,8 @@ class ExactExtrema(NamedTuple):
     q_min_mm: jax.Array  # () min_theta (s + s''), mm
     stress_need_mm: jax.Array  # () max_theta ((C / sigma_max)^2 - q), mm
     face_width_need_mm: jax.Array  # () 2 max_theta |s'|, mm
+    q_min_deg: jax.Array  # () where q is smallest (the curvature constraint binds), deg
+    stress_need_deg: jax.Array  # () where the stress need peaks, deg
 
 
 class Constraints(NamedTuple):
@@ -177,7 +179,7 @@ def _problem_curves(p, sigma_max_MPa) -> jax.Array:
 
 @jax.jit
 def _exact_maxima(model, sigma_max_MPa, grid):
-    """max -q, max stress need, max s', max -s' refined off the grid (3, N): shape (4,)."""
+    """max -q, max stress need, max s', max -s' refined off the grid (3, N): Extremum of shape (4,)."""
     from camjax import extrema
     from camjax.evaluate import model_at
     from camjax.program import segment_bounds_deg
@@ -190,7 +192,7 @@ def _exact_maxima(model, sigma_max_MPa, grid):
     rows = jnp.concatenate([eye, -eye[2:]])
     bounds, dwells = segment_bounds_deg(model.program), extrema.dwells(model.program)
     return jax.vmap(lambda w: extrema.refine_max(fn, (model, sigma_max_MPa, w), bounds, w @ grid,
-                                                 constant=dwells).value)(rows)
+                                                 constant=dwells))(rows)
 
 
 def _exact_extrema(arrays, sigma_max_MPa) -> ExactExtrema:
@@ -198,8 +200,9 @@ def _exact_extrema(arrays, sigma_max_MPa) -> ExactExtrema:
     from camjax.evaluate import PointValues
 
     grid = _problem_curves(PointValues(arrays.kin, None, None, arrays.stress_coefficient), sigma_max_MPa)
-    e = _exact_maxima(arrays.model, sigma_max_MPa, grid)
-    return ExactExtrema(arrays.model, -e[0], e[1], 2.0 * jnp.maximum(jnp.maximum(e[2], e[3]), 0.0))
+    e, at = _exact_maxima(arrays.model, sigma_max_MPa, grid)
+    width = 2.0 * jnp.maximum(jnp.maximum(e[2], e[3]), 0.0)
+    return ExactExtrema(arrays.model, -e[0], e[1], width, at[0], at[1])
 
 
 def weights_of(alpha, gamma, dtype=None) -> Weights:
@@ -525,7 +528,8 @@ def global_optimum(problem: Problem, weights: Weights, bisections: int = 200) ->
     g'(R) = alpha/N - gamma C_k / (2 sigma_max rho_k^(3/2)), k = argmax_theta sigma_theta(R),
     is nondecreasing, and bisection on its sign converges to the minimizer (a kink where two
     angles share the max included). ``bisections`` halvings of [R_need, R_hi] (200: to the last
-    bit in float64). Returns scalars.
+    bit in float64). A problem with :class:`ExactExtrema` gets the continuous optimum
+    (:func:`polish` from the grid's). Returns scalars.
     """
     lo_r = jnp.maximum(problem.lower.base_radius_mm, required_base_radius(problem))
     hi_r = problem.upper.base_radius_mm
@@ -548,7 +552,8 @@ def global_optimum(problem: Problem, weights: Weights, bisections: int = 200) ->
     a, b = jax.lax.fori_loop(0, bisections, halve, (lo_r, hi_r))
     r = jnp.where(slope(lo_r) >= 0, lo_r, jnp.where(slope(hi_r) < 0, hi_r, 0.5 * (a + b)))
     l_need = jnp.maximum(problem.lower.face_width_mm, required_face_width(problem))
-    return Design(r, jnp.minimum(l_need, problem.upper.face_width_mm))
+    # with exact extrema the grid's optimum is the start of the polish to the continuous one
+    return polish(problem, weights, Design(r, jnp.minimum(l_need, problem.upper.face_width_mm)))
 
 
 # ------------------------------------------------------------------- family protocol

@@ -12,6 +12,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from reference import numpy_reference_optimum
 
+import camjax
 from camjax import problem as P
 from camjax.solvers import gradient as G
 
@@ -19,8 +20,10 @@ WEIGHTINGS = [(1.0, 1.0), (10.0, 1.0), (1.0, 10.0), (1.0, 0.0), (0.0, 1.0), (1e-
 
 
 @pytest.fixture(scope="module")
-def problem(default_scene, default_arrays):
-    return P.problem_from_scene(default_scene, default_arrays)
+def problem(default_scene):
+    """The grid problem (extrema = "grid"): these tests check it against NumPy on the same grid;
+    the exact one is checked in test_exact_design.py."""
+    return P.problem_from_scene(default_scene, camjax.scene_arrays(default_scene, extrema="grid"))
 
 
 def _numpy(problem):

@@ -62,6 +62,7 @@ def test_default_scene_is_the_reference_case():
         (('type = "flat"', 'type = "knife"'), "follower.type", "not allowed"),
         (("samples = 360", "samples = 0"), "motion.samples", "out of range"),
         (("samples = 360", "samples = 36.5"), "motion.samples", "integer"),
+        (("samples = 360", 'samples = 360\nextrema = "fast"'), "motion.extrema", "not allowed"),
     ],
 )
 def test_bad_scenes_name_the_field(edit, field, words):

@@ -1,0 +1,90 @@
+"""Exact extrema end to end: the [motion] switch, the report's figures and every solver's answer."""
+
+import math
+
+import numpy as np
+import pytest
+from scipy.optimize import brentq, minimize_scalar
+
+import camjax
+from camjax import pipeline
+from camjax import problem as P
+from camjax.evaluate import scene_arrays
+from camjax.scene import builtin_scene_text, parse_scene
+from camjax.solvers.base import solve
+
+H, OMEGA = 5.0, 240 * 2 * math.pi / 60
+
+
+def numpy_reference(theta_deg):
+    """Independent NumPy s + s'' and stress coefficient C of the reference case (SPEC 4, 5)."""
+    th = np.asarray(theta_deg, dtype=float)
+    s, v, a = (np.zeros_like(th) for _ in range(3))
+    b1, b2 = math.radians(80), math.radians(60)
+    m = (th >= 100) & (th < 180)
+    x = (th[m] - 100) / 80
+    s[m], v[m], a[m] = (H * (x - np.sin(2 * np.pi * x) / (2 * np.pi)), H * (1 - np.cos(2 * np.pi * x)) / b1,
+                        H * 2 * np.pi * np.sin(2 * np.pi * x) / b1**2)
+    s[(th >= 180) & (th < 300)] = H
+    m = th >= 300
+    x = (th[m] - 300) / 60
+    s[m], v[m], a[m] = (H * (1 - (x - np.sin(2 * np.pi * x) / (2 * np.pi))), -H * (1 - np.cos(2 * np.pi * x)) / b2,
+                        -H * 2 * np.pi * np.sin(2 * np.pi * x) / b2**2)
+    force = 1e-3 * (a * OMEGA**2 + 0.345 * v * OMEGA + 3004.0 * (s + 13.0)) + 9.81
+    k = (1 - 0.3**2) / 2.1e5 + (1 - 0.26**2) / 1.15e5
+    return s + a, 0.564 * np.sqrt(force / 10.0 / k)
+
+
+def test_report_min_base_radius_is_the_closed_form():
+    """max -(s + s'') on the 60-deg cycloidal return, at cos 2 pi u = -1/35 (test_extrema derives it)."""
+    a = math.acos(1.0 / 35.0)
+    u = (math.pi + a) / (2 * math.pi)
+    need = -H * (u + math.sin(a) / (2 * math.pi) - 2 * math.pi / (math.pi / 3) ** 2 * math.sin(a))
+    report = pipeline.design_report(camjax.load_scene())
+    assert report["extrema"] == "exact"
+    assert report["min_base_radius_mm"] == pytest.approx(need, rel=1e-12)
+    assert report["min_base_radius_deg"] == pytest.approx(300 + 60 * (1 - u), abs=1e-7)
+    # the face width is 2 max|s'| = 2 h 2 / beta on the return (x = 1/2 is a sample: exact either way)
+    assert report["min_face_width_mm"] == pytest.approx(2 * H * 2 / (math.pi / 3), rel=1e-14)
+
+
+def test_grid_switch_keeps_the_samples():
+    text = builtin_scene_text("default").replace("samples = 360", 'samples = 360\nextrema = "grid"')
+    scene = parse_scene(text)
+    assert scene.motion.extrema == "grid"
+    report = pipeline.design_report(scene)
+    q, _ = numpy_reference(np.arange(360.0))
+    assert report["extrema"] == "grid"
+    assert report["min_base_radius_mm"] == pytest.approx(-q.min(), rel=1e-12)  # 24.1021, a sample
+    assert report["min_base_radius_deg"] == 315.0
+
+
+@pytest.mark.slow
+def test_every_solver_reaches_the_continuous_optimum():
+    """alpha = gamma = 1: R* is the root of g'(R) = 1/N - C*/(2 sigma_max rho*^(3/2)) (envelope
+    theorem at the peak angle), found here from NumPy closed forms by SciPy (a 1e6-sample grid
+    brackets the peak, Brent's bounded search polishes its angle, brentq solves for R)."""
+    theta = np.arange(1_000_000) * 360.0 / 1_000_000
+    q, c = numpy_reference(theta)
+
+    def peak_angle(r):
+        i = int(np.argmax(c / np.sqrt(r + q)))
+        f = lambda x: -(lambda qq, cc: cc / np.sqrt(r + qq))(*numpy_reference(np.array([x])))[0]  # noqa: E731
+        return minimize_scalar(f, bounds=(theta[i - 1], theta[i + 1]), method="bounded",
+                               options={"xatol": 1e-13}).x
+
+    def slope(r):
+        qq, cc = numpy_reference(np.array([peak_angle(r)]))
+        return 1 / 65 - cc[0] / (2 * 1230 * (r + qq[0]) ** 1.5)
+
+    reference = brentq(slope, 26.0, 30.0, xtol=1e-14, rtol=1e-15)
+    scene = camjax.load_scene()
+    problem = P.problem_from_scene(scene, scene_arrays(scene))
+    for solver in ("gradient", "ga"):
+        r = solve(problem, (1.0, 1.0), solver=solver)
+        # brentq's root is good to ~1e-14 relative; the polish converges to the last bits
+        assert float(r.base_radius_mm) == pytest.approx(reference, rel=1e-11), solver
+        assert float(r.face_width_mm) == pytest.approx(2 * H * 2 / (math.pi / 3), rel=1e-14)
+        # the grid's answer is 3e-4 relative off: the test has teeth
+    grid = P.problem_from_scene(scene, scene_arrays(scene, extrema="grid"))
+    assert abs(float(solve(grid, (1.0, 1.0)).base_radius_mm) / reference - 1) > 1e-4
