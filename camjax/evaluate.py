@@ -36,7 +36,6 @@ class SceneModel(NamedTuple):
     cam_width_mm: jax.Array | None  # [contact]
     cam: Material | None
     follower: Material | None
-    guide: Guide | None
 
 
 class PointValues(NamedTuple):
@@ -59,8 +58,7 @@ def scene_model(scene: Scene, dtype=None) -> SceneModel:
         None if train is None else as_(train),
         None if c is None or train is None else jnp.asarray(c.cam_width_mm, dtype),
         None if c is None or train is None else as_(c.cam),
-        None if c is None or train is None else as_(c.follower),
-        None if scene.guide is None or train is None else as_(scene.guide))
+        None if c is None or train is None else as_(c.follower))
 
 
 def model_at(model: SceneModel, segment: int, theta_deg: jax.Array) -> PointValues:
@@ -199,6 +197,24 @@ def evaluate_design(scene: Scene, arrays: SceneArrays, base_radius_mm: float,
 KINEMATIC_CURVES = ("s", "ds", "d2s", "d3s")  # mm, mm/rad, mm/rad^2, mm/rad^3
 LOAD_CURVES = ("force", "torque")  # N, N m
 GUIDE_CURVES = ("cam_force", "reaction_1", "reaction_2", "gamma")  # N, N, N, mm (GuideReactions)
+# translating roller at the base radius: rad, |pitch-curve rho| (mm), |rho_pitch| - R_f (mm)
+ROLLER_CURVES = ("pressure_angle", "pitch_rho_abs", "undercut_margin")
+
+
+class CurveConstants(NamedTuple):
+    """Scene constants the curves need besides the motion (a pytree; None where not declared)."""
+
+    guide: Guide | None
+    roller_radius_mm: jax.Array | None
+    offset_mm: jax.Array | None
+
+
+def curve_constants(scene: Scene) -> CurveConstants:
+    """The guide and roller constants of a scene."""
+    f = scene.follower
+    roller = f.type == "roller"
+    return CurveConstants(scene.guide, f.roller_radius_mm if roller else None,
+                          f.offset_mm if roller else None)
 
 
 class Extremes(NamedTuple):
@@ -210,7 +226,7 @@ class Extremes(NamedTuple):
     min_deg: float
 
 
-def _curve(name: str, p: PointValues, guide: Guide | None, base_radius_mm) -> jax.Array:
+def _curve(name: str, p: PointValues, consts: CurveConstants, base_radius_mm) -> jax.Array:
     """One named curve from the point values (grid arrays or closed-form points alike)."""
     if name in KINEMATIC_CURVES:
         return getattr(p.kin, name)
@@ -223,18 +239,25 @@ def _curve(name: str, p: PointValues, guide: Guide | None, base_radius_mm) -> ja
     if name == "stress":  # flat-face contact stress at base_radius_mm, MPa
         return contact.stress_from_coefficient(p.stress_coefficient, base_radius_mm + p.kin.s + p.kin.d2s)
     if name in GUIDE_CURVES:
-        return getattr(loads.guide_reactions(guide, p.force_N, geometry.flat_contact_offset(p.kin)), name)
+        offset = geometry.flat_contact_offset(p.kin)
+        return getattr(loads.guide_reactions(consts.guide, p.force_N, offset), name)
+    if name in ROLLER_CURVES:
+        g = geometry.roller_geometry(base_radius_mm, consts.roller_radius_mm, consts.offset_mm, p.kin)
+        return {"pressure_angle": g.pressure_angle, "undercut_margin": g.undercut_margin,
+                "pitch_rho_abs": jnp.abs(g.pitch_radius_of_curvature)}[name]
     raise ValueError(f"curve: unknown name '{name}'")
 
 
 def curve_names(scene: Scene, arrays: SceneArrays, with_stress: bool = True) -> tuple[str, ...]:
     """The curves a scene's report takes extrema of (``q`` and ``stress``: flat face only; the
-    guide's reactions only with exact extrema: on the grid the report computes them itself)."""
+    roller curves at the drawing base radius for a roller)."""
     names = list(KINEMATIC_CURVES)
     if arrays.force_N is not None:
         names += LOAD_CURVES
-        if scene.guide is not None and arrays.model is not None:
+        if scene.guide is not None:
             names += GUIDE_CURVES
+    if scene.follower.type == "roller":
+        names += ROLLER_CURVES
     if scene.follower.type == "flat":
         names.append("q")
         if with_stress and arrays.stress_coefficient is not None:
@@ -243,7 +266,8 @@ def curve_names(scene: Scene, arrays: SceneArrays, with_stress: bool = True) -> 
 
 
 @partial(jax.jit, static_argnames=("names",))
-def _refined_extremes(model: SceneModel, grid: jax.Array, base_radius_mm, names: tuple[str, ...]):
+def _refined_extremes(model: SceneModel, consts: CurveConstants, grid: jax.Array, base_radius_mm,
+                      names: tuple[str, ...]):
     """Max and min of every named curve, refined off the grid ``grid`` (Q, N), in one program.
 
     One refinement per (curve, sense): the function refined is w . curves with w = +-e_q, so a
@@ -252,39 +276,47 @@ def _refined_extremes(model: SceneModel, grid: jax.Array, base_radius_mm, names:
     count = len(names)
 
     def fn(segment, theta_deg, params):
-        m, radius, w = params
+        m, c, radius, w = params
         p = model_at(m, segment, theta_deg)
-        return jnp.tensordot(w, jnp.stack([_curve(n, p, m.guide, radius) for n in names]), axes=1)
+        return jnp.tensordot(w, jnp.stack([_curve(n, p, c, radius) for n in names]), axes=1)
 
     bounds = program.segment_bounds_deg(model.program)
     weights = jnp.concatenate([jnp.eye(count, dtype=grid.dtype), -jnp.eye(count, dtype=grid.dtype)])
     dwells = extrema_mod.dwells(model.program)  # every curve here is a function of the motion
-    e = jax.vmap(lambda w: extrema_mod.refine_max(fn, (model, base_radius_mm, w), bounds, w @ grid,
+    e = jax.vmap(lambda w: extrema_mod.refine_max(fn, (model, consts, base_radius_mm, w), bounds, w @ grid,
                                                   constant=dwells))(weights)
     return e.value[:count], e.angle_deg[:count], -e.value[count:], e.angle_deg[count:]
 
 
-def curve_extremes(arrays: SceneArrays, names: tuple[str, ...], base_radius_mm: float | None = None
-                   ) -> dict[str, Extremes]:
+def refined_extremes(model: SceneModel, consts: CurveConstants, grid_point: PointValues, base_radius_mm,
+                     names: tuple[str, ...]):
+    """(max, max_deg, min, min_deg), arrays of shape (len(names),), refined off the grid values
+    ``grid_point``; traceable (``names`` static)."""
+    grid = jnp.stack([_curve(n, grid_point, consts, base_radius_mm) for n in names])
+    return _refined_extremes(model, consts, grid, base_radius_mm, names)
+
+
+def curve_extremes(scene: Scene, arrays: SceneArrays, names: tuple[str, ...],
+                   base_radius_mm: float | None = None) -> dict[str, Extremes]:
     """Max and min over the cam angle of each named curve (see :func:`curve_names`).
 
     Exact (refined off the grid, :mod:`camjax.extrema`) when the arrays carry their
     :class:`SceneModel`, else the samples' own (the first sample wins on ties). ``base_radius_mm``
-    is where ``stress`` is taken. Python (returns floats); the refinement itself is one jitted call.
+    is where ``stress`` and the roller curves are taken. Python (returns floats); the refinement
+    itself is one jitted call.
     """
     radius = 0.0 if base_radius_mm is None else float(base_radius_mm)
-    model = arrays.model
-    guide = None if model is None else model.guide
+    model, consts = arrays.model, curve_constants(scene)
     grid_point = PointValues(arrays.kin, arrays.force_N, arrays.torque_Nm, arrays.stress_coefficient)
-    if model is None and any(n in GUIDE_CURVES for n in names):
-        raise ValueError("curve_extremes: the guide curves need the scene model (exact extrema)")
-    grid = jnp.stack([_curve(n, grid_point, guide, radius) for n in names])
+    grid = jnp.stack([_curve(n, grid_point, consts, radius) for n in names])
     if model is None:
         g, t = np.asarray(grid), np.asarray(arrays.theta_deg)
         i, j = np.argmax(g, axis=1), np.argmin(g, axis=1)
         rows = np.arange(len(names))
         hi, hi_deg, lo, lo_deg = g[rows, i], t[i], g[rows, j], t[j]
     else:
-        hi, hi_deg, lo, lo_deg = (np.asarray(a) for a in _refined_extremes(model, grid, radius, names))
+        consts = jax.tree_util.tree_map(lambda x: jnp.asarray(x, grid.dtype), consts)
+        refined = _refined_extremes(model, consts, grid, radius, names)
+        hi, hi_deg, lo, lo_deg = (np.asarray(a) for a in refined)
     return {n: Extremes(float(hi[k]), float(hi_deg[k]), float(lo[k]), float(lo_deg[k]))
             for k, n in enumerate(names)}

@@ -31,10 +31,13 @@ from camjax import contact, geometry
 from camjax.evaluate import (
     DesignCurves,
     Extremes,
+    PointValues,
     SceneArrays,
+    curve_constants,
     curve_extremes,
     curve_names,
     evaluate_design,
+    refined_extremes,
     scene_arrays,
 )
 from camjax.geometry import PRESSURE_ANGLE_LIMIT_DEG
@@ -68,6 +71,17 @@ def _roller_violation(base_radius_mm, roller_radius_mm, offset_mm, kin):
     return jnp.maximum(jnp.maximum(phi_excess, undercut), reach / roller_radius_mm)
 
 
+@jax.jit
+def _roller_violation_exact(base_radius_mm, consts, kin, model):
+    """:func:`_roller_violation` with the max |phi| and min undercut margin refined off the grid."""
+    hi, _, lo, _ = refined_extremes(model, consts, PointValues(kin, None, None, None), base_radius_mm,
+                                    ("pressure_angle", "undercut_margin"))
+    phi_excess = jnp.maximum(hi[0], -lo[0]) / jnp.deg2rad(PRESSURE_ANGLE_LIMIT_DEG) - 1.0
+    undercut = -lo[1] / consts.roller_radius_mm
+    reach = jnp.abs(consts.offset_mm) - (base_radius_mm + consts.roller_radius_mm)
+    return jnp.maximum(jnp.maximum(phi_excess, undercut), reach / consts.roller_radius_mm)
+
+
 def _roller_min_base_radius(scene: Scene, arrays: SceneArrays) -> float:
     """Smallest R_b (mm, to 1e-9 relative) with |phi| <= 30 deg and no undercut, by bisection.
 
@@ -76,8 +90,13 @@ def _roller_min_base_radius(scene: Scene, arrays: SceneArrays) -> float:
     """
     f = scene.follower
     kin = arrays.kin
+    dtype = kin.s.dtype
+    consts = curve_constants(scene)._replace(guide=None)
+    consts = jax.tree_util.tree_map(lambda x: jnp.asarray(x, dtype), consts)
 
     def bad(r):
+        if arrays.model is not None:  # exact extrema: the constraints at every cam angle
+            return float(_roller_violation_exact(jnp.asarray(r, dtype), consts, kin, arrays.model)) > 0.0
         return float(_roller_violation(r, f.roller_radius_mm, f.offset_mm, kin)) > 0.0
 
     lo, hi = 0.0, max(1.0, abs(f.offset_mm))
@@ -100,11 +119,14 @@ def min_base_radius(scene: Scene, arrays: SceneArrays) -> MinBaseRadius:
     t = np.asarray(arrays.theta_deg)
     if scene.follower.type == "flat":
         if arrays.model is not None:  # exact: max_theta -(s + s'') refined off the grid
-            q = curve_extremes(arrays, ("q",))["q"]
+            q = curve_extremes(scene, arrays, ("q",))["q"]
             return MinBaseRadius(-q.min, q.min_deg)
         r, i = geometry.flat_min_base_radius(arrays.kin)
         return MinBaseRadius(_f(r), _f(t[int(i)]))
     r = _roller_min_base_radius(scene, arrays)
+    if arrays.model is not None:
+        phi = curve_extremes(scene, arrays, ("pressure_angle",), r)["pressure_angle"]
+        return MinBaseRadius(r, phi.max_deg if phi.max >= -phi.min else phi.min_deg)
     f = scene.follower
     g = geometry.roller_geometry(r, f.roller_radius_mm, f.offset_mm, arrays.kin)
     i = int(np.argmax(np.abs(np.asarray(g.pressure_angle))))
@@ -207,7 +229,7 @@ def run_design(scene: Scene, arrays: SceneArrays | None = None, *,
     radius, source = drawing_base_radius(design, minimum.radius_mm, base_radius_mm)
     width = design.result["face_width_mm"] if design is not None else None
     curves = evaluate_design(scene, arrays, radius, width)
-    extremes = curve_extremes(arrays, curve_names(scene, arrays), radius)
+    extremes = curve_extremes(scene, arrays, curve_names(scene, arrays), radius)
     return DesignRun(arrays, minimum, design, radius, source, curves, extremes)
 
 

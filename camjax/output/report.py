@@ -257,7 +257,6 @@ def design_block(spec: DesignSpec, solution: DesignSolution) -> dict[str, Any]:
 
 def evaluated_block(curves: DesignCurves, extremes: dict[str, Extremes]) -> dict[str, Any]:
     """Stress, curvature and roller figures at the evaluated design (rho = R_b + q, q = s + s'')."""
-    t = curves.theta_deg
     out: dict[str, Any] = {}
     if curves.rho_mm is not None:
         q = extremes["q"]
@@ -266,20 +265,20 @@ def evaluated_block(curves: DesignCurves, extremes: dict[str, Extremes]) -> dict
         e = extremes["stress"]
         out["stress_MPa"] = {"max": e.max, "max_deg": e.max_deg}
     if curves.follower_type == "roller":
-        phi = curves.pressure_angle_deg
-        i = int(np.argmax(np.abs(phi)))
-        j = int(np.argmin(np.abs(curves.pitch_rho_mm)))
+        phi, rho, margin = extremes["pressure_angle"], extremes["pitch_rho_abs"], extremes["undercut_margin"]
+        deg = math.degrees
+        worst = (phi.max, phi.max_deg) if phi.max >= -phi.min else (-phi.min, phi.min_deg)
         out["roller"] = {
             "roller_radius_mm": curves.roller_radius_mm,
             "offset_mm": curves.offset_mm,
-            "pressure_angle_deg": {**extrema(phi, t), "max_abs": _f(abs(phi[i])),
-                                   "max_abs_deg": _f(t[i])},
+            "pressure_angle_deg": {"max": deg(phi.max), "max_deg": phi.max_deg, "min": deg(phi.min),
+                                   "min_deg": phi.min_deg, "max_abs": deg(worst[0]), "max_abs_deg": worst[1]},
             "pressure_angle_limit_deg": PRESSURE_ANGLE_LIMIT_DEG,
-            "pressure_angle_ok": bool(abs(phi[i]) <= PRESSURE_ANGLE_LIMIT_DEG),
-            "pitch_rho_mm": {"min_abs": _f(abs(curves.pitch_rho_mm[j])), "min_abs_deg": _f(t[j]),
+            "pressure_angle_ok": bool(deg(worst[0]) <= PRESSURE_ANGLE_LIMIT_DEG),
+            "pitch_rho_mm": {"min_abs": rho.min, "min_abs_deg": rho.min_deg,
                              "concave": bool(np.any(curves.pitch_rho_mm < 0))},
-            "undercut_margin_mm": trough(curves.undercut_margin_mm, t),
-            "undercut": bool(np.any(curves.undercut_margin_mm <= 0)),
+            "undercut_margin_mm": {"min": margin.min, "min_deg": margin.min_deg},
+            "undercut": bool(margin.min <= 0 or np.any(curves.undercut_margin_mm <= 0)),
         }
     return out
 
