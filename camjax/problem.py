@@ -320,10 +320,15 @@ def bounds_violation(problem: Problem, design: Design) -> jax.Array:
     return jnp.max(jnp.stack(jax.tree.leaves(below) + jax.tree.leaves(above)))
 
 
-def violation(problem: Problem, design: Design) -> Violation:
-    """Worst violation of each constraint in physical units (mm, MPa); zeros when feasible."""
+def violation(problem: Problem, design: Design, peak_stress_MPa: jax.Array | None = None) -> Violation:
+    """Worst violation of each constraint in physical units (mm, MPa); zeros when feasible.
+
+    ``peak_stress_MPa``: the design's peak stress if already known (else computed here).
+    """
     g = constraint_maxima(problem, design)
-    if problem.exact is None:
+    if peak_stress_MPa is not None:
+        peak = peak_stress_MPa
+    elif problem.exact is None:
         peak = jnp.max(stress(problem, design))
     else:
         peak = exact_peak_stress(problem, design).value
@@ -347,7 +352,6 @@ def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
 
     Exact (refined off the grid) when the problem carries :class:`ExactExtrema`.
     """
-    v = violation(problem, design)
     if problem.exact is None:
         sigma = stress(problem, design)
         i = jnp.argmax(sigma)
@@ -356,6 +360,7 @@ def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
     else:
         peak, peak_deg = exact_peak_stress(problem, design)
         f = weights.alpha * size_term(problem, design) + weights.gamma * peak / problem.sigma_max_MPa
+    v = violation(problem, design, peak)
     return Evaluation(
         objective=f,
         size_mm=design.base_radius_mm + design.face_width_mm,
@@ -451,10 +456,9 @@ def polish(problem: Problem, weights: Weights, design: Design) -> Design:
         peak_slope = jax.grad(lambda x: exact_peak_stress(problem, Design(x, width)).value)(r)
         return weights.alpha / problem.size_norm_mm + weights.gamma * peak_slope / problem.sigma_max_MPa
 
-    g_lo, g_hi = slope(lo), slope(hi)
     # the solver's R splits the bracket: the secant starts next to the minimizer
     r0 = jnp.clip(design.base_radius_mm, lo, hi)
-    g0 = slope(r0)
+    g_lo, g_hi, g0 = jax.vmap(slope)(jnp.stack([lo, hi, r0]))  # one traced copy of the refinement
     a, ga = jnp.where(g0 < 0, r0, lo), jnp.where(g0 < 0, g0, g_lo)
     b, gb = jnp.where(g0 < 0, hi, r0), jnp.where(g0 < 0, g_hi, g0)
 
