@@ -100,6 +100,7 @@ class ExactExtrema(NamedTuple):
     face_width_need_mm: jax.Array  # () 2 max_theta |s'|, mm
     q_min_deg: jax.Array  # () where q is smallest (the curvature constraint binds), deg
     stress_need_deg: jax.Array  # () where the stress need peaks, deg
+    face_width_need_deg: jax.Array  # () where |s'| peaks, deg
 
 
 class Constraints(NamedTuple):
@@ -202,7 +203,7 @@ def _exact_extrema(arrays, sigma_max_MPa) -> ExactExtrema:
     grid = _problem_curves(PointValues(arrays.kin, None, None, arrays.stress_coefficient), sigma_max_MPa)
     e, at = _exact_maxima(arrays.model, sigma_max_MPa, grid)
     width = 2.0 * jnp.maximum(jnp.maximum(e[2], e[3]), 0.0)
-    return ExactExtrema(arrays.model, -e[0], e[1], width, at[0], at[1])
+    return ExactExtrema(arrays.model, -e[0], e[1], width, at[0], at[1], jnp.where(e[2] >= e[3], at[2], at[3]))
 
 
 def weights_of(alpha, gamma, dtype=None) -> Weights:
@@ -586,6 +587,38 @@ def condense_pointwise(problem: Problem, per_angle_design: Design) -> tuple[Desi
     extras = {"base_radius_deg": problem.theta_deg[i], "face_width_deg": problem.theta_deg[j],
               "theta_deg": problem.theta_deg}
     return design, extras
+
+
+def polish_pointwise(problem: Problem, weights: Weights, design: Design, extras: dict) -> tuple[Design, dict]:
+    """The condensed pointwise design as continuous maxima over the angle (with ``problem.exact``).
+
+    R_b: the largest per-angle optimum R*(theta) of :func:`pointwise_optimum`, a closed form in
+    q(theta), C(theta) and s'(theta), refined off the grid from the scene's closed forms (its
+    kinks, where a constraint takes over, are handled by the bisection fallback). L: the largest
+    per-angle width, clip(2 max|s'|, L_lo, L_hi), exact. Without ``problem.exact``: unchanged.
+    """
+    if problem.exact is None:
+        return design, extras
+    from camjax import extrema
+    from camjax.evaluate import model_at
+    from camjax.program import segment_bounds_deg
+
+    model, plain = problem.exact.model, problem._replace(exact=None)
+
+    def fn(segment, theta_deg, params):
+        m, pr, w = params
+        p = model_at(m, segment, theta_deg)
+        at = pr._replace(theta_deg=theta_deg, q_mm=p.kin.s + p.kin.d2s, ds_mm=p.kin.ds,
+                         stress_coefficient=p.stress_coefficient)
+        return pointwise_optimum(at, w).base_radius_mm
+
+    grid = pointwise_optimum(plain, weights).base_radius_mm
+    e = extrema.refine_max(fn, (model, plain, weights), segment_bounds_deg(model.program), grid,
+                           constant=extrema.dwells(model.program))
+    width = jnp.clip(problem.exact.face_width_need_mm, problem.lower.face_width_mm,
+                     problem.upper.face_width_mm)
+    extras = {**extras, "base_radius_deg": e.angle_deg, "face_width_deg": problem.exact.face_width_need_deg}
+    return Design(e.value, width), extras
 
 
 def _f(x) -> float:

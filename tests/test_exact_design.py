@@ -35,6 +35,7 @@ def numpy_reference(theta_deg):
     return s + a, 0.564 * np.sqrt(force / 10.0 / k)
 
 
+@pytest.mark.slow
 def test_report_min_base_radius_is_the_closed_form():
     """max -(s + s'') on the 60-deg cycloidal return, at cos 2 pi u = -1/35 (test_extrema derives it)."""
     a = math.acos(1.0 / 35.0)
@@ -88,3 +89,24 @@ def test_every_solver_reaches_the_continuous_optimum():
         # the grid's answer is 3e-4 relative off: the test has teeth
     grid = P.problem_from_scene(scene, scene_arrays(scene, extrema="grid"))
     assert abs(float(solve(grid, (1.0, 1.0)).base_radius_mm) / reference - 1) > 1e-4
+
+
+@pytest.mark.slow
+def test_pointwise_condensed_design_is_the_continuous_max():
+    """Pointwise, alpha = gamma = 1: R*(theta) = -q + (gamma N C / (2 alpha sigma_max))^(2/3) where
+    that is feasible (SPEC 5's stationary point); its max over theta from NumPy closed forms on a
+    1e6-sample grid, polished by SciPy's bounded Brent."""
+    def radius(t):
+        q, c = numpy_reference(t)
+        return -q + np.maximum((65.0 * c / (2 * 1230.0)) ** (2 / 3), (c / 1230.0) ** 2)
+
+    theta = np.arange(1_000_000) * 360.0 / 1_000_000
+    i = int(np.argmax(radius(theta)))
+    best = minimize_scalar(lambda x: -radius(np.array([x]))[0], bounds=(theta[i - 1], theta[i + 1]),
+                           method="bounded", options={"xatol": 1e-12})
+    scene = camjax.load_scene()
+    r = solve(P.problem_from_scene(scene, scene_arrays(scene)), (1.0, 1.0), mode="pointwise")
+    # Brent's max of a smooth function is good to ~eps relative in value
+    assert float(r.base_radius_mm) == pytest.approx(-best.fun, rel=1e-12)
+    assert float(r.base_radius_deg) == pytest.approx(best.x, abs=1e-5)
+    assert float(r.face_width_mm) == pytest.approx(2 * H * 2 / (math.pi / 3), rel=1e-14)

@@ -38,7 +38,9 @@ flat-face one is :mod:`camjax.problem`). It provides:
 - ``record(solution) -> dict`` (Python) the family's keys of a pareto.json row; it must contain
   ``size_mm`` and ``stress_max_MPa`` (the two objectives of the Pareto front).
 - optionally ``polish(problem, weights, design) -> Design``: the exact optimum near a solver's
-  global-mode design (the solvers may search on the sample grid; :func:`_solution` polishes).
+  global-mode design (the solvers may search on the sample grid; :func:`_solution` polishes),
+  and ``polish_pointwise(problem, weights, design, extras) -> (Design, dict)``: the condensed
+  pointwise design taken as a continuous max over the angle.
 
 Weights (:class:`camjax.problem.Weights`: alpha for size, gamma for stress) are shared by every
 family. Starts come from the bounds (the gradient solver: the centre of the box; the GA: uniform
@@ -264,6 +266,8 @@ def _solution(problem, weights: Weights, raw: Raw, mode: str, solver: str) -> So
     if mode == "pointwise":
         per_angle = raw.design
         design, extras = family.condense_pointwise(problem, per_angle)
+        if hasattr(family, "polish_pointwise"):  # exact extrema: the continuous max over angles
+            design, extras = family.polish_pointwise(problem, weights, design, extras)
         iterations = jnp.max(iterations)
         converged = None if converged is None else jnp.all(converged)
     elif hasattr(family, "polish"):  # exact extrema: the final answer is the continuous optimum
