@@ -36,8 +36,8 @@ from camjax import program as program_mod
 from camjax.numerics import safe_divide
 from camjax.program import Kinematics, MotionProgram
 
-# Safeguarded Newton converges in ~5 steps from a two-sample bracket; 20 steps also let pure
-# bisection (the fallback, e.g. at a kink of f') shrink a 2-degree bracket to 2e-6 deg, where a
+# Safeguarded Newton converges in ~5 steps from the scanned bracket (1/8 of two samples); 20
+# steps also let pure bisection (the fallback, e.g. at a kink of f') shrink it ~1e6-fold, where a
 # smooth maximum's value is exact to ~1e-15 relative (the error is quadratic in the angle).
 ITERATIONS = 20
 # Values of the scene's [motion] extrema switch: refined off the grid, or the grid's samples.
