@@ -136,7 +136,7 @@ class Evaluation(NamedTuple):
 
 
 def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=None,
-                       rho_min_mm: float = RHO_MIN_MM) -> Problem:
+                       rho_min_mm: float = RHO_MIN_MM, extrema: str | None = None) -> Problem:
     """Problem of a scene with a [design] section (Python, not traceable: it reads the scene).
 
     Args:
@@ -145,13 +145,16 @@ def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=
       samples: grid size override (ignored when ``arrays`` is given).
       dtype: floating dtype of the arrays (default float64).
       rho_min_mm: the curvature margin of the constraint rho > 0.
+      extrema: "exact" or "grid" (ignored when ``arrays`` is given: theirs applies); default
+        the scene's ``[motion] extrema``. Exact: the constraint maxima and the peak stress are
+        refined off the grid and the solvers' designs polished (:class:`ExactExtrema`).
     """
     from camjax.evaluate import scene_arrays
 
     if scene.design is None:
         raise ValueError("scene has no [design] section: nothing to optimize")
     if arrays is None:
-        arrays = scene_arrays(scene, samples=samples, dtype=dtype)
+        arrays = scene_arrays(scene, samples=samples, dtype=dtype, extrema=extrema)
     if arrays.stress_coefficient is None:
         raise ValueError("scene has no contact stress: the objective needs [contact] and loads")
     d = scene.design
@@ -431,8 +434,10 @@ def exact_peak_stress(problem: Problem, design: Design):
                               stress(problem, design), constant=extrema.dwells(model.program))
 
 
-# Secant steps of :func:`polish` (superlinear from the solver's design: ~1e-3 -> 1e-15 in ~6).
-POLISH_STEPS = 10
+# Secant steps of :func:`polish` (superlinear from the solver's design: ~1e-3 -> 1e-15 in ~6),
+# and its second start point, beside the solver's R, as a fraction of the R_b interval.
+POLISH_STEPS = 8
+POLISH_START_STEP = 1e-4
 
 
 def polish(problem: Problem, weights: Weights, design: Design) -> Design:
@@ -457,23 +462,32 @@ def polish(problem: Problem, weights: Weights, design: Design) -> Design:
         peak_slope = jax.grad(lambda x: exact_peak_stress(problem, Design(x, width)).value)(r)
         return weights.alpha / problem.size_norm_mm + weights.gamma * peak_slope / problem.sigma_max_MPa
 
-    # the solver's R splits the bracket: the secant starts next to the minimizer
+    # the secant starts at the solver's R and a step beside it (the grid's optimum is ~1e-3
+    # relative off, so the iterates converge superlinearly from there); every point evaluated
+    # narrows the bracket [a, b] with g'(a) < 0 < g'(b)
     r0 = jnp.clip(design.base_radius_mm, lo, hi)
-    g_lo, g_hi, g0 = jax.vmap(slope)(jnp.stack([lo, hi, r0]))  # one traced copy of the refinement
-    a, ga = jnp.where(g0 < 0, r0, lo), jnp.where(g0 < 0, g0, g_lo)
-    b, gb = jnp.where(g0 < 0, hi, r0), jnp.where(g0 < 0, g_hi, g0)
+    r1 = jnp.clip(r0 + POLISH_START_STEP * (hi - lo), lo, hi)
+    r1 = jnp.where(r1 == r0, jnp.clip(r0 - POLISH_START_STEP * (hi - lo), lo, hi), r1)
+    points = jnp.stack([lo, hi, r0, r1])
+    slopes = jax.vmap(slope)(points)  # one traced copy of the refinement
+    g_lo, g_hi, g0, g1 = slopes
+    a = jnp.max(jnp.where(slopes < 0, points, lo))
+    b = jnp.min(jnp.where(slopes >= 0, points, hi))
 
     def step(_, state):
-        a, b, x0, g0, x1, g1 = state
-        # secant through the last two iterates; bisection when it leaves the bracket
+        a, b, x0, g0, x1, g1, best, g_best = state
+        # secant through the last two iterates; bisection when it leaves the bracket (whose ends
+        # count as inside: a converged iterate is an end, and the secant then stays on it)
         x = x1 - g1 * safe_divide(x1 - x0, g1 - g0)
-        x = jnp.where((x > a) & (x < b), x, 0.5 * (a + b))
+        x = jnp.where((x >= a) & (x <= b), x, 0.5 * (a + b))
         gx = slope(x)
         a, b = jnp.where(gx < 0, x, a), jnp.where(gx < 0, b, x)
-        return a, b, x1, g1, x, gx
+        closer = jnp.abs(gx) < jnp.abs(g_best)
+        return a, b, x1, g1, x, gx, jnp.where(closer, x, best), jnp.where(closer, gx, g_best)
 
-    # the first secant runs through the bracket ends (a regula falsi step)
-    _, _, _, _, x, _ = jax.lax.fori_loop(0, POLISH_STEPS, step, (a, b, a, ga, b, gb))
+    start_best = jnp.where(jnp.abs(g1) < jnp.abs(g0), r1, r0)
+    state = (a, b, r0, g0, r1, g1, start_best, jnp.minimum(jnp.abs(g0), jnp.abs(g1)))
+    x = jax.lax.fori_loop(0, POLISH_STEPS, step, state)[6]  # the point of smallest |g'| seen
     radius = jnp.where(g_lo >= 0, lo, jnp.where(g_hi <= 0, hi, x))
     return Design(jax.lax.stop_gradient(radius), width)
 

@@ -16,8 +16,9 @@ WEIGHTINGS = [(1.0, 1.0), (10.0, 1.0), (1.0, 10.0), (0.0, 1.0), (1.0, 0.0), (1e-
 
 
 @pytest.fixture(scope="module")
-def problem(default_scene, default_arrays):
-    return P.problem_from_scene(default_scene, default_arrays)
+def problem(default_scene):
+    """The grid problem: the solvers are checked against references on the same grid."""
+    return P.problem_from_scene(default_scene, extrema="grid")
 
 
 @pytest.fixture(scope="module")
@@ -74,7 +75,7 @@ def test_infeasible_bounds_reported_by_name_without_nan(problem):
 
 def test_single_angle_grid(default_scene):
     scene = dataclasses.replace(default_scene, motion=dataclasses.replace(default_scene.motion, samples=1))
-    prob = P.problem_from_scene(scene)
+    prob = P.problem_from_scene(scene, extrema="grid")  # the problem at the one angle itself
     assert prob.q_mm.shape == (1,)
     w = P.weights_of(1.0, 1.0)
     ref = P.pointwise_optimum(prob, w)

@@ -18,14 +18,15 @@ SMALL_GA = ga.GASettings(population=16, generations=60)
 
 
 @pytest.fixture(scope="module")
-def problem(default_scene, default_arrays):
-    return P.problem_from_scene(default_scene, default_arrays)
+def problem(default_scene):
+    """The grid problem: the solvers are checked against references on the same grid."""
+    return P.problem_from_scene(default_scene, extrema="grid")
 
 
 @pytest.fixture(scope="module")
 def coarse(default_scene):
     """A 24-angle grid: pointwise solves of every solver stay quick."""
-    return P.problem_from_scene(default_scene, samples=24)
+    return P.problem_from_scene(default_scene, samples=24, extrema="grid")
 
 
 @pytest.mark.parametrize("solver", registry.SOLVERS)

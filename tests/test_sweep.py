@@ -11,8 +11,9 @@ from camjax.solvers import sweep as S
 
 
 @pytest.fixture(scope="module")
-def problem(default_scene, default_arrays):
-    return P.problem_from_scene(default_scene, default_arrays)
+def problem(default_scene):
+    """The grid problem: the sweeps are checked against references on the same grid."""
+    return P.problem_from_scene(default_scene, extrema="grid")
 
 
 @pytest.fixture(scope="module")
