@@ -43,6 +43,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from camjax.contact import stress_from_coefficient
+from camjax.extrema import ITERATIONS
 from camjax.numerics import RHO_FLOOR_MM, max_over_angles, positive_part, safe_divide, safe_sqrt
 
 # Smallest admissible radius of curvature (mm): the strict "rho > 0" of SPEC 5 as a margin.
@@ -413,7 +414,7 @@ def required_face_width(problem: Problem) -> jax.Array:
     return jnp.max(face_width_need(problem)) if problem.exact is None else problem.exact.face_width_need_mm
 
 
-def exact_peak_stress(problem: Problem, design: Design):
+def exact_peak_stress(problem: Problem, design: Design, iterations: int = ITERATIONS):
     """max_theta sigma (MPa) and its angle (deg), refined off the grid: an
     :class:`camjax.extrema.Extremum`. Needs ``problem.exact``. The gradient in the design is
     the envelope theorem's, -C / (2 rho^(3/2)) at the refined angle.
@@ -431,13 +432,17 @@ def exact_peak_stress(problem: Problem, design: Design):
         return sigma_of(p.stress_coefficient, radius + p.kin.s + p.kin.d2s)
 
     return extrema.refine_max(fn, (model, design.base_radius_mm), segment_bounds_deg(model.program),
-                              stress(problem, design), constant=extrema.dwells(model.program))
+                              stress(problem, design), constant=extrema.dwells(model.program),
+                              iterations=iterations)
 
 
 # Secant steps of :func:`polish` (superlinear from the solver's design: ~1e-3 -> 1e-15 in ~6),
 # and its second start point, beside the solver's R, as a fraction of the R_b interval.
 POLISH_STEPS = 8
 POLISH_START_STEP = 1e-4
+# Newton steps of the peak refinements inside the polish: the scan leaves 1/8 of two samples,
+# which Newton closes in ~5; the final evaluation refines with the full ITERATIONS.
+POLISH_ITERATIONS = 8
 
 
 def polish(problem: Problem, weights: Weights, design: Design) -> Design:
@@ -459,7 +464,10 @@ def polish(problem: Problem, weights: Weights, design: Design) -> Design:
     hi = problem.upper.base_radius_mm
 
     def slope(r):
-        peak_slope = jax.grad(lambda x: exact_peak_stress(problem, Design(x, width)).value)(r)
+        def peak(x):
+            return exact_peak_stress(problem, Design(x, width), POLISH_ITERATIONS).value
+
+        peak_slope = jax.grad(peak)(r)
         return weights.alpha / problem.size_norm_mm + weights.gamma * peak_slope / problem.sigma_max_MPa
 
     # the secant starts at the solver's R and a step beside it (the grid's optimum is ~1e-3
