@@ -1,14 +1,19 @@
 """Tables and figures of the documentation, generated from the JSON that camjax's own commands write.
 
-Two sources, both committed:
+Four sources, all committed (:data:`SOURCES`):
 
-- ``benchmarks/results/full.json``: ``python benchmarks/run.py --out benchmarks/results/full.json``;
-- ``docs/data/extremes.json``: ``python -m camjax.cli check-extremes --out DIR``, then
-  ``cp DIR/extremes.json docs/data/``.
+- ``bench``, ``benchmarks/results/full.json``: ``python benchmarks/run.py --out
+  benchmarks/results/full.json``;
+- ``extremes``, ``docs/data/extremes.json``: ``python -m camjax.cli check-extremes --out DIR``, then
+  ``cp DIR/extremes.json docs/data/``;
+- ``result``, ``docs/data/default/result.json``: ``python -m camjax.cli design --out DIR``, then
+  ``cp DIR/result.json docs/data/default/``;
+- ``dynamics``, ``docs/data/thesis-bench/dynamics.json``: ``python -m camjax.cli dynamics
+  thesis-bench --out DIR``, then ``cp DIR/dynamics.json docs/data/thesis-bench/``.
 
 A page asks for a table with a line ``{{ table: NAME }}`` (NAME one of :data:`TABLES`) and for a
 single figure with ``{{ SOURCE: dotted.path[*factor][:format] }}``, e.g.
-``{{ bench: pointwise.camjax_s*1e3:.2f }}`` (SOURCE ``bench`` or ``extremes``; list items by
+``{{ bench: pointwise.camjax_s*1e3:.2f }}`` (SOURCE a key of :data:`SOURCES`; list items by
 index, ``accuracy.grid.2.time_s``); ``\\{{`` is a literal ``{{``. ``docs/hooks.py`` runs
 :func:`render` on every page at ``mkdocs build``; a placeholder that names nothing is an error,
 so a renamed JSON key fails the strict build instead of printing a stale number.
@@ -29,19 +34,21 @@ ROOT = Path(__file__).resolve().parent.parent
 SOURCES = {
     "bench": ROOT / "benchmarks" / "results" / "full.json",
     "extremes": ROOT / "docs" / "data" / "extremes.json",
+    "result": ROOT / "docs" / "data" / "default" / "result.json",
+    "dynamics": ROOT / "docs" / "data" / "thesis-bench" / "dynamics.json",
 }
 
 
 def load(source: str) -> dict:
-    """The JSON of one source (``bench`` or ``extremes``)."""
+    """The JSON of one source (a key of :data:`SOURCES`)."""
     return json.loads(SOURCES[source].read_text())
 
 
 def _g(v, digits: int = 3) -> str:
-    """A measured value for a table cell: ``–`` for none, integers as they are, else 3 digits."""
+    """A measured value for a table cell: ``–`` for none, integers and text as they are, else 3 digits."""
     if v is None:
         return "–"
-    if isinstance(v, bool | int):
+    if isinstance(v, bool | int | str):
         return str(v)
     return f"{v:.{digits}g}"
 
@@ -205,7 +212,9 @@ TABLES: dict[str, tuple[str, Callable[[dict], str]]] = {
 # ------------------------------------------------------------------------------------ pages
 
 _TABLE = re.compile(r"(?<!\\)\{\{\s*table:\s*(\w+)\s*\}\}")
-_VALUE = re.compile(r"(?<!\\)\{\{\s*(bench|extremes):\s*([\w.]+)(?:\*([0-9.eE+-]+))?(?::([^}\s]+))?\s*\}\}")
+_VALUE = re.compile(
+    r"(?<!\\)\{\{\s*(" + "|".join(SOURCES) + r"):\s*([\w.]+)(?:\*([0-9.eE+-]+))?(?::([^}\s]+))?\s*\}\}"
+)
 
 
 class PlaceholderError(ValueError):
@@ -236,7 +245,10 @@ def render(markdown: str, page: str = "<page>") -> str:
             raise PlaceholderError(f"{page}: {source} has no {path!r} ({e!r})") from e
         if factor is not None:
             v = v * float(factor)
-        return format(v, spec) if spec else _g(v)
+        try:
+            return format(v, spec) if spec else _g(v)
+        except (TypeError, ValueError) as e:
+            raise PlaceholderError(f"{page}: {source} {path!r} = {v!r} does not format as {spec!r}") from e
 
     # "\\{{" is a literal "{{" (a page that shows the syntax)
     return _VALUE.sub(value, _TABLE.sub(table, markdown)).replace("\\{{", "{{")
