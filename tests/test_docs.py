@@ -1,6 +1,7 @@
 """The README's contract (set-up lines first, size, a Python quickstart that runs) and the docs'
 generated figures (every placeholder resolves against the committed JSON)."""
 
+import ast
 import importlib.util
 import math
 import os
@@ -86,3 +87,29 @@ def test_extremes_tables_account_for_every_case():
     passed = sum(int(r.split("|")[3]) for r in rows)
     assert counted == data["summary"]["cases"] == len(data["cases"])
     assert passed == data["summary"]["passed"]
+
+
+def _documented_modules() -> list[str]:
+    """Every module of the package with a module docstring (an empty ``__init__`` is data only)."""
+    names = []
+    for path in sorted((ROOT / "camjax").rglob("*.py")):
+        if path.name.startswith("_") and path.name != "__init__.py":
+            continue
+        parts = path.relative_to(ROOT).with_suffix("").parts
+        name = ".".join(parts[:-1] if path.name == "__init__.py" else parts)
+        if ast.get_docstring(ast.parse(path.read_text())):
+            names.append(name)
+    return names
+
+
+def test_every_public_module_has_an_api_page_in_the_nav():
+    modules = _documented_modules()
+    assert "camjax.problem" in modules and "camjax" in modules  # the walk finds the package
+    nav = (ROOT / "mkdocs.yml").read_text()
+    for name in modules:
+        page = ROOT / "docs" / "api" / f"{name}.md"
+        assert page.exists(), f"no API page for {name}"
+        assert re.search(rf"^::: {re.escape(name)}$", page.read_text(), flags=re.M), page
+        assert f"api/{name}.md" in nav, f"{name} is not in mkdocs.yml's nav"
+    pages = {p.stem for p in (ROOT / "docs" / "api").glob("camjax*.md")}
+    assert pages == set(modules), f"API pages of modules that do not exist: {pages - set(modules)}"
