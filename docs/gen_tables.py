@@ -144,12 +144,16 @@ def _ratio(case: dict) -> float:
 
 
 def extremes_summary(extremes: dict) -> str:
-    """One line: scene, number of cases, passed and failed."""
+    """One line: scene, number of cases, passed and failed, and the groups skipped with their reasons."""
     s = extremes["summary"]
-    return (
+    line = (
         f"`camjax check-extremes` on the `{extremes['scene']}` scene: {s['cases']} cases, "
         f"{s['passed']} pass, {s['failed']} fail."
     )
+    skipped = extremes.get("skipped", [])
+    if skipped:
+        line += " Skipped: " + "; ".join(f"{g['group']} ({g['reason']})" for g in skipped) + "."
+    return line
 
 
 def extremes_groups(extremes: dict) -> str:
