@@ -2,7 +2,7 @@
 
 Importing camjax turns on JAX's 64-bit mode (``jax_enable_x64``): cam geometry near the
 curvature limit needs it. Ask for float32 per call (``dtype=jnp.float32``) where speed matters
-more than the last digits; the README's "Accuracy and limits" says what that costs.
+more than the last digits; the documentation's "Accuracy and limits" page says what that costs.
 """
 
 import jax
