@@ -10,7 +10,7 @@ from typing import NamedTuple
 import jax
 import jax.numpy as jnp
 
-from camjax.numerics import capped_divide
+from camjax.numerics import COS_FLOOR, capped_divide, floor_positive
 from camjax.program import TimeKinematics
 
 
@@ -41,6 +41,15 @@ def cam_torque(force_N: jax.Array, ds_mm_per_rad: jax.Array) -> jax.Array:
     gradient at vanishing speed.
     """
     return force_N * ds_mm_per_rad * 1e-3
+
+
+def normal_force(axial_force_N: jax.Array, pressure_angle_rad: jax.Array) -> jax.Array:
+    """Normal contact force P = F / cos phi (N) of a roller, F along the follower's motion.
+
+    cos phi is floored at :data:`camjax.numerics.COS_FLOOR` (phi -> 90 deg is a jammed
+    follower): finite in value and gradient for every trial design.
+    """
+    return axial_force_N / floor_positive(jnp.cos(pressure_angle_rad), COS_FLOOR)
 
 
 def contact_margin(force_N: jax.Array) -> jax.Array:

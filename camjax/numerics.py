@@ -14,6 +14,10 @@ import jax.numpy as jnp
 # profile is treated as a corner: the stress saturates at a huge but finite value and the
 # curvature constraint (which has its own penalty) carries the gradient.
 RHO_FLOOR_MM = 1e-15
+# Floor on cos(pressure angle) in a roller's normal force P = F / cos phi: phi -> 90 deg is a
+# jammed follower; the force saturates there (finite) and the pressure-angle constraint carries
+# the gradient.
+COS_FLOOR = 1e-12
 
 
 def safe_sqrt(x: jax.Array) -> jax.Array:

@@ -14,6 +14,13 @@ from pathlib import Path
 from typing import Any
 
 from camjax.contact import Material
+from camjax.geometry import (
+    DEFAULT_ROTATION,
+    FLAT_MIN_CURVATURE_RADIUS_MM,
+    ROLLER_MAX_PRESSURE_ANGLE_DEG,
+    ROLLER_MIN_CURVATURE_RADIUS_MM,
+    ROTATIONS,
+)
 from camjax.laws import FOURIER_PRESETS, LAWS, FourierSeries, fourier_law, get_law, polynomial_law
 from camjax.loads import FollowerTrain, Guide
 from camjax.program import KINDS, MotionProgram, Segment
@@ -49,6 +56,7 @@ class MotionSpec:
     program: MotionProgram = field(compare=False)
     segments: tuple[dict, ...]  # as written in the scene, for reports
     samples: int = 360  # cam-angle grid size N
+    rotation: str = DEFAULT_ROTATION  # "ccw" or "cw": camjax.geometry.pitch (cw = mirror image)
 
 
 @dataclass(frozen=True)
@@ -59,6 +67,10 @@ class FollowerSpec:
     train: FollowerTrain | None = None
     roller_radius_mm: float = 0.0
     offset_mm: float = 0.0
+    # roller: |pressure angle| limit, deg (unused for a flat face, whose pressure angle is 0)
+    max_pressure_angle_deg: float = ROLLER_MAX_PRESSURE_ANGLE_DEG
+    # flat: the margin of rho >= rho_min; roller: smallest convex cam-surface radius (0 = no undercut)
+    min_curvature_radius_mm: float = FLAT_MIN_CURVATURE_RADIUS_MM
 
 
 @dataclass(frozen=True)
@@ -294,9 +306,10 @@ def _parse_law(seg: _Reader):
 
 
 def _parse_motion(r: _Reader) -> MotionSpec:
-    r.check_keys(("rpm", "samples", "segments"))
+    r.check_keys(("rpm", "samples", "segments", "rotation"))
     rpm = r.number("rpm", low=0.0)
     samples = r.number("samples", _DEFAULT, low=1, high=10_000_000, integer=True)
+    rotation = r.choice("rotation", ROTATIONS, _DEFAULT)
     raw = r.table.get("segments")
     if not isinstance(raw, list) or not raw:
         raise r.error("segments", raw if raw is not None else _MISSING, "needs a list of segments",
@@ -325,12 +338,13 @@ def _parse_motion(r: _Reader) -> MotionSpec:
         raise SceneError(f"{r.path}.{fld}", value, problem,
                          "angles summing to 360" if value is not _MISSING else None, r.source) from None
     return _build(MotionSpec, rpm=rpm, program=program, segments=tuple(dict(s) for s in raw),
-                  samples=samples)
+                  samples=samples, rotation=rotation)
 
 
 def _parse_follower(r: _Reader) -> FollowerSpec:
     r.check_keys(("type", "mass_kg", "spring_N_per_m", "preload_mm", "damping_Ns_per_m",
-                  "gravity_m_s2", "roller_radius_mm", "offset_mm"))
+                  "gravity_m_s2", "roller_radius_mm", "offset_mm", "max_pressure_angle_deg",
+                  "min_curvature_radius_mm"))
     ftype = r.choice("type", ("flat", "roller"))
     train = None
     if r.has("mass_kg") or r.has("spring_N_per_m"):
@@ -347,13 +361,22 @@ def _parse_follower(r: _Reader) -> FollowerSpec:
             if r.has(key):
                 raise r.error(key, r.table[key], "needs mass_kg or spring_N_per_m (loads are off)")
     if ftype == "roller":
+        limit = r.number("max_pressure_angle_deg", _DEFAULT, low=0.0, low_open=True)
+        if limit is not _DEFAULT and limit >= 90.0:
+            raise r.error("max_pressure_angle_deg", limit, "out of range", "> 0 and < 90")
         return _build(FollowerSpec, type=ftype, train=train,
                       roller_radius_mm=r.number("roller_radius_mm", low=0.0, low_open=True),
-                      offset_mm=r.number("offset_mm", _DEFAULT))
-    for key in ("roller_radius_mm", "offset_mm"):
+                      offset_mm=r.number("offset_mm", _DEFAULT), max_pressure_angle_deg=limit,
+                      # a roller's default differs from the flat face's: 0 = just no undercut
+                      min_curvature_radius_mm=r.number("min_curvature_radius_mm",
+                                                       ROLLER_MIN_CURVATURE_RADIUS_MM, low=0.0))
+    for key in ("roller_radius_mm", "offset_mm", "max_pressure_angle_deg"):
         if r.has(key):
             raise r.error(key, r.table[key], "only for type = 'roller'")
-    return FollowerSpec(type=ftype, train=train)
+    # > 0: a flat face on rho = 0 rides a corner, where the contact stress is unbounded
+    return _build(FollowerSpec, type=ftype, train=train,
+                  min_curvature_radius_mm=r.number("min_curvature_radius_mm", _DEFAULT, low=0.0,
+                                                   low_open=True))
 
 
 def _parse_material(r: _Reader) -> Material:
