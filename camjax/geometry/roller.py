@@ -20,7 +20,7 @@ import jax
 import jax.numpy as jnp
 
 from camjax.geometry import pitch
-from camjax.geometry.pitch import DEFAULT_ROTATION
+from camjax.geometry.pitch import DEFAULT_ROTATION, rotation_sign
 from camjax.program import Kinematics
 
 # Defaults of the scene keys follower.max_pressure_angle_deg and min_curvature_radius_mm.
@@ -132,14 +132,28 @@ def roller_reach_constraint(base_radius_mm, roller_radius_mm, offset_mm) -> jax.
     return jnp.abs(offset_mm) - (base_radius_mm + roller_radius_mm)
 
 
+def roller_min_prime_radius_for_pressure_angle(kin: Kinematics, offset_mm, max_pressure_angle_rad,
+                                               rotation: str = DEFAULT_ROTATION) -> jax.Array:
+    """Smallest R_p (mm) with |phi| <= the limit at every sample, in closed form.
+
+    |phi| <= lim  <=>  |sign s' - e| <= tan(lim) (d + s)  <=>  d >= |s' - sign e| / tan(lim) - s
+    (for d + s > 0), so d_min = max(0, max_theta(|s' - sign e| / tan lim - s)) and
+    R_p = sqrt(e^2 + d_min^2). Exact on the grid (no bisection); the pressure angle does not
+    depend on R_f for a given R_p.
+    """
+    e = rotation_sign(rotation) * offset_mm
+    d_min = jnp.max(jnp.abs(kin.ds - e) / jnp.tan(max_pressure_angle_rad) - kin.s)
+    return jnp.sqrt(offset_mm**2 + jnp.maximum(d_min, 0.0) ** 2)
+
+
 def prime_radius(base_radius_mm, roller_radius_mm) -> jax.Array:
     """R_p = R_b + R_f (mm), the prime circle catalogues and textbooks quote."""
     return base_radius_mm + roller_radius_mm
 
 
 __all__ = [
-    "ROLLER_MAX_PRESSURE_ANGLE_DEG", "ROLLER_MIN_CURVATURE_RADIUS_MM", "RollerGeometry",
-    "prime_radius", "roller_equivalent_radius", "roller_geometry",
+    "ROLLER_MAX_PRESSURE_ANGLE_DEG", "ROLLER_MIN_CURVATURE_RADIUS_MM", "RollerGeometry", "prime_radius",
+    "roller_equivalent_radius", "roller_geometry", "roller_min_prime_radius_for_pressure_angle",
     "roller_pitch_curvature", "roller_pitch_curve", "roller_pitch_height", "roller_pressure_angle",
     "roller_profile", "roller_reach_constraint", "roller_undercut_constraint", "roller_undercut_margin",
 ]
