@@ -26,7 +26,7 @@ from camjax.loads import FollowerTrain, Guide
 from camjax.program import KINDS, MotionProgram, Segment
 from camjax.solvers.registry import MODES, SOLVERS
 
-BUILTIN_SCENES = {"default": "default.toml", "thesis-bench": "thesis-bench.toml"}
+BUILTIN_SCENES = {"default": "default.toml", "thesis-bench": "thesis-bench.toml", "roller": "roller.toml"}
 
 
 class SceneError(ValueError):
@@ -84,16 +84,23 @@ class ContactSpec:
 
 @dataclass(frozen=True)
 class DesignSpec:
-    """[design]: the optimal-design problem (SPEC 5)."""
+    """[design]: the optimal-design problem (SPEC 5; roller: camjax.roller_problem).
+
+    Every design variable is a (low, high) pair in mm; low == high fixes it (the scene may write
+    a fixed variable as a number). Flat face: base_radius_mm and face_width_mm; roller:
+    base_radius_mm, roller_radius_mm and offset_mm (the variables of the other type are None).
+    """
 
     base_radius_mm: tuple[float, float]  # bounds [low, high]
-    face_width_mm: tuple[float, float]  # bounds [low, high]
-    sigma_max_MPa: float
+    face_width_mm: tuple[float, float] | None  # bounds [low, high]; flat face only
+    sigma_max_MPa: float | None  # None only for a roller without [contact] (no stress)
     mode: str = "global"  # or "pointwise"
     alpha: float = 1.0  # weight of the size term
     gamma: float = 1.0  # weight of the stress term
     solver: str = "gradient"
     seed: int = 0
+    roller_radius_mm: tuple[float, float] | None = None  # roller only
+    offset_mm: tuple[float, float] | None = None  # roller only
 
 
 DYNAMICS_COMPUTE = ("compensation", "robustness", "time_domain", "drive", "nonlinear", "jump",
@@ -391,20 +398,72 @@ def _parse_contact(r: _Reader) -> ContactSpec:
                        cam=_parse_material(r.sub("cam")), follower=_parse_material(r.sub("follower")))
 
 
-def _parse_design(r: _Reader) -> DesignSpec:
-    r.check_keys(("mode", "base_radius_mm", "face_width_mm", "sigma_max_MPa", "alpha", "gamma",
-                  "solver", "seed"))
-    spec = _build(
-        DesignSpec,
-        base_radius_mm=r.interval("base_radius_mm"),
-        face_width_mm=r.interval("face_width_mm"),
-        sigma_max_MPa=r.number("sigma_max_MPa", low=0.0, low_open=True),
+DESIGN_VARIABLES = {"flat": ("base_radius_mm", "face_width_mm"),
+                    "roller": ("base_radius_mm", "roller_radius_mm", "offset_mm")}
+
+
+def _fixed_or_free(r: _Reader, key: str, default=_MISSING, *, positive: bool = True) -> tuple[float, float]:
+    """A design variable: a number (fixed, returned as (v, v)) or a [low, high] pair (free)."""
+    if r.has(key) and not isinstance(r.table[key], list):
+        v = r.number(key, low=0.0 if positive else None, low_open=positive)
+        return v, v
+    if not r.has(key) and default is not _MISSING:
+        return default
+    if positive:
+        return r.interval(key)
+    v = r.table.get(key)
+    ok = (isinstance(v, list) and len(v) == 2
+          and all(isinstance(x, int | float) and not isinstance(x, bool) and math.isfinite(x) for x in v))
+    if not ok:
+        raise r.error(key, v if r.has(key) else _MISSING, "must be a number (fixed) or a pair [low, high] "
+                      "(free) of finite numbers")
+    if v[0] > v[1]:
+        raise r.error(key, v, "bounds must satisfy low <= high")
+    return float(v[0]), float(v[1])
+
+
+def _parse_design(r: _Reader, follower: FollowerSpec, has_contact: bool) -> DesignSpec:
+    """[design] of a flat-face or roller follower (DESIGN_VARIABLES says which variables)."""
+    own = DESIGN_VARIABLES[follower.type]
+    others = {v for vs in DESIGN_VARIABLES.values() for v in vs} - set(own)
+    for key in sorted(others):
+        if r.has(key):
+            raise r.error(key, r.table[key], f"is not a design variable of a {follower.type} follower",
+                          ", ".join(own))
+    r.check_keys(("mode", *own, "sigma_max_MPa", "alpha", "gamma", "solver", "seed"))
+    common = dict(
         mode=r.choice("mode", MODES, _DEFAULT),
         alpha=r.number("alpha", _DEFAULT, low=0.0),
-        gamma=r.number("gamma", _DEFAULT, low=0.0),
+        # no stress term without [contact] (a roller may be sized without it)
+        gamma=r.number("gamma", _DEFAULT if has_contact else 0.0, low=0.0),
         solver=r.choice("solver", SOLVERS, _DEFAULT),
         seed=r.number("seed", _DEFAULT, low=0, integer=True),
     )
+    if follower.type == "flat":
+        spec = _build(DesignSpec, base_radius_mm=r.interval("base_radius_mm"),
+                      face_width_mm=r.interval("face_width_mm"),
+                      sigma_max_MPa=r.number("sigma_max_MPa", low=0.0, low_open=True), **common)
+    else:
+        base = _fixed_or_free(r, "base_radius_mm")
+        roller = _fixed_or_free(r, "roller_radius_mm", (follower.roller_radius_mm,) * 2)
+        offset = _fixed_or_free(r, "offset_mm", (follower.offset_mm,) * 2, positive=False)
+        reach = base[0] + roller[0]  # the smallest prime radius in the box
+        if max(abs(offset[0]), abs(offset[1])) >= reach:
+            raise r.error("offset_mm", list(offset) if offset[0] != offset[1] else offset[0],
+                          f"allows |e| >= R_p = R_b + R_f (smallest in the bounds: {reach:g} mm): the "
+                          "follower axis must cut the prime circle", f"|e| < {reach:g}")
+        if has_contact:
+            sigma_max = r.number("sigma_max_MPa", low=0.0, low_open=True)
+        else:
+            if r.has("sigma_max_MPa"):
+                raise r.error("sigma_max_MPa", r.table["sigma_max_MPa"], "needs a [contact] section (no "
+                              "stress is modelled without it)")
+            if common["gamma"] != 0:
+                raise r.error("gamma", common["gamma"], "the stress term needs a [contact] section",
+                              "0 without [contact]")
+            sigma_max = None
+        spec = _build(DesignSpec, base_radius_mm=base, face_width_mm=None, sigma_max_MPa=sigma_max,
+                      roller_radius_mm=roller, offset_mm=offset, **common)
     if spec.alpha == 0 and spec.gamma == 0:
         raise r.error("alpha", 0.0, "alpha and gamma are both zero: nothing to minimize",
                       "alpha >= 0, gamma >= 0, not both 0")
@@ -521,17 +580,10 @@ def scene_from_dict(data: dict, name: str = "scene", source: str | None = None) 
         raise SceneError("contact", _MISSING,
                          "contact stress needs the follower force: give follower.mass_kg and/or "
                          "follower.spring_N_per_m", source=source)
-    if contact is not None and follower.type != "flat":
-        raise SceneError("contact", _MISSING, "contact stress is modelled for a flat-face follower "
-                         "only", "follower.type = 'flat'", source=source)
-    design = _parse_design(top.sub("design")) if "design" in data else None
-    if design is not None:
-        if follower.type != "flat":
-            raise SceneError("design", _MISSING, "the optimal-design problem is for a flat-face "
-                             "follower", "follower.type = 'flat'", source=source)
-        if contact is None:
-            raise SceneError("design", _MISSING, "the objective needs the contact stress: add a "
-                             "[contact] section", source=source)
+    if "design" in data and contact is None and follower.type == "flat":
+        raise SceneError("design", _MISSING, "the objective needs the contact stress: add a "
+                         "[contact] section", source=source)
+    design = _parse_design(top.sub("design"), follower, contact is not None) if "design" in data else None
     guide = _parse_guide(top.sub("guide")) if "guide" in data else None
     if guide is not None and (follower.train is None or follower.type != "flat"):
         raise SceneError("guide", _MISSING, "guide reactions need a flat-face follower with loads "
@@ -550,8 +602,9 @@ def with_design(scene: Scene, **overrides) -> Scene:
     if scene.design is None:
         raise SceneError("design", _MISSING, "the scene has no [design] section to override")
     table = {f.name: getattr(scene.design, f.name) for f in fields(DesignSpec)}
-    table = {k: list(v) if isinstance(v, tuple) else v for k, v in table.items()}
-    design = _parse_design(_Reader({**table, **overrides}, "design", None))
+    table = {k: list(v) if isinstance(v, tuple) else v for k, v in table.items() if v is not None}
+    design = _parse_design(_Reader({**table, **overrides}, "design", None), scene.follower,
+                           scene.contact is not None)
     return replace(scene, design=design)
 
 

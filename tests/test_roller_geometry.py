@@ -242,3 +242,21 @@ def test_everything_finite_for_infeasible_designs():
     for x in [(0.5, 20.0, 0.0), (5.0, 2.0, 9.0), (0.0, 1.0, 1.0), (30.0, 6.0, 300.0), (1e-3, 1e-3, 0.0)]:
         v, gr = grad(jnp.asarray(x))
         assert np.isfinite(float(v)) and np.all(np.isfinite(np.asarray(gr))), x
+
+
+@pytest.mark.parametrize("rotation,e,rf,rho_min", [("ccw", 4.0, 6.0, 0.0), ("cw", 4.0, 15.0, 1.0),
+                                                   ("ccw", -2.0, 30.0, 0.5)])
+def test_undercut_limited_prime_radius_against_a_dense_scan(rotation, e, rf, rho_min):
+    kin = evaluate(PROGRAM, 720)
+    rp = float(geometry.roller_min_prime_radius_for_undercut(kin, rf, e, rho_min, rotation, lower_mm=abs(e)))
+    # scan R_p in 1 um steps around it, judging undercut by the smallest convex cam radius
+    # (a different formula: rho_c = 1/kappa - R_f on the convex samples)
+    scan = np.arange(rp - 0.05, rp + 0.05, 1e-3)
+
+    def ok(r):
+        k = np.asarray(geometry.roller_pitch_curvature(r - rf, rf, e, kin, rotation))
+        return np.all(1 / k[k > 0] - rf >= rho_min)
+
+    first = scan[np.argmax([ok(r) for r in scan])]
+    assert not ok(scan[0]) and ok(scan[-1])
+    assert first - 1e-3 <= rp <= first + 1e-12

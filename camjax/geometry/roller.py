@@ -146,6 +146,39 @@ def roller_min_prime_radius_for_pressure_angle(kin: Kinematics, offset_mm, max_p
     return jnp.sqrt(offset_mm**2 + jnp.maximum(d_min, 0.0) ** 2)
 
 
+def roller_min_prime_radius_for_undercut(kin: Kinematics, roller_radius_mm, offset_mm,
+                                         min_curvature_radius_mm=ROLLER_MIN_CURVATURE_RADIUS_MM,
+                                         rotation: str = DEFAULT_ROTATION, lower_mm=0.0,
+                                         bisections: int = 200) -> jax.Array:
+    """Smallest R_p >= ``lower_mm`` (mm) with no undercut at any sample, by bisection.
+
+    No undercut is max_theta kappa_pitch(R_p) (R_f + rho_min) <= 1; growing the prime circle
+    flattens the convex parts of the pitch curve, so the admissible R_p form an interval
+    [R_min, inf) (the result is a bracket end on the admissible side). The bracket's upper end
+    doubles until admissible (``lax.while_loop``), then ``bisections`` halvings (200: to the last
+    bit in float64). jit/vmap-safe; not reverse-differentiable (a while loop), nor meant to be.
+    """
+    e = rotation_sign(rotation) * offset_mm
+    reach = roller_radius_mm + min_curvature_radius_mm
+
+    def bad(rp):
+        w = pitch.pitch_height(rp, e, kin.s)
+        return jnp.max(pitch.pitch_curvature(w, kin.ds, kin.d2s, e)) * reach > 1.0
+
+    lo = jnp.maximum(jnp.asarray(lower_mm, kin.s.dtype), jnp.abs(e))
+    hi0 = jnp.maximum(2.0 * lo, reach + jnp.abs(e) + 1.0)
+    lo, hi = jax.lax.while_loop(lambda b: bad(b[1]), lambda b: (b[1], 2.0 * b[1]), (lo, hi0))
+
+    def halve(_, bracket):
+        a, b = bracket
+        m = 0.5 * (a + b)
+        return jnp.where(bad(m), m, a), jnp.where(bad(m), b, m)
+
+    lo, hi = jax.lax.fori_loop(0, bisections, halve, (lo, hi))
+    lower = jnp.maximum(jnp.asarray(lower_mm, kin.s.dtype), jnp.abs(e))
+    return jnp.where(bad(lower), hi, lower)
+
+
 def prime_radius(base_radius_mm, roller_radius_mm) -> jax.Array:
     """R_p = R_b + R_f (mm), the prime circle catalogues and textbooks quote."""
     return base_radius_mm + roller_radius_mm

@@ -28,6 +28,7 @@ SOLVERS = tuple(SOLVER_MODULES)
 # the solvers dispatch on)
 FAMILY_MODULES = {
     "flat_face": "camjax.problem",
+    "roller": "camjax.roller_problem",
 }
 
 # Solution.status codes (int32 in the traced result) and their names
