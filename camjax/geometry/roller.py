@@ -179,14 +179,44 @@ def roller_min_prime_radius_for_undercut(kin: Kinematics, roller_radius_mm, offs
     return jnp.where(bad(lower), hi, lower)
 
 
+class RollerSizing(NamedTuple):
+    """Smallest admissible prime circle of a roller follower and the limit that sets it."""
+
+    prime_radius_mm: jax.Array  # R_p = R_b + R_f, mm
+    undercut_binds: jax.Array  # bool: the undercut limit (else the pressure angle) sets R_p
+    index: jax.Array  # int: the sample where the binding limit is reached
+
+
+def roller_min_prime_radius(kin: Kinematics, roller_radius_mm, offset_mm, max_pressure_angle_rad,
+                            min_curvature_radius_mm=ROLLER_MIN_CURVATURE_RADIUS_MM,
+                            rotation: str = DEFAULT_ROTATION) -> RollerSizing:
+    """Smallest R_p (mm) with |phi| <= the limit and no undercut at every sample.
+
+    The pressure angle gives R_p in closed form
+    (:func:`roller_min_prime_radius_for_pressure_angle`); if the roller undercuts there, the
+    undercut limit is found by bisection above it (:func:`roller_min_prime_radius_for_undercut`).
+    The index is where |phi| peaks (pressure angle) or where the pitch curve is most convex
+    (undercut) at that radius. jit/vmap-safe.
+    """
+    r_phi = roller_min_prime_radius_for_pressure_angle(kin, offset_mm, max_pressure_angle_rad, rotation)
+    r = roller_min_prime_radius_for_undercut(kin, roller_radius_mm, offset_mm, min_curvature_radius_mm,
+                                             rotation, lower_mm=r_phi)
+    undercut = r > r_phi
+    base = r - roller_radius_mm
+    phi = roller_pressure_angle(base, roller_radius_mm, offset_mm, kin, rotation)
+    kappa = roller_pitch_curvature(base, roller_radius_mm, offset_mm, kin, rotation)
+    return RollerSizing(r, undercut, jnp.where(undercut, jnp.argmax(kappa), jnp.argmax(jnp.abs(phi))))
+
+
 def prime_radius(base_radius_mm, roller_radius_mm) -> jax.Array:
     """R_p = R_b + R_f (mm), the prime circle catalogues and textbooks quote."""
     return base_radius_mm + roller_radius_mm
 
 
 __all__ = [
-    "ROLLER_MAX_PRESSURE_ANGLE_DEG", "ROLLER_MIN_CURVATURE_RADIUS_MM", "RollerGeometry", "prime_radius",
-    "roller_equivalent_radius", "roller_geometry", "roller_min_prime_radius_for_pressure_angle",
-    "roller_pitch_curvature", "roller_pitch_curve", "roller_pitch_height", "roller_pressure_angle",
-    "roller_profile", "roller_reach_constraint", "roller_undercut_constraint", "roller_undercut_margin",
+    "ROLLER_MAX_PRESSURE_ANGLE_DEG", "ROLLER_MIN_CURVATURE_RADIUS_MM", "RollerGeometry", "RollerSizing",
+    "prime_radius", "roller_equivalent_radius", "roller_geometry", "roller_min_prime_radius",
+    "roller_min_prime_radius_for_pressure_angle", "roller_pitch_curvature", "roller_pitch_curve",
+    "roller_pitch_height", "roller_pressure_angle", "roller_profile", "roller_reach_constraint",
+    "roller_undercut_constraint", "roller_undercut_margin",
 ]
