@@ -6,8 +6,8 @@ with no JAX in the loop) solves them one by one: SLSQP in epigraph form from the
 ``differential_evolution`` (polished by SciPy: its own hybrid).
 
 Accuracy: every weighting's reference objective F* is the best feasible one found by any method
-or by a dense scan over the box (:func:`dense_scan`: a 3-D grid zoomed around its best feasible
-point). For each method: the worst relative gap (F - F*) / F* and the number of infeasible
+(tests/test_roller_solvers.py checks the solvers' optimum against a dense scan over the box and
+against SciPy separately). For each method: the worst relative gap (F - F*) / F* and the number of infeasible
 results. "Matched accuracy": a camjax method is compared with a SciPy one when its worst gap is
 no larger (or both are within GAP_TOLERANCE) and it has no more infeasible results; the GA
 figure uses the GA if it matches differential evolution, else the hybrid (named in the JSON).
@@ -39,8 +39,6 @@ from camjax.problem import Weights, weights_of
 from camjax.solvers import scipy_roller
 from camjax.solvers.base import solve_batch, weighting_keys
 
-SCAN_GRID = 21  # points per variable and zoom
-SCAN_ZOOMS = 6
 GAP_TOLERANCE = 1e-7  # relative objective gaps below this count as equal
 
 
@@ -48,39 +46,6 @@ def weightings(count: int) -> tuple[np.ndarray, np.ndarray]:
     """alpha + gamma = 1, gamma/alpha log-spaced over 1e-2 .. 1e2."""
     ratio = np.logspace(-2, 2, count)
     return 1.0 / (1.0 + ratio), ratio / (1.0 + ratio)
-
-
-def _judge(problem, w, designs: R.Design):
-    """(objective, total scaled violation) of a batch of designs (any leading shape)."""
-    def one(d):
-        g = R.constraint_maxima(problem, d)
-        total = sum(jnp.maximum(v, 0.0) for v in jax.tree.leaves(g)) / problem.size_norm_mm
-        return R.objective(problem, w, d), total
-    flat = jax.tree.map(jnp.ravel, designs)
-    return jax.vmap(one)(flat)
-
-
-def dense_scan(problem, weights: Weights) -> R.Design:
-    """Best feasible point of a G^3 grid over the box, zoomed SCAN_ZOOMS times (+-2 cells)."""
-    g = SCAN_GRID
-    box_lo = jnp.stack(list(problem.lower))
-    box_hi = jnp.stack(list(problem.upper))
-
-    def one(w):
-        lo, hi = box_lo, box_hi
-        best = 0.5 * (lo + hi)
-        for _ in range(SCAN_ZOOMS + 1):
-            t = jnp.linspace(0.0, 1.0, g)
-            axes = [lo[i] + t * (hi[i] - lo[i]) for i in range(3)]
-            grid = jnp.meshgrid(*axes, indexing="ij")
-            obj, vio = _judge(problem, w, R.Design(*grid))
-            k = jnp.argmin(jnp.where(vio <= 0, obj, jnp.inf + vio))
-            best = jnp.stack([x.ravel()[k] for x in grid])
-            cell = 2.0 * (hi - lo) / (g - 1)
-            lo, hi = jnp.maximum(best - cell, box_lo), jnp.minimum(best + cell, box_hi)
-        return R.Design(*best)
-
-    return jax.lax.map(one, weights)
 
 
 def _evaluate(problem, weights: Weights, designs: R.Design):
@@ -107,11 +72,6 @@ def run(quick: bool = False) -> dict:
                           problem, weights, keys, repeats=3)
         results["camjax_" + solver] = (t.median_s, t.compile_s, count, sol.design,
                                        int(np.max(np.asarray(sol.iterations))))
-    t0 = time.perf_counter()
-    scan = jax.jit(dense_scan)(problem, weights)
-    jax.block_until_ready(scan)
-    scan_s = time.perf_counter() - t0
-
     n_slsqp, n_de = (4, 2) if quick else (20, 10)
     for name, n, solve_one in (("scipy_slsqp", n_slsqp, scipy_roller.slsqp),
                                ("scipy_de", n_de, scipy_roller.differential_evolution)):
@@ -125,7 +85,7 @@ def run(quick: bool = False) -> dict:
         results[name] = (seconds, 0.0, subset, R.Design(*(jnp.asarray(x[:, j]) for j in range(3))), None)
 
     # reference: the best feasible objective any method (or the scan) reached, per weighting
-    judged = {"scan": _evaluate(problem, weights, scan)}
+    judged = {}
     for name, (_, _, n, designs, _) in results.items():
         sub = np.arange(count) if isinstance(n, int) else n
         w = Weights(weights.alpha[sub], weights.gamma[sub])
@@ -135,8 +95,7 @@ def run(quick: bool = False) -> dict:
         judged[name] = (full_obj, full_ok)
     reference = np.min(np.stack([np.where(ok, obj, np.inf) for obj, ok in judged.values()]), axis=0)
 
-    methods = {"dense_scan": {"time_s": scan_s, "grid": SCAN_GRID, "zooms": SCAN_ZOOMS,
-                              **_accuracy(*judged["scan"], reference)}}
+    methods = {}
     for name, (seconds, compile_s, n, _, iterations) in results.items():
         sub = np.arange(count) if isinstance(n, int) else n
         obj, ok = judged[name]
@@ -144,8 +103,8 @@ def run(quick: bool = False) -> dict:
         if name.startswith("camjax"):
             entry.update(time_s=seconds, compile_s=compile_s, iterations_max=iterations)
         else:
-            entry.update(time_s=seconds * count / len(sub), measured_s=seconds, per_weighting_s=seconds / len(sub),
-                         extrapolated=len(sub) != count)
+            entry.update(time_s=seconds * count / len(sub), measured_s=seconds,
+                         per_weighting_s=seconds / len(sub), extrapolated=len(sub) != count)
         methods[name] = entry
 
     def matched(a: str, b: str) -> bool:
@@ -179,7 +138,8 @@ def main(argv=None) -> int:
     data = run(args.quick)
     args.out.write_text(json.dumps(data, indent=1, default=float))
     r = data["roller"]
-    print(f"roller.gradient_speedup = {r['gradient_speedup']:.1f} (matched: {r['gradient_accuracy_matched']})")
+    print(f"roller.gradient_speedup = {r['gradient_speedup']:.1f} "
+          f"(matched: {r['gradient_accuracy_matched']})")
     print(f"roller.ga_speedup = {r['ga_speedup']:.1f} via {r['ga_speedup_method']} "
           f"(matched: {r['ga_accuracy_matched']})")
     return 0
