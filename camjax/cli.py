@@ -126,9 +126,13 @@ def _setup_design(p: argparse.ArgumentParser):
               f"{d['min_base_radius_deg']:g} deg")
         if "design" in d:
             g = d["design"]
-            print(f"design ({g['solver']}): R_b = {g['base_radius_mm']:.4f} mm, L = "
-                  f"{g['face_width_mm']:.4f} mm, objective {g['objective']:.5f}, "
-                  f"feasible {g['feasible']}")
+            if "face_width_mm" in g:
+                sizes = f"L = {g['face_width_mm']:.4f} mm"
+            else:
+                sizes = (f"R_f = {g['roller_radius_mm']:.4f} mm, offset {g['offset_mm']:.4f} mm, "
+                         f"R_p = {g['prime_radius_mm']:.4f} mm")
+            print(f"design ({g['solver']}): R_b = {g['base_radius_mm']:.4f} mm, {sizes}, "
+                  f"objective {g['objective']:.5f}, feasible {g['feasible']}")
         print(f"wrote {', '.join(names)} to {args.out}")
         return 0
 

@@ -89,7 +89,9 @@ class DesignCurves(NamedTuple):
     pitch_y_mm: np.ndarray | None
     pressure_angle_deg: np.ndarray | None
     pitch_rho_mm: np.ndarray | None
-    undercut_margin_mm: np.ndarray | None
+    undercut_margin_mm: np.ndarray | None  # roller: rho_c - min radius on convex parts (float max on concave)
+    pressure_angle_limit_deg: float | None = None  # roller: follower.max_pressure_angle_deg
+    rotation: str = "ccw"  # the cam's turning direction (camjax.geometry.pitch)
 
 
 def _np(x):
@@ -97,24 +99,36 @@ def _np(x):
 
 
 def evaluate_design(scene: Scene, arrays: SceneArrays, base_radius_mm: float,
-                    face_width_mm: float | None = None) -> DesignCurves:
-    """Geometry, stress and roller quantities at one base radius (mm)."""
-    kin, f = arrays.kin, scene.follower
-    rho = stress = pitch_x = pitch_y = phi = pitch_rho = margin = None
+                    face_width_mm: float | None = None, *, roller_radius_mm: float | None = None,
+                    offset_mm: float | None = None) -> DesignCurves:
+    """Geometry, stress and roller quantities at one design (mm).
+
+    ``roller_radius_mm``, ``offset_mm``: a roller's design values (default: the [follower]'s).
+    Outlines follow the scene's ``motion.rotation`` (a cw cam is the mirror image of ccw).
+    Roller stress: Hertz line contact of the cam surface (rho_c, concave parts included) and the
+    roller under the normal force F / cos phi (:func:`camjax.contact.roller_stress`).
+    """
+    kin, f, rot = arrays.kin, scene.follower, scene.motion.rotation
+    rho = stress = pitch_x = pitch_y = phi = pitch_rho = margin = limit = None
+    rf = e = None
     if f.type == "flat":
-        x, y = geometry.flat_profile(base_radius_mm, kin)
+        x, y = geometry.flat_profile(base_radius_mm, kin, rot)
         rho = geometry.flat_radius_of_curvature(base_radius_mm, kin)
         if arrays.stress_coefficient is not None:
             stress = contact.stress_from_coefficient(arrays.stress_coefficient, rho)
         if face_width_mm is None:
             face_width_mm = float(np.asarray(geometry.flat_face_width(kin, symmetric=True)))
     else:
-        rf, e = f.roller_radius_mm, f.offset_mm
-        x, y = geometry.roller_profile(base_radius_mm, rf, e, kin)
-        pitch_x, pitch_y = geometry.roller_pitch_curve(base_radius_mm, rf, e, kin)
-        g = geometry.roller_geometry(base_radius_mm, rf, e, kin)
-        phi, pitch_rho, margin = jnp.rad2deg(g.pressure_angle), g.pitch_radius_of_curvature, \
-            g.undercut_margin
+        rf = float(f.roller_radius_mm if roller_radius_mm is None else roller_radius_mm)
+        e = float(f.offset_mm if offset_mm is None else offset_mm)
+        x, y = geometry.roller_profile(base_radius_mm, rf, e, kin, rot)
+        pitch_x, pitch_y = geometry.roller_pitch_curve(base_radius_mm, rf, e, kin, rot)
+        g = geometry.roller_geometry(base_radius_mm, rf, e, kin, rot, f.min_curvature_radius_mm)
+        phi, pitch_rho, margin = jnp.rad2deg(g.pressure_angle), g.pitch_radius_of_curvature, g.undercut_margin
+        if arrays.stress_coefficient is not None:
+            rho_eq = geometry.roller_equivalent_radius(g.pitch_curvature, rf)
+            stress = contact.roller_stress(arrays.stress_coefficient, g.pressure_angle, rho_eq)
+        limit = f.max_pressure_angle_deg
         face_width_mm = None
     m = arrays.motion
     return DesignCurves(
@@ -124,7 +138,5 @@ def evaluate_design(scene: Scene, arrays: SceneArrays, base_radius_mm: float,
         None if face_width_mm is None else float(face_width_mm),
         np.asarray(x), np.asarray(y), _np(rho), _np(arrays.force_N), _np(arrays.torque_Nm),
         _np(stress), None if scene.design is None else scene.design.sigma_max_MPa,
-        f.roller_radius_mm if f.type == "roller" else None,
-        f.offset_mm if f.type == "roller" else None,
-        _np(pitch_x), _np(pitch_y), _np(phi), _np(pitch_rho), _np(margin),
+        rf, e, _np(pitch_x), _np(pitch_y), _np(phi), _np(pitch_rho), _np(margin), limit, rot,
     )

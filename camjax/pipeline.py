@@ -4,9 +4,9 @@ Data flows one way and each step is a pure function:
 
 1. :func:`camjax.evaluate.scene_arrays` evaluates what the scene declares (once per scene);
 2. :func:`min_base_radius` finds the smallest admissible base radius (closed form for a flat
-   face, bisection for a roller);
-3. :func:`solve_design` picks the design (R_b, L) of a scene with a [design] section -- the one
-   place an optimizer plugs in;
+   face; for a roller the pressure angle in closed form, the undercut by bisection);
+3. :func:`solve_design` picks the design of a scene with a [design] section (flat face: R_b, L;
+   roller: R_b, R_f, e) -- the one place an optimizer plugs in;
 4. :func:`camjax.evaluate.evaluate_design` computes the curves at the drawing base radius
    (:func:`drawing_base_radius`);
 5. :func:`camjax.output.report.build_report` turns the typed :class:`DesignRun` into the
@@ -23,13 +23,11 @@ from __future__ import annotations
 import math
 from typing import Any, NamedTuple
 
-import jax
 import jax.numpy as jnp
 import numpy as np
 
 from camjax import contact, geometry
 from camjax.evaluate import DesignCurves, SceneArrays, evaluate_design, scene_arrays
-from camjax.geometry import PRESSURE_ANGLE_LIMIT_DEG
 from camjax.scene import Scene
 
 DRAWING_MARGIN_MM = 1.0  # without a [design], draw at the smallest admissible R_b + this, rounded up
@@ -44,60 +42,34 @@ def _f(x) -> float:
 
 
 class MinBaseRadius(NamedTuple):
-    """Smallest admissible base radius and the cam angle where it binds."""
+    """Smallest admissible base radius, the cam angle where it binds and the limit that binds."""
 
     radius_mm: float
     angle_deg: float
-
-
-@jax.jit
-def _roller_violation(base_radius_mm, roller_radius_mm, offset_mm, kin):
-    """Largest violation (> 0 = violated) of |phi| <= 30 deg and no undercut, normalized."""
-    g = geometry.roller_geometry(base_radius_mm, roller_radius_mm, offset_mm, kin)
-    phi_excess = jnp.max(jnp.abs(g.pressure_angle)) / jnp.deg2rad(PRESSURE_ANGLE_LIMIT_DEG) - 1.0
-    undercut = -jnp.min(g.undercut_margin) / roller_radius_mm
-    reach = jnp.abs(offset_mm) - (base_radius_mm + roller_radius_mm)  # prime circle must pass e
-    return jnp.maximum(jnp.maximum(phi_excess, undercut), reach / roller_radius_mm)
-
-
-def _roller_min_base_radius(scene: Scene, arrays: SceneArrays) -> float:
-    """Smallest R_b (mm, to 1e-9 relative) with |phi| <= 30 deg and no undercut, by bisection.
-
-    Both constraints relax as R_b grows (the pitch point moves out, tan phi falls, the pitch
-    curve flattens), so the feasible set is an interval [R_min, inf).
-    """
-    f = scene.follower
-    kin = arrays.kin
-
-    def bad(r):
-        return float(_roller_violation(r, f.roller_radius_mm, f.offset_mm, kin)) > 0.0
-
-    lo, hi = 0.0, max(1.0, abs(f.offset_mm))
-    while bad(hi):
-        lo, hi = hi, 2.0 * hi
-        if hi > 1e7:
-            raise ValueError("no base radius below 1e7 mm satisfies the roller constraints")
-    while hi - lo > 1e-9 * hi:
-        mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if bad(mid) else (lo, mid)
-    return hi
+    binding: str  # "curvature" (flat face), "pressure_angle" or "undercut" (roller)
+    prime_radius_mm: float | None = None  # roller: R_b + R_f
 
 
 def min_base_radius(scene: Scene, arrays: SceneArrays) -> MinBaseRadius:
     """Smallest admissible base radius (mm) and the cam angle (deg) where it binds.
 
-    Flat face: max_theta -(s + s'') (rho >= 0). Roller: the smallest R_b with |phi| <= 30 deg
-    and no undercut; the angle is where the pressure angle peaks at that radius.
+    Flat face: max_theta -(s + s'') (rho >= 0). Roller: the smallest prime circle with
+    |phi| <= follower.max_pressure_angle_deg and no undercut (convex cam-surface radius >=
+    follower.min_curvature_radius_mm) at the follower's R_f and offset
+    (:func:`camjax.geometry.roller_min_prime_radius`), minus R_f; the angle is where the binding
+    limit is reached.
     """
     t = np.asarray(arrays.theta_deg)
-    if scene.follower.type == "flat":
-        r, i = geometry.flat_min_base_radius(arrays.kin)
-        return MinBaseRadius(_f(r), _f(t[int(i)]))
-    r = _roller_min_base_radius(scene, arrays)
     f = scene.follower
-    g = geometry.roller_geometry(r, f.roller_radius_mm, f.offset_mm, arrays.kin)
-    i = int(np.argmax(np.abs(np.asarray(g.pressure_angle))))
-    return MinBaseRadius(r, _f(t[i]))
+    if f.type == "flat":
+        r, i = geometry.flat_min_base_radius(arrays.kin)
+        return MinBaseRadius(_f(r), _f(t[int(i)]), "curvature")
+    sizing = geometry.roller_min_prime_radius(arrays.kin, f.roller_radius_mm, f.offset_mm,
+                                              math.radians(f.max_pressure_angle_deg),
+                                              f.min_curvature_radius_mm, scene.motion.rotation)
+    rp = _f(sizing.prime_radius_mm)
+    return MinBaseRadius(rp - f.roller_radius_mm, _f(t[int(sizing.index)]),
+                         "undercut" if bool(sizing.undercut_binds) else "pressure_angle", rp)
 
 
 # ------------------------------------------------------------------------------ design
@@ -107,32 +79,41 @@ class DesignSolution(NamedTuple):
     """The solved design of a scene's [design] and the figures the report states beside it."""
 
     result: dict[str, Any]  # the solver's JSON (camjax.solvers.base.Solution.to_json)
-    peak_stress_MPa: float  # the design's peak stress, computed exactly as the stress curve
-    required_base_radius_mm: float  # smallest admissible R_b (max over angles of the need)
+    peak_stress_MPa: float | None  # the design's peak stress, computed exactly as the stress curve
+    required_base_radius_mm: float  # smallest admissible R_b (flat: over angles; roller: at R_f, e)
     required_base_radius_deg: float  # where it binds
-    binding_constraint: str  # "stress" or "curvature"
-    required_face_width_mm: float
+    binding_constraint: str  # flat: "stress" or "curvature"; roller: "pressure_angle" or "undercut"
+    required_face_width_mm: float | None  # flat face only
     rho_min_limit_mm: float  # the problem's smallest allowed radius of curvature
 
 
-def solve_design(scene: Scene, arrays: SceneArrays) -> DesignSolution | None:
-    """The optimized design (R_b, L) of a scene with a [design] section; None without one.
+def design_problem(scene: Scene, arrays: SceneArrays | None = None, *, samples: int | None = None):
+    """The design problem of the scene's [design] section (the follower type's problem family)."""
+    from camjax.solvers.base import problem_from_scene
 
-    Solved by :func:`camjax.solvers.sweep.solve` with the scene's mode, alpha, gamma, solver and
-    seed (SPEC 5; keys of :meth:`camjax.solvers.base.Solution.to_json`: mode, solver,
-    base_radius_mm, face_width_mm, objective, feasible, violated, iterations, ..., and in
-    pointwise mode base_radius_deg, face_width_deg and the per-angle ``pointwise`` arrays).
+    return problem_from_scene(scene, arrays, samples=samples)
+
+
+def solve_design(scene: Scene, arrays: SceneArrays) -> DesignSolution | None:
+    """The optimized design of a scene with a [design] section; None without one.
+
+    Solved by :func:`camjax.solvers.base.solve` with the scene's mode, alpha, gamma, solver and
+    seed (SPEC 5; keys of :meth:`camjax.solvers.base.Solution.to_json`: mode, solver, the design
+    variables, objective, feasible, violated, iterations, ..., and in pointwise mode the angles
+    and per-angle ``pointwise`` arrays). Flat face: (R_b, L); roller: (R_b, R_f, e).
     """
     if scene.design is None:
         return None
+    from camjax.solvers.base import solve
+
+    d, t = scene.design, np.asarray(arrays.theta_deg)
+    problem = design_problem(scene, arrays)
+    out = solve(problem, (d.alpha, d.gamma), mode=d.mode, solver=d.solver, seed=d.seed).to_json(problem)
+    if scene.follower.type == "roller":
+        return _roller_design_solution(scene, arrays, out)
     from camjax import problem as P
-    from camjax.solvers.sweep import solve
 
-    d, kin, t = scene.design, arrays.kin, np.asarray(arrays.theta_deg)
-    problem = P.problem_from_scene(scene, arrays)
-    out = solve(problem, d.alpha, d.gamma, mode=d.mode, solver=d.solver, seed=d.seed).to_json(problem)
-
-    rho = geometry.flat_radius_of_curvature(out["base_radius_mm"], kin)
+    rho = geometry.flat_radius_of_curvature(out["base_radius_mm"], arrays.kin)
     sigma_peak = _f(jnp.max(contact.stress_from_coefficient(arrays.stress_coefficient, rho)))
     stress_rho = np.asarray(P.stress_rho_need(problem))
     need = np.asarray(P.rho_need(problem) - problem.q_mm)  # max over angles: P.required_base_radius
@@ -141,6 +122,20 @@ def solve_design(scene: Scene, arrays: SceneArrays) -> DesignSolution | None:
         out, sigma_peak, float(need[i]), _f(t[i]),
         "stress" if stress_rho[i] >= float(problem.rho_min_mm) else "curvature",
         _f(P.required_face_width(problem)), float(problem.rho_min_mm))
+
+
+def _roller_design_solution(scene: Scene, arrays: SceneArrays, out: dict) -> DesignSolution:
+    """A roller design's figures: its peak stress as the stress curve computes it, and the
+    smallest R_b its R_f and offset admit (pressure angle and undercut; stress aside)."""
+    f, t = scene.follower, np.asarray(arrays.theta_deg)
+    rf, e = out["roller_radius_mm"], out["offset_mm"]
+    curves = evaluate_design(scene, arrays, out["base_radius_mm"], roller_radius_mm=rf, offset_mm=e)
+    sizing = geometry.roller_min_prime_radius(arrays.kin, rf, e, math.radians(f.max_pressure_angle_deg),
+                                              f.min_curvature_radius_mm, scene.motion.rotation)
+    peak_stress = None if curves.stress_MPa is None else _f(np.max(curves.stress_MPa))
+    return DesignSolution(out, peak_stress, _f(sizing.prime_radius_mm) - rf, _f(t[int(sizing.index)]),
+                          "undercut" if bool(sizing.undercut_binds) else "pressure_angle", None,
+                          f.min_curvature_radius_mm)
 
 
 def drawing_base_radius(design: DesignSolution | None, min_base_radius_mm: float,
@@ -184,8 +179,10 @@ def run_design(scene: Scene, arrays: SceneArrays | None = None, *,
     minimum = min_base_radius(scene, arrays)
     design = solve_design(scene, arrays)
     radius, source = drawing_base_radius(design, minimum.radius_mm, base_radius_mm)
-    width = design.result["face_width_mm"] if design is not None else None
-    curves = evaluate_design(scene, arrays, radius, width)
+    result = design.result if design is not None else {}
+    curves = evaluate_design(scene, arrays, radius, result.get("face_width_mm"),
+                             roller_radius_mm=result.get("roller_radius_mm"),
+                             offset_mm=result.get("offset_mm"))
     return DesignRun(arrays, minimum, design, radius, source, curves)
 
 
@@ -195,10 +192,9 @@ def sweep_scene(scene: Scene, alphas, gammas, *, mode: str, solver: str, seed: i
 
     Returns :class:`camjax.solvers.sweep.SweepResult` (its ``records()`` are the JSON rows).
     """
-    from camjax.problem import problem_from_scene
     from camjax.solvers.sweep import sweep
 
-    problem = problem_from_scene(scene)
+    problem = design_problem(scene)
     return sweep(problem, alphas, gammas, mode=mode, solver=solver, seed=seed, chunk_size=chunk_size)
 
 

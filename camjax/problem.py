@@ -43,10 +43,12 @@ import jax.numpy as jnp
 import numpy as np
 
 from camjax.contact import stress_from_coefficient
+from camjax.geometry import FLAT_MIN_CURVATURE_RADIUS_MM
 from camjax.numerics import RHO_FLOOR_MM, max_over_angles, positive_part, safe_divide, safe_sqrt
 
-# Smallest admissible radius of curvature (mm): the strict "rho > 0" of SPEC 5 as a margin.
-RHO_MIN_MM = 1e-3
+# Default smallest admissible radius of curvature (mm): the strict "rho > 0" of SPEC 5 as a margin.
+# The scene's follower.min_curvature_radius_mm decides; this is its default, named once in geometry.
+RHO_MIN_MM = FLAT_MIN_CURVATURE_RADIUS_MM
 # A design is feasible when every violation is below these (mm; MPa relative to sigma_max).
 FEASIBILITY_TOL_MM = 1e-6
 FEASIBILITY_RTOL_STRESS = 1e-6
@@ -119,7 +121,7 @@ class Evaluation(NamedTuple):
 
 
 def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=None,
-                       rho_min_mm: float = RHO_MIN_MM) -> Problem:
+                       rho_min_mm: float | None = None) -> Problem:
     """Problem of a scene with a [design] section (Python, not traceable: it reads the scene).
 
     Args:
@@ -127,7 +129,8 @@ def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=
       arrays: its :class:`camjax.evaluate.SceneArrays` if already computed (else computed here).
       samples: grid size override (ignored when ``arrays`` is given).
       dtype: floating dtype of the arrays (default float64).
-      rho_min_mm: the curvature margin of the constraint rho > 0.
+      rho_min_mm: the curvature margin of the constraint rho > 0 (default: the scene's
+        follower.min_curvature_radius_mm).
     """
     from camjax.evaluate import scene_arrays
 
@@ -150,7 +153,7 @@ def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=
         upper=Design(as_(d.base_radius_mm[1]), as_(d.face_width_mm[1])),
         sigma_max_MPa=as_(d.sigma_max_MPa),
         size_norm_mm=as_(d.base_radius_mm[1] + d.face_width_mm[1]),
-        rho_min_mm=as_(rho_min_mm),
+        rho_min_mm=as_(scene.follower.min_curvature_radius_mm if rho_min_mm is None else rho_min_mm),
     )
 
 

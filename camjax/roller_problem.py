@@ -69,6 +69,7 @@ class Problem(NamedTuple):
     sigma_max_MPa: jax.Array  # () allowable contact stress
     size_norm_mm: jax.Array  # () N = R_b,max + R_f,max
     tan_max_pressure_angle: jax.Array  # () tan(phi_max)
+    max_pressure_angle_deg: jax.Array  # () phi_max, deg (as the scene gives it)
     min_curvature_radius_mm: jax.Array  # () smallest convex cam-surface radius allowed
     rotation_sign: jax.Array  # () +1 ccw, -1 cw (geometry.pitch): e~ = sign e
 
@@ -112,11 +113,11 @@ def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=
 
     Args:
       scene: a :class:`camjax.scene.Scene` with a roller follower and [design].
-      arrays: its :class:`camjax.analysis.SceneArrays` if already computed (else computed here).
+      arrays: its :class:`camjax.evaluate.SceneArrays` if already computed (else computed here).
       samples: grid size override (ignored when ``arrays`` is given).
       dtype: floating dtype of the arrays (default float64).
     """
-    from camjax.analysis import scene_arrays
+    from camjax.evaluate import scene_arrays
 
     if scene.design is None:
         raise ValueError("scene has no [design] section: nothing to optimize")
@@ -136,6 +137,7 @@ def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=
         sigma_max_MPa=as_(d.sigma_max_MPa if d.sigma_max_MPa is not None else 1.0),
         size_norm_mm=as_(d.base_radius_mm[1] + d.roller_radius_mm[1]),
         tan_max_pressure_angle=as_(np.tan(np.radians(f.max_pressure_angle_deg))),
+        max_pressure_angle_deg=as_(f.max_pressure_angle_deg),
         min_curvature_radius_mm=as_(f.min_curvature_radius_mm),
         rotation_sign=as_(geometry.rotation_sign(scene.motion.rotation)),
     )
@@ -254,7 +256,7 @@ def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
     margin = geometry.roller_undercut_margin(kappa, design.roller_radius_mm, 0.0)  # rho_c, convex parts
     rho_c_min = jnp.min(margin)
     v = Violation(
-        pressure_angle=positive_part(phi[j] - jnp.arctan(problem.tan_max_pressure_angle)),
+        pressure_angle=positive_part(phi[j] - jnp.deg2rad(problem.max_pressure_angle_deg)),
         undercut=positive_part(problem.min_curvature_radius_mm - rho_c_min),
         stress=positive_part(sigma[i] - problem.sigma_max_MPa),
         bounds=bounds_violation(problem, design),
@@ -319,7 +321,7 @@ def solution_json(problem: Problem, solution) -> dict:
         "stress_max_deg": _f(ev.stress_max_deg),
         "pressure_angle_max_deg": _f(ev.pressure_angle_max_deg),
         "pressure_angle_max_at_deg": _f(ev.pressure_angle_max_at_deg),
-        "max_pressure_angle_deg": _f(np.degrees(np.arctan(problem.tan_max_pressure_angle))),
+        "max_pressure_angle_deg": _f(problem.max_pressure_angle_deg),
         "cam_rho_min_mm": _f(ev.cam_rho_min_mm),
         "sigma_max_MPa": _f(problem.sigma_max_MPa),
         **{f"{name[:-3]}_bounds_mm": [_f(getattr(problem.lower, name)), _f(getattr(problem.upper, name))]

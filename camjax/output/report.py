@@ -15,9 +15,8 @@ import numpy as np
 
 from camjax import geometry, loads
 from camjax.evaluate import DesignCurves, SceneArrays
-from camjax.geometry import PRESSURE_ANGLE_LIMIT_DEG
 from camjax.program import joints
-from camjax.scene import DesignSpec, Scene
+from camjax.scene import DesignSpec, FollowerSpec, Scene
 
 if TYPE_CHECKING:  # the pipeline hands its result down; nothing here calls back into it
     from camjax.pipeline import DesignRun, DesignSolution, MinBaseRadius
@@ -128,6 +127,8 @@ def guide_block(scene: Scene, arrays: SceneArrays) -> dict[str, Any]:
     independent statement of the same condition, reports min Gamma (> 0 while not jammed).
     """
     guide, t = scene.guide, arrays.theta_deg
+    # a in Chen's frame, whose friction directions turn with the cam: a cw cam is the mirror image
+    # of the ccw one (face, friction and all), so a = s' for either rotation
     offset = geometry.flat_contact_offset(arrays.kin)
     r = loads.guide_reactions(guide, arrays.force_N, offset)
     limit = loads.jamming_limit_mm(guide)
@@ -157,15 +158,23 @@ def guide_block(scene: Scene, arrays: SceneArrays) -> dict[str, Any]:
 # ------------------------------------------------------------------------- base radius
 
 
-def min_base_radius_block(follower_type: str, minimum: MinBaseRadius) -> dict[str, Any]:
-    """Smallest admissible base radius (mm), the cam angle (deg) where it binds, and the rule."""
-    if follower_type == "flat":
-        rule = "flat face: rho = R_b + s + s'' >= 0 at every sample"
-    else:
-        rule = (f"roller: |pressure angle| <= {PRESSURE_ANGLE_LIMIT_DEG:g} deg "
-                "and no undercut at every sample (bisection)")
-    return {"min_base_radius_mm": minimum.radius_mm, "min_base_radius_deg": minimum.angle_deg,
-            "min_base_radius_rule": rule}
+def min_base_radius_block(follower: FollowerSpec, minimum: MinBaseRadius) -> dict[str, Any]:
+    """Smallest admissible base radius (mm), the cam angle (deg) where it binds, and the rule.
+
+    Roller: also the prime-circle radius R_b + R_f, and the rule names the binding limit
+    (pressure angle or undercut) and its angle.
+    """
+    out = {"min_base_radius_mm": minimum.radius_mm, "min_base_radius_deg": minimum.angle_deg}
+    if follower.type == "flat":
+        return {**out, "min_base_radius_rule": "flat face: rho = R_b + s + s'' >= 0 at every sample"}
+    f = follower
+    limits = {"pressure_angle": f"pressure angle |phi| <= {f.max_pressure_angle_deg:g} deg",
+              "undercut": f"no undercut (convex cam-surface radius >= {f.min_curvature_radius_mm:g} mm)"}
+    other = next(k for k in limits if k != minimum.binding)
+    rule = (f"roller: {limits[minimum.binding]} binds at {minimum.angle_deg:g} deg "
+            f"(R_f = {f.roller_radius_mm:g} mm, offset {f.offset_mm:g} mm; {limits[other]} holds)")
+    return {**out, "min_prime_radius_mm": minimum.prime_radius_mm, "min_base_radius_rule": rule,
+            "min_base_radius_binding": minimum.binding}
 
 
 def face_width_block(scene: Scene, arrays: SceneArrays) -> dict[str, Any]:
@@ -187,20 +196,34 @@ def design_block(spec: DesignSpec, solution: DesignSolution) -> dict[str, Any]:
     """The solver's result with the report's additions.
 
     Added to the solver's JSON: ``peak_stress_MPa`` (the design's peak stress computed exactly as
-    the report's stress curve), the smallest admissible R_b and L (``required_*``) with the
-    constraint that binds there, and ``violations`` as readable sentences.
+    the report's stress curve; null for a roller without [contact]), the smallest admissible R_b
+    (and, flat face, L) (``required_*``) with the constraint that binds there, and ``violations``
+    as readable sentences. Roller: R_b required at the design's R_f and offset (pressure angle
+    and undercut), and the design variables base_radius_mm, roller_radius_mm, offset_mm,
+    prime_radius_mm come from the solver.
     """
     out = dict(solution.result)
     sigma_peak, required = solution.peak_stress_MPa, solution.required_base_radius_mm
-    required_width = solution.required_face_width_mm
-    rb_hi, l_hi = spec.base_radius_mm[1], spec.face_width_mm[1]
+    rb_hi = spec.base_radius_mm[1]
     sentences = {
-        "curvature": f"rho <= {solution.rho_min_limit_mm:g} mm somewhere (min rho "
-                     f"{out['rho_min_mm']:.6g} mm): the flat face cannot follow the profile",
-        "stress": f"peak stress {sigma_peak:.6g} MPa > sigma_max {spec.sigma_max_MPa:g} MPa",
-        "face_width": f"face width needs {required_width:.6g} mm > upper bound {l_hi:g} mm",
+        "stress": f"peak stress {sigma_peak or 0.0:.6g} MPa > sigma_max {spec.sigma_max_MPa or 0.0:g} MPa",
         "bounds": "a design variable is outside its bounds",
     }
+    if spec.face_width_mm is not None:  # flat face
+        sentences.update({
+            "curvature": f"rho <= {solution.rho_min_limit_mm:g} mm somewhere (min rho "
+                         f"{out['rho_min_mm']:.6g} mm): the flat face cannot follow the profile",
+            "face_width": f"face width needs {solution.required_face_width_mm:.6g} mm > upper bound "
+                          f"{spec.face_width_mm[1]:g} mm",
+        })
+    else:
+        sentences.update({
+            "pressure_angle": f"pressure angle {out['pressure_angle_max_deg']:.6g} deg at "
+                              f"{out['pressure_angle_max_at_deg']:g} deg > limit "
+                              f"{out['max_pressure_angle_deg']:g} deg",
+            "undercut": f"the roller undercuts the cam: smallest convex cam-surface radius "
+                        f"{out['cam_rho_min_mm']:.6g} mm < {solution.rho_min_limit_mm:g} mm",
+        })
     violations = [sentences[name] for name in out["violated"]]
     if required > rb_hi:
         violations.insert(0, f"base radius needs {required:.6g} mm > upper bound {rb_hi:g} mm")
@@ -210,8 +233,9 @@ def design_block(spec: DesignSpec, solution: DesignSolution) -> dict[str, Any]:
         "required_base_radius_mm": required,
         "required_base_radius_deg": solution.required_base_radius_deg,
         "binding_constraint": solution.binding_constraint,
-        "required_face_width_mm": required_width,
     })
+    if solution.required_face_width_mm is not None:
+        out["required_face_width_mm"] = solution.required_face_width_mm
     return out
 
 
@@ -233,10 +257,11 @@ def evaluated_block(curves: DesignCurves) -> dict[str, Any]:
         out["roller"] = {
             "roller_radius_mm": curves.roller_radius_mm,
             "offset_mm": curves.offset_mm,
+            "prime_radius_mm": curves.base_radius_mm + curves.roller_radius_mm,
             "pressure_angle_deg": {**extrema(phi, t), "max_abs": _f(abs(phi[i])),
                                    "max_abs_deg": _f(t[i])},
-            "pressure_angle_limit_deg": PRESSURE_ANGLE_LIMIT_DEG,
-            "pressure_angle_ok": bool(abs(phi[i]) <= PRESSURE_ANGLE_LIMIT_DEG),
+            "pressure_angle_limit_deg": curves.pressure_angle_limit_deg,
+            "pressure_angle_ok": bool(abs(phi[i]) <= curves.pressure_angle_limit_deg),
             "pitch_rho_mm": {"min_abs": _f(abs(curves.pitch_rho_mm[j])), "min_abs_deg": _f(t[j]),
                              "concave": bool(np.any(curves.pitch_rho_mm < 0))},
             "undercut_margin_mm": trough(curves.undercut_margin_mm, t),
@@ -260,6 +285,7 @@ def build_report(scene: Scene, run: DesignRun) -> dict[str, Any]:
         "models": sorted(scene.needs()),
         "samples": int(arrays.theta_deg.shape[0]),
         "cam_speed_rpm": scene.motion.rpm,
+        "rotation": scene.motion.rotation,
         "cam_speed_rad_s": _f(arrays.cam_speed_rad_s),
         "follower_type": scene.follower.type,
         "segments": [dict(s) for s in scene.motion.segments],
@@ -270,7 +296,7 @@ def build_report(scene: Scene, run: DesignRun) -> dict[str, Any]:
     block = loads_block(scene, arrays)
     if block is not None:
         data["loads"] = block
-    data.update(min_base_radius_block(scene.follower.type, run.min_base_radius))
+    data.update(min_base_radius_block(scene.follower, run.min_base_radius))
     data.update(face_width_block(scene, arrays))
     if run.design is not None:
         data["design"] = design_block(scene.design, run.design)

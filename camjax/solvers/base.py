@@ -61,6 +61,7 @@ from camjax.problem import Weights, weights_of
 from camjax.solvers.registry import (
     CONVERGED,
     FAMILY_MODULES,
+    FOLLOWER_FAMILIES,
     INFEASIBLE,
     MAX_STEPS,
     MODES,
@@ -73,7 +74,7 @@ from camjax.solvers.registry import (
 
 __all__ = [
     "CONVERGED", "INFEASIBLE", "MAX_STEPS", "Raw", "Settings", "Solution", "Timings", "family_of",
-    "in_mode", "solve", "solve_batch", "solver_module", "status_name", "weighting_keys",
+    "in_mode", "problem_from_scene", "solve", "solve_batch", "solver_module", "status_name", "weighting_keys",
 ]
 
 
@@ -94,6 +95,20 @@ def family_of(problem):
     except KeyError:
         raise TypeError(f"problem: {type(problem).__name__} is not a registered problem family "
                         f"({', '.join(FAMILY_MODULES)})") from None
+
+
+def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=None):
+    """The design problem of a scene's [design] section, built by its follower type's family module.
+
+    (Python, not traceable.) ``arrays``: the scene's :class:`camjax.evaluate.SceneArrays` if
+    already computed; ``samples``, ``dtype``: grid size and floating dtype otherwise.
+    """
+    family = FOLLOWER_FAMILIES.get(scene.follower.type)
+    if family is None:
+        raise ValueError(f"follower.type: {scene.follower.type!r} has no design problem "
+                         f"(allowed: {', '.join(FOLLOWER_FAMILIES)})")
+    module = importlib.import_module(FAMILY_MODULES[family])
+    return module.problem_from_scene(scene, arrays, samples=samples, dtype=dtype)
 
 
 def solver_module(name: str):
