@@ -162,41 +162,49 @@ class _Kin(NamedTuple):  # the geometry functions' view of the problem's grid (t
     d2s: jax.Array
 
 
-def _geometry(problem: Problem, design: Design) -> tuple[jax.Array, jax.Array, jax.Array]:
-    """(w, u, kappa) per angle: pitch height d + s, s' - e~ and the pitch curvature (1/mm).
+class _Terms(NamedTuple):
+    """Per-angle quantities every function of a design shares (shape (n,) each)."""
+
+    w: jax.Array  # d + s, mm: the pitch point's height on the follower axis
+    u: jax.Array  # s' - e~, mm: tan phi = u / w (up to the rotation's sign)
+    inv_cos: jax.Array  # 1 / cos phi = |(w, u)| / w, with cos phi floored at COS_FLOOR
+    kappa: jax.Array  # pitch-curve curvature, 1/mm (convex > 0)
+    rho_eq: jax.Array  # Hertz equivalent radius 1 / (1/rho_c + 1/R_f), mm
+
+
+def _terms(problem: Problem, design: Design) -> _Terms:
+    """The shared per-angle terms of a design.
 
     The rotation enters only through e~ = sign e (geometry.pitch); with it every formula is the
-    ccw one, and |phi|, cos phi and kappa are those of the true rotation.
+    ccw one, and |phi|, cos phi and kappa are those of the true rotation. 1 / cos phi is written
+    as r / w (r = |(w, u)|) to share the root with the curvature and avoid a cos(atan2(.)).
     """
     e = problem.rotation_sign * design.offset_mm
     kin = _Kin(problem.theta_deg, problem.s_mm, problem.ds_mm, problem.d2s_mm)
     w = geometry.roller_pitch_height(design.base_radius_mm, design.roller_radius_mm, e, kin)
+    u = kin.ds - e
+    r = jnp.sqrt(w**2 + u**2)
     kappa = geometry.pitch_curvature(w, kin.ds, kin.d2s, e)
-    return w, kin.ds - e, kappa
+    return _Terms(w, u, r / jnp.maximum(w, COS_FLOOR * r), kappa,
+                  geometry.roller_equivalent_radius(kappa, design.roller_radius_mm))
 
 
 def pressure_angle(problem: Problem, design: Design) -> jax.Array:
     """phi (rad) per angle, signed as :func:`camjax.geometry.pressure_angle`."""
-    w, u, _ = _geometry(problem, design)
-    return problem.rotation_sign * jnp.arctan2(u, w)
-
-
-def _cos_phi(w, u) -> jax.Array:
-    return floor_positive(w * jax.lax.rsqrt(floor_positive(w**2 + u**2, RHO_FLOOR_MM**2)), COS_FLOOR)
+    x = _terms(problem, design)
+    return problem.rotation_sign * jnp.arctan2(x.u, x.w)
 
 
 def stress(problem: Problem, design: Design) -> jax.Array:
     """Hertz contact stress sigma(theta) (MPa), shape (n,); finite (saturated) at an undercut."""
-    w, u, kappa = _geometry(problem, design)
-    rho_eq = geometry.roller_equivalent_radius(kappa, design.roller_radius_mm)
-    return roller_stress(problem.stress_coefficient, jnp.arctan2(u, w), rho_eq)
+    x = _terms(problem, design)
+    return roller_stress(problem.stress_coefficient, jnp.arctan2(x.u, x.w), x.rho_eq)
 
 
 def peak_stress(problem: Problem, design: Design) -> jax.Array:
     """max_theta sigma (MPa), shape (), as sqrt(max_theta C^2 / (cos phi rho_eq)): one root."""
-    w, u, kappa = _geometry(problem, design)
-    rho_eq = geometry.roller_equivalent_radius(kappa, design.roller_radius_mm)
-    ratio = problem.stress_coefficient**2 / (_cos_phi(w, u) * floor_positive(rho_eq, RHO_FLOOR_MM))
+    x = _terms(problem, design)
+    ratio = problem.stress_coefficient**2 * x.inv_cos / floor_positive(x.rho_eq, RHO_FLOOR_MM)
     return safe_sqrt(jnp.max(ratio))
 
 
@@ -213,21 +221,24 @@ def objective(problem: Problem, weights: Weights, design: Design) -> jax.Array:
 
 def constraints(problem: Problem, design: Design) -> Constraints:
     """Every angle's constraints as g <= 0 (mm), shape (n,) each; finite for every design."""
-    w, u, kappa = _geometry(problem, design)
+    x = _terms(problem, design)
     reach = design.roller_radius_mm + problem.min_curvature_radius_mm
-    rho_eq = geometry.roller_equivalent_radius(kappa, design.roller_radius_mm)
-    need = problem.stress_coefficient**2 / (problem.sigma_max_MPa**2 * _cos_phi(w, u))
+    need = problem.stress_coefficient**2 * x.inv_cos / problem.sigma_max_MPa**2
     return Constraints(
-        pressure_angle=jnp.abs(u) - problem.tan_max_pressure_angle * w,
-        undercut=reach * geometry.roller_undercut_constraint(kappa, design.roller_radius_mm,
+        pressure_angle=jnp.abs(x.u) - problem.tan_max_pressure_angle * x.w,
+        undercut=reach * geometry.roller_undercut_constraint(x.kappa, design.roller_radius_mm,
                                                              problem.min_curvature_radius_mm),
-        stress=need - rho_eq,
+        stress=need - x.rho_eq,
     )
 
 
 def constraint_maxima(problem: Problem, design: Design) -> Constraints:
-    """max_theta of each constraint of :func:`constraints`, shape () each."""
-    return jax.tree.map(jnp.max, constraints(problem, design))
+    """max_theta of each constraint of :func:`constraints`, shape () each.
+
+    One reduction over the stacked constraints: XLA then evaluates the shared terms once per
+    angle instead of once per constraint.
+    """
+    return Constraints(*jnp.max(jnp.stack(constraints(problem, design)), axis=-1))
 
 
 def bounds(problem: Problem) -> tuple[Design, Design]:
@@ -249,9 +260,10 @@ def bounds_violation(problem: Problem, design: Design) -> jax.Array:
 
 def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
     """Objective, peak stress and pressure angle (and their angles), violations and feasibility."""
-    w, u, kappa = _geometry(problem, design)
+    x = _terms(problem, design)
+    kappa = x.kappa
     sigma = stress(problem, design)
-    phi = jnp.abs(jnp.arctan2(u, w))
+    phi = jnp.abs(jnp.arctan2(x.u, x.w))
     i, j = jnp.argmax(sigma), jnp.argmax(phi)
     margin = geometry.roller_undercut_margin(kappa, design.roller_radius_mm, 0.0)  # rho_c, convex parts
     rho_c_min = jnp.min(margin)

