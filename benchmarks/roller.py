@@ -16,7 +16,8 @@ SciPy runs on evenly spaced subsets of the weightings (SLSQP ~0.5 s and differen
 ~4 s per weighting on this machine); its time is scaled to all weightings by the mean per
 weighting and the JSON says so (``extrapolated``). Timings on a shared machine are noisy.
 
-Run: ``python -m benchmarks.roller --out roller.json [--quick]``.
+Run alone: ``python -m benchmarks.roller --out roller.json [--quick]`` (keys ``roller.*``), or as
+part of ``benchmarks/run.py``.
 """
 
 from __future__ import annotations
@@ -59,7 +60,9 @@ def _accuracy(objective, feasible, reference) -> dict:
             "infeasible": int(np.sum(~feasible))}
 
 
-def run(quick: bool = False) -> dict:
+def run(scene=None, quick: bool = False) -> dict:
+    """The roller benchmark (``scene``: ignored, the built-in roller scene is used); the dict
+    that benchmarks/run.py stores under "roller"."""
     count = 20 if quick else 100
     problem = R.problem_from_scene(camjax.load_scene("roller"))
     alpha, gamma = weightings(count)
@@ -112,7 +115,7 @@ def run(quick: bool = False) -> dict:
         return ga_ <= max(gb, GAP_TOLERANCE) and methods[a]["infeasible"] <= methods[b]["infeasible"]
 
     ga_name = "camjax_ga" if matched("camjax_ga", "scipy_de") else "camjax_hybrid"
-    return {"roller": {
+    return {
         "weightings": count,
         "free_variables": list(R.VARIABLES),
         "samples": int(problem.theta_deg.shape[0]),
@@ -127,7 +130,7 @@ def run(quick: bool = False) -> dict:
         "note": "SciPy times measured on evenly spaced subsets and scaled to all weightings; shared "
                 "2-core machine, timings noisy",
         "methods": methods,
-    }}
+    }
 
 
 def main(argv=None) -> int:
@@ -135,7 +138,7 @@ def main(argv=None) -> int:
     parser.add_argument("--out", type=Path, required=True)
     parser.add_argument("--quick", action="store_true", help="20 weightings, SciPy on 4 and 2")
     args = parser.parse_args(argv)
-    data = run(args.quick)
+    data = {"roller": run(quick=args.quick)}
     args.out.write_text(json.dumps(data, indent=1, default=float))
     r = data["roller"]
     print(f"roller.gradient_speedup = {r['gradient_speedup']:.1f} "
