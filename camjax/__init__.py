@@ -20,6 +20,7 @@ from camjax import (  # noqa: E402
     pipeline,
     problem,
     program,
+    roller_problem,
     runtime,
 )
 from camjax.contact import Material, hertz_line_stress  # noqa: E402
@@ -50,7 +51,7 @@ __all__ = [
     "loads", "numerics", "parse_scene", "polynomial_law", "program", "scene_arrays",
     "stepped_law", "design_report", "report", "DesignCurves", "DesignRun", "Report", "analyse",
     "evaluate_design", "run_design", "evaluate", "output", "pipeline", "runtime",
-    "Design", "Problem", "Weights", "problem", "problem_from_scene", "solvers",
+    "Design", "Problem", "Weights", "problem", "problem_from_scene", "roller_problem", "solvers",
 ]
 
 

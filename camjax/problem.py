@@ -136,6 +136,9 @@ def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=
 
     if scene.design is None:
         raise ValueError("scene has no [design] section: nothing to optimize")
+    if scene.follower.type != "flat":
+        raise ValueError(f"follower.type: {scene.follower.type!r} is not a flat face; use "
+                         "camjax.solvers.base.problem_from_scene (it picks the follower's family)")
     if arrays is None:
         arrays = scene_arrays(scene, samples=samples, dtype=dtype)
     if arrays.stress_coefficient is None:
