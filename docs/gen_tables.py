@@ -9,7 +9,9 @@ Four sources, all committed (:data:`SOURCES`):
 - ``result``, ``docs/data/default/result.json``: ``python -m camjax.cli design --out DIR``, then
   ``cp DIR/result.json docs/data/default/``;
 - ``dynamics``, ``docs/data/thesis-bench/dynamics.json``: ``python -m camjax.cli dynamics
-  thesis-bench --out DIR``, then ``cp DIR/dynamics.json docs/data/thesis-bench/``.
+  thesis-bench --out DIR``, then ``cp DIR/dynamics.json docs/data/thesis-bench/``;
+- ``roller``, ``benchmarks/results/roller.json``: ``python -m benchmarks.roller --out
+  benchmarks/results/roller.json``.
 
 A page asks for a table with a line ``{{ table: NAME }}`` (NAME one of :data:`TABLES`) and for a
 single figure with ``{{ SOURCE: dotted.path[*factor][:format] }}``, e.g.
@@ -36,6 +38,7 @@ SOURCES = {
     "extremes": ROOT / "docs" / "data" / "extremes.json",
     "result": ROOT / "docs" / "data" / "default" / "result.json",
     "dynamics": ROOT / "docs" / "data" / "thesis-bench" / "dynamics.json",
+    "roller": ROOT / "benchmarks" / "results" / "roller.json",
 }
 
 
