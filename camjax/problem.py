@@ -12,7 +12,7 @@ with sigma(theta) = C(theta) / sqrt(rho(theta)), rho = R_b + q, q = s + s''. Con
 written ``g <= 0`` in mm (:class:`Constraints`, one value per angle):
 
 - curvature:  rho_min - rho <= 0      (rho > 0: a flat face cannot follow a concavity; rho_min
-  is a tiny margin, 1 um by default, so that "> 0" has a minimum);
+  is the scene's follower.min_curvature_radius_mm, 1 um by default, so that "> 0" has a minimum);
 - stress:     (C / sigma_max)^2 - rho <= 0, which is sigma <= sigma_max for C >= 0 written so that
   it is linear in R_b and stays finite where rho <= 0 (sigma itself saturates there);
 - face_width: 2 |s'| - L <= 0         (symmetric face);
@@ -43,12 +43,8 @@ import jax.numpy as jnp
 import numpy as np
 
 from camjax.contact import stress_from_coefficient
-from camjax.geometry import FLAT_MIN_CURVATURE_RADIUS_MM
 from camjax.numerics import RHO_FLOOR_MM, max_over_angles, positive_part, safe_divide, safe_sqrt
 
-# Default smallest admissible radius of curvature (mm): the strict "rho > 0" of SPEC 5 as a margin.
-# The scene's follower.min_curvature_radius_mm decides; this is its default, named once in geometry.
-RHO_MIN_MM = FLAT_MIN_CURVATURE_RADIUS_MM
 # A design is feasible when every violation is below these (mm; MPa relative to sigma_max).
 FEASIBILITY_TOL_MM = 1e-6
 FEASIBILITY_RTOL_STRESS = 1e-6
