@@ -27,6 +27,12 @@ from camjax.program import KINDS, MotionProgram, Segment
 from camjax.solvers.registry import MODES, SOLVERS
 
 BUILTIN_SCENES = {"default": "default.toml", "thesis-bench": "thesis-bench.toml", "roller": "roller.toml"}
+RPM_MAX = 1e6  # cam speed, rev/min: far above any machine, low enough that every load stays finite
+SAMPLES_MAX = 1_000_000  # cam-angle grid: measured to run (design, CSV, DXF) in the README's limits
+# The shortest segment gets at least this many samples. One period of a sine (the acceleration of
+# the cycloidal law, the simplest smooth rise) sampled 8 times shows its peak within
+# 1 - cos(pi / 8) = 8 % and its sign changes; fewer samples cannot resolve the segment's shape.
+SAMPLES_PER_SEGMENT = 8
 
 
 class SceneError(ValueError):
@@ -36,10 +42,27 @@ class SceneError(ValueError):
                  source: str | None = None):
         self.field, self.value, self.problem, self.allowed = field, value, problem, allowed
         self.source = source
-        where = f"{source}: " if source else ""
-        shown = "" if value is _MISSING else f" = {value!r}"
-        tail = f" (allowed: {allowed})" if allowed else ""
-        super().__init__(f"{where}{field}{shown}: {problem}{tail}")
+        where = f"{cut(source)}: " if source else ""
+        shown = "" if value is _MISSING else f" = {quote(value)}"
+        tail = f" (allowed: {cut(allowed, 4 * QUOTE_CHARS)})" if allowed else ""
+        super().__init__(f"{where}{cut(field)}{shown}: {cut(problem, 4 * QUOTE_CHARS)}{tail}")
+
+
+QUOTE_CHARS = 100  # a message quotes at most this many characters of a value (one readable line)
+
+
+def cut(text: str, limit: int = QUOTE_CHARS) -> str:
+    """``text`` cut to about ``limit`` characters for a one-line message, saying how long it was.
+
+    An unknown 50 MB section name must not become a 50 MB error line.
+    """
+    head = "".join(c if c.isprintable() else repr(c)[1:-1] for c in text[:limit])  # one line
+    return head if len(text) <= limit else f"{head}... ({len(text)} characters)"
+
+
+def quote(value: Any, limit: int = QUOTE_CHARS) -> str:
+    """``repr(value)`` cut by :func:`cut`."""
+    return cut(repr(value), limit)
 
 
 _MISSING = object()
@@ -314,8 +337,8 @@ def _parse_law(seg: _Reader):
 
 def _parse_motion(r: _Reader) -> MotionSpec:
     r.check_keys(("rpm", "samples", "segments", "rotation"))
-    rpm = r.number("rpm", low=0.0)
-    samples = r.number("samples", _DEFAULT, low=1, high=10_000_000, integer=True)
+    rpm = r.number("rpm", low=0.0, high=RPM_MAX)
+    samples = r.number("samples", _DEFAULT, low=1, high=SAMPLES_MAX, integer=True)
     rotation = r.choice("rotation", ROTATIONS, _DEFAULT)
     raw = r.table.get("segments")
     if not isinstance(raw, list) or not raw:
@@ -344,8 +367,27 @@ def _parse_motion(r: _Reader) -> MotionSpec:
         value = total if fld.endswith("angle_deg") else _MISSING
         raise SceneError(f"{r.path}.{fld}", value, problem,
                          "angles summing to 360" if value is not _MISSING else None, r.source) from None
-    return _build(MotionSpec, rpm=rpm, program=program, segments=tuple(dict(s) for s in raw),
+    spec = _build(MotionSpec, rpm=rpm, program=program, segments=tuple(dict(s) for s in raw),
                   samples=samples, rotation=rotation)
+    _check_resolution(spec, r)
+    return spec
+
+
+def samples_needed(program: MotionProgram) -> int:
+    """Smallest grid N that puts :data:`SAMPLES_PER_SEGMENT` samples in the shortest segment."""
+    return math.ceil(SAMPLES_PER_SEGMENT * 360.0 / min(program.angles_deg) - 1e-9)
+
+
+def _check_resolution(motion: MotionSpec, r: _Reader) -> None:
+    angles = motion.program.angles_deg
+    need = samples_needed(motion.program)
+    if motion.samples < need:
+        i = min(range(len(angles)), key=lambda k: angles[k])
+        got = motion.samples * angles[i] / 360.0
+        raise r.error("samples", motion.samples,
+                      f"too coarse: the {angles[i]:g} deg segment {r.path}.segments[{i}] gets "
+                      f"{got:.3g} samples, {SAMPLES_PER_SEGMENT} are needed to resolve it",
+                      f"{need}..{SAMPLES_MAX}")
 
 
 def _parse_follower(r: _Reader) -> FollowerSpec:
@@ -608,12 +650,27 @@ def with_design(scene: Scene, **overrides) -> Scene:
     return replace(scene, design=design)
 
 
+def with_samples(scene: Scene, samples: int) -> Scene:
+    """The scene on a grid of ``samples`` cam angles, checked by the same rules as ``motion.samples``.
+
+    Raises :class:`SceneError` naming ``motion.samples`` when the grid is out of range or too
+    coarse for the shortest segment.
+    """
+    r = _Reader({"samples": samples}, "motion", None)
+    motion = replace(scene.motion, samples=r.number("samples", low=1, high=SAMPLES_MAX, integer=True))
+    _check_resolution(motion, r)
+    return replace(scene, motion=motion)
+
+
 def parse_scene(text: str, name: str = "scene", source: str | None = None) -> Scene:
     """Parse and validate TOML text."""
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise SceneError("toml", _MISSING, f"not valid TOML ({exc})", source=source) from None
+    except RecursionError:
+        raise SceneError("toml", _MISSING, "nested too deeply to read", "tables and arrays nested a "
+                         "few levels", source=source) from None
     return scene_from_dict(data, name, source)
 
 
@@ -633,6 +690,31 @@ def load_scene(path_or_name: str | Path | None = None) -> Scene:
         return parse_scene(builtin_scene_text(str(path_or_name)), str(path_or_name),
                            f"<built-in {path_or_name}>")
     if not p.is_file():
-        raise SceneError("scene", str(path_or_name), "no such file or built-in scene",
+        problem = "is a folder, not a scene file" if p.is_dir() else "no such file or built-in scene"
+        raise SceneError("scene", str(path_or_name), problem,
                          f"a TOML file or one of {', '.join(BUILTIN_SCENES)}")
-    return parse_scene(p.read_text(), p.stem, str(p))
+    try:
+        raw = p.read_bytes()
+    except OSError as exc:
+        raise SceneError("scene", str(path_or_name), f"cannot be read ({exc.strerror})") from None
+    return parse_scene(decode_scene(raw, str(p)), p.stem, str(p))
+
+
+def decode_scene(raw: bytes, source: str) -> str:
+    """A scene file's bytes as text: UTF-8 (TOML's encoding), with a BOM tolerated.
+
+    Raises :class:`SceneError` for UTF-16/32 (says so), binary data or other encodings.
+    """
+    if raw.startswith((b"\xff\xfe", b"\xfe\xff")):
+        raise SceneError("scene", _MISSING, "is UTF-16 or UTF-32 text; TOML files are UTF-8",
+                         "save the file as UTF-8", source)
+    try:
+        text = raw.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise SceneError("scene", _MISSING, f"is not UTF-8 text (byte 0x{raw[exc.start]:02x} at offset "
+                         f"{exc.start}); TOML files are UTF-8", "a UTF-8 text file", source) from None
+    if "\x00" in text:
+        i = text.index("\x00")
+        raise SceneError("scene", _MISSING, f"holds a NUL character at offset {i}: a binary file, "
+                         "not a TOML scene", "a UTF-8 text file", source)
+    return text
