@@ -140,3 +140,65 @@ def evaluate_design(scene: Scene, arrays: SceneArrays, base_radius_mm: float,
         _np(stress), None if scene.design is None else scene.design.sigma_max_MPa,
         rf, e, _np(pitch_x), _np(pitch_y), _np(phi), _np(pitch_rho), _np(margin), limit, rot,
     )
+
+
+# ----------------------------------------------------------------------------- feasibility
+
+
+class Violation(NamedTuple):
+    """One constraint the evaluated geometry breaks: a key and one sentence with the figures."""
+
+    constraint: str  # curvature, stress, face_width, pressure_angle, undercut, contact
+    message: str
+
+
+def geometry_violations(curves: DesignCurves, rho_min_mm: float = 0.0) -> list[Violation]:
+    """Constraints broken by the geometry at the evaluated base radius (empty: usable geometry).
+
+    Flat face: rho < ``rho_min_mm`` (the profile cannot be followed; below 0 it crosses itself),
+    peak stress > sigma_max (with a [design]), face narrower than 2 max|s'|. Roller: |pressure
+    angle| > the limit, undercut. With loads: contact force < 0 (the follower leaves the cam).
+    Tolerances are the solvers' (:data:`camjax.problem.FEASIBILITY_TOL_MM`, relative 1e-6 on the
+    stress), so a design the solver calls feasible is not flagged here.
+    """
+    from camjax.problem import FEASIBILITY_RTOL_STRESS, FEASIBILITY_TOL_MM
+
+    t, out = curves.theta_deg, []
+
+    def at(values, pick):
+        i = int(pick(values))
+        return float(values[i]), float(t[i])
+
+    if curves.rho_mm is not None:
+        rho, deg = at(curves.rho_mm, np.argmin)
+        if rho < rho_min_mm - FEASIBILITY_TOL_MM:
+            why = "the profile crosses itself" if rho < 0 else "the flat face cannot follow it"
+            out.append(Violation("curvature", f"min radius of curvature {rho:.4g} mm at {deg:g} deg "
+                                 f"< {rho_min_mm:g} mm: {why}"))
+    if curves.stress_MPa is not None and curves.sigma_max_MPa is not None:
+        sigma, deg = at(curves.stress_MPa, np.argmax)
+        if sigma > curves.sigma_max_MPa * (1.0 + FEASIBILITY_RTOL_STRESS):
+            out.append(Violation("stress", f"peak contact stress {sigma:.4g} MPa at {deg:g} deg > "
+                                 f"sigma_max {curves.sigma_max_MPa:g} MPa"))
+    if curves.face_width_mm is not None:
+        need = 2.0 * float(np.max(np.abs(curves.ds_mm)))
+        if curves.face_width_mm < need - FEASIBILITY_TOL_MM:
+            out.append(Violation("face_width", f"face width {curves.face_width_mm:.4g} mm < 2 max|s'| = "
+                                 f"{need:.4g} mm: the contact runs off the face"))
+    if curves.pressure_angle_deg is not None:
+        phi, deg = at(np.abs(curves.pressure_angle_deg), np.argmax)
+        if phi > curves.pressure_angle_limit_deg:
+            out.append(Violation("pressure_angle", f"|pressure angle| {phi:.4g} deg at {deg:g} deg > "
+                                 f"{curves.pressure_angle_limit_deg:g} deg"))
+    if curves.undercut_margin_mm is not None:
+        margin, deg = at(curves.undercut_margin_mm, np.argmin)
+        if margin <= 0:
+            out.append(Violation("undercut", f"undercut margin {margin:.4g} mm at {deg:g} deg <= 0: the "
+                                 "roller cannot reach the profile (undercut)"))
+    if curves.force_N is not None:
+        force, deg = at(curves.force_N, np.argmin)
+        if force < 0:
+            lost = float(np.mean(curves.force_N < 0)) * 360.0
+            out.append(Violation("contact", f"contact force {force:.4g} N at {deg:g} deg < 0 (over about "
+                                 f"{lost:.3g} deg): the follower leaves the cam"))
+    return out

@@ -8,7 +8,8 @@ Data flows one way and each step is a pure function:
 3. :func:`solve_design` picks the design of a scene with a [design] section (flat face: R_b, L;
    roller: R_b, R_f, e) -- the one place an optimizer plugs in;
 4. :func:`camjax.evaluate.evaluate_design` computes the curves at the drawing base radius
-   (:func:`drawing_base_radius`);
+   (:func:`drawing_base_radius`) and :func:`camjax.evaluate.geometry_violations` the
+   constraints that geometry breaks;
 5. :func:`camjax.output.report.build_report` turns the typed :class:`DesignRun` into the
    JSON-ready dict.
 
@@ -27,7 +28,14 @@ import jax.numpy as jnp
 import numpy as np
 
 from camjax import contact, geometry
-from camjax.evaluate import DesignCurves, SceneArrays, evaluate_design, scene_arrays
+from camjax.evaluate import (
+    DesignCurves,
+    SceneArrays,
+    Violation,
+    evaluate_design,
+    geometry_violations,
+    scene_arrays,
+)
 from camjax.scene import Scene
 
 DRAWING_MARGIN_MM = 1.0  # without a [design], draw at the smallest admissible R_b + this, rounded up
@@ -161,6 +169,7 @@ class DesignRun(NamedTuple):
     base_radius_mm: float  # where the curves are evaluated and drawn
     base_radius_source: str  # why that radius
     curves: DesignCurves
+    violations: tuple[Violation, ...] = ()  # constraints the drawn geometry breaks (empty: usable)
 
 
 def run_design(scene: Scene, arrays: SceneArrays | None = None, *,
@@ -183,7 +192,8 @@ def run_design(scene: Scene, arrays: SceneArrays | None = None, *,
     curves = evaluate_design(scene, arrays, radius, result.get("face_width_mm"),
                              roller_radius_mm=result.get("roller_radius_mm"),
                              offset_mm=result.get("offset_mm"))
-    return DesignRun(arrays, minimum, design, radius, source, curves)
+    return DesignRun(arrays, minimum, design, radius, source, curves,
+                     tuple(geometry_violations(curves, scene.follower.min_curvature_radius_mm)))
 
 
 def sweep_scene(scene: Scene, alphas, gammas, *, mode: str, solver: str, seed: int = 0,

@@ -55,21 +55,28 @@ def write_profile_dxf(path: Path, curves: DesignCurves) -> Path:
     return path
 
 
-def write_figures(folder: Path, curves: DesignCurves, dpi: int = 100) -> list[Path]:
-    """PNG of every figure the scene declares (see :func:`camjax.output.plots.design_figures`)."""
-    from camjax.output.plots import design_figures  # matplotlib is imported only when drawing
+def write_figures(folder: Path, curves: DesignCurves, dpi: int = 100,
+                  banner: str | None = None) -> list[Path]:
+    """PNG of every figure the scene declares (see :func:`camjax.output.plots.design_figures`).
+
+    ``banner``: text of a red banner stamped on every figure (the constraints the geometry breaks).
+    """
+    from camjax.output.plots import design_figures, stamp_banner  # matplotlib only when drawing
 
     out = []
     for name, fig in design_figures(curves).items():
+        if banner:
+            stamp_banner(fig, banner)
         path = folder / name
         fig.savefig(path, dpi=dpi)
         out.append(path)
     return out
 
 
-def write_design_files(folder: str | Path, curves: DesignCurves, dpi: int = 100) -> list[Path]:
+def write_design_files(folder: str | Path, curves: DesignCurves, dpi: int = 100,
+                       banner: str | None = None) -> list[Path]:
     """Figures, profile.csv and profile.dxf into ``folder`` (created if needed); the written paths."""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
-    return [*write_figures(folder, curves, dpi), write_profile_csv(folder / "profile.csv", curves),
+    return [*write_figures(folder, curves, dpi, banner), write_profile_csv(folder / "profile.csv", curves),
             write_profile_dxf(folder / "profile.dxf", curves)]

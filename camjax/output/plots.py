@@ -173,6 +173,20 @@ def stress_figure(curves: DesignCurves) -> Figure:
     return fig
 
 
+def stamp_banner(fig: Figure, text: str) -> Figure:
+    """A red banner across the top of ``fig`` (e.g. naming the constraints a geometry breaks).
+
+    The layout keeps the top 0.35 inch free for it, so it covers no title or axis.
+    """
+    engine = fig.get_layout_engine()
+    if engine is not None and hasattr(engine, "set"):
+        engine.set(rect=(0.0, 0.0, 1.0, 1.0 - 0.35 / fig.get_figheight()))
+    fig.text(0.5, 0.995, text, ha="center", va="top", fontsize=8, color="white", fontweight="bold",
+             wrap=True, zorder=10, bbox={"boxstyle": "square,pad=0.4", "facecolor": "#c00000",
+                                         "edgecolor": "none"})
+    return fig
+
+
 def design_figures(curves: DesignCurves) -> dict[str, Figure]:
     """{file name: figure} for what the scene declares: no loads or stress figure without them."""
     out = {"svaj.png": svaj_figure(curves), "profile.png": profile_figure(curves)}

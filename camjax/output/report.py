@@ -270,6 +270,12 @@ def evaluated_block(curves: DesignCurves) -> dict[str, Any]:
     return out
 
 
+def feasibility_block(violations) -> dict[str, Any]:
+    """Whether the written geometry is usable, and each broken constraint as {constraint, message}."""
+    return {"feasible": not violations,
+            "violations": [{"constraint": v.constraint, "message": v.message} for v in violations]}
+
+
 # ------------------------------------------------------------------------------ report
 
 
@@ -302,6 +308,7 @@ def build_report(scene: Scene, run: DesignRun) -> dict[str, Any]:
         data["design"] = design_block(scene.design, run.design)
     data["evaluated_at"] = {"base_radius_mm": run.base_radius_mm,
                             "face_width_mm": run.curves.face_width_mm,
-                            "source": run.base_radius_source}
+                            "source": run.base_radius_source,
+                            **feasibility_block(run.violations)}
     data.update(evaluated_block(run.curves))
     return data
