@@ -43,6 +43,7 @@ def enable_compilation_cache() -> None:
 
 
 COMPUTE_THREAD = "camjax-compute"
+_RUNNING: set = set()  # done-events of interruptible workers that have not finished
 
 
 def interruptible(fn, *args, **kwargs):
@@ -52,25 +53,30 @@ def interruptible(fn, *args, **kwargs):
     it returns, and Python delivers Ctrl-C (KeyboardInterrupt) or SIGTERM only between bytecodes of
     the main thread: waiting here instead answers within about 0.1 s. On an interrupt the worker is
     abandoned (it is a daemon thread; :func:`computing` says whether it still runs, and a process
-    that exits while it does must leave through ``os._exit``). Exceptions of ``fn`` are re-raised
-    here. Called from any other thread, ``fn`` simply runs.
+    that exits while it does must leave through ``os._exit``: XLA aborts when the interpreter
+    shuts down under a running computation). Exceptions of ``fn`` are re-raised here. Called from
+    any other thread, ``fn`` simply runs.
     """
     import threading
 
     if threading.current_thread() is not threading.main_thread():
         return fn(*args, **kwargs)
     box: dict = {}
+    done = threading.Event()  # not Thread.is_alive: it can read False after an interrupted join
 
     def work():
         try:
             box["value"] = fn(*args, **kwargs)
         except BaseException as exc:  # handed to the waiting thread
             box["error"] = exc
+        finally:
+            done.set()
+            _RUNNING.discard(done)
 
-    worker = threading.Thread(target=work, name=COMPUTE_THREAD, daemon=True)
-    worker.start()
-    while worker.is_alive():
-        worker.join(0.05)
+    _RUNNING.add(done)
+    threading.Thread(target=work, name=COMPUTE_THREAD, daemon=True).start()
+    while not done.wait(0.05):
+        pass
     if "error" in box:
         raise box["error"]
     return box["value"]
@@ -78,6 +84,4 @@ def interruptible(fn, *args, **kwargs):
 
 def computing() -> bool:
     """True while an abandoned :func:`interruptible` worker still runs."""
-    import threading
-
-    return any(t.name == COMPUTE_THREAD and t.is_alive() for t in threading.enumerate())
+    return any(not done.is_set() for done in list(_RUNNING))

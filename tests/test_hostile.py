@@ -379,7 +379,10 @@ def test_rpm_1e6_runs_with_finite_results(tmp_path, capsys, monkeypatch):
 
 
 def _start(args: list[str], tmp_path: Path) -> subprocess.Popen:
-    env = {**os.environ, "CAMJAX_COMPILATION_CACHE": "0", "PYTHONUNBUFFERED": "1"}
+    # this checkout's camjax, whatever the working folder
+    root = str(Path(cli.__file__).resolve().parents[1])
+    path = os.pathsep.join([root, *filter(None, [os.environ.get("PYTHONPATH")])])
+    env = {**os.environ, "CAMJAX_COMPILATION_CACHE": "0", "PYTHONUNBUFFERED": "1", "PYTHONPATH": path}
     return subprocess.Popen([sys.executable, "-m", "camjax.cli", *args], stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True, env=env, cwd=tmp_path)
 
@@ -394,16 +397,26 @@ def _wait_for_import(proc: subprocess.Popen, seconds: float) -> None:
 @pytest.mark.parametrize("sig, status", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
 def test_sweep_answers_an_interrupt_within_a_second(sig, status, place):
     before = snapshot(place / "out")
-    proc = _start(["sweep", "--alpha", ",".join(["0.1", "1", "10"] * 100), "--gamma", "1,2", "--out",
+    # 4000 weightings in chunks of 1000: compiling and solving one takes well over 5 s on 2 cores
+    alphas = ",".join(f"{0.01 * (k + 1):g}" for k in range(2000))
+    proc = _start(["sweep", "--alpha", alphas, "--gamma", "1,2", "--chunk-size", "1000", "--out",
                    str(place / "out")], place)
-    _wait_for_import(proc, 8.0)
+    seen = ""
+    while "sweep (" not in seen:  # the progress bar: the first chunk is being compiled
+        char = proc.stderr.read(1)
+        assert char, proc.communicate()
+        seen += char
+    time.sleep(1.0)
     sent = time.perf_counter()
     proc.send_signal(sig)
-    _, err = proc.communicate(timeout=30)
+    _, err = proc.communicate(timeout=60)
     waited = time.perf_counter() - sent
-    assert proc.returncode == status
-    assert waited < 1.5, waited  # a chunk of this sweep takes about 20 s
-    assert len(err.strip().splitlines()) == 1 and "Traceback" not in err
+    assert proc.returncode == status, err
+    assert "1/4" not in err  # interrupted in the first chunk
+    assert waited < 1.5, waited  # the process ends within about a second (the worker is abandoned)
+    said = [line for line in err.splitlines() if "camjax sweep:" in line]
+    assert len(said) == 1 and ("interrupted" in said[0] or "terminated" in said[0])
+    assert "Traceback" not in err and "Fatal" not in err
     assert snapshot(place / "out") == before and leftovers(place) == []
 
 
@@ -420,5 +433,5 @@ def test_design_interrupted_while_writing_leaves_the_folder_as_it_was(place):
         if proc.returncode == 0:  # finished first: the whole new set
             assert "result.json" in after and "profile.dxf" in after and "loads.png" in after
             return
-        assert proc.returncode == 130 and len(err.strip().splitlines()) == 1
+        assert proc.returncode == 130 and len(err.strip().splitlines()) == 1, err
         assert after == before and leftovers(place) == []
