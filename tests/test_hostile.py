@@ -435,3 +435,112 @@ def test_design_interrupted_while_writing_leaves_the_folder_as_it_was(place):
             return
         assert proc.returncode == 130 and len(err.strip().splitlines()) == 1, err
         assert after == before and leftovers(place) == []
+
+
+# ------------------------------------------------------------- interrupted writes (property)
+
+
+class Injected(OSError):
+    """The failure a test injects into the file writing."""
+
+
+def _scene_text(rpm: float, angles: tuple[float, float, float, float], lift: float, law: str,
+                samples: int) -> str:
+    d1, rise, d2, ret = angles
+    return f"""
+[motion]
+rpm = {rpm!r}
+samples = {samples}
+segments = [
+  {{ kind = "dwell", angle_deg = {d1!r} }},
+  {{ kind = "rise", angle_deg = {rise!r}, law = "{law}", lift_mm = {lift!r} }},
+  {{ kind = "dwell", angle_deg = {d2!r} }},
+  {{ kind = "return", angle_deg = {ret!r}, law = "{law}", lift_mm = {lift!r} }},
+]
+[follower]
+type = "flat"
+"""
+
+
+def _counting_writes(monkeypatch, root: Path, fail_at: int, error: type[BaseException]) -> list[str]:
+    """Make the ``fail_at``-th write under ``root`` (file opened for writing, or a rename) raise."""
+    import builtins
+    import io
+
+    seen: list[str] = []
+    real_open, real_replace = builtins.open, os.replace
+
+    def event(what: str) -> None:
+        seen.append(what)
+        if len(seen) == fail_at:
+            raise error(28, "injected failure", what) if error is Injected else error()
+
+    def guarded_open(file, mode="r", *args, **kwargs):
+        if isinstance(file, str | os.PathLike) and str(root) in os.fspath(file) and set(mode) & set("wax+"):
+            event(f"open {Path(os.fspath(file)).name}")
+        return real_open(file, mode, *args, **kwargs)
+
+    def guarded_replace(src, dst, *args, **kwargs):
+        if str(root) in os.fspath(dst):  # the swap: DIR set aside, staging renamed into place
+            event(f"rename {Path(os.fspath(dst)).name}")
+        return real_replace(src, dst, *args, **kwargs)
+
+    monkeypatch.setattr(builtins, "open", guarded_open)
+    monkeypatch.setattr(io, "open", guarded_open)
+    monkeypatch.setattr(os, "replace", guarded_replace)
+    return seen
+
+
+NEW_SET = {"result.json", "svaj.png", "profile.png", "profile.csv", "profile.dxf"}
+
+
+@pytest.mark.slow
+def test_an_interrupted_write_leaves_the_old_or_the_new_complete_folder(tmp_path_factory):
+    import json
+
+    from hypothesis import HealthCheck, given, settings
+    from hypothesis import strategies as st
+
+    base = tmp_path_factory.mktemp("property")
+    old = base / "template"
+    with pytest.MonkeyPatch.context() as mp:  # an earlier run's complete folder (with loads.png etc.)
+        mp.setenv("CAMJAX_COMPILATION_CACHE", "0")
+        assert cli.main(["design", "--dpi", "10", "--out", str(old)]) == 0
+    old_files = snapshot(old)
+
+    angles = st.lists(st.integers(30, 150), min_size=3, max_size=3).filter(lambda a: sum(a) <= 330).map(
+        lambda a: (float(a[0]), float(a[1]), float(a[2]), float(360 - sum(a))))
+
+    @settings(max_examples=8, deadline=None, derandomize=True,
+              suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
+    @given(rpm=st.floats(1.0, 1e4), angles=angles, lift=st.floats(0.5, 20.0),
+           law=st.sampled_from(["cycloidal", "harmonic", "poly_3_4_5"]), extra=st.integers(0, 300),
+           fail_at=st.integers(1, 12), error=st.sampled_from([Injected, KeyboardInterrupt]))
+    def check(rpm, angles, lift, law, extra, fail_at, error):
+        import shutil
+        import uuid
+
+        place = base / uuid.uuid4().hex
+        place.mkdir()
+        shutil.copytree(old, place / "out")
+        samples = 96 + extra  # >= 8 samples in a 30 deg segment
+        (place / "scene.toml").write_text(_scene_text(rpm, angles, lift, law, samples))
+        with pytest.MonkeyPatch.context() as mp:
+            mp.setenv("CAMJAX_COMPILATION_CACHE", "0")
+            seen = _counting_writes(mp, place, fail_at, error)
+            rc = cli.main(["design", str(place / "scene.toml"), "--dpi", "10", "--out", str(place / "out")])
+        after = snapshot(place / "out")
+        outcomes.add(len(seen) >= fail_at)
+        assert leftovers(place) == []
+        if len(seen) < fail_at:  # the run wrote everything before the failure was due
+            assert rc == 0 and set(after) == NEW_SET
+            data = json.loads(after["result.json"])
+            assert data["cam_speed_rpm"] == rpm and data["samples"] == samples
+            assert len(after["profile.csv"].decode().splitlines()) == samples + 1  # header + rows
+        else:
+            assert rc == (1 if error is Injected else 130), seen
+            assert after == old_files
+
+    outcomes: set[bool] = set()
+    check()
+    assert outcomes == {True, False}  # both interrupted and finished runs were drawn
