@@ -8,7 +8,7 @@ Data flows one way and each step is a pure function:
 3. :func:`solve_design` picks the design of a scene with a [design] section (flat face: R_b, L;
    roller: R_b, R_f, e) -- the one place an optimizer plugs in;
 4. :func:`camjax.evaluate.evaluate_design` computes the curves at the drawing base radius
-   (:func:`drawing_base_radius`) and :func:`camjax.evaluate.geometry_violations` the
+   (:func:`drawing_base_radius`) and :func:`geometry_violations` the
    constraints that geometry breaks;
 5. :func:`camjax.output.report.build_report` turns the typed :class:`DesignRun` into the
    JSON-ready dict.
@@ -28,14 +28,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from camjax import contact, geometry
-from camjax.evaluate import (
-    DesignCurves,
-    SceneArrays,
-    Violation,
-    evaluate_design,
-    geometry_violations,
-    scene_arrays,
-)
+from camjax.evaluate import DesignCurves, SceneArrays, evaluate_design, scene_arrays
 from camjax.scene import Scene
 
 DRAWING_MARGIN_MM = 1.0  # without a [design], draw at the smallest admissible R_b + this, rounded up
@@ -157,6 +150,74 @@ def drawing_base_radius(design: DesignSolution | None, min_base_radius_mm: float
     return r, f"smallest admissible + {DRAWING_MARGIN_MM:g} mm, rounded up to whole mm"
 
 
+# ----------------------------------------------------------------------------- feasibility
+
+
+class GeometryViolation(NamedTuple):
+    """One constraint the evaluated geometry breaks: a key and one sentence with the figures."""
+
+    constraint: str  # curvature, stress, face_width, pressure_angle, undercut, contact
+    message: str
+
+
+def geometry_violations(curves: DesignCurves, rho_min_mm: float = 0.0) -> list[GeometryViolation]:
+    """Constraints broken by the geometry at the evaluated base radius (empty: usable geometry).
+
+    Flat face: rho < ``rho_min_mm`` (the profile cannot be followed; below 0 it crosses itself),
+    peak stress > sigma_max (with a [design]), face narrower than 2 max|s'|. Roller: |pressure
+    angle| > the limit, undercut. With loads: contact force < 0 (the follower leaves the cam).
+    Tolerances are the solvers' (:data:`camjax.problem.FEASIBILITY_TOL_MM`, relative 1e-6 on the
+    stress), so a design the solver calls feasible is not flagged here.
+    """
+    from camjax.problem import FEASIBILITY_RTOL_STRESS, FEASIBILITY_TOL_MM
+
+    t, out = curves.theta_deg, []
+
+    def at(values, pick):
+        i = int(pick(values))
+        return float(values[i]), float(t[i])
+
+    if curves.rho_mm is not None:
+        rho, deg = at(curves.rho_mm, np.argmin)
+        if rho < rho_min_mm - FEASIBILITY_TOL_MM:
+            why = "the profile crosses itself" if rho < 0 else "the flat face cannot follow it"
+            out.append(GeometryViolation(
+                "curvature", f"min radius of curvature {rho:.4g} mm at {deg:g} deg < {rho_min_mm:g} mm: "
+                f"{why}"))
+    if curves.stress_MPa is not None and curves.sigma_max_MPa is not None:
+        sigma, deg = at(curves.stress_MPa, np.argmax)
+        if sigma > curves.sigma_max_MPa * (1.0 + FEASIBILITY_RTOL_STRESS):
+            out.append(GeometryViolation(
+                "stress", f"peak contact stress {sigma:.4g} MPa at {deg:g} deg > sigma_max "
+                f"{curves.sigma_max_MPa:g} MPa"))
+    if curves.face_width_mm is not None:
+        need = 2.0 * float(np.max(np.abs(curves.ds_mm)))
+        if curves.face_width_mm < need - FEASIBILITY_TOL_MM:
+            out.append(GeometryViolation(
+                "face_width", f"face width {curves.face_width_mm:.4g} mm < 2 max|s'| = {need:.4g} mm: "
+                "the contact runs off the face"))
+    if curves.pressure_angle_deg is not None:
+        phi, deg = at(np.abs(curves.pressure_angle_deg), np.argmax)
+        if phi > curves.pressure_angle_limit_deg:
+            out.append(GeometryViolation(
+                "pressure_angle", f"|pressure angle| {phi:.4g} deg at {deg:g} deg > "
+                f"{curves.pressure_angle_limit_deg:g} deg"))
+    if curves.undercut_margin_mm is not None:
+        margin, deg = at(curves.undercut_margin_mm, np.argmin)
+        if margin <= 0:
+            out.append(GeometryViolation(
+                "undercut", f"undercut margin {margin:.4g} mm at {deg:g} deg <= 0: the roller undercuts "
+                "the cam"))
+    if curves.force_N is not None:
+        force, deg = at(curves.force_N, np.argmin)
+        if force < 0:
+            lost = float(np.mean(curves.force_N < 0)) * 360.0
+            out.append(GeometryViolation(
+                "contact", f"contact force {force:.4g} N at {deg:g} deg < 0 (over about {lost:.3g} deg): "
+                "the follower leaves the cam"))
+    return out
+
+
 # ------------------------------------------------------------------------------- run
 
 
@@ -169,7 +230,7 @@ class DesignRun(NamedTuple):
     base_radius_mm: float  # where the curves are evaluated and drawn
     base_radius_source: str  # why that radius
     curves: DesignCurves
-    violations: tuple[Violation, ...] = ()  # constraints the drawn geometry breaks (empty: usable)
+    violations: tuple[GeometryViolation, ...] = ()  # constraints the drawn geometry breaks (empty: usable)
 
 
 def run_design(scene: Scene, arrays: SceneArrays | None = None, *,

@@ -544,3 +544,18 @@ def test_an_interrupted_write_leaves_the_old_or_the_new_complete_folder(tmp_path
     outcomes: set[bool] = set()
     check()
     assert outcomes == {True, False}  # both interrupted and finished runs were drawn
+
+
+def test_roller_violations_agree_with_the_minimum_base_radius():
+    # the bisection of pipeline.min_base_radius (jitted, normalized violations) and the NumPy
+    # checks on the drawn curves are separate computations of the same constraints: 1 % below
+    # the minimum something must break, 1 % above nothing may
+    from camjax.pipeline import run_design
+    from camjax.scene import parse_scene
+
+    scene = parse_scene(KINEMATIC.replace('type = "flat"', 'type = "roller"\nroller_radius_mm = 8.0\n'
+                                          'offset_mm = 3.0'))
+    minimum = run_design(scene).min_base_radius.radius_mm
+    below = run_design(scene, base_radius_mm=0.99 * minimum).violations
+    above = run_design(scene, base_radius_mm=1.01 * minimum).violations
+    assert {v.constraint for v in below} & {"pressure_angle", "undercut"} and above == ()
