@@ -22,6 +22,7 @@ from pathlib import Path
 
 import camjax  # noqa: F401  (turns on x64 before any array is made)
 from camjax import runtime
+from camjax.numerics import NonFiniteError
 from camjax.output.files import write_json
 from camjax.output.folder import (
     OutputError,
@@ -489,6 +490,11 @@ def main(argv: list[str] | None = None) -> int:
         return int(args._run(args) or 0)
     except (SceneError, UsageError, OutputError) as exc:
         print(f"{prog}: error: {exc}", file=sys.stderr)
+        return 2
+    except NonFiniteError as exc:  # finite inputs whose magnitudes overflow float64
+        print(f"{prog}: error: {cut(str(exc), 300)}: the scene's magnitudes overflow float64 (allowed: "
+              "physical values: lifts, masses, stiffnesses and sigma_max within a few orders of the "
+              "default scene's)", file=sys.stderr)
         return 2
     except KeyboardInterrupt as exc:
         code, what = (143, "terminated") if isinstance(exc, Terminated) else (130, "interrupted")

@@ -20,6 +20,20 @@ RHO_FLOOR_MM = 1e-15
 COS_FLOOR = 1e-12
 
 
+class NonFiniteError(ValueError):
+    """A result that came out inf or NaN: the inputs' magnitudes overflow float64."""
+
+
+def finite_float(x, what: str = "a design result") -> float:
+    """A scalar as a Python float; :class:`NonFiniteError` naming ``what`` if it is inf or NaN."""
+    import numpy as np
+
+    v = float(np.asarray(x))
+    if not np.isfinite(v):
+        raise NonFiniteError(f"non-finite value {v} in {what}")
+    return v
+
+
 def safe_sqrt(x: jax.Array) -> jax.Array:
     """sqrt(x) for x > 0, 0 otherwise; the gradient is 0 (not inf/nan) for x <= 0."""
     positive = x > 0

@@ -43,7 +43,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from camjax.contact import stress_from_coefficient
-from camjax.numerics import RHO_FLOOR_MM, max_over_angles, positive_part, safe_divide, safe_sqrt
+from camjax.numerics import RHO_FLOOR_MM, finite_float, max_over_angles, positive_part, safe_divide, safe_sqrt
 
 # A design is feasible when every violation is below these (mm; MPa relative to sigma_max).
 FEASIBILITY_TOL_MM = 1e-6
@@ -438,10 +438,7 @@ def condense_pointwise(problem: Problem, per_angle_design: Design) -> tuple[Desi
 
 
 def _f(x) -> float:
-    v = float(np.asarray(x))
-    if not np.isfinite(v):
-        raise ValueError(f"non-finite value {v} in a design result")
-    return v
+    return finite_float(x)
 
 
 def solution_json(problem: Problem, solution) -> dict:

@@ -89,6 +89,9 @@ CASES: dict[str, tuple[list[str], str | bytes | None, str, int]] = {
     "newline_in_key": (SCENE_ARGS, DEFAULT + '\n["a\\nb"]\n', "unknown key", 2),
     "unknown_key": (SCENE_ARGS, _variant("mass_kg = 1.0", "mass_kg = 1.0\nmas_kg = 2.0"), "follower.mas_kg", 2),
     "rpm_1e160": (SCENE_ARGS, _variant("rpm = 240.0", "rpm = 1e160"), "motion.rpm", 2),
+    "lift_overflows": (SCENE_ARGS, DEFAULT.replace("lift_mm = 5.0", "lift_mm = 1e300"), "overflow", 2),
+    "sigma_max_underflows": (SCENE_ARGS, _variant("sigma_max_MPa = 1230.0", "sigma_max_MPa = 1e-300"),
+                             "overflow", 2),
     "rpm_over_max": (SCENE_ARGS, _variant("rpm = 240.0", "rpm = 1.0000001e6"), "motion.rpm", 2),
     "rpm_negative": (SCENE_ARGS, _variant("rpm = 240.0", "rpm = -1.0"), "motion.rpm", 2),
     "rpm_nan": (SCENE_ARGS, _variant("rpm = 240.0", "rpm = nan"), "motion.rpm", 2),
@@ -559,3 +562,14 @@ def test_roller_violations_agree_with_the_minimum_base_radius():
     below = run_design(scene, base_radius_mm=0.99 * minimum).violations
     above = run_design(scene, base_radius_mm=1.01 * minimum).violations
     assert {v.constraint for v in below} & {"pressure_angle", "undercut"} and above == ()
+
+
+def test_write_json_names_the_non_finite_key(tmp_path):
+    from camjax.numerics import NonFiniteError
+    from camjax.output.files import non_finite_key, write_json
+
+    data = {"a": [1.0, {"b": 2.0, "c": float("nan")}], "d": float("inf")}
+    assert non_finite_key(data) == "a[1].c" and non_finite_key({"x": [1.0]}) is None
+    with pytest.raises(NonFiniteError, match=r"a\[1\]\.c"):
+        write_json(tmp_path / "r.json", data)
+    assert not (tmp_path / "r.json").exists()

@@ -57,6 +57,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from camjax.numerics import finite_float
 from camjax.problem import Weights, weights_of
 from camjax.solvers.registry import (
     CONVERGED,
@@ -235,10 +236,7 @@ class Solution:
 
 
 def _f(x) -> float:
-    v = float(np.asarray(x))
-    if not np.isfinite(v):
-        raise ValueError(f"non-finite value {v} in a design result")
-    return v
+    return finite_float(x)
 
 
 # --------------------------------------------------------------------------------- modes
