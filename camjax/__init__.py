@@ -5,7 +5,16 @@ curvature limit needs it. Ask for float32 per call (``dtype=jnp.float32``) where
 more than the last digits; the documentation's "Accuracy and limits" page says what that costs.
 """
 
-import jax
+import os as _os
+import sys as _sys
+
+if _os.path.basename(_sys.argv[0]) == "camjax" or "camjax.cli" in _sys.orig_argv[1:3]:
+    # the command line is starting: an interrupt during the imports below is one line, not a traceback
+    from camjax.runtime import quiet_startup_interrupts
+
+    quiet_startup_interrupts()
+
+import jax  # noqa: E402
 
 jax.config.update("jax_enable_x64", True)
 

@@ -464,8 +464,9 @@ def _install_signal_handlers() -> Callable[[], None]:
     if threading.current_thread() is not threading.main_thread():
         return lambda: None
     previous = {sig: signal.getsignal(sig) for sig in (signal.SIGINT, signal.SIGTERM)}
-    signal.signal(signal.SIGINT, signal.default_int_handler)
-    signal.signal(signal.SIGTERM, _raise_terminated)
+    for sig, handler in ((signal.SIGINT, signal.default_int_handler), (signal.SIGTERM, _raise_terminated)):
+        if previous[sig] is not signal.SIG_IGN:  # an ignored signal (nohup, `&`) stays ignored
+            signal.signal(sig, handler)
 
     def undo():
         for sig, handler in previous.items():

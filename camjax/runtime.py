@@ -85,3 +85,17 @@ def interruptible(fn, *args, **kwargs):
 def computing() -> bool:
     """True while an abandoned :func:`interruptible` worker still runs."""
     return any(not done.is_set() for done in list(_RUNNING))
+
+
+def quiet_startup_interrupts() -> None:
+    """Until ``camjax.cli.main`` installs its handlers, Ctrl-C or SIGTERM ends the process with one
+    line (status 130 / 143) instead of a traceback from inside ``import jax`` (about a second)."""
+    import signal
+
+    def leave(signum, frame):
+        os.write(2, b"camjax: interrupted while starting; nothing was written\n")
+        os._exit(143 if signum == signal.SIGTERM else 130)
+
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        if signal.getsignal(sig) is not signal.SIG_IGN:  # an ignored signal (nohup, `&`) stays ignored
+            signal.signal(sig, leave)

@@ -573,3 +573,17 @@ def test_write_json_names_the_non_finite_key(tmp_path):
     with pytest.raises(NonFiniteError, match=r"a\[1\]\.c"):
         write_json(tmp_path / "r.json", data)
     assert not (tmp_path / "r.json").exists()
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("sig, status", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
+def test_an_interrupt_while_starting_is_one_line(sig, status, place):
+    # half a second in, the process is still importing JAX: no traceback from inside the imports
+    before = snapshot(place / "out")
+    proc = _start(["design", "--out", str(place / "out")], place)
+    time.sleep(0.5)
+    proc.send_signal(sig)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == status, err
+    assert len(err.strip().splitlines()) == 1 and "Traceback" not in err
+    assert snapshot(place / "out") == before and leftovers(place) == []
