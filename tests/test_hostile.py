@@ -136,6 +136,8 @@ CASES: dict[str, tuple[list[str], str | bytes | None, str, int]] = {
     "out_nul": (["design", "--out", "{tmp}/a\x00b"], None, "--out", 2),
     "out_foreign_folder": (["design", "--out", "{tmp}/foreign"], None, "--out", 2),
     "out_root": (["design", "--out", "/"], None, "--out", 2),
+    "out_current_folder": (["design", "--out", "."], None, "--out", 2),
+    "out_parent_folder": (["design", "--out", ".."], None, "--out", 2),
     "sweep_out_is_a_file": (["sweep", "--alpha", "1", "--gamma", "1", "--out", "{file}"], None, "--out", 2),
     "extremes_out_is_a_file": (["check-extremes", "--out", "{file}"], None, "--out", 2),
     "dynamics_out_empty": (["dynamics", "thesis-bench", "--out", ""], None, "--out", 2),

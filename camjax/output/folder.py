@@ -116,6 +116,9 @@ def check_output_dir(text: str, option: str = "--out", replace: bool = True) -> 
     camjax wrote (it holds one of :data:`OUTPUT_MARKERS`).
     """
     out = _absolute(option, text)
+    if replace and out in (cwd := Path.cwd(), *cwd.parents):
+        raise OutputError(f"{_display(option, text)}: is the current folder or holds it; it would be "
+                          "replaced whole (allowed: a folder below the current one, e.g. out)")
     if out.exists() or out.is_symlink():
         if not out.is_dir():
             raise OutputError(f"{_display(option, text)}: is a file, not a folder "
