@@ -28,22 +28,17 @@ import signal
 from collections.abc import Iterator
 from pathlib import Path
 
+from camjax.scene import quote
+
 STAGING = "camjax-staging"
 OLD = "camjax-old"
 # A folder holding one of these was written by camjax (or is empty) and may be replaced whole;
 # any other non-empty folder is refused rather than deleted (e.g. --out ~ or --out .).
 OUTPUT_MARKERS = ("result.json", "pareto.json", "extremes.json", "dynamics.json", "manifest.json")
-SHOWN_CHARS = 100  # an option's value is quoted up to this many characters in a message
 
 
 class OutputError(ValueError):
     """An output location that cannot be used; the message names the option and the path."""
-
-
-def shown(value: str) -> str:
-    """``repr`` of a value, cut to about :data:`SHOWN_CHARS` characters for a one-line message."""
-    text = repr(value)
-    return text if len(text) <= SHOWN_CHARS else f"{text[:SHOWN_CHARS]}... ({len(text)} characters)"
 
 
 def _leftover_name(out: Path, kind: str, pid: int) -> Path:
@@ -80,7 +75,7 @@ def clean_stale(out: Path) -> None:
 
 
 def _display(option: str, path: str) -> str:
-    return f"{option} = {shown(path)}"
+    return f"{option} = {quote(path)}"
 
 
 def _check_parent(option: str, text: str, out: Path) -> None:
