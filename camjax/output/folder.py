@@ -21,6 +21,7 @@ Every command that writes a folder (``design``, ``sweep``, ``dynamics``, ``check
 from __future__ import annotations
 
 import contextlib
+import functools
 import os
 import re
 import shutil
@@ -104,6 +105,20 @@ def _absolute(option: str, text: str) -> Path:
     return out
 
 
+def _checked(check):
+    """An OSError while looking at the path (name too long, I/O error) is one :class:`OutputError`."""
+
+    @functools.wraps(check)
+    def wrapper(text: str, option: str = "--out", *args, **kwargs) -> Path:
+        try:
+            return check(text, option, *args, **kwargs)
+        except OSError as exc:
+            raise OutputError(f"{_display(option, text)}: {exc.strerror or exc}") from None
+
+    return wrapper
+
+
+@_checked
 def check_output_dir(text: str, option: str = "--out", replace: bool = True) -> Path:
     """The absolute output folder for ``text``, or :class:`OutputError` saying why it cannot be.
 
@@ -136,6 +151,7 @@ def check_output_dir(text: str, option: str = "--out", replace: bool = True) -> 
     return out
 
 
+@_checked
 def check_output_file(text: str, option: str) -> Path:
     """The absolute path of a file to write, or :class:`OutputError` saying why it cannot be."""
     out = _absolute(option, text)
