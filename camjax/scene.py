@@ -689,8 +689,13 @@ def load_scene(path_or_name: str | Path | None = None) -> Scene:
     if str(path_or_name) in BUILTIN_SCENES and not p.is_file():
         return parse_scene(builtin_scene_text(str(path_or_name)), str(path_or_name),
                            f"<built-in {path_or_name}>")
-    if not p.is_file():
-        problem = "is a folder, not a scene file" if p.is_dir() else "no such file or built-in scene"
+    try:
+        is_file, is_dir = p.is_file(), p.is_dir()
+    except (OSError, ValueError) as exc:  # a name too long, a NUL character
+        raise SceneError("scene", str(path_or_name), f"cannot be used as a path "
+                         f"({getattr(exc, 'strerror', None) or exc})") from None
+    if not is_file:
+        problem = "is a folder, not a scene file" if is_dir else "no such file or built-in scene"
         raise SceneError("scene", str(path_or_name), problem,
                          f"a TOML file or one of {', '.join(BUILTIN_SCENES)}")
     try:

@@ -126,6 +126,8 @@ CASES: dict[str, tuple[list[str], str | bytes | None, str, int]] = {
                           "design.alpha", 2),
     "section_not_table": (SCENE_ARGS, "motion = 3\n[follower]\ntype = 'flat'\n", "motion = 3: must be a table", 2),
     "scene_is_a_folder": (["design", "{tmp}", "--out", "{dir}"], None, "scene", 2),
+    "scene_name_too_long": (["design", "{tmp}/" + "s" * 10_000, "--out", "{dir}"], None, "scene", 2),
+    "scene_name_nul": (["design", "a\x00b.toml", "--out", "{dir}"], None, "scene", 2),
     "scene_missing": (["design", "{tmp}/nothing.toml", "--out", "{dir}"], None, "scene", 2),
     "oscillating_in_design": (["design", "thesis-bench", "--out", "{dir}"], None, "dynamics.follower", 2),
     # the output location, checked before any computation
