@@ -165,6 +165,9 @@ def _setup_design(p: argparse.ArgumentParser):
             print(f"design ({g['solver']}): R_b = {g['base_radius_mm']:.4f} mm, {sizes}, "
                   f"objective {g['objective']:.5f}, feasible {g['feasible']}")
         width = f", L = {at['face_width_mm']:.4f} mm" if at["face_width_mm"] is not None else ""
+        if "roller" in d:
+            roller = d["roller"]
+            width = f", R_f = {roller['roller_radius_mm']:.4f} mm, offset {roller['offset_mm']:.4f} mm"
         state = f"INFEASIBLE ({', '.join(broken)})" if broken else "feasible"
         print(f"files drawn at R_b = {at['base_radius_mm']:.4f} mm{width} ({at['source']}): {state}")
         print(f"wrote {', '.join(names)} to {args.out}")
