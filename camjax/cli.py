@@ -138,10 +138,12 @@ def _setup_design(p: argparse.ArgumentParser):
                              f"<= {MAX_BASE_RADIUS_MM:g}, mm)")
         check_dpi(args.dpi)
         scene = apply_design_options(apply_samples(load_scene(args.scene), args), args)
-        if scene.dynamics is not None and scene.dynamics.follower == "oscillating":
+        rad_lifts = scene.dynamics is not None and scene.dynamics.follower == "oscillating"
+        if rad_lifts and not scene.follower.oscillating:
             raise UsageError(f"scene {scene.name}: dynamics.follower = 'oscillating' (motion in rad); the "
-                             "disc-cam geometry of `design` is for translating followers in mm "
-                             f"(allowed: use `camjax dynamics {args.scene or scene.name}`)")
+                             "geometry of this scene's follower.type is for lifts in mm "
+                             f"(allowed: follower.type = 'oscillating_roller' or 'oscillating_flat' with "
+                             f"lift_deg, or `camjax dynamics {args.scene or scene.name}`)")
         runtime.enable_compilation_cache()
         result = runtime.interruptible(analyse, scene, base_radius_mm=r)
         d = result.data

@@ -49,7 +49,7 @@ def scene_arrays(scene: Scene, samples: int | None = None, dtype=None) -> SceneA
     motion = program.time_kinematics(kin, omega)
     force = torque = coeff = None
     train = scene.follower.train
-    if train is not None:
+    if train is not None and not scene.follower.oscillating:  # a rocker's loads: camjax.rocker
         force = loads.kinetostatic_force(train, motion)
         torque = loads.cam_torque(force, kin.ds)
         if scene.contact is not None:

@@ -273,15 +273,26 @@ class Report(NamedTuple):
     """A scene's report (JSON-ready dict) with the curves and arrays behind it."""
 
     data: dict[str, Any]
-    curves: DesignCurves
+    curves: DesignCurves  # camjax.rocker.RockerCurves for an oscillating follower
     arrays: SceneArrays
 
 
 def analyse(scene: Scene, arrays: SceneArrays | None = None, *, base_radius_mm: float | None = None,
             dtype=None) -> Report:
-    """:func:`run_design` and its report dict (see :func:`run_design` for the arguments)."""
+    """:func:`run_design` and its report dict (see :func:`run_design` for the arguments).
+
+    An oscillating follower runs :func:`camjax.rocker.run_rocker` instead (lifts in rad, the
+    cam sized for its pivot and arm); its curves are :class:`camjax.rocker.RockerCurves`.
+    """
     from camjax.output.report import build_report
 
+    if scene.follower.oscillating:
+        from camjax.output.rocker import rocker_report
+        from camjax.rocker import run_rocker
+
+        arrays = scene_arrays(scene, dtype=dtype) if arrays is None else arrays
+        rocker = run_rocker(scene, arrays.kin, arrays.cam_speed_rad_s, base_radius_mm)
+        return Report(rocker_report(scene, arrays, rocker), rocker.curves, arrays)
     run = run_design(scene, arrays, base_radius_mm=base_radius_mm, dtype=dtype)
     return Report(build_report(scene, run), run.curves, run.arrays)
 

@@ -17,12 +17,13 @@ from camjax.contact import Material
 from camjax.geometry import (
     DEFAULT_ROTATION,
     FLAT_MIN_CURVATURE_RADIUS_MM,
+    OSCILLATING_FLAT_MIN_CURVATURE_RADIUS_MM,
     ROLLER_MAX_PRESSURE_ANGLE_DEG,
     ROLLER_MIN_CURVATURE_RADIUS_MM,
     ROTATIONS,
 )
 from camjax.laws import FOURIER_PRESETS, LAWS, FourierSeries, fourier_law, get_law, polynomial_law
-from camjax.loads import FollowerTrain, Guide
+from camjax.loads import FollowerTrain, Guide, RockerTrain
 from camjax.program import KINDS, MotionProgram, Segment
 from camjax.solvers.registry import MODES, SOLVERS
 
@@ -82,18 +83,36 @@ class MotionSpec:
     rotation: str = DEFAULT_ROTATION  # "ccw" or "cw": camjax.geometry.pitch (cw = mirror image)
 
 
+FOLLOWER_TYPES = ("flat", "roller", "oscillating_roller", "oscillating_flat")
+OSCILLATING_TYPES = ("oscillating_roller", "oscillating_flat")
+
+
 @dataclass(frozen=True)
 class FollowerSpec:
-    """[follower]: geometry and, when mass or spring is given, the lumped train for loads."""
+    """[follower]: geometry and, when mass/spring (inertia/spring) is given, the lumped train for loads.
 
-    type: str  # "flat" or "roller"
-    train: FollowerTrain | None = None
+    Translating followers ("flat", "roller") move their lifts in mm and carry a
+    :class:`camjax.loads.FollowerTrain`; oscillating ones ("oscillating_roller", "oscillating_flat";
+    :mod:`camjax.geometry.oscillating`) swing an arm through the lifts in rad (``lift_deg`` in the
+    scene) and carry a :class:`camjax.loads.RockerTrain` about the pivot.
+    """
+
+    type: str  # one of FOLLOWER_TYPES
+    train: FollowerTrain | RockerTrain | None = None
     roller_radius_mm: float = 0.0
     offset_mm: float = 0.0
     # roller: |pressure angle| limit, deg (unused for a flat face, whose pressure angle is 0)
     max_pressure_angle_deg: float = ROLLER_MAX_PRESSURE_ANGLE_DEG
     # flat: the margin of rho >= rho_min; roller: smallest convex cam-surface radius (0 = no undercut)
     min_curvature_radius_mm: float = FLAT_MIN_CURVATURE_RADIUS_MM
+    pivot_distance_mm: float = 0.0  # oscillating: cam centre to pivot, d
+    arm_length_mm: float = 0.0  # oscillating roller: pivot to roller centre, l
+    face_offset_mm: float = 0.0  # oscillating flat face: distance of the face line from the pivot, f
+
+    @property
+    def oscillating(self) -> bool:
+        """True for a rocker follower: lifts in rad, loads about the pivot."""
+        return self.type in OSCILLATING_TYPES
 
 
 @dataclass(frozen=True)
@@ -335,8 +354,10 @@ def _parse_law(seg: _Reader):
         raise seg.error("law", name, "unknown law", ", ".join([*LAWS, "polynomial", "fourier"])) from None
 
 
-def _parse_motion(r: _Reader) -> MotionSpec:
+def _parse_motion(r: _Reader, oscillating: bool = False) -> MotionSpec:
+    """[motion]; ``oscillating``: the follower swings, lifts are ``lift_deg`` (kept in rad)."""
     r.check_keys(("rpm", "samples", "segments", "rotation"))
+    lift_key, other_key = ("lift_deg", "lift_mm") if oscillating else ("lift_mm", "lift_deg")
     rpm = r.number("rpm", low=0.0, high=RPM_MAX)
     samples = r.number("samples", _DEFAULT, low=1, high=SAMPLES_MAX, integer=True)
     rotation = r.choice("rotation", ROTATIONS, _DEFAULT)
@@ -347,16 +368,23 @@ def _parse_motion(r: _Reader) -> MotionSpec:
     segments = []
     for i, item in enumerate(raw):
         seg = _Reader(item, f"{r.path}.segments[{i}]", r.source)
-        seg.check_keys(("kind", "angle_deg", "law", "lift_mm", "exponents", "coefficients", "phases"))
+        if seg.has(other_key):
+            raise seg.error(other_key, seg.table[other_key],
+                            f"{'an oscillating' if oscillating else 'a translating'} follower takes its "
+                            f"lift as {lift_key}", lift_key)
+        seg.check_keys(("kind", "angle_deg", "law", lift_key, "exponents", "coefficients", "phases"))
         kind = seg.choice("kind", KINDS)
         angle = seg.number("angle_deg", low=0.0, low_open=True, high=360.0)
         if kind == "dwell":
-            for extra in ("law", "lift_mm", "exponents", "coefficients", "phases"):
+            for extra in ("law", lift_key, "exponents", "coefficients", "phases"):
                 if seg.has(extra):
                     raise seg.error(extra, seg.table[extra], "a dwell takes only kind and angle_deg")
             segments.append(Segment(kind, angle))
         else:
-            lift = seg.number("lift_mm", low=0.0, low_open=True)
+            lift = seg.number(lift_key, low=0.0, low_open=True)
+            if oscillating and lift >= 180.0:
+                raise seg.error(lift_key, lift, "swings the arm through the line of centres", "< 180")
+            lift = math.radians(lift) if oscillating else lift  # the program keeps rad
             segments.append(Segment(kind, angle, _parse_law(seg), lift))
     try:
         program = MotionProgram.from_segments(segments)
@@ -391,10 +419,12 @@ def _check_resolution(motion: MotionSpec, r: _Reader) -> None:
 
 
 def _parse_follower(r: _Reader) -> FollowerSpec:
+    ftype = r.choice("type", FOLLOWER_TYPES)
+    if ftype in OSCILLATING_TYPES:
+        return _parse_oscillating_follower(r, ftype)
     r.check_keys(("type", "mass_kg", "spring_N_per_m", "preload_mm", "damping_Ns_per_m",
                   "gravity_m_s2", "roller_radius_mm", "offset_mm", "max_pressure_angle_deg",
                   "min_curvature_radius_mm"))
-    ftype = r.choice("type", ("flat", "roller"))
     train = None
     if r.has("mass_kg") or r.has("spring_N_per_m"):
         train = _build(
@@ -427,6 +457,56 @@ def _parse_follower(r: _Reader) -> FollowerSpec:
                   min_curvature_radius_mm=r.number("min_curvature_radius_mm", _DEFAULT, low=0.0,
                                                    low_open=True))
 
+
+OSCILLATING_KEYS = {
+    "oscillating_roller": ("pivot_distance_mm", "arm_length_mm", "roller_radius_mm", "max_pressure_angle_deg",
+                           "min_curvature_radius_mm"),
+    "oscillating_flat": ("pivot_distance_mm", "face_offset_mm", "min_curvature_radius_mm"),
+}
+ROCKER_LOAD_KEYS = ("inertia_kg_m2", "spring_N_m_per_rad", "preload_rad", "damping_N_m_s_per_rad")
+
+
+def _parse_oscillating_follower(r: _Reader, ftype: str) -> FollowerSpec:
+    """[follower] of a rocker: pivot, arm or face, limits, and the train about the pivot.
+
+    Whether the geometry closes for the prime (base) radius the cam gets is checked where that
+    radius is known (the design or the sizing); here d > 0, l > 0 and R_f > 0.
+    """
+    own = OSCILLATING_KEYS[ftype]
+    translating = ("mass_kg", "spring_N_per_m", "preload_mm", "damping_Ns_per_m", "gravity_m_s2", "offset_mm")
+    for key in translating:
+        if r.has(key):
+            raise r.error(key, r.table[key], f"not a key of an {ftype} follower",
+                          ", ".join((*own, *ROCKER_LOAD_KEYS)))
+    r.check_keys(("type", *own, *ROCKER_LOAD_KEYS))
+    train = None
+    if r.has("inertia_kg_m2") or r.has("spring_N_m_per_rad"):
+        train = _build(RockerTrain, inertia_kg_m2=r.number("inertia_kg_m2", _DEFAULT, low=0.0),
+                       spring_N_m_per_rad=r.number("spring_N_m_per_rad", _DEFAULT, low=0.0),
+                       preload_rad=r.number("preload_rad", _DEFAULT),
+                       damping_N_m_s_per_rad=r.number("damping_N_m_s_per_rad", _DEFAULT, low=0.0))
+    else:
+        for key in ("preload_rad", "damping_N_m_s_per_rad"):
+            if r.has(key):
+                raise r.error(key, r.table[key], "needs inertia_kg_m2 or spring_N_m_per_rad (loads are off)")
+    pivot = r.number("pivot_distance_mm", low=0.0, low_open=True)
+    if ftype == "oscillating_flat":
+        # a flat face's own default (rho > 0: a face on rho = 0 rides a corner)
+        return _build(FollowerSpec, type=ftype, train=train, pivot_distance_mm=pivot,
+                      face_offset_mm=r.number("face_offset_mm", _DEFAULT),
+                      min_curvature_radius_mm=r.number("min_curvature_radius_mm",
+                                                       OSCILLATING_FLAT_MIN_CURVATURE_RADIUS_MM, low=0.0,
+                                                       low_open=True))
+    limit = r.number("max_pressure_angle_deg", _DEFAULT, low=0.0, low_open=True)
+    if limit is not _DEFAULT and limit >= 90.0:
+        raise r.error("max_pressure_angle_deg", limit, "out of range", "> 0 and < 90")
+    return _build(FollowerSpec, type=ftype, train=train, pivot_distance_mm=pivot,
+                  arm_length_mm=r.number("arm_length_mm", low=0.0, low_open=True),
+                  roller_radius_mm=r.number("roller_radius_mm", low=0.0, low_open=True),
+                  max_pressure_angle_deg=limit,
+                  # as for a translating roller: 0 = just no undercut
+                  min_curvature_radius_mm=r.number("min_curvature_radius_mm", ROLLER_MIN_CURVATURE_RADIUS_MM,
+                                                   low=0.0))
 
 def _parse_material(r: _Reader) -> Material:
     r.check_keys(("E_MPa", "poisson"))
@@ -535,8 +615,12 @@ def _parse_dynamics(r: _Reader, motion: MotionSpec, follower: FollowerSpec) -> D
                   "harmonics", "steps_per_cycle", "transient_tolerance", "max_cycles",
                   "damping_factors", "speed_factors", "wn_factors", "jump_speed_range_hz",
                   "shaping_band", "shaping_harmonics", "shaping_steps"))
-    kind = r.choice("follower", ("translating", "oscillating"))
-    if kind == "oscillating":
+    kind = r.choice("follower", ("translating", "oscillating"),
+                    "oscillating" if follower.oscillating else _MISSING)
+    if follower.oscillating and kind != "oscillating":
+        raise r.error("follower", kind, f"follower.type = {follower.type!r} swings: its dynamics is "
+                      "oscillating", "oscillating")
+    if kind == "oscillating" and not follower.oscillating:  # the older form: rad written as lift_mm
         for i, seg in enumerate(motion.segments):
             lift = seg.get("lift_mm", 0.0)
             if lift > math.pi:
@@ -615,13 +699,19 @@ def scene_from_dict(data: dict, name: str = "scene", source: str | None = None) 
         raise SceneError("motion", _MISSING, "section [motion] is required", source=source)
     if "follower" not in data:
         raise SceneError("follower", _MISSING, "section [follower] is required", source=source)
-    motion = _parse_motion(top.sub("motion"))
+    ftype = data["follower"].get("type") if isinstance(data["follower"], dict) else None
+    motion = _parse_motion(top.sub("motion"), oscillating=ftype in OSCILLATING_TYPES)
     follower = _parse_follower(top.sub("follower"))
     contact = _parse_contact(top.sub("contact")) if "contact" in data else None
     if contact is not None and follower.train is None:
         raise SceneError("contact", _MISSING,
                          "contact stress needs the follower force: give follower.mass_kg and/or "
                          "follower.spring_N_per_m", source=source)
+    if "design" in data and follower.oscillating:
+        raise SceneError("design", _MISSING, f"optimal design of an {follower.type} follower is not "
+                         "available: leave [design] out (the cam is sized for the pressure angle and "
+                         "curvature limits)",
+                         source=source)
     if "design" in data and contact is None and follower.type == "flat":
         raise SceneError("design", _MISSING, "the objective needs the contact stress: add a "
                          "[contact] section", source=source)

@@ -91,6 +91,12 @@ def write_figures(folder: Path, curves: DesignCurves, dpi: int = 100,
 def write_design_files(folder: str | Path, curves: DesignCurves, dpi: int = 100,
                        banner: str | None = None) -> list[Path]:
     """Figures, profile.csv and profile.dxf into ``folder`` (created if needed); the written paths."""
+    from camjax.rocker import RockerCurves
+
+    if isinstance(curves, RockerCurves):  # an oscillating follower's files
+        from camjax.output.rocker import write_rocker_files
+
+        return write_rocker_files(folder, curves, dpi)
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     return [*write_figures(folder, curves, dpi, banner), write_profile_csv(folder / "profile.csv", curves),

@@ -51,7 +51,7 @@ def trough(values, theta_deg) -> dict[str, float]:
     return {"min": e["min"], "min_deg": e["min_deg"]}
 
 
-def _negative_ranges_deg(values, theta_deg) -> list[list[float]]:
+def negative_ranges_deg(values, theta_deg) -> list[list[float]]:
     """[first, last] sample angles (deg) of each run where values < 0, wrapping over 360."""
     neg = np.asarray(values) < 0
     t = np.asarray(theta_deg)
@@ -111,7 +111,7 @@ def loads_block(scene: Scene, arrays: SceneArrays) -> dict[str, Any] | None:
             "min_force_N": _f(loads.contact_margin(force)),
             "min_force_deg": trough(force, t)["min_deg"],
             "lost": bool(np.any(np.asarray(force) < 0)),
-            "lost_ranges_deg": _negative_ranges_deg(force, t),
+            "lost_ranges_deg": negative_ranges_deg(force, t),
         },
     }
     if scene.guide is not None:
@@ -279,12 +279,11 @@ def feasibility_block(violations) -> dict[str, Any]:
 # ------------------------------------------------------------------------------ report
 
 
-def build_report(scene: Scene, run: DesignRun) -> dict[str, Any]:
-    """The report of a scene's design run as a plain, JSON-ready dict."""
+def header_block(scene: Scene, arrays: SceneArrays) -> dict[str, Any]:
+    """Keys every report starts with: version, scene, grid, speed, follower, segments, motion, FLCD."""
     import camjax  # the version lives in the package
 
-    arrays = run.arrays
-    data: dict[str, Any] = {
+    return {
         "camjax_version": camjax.__version__,
         "scene": scene.name,
         "dtype": str(arrays.kin.s.dtype),
@@ -299,6 +298,12 @@ def build_report(scene: Scene, run: DesignRun) -> dict[str, Any]:
         "flcd": flcd_block(scene),
         "flcd_units": FLCD_UNITS,
     }
+
+
+def build_report(scene: Scene, run: DesignRun) -> dict[str, Any]:
+    """The report of a scene's design run as a plain, JSON-ready dict."""
+    arrays = run.arrays
+    data = header_block(scene, arrays)
     block = loads_block(scene, arrays)
     if block is not None:
         data["loads"] = block
