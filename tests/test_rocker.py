@@ -220,3 +220,28 @@ def test_design_refuses_an_arm_swung_through_the_line_of_centres(tmp_path, capsy
     assert rc == 2 and not out.exists()
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "line of centres" in err[0]
+
+
+def test_thesis_bench_keeps_its_lifts_in_rad_exactly():
+    # the dynamics of the bench read the program's lifts: lift_deg must convert back to the
+    # series' 0.48337882 rad to the last bit for `camjax dynamics thesis-bench` to stay unchanged
+    from camjax.scene import load_scene
+
+    scene = load_scene("thesis-bench")
+    assert scene.follower.type == "oscillating_roller" and scene.dynamics.follower == "oscillating"
+    assert [float(x) for x in scene.motion.program.lifts] == [0.48337882, 0.48337882]
+
+
+@pytest.mark.slow
+def test_design_thesis_bench(tmp_path):
+    out = tmp_path / "tb"
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("CAMJAX_COMPILATION_CACHE", "0")
+        assert cli.main(["design", "thesis-bench", "--out", str(out), "--dpi", "30"]) == 0
+    data = json.loads((out / "result.json").read_text())
+    assert data["follower_type"] == "oscillating_roller"
+    assert data["kinematics"]["swing_deg"]["max"] == pytest.approx(math.degrees(0.48337882), rel=1e-15)
+    # sized by the 30 deg rule: at the smallest prime radius |phi| peaks on the limit, so the drawn
+    # (1 mm larger) cam stays below it
+    assert data["min_base_radius_binding"] == "pressure_angle"
+    assert data["evaluated"]["pressure_angle_deg"]["max_abs"] < 30.0
