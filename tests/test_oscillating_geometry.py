@@ -176,6 +176,52 @@ def test_roller_follower_riding_on_exported_profile_reproduces_the_motion(rotati
     np.testing.assert_allclose(np.asarray(psi) - psi0, s, rtol=0, atol=1e-9)
 
 
+def riding_face_angles(d, f, rb, rotation, theta_deg, dense=7200, iters=90):
+    """Arm angle of a flat face riding on the cam outline, from the outline only.
+
+    For each cam angle: turn the outline (geometry.oscillating_flat_profile at any parameter tau)
+    into the fixed frame. With P - A = R (cos beta, sin beta) seen from the pivot, the face
+    {X : m(psi) . (X - A) = -f}, m = (sin psi, cos psi), passes through P where
+    R sin(psi + beta) = -f; it leaves P behind (R sin(psi + beta) decreasing) at
+    psi = pi + asin(f / R) - beta. The face rests at the largest such psi over the outline (dense
+    grid over tau, then golden-section refinement, as for the roller).
+    """
+
+    def face(tau_deg, th):
+        kin = motion_at(PROGRAM, tau_deg)
+        x, y = geometry.oscillating_flat_profile(d, f, rb, kin, rotation)
+        a = sigma_of(rotation) * th
+        xf, yf = jnp.cos(a) * x - jnp.sin(a) * y, jnp.sin(a) * x + jnp.cos(a) * y
+        r, beta = jnp.hypot(xf - d, yf), jnp.arctan2(yf, xf - d)
+        psi = math.pi + jnp.arcsin(f / r) - beta
+        return jnp.mod(psi + math.pi, 2 * math.pi) - math.pi  # in (-pi, pi]
+
+    th = jnp.deg2rad(jnp.asarray(theta_deg))
+    grid = jnp.arange(dense) * (360.0 / dense)
+    k = jnp.argmax(jax.vmap(lambda t: face(grid, t))(th), axis=1)
+    lo, hi = grid[k] - 360.0 / dense, grid[k] + 360.0 / dense
+    g = (math.sqrt(5) - 1) / 2
+    h = jax.jit(jax.vmap(face))
+    for _ in range(iters):
+        a, b = hi - g * (hi - lo), lo + g * (hi - lo)
+        up = h(a, th) < h(b, th)
+        lo, hi = jnp.where(up, a, lo), jnp.where(up, hi, b)
+    return h(0.5 * (lo + hi), th)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("rotation", ["ccw", "cw"])
+def test_flat_face_riding_on_exported_profile_reproduces_the_motion(rotation):
+    d, f, rb = FLAT["d"], FLAT["f"], FLAT["rb"]
+    kin = evaluate(PROGRAM, 360)
+    assert float(jnp.min(geometry.oscillating_flat_geometry(d, f, rb, kin, rotation).radius_of_curvature)) > 0
+    theta_deg = np.arange(0.0, 360.0, 2.5)
+    psi = riding_face_angles(d, f, rb, rotation, theta_deg)
+    s = np.asarray(motion_at(PROGRAM, theta_deg).s)
+    # golden section to ~1e-17 deg of tau; the rest is float64 round-off at ~100 mm
+    np.testing.assert_allclose(np.asarray(psi) - math.asin((rb + f) / d), s, rtol=0, atol=1e-9)
+
+
 def flat_lines(d, f, rb, kin, rotation):
     """Face lines m . X = p of the fixed frame, seen from the cam (unit normals and distances, NumPy)."""
     psi = math.asin((rb + f) / d) + np.asarray(kin.s)
