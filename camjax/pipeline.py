@@ -291,8 +291,15 @@ def analyse(scene: Scene, arrays: SceneArrays | None = None, *, base_radius_mm: 
         from camjax.rocker import run_rocker
 
         arrays = scene_arrays(scene, dtype=dtype) if arrays is None else arrays
-        rocker = run_rocker(scene, arrays.kin, arrays.cam_speed_rad_s, base_radius_mm)
-        return Report(rocker_report(scene, arrays, rocker), rocker.curves, arrays)
+        design = None
+        if scene.design is not None:
+            from camjax.solvers.base import solve
+
+            d, problem = scene.design, design_problem(scene, arrays)
+            design = solve(problem, (d.alpha, d.gamma), mode=d.mode, solver=d.solver,
+                           seed=d.seed).to_json(problem)
+        rocker = run_rocker(scene, arrays.kin, arrays.cam_speed_rad_s, base_radius_mm, design)
+        return Report(rocker_report(scene, arrays, rocker, design), rocker.curves, arrays)
     run = run_design(scene, arrays, base_radius_mm=base_radius_mm, dtype=dtype)
     return Report(build_report(scene, run), run.curves, run.arrays)
 

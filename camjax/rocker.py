@@ -20,6 +20,7 @@ report gives angles in degrees, lengths in mm, loads in SI.
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from typing import NamedTuple
 
 import jax.numpy as jnp
@@ -38,7 +39,7 @@ class RockerSizing(NamedTuple):
     min_base_radius_mm: float  # R_b (roller: R_p - R_f)
     min_prime_radius_mm: float | None  # roller only: R_p
     angle_deg: float  # cam angle where the binding limit is reached
-    binding: str  # "pressure_angle", "undercut" or "curvature"
+    binding: str  # "pressure_angle", "undercut", "curvature" ("none": an infeasible design's own radius)
 
 
 class RockerCurves(NamedTuple):
@@ -230,8 +231,27 @@ class RockerRun(NamedTuple):
     curves: RockerCurves
 
 
-def run_rocker(scene, kin: Kinematics, cam_speed_rad_s, base_radius_mm: float | None = None) -> RockerRun:
-    """Sizing, drawing radius and curves of a rocker scene (Python: reads the scene, may raise SceneError)."""
-    sizing = rocker_sizing(scene, kin)
+def run_rocker(scene, kin: Kinematics, cam_speed_rad_s, base_radius_mm: float | None = None,
+               design: dict | None = None) -> RockerRun:
+    """Sizing, drawing radius and curves of a rocker scene (Python: reads the scene, may raise SceneError).
+
+    ``design``: the solved [design] (:meth:`camjax.solvers.base.Solution.to_json` keys of the
+    oscillating-roller family): the cam is sized and drawn with its roller, pivot and arm, at its
+    base radius unless ``base_radius_mm`` (the option) is given.
+    """
+    if design is not None:
+        follower = replace(scene.follower, roller_radius_mm=design["roller_radius_mm"],
+                           pivot_distance_mm=design["pivot_distance_mm"],
+                           arm_length_mm=design["arm_length_mm"])
+        scene = replace(scene, follower=follower)
+        try:
+            sizing = rocker_sizing(scene, kin)
+        except SceneError:  # an infeasible design: its own radius is all there is to report
+            sizing = RockerSizing(design["base_radius_mm"], design["prime_radius_mm"], 0.0, "none")
+        if base_radius_mm is None:
+            radius = design["base_radius_mm"]
+            return RockerRun(sizing, radius, "design", evaluate_rocker(scene, kin, cam_speed_rad_s, radius))
+    else:
+        sizing = rocker_sizing(scene, kin)
     radius, source = rocker_drawing_radius(scene, kin, sizing, base_radius_mm)
     return RockerRun(sizing, radius, source, evaluate_rocker(scene, kin, cam_speed_rad_s, radius))

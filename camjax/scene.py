@@ -130,7 +130,9 @@ class DesignSpec:
 
     Every design variable is a (low, high) pair in mm; low == high fixes it (the scene may write
     a fixed variable as a number). Flat face: base_radius_mm and face_width_mm; roller:
-    base_radius_mm, roller_radius_mm and offset_mm (the variables of the other type are None).
+    base_radius_mm, roller_radius_mm and offset_mm; oscillating roller
+    (:mod:`camjax.oscillating_problem`): base_radius_mm, roller_radius_mm, pivot_distance_mm and
+    arm_length_mm (the variables of the other types are None).
     """
 
     base_radius_mm: tuple[float, float]  # bounds [low, high]
@@ -141,8 +143,10 @@ class DesignSpec:
     gamma: float = 1.0  # weight of the stress term
     solver: str = "gradient"
     seed: int = 0
-    roller_radius_mm: tuple[float, float] | None = None  # roller only
+    roller_radius_mm: tuple[float, float] | None = None  # roller and oscillating roller
     offset_mm: tuple[float, float] | None = None  # roller only
+    pivot_distance_mm: tuple[float, float] | None = None  # oscillating roller only
+    arm_length_mm: tuple[float, float] | None = None  # oscillating roller only
 
 
 DYNAMICS_COMPUTE = ("compensation", "robustness", "time_domain", "drive", "nonlinear", "jump",
@@ -521,7 +525,9 @@ def _parse_contact(r: _Reader) -> ContactSpec:
 
 
 DESIGN_VARIABLES = {"flat": ("base_radius_mm", "face_width_mm"),
-                    "roller": ("base_radius_mm", "roller_radius_mm", "offset_mm")}
+                    "roller": ("base_radius_mm", "roller_radius_mm", "offset_mm"),
+                    "oscillating_roller": ("base_radius_mm", "roller_radius_mm", "pivot_distance_mm",
+                                           "arm_length_mm")}
 
 
 def _fixed_or_free(r: _Reader, key: str, default=_MISSING, *, positive: bool = True) -> tuple[float, float]:
@@ -542,6 +548,23 @@ def _fixed_or_free(r: _Reader, key: str, default=_MISSING, *, positive: bool = T
     if v[0] > v[1]:
         raise r.error(key, v, "bounds must satisfy low <= high")
     return float(v[0]), float(v[1])
+
+
+def _check_rocker_closes(r: _Reader, base, roller, pivot_distance_mm, arm_length_mm) -> None:
+    """Refuse bounds in which no oscillating-roller design closes: |d - l| < R_p < d + l nowhere.
+
+    Designs of the box that do not close are left to the solver's reach constraint; a box with
+    none that does is a scene error naming pivot_distance_mm (the pivot cannot be placed).
+    """
+    (d0, d1), (l0, l1) = pivot_distance_mm, arm_length_mm
+    rp0, rp1 = base[0] + roller[0], base[1] + roller[1]
+    gap = max(d0 - l1, l0 - d1, 0.0)  # smallest |d - l| in the box
+    if rp1 <= gap or rp0 >= d1 + l1:
+        value = list(pivot_distance_mm) if d0 != d1 else d0
+        raise r.error("pivot_distance_mm", value,
+                      f"no design in the bounds closes: the prime radius R_b + R_f ({rp0:g}..{rp1:g} mm) "
+                      f"must lie between |d - l| (>= {gap:g} mm) and d + l (<= {d1 + l1:g} mm)",
+                      "a pivot distance closer to the arm length, or a larger base radius")
 
 
 def _parse_design(r: _Reader, follower: FollowerSpec, has_contact: bool) -> DesignSpec:
@@ -568,12 +591,19 @@ def _parse_design(r: _Reader, follower: FollowerSpec, has_contact: bool) -> Desi
     else:
         base = _fixed_or_free(r, "base_radius_mm")
         roller = _fixed_or_free(r, "roller_radius_mm", (follower.roller_radius_mm,) * 2)
-        offset = _fixed_or_free(r, "offset_mm", (follower.offset_mm,) * 2, positive=False)
-        reach = base[0] + roller[0]  # the smallest prime radius in the box
-        if max(abs(offset[0]), abs(offset[1])) >= reach:
-            raise r.error("offset_mm", list(offset) if offset[0] != offset[1] else offset[0],
-                          f"allows |e| >= R_p = R_b + R_f (smallest in the bounds: {reach:g} mm): the "
-                          "follower axis must cut the prime circle", f"|e| < {reach:g}")
+        if follower.type == "oscillating_roller":
+            variables = dict(
+                pivot_distance_mm=_fixed_or_free(r, "pivot_distance_mm", (follower.pivot_distance_mm,) * 2),
+                arm_length_mm=_fixed_or_free(r, "arm_length_mm", (follower.arm_length_mm,) * 2))
+            _check_rocker_closes(r, base, roller, **variables)
+        else:
+            offset = _fixed_or_free(r, "offset_mm", (follower.offset_mm,) * 2, positive=False)
+            reach = base[0] + roller[0]  # the smallest prime radius in the box
+            if max(abs(offset[0]), abs(offset[1])) >= reach:
+                raise r.error("offset_mm", list(offset) if offset[0] != offset[1] else offset[0],
+                              f"allows |e| >= R_p = R_b + R_f (smallest in the bounds: {reach:g} mm): the "
+                              "follower axis must cut the prime circle", f"|e| < {reach:g}")
+            variables = dict(offset_mm=offset)
         if has_contact:
             sigma_max = r.number("sigma_max_MPa", low=0.0, low_open=True)
         else:
@@ -585,7 +615,7 @@ def _parse_design(r: _Reader, follower: FollowerSpec, has_contact: bool) -> Desi
                               "0 without [contact]")
             sigma_max = None
         spec = _build(DesignSpec, base_radius_mm=base, face_width_mm=None, sigma_max_MPa=sigma_max,
-                      roller_radius_mm=roller, offset_mm=offset, **common)
+                      roller_radius_mm=roller, **variables, **common)
     if spec.alpha == 0 and spec.gamma == 0:
         raise r.error("alpha", 0.0, "alpha and gamma are both zero: nothing to minimize",
                       "alpha >= 0, gamma >= 0, not both 0")
@@ -707,7 +737,7 @@ def scene_from_dict(data: dict, name: str = "scene", source: str | None = None) 
         raise SceneError("contact", _MISSING,
                          "contact stress needs the follower force: give follower.mass_kg and/or "
                          "follower.spring_N_per_m", source=source)
-    if "design" in data and follower.oscillating:
+    if "design" in data and follower.type == "oscillating_flat":
         raise SceneError("design", _MISSING, f"optimal design of an {follower.type} follower is not "
                          "available: leave [design] out (the cam is sized for the pressure angle and "
                          "curvature limits)",

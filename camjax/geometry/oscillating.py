@@ -169,11 +169,16 @@ def oscillating_roller_pitch_curvature(pivot_distance_mm, arm_length_mm, psi0, k
     T x T' = -l^2 s' q^2 + sigma d l (sn s'' + c s' q) with q = s' + sigma = sigma Q, which gives
     the numerator above. A circle (s' = s'' = 0) gives 1/|C|.
     """
-    d, l = pivot_distance_mm, arm_length_mm
-    psi = arm_angle(psi0, kin)
+    return swing_pitch_curvature(pivot_distance_mm, arm_length_mm, arm_angle(psi0, kin),
+                                 relative_rate(kin, rotation), kin.d2s)
+
+
+def swing_pitch_curvature(pivot_distance_mm, arm_length_mm, psi, rate, d2s) -> jax.Array:
+    """The closed form of :func:`oscillating_roller_pitch_curvature` in the arm angle psi (rad), the
+    relative rate Q = 1 + sigma s' and s'' (rad/rad^2): for callers that hold sigma as data."""
+    d, l, q = pivot_distance_mm, arm_length_mm, rate
     c, sn = jnp.cos(psi), jnp.sin(psi)
-    q = relative_rate(kin, rotation)
-    num = l**2 * q**3 - d * l * c * q * (q + 1.0) + d**2 - d * l * sn * kin.d2s
+    num = l**2 * q**3 - d * l * c * q * (q + 1.0) + d**2 - d * l * sn * d2s
     den = (l**2 * q**2 - 2.0 * d * l * c * q + d**2) ** 1.5
     return capped_divide(num, den)
 
@@ -430,5 +435,5 @@ __all__ = [
     "oscillating_roller_min_prime_radius", "oscillating_roller_pitch_curvature",
     "oscillating_roller_pitch_curve", "oscillating_roller_pressure_angle", "oscillating_roller_profile",
     "oscillating_roller_reach_constraint", "oscillating_roller_tangent", "relative_rate",
-    "roller_centre", "roller_centre_distance",
+    "roller_centre", "roller_centre_distance", "swing_pitch_curvature",
 ]

@@ -170,13 +170,14 @@ def write_rocker_files(folder: str | Path, curves: RockerCurves, dpi: int = 100)
 # ------------------------------------------------------------------------------ report
 
 
-def rocker_report(scene: Scene, arrays: SceneArrays, run: RockerRun) -> dict[str, Any]:
+def rocker_report(scene: Scene, arrays: SceneArrays, run: RockerRun,
+                  design: dict | None = None) -> dict[str, Any]:
     """The report of a rocker scene as a plain, JSON-ready dict (strict JSON: no NaN or infinity).
 
     The common header (:func:`camjax.output.report.header_block`) with the motion in rad (swing
     in deg, angular velocity ... in SI), the smallest admissible cam and its binding limit, the
     evaluated cam (pressure angle, curvature, undercut or face length), loads about the pivot and
-    the contact stress.
+    the contact stress; with a solved [design], its block (``design``: the solver's keys).
     """
     sizing, c, f = run.sizing, run.curves, scene.follower
     t = c.theta_deg
@@ -209,6 +210,7 @@ def rocker_report(scene: Scene, arrays: SceneArrays, run: RockerRun) -> dict[str
             "undercut": f"no undercut (binding; cam-surface radius >= {f.min_curvature_radius_mm:g} mm) and "
                         f"|pressure angle| <= {f.max_pressure_angle_deg:g} deg",
             "curvature": f"cam radius of curvature >= {f.min_curvature_radius_mm:g} mm",
+            "none": "no admissible cam for the design's pivot and arm: the design's own radius",
         }[sizing.binding],
         "min_base_radius_binding": sizing.binding,
         "evaluated_at": {"base_radius_mm": run.base_radius_mm, "source": run.base_radius_source},
@@ -255,6 +257,8 @@ def rocker_report(scene: Scene, arrays: SceneArrays, run: RockerRun) -> dict[str
     if c.stress_MPa is not None:
         k = int(np.argmax(c.stress_MPa))
         out["stress_MPa"] = {"max": _f(c.stress_MPa[k]), "max_deg": _f(t[k])}
+    if design is not None:
+        out["design"] = design
     return out
 
 
