@@ -29,6 +29,7 @@ from camjax import (  # noqa: E402
     pipeline,
     problem,
     program,
+    rocker,
     roller_problem,
     runtime,
 )
@@ -44,7 +45,7 @@ from camjax.laws import (  # noqa: E402
     polynomial_law,
     stepped_law,
 )
-from camjax.loads import FollowerTrain, Guide  # noqa: E402
+from camjax.loads import FollowerTrain, Guide, RockerTrain  # noqa: E402
 from camjax.output import report  # noqa: E402
 from camjax.pipeline import DesignRun, Report, analyse, design_report, run_design  # noqa: E402
 from camjax.problem import Design, Problem, Weights, problem_from_scene  # noqa: E402
@@ -61,6 +62,7 @@ __all__ = [
     "stepped_law", "design_report", "report", "DesignCurves", "DesignRun", "Report", "analyse",
     "evaluate_design", "run_design", "evaluate", "output", "pipeline", "runtime",
     "Design", "Problem", "Weights", "problem", "problem_from_scene", "roller_problem", "solvers",
+    "rocker", "RockerTrain",
 ]
 
 

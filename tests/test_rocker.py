@@ -245,3 +245,12 @@ def test_design_thesis_bench(tmp_path):
     # (1 mm larger) cam stays below it
     assert data["min_base_radius_binding"] == "pressure_angle"
     assert data["evaluated"]["pressure_angle_deg"]["max_abs"] < 30.0
+
+
+def test_design_refuses_a_rocker_no_cam_can_carry(tmp_path, capsys):
+    # a face 10 mm from a pivot only 10 mm from the cam centre: R_b + f < d leaves no base circle
+    text = FLAT_SCENE.replace("ROT", "ccw").replace("pivot_distance_mm = 150.0", "pivot_distance_mm = 10.0")
+    rc, out = _design(tmp_path, text)
+    assert rc == 2 and not out.exists()
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "follower.pivot_distance_mm" in err[0]
