@@ -161,9 +161,12 @@ def _setup_design(p: argparse.ArgumentParser):
             g = d["design"]
             if "face_width_mm" in g:
                 sizes = f"L = {g['face_width_mm']:.4f} mm"
-            elif "pivot_distance_mm" in g:
+            elif "arm_length_mm" in g:
                 sizes = (f"R_f = {g['roller_radius_mm']:.4f} mm, pivot {g['pivot_distance_mm']:.4f} mm, "
                          f"arm {g['arm_length_mm']:.4f} mm, R_p = {g['prime_radius_mm']:.4f} mm")
+            elif "face_offset_mm" in g:
+                sizes = (f"pivot {g['pivot_distance_mm']:.4f} mm, face offset {g['face_offset_mm']:.4f} mm, "
+                         f"face {g['face_length_mm']:.4f} mm")
             else:
                 sizes = (f"R_f = {g['roller_radius_mm']:.4f} mm, offset {g['offset_mm']:.4f} mm, "
                          f"R_p = {g['prime_radius_mm']:.4f} mm")

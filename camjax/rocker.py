@@ -236,18 +236,17 @@ def run_rocker(scene, kin: Kinematics, cam_speed_rad_s, base_radius_mm: float | 
     """Sizing, drawing radius and curves of a rocker scene (Python: reads the scene, may raise SceneError).
 
     ``design``: the solved [design] (:meth:`camjax.solvers.base.Solution.to_json` keys of the
-    oscillating-roller family): the cam is sized and drawn with its roller, pivot and arm, at its
-    base radius unless ``base_radius_mm`` (the option) is given.
+    oscillating families): the cam is sized and drawn with its roller, pivot and arm (or face
+    offset), at its base radius unless ``base_radius_mm`` (the option) is given.
     """
     if design is not None:
-        follower = replace(scene.follower, roller_radius_mm=design["roller_radius_mm"],
-                           pivot_distance_mm=design["pivot_distance_mm"],
-                           arm_length_mm=design["arm_length_mm"])
+        geometry_keys = ("roller_radius_mm", "pivot_distance_mm", "arm_length_mm", "face_offset_mm")
+        follower = replace(scene.follower, **{k: design[k] for k in geometry_keys if k in design})
         scene = replace(scene, follower=follower)
         try:
             sizing = rocker_sizing(scene, kin)
         except SceneError:  # an infeasible design: its own radius is all there is to report
-            sizing = RockerSizing(design["base_radius_mm"], design["prime_radius_mm"], 0.0, "none")
+            sizing = RockerSizing(design["base_radius_mm"], design.get("prime_radius_mm"), 0.0, "none")
         if base_radius_mm is None:
             radius = design["base_radius_mm"]
             return RockerRun(sizing, radius, "design", evaluate_rocker(scene, kin, cam_speed_rad_s, radius))

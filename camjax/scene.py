@@ -132,7 +132,8 @@ class DesignSpec:
     a fixed variable as a number). Flat face: base_radius_mm and face_width_mm; roller:
     base_radius_mm, roller_radius_mm and offset_mm; oscillating roller
     (:mod:`camjax.oscillating_problem`): base_radius_mm, roller_radius_mm, pivot_distance_mm and
-    arm_length_mm (the variables of the other types are None).
+    arm_length_mm; oscillating flat face (:mod:`camjax.oscillating_flat_problem`): base_radius_mm,
+    pivot_distance_mm and face_offset_mm (the variables of the other types are None).
     """
 
     base_radius_mm: tuple[float, float]  # bounds [low, high]
@@ -145,8 +146,9 @@ class DesignSpec:
     seed: int = 0
     roller_radius_mm: tuple[float, float] | None = None  # roller and oscillating roller
     offset_mm: tuple[float, float] | None = None  # roller only
-    pivot_distance_mm: tuple[float, float] | None = None  # oscillating roller only
+    pivot_distance_mm: tuple[float, float] | None = None  # oscillating followers
     arm_length_mm: tuple[float, float] | None = None  # oscillating roller only
+    face_offset_mm: tuple[float, float] | None = None  # oscillating flat face only
 
 
 DYNAMICS_COMPUTE = ("compensation", "robustness", "time_domain", "drive", "nonlinear", "jump",
@@ -527,7 +529,8 @@ def _parse_contact(r: _Reader) -> ContactSpec:
 DESIGN_VARIABLES = {"flat": ("base_radius_mm", "face_width_mm"),
                     "roller": ("base_radius_mm", "roller_radius_mm", "offset_mm"),
                     "oscillating_roller": ("base_radius_mm", "roller_radius_mm", "pivot_distance_mm",
-                                           "arm_length_mm")}
+                                           "arm_length_mm"),
+                    "oscillating_flat": ("base_radius_mm", "pivot_distance_mm", "face_offset_mm")}
 
 
 def _fixed_or_free(r: _Reader, key: str, default=_MISSING, *, positive: bool = True) -> tuple[float, float]:
@@ -548,6 +551,19 @@ def _fixed_or_free(r: _Reader, key: str, default=_MISSING, *, positive: bool = T
     if v[0] > v[1]:
         raise r.error(key, v, "bounds must satisfy low <= high")
     return float(v[0]), float(v[1])
+
+
+def _rocker_sigma_max(r: _Reader, has_contact: bool, common: dict) -> float | None:
+    """sigma_max_MPa of a roller or rocker [design]: required with [contact], refused without (no stress)."""
+    if has_contact:
+        return r.number("sigma_max_MPa", low=0.0, low_open=True)
+    if r.has("sigma_max_MPa"):
+        raise r.error("sigma_max_MPa", r.table["sigma_max_MPa"], "needs a [contact] section (no "
+                      "stress is modelled without it)")
+    if common["gamma"] != 0:
+        raise r.error("gamma", common["gamma"], "the stress term needs a [contact] section",
+                      "0 without [contact]")
+    return None
 
 
 def _check_rocker_closes(r: _Reader, base, roller, pivot_distance_mm, arm_length_mm) -> None:
@@ -588,6 +604,18 @@ def _parse_design(r: _Reader, follower: FollowerSpec, has_contact: bool) -> Desi
         spec = _build(DesignSpec, base_radius_mm=r.interval("base_radius_mm"),
                       face_width_mm=r.interval("face_width_mm"),
                       sigma_max_MPa=r.number("sigma_max_MPa", low=0.0, low_open=True), **common)
+    elif follower.type == "oscillating_flat":
+        base = _fixed_or_free(r, "base_radius_mm")
+        pivot = _fixed_or_free(r, "pivot_distance_mm", (follower.pivot_distance_mm,) * 2)
+        offset = _fixed_or_free(r, "face_offset_mm", (follower.face_offset_mm,) * 2, positive=False)
+        if base[0] + offset[0] >= pivot[1] or base[1] + offset[1] <= 0:
+            raise r.error("pivot_distance_mm", list(pivot) if pivot[0] != pivot[1] else pivot[0],
+                          f"no design in the bounds closes: R_b + face_offset ({base[0] + offset[0]:g}.."
+                          f"{base[1] + offset[1]:g} mm) must lie between 0 and the pivot distance",
+                          "a larger pivot distance")
+        spec = _build(DesignSpec, base_radius_mm=base, face_width_mm=None,
+                      sigma_max_MPa=_rocker_sigma_max(r, has_contact, common), pivot_distance_mm=pivot,
+                      face_offset_mm=offset, **common)
     else:
         base = _fixed_or_free(r, "base_radius_mm")
         roller = _fixed_or_free(r, "roller_radius_mm", (follower.roller_radius_mm,) * 2)
@@ -604,16 +632,7 @@ def _parse_design(r: _Reader, follower: FollowerSpec, has_contact: bool) -> Desi
                               f"allows |e| >= R_p = R_b + R_f (smallest in the bounds: {reach:g} mm): the "
                               "follower axis must cut the prime circle", f"|e| < {reach:g}")
             variables = dict(offset_mm=offset)
-        if has_contact:
-            sigma_max = r.number("sigma_max_MPa", low=0.0, low_open=True)
-        else:
-            if r.has("sigma_max_MPa"):
-                raise r.error("sigma_max_MPa", r.table["sigma_max_MPa"], "needs a [contact] section (no "
-                              "stress is modelled without it)")
-            if common["gamma"] != 0:
-                raise r.error("gamma", common["gamma"], "the stress term needs a [contact] section",
-                              "0 without [contact]")
-            sigma_max = None
+        sigma_max = _rocker_sigma_max(r, has_contact, common)
         spec = _build(DesignSpec, base_radius_mm=base, face_width_mm=None, sigma_max_MPa=sigma_max,
                       roller_radius_mm=roller, **variables, **common)
     if spec.alpha == 0 and spec.gamma == 0:
@@ -737,11 +756,6 @@ def scene_from_dict(data: dict, name: str = "scene", source: str | None = None) 
         raise SceneError("contact", _MISSING,
                          "contact stress needs the follower force: give follower.mass_kg and/or "
                          "follower.spring_N_per_m", source=source)
-    if "design" in data and follower.type == "oscillating_flat":
-        raise SceneError("design", _MISSING, f"optimal design of an {follower.type} follower is not "
-                         "available: leave [design] out (the cam is sized for the pressure angle and "
-                         "curvature limits)",
-                         source=source)
     if "design" in data and contact is None and follower.type == "flat":
         raise SceneError("design", _MISSING, "the objective needs the contact stress: add a "
                          "[contact] section", source=source)

@@ -122,12 +122,10 @@ def test_bounds_in_which_no_design_closes_are_refused():
     with pytest.raises(SceneError) as err:
         scene_of(design="pivot_distance_mm = [200.0, 300.0]")  # |d - l| >= 140 > R_p <= 68
     assert err.value.field == "design.pivot_distance_mm" and "closes" in str(err.value)
-    flat = SCENE.replace("ROT", "ccw").replace("DESIGN", "").replace(
-        'type = "oscillating_roller"', 'type = "oscillating_flat"').replace(
-        "arm_length_mm = 60.0\nroller_radius_mm = 8.0", "face_offset_mm = 0.0")
+    flat = FLAT.replace("ROT", "ccw").replace("DESIGN", "").replace("[5.0, 130.0]", "[200.0, 300.0]")
     with pytest.raises(SceneError) as err:
-        parse_scene(flat)
-    assert err.value.field == "design"
+        parse_scene(flat)  # R_b + f >= 210 > d = 150: no face touches the base circle
+    assert err.value.field == "design.pivot_distance_mm" and "closes" in str(err.value)
 
 
 @pytest.mark.slow
@@ -143,3 +141,33 @@ def test_sweep_of_an_oscillating_roller_scene():
     # more weight on stress never gives a smaller cam (alpha = 1: gamma 0 -> 1)
     size = {(r["alpha"], r["gamma"]): r["size_mm"] for r in records}
     assert size[(1.0, 1.0)] >= size[(1.0, 0.0)] - 1e-6
+
+
+FLAT = (SCENE.replace('type = "oscillating_roller"', 'type = "oscillating_flat"')
+        .replace("arm_length_mm = 60.0\nroller_radius_mm = 8.0", "face_offset_mm = 10.0")
+        .replace("pivot_distance_mm = 80.0", "pivot_distance_mm = 150.0")
+        .replace("base_radius_mm = [5.0, 60.0]", "base_radius_mm = [5.0, 130.0]"))
+
+
+@pytest.mark.parametrize("rotation", ["ccw", "cw"])
+def test_flat_face_smallest_cam_is_the_sizing_and_the_stress_limit_binds_as_the_curves_say(rotation):
+    from camjax.rocker import evaluate_rocker
+
+    loose = parse_scene(FLAT.replace("ROT", rotation).replace("DESIGN", "").replace(
+        "sigma_max_MPa = 2000.0", "sigma_max_MPa = 1e6"))
+    problem = problem_from_scene(loose)
+    sol = solve(problem, (1.0, 0.0), mode="global", solver="gradient")
+    assert bool(sol.evaluation.feasible)
+    arrays = scene_arrays(loose)
+    sizing = geometry.oscillating_flat_min_base_radius(arrays.kin, 150.0, 10.0, 1e-3, rotation)
+    # the same boundary rho = rho_min, by bisection in the arm angle and by the solver (1e-6 mm)
+    assert float(sol.design.base_radius_mm) == pytest.approx(float(sizing.base_radius_mm), abs=1e-5)
+    # a tight allowed stress binds instead: the peak of the report's stress curve (P = M / xi and
+    # camjax.contact.hertz_line_stress, not the family's formula) sits on sigma_max
+    tight = parse_scene(FLAT.replace("ROT", rotation).replace("DESIGN", "").replace(
+        "sigma_max_MPa = 2000.0", "sigma_max_MPa = 1000.0"))
+    sol = solve(problem_from_scene(tight), (1.0, 0.0), mode="global", solver="gradient")
+    assert bool(sol.evaluation.feasible)
+    assert float(sol.design.base_radius_mm) > float(sizing.base_radius_mm) + 0.01
+    curves = evaluate_rocker(tight, arrays.kin, arrays.cam_speed_rad_s, float(sol.design.base_radius_mm))
+    assert float(np.max(curves.stress_MPa)) == pytest.approx(1000.0, rel=1e-6)

@@ -40,6 +40,7 @@ from camjax.geometry.oscillating import (
     oscillating_roller_profile,
     oscillating_roller_reach_constraint,
     oscillating_roller_tangent,
+    swing_face_radius_of_curvature,
     swing_pitch_curvature,
 )
 from camjax.geometry.pitch import (
@@ -92,6 +93,6 @@ __all__ = [
     "roller_min_prime_radius", "roller_min_prime_radius_for_pressure_angle",
     "roller_min_prime_radius_for_undercut", "roller_pitch_curvature", "roller_pitch_curve",
     "roller_pitch_height", "roller_pressure_angle", "roller_profile", "roller_reach_constraint",
-    "roller_undercut_constraint", "roller_undercut_margin", "rotation_sign", "swing_pitch_curvature",
-    "to_cam_frame", "to_follower_frame",
+    "roller_undercut_constraint", "roller_undercut_margin", "rotation_sign",
+    "swing_face_radius_of_curvature", "swing_pitch_curvature", "to_cam_frame", "to_follower_frame",
 ]

@@ -271,12 +271,17 @@ def oscillating_flat_radius_of_curvature(pivot_distance_mm, face_offset_mm, psi0
     = d [Q (c s'' - sn s'^2) - sigma c s' s''] / Q^3 = d (c s'' - sn s'^2 Q) / Q^3,
     using Q - sigma s' = 1. A dwell gives rho = p, the base circle.
     """
+    return swing_face_radius_of_curvature(pivot_distance_mm, face_offset_mm, arm_angle(psi0, kin),
+                                          relative_rate(kin, rotation), kin.ds, kin.d2s)
+
+
+def swing_face_radius_of_curvature(pivot_distance_mm, face_offset_mm, psi, rate, ds, d2s) -> jax.Array:
+    """The closed form of :func:`oscillating_flat_radius_of_curvature` in the arm angle psi (rad),
+    Q = 1 + sigma s', s' and s'': for callers that hold sigma as data."""
     d, f = pivot_distance_mm, face_offset_mm
-    psi = arm_angle(psi0, kin)
     c, sn = jnp.cos(psi), jnp.sin(psi)
-    q = relative_rate(kin, rotation)
-    inv_q = capped_divide(jnp.ones_like(q), q)
-    return d * sn * (1.0 - (kin.ds * inv_q) ** 2) - f + d * c * kin.d2s * inv_q**3
+    inv_q = capped_divide(jnp.ones_like(rate), rate)
+    return d * sn * (1.0 - (ds * inv_q) ** 2) - f + d * c * d2s * inv_q**3
 
 
 def oscillating_flat_geometry(pivot_distance_mm, face_offset_mm, base_radius_mm, kin: Kinematics,
@@ -435,5 +440,6 @@ __all__ = [
     "oscillating_roller_min_prime_radius", "oscillating_roller_pitch_curvature",
     "oscillating_roller_pitch_curve", "oscillating_roller_pressure_angle", "oscillating_roller_profile",
     "oscillating_roller_reach_constraint", "oscillating_roller_tangent", "relative_rate",
-    "roller_centre", "roller_centre_distance", "swing_pitch_curvature",
+    "roller_centre", "roller_centre_distance", "swing_face_radius_of_curvature",
+    "swing_pitch_curvature",
 ]
