@@ -59,6 +59,7 @@ OSCILLATING_FLAT_MIN_CURVATURE_RADIUS_MM = 1e-3
 # Arm start angles scanned by the sizing functions before the bisection (see _first_admissible).
 SIZING_SCAN = 2048
 SIZING_BISECTIONS = 80
+SIZING_BATCH_VALUES = 1 << 22  # arm angles x samples evaluated at once by the scan (~32 MB of float64)
 
 
 # ----------------------------------------------------------------------------- layout
@@ -329,16 +330,19 @@ def oscillating_flat_face_extent(pivot_distance_mm, face_offset_mm, base_radius_
 # ------------------------------------------------------------------------------ sizing
 
 
-def _first_admissible(bad, lo, hi, scan: int = SIZING_SCAN, bisections: int = SIZING_BISECTIONS):
+def _first_admissible(bad, lo, hi, samples: int, scan: int = SIZING_SCAN,
+                      bisections: int = SIZING_BISECTIONS):
     """Smallest x in (lo, hi) with bad(x) False: a scan of ``scan`` points, then a bisection.
 
     The scan finds the first admissible grid point x_k; bisecting [x_{k-1}, x_k] moves to the
     boundary (80 halvings: below float64 resolution for brackets < 1e5). Returns (x, found);
-    x = hi where nothing on the scan is admissible. ``bad`` maps a (k,) array to (k,) bools.
-    jit/vmap-safe; not differentiable (a search), nor meant to be.
+    x = hi where nothing on the scan is admissible. ``bad`` maps one x (shape ()) to a bool over
+    the whole grid of ``samples`` angles; the scan evaluates it in batches of ~SIZING_BATCH_VALUES
+    / samples points, so memory stays bounded on dense grids. jit/vmap-safe; not differentiable
+    (a search), nor meant to be.
     """
     xs = lo + (hi - lo) * (jnp.arange(1, scan + 1) / (scan + 1))
-    ok = ~bad(xs)
+    ok = ~jax.lax.map(bad, xs, batch_size=max(1, min(scan, SIZING_BATCH_VALUES // max(samples, 1))))
     found = jnp.any(ok)
     k = jnp.argmax(ok)
     a = jnp.where(k > 0, xs[jnp.maximum(k - 1, 0)], lo)
@@ -347,7 +351,7 @@ def _first_admissible(bad, lo, hi, scan: int = SIZING_SCAN, bisections: int = SI
     def halve(_, bracket):
         a, b = bracket
         m = 0.5 * (a + b)
-        is_bad = bad(m[None])[0]
+        is_bad = bad(m)
         return jnp.where(is_bad, m, a), jnp.where(is_bad, b, m)
 
     a, b = jax.lax.fori_loop(0, bisections, halve, (a, b))
@@ -387,7 +391,7 @@ def oscillating_roller_min_prime_radius(kin: Kinematics, pivot_distance_mm, arm_
         return jnp.any(phi_bad | (kappa * reach > 1.0))
 
     psi_hi = math.pi - jnp.max(kin.s)
-    psi0, found = _first_admissible(jax.vmap(bad_one), jnp.zeros_like(psi_hi), psi_hi)
+    psi0, found = _first_admissible(bad_one, jnp.zeros_like(psi_hi), psi_hi, kin.s.shape[-1])
     rp = roller_centre_distance(d, l, psi0)
     kappa = oscillating_roller_pitch_curvature(d, l, psi0, kin, rotation)
     phi = oscillating_roller_pressure_angle(d, l, psi0, kin, rotation)
@@ -423,7 +427,7 @@ def oscillating_flat_min_base_radius(kin: Kinematics, pivot_distance_mm, face_of
         return (jnp.min(rho) < min_curvature_radius_mm) | (d * jnp.sin(psi0) - f <= 0.0)
 
     psi_hi = 0.5 * math.pi - jnp.max(kin.s)
-    psi0, found = _first_admissible(jax.vmap(bad_one), jnp.zeros_like(psi_hi), psi_hi)
+    psi0, found = _first_admissible(bad_one, jnp.zeros_like(psi_hi), psi_hi, kin.s.shape[-1])
     rb = d * jnp.sin(psi0) - f
     rho = oscillating_flat_radius_of_curvature(d, f, psi0, kin, rotation)
     xi = oscillating_flat_contact_distance(d, psi0, kin, rotation)
