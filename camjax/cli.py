@@ -172,7 +172,7 @@ def _setup_design(p: argparse.ArgumentParser):
                          f"R_p = {g['prime_radius_mm']:.4f} mm")
             print(f"design ({g['solver']}): R_b = {g['base_radius_mm']:.4f} mm, {sizes}, "
                   f"objective {g['objective']:.5f}, feasible {g['feasible']}")
-        width = f", L = {at['face_width_mm']:.4f} mm" if at["face_width_mm"] is not None else ""
+        width = f", L = {at['face_width_mm']:.4f} mm" if at.get("face_width_mm") is not None else ""
         if "roller" in d:
             roller = d["roller"]
             width = f", R_f = {roller['roller_radius_mm']:.4f} mm, offset {roller['offset_mm']:.4f} mm"

@@ -218,6 +218,54 @@ def geometry_violations(curves: DesignCurves, rho_min_mm: float = 0.0) -> list[G
     return out
 
 
+def rocker_violations(curves, scene: Scene) -> list[GeometryViolation]:
+    """Constraints broken by an oscillating follower's evaluated geometry (empty: usable geometry).
+
+    ``curves`` is a :class:`camjax.rocker.RockerCurves`. Roller: |pressure angle| > the limit,
+    undercut; flat face: cam-surface radius < ``follower.min_curvature_radius_mm``; with loads:
+    contact force < 0; with a [design]: peak stress > sigma_max. Tolerances as
+    :func:`geometry_violations`.
+    """
+    from camjax.problem import FEASIBILITY_RTOL_STRESS, FEASIBILITY_TOL_MM
+
+    f, t, out = scene.follower, curves.theta_deg, []
+
+    def at(values, pick):
+        i = int(pick(values))
+        return float(values[i]), float(t[i])
+
+    if curves.undercut_margin_mm is not None:
+        phi, deg = at(np.abs(curves.pressure_angle_deg), np.argmax)
+        if phi > f.max_pressure_angle_deg:
+            out.append(GeometryViolation(
+                "pressure_angle", f"|pressure angle| {phi:.4g} deg at {deg:g} deg > "
+                f"{f.max_pressure_angle_deg:g} deg"))
+        margin, deg = at(curves.undercut_margin_mm, np.argmin)
+        if margin <= 0:
+            out.append(GeometryViolation(
+                "undercut", f"undercut margin {margin:.4g} mm at {deg:g} deg <= 0: the roller undercuts "
+                "the cam"))
+    else:
+        rho, deg = at(curves.rho_mm, np.argmin)
+        if rho < f.min_curvature_radius_mm - FEASIBILITY_TOL_MM:
+            why = "the profile crosses itself" if rho < 0 else "the flat face cannot follow it"
+            out.append(GeometryViolation(
+                "curvature", f"min radius of curvature {rho:.4g} mm at {deg:g} deg < "
+                f"{f.min_curvature_radius_mm:g} mm: {why}"))
+    if curves.stress_MPa is not None and scene.design is not None and scene.design.sigma_max_MPa:
+        sigma, deg = at(curves.stress_MPa, np.argmax)
+        if sigma > scene.design.sigma_max_MPa * (1.0 + FEASIBILITY_RTOL_STRESS):
+            out.append(GeometryViolation(
+                "stress", f"peak contact stress {sigma:.4g} MPa at {deg:g} deg > sigma_max "
+                f"{scene.design.sigma_max_MPa:g} MPa"))
+    if curves.contact_force_N is not None:
+        force, deg = at(curves.contact_force_N, np.argmin)
+        if force < 0:
+            out.append(GeometryViolation(
+                "contact", f"contact force {force:.4g} N at {deg:g} deg < 0: the follower leaves the cam"))
+    return out
+
+
 # ------------------------------------------------------------------------------- run
 
 
@@ -299,7 +347,8 @@ def analyse(scene: Scene, arrays: SceneArrays | None = None, *, base_radius_mm: 
             design = solve(problem, (d.alpha, d.gamma), mode=d.mode, solver=d.solver,
                            seed=d.seed).to_json(problem)
         rocker = run_rocker(scene, arrays.kin, arrays.cam_speed_rad_s, base_radius_mm, design)
-        return Report(rocker_report(scene, arrays, rocker, design), rocker.curves, arrays)
+        violations = rocker_violations(rocker.curves, scene)
+        return Report(rocker_report(scene, arrays, rocker, design, violations), rocker.curves, arrays)
     run = run_design(scene, arrays, base_radius_mm=base_radius_mm, dtype=dtype)
     return Report(build_report(scene, run), run.curves, run.arrays)
 

@@ -129,7 +129,8 @@ CASES: dict[str, tuple[list[str], str | bytes | None, str, int]] = {
     "scene_name_too_long": (["design", "{tmp}/" + "s" * 10_000, "--out", "{dir}"], None, "scene", 2),
     "scene_name_nul": (["design", "a\x00b.toml", "--out", "{dir}"], None, "scene", 2),
     "scene_missing": (["design", "{tmp}/nothing.toml", "--out", "{dir}"], None, "scene", 2),
-    "oscillating_in_design": (["design", "thesis-bench", "--out", "{dir}"], None, "dynamics.follower", 2),
+    "swing_lift_on_translating": (SCENE_ARGS, DEFAULT.replace("lift_mm = 5.0", "lift_deg = 5.0", 1),
+                                  "lift_deg", 2),
     # the output location, checked before any computation
     "out_empty": (["design", "--out", ""], None, "--out", 2),
     "out_blank": (["design", "--out", "   "], None, "--out", 2),

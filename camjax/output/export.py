@@ -96,7 +96,7 @@ def write_design_files(folder: str | Path, curves: DesignCurves, dpi: int = 100,
     if isinstance(curves, RockerCurves):  # an oscillating follower's files
         from camjax.output.rocker import write_rocker_files
 
-        return write_rocker_files(folder, curves, dpi)
+        return write_rocker_files(folder, curves, dpi, banner)
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     return [*write_figures(folder, curves, dpi, banner), write_profile_csv(folder / "profile.csv", curves),

@@ -18,7 +18,7 @@ from camjax.evaluate import SceneArrays
 from camjax.geometry.pitch import to_cam_frame
 from camjax.output.export import CSV_FORMAT, write_profile_dxf
 from camjax.output.plots import _cycle_axis  # reads only segment_starts_deg
-from camjax.output.report import extrema, header_block, negative_ranges_deg
+from camjax.output.report import extrema, feasibility_block, header_block, negative_ranges_deg
 from camjax.rocker import RockerCurves, RockerRun
 from camjax.scene import Scene
 
@@ -154,12 +154,20 @@ def rocker_figures(curves: RockerCurves) -> dict[str, Figure]:
     return out
 
 
-def write_rocker_files(folder: str | Path, curves: RockerCurves, dpi: int = 100) -> list[Path]:
-    """Figures, profile.csv and profile.dxf into ``folder`` (created if needed); the written paths."""
+def write_rocker_files(folder: str | Path, curves: RockerCurves, dpi: int = 100,
+                       banner: str | None = None) -> list[Path]:
+    """Figures, profile.csv and profile.dxf into ``folder`` (created if needed); the written paths.
+
+    ``banner``: text of a red banner stamped on every figure (the constraints the geometry breaks).
+    """
+    from camjax.output.plots import stamp_banner
+
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     out = []
     for name, fig in rocker_figures(curves).items():
+        if banner:
+            stamp_banner(fig, banner)
         fig.savefig(folder / name, dpi=dpi)
         out.append(folder / name)
     # the DXF writer reads only the outline (profile_x_mm, profile_y_mm)
@@ -171,7 +179,7 @@ def write_rocker_files(folder: str | Path, curves: RockerCurves, dpi: int = 100)
 
 
 def rocker_report(scene: Scene, arrays: SceneArrays, run: RockerRun,
-                  design: dict | None = None) -> dict[str, Any]:
+                  design: dict | None = None, violations=()) -> dict[str, Any]:
     """The report of a rocker scene as a plain, JSON-ready dict (strict JSON: no NaN or infinity).
 
     The common header (:func:`camjax.output.report.header_block`) with the motion in rad (swing
@@ -213,7 +221,8 @@ def rocker_report(scene: Scene, arrays: SceneArrays, run: RockerRun,
             "none": "no admissible cam for the design's pivot and arm: the design's own radius",
         }[sizing.binding],
         "min_base_radius_binding": sizing.binding,
-        "evaluated_at": {"base_radius_mm": run.base_radius_mm, "source": run.base_radius_source},
+        "evaluated_at": {"base_radius_mm": run.base_radius_mm, "source": run.base_radius_source,
+                         **feasibility_block(violations)},
     })
     if sizing.min_prime_radius_mm is not None:
         out["min_prime_radius_mm"] = sizing.min_prime_radius_mm
