@@ -4,6 +4,7 @@ Runs every benchmark (pointwise design, weight sweep, speed/accuracy trade, fitn
 gradients), prints a table, writes the JSON and draws the plots next to it. ``--quick`` is the
 CI smoke run (< 2 min on 2 cores; it asserts nothing about speed). Keys a script can read:
 ``pointwise.speedup``, ``sweep.gradient_speedup``, ``sweep.ga_speedup``,
+``roller.gradient_speedup``, ``roller.ga_speedup``,
 ``fitness.evaluations_per_s``, ``fitness.numpy_ratio`` (and ``targets`` lists every target
 with its measured value and pass/miss).
 """
@@ -20,7 +21,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 import camjax  # noqa: E402  (turns on float64)
-from benchmarks import accuracy, gradients, plots, pointwise, scaling, sweep  # noqa: E402
+from benchmarks import accuracy, gradients, plots, pointwise, roller, scaling, sweep  # noqa: E402
 from benchmarks.harness import environment  # noqa: E402
 
 # (json path, comparison, threshold, description)
@@ -29,6 +30,8 @@ TARGETS = (
     ("pointwise.max_abs_diff_base_radius_mm", "<=", 1e-4, "pointwise: max abs dR_b vs SciPy (mm)"),
     ("sweep.gradient_speedup", ">=", 20.0, "sweep, gradient vs SciPy SLSQP one by one (x)"),
     ("sweep.ga_speedup", ">=", 30.0, "sweep, GA vs SciPy differential_evolution (x)"),
+    ("roller.gradient_speedup", ">=", 20.0, "roller sweep (R_b, R_f, e), gradient vs SciPy SLSQP (x)"),
+    ("roller.ga_speedup", ">=", 30.0, "roller sweep, GA (or hybrid) vs SciPy differential_evolution (x)"),
     ("fitness.evaluations_per_s", ">=", 3e8, "fitness, design-angle evals/s, pop 1e4..1e6"),
     ("fitness.numpy_ratio", ">=", 5.0, "fitness vs vectorized NumPy (x)"),
     ("fitness.population_exponent_library", "<=", 1.15, "cost exponent in population (>= 1e3)"),
@@ -119,7 +122,7 @@ def print_table(data: dict) -> None:
                 f"{r['knob']:<9} {setting:<32} {r['dtype']:<8} {r['time_s']:>9.3g} "
                 f"{r['max_rel_error']:>11.2e}{mark}"
             )
-    for name in ("pointwise", "sweep"):
+    for name in ("pointwise", "sweep", "roller"):
         section = data.get(name, {})
         scalars = {k: v for k, v in section.items() if not isinstance(v, dict | list)}
         if scalars:
@@ -129,6 +132,7 @@ def print_table(data: dict) -> None:
 BENCHMARKS = (
     ("pointwise", pointwise.run),
     ("sweep", sweep.run),
+    ("roller", roller.run),
     ("fitness", scaling.run),
     ("gradients", gradients.run),
     ("accuracy", accuracy.run),

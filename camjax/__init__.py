@@ -2,10 +2,19 @@
 
 Importing camjax turns on JAX's 64-bit mode (``jax_enable_x64``): cam geometry near the
 curvature limit needs it. Ask for float32 per call (``dtype=jnp.float32``) where speed matters
-more than the last digits; the README's "Accuracy and limits" says what that costs.
+more than the last digits; the documentation's "Accuracy and limits" page says what that costs.
 """
 
-import jax
+import os as _os
+import sys as _sys
+
+if _os.path.basename(_sys.argv[0]) == "camjax" or "camjax.cli" in _sys.orig_argv[1:3]:
+    # the command line is starting: an interrupt during the imports below is one line, not a traceback
+    from camjax.runtime import quiet_startup_interrupts
+
+    quiet_startup_interrupts()
+
+import jax  # noqa: E402
 
 jax.config.update("jax_enable_x64", True)
 
@@ -20,6 +29,8 @@ from camjax import (  # noqa: E402
     pipeline,
     problem,
     program,
+    rocker,
+    roller_problem,
     runtime,
 )
 from camjax.contact import Material, hertz_line_stress  # noqa: E402
@@ -34,7 +45,7 @@ from camjax.laws import (  # noqa: E402
     polynomial_law,
     stepped_law,
 )
-from camjax.loads import FollowerTrain, Guide  # noqa: E402
+from camjax.loads import FollowerTrain, Guide, RockerTrain  # noqa: E402
 from camjax.output import report  # noqa: E402
 from camjax.pipeline import DesignRun, Report, analyse, design_report, run_design  # noqa: E402
 from camjax.problem import Design, Problem, Weights, problem_from_scene  # noqa: E402
@@ -50,7 +61,8 @@ __all__ = [
     "loads", "numerics", "parse_scene", "polynomial_law", "program", "scene_arrays",
     "stepped_law", "design_report", "report", "DesignCurves", "DesignRun", "Report", "analyse",
     "evaluate_design", "run_design", "evaluate", "output", "pipeline", "runtime",
-    "Design", "Problem", "Weights", "problem", "problem_from_scene", "solvers",
+    "Design", "Problem", "Weights", "problem", "problem_from_scene", "roller_problem", "solvers",
+    "rocker", "RockerTrain",
 ]
 
 

@@ -1,22 +1,38 @@
-"""The ``camjax`` command line. One subcommand per job; each writes its outputs atomically.
+"""The ``camjax`` command line. One subcommand per job; each replaces its output folder whole.
 
 Subcommands register themselves in ``COMMANDS`` via :func:`command`: a function that adds its
 arguments to an argparse parser and returns the function that runs it.
-Bad input (scene or arguments) exits with status 2 and one message naming the field; nothing is
-written to the output folder unless the whole job succeeds.
+
+Exit status: 0 done; 2 bad input (scene, arguments or output location: one line naming the
+field, checked before any computation, nothing written); 3 ``design --strict`` wrote geometry that
+breaks a constraint; 1 a failure while running (one line; ``CAMJAX_DEBUG=1`` shows the
+traceback); 130 interrupted (Ctrl-C), 143 terminated (SIGTERM). The output folder holds exactly
+the new run's files, or, on any failure or interruption, exactly what it held before
+(:mod:`camjax.output.folder`).
 """
 
 from __future__ import annotations
 
 import argparse
+import os
+import signal
 import sys
 from collections.abc import Callable
 from pathlib import Path
 
 import camjax  # noqa: F401  (turns on x64 before any array is made)
 from camjax import runtime
-from camjax.output.files import staged_output, write_json
-from camjax.scene import SceneError
+from camjax.numerics import NonFiniteError
+from camjax.output.files import write_json
+from camjax.output.folder import (
+    OutputError,
+    check_output_dir,
+    check_output_file,
+    merged_files,
+    replaced_folder,
+    write_file_atomic,
+)
+from camjax.scene import SceneError, cut, quote
 
 COMMANDS: dict[str, tuple[str, Callable[[argparse.ArgumentParser], Callable]]] = {}
 
@@ -35,6 +51,11 @@ class UsageError(ValueError):
     """Bad command-line input; the message names the option, the value and what is allowed."""
 
 
+OUT_HELP = "output folder, replaced whole when the run succeeds (left as it was otherwise)"
+STRICT_EXIT = 3  # design --strict: the files were written, but their geometry breaks a constraint
+MAX_BASE_RADIUS_MM = 1e6  # --base-radius: a 2 km cam is no cam; beyond this the figures lose meaning
+
+
 def parse_float_list(option: str, text: str) -> list[float]:
     """'1,2.5,10' -> [1.0, 2.5, 10.0], with a clear error naming the option."""
     out = []
@@ -42,10 +63,10 @@ def parse_float_list(option: str, text: str) -> list[float]:
         try:
             v = float(item)
         except ValueError:
-            raise UsageError(f"{option} = {text!r}: '{item}' is not a number "
+            raise UsageError(f"{option} = {quote(text)}: {quote(item)} is not a number "
                              "(allowed: comma-separated numbers, e.g. 0.1,1,10)") from None
         if v != v or v in (float("inf"), float("-inf")):
-            raise UsageError(f"{option} = {text!r}: values must be finite")
+            raise UsageError(f"{option} = {quote(text)}: values must be finite")
         out.append(v)
     return out
 
@@ -60,6 +81,7 @@ def _setup_laws(p: argparse.ArgumentParser):
     def run(args) -> int:
         from camjax.laws import LAWS, summarize
 
+        path = check_output_file(args.json, "--json") if args.json is not None else None
         rows = []
         for law in LAWS.values():
             s = summarize(law)
@@ -73,10 +95,8 @@ def _setup_laws(p: argparse.ArgumentParser):
                 "perturbation_against_dwells": s.perturbation_against_dwells,
             })
         if args.json:
-            path = Path(args.json)
-            path.parent.mkdir(parents=True, exist_ok=True)
-            write_json(path, {"normalized": True, "laws": rows})
-            print(f"wrote {path}")
+            write_file_atomic(path, lambda tmp: write_json(tmp, {"normalized": True, "laws": rows}))
+            print(f"wrote {args.json}")
             return 0
         head = f"{'law':20s} {'|v|max':>8s} {'+a':>9s} {'-a':>9s} {'|j|max':>9s}  FLCD  perturbation"
         print(head)
@@ -96,10 +116,14 @@ def _setup_laws(p: argparse.ArgumentParser):
 def _setup_design(p: argparse.ArgumentParser):
     p.add_argument("scene", nargs="?", default=None,
                    help="scene TOML file or built-in scene name (default: the embedded default scene)")
-    p.add_argument("--out", required=True, metavar="DIR", help="output folder (written atomically)")
+    p.add_argument("--out", required=True, metavar="DIR", help=OUT_HELP)
     p.add_argument("--base-radius", type=float, default=None, metavar="MM",
                    help="evaluate and draw at this base radius instead of the design's")
     p.add_argument("--dpi", type=int, default=100, help="resolution of the PNG figures (default 100)")
+    add_samples_option(p)
+    p.add_argument("--strict", action="store_true",
+                   help="exit with status 3 (after writing) when the geometry written breaks a "
+                   "constraint; without it such a run warns on stderr and exits 0")
     add_design_options(p)
 
     def run(args) -> int:
@@ -107,32 +131,82 @@ def _setup_design(p: argparse.ArgumentParser):
         from camjax.pipeline import analyse
         from camjax.scene import load_scene
 
+        out = check_output_dir(args.out)
         r = args.base_radius
-        if r is not None and not (r == r and 0 < r < float("inf")):
-            raise UsageError(f"--base-radius = {r!r}: must be a finite number > 0 (mm)")
+        if r is not None and not (r == r and 0 < r <= MAX_BASE_RADIUS_MM):
+            raise UsageError(f"--base-radius = {r!r}: out of range (allowed: a number > 0 and "
+                             f"<= {MAX_BASE_RADIUS_MM:g}, mm)")
         check_dpi(args.dpi)
-        scene = apply_design_options(load_scene(args.scene), args)
-        if scene.dynamics is not None and scene.dynamics.follower == "oscillating":
+        scene = apply_design_options(apply_samples(load_scene(args.scene), args), args)
+        rad_lifts = scene.dynamics is not None and scene.dynamics.follower == "oscillating"
+        if rad_lifts and not scene.follower.oscillating:
             raise UsageError(f"scene {scene.name}: dynamics.follower = 'oscillating' (motion in rad); the "
-                             "disc-cam geometry of `design` is for translating followers in mm "
-                             f"(allowed: use `camjax dynamics {args.scene or scene.name}`)")
+                             "geometry of this scene's follower.type is for lifts in mm "
+                             f"(allowed: follower.type = 'oscillating_roller' or 'oscillating_flat' with "
+                             f"lift_deg, or `camjax dynamics {args.scene or scene.name}`)")
         runtime.enable_compilation_cache()
-        result = analyse(scene, base_radius_mm=r)
-        with staged_output(args.out) as tmp:
-            write_json(tmp / "result.json", result.data)
-            names = ["result.json"] + [p.name for p in write_design_files(tmp, result.curves, args.dpi)]
+        result = runtime.interruptible(analyse, scene, base_radius_mm=r)
         d = result.data
+        at = d["evaluated_at"]
+        broken = [v["constraint"] for v in at["violations"]]
+        banner = (f"INFEASIBLE GEOMETRY at R_b = {at['base_radius_mm']:.4g} mm: "
+                  f"{', '.join(broken)} violated" if broken else None)
+        with replaced_folder(out) as tmp:
+            write_json(tmp / "result.json", d)
+            names = ["result.json"] + [p.name for p in write_design_files(tmp, result.curves, args.dpi,
+                                                                          banner)]
         print(f"scene {d['scene']}: min base radius {d['min_base_radius_mm']:.4f} mm at "
               f"{d['min_base_radius_deg']:g} deg")
         if "design" in d:
             g = d["design"]
-            print(f"design ({g['solver']}): R_b = {g['base_radius_mm']:.4f} mm, L = "
-                  f"{g['face_width_mm']:.4f} mm, objective {g['objective']:.5f}, "
-                  f"feasible {g['feasible']}")
+            if "face_width_mm" in g:
+                sizes = f"L = {g['face_width_mm']:.4f} mm"
+            elif "arm_length_mm" in g:
+                sizes = (f"R_f = {g['roller_radius_mm']:.4f} mm, pivot {g['pivot_distance_mm']:.4f} mm, "
+                         f"arm {g['arm_length_mm']:.4f} mm, R_p = {g['prime_radius_mm']:.4f} mm")
+            elif "face_offset_mm" in g:
+                sizes = (f"pivot {g['pivot_distance_mm']:.4f} mm, face offset {g['face_offset_mm']:.4f} mm, "
+                         f"face {g['face_length_mm']:.4f} mm")
+            else:
+                sizes = (f"R_f = {g['roller_radius_mm']:.4f} mm, offset {g['offset_mm']:.4f} mm, "
+                         f"R_p = {g['prime_radius_mm']:.4f} mm")
+            print(f"design ({g['solver']}): R_b = {g['base_radius_mm']:.4f} mm, {sizes}, "
+                  f"objective {g['objective']:.5f}, feasible {g['feasible']}")
+        width = f", L = {at['face_width_mm']:.4f} mm" if at.get("face_width_mm") is not None else ""
+        if "roller" in d:
+            roller = d["roller"]
+            width = f", R_f = {roller['roller_radius_mm']:.4f} mm, offset {roller['offset_mm']:.4f} mm"
+        state = f"INFEASIBLE ({', '.join(broken)})" if broken else "feasible"
+        print(f"files drawn at R_b = {at['base_radius_mm']:.4f} mm{width} ({at['source']}): {state}")
         print(f"wrote {', '.join(names)} to {args.out}")
-        return 0
+        for v in at["violations"]:
+            print(f"camjax design: warning: the geometry written breaks {v['constraint']}: {v['message']}",
+                  file=sys.stderr)
+        return STRICT_EXIT if broken and args.strict else 0
 
     return run
+
+
+def add_samples_option(p: argparse.ArgumentParser) -> None:
+    """--samples N: the cam-angle grid instead of the scene's motion.samples."""
+    from camjax.scene import SAMPLES_MAX, SAMPLES_PER_SEGMENT
+
+    p.add_argument("--samples", type=int, default=None, metavar="N",
+                   help=f"cam-angle grid size (default: the scene's motion.samples); at most {SAMPLES_MAX}, "
+                   f"and at least {SAMPLES_PER_SEGMENT} samples in the shortest segment")
+
+
+def apply_samples(scene, args):
+    """The scene on the --samples grid (checked by the scene's own rules), or unchanged."""
+    from camjax.scene import with_samples
+
+    if getattr(args, "samples", None) is None:
+        return scene
+    try:
+        return with_samples(scene, args.samples)
+    except SceneError as exc:
+        allowed = f" (allowed: {exc.allowed})" if exc.allowed else ""
+        raise UsageError(f"--samples = {exc.value!r}: {exc.problem}{allowed}") from None
 
 
 def add_design_options(p: argparse.ArgumentParser, weights: bool = True) -> None:
@@ -182,11 +256,12 @@ def _setup_sweep(p: argparse.ArgumentParser):
     p.add_argument("--alpha", required=True, metavar="LIST",
                    help="size weights, comma-separated, e.g. 0.1,1,10")
     p.add_argument("--gamma", required=True, metavar="LIST", help="stress weights, comma-separated")
-    p.add_argument("--out", required=True, metavar="DIR", help="output folder (written atomically)")
+    p.add_argument("--out", required=True, metavar="DIR", help=OUT_HELP)
     add_design_options(p, weights=False)
     p.add_argument("--chunk-size", type=int, default=128, metavar="W",
                    help="weightings per compiled call (default 128; a progress bar when there are more)")
     p.add_argument("--dpi", type=int, default=120, help="resolution of pareto.png (default 120)")
+    add_samples_option(p)
     from camjax.scaleout import command as scaleout
 
     scaleout.add_options(p)
@@ -198,6 +273,8 @@ def _setup_sweep(p: argparse.ArgumentParser):
         from camjax.scene import load_scene
         from camjax.solvers.sweep import plot_pareto
 
+        # a scale-out sweep keeps its blocks in --out between runs (--resume): merged, not replaced
+        out = check_output_dir(args.out, replace=not scaleout.requested(args))
         alphas = parse_float_list("--alpha", args.alpha)
         gammas = parse_float_list("--gamma", args.gamma)
         for option, values in (("--alpha", alphas), ("--gamma", gammas)):
@@ -211,7 +288,7 @@ def _setup_sweep(p: argparse.ArgumentParser):
         if not 1 <= args.chunk_size <= 100_000:
             raise UsageError(f"--chunk-size = {args.chunk_size}: out of range (allowed: 1..100000)")
         check_dpi(args.dpi)
-        scene = load_scene(args.scene)
+        scene = apply_samples(load_scene(args.scene), args)
         if scene.design is None:
             raise UsageError(f"scene '{scene.name}' has no [design] section: a sweep needs its bounds "
                              "and sigma_max_MPa")
@@ -229,12 +306,12 @@ def _setup_sweep(p: argparse.ArgumentParser):
                                         mode=mode, solver=solver, seed=seed, usage_error=UsageError,
                                         cache_dir=jax.config.jax_compilation_cache_dir)
         else:
-            result = sweep_scene(scene, alphas, gammas, mode=mode, solver=solver, seed=seed,
-                                 chunk_size=args.chunk_size)
+            result = runtime.interruptible(sweep_scene, scene, alphas, gammas, mode=mode, solver=solver,
+                                           seed=seed, chunk_size=args.chunk_size)
         seconds = time.perf_counter() - start
         data = {"scene": scene.name, "mode": mode, "solver": solver, "seed": seed,
                 "alphas": alphas, "gammas": gammas, "seconds": seconds, "records": result.records()}
-        with staged_output(args.out) as tmp:
+        with (merged_files(out) if scaleout.requested(args) else replaced_folder(out)) as tmp:
             write_json(tmp / "pareto.json", data)
             fig = plot_pareto(result)
             fig.savefig(tmp / "pareto.png", dpi=args.dpi)
@@ -268,19 +345,22 @@ def _stability_matrix():
 @command("check-extremes", "run the numerical-stability matrix and write extremes.json")
 def _setup_check_extremes(p: argparse.ArgumentParser):
     p.add_argument("scene", nargs="?", default=None, help="scene file or built-in name (default: default)")
-    p.add_argument("--out", required=True, metavar="DIR", help="output folder")
+    p.add_argument("--out", required=True, metavar="DIR", help="output folder (replaced whole)")
+    add_samples_option(p)
 
     def run(args) -> int:
         from camjax.scene import load_scene
 
+        out = check_output_dir(args.out)
         matrix = _stability_matrix()
-        scene = load_scene(args.scene)
+        scene = apply_samples(load_scene(args.scene), args)
         skipped = matrix.skipped_groups(scene)
         for s in skipped:
             print(f"  skipping {s['group']}: {s['reason']}", file=sys.stderr)
-        cases = matrix.run_matrix(scene, progress=lambda g: print(f"  running {g} ...", file=sys.stderr))
+        cases = runtime.interruptible(matrix.run_matrix, scene,
+                                      progress=lambda g: print(f"  running {g} ...", file=sys.stderr))
         failed = [c for c in cases if not c.passed]
-        with staged_output(args.out) as tmp:
+        with replaced_folder(out) as tmp:
             write_json(tmp / "extremes.json", {
                 "scene": scene.name,
                 "cases": [c.as_dict() for c in cases],
@@ -290,7 +370,7 @@ def _setup_check_extremes(p: argparse.ArgumentParser):
             (tmp / "extremes.txt").write_text(matrix.format_table(cases) + "\n")
             (tmp / "extremes.md").write_text(matrix.format_markdown(cases) + "\n")
         print(matrix.format_table(failed) if failed else f"all {len(cases)} cases pass")
-        written = Path(args.out) / "extremes.json"
+        written = out / "extremes.json"
         print(f"{len(cases) - len(failed)} passed, {len(failed)} failed; wrote {written}")
         return 1 if failed else 0
 
@@ -301,13 +381,14 @@ def _setup_check_extremes(p: argparse.ArgumentParser):
 def _setup_dynamics(p: argparse.ArgumentParser):
     p.add_argument("scene", help="scene TOML file with a [dynamics] section, or a built-in name "
                    "(e.g. thesis-bench)")
-    p.add_argument("--out", required=True, metavar="DIR", help="output folder (written atomically)")
+    p.add_argument("--out", required=True, metavar="DIR", help=OUT_HELP)
     p.add_argument("--dpi", type=int, default=100, help="resolution of the PNG figures (default 100)")
 
     def run(args) -> int:
         from camjax.dynamics import scene_dynamics
         from camjax.scene import load_scene
 
+        out = check_output_dir(args.out)
         check_dpi(args.dpi)
         scene = load_scene(args.scene)
         if scene.dynamics is None:
@@ -327,7 +408,7 @@ def _setup_dynamics(p: argparse.ArgumentParser):
             progress("figures")
             rendered.update(render_dynamics_figures(steady.curves, steady.summary, args.dpi))
 
-        report = scene_dynamics(scene, progress, figures)
+        report = runtime.interruptible(scene_dynamics, scene, progress, figures)
         if report.settling is not None and not report.settling.settled:
             st = report.settling
             needs = (f"needs {st.cycles_needed} cycles" if st.cycles_needed is not None
@@ -337,7 +418,7 @@ def _setup_dynamics(p: argparse.ArgumentParser):
                      f"transient_tolerance = {scene.dynamics.transient_tolerance:g}); raise max_cycles")
         from camjax.output.plots_dynamics import write_dynamics_figures
 
-        with staged_output(args.out) as tmp:
+        with replaced_folder(out) as tmp:
             write_json(tmp / "dynamics.json", report.summary)
             names = ["dynamics.json"] + [f.name for f in write_dynamics_figures(
                 tmp, report.curves, report.summary, args.dpi, rendered)]
@@ -359,27 +440,96 @@ def _setup_dynamics(p: argparse.ArgumentParser):
 # ---------------------------------------------------------------------------------- main
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse with one-line errors: ``camjax design: error: ... (see camjax design --help)``."""
+
+    def error(self, message):
+        self.exit(2, f"{self.prog}: error: {cut(message, 400)} (see {self.prog} --help)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="camjax", description="Disc cam design with JAX.")
+    parser = _Parser(prog="camjax", description="Disc cam design with JAX.",
+                     epilog="exit status: 0 done, 1 failed while running, 2 bad input (nothing "
+                     "written), 3 design --strict wrote infeasible geometry, 130 interrupted, "
+                     "143 terminated")
     parser.add_argument("--version", action="version", version=f"camjax {camjax.__version__}")
-    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND", parser_class=_Parser)
     for name, (help_text, setup) in COMMANDS.items():
         p = sub.add_parser(name, help=help_text, description=help_text)
         p.set_defaults(_run=setup(p))
     return parser
 
 
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, raised in the main thread so that the same clean-up as Ctrl-C runs."""
+
+
+def _raise_terminated(signum, frame):
+    raise Terminated()
+
+
+def _install_signal_handlers() -> Callable[[], None]:
+    """SIGINT -> KeyboardInterrupt, SIGTERM -> :class:`Terminated`; returns the undo function."""
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        return lambda: None
+    previous = {sig: signal.getsignal(sig) for sig in (signal.SIGINT, signal.SIGTERM)}
+    for sig, handler in ((signal.SIGINT, signal.default_int_handler), (signal.SIGTERM, _raise_terminated)):
+        if previous[sig] is not signal.SIG_IGN:  # an ignored signal (nohup, `&`) stays ignored
+            signal.signal(sig, handler)
+
+    def undo():
+        for sig, handler in previous.items():
+            signal.signal(sig, handler if handler is not None else signal.SIG_DFL)
+
+    return undo
+
+
+def _os_error(exc: OSError) -> str:
+    where = f": {cut(str(exc.filename))}" if exc.filename else ""
+    return f"{exc.strerror or type(exc).__name__}{where}"
+
+
 def main(argv: list[str] | None = None) -> int:
-    parser = build_parser()
-    args = parser.parse_args(argv)
+    """Run one command; returns the exit status (see the module docstring). Never a traceback:
+    every failure is one line on stderr (``CAMJAX_DEBUG=1`` re-raises unexpected errors)."""
+    undo = _install_signal_handlers()
+    prog = "camjax"
     try:
+        args = build_parser().parse_args(argv)
+        prog = f"camjax {args.command}"
         return int(args._run(args) or 0)
-    except (SceneError, UsageError) as exc:
-        print(f"camjax {args.command}: error: {exc}", file=sys.stderr)
+    except (SceneError, UsageError, OutputError) as exc:
+        print(f"{prog}: error: {exc}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
-        print(f"camjax {args.command}: interrupted; nothing was written", file=sys.stderr)
-        return 130
+    except NonFiniteError as exc:  # finite inputs whose magnitudes overflow float64
+        print(f"{prog}: error: {cut(str(exc), 300)}: the scene's magnitudes overflow float64 (allowed: "
+              "physical values: lifts, masses, stiffnesses and sigma_max within a few orders of the "
+              "default scene's)", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt as exc:
+        code, what = (143, "terminated") if isinstance(exc, Terminated) else (130, "interrupted")
+        print(f"{prog}: {what}; the output folder is left as it was", file=sys.stderr)
+        if argv is None and runtime.computing():  # a computation cannot be stopped: leave now
+            sys.stdout.flush()
+            sys.stderr.flush()
+            os._exit(code)
+        return code
+    except OSError as exc:
+        print(f"{prog}: error: {_os_error(exc)}", file=sys.stderr)
+        return 1
+    except MemoryError:
+        print(f"{prog}: error: out of memory (allowed: fewer --samples, or a smaller job)", file=sys.stderr)
+        return 1
+    except Exception as exc:
+        if os.environ.get("CAMJAX_DEBUG"):
+            raise
+        print(f"{prog}: error: {type(exc).__name__}: {cut(str(exc), 300)} (CAMJAX_DEBUG=1 shows the "
+              "traceback)", file=sys.stderr)
+        return 1
+    finally:
+        undo()
 
 
 if __name__ == "__main__":

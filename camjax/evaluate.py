@@ -9,6 +9,7 @@ quantities at one base radius as :class:`DesignCurves`, the NumPy arrays plots a
 
 from __future__ import annotations
 
+import math
 from functools import partial
 from typing import NamedTuple
 
@@ -110,14 +111,15 @@ def scene_arrays(scene: Scene, samples: int | None = None, dtype=None, extrema: 
     motion = program.time_kinematics(kin, omega)
     force = torque = coeff = None
     train = scene.follower.train
-    if train is not None:
+    if train is not None and not scene.follower.oscillating:  # a rocker's loads: camjax.rocker
         force = loads.kinetostatic_force(train, motion)
         torque = loads.cam_torque(force, kin.ds)
         if scene.contact is not None:
             c = scene.contact
             coeff = contact.stress_coefficient(force, c.cam_width_mm, c.cam, c.follower)
     theta_deg = program.sample_angles_deg(n, dtype)
-    model = scene_model(scene, dtype) if mode == "exact" else None
+    # an oscillating follower's extrema stay on the grid (camjax.rocker evaluates its curves)
+    model = scene_model(scene, dtype) if mode == "exact" and not scene.follower.oscillating else None
     return SceneArrays(theta_deg, kin, motion, omega, force, torque, coeff, model)
 
 
@@ -151,7 +153,9 @@ class DesignCurves(NamedTuple):
     pitch_y_mm: np.ndarray | None
     pressure_angle_deg: np.ndarray | None
     pitch_rho_mm: np.ndarray | None
-    undercut_margin_mm: np.ndarray | None
+    undercut_margin_mm: np.ndarray | None  # roller: rho_c - min radius on convex parts (float max on concave)
+    pressure_angle_limit_deg: float | None = None  # roller: follower.max_pressure_angle_deg
+    rotation: str = "ccw"  # the cam's turning direction (camjax.geometry.pitch)
 
 
 def _np(x):
@@ -159,24 +163,36 @@ def _np(x):
 
 
 def evaluate_design(scene: Scene, arrays: SceneArrays, base_radius_mm: float,
-                    face_width_mm: float | None = None) -> DesignCurves:
-    """Geometry, stress and roller quantities at one base radius (mm)."""
-    kin, f = arrays.kin, scene.follower
-    rho = stress = pitch_x = pitch_y = phi = pitch_rho = margin = None
+                    face_width_mm: float | None = None, *, roller_radius_mm: float | None = None,
+                    offset_mm: float | None = None) -> DesignCurves:
+    """Geometry, stress and roller quantities at one design (mm).
+
+    ``roller_radius_mm``, ``offset_mm``: a roller's design values (default: the [follower]'s).
+    Outlines follow the scene's ``motion.rotation`` (a cw cam is the mirror image of ccw).
+    Roller stress: Hertz line contact of the cam surface (rho_c, concave parts included) and the
+    roller under the normal force F / cos phi (:func:`camjax.contact.roller_stress`).
+    """
+    kin, f, rot = arrays.kin, scene.follower, scene.motion.rotation
+    rho = stress = pitch_x = pitch_y = phi = pitch_rho = margin = limit = None
+    rf = e = None
     if f.type == "flat":
-        x, y = geometry.flat_profile(base_radius_mm, kin)
+        x, y = geometry.flat_profile(base_radius_mm, kin, rot)
         rho = geometry.flat_radius_of_curvature(base_radius_mm, kin)
         if arrays.stress_coefficient is not None:
             stress = contact.stress_from_coefficient(arrays.stress_coefficient, rho)
         if face_width_mm is None:
             face_width_mm = float(np.asarray(geometry.flat_face_width(kin, symmetric=True)))
     else:
-        rf, e = f.roller_radius_mm, f.offset_mm
-        x, y = geometry.roller_profile(base_radius_mm, rf, e, kin)
-        pitch_x, pitch_y = geometry.roller_pitch_curve(base_radius_mm, rf, e, kin)
-        g = geometry.roller_geometry(base_radius_mm, rf, e, kin)
-        phi, pitch_rho, margin = jnp.rad2deg(g.pressure_angle), g.pitch_radius_of_curvature, \
-            g.undercut_margin
+        rf = float(f.roller_radius_mm if roller_radius_mm is None else roller_radius_mm)
+        e = float(f.offset_mm if offset_mm is None else offset_mm)
+        x, y = geometry.roller_profile(base_radius_mm, rf, e, kin, rot)
+        pitch_x, pitch_y = geometry.roller_pitch_curve(base_radius_mm, rf, e, kin, rot)
+        g = geometry.roller_geometry(base_radius_mm, rf, e, kin, rot, f.min_curvature_radius_mm)
+        phi, pitch_rho, margin = jnp.rad2deg(g.pressure_angle), g.pitch_radius_of_curvature, g.undercut_margin
+        if arrays.stress_coefficient is not None:
+            rho_eq = geometry.roller_equivalent_radius(g.pitch_curvature, rf)
+            stress = contact.roller_stress(arrays.stress_coefficient, g.pressure_angle, rho_eq)
+        limit = f.max_pressure_angle_deg
         face_width_mm = None
     m = arrays.motion
     return DesignCurves(
@@ -186,9 +202,7 @@ def evaluate_design(scene: Scene, arrays: SceneArrays, base_radius_mm: float,
         None if face_width_mm is None else float(face_width_mm),
         np.asarray(x), np.asarray(y), _np(rho), _np(arrays.force_N), _np(arrays.torque_Nm),
         _np(stress), None if scene.design is None else scene.design.sigma_max_MPa,
-        f.roller_radius_mm if f.type == "roller" else None,
-        f.offset_mm if f.type == "roller" else None,
-        _np(pitch_x), _np(pitch_y), _np(phi), _np(pitch_rho), _np(margin),
+        rf, e, _np(pitch_x), _np(pitch_y), _np(phi), _np(pitch_rho), _np(margin), limit, rot,
     )
 
 
@@ -197,24 +211,43 @@ def evaluate_design(scene: Scene, arrays: SceneArrays, base_radius_mm: float,
 KINEMATIC_CURVES = ("s", "ds", "d2s", "d3s")  # mm, mm/rad, mm/rad^2, mm/rad^3
 LOAD_CURVES = ("force", "torque")  # N, N m
 GUIDE_CURVES = ("cam_force", "reaction_1", "reaction_2", "gamma")  # N, N, N, mm (GuideReactions)
-# translating roller at the base radius: rad, |pitch-curve rho| (mm), |rho_pitch| - R_f (mm)
+# translating roller at the base radius: pressure angle (rad), |pitch-curve rho| (mm), undercut
+# margin rho_c - rho_min on convex parts (mm; the largest float on concave ones, as
+# camjax.geometry.roller_undercut_margin)
 ROLLER_CURVES = ("pressure_angle", "pitch_rho_abs", "undercut_margin")
+# the roller's pressure-angle sizing: |s' - e~| / tan(limit) - s (mm), whose max is the smallest
+# d = sqrt(R_p^2 - e^2) (camjax.geometry.roller_min_prime_radius_for_pressure_angle)
+PRESSURE_NEED = "pressure_angle_need"
 
 
 class CurveConstants(NamedTuple):
-    """Scene constants the curves need besides the motion (a pytree; None where not declared)."""
+    """Scene constants the curves need besides the motion (a pytree; None where not declared).
+
+    The roller's offset is stored times the rotation sign (a cw cam is the mirror image of the
+    ccw one with e -> -e), so the curves are the ccw formulas of :mod:`camjax.geometry.pitch`
+    with the pressure angle's sign restored by ``rotation_sign``.
+    """
 
     guide: Guide | None
     roller_radius_mm: jax.Array | None
-    offset_mm: jax.Array | None
+    offset_mm: jax.Array | None  # rotation_sign * e
+    rotation_sign: jax.Array | None  # +1 ccw, -1 cw
+    min_curvature_radius_mm: jax.Array | None  # the undercut margin's rho_min
+    tan_pressure_limit: jax.Array | None  # tan(follower.max_pressure_angle_deg)
 
 
-def curve_constants(scene: Scene) -> CurveConstants:
-    """The guide and roller constants of a scene."""
+def curve_constants(scene: Scene, roller_radius_mm: float | None = None,
+                    offset_mm: float | None = None) -> CurveConstants:
+    """The guide and roller constants of a scene (a roller design's R_f and e override the
+    [follower]'s)."""
     f = scene.follower
-    roller = f.type == "roller"
-    return CurveConstants(scene.guide, f.roller_radius_mm if roller else None,
-                          f.offset_mm if roller else None)
+    if f.type != "roller":
+        return CurveConstants(scene.guide, None, None, None, None, None)
+    sign = geometry.rotation_sign(scene.motion.rotation)
+    rf = f.roller_radius_mm if roller_radius_mm is None else roller_radius_mm
+    e = f.offset_mm if offset_mm is None else offset_mm
+    return CurveConstants(scene.guide, float(rf), sign * float(e), sign, f.min_curvature_radius_mm,
+                          math.tan(math.radians(f.max_pressure_angle_deg)))
 
 
 class Extremes(NamedTuple):
@@ -236,21 +269,29 @@ def _curve(name: str, p: PointValues, consts: CurveConstants, base_radius_mm) ->
         return p.torque_Nm
     if name == "q":  # s + s'' (mm): the flat face's rho = R_b + q
         return p.kin.s + p.kin.d2s
+    if name == "stress" and consts.roller_radius_mm is not None:  # roller contact stress, MPa
+        g = geometry.roller_geometry(base_radius_mm, consts.roller_radius_mm, consts.offset_mm, p.kin)
+        rho_eq = geometry.roller_equivalent_radius(g.pitch_curvature, consts.roller_radius_mm)
+        return contact.roller_stress(p.stress_coefficient, g.pressure_angle, rho_eq)  # even in phi
     if name == "stress":  # flat-face contact stress at base_radius_mm, MPa
         return contact.stress_from_coefficient(p.stress_coefficient, base_radius_mm + p.kin.s + p.kin.d2s)
     if name in GUIDE_CURVES:
         offset = geometry.flat_contact_offset(p.kin)
         return getattr(loads.guide_reactions(consts.guide, p.force_N, offset), name)
+    if name == PRESSURE_NEED:
+        return jnp.abs(p.kin.ds - consts.offset_mm) / consts.tan_pressure_limit - p.kin.s
     if name in ROLLER_CURVES:
-        g = geometry.roller_geometry(base_radius_mm, consts.roller_radius_mm, consts.offset_mm, p.kin)
-        return {"pressure_angle": g.pressure_angle, "undercut_margin": g.undercut_margin,
+        g = geometry.roller_geometry(base_radius_mm, consts.roller_radius_mm, consts.offset_mm, p.kin,
+                                     "ccw", consts.min_curvature_radius_mm)
+        return {"pressure_angle": consts.rotation_sign * g.pressure_angle,
+                "undercut_margin": g.undercut_margin,
                 "pitch_rho_abs": jnp.abs(g.pitch_radius_of_curvature)}[name]
     raise ValueError(f"curve: unknown name '{name}'")
 
 
 def curve_names(scene: Scene, arrays: SceneArrays, with_stress: bool = True) -> tuple[str, ...]:
-    """The curves a scene's report takes extrema of (``q`` and ``stress``: flat face only; the
-    roller curves at the drawing base radius for a roller)."""
+    """The curves a scene's report takes extrema of (``q``: flat face only; ``stress`` with a
+    contact model; the roller curves at the drawing base radius for a roller)."""
     names = list(KINEMATIC_CURVES)
     if arrays.force_N is not None:
         names += LOAD_CURVES
@@ -260,8 +301,8 @@ def curve_names(scene: Scene, arrays: SceneArrays, with_stress: bool = True) -> 
         names += ROLLER_CURVES
     if scene.follower.type == "flat":
         names.append("q")
-        if with_stress and arrays.stress_coefficient is not None:
-            names.append("stress")
+    if with_stress and arrays.stress_coefficient is not None:
+        names.append("stress")
     return tuple(names)
 
 
@@ -297,16 +338,18 @@ def refined_extremes(model: SceneModel, consts: CurveConstants, grid_point: Poin
 
 
 def curve_extremes(scene: Scene, arrays: SceneArrays, names: tuple[str, ...],
-                   base_radius_mm: float | None = None) -> dict[str, Extremes]:
+                   base_radius_mm: float | None = None, *, roller_radius_mm: float | None = None,
+                   offset_mm: float | None = None) -> dict[str, Extremes]:
     """Max and min over the cam angle of each named curve (see :func:`curve_names`).
 
     Exact (refined off the grid, :mod:`camjax.extrema`) when the arrays carry their
     :class:`SceneModel`, else the samples' own (the first sample wins on ties). ``base_radius_mm``
-    is where ``stress`` and the roller curves are taken. Python (returns floats); the refinement
-    itself is one jitted call.
+    is where ``stress`` and the roller curves are taken (with a roller design's
+    ``roller_radius_mm`` and ``offset_mm``; default the [follower]'s). Python (returns floats);
+    the refinement itself is one jitted call.
     """
     radius = 0.0 if base_radius_mm is None else float(base_radius_mm)
-    model, consts = arrays.model, curve_constants(scene)
+    model, consts = arrays.model, curve_constants(scene, roller_radius_mm, offset_mm)
     grid_point = PointValues(arrays.kin, arrays.force_N, arrays.torque_Nm, arrays.stress_coefficient)
     grid = jnp.stack([_curve(n, grid_point, consts, radius) for n in names])
     if model is None:

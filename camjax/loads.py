@@ -10,7 +10,7 @@ from typing import NamedTuple
 import jax
 import jax.numpy as jnp
 
-from camjax.numerics import capped_divide
+from camjax.numerics import COS_FLOOR, capped_divide, floor_positive
 from camjax.program import TimeKinematics
 
 
@@ -41,6 +41,61 @@ def cam_torque(force_N: jax.Array, ds_mm_per_rad: jax.Array) -> jax.Array:
     gradient at vanishing speed.
     """
     return force_N * ds_mm_per_rad * 1e-3
+
+
+class RockerTrain(NamedTuple):
+    """Lumped follower train of an oscillating (rocker) follower, about its pivot (SI, rad)."""
+
+    inertia_kg_m2: float = 0.0
+    spring_N_m_per_rad: float = 0.0
+    preload_rad: float = 0.0  # spring wind-up at s = 0
+    damping_N_m_s_per_rad: float = 0.0
+
+
+def rocker_torque(train: RockerTrain, kin, cam_speed_rad_s) -> jax.Array:
+    """Torque the cam must apply to the arm about the pivot, M = I psi'' + c psi' + k (s + x0), N m.
+
+    The kinetostatic balance of SPEC 4 turned about the pivot: psi' = s' omega, psi'' = s'' omega^2
+    (s in rad, constant cam speed); M < 0 means the spring cannot hold the arm on the cam (contact lost).
+    Positive M turns the arm towards larger psi (away from the cam).
+    """
+    w = cam_speed_rad_s
+    return (train.inertia_kg_m2 * kin.d2s * w**2 + train.damping_N_m_s_per_rad * kin.ds * w
+            + train.spring_N_m_per_rad * (kin.s + train.preload_rad))
+
+
+def rocker_cam_torque(torque_Nm: jax.Array, ds_rad_per_rad: jax.Array) -> jax.Array:
+    """Torque on the cam shaft from the power balance T w = M psi', i.e. T = M s' (N m)."""
+    return torque_Nm * ds_rad_per_rad
+
+
+def rocker_roller_contact_force(torque_Nm, arm_length_mm, pressure_angle_rad) -> jax.Array:
+    """Normal contact force P = M / (l cos phi) (N) on an oscillating roller.
+
+    The normal force acts through the roller centre at arm length l; only its part along the
+    roller's path (perpendicular to the arm), P cos phi, has a moment about the pivot. cos phi is
+    floored like :func:`normal_force`.
+    """
+    return normal_force(torque_Nm / (arm_length_mm * 1e-3), pressure_angle_rad)
+
+
+def rocker_flat_contact_force(torque_Nm, contact_distance_mm) -> jax.Array:
+    """Normal contact force P = M / xi (N) on an oscillating flat face.
+
+    The force acts along the face normal at the contact point, xi along the face from the pivot's
+    foot: its moment about the pivot is P xi (the face offset is parallel to the force and has no
+    arm). Saturates (finite) where the contact reaches the pivot's foot (xi -> 0).
+    """
+    return capped_divide(torque_Nm, contact_distance_mm * 1e-3)
+
+
+def normal_force(axial_force_N: jax.Array, pressure_angle_rad: jax.Array) -> jax.Array:
+    """Normal contact force P = F / cos phi (N) of a roller, F along the follower's motion.
+
+    cos phi is floored at :data:`camjax.numerics.COS_FLOOR` (phi -> 90 deg is a jammed
+    follower): finite in value and gradient for every trial design.
+    """
+    return axial_force_N / floor_positive(jnp.cos(pressure_angle_rad), COS_FLOOR)
 
 
 def contact_margin(force_N: jax.Array) -> jax.Array:

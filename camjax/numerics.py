@@ -14,6 +14,24 @@ import jax.numpy as jnp
 # profile is treated as a corner: the stress saturates at a huge but finite value and the
 # curvature constraint (which has its own penalty) carries the gradient.
 RHO_FLOOR_MM = 1e-15
+# Floor on cos(pressure angle) in a roller's normal force P = F / cos phi: phi -> 90 deg is a
+# jammed follower; the force saturates there (finite) and the pressure-angle constraint carries
+# the gradient.
+COS_FLOOR = 1e-12
+
+
+class NonFiniteError(ValueError):
+    """A result that came out inf or NaN: the inputs' magnitudes overflow float64."""
+
+
+def finite_float(x, what: str = "a design result") -> float:
+    """A scalar as a Python float; :class:`NonFiniteError` naming ``what`` if it is inf or NaN."""
+    import numpy as np
+
+    v = float(np.asarray(x))
+    if not np.isfinite(v):
+        raise NonFiniteError(f"non-finite value {v} in {what}")
+    return v
 
 
 def safe_sqrt(x: jax.Array) -> jax.Array:

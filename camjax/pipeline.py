@@ -4,11 +4,12 @@ Data flows one way and each step is a pure function:
 
 1. :func:`camjax.evaluate.scene_arrays` evaluates what the scene declares (once per scene);
 2. :func:`min_base_radius` finds the smallest admissible base radius (closed form for a flat
-   face, bisection for a roller);
-3. :func:`solve_design` picks the design (R_b, L) of a scene with a [design] section -- the one
-   place an optimizer plugs in;
+   face; for a roller the pressure angle in closed form, the undercut by bisection);
+3. :func:`solve_design` picks the design of a scene with a [design] section (flat face: R_b, L;
+   roller: R_b, R_f, e) -- the one place an optimizer plugs in;
 4. :func:`camjax.evaluate.evaluate_design` computes the curves at the drawing base radius
-   (:func:`drawing_base_radius`);
+   (:func:`drawing_base_radius`) and :func:`geometry_violations` the
+   constraints that geometry breaks;
 5. :func:`camjax.output.report.build_report` turns the typed :class:`DesignRun` into the
    JSON-ready dict.
 
@@ -23,24 +24,20 @@ from __future__ import annotations
 import math
 from typing import Any, NamedTuple
 
-import jax
 import jax.numpy as jnp
 import numpy as np
 
 from camjax import contact, geometry
 from camjax.evaluate import (
+    PRESSURE_NEED,
     DesignCurves,
     Extremes,
-    PointValues,
     SceneArrays,
-    curve_constants,
     curve_extremes,
     curve_names,
     evaluate_design,
-    refined_extremes,
     scene_arrays,
 )
-from camjax.geometry import PRESSURE_ANGLE_LIMIT_DEG
 from camjax.scene import Scene
 
 DRAWING_MARGIN_MM = 1.0  # without a [design], draw at the smallest admissible R_b + this, rounded up
@@ -55,82 +52,46 @@ def _f(x) -> float:
 
 
 class MinBaseRadius(NamedTuple):
-    """Smallest admissible base radius and the cam angle where it binds."""
+    """Smallest admissible base radius, the cam angle where it binds and the limit that binds."""
 
     radius_mm: float
     angle_deg: float
-
-
-@jax.jit
-def _roller_violation(base_radius_mm, roller_radius_mm, offset_mm, kin):
-    """Largest violation (> 0 = violated) of |phi| <= 30 deg and no undercut, normalized."""
-    g = geometry.roller_geometry(base_radius_mm, roller_radius_mm, offset_mm, kin)
-    phi_excess = jnp.max(jnp.abs(g.pressure_angle)) / jnp.deg2rad(PRESSURE_ANGLE_LIMIT_DEG) - 1.0
-    undercut = -jnp.min(g.undercut_margin) / roller_radius_mm
-    reach = jnp.abs(offset_mm) - (base_radius_mm + roller_radius_mm)  # prime circle must pass e
-    return jnp.maximum(jnp.maximum(phi_excess, undercut), reach / roller_radius_mm)
-
-
-@jax.jit
-def _roller_violation_exact(base_radius_mm, consts, kin, model):
-    """:func:`_roller_violation` with the max |phi| and min undercut margin refined off the grid."""
-    hi, _, lo, _ = refined_extremes(model, consts, PointValues(kin, None, None, None), base_radius_mm,
-                                    ("pressure_angle", "undercut_margin"))
-    phi_excess = jnp.maximum(hi[0], -lo[0]) / jnp.deg2rad(PRESSURE_ANGLE_LIMIT_DEG) - 1.0
-    undercut = -lo[1] / consts.roller_radius_mm
-    reach = jnp.abs(consts.offset_mm) - (base_radius_mm + consts.roller_radius_mm)
-    return jnp.maximum(jnp.maximum(phi_excess, undercut), reach / consts.roller_radius_mm)
-
-
-def _roller_min_base_radius(scene: Scene, arrays: SceneArrays) -> float:
-    """Smallest R_b (mm, to 1e-9 relative) with |phi| <= 30 deg and no undercut, by bisection.
-
-    Both constraints relax as R_b grows (the pitch point moves out, tan phi falls, the pitch
-    curve flattens), so the feasible set is an interval [R_min, inf).
-    """
-    f = scene.follower
-    kin = arrays.kin
-    dtype = kin.s.dtype
-    consts = curve_constants(scene)._replace(guide=None)
-    consts = jax.tree_util.tree_map(lambda x: jnp.asarray(x, dtype), consts)
-
-    def bad(r):
-        if arrays.model is not None:  # exact extrema: the constraints at every cam angle
-            return float(_roller_violation_exact(jnp.asarray(r, dtype), consts, kin, arrays.model)) > 0.0
-        return float(_roller_violation(r, f.roller_radius_mm, f.offset_mm, kin)) > 0.0
-
-    lo, hi = 0.0, max(1.0, abs(f.offset_mm))
-    while bad(hi):
-        lo, hi = hi, 2.0 * hi
-        if hi > 1e7:
-            raise ValueError("no base radius below 1e7 mm satisfies the roller constraints")
-    while hi - lo > 1e-9 * hi:
-        mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if bad(mid) else (lo, mid)
-    return hi
+    binding: str  # "curvature" (flat face), "pressure_angle" or "undercut" (roller)
+    prime_radius_mm: float | None = None  # roller: R_b + R_f
 
 
 def min_base_radius(scene: Scene, arrays: SceneArrays) -> MinBaseRadius:
     """Smallest admissible base radius (mm) and the cam angle (deg) where it binds.
 
-    Flat face: max_theta -(s + s'') (rho >= 0). Roller: the smallest R_b with |phi| <= 30 deg
-    and no undercut; the angle is where the pressure angle peaks at that radius.
+    Flat face: max_theta -(s + s'') (rho >= 0), refined off the grid with exact extrema
+    (``[motion] extrema``). Roller: the smallest prime circle with
+    |phi| <= follower.max_pressure_angle_deg and no undercut (convex cam-surface radius >=
+    follower.min_curvature_radius_mm) at the follower's R_f and offset
+    (:func:`camjax.geometry.roller_min_prime_radius`: closed form for the pressure angle, its max
+    over the angle refined off the grid with exact extrema; bisection on the samples for the
+    undercut), minus R_f; the angle is where the binding limit is reached.
     """
     t = np.asarray(arrays.theta_deg)
-    if scene.follower.type == "flat":
-        if arrays.model is not None:  # exact: max_theta -(s + s'') refined off the grid
-            q = curve_extremes(scene, arrays, ("q",))["q"]
-            return MinBaseRadius(-q.min, q.min_deg)
-        r, i = geometry.flat_min_base_radius(arrays.kin)
-        return MinBaseRadius(_f(r), _f(t[int(i)]))
-    r = _roller_min_base_radius(scene, arrays)
-    if arrays.model is not None:
-        phi = curve_extremes(scene, arrays, ("pressure_angle",), r)["pressure_angle"]
-        return MinBaseRadius(r, phi.max_deg if phi.max >= -phi.min else phi.min_deg)
+    if scene.follower.type == "flat" and arrays.model is not None:
+        # exact: max_theta -(s + s'') refined off the grid
+        q = curve_extremes(scene, arrays, ("q",))["q"]
+        return MinBaseRadius(-q.min, q.min_deg, "curvature")
     f = scene.follower
-    g = geometry.roller_geometry(r, f.roller_radius_mm, f.offset_mm, arrays.kin)
-    i = int(np.argmax(np.abs(np.asarray(g.pressure_angle))))
-    return MinBaseRadius(r, _f(t[i]))
+    if f.type == "flat":
+        r, i = geometry.flat_min_base_radius(arrays.kin)
+        return MinBaseRadius(_f(r), _f(t[int(i)]), "curvature")
+    sizing = geometry.roller_min_prime_radius(arrays.kin, f.roller_radius_mm, f.offset_mm,
+                                              math.radians(f.max_pressure_angle_deg),
+                                              f.min_curvature_radius_mm, scene.motion.rotation)
+    rp = _f(sizing.prime_radius_mm)
+    if arrays.model is not None and not bool(sizing.undercut_binds):
+        # exact: the closed form's max over the angle refined off the grid; it is >= the samples'
+        # max, so the undercut (which relaxes as R_p grows) still holds
+        need = curve_extremes(scene, arrays, (PRESSURE_NEED,))[PRESSURE_NEED]
+        rp = math.hypot(f.offset_mm, max(need.max, 0.0))
+        return MinBaseRadius(rp - f.roller_radius_mm, need.max_deg, "pressure_angle", rp)
+    return MinBaseRadius(rp - f.roller_radius_mm, _f(t[int(sizing.index)]),
+                         "undercut" if bool(sizing.undercut_binds) else "pressure_angle", rp)
 
 
 # ------------------------------------------------------------------------------ design
@@ -140,30 +101,39 @@ class DesignSolution(NamedTuple):
     """The solved design of a scene's [design] and the figures the report states beside it."""
 
     result: dict[str, Any]  # the solver's JSON (camjax.solvers.base.Solution.to_json)
-    peak_stress_MPa: float  # the design's peak stress, computed exactly as the stress curve
-    required_base_radius_mm: float  # smallest admissible R_b (max over angles of the need)
+    peak_stress_MPa: float | None  # the design's peak stress, computed exactly as the stress curve
+    required_base_radius_mm: float  # smallest admissible R_b (flat: over angles; roller: at R_f, e)
     required_base_radius_deg: float  # where it binds
-    binding_constraint: str  # "stress" or "curvature"
-    required_face_width_mm: float
+    binding_constraint: str  # flat: "stress" or "curvature"; roller: "pressure_angle" or "undercut"
+    required_face_width_mm: float | None  # flat face only
     rho_min_limit_mm: float  # the problem's smallest allowed radius of curvature
 
 
-def solve_design(scene: Scene, arrays: SceneArrays) -> DesignSolution | None:
-    """The optimized design (R_b, L) of a scene with a [design] section; None without one.
+def design_problem(scene: Scene, arrays: SceneArrays | None = None, *, samples: int | None = None):
+    """The design problem of the scene's [design] section (the follower type's problem family)."""
+    from camjax.solvers.base import problem_from_scene
 
-    Solved by :func:`camjax.solvers.sweep.solve` with the scene's mode, alpha, gamma, solver and
-    seed (SPEC 5; keys of :meth:`camjax.solvers.base.Solution.to_json`: mode, solver,
-    base_radius_mm, face_width_mm, objective, feasible, violated, iterations, ..., and in
-    pointwise mode base_radius_deg, face_width_deg and the per-angle ``pointwise`` arrays).
+    return problem_from_scene(scene, arrays, samples=samples)
+
+
+def solve_design(scene: Scene, arrays: SceneArrays) -> DesignSolution | None:
+    """The optimized design of a scene with a [design] section; None without one.
+
+    Solved by :func:`camjax.solvers.base.solve` with the scene's mode, alpha, gamma, solver and
+    seed (SPEC 5; keys of :meth:`camjax.solvers.base.Solution.to_json`: mode, solver, the design
+    variables, objective, feasible, violated, iterations, ..., and in pointwise mode the angles
+    and per-angle ``pointwise`` arrays). Flat face: (R_b, L); roller: (R_b, R_f, e).
     """
     if scene.design is None:
         return None
-    from camjax import problem as P
-    from camjax.solvers.sweep import solve
+    from camjax.solvers.base import solve
 
-    d, kin, t = scene.design, arrays.kin, np.asarray(arrays.theta_deg)
-    problem = P.problem_from_scene(scene, arrays)
-    out = solve(problem, d.alpha, d.gamma, mode=d.mode, solver=d.solver, seed=d.seed).to_json(problem)
+    d, t = scene.design, np.asarray(arrays.theta_deg)
+    problem = design_problem(scene, arrays)
+    out = solve(problem, (d.alpha, d.gamma), mode=d.mode, solver=d.solver, seed=d.seed).to_json(problem)
+    if scene.follower.type == "roller":
+        return _roller_design_solution(scene, arrays, out)
+    from camjax import problem as P
 
     if problem.exact is not None:  # every figure refined off the grid
         e = problem.exact
@@ -174,7 +144,7 @@ def solve_design(scene: Scene, arrays: SceneArrays) -> DesignSolution | None:
             out, out["stress_max_MPa"], max(curvature, stress_need),
             _f(e.stress_need_deg if binding == "stress" else e.q_min_deg), binding,
             _f(P.required_face_width(problem)), float(problem.rho_min_mm))
-    rho = geometry.flat_radius_of_curvature(out["base_radius_mm"], kin)
+    rho = geometry.flat_radius_of_curvature(out["base_radius_mm"], arrays.kin)
     sigma_peak = _f(jnp.max(contact.stress_from_coefficient(arrays.stress_coefficient, rho)))
     stress_rho = np.asarray(P.stress_rho_need(problem))
     need = np.asarray(P.rho_need(problem) - problem.q_mm)  # max over angles: P.required_base_radius
@@ -183,6 +153,20 @@ def solve_design(scene: Scene, arrays: SceneArrays) -> DesignSolution | None:
         out, sigma_peak, float(need[i]), _f(t[i]),
         "stress" if stress_rho[i] >= float(problem.rho_min_mm) else "curvature",
         _f(P.required_face_width(problem)), float(problem.rho_min_mm))
+
+
+def _roller_design_solution(scene: Scene, arrays: SceneArrays, out: dict) -> DesignSolution:
+    """A roller design's figures: its peak stress as the stress curve computes it, and the
+    smallest R_b its R_f and offset admit (pressure angle and undercut; stress aside)."""
+    f, t = scene.follower, np.asarray(arrays.theta_deg)
+    rf, e = out["roller_radius_mm"], out["offset_mm"]
+    curves = evaluate_design(scene, arrays, out["base_radius_mm"], roller_radius_mm=rf, offset_mm=e)
+    sizing = geometry.roller_min_prime_radius(arrays.kin, rf, e, math.radians(f.max_pressure_angle_deg),
+                                              f.min_curvature_radius_mm, scene.motion.rotation)
+    peak_stress = None if curves.stress_MPa is None else _f(np.max(curves.stress_MPa))
+    return DesignSolution(out, peak_stress, _f(sizing.prime_radius_mm) - rf, _f(t[int(sizing.index)]),
+                          "undercut" if bool(sizing.undercut_binds) else "pressure_angle", None,
+                          f.min_curvature_radius_mm)
 
 
 def drawing_base_radius(design: DesignSolution | None, min_base_radius_mm: float,
@@ -194,6 +178,133 @@ def drawing_base_radius(design: DesignSolution | None, min_base_radius_mm: float
         return design.result["base_radius_mm"], "design"
     r = float(math.ceil(max(min_base_radius_mm, 0.0) + DRAWING_MARGIN_MM))
     return r, f"smallest admissible + {DRAWING_MARGIN_MM:g} mm, rounded up to whole mm"
+
+
+# ----------------------------------------------------------------------------- feasibility
+
+
+class GeometryViolation(NamedTuple):
+    """One constraint the evaluated geometry breaks: a key and one sentence with the figures."""
+
+    constraint: str  # curvature, stress, face_width, pressure_angle, undercut, contact
+    message: str
+
+
+def geometry_violations(curves: DesignCurves, rho_min_mm: float = 0.0,
+                        extremes: dict[str, Extremes] | None = None) -> list[GeometryViolation]:
+    """Constraints broken by the geometry at the evaluated base radius (empty: usable geometry).
+
+    Flat face: rho < ``rho_min_mm`` (the profile cannot be followed; below 0 it crosses itself),
+    peak stress > sigma_max (with a [design]), face narrower than 2 max|s'|. Roller: |pressure
+    angle| > the limit, undercut. With loads: contact force < 0 (the follower leaves the cam).
+    Tolerances are the solvers' (:data:`camjax.problem.FEASIBILITY_TOL_MM`, relative 1e-6 on the
+    stress), so a design the solver calls feasible is not flagged here.
+
+    ``extremes`` (:func:`camjax.evaluate.curve_extremes` at the curves' design): rho, stress, face
+    width and force are judged on them (exact extrema: the continuous ones, as the report states
+    them); the roller's pressure angle and undercut stay on the samples, as the roller design
+    problem constrains them.
+    """
+    from camjax.problem import FEASIBILITY_RTOL_STRESS, FEASIBILITY_TOL_MM
+
+    t, out, ex = curves.theta_deg, [], extremes or {}
+
+    def at(values, pick, name=None, sense="min"):
+        if name in ex:
+            e = ex[name]
+            return (e.min, e.min_deg) if sense == "min" else (e.max, e.max_deg)
+        i = int(pick(values))
+        return float(values[i]), float(t[i])
+
+    if curves.rho_mm is not None:
+        rho, deg = at(curves.rho_mm, np.argmin)
+        if "q" in ex:  # rho = R_b + q
+            rho, deg = curves.base_radius_mm + ex["q"].min, ex["q"].min_deg
+        if rho < rho_min_mm - FEASIBILITY_TOL_MM:
+            why = "the profile crosses itself" if rho < 0 else "the flat face cannot follow it"
+            out.append(GeometryViolation(
+                "curvature", f"min radius of curvature {rho:.4g} mm at {deg:g} deg < {rho_min_mm:g} mm: "
+                f"{why}"))
+    if curves.stress_MPa is not None and curves.sigma_max_MPa is not None:
+        sigma, deg = at(curves.stress_MPa, np.argmax, "stress", "max")
+        if sigma > curves.sigma_max_MPa * (1.0 + FEASIBILITY_RTOL_STRESS):
+            out.append(GeometryViolation(
+                "stress", f"peak contact stress {sigma:.4g} MPa at {deg:g} deg > sigma_max "
+                f"{curves.sigma_max_MPa:g} MPa"))
+    if curves.face_width_mm is not None:
+        need = 2.0 * (max(ex["ds"].max, -ex["ds"].min) if "ds" in ex else float(np.max(np.abs(curves.ds_mm))))
+        if curves.face_width_mm < need - FEASIBILITY_TOL_MM:
+            out.append(GeometryViolation(
+                "face_width", f"face width {curves.face_width_mm:.4g} mm < 2 max|s'| = {need:.4g} mm: "
+                "the contact runs off the face"))
+    if curves.pressure_angle_deg is not None:
+        phi, deg = at(np.abs(curves.pressure_angle_deg), np.argmax)
+        if phi > curves.pressure_angle_limit_deg:
+            out.append(GeometryViolation(
+                "pressure_angle", f"|pressure angle| {phi:.4g} deg at {deg:g} deg > "
+                f"{curves.pressure_angle_limit_deg:g} deg"))
+    if curves.undercut_margin_mm is not None:
+        margin, deg = at(curves.undercut_margin_mm, np.argmin)
+        if margin <= 0:
+            out.append(GeometryViolation(
+                "undercut", f"undercut margin {margin:.4g} mm at {deg:g} deg <= 0: the roller undercuts "
+                "the cam"))
+    if curves.force_N is not None:
+        force, deg = at(curves.force_N, np.argmin, "force")
+        if force < 0:
+            lost = float(np.mean(curves.force_N < 0)) * 360.0
+            out.append(GeometryViolation(
+                "contact", f"contact force {force:.4g} N at {deg:g} deg < 0 (over about {lost:.3g} deg): "
+                "the follower leaves the cam"))
+    return out
+
+
+def rocker_violations(curves, scene: Scene) -> list[GeometryViolation]:
+    """Constraints broken by an oscillating follower's evaluated geometry (empty: usable geometry).
+
+    ``curves`` is a :class:`camjax.rocker.RockerCurves`. Roller: |pressure angle| > the limit,
+    undercut; flat face: cam-surface radius < ``follower.min_curvature_radius_mm``; with loads:
+    contact force < 0; with a [design]: peak stress > sigma_max. Tolerances as
+    :func:`geometry_violations`.
+    """
+    from camjax.problem import FEASIBILITY_RTOL_STRESS, FEASIBILITY_TOL_MM
+
+    f, t, out = scene.follower, curves.theta_deg, []
+
+    def at(values, pick):
+        i = int(pick(values))
+        return float(values[i]), float(t[i])
+
+    if curves.undercut_margin_mm is not None:
+        phi, deg = at(np.abs(curves.pressure_angle_deg), np.argmax)
+        if phi > f.max_pressure_angle_deg:
+            out.append(GeometryViolation(
+                "pressure_angle", f"|pressure angle| {phi:.4g} deg at {deg:g} deg > "
+                f"{f.max_pressure_angle_deg:g} deg"))
+        margin, deg = at(curves.undercut_margin_mm, np.argmin)
+        if margin <= 0:
+            out.append(GeometryViolation(
+                "undercut", f"undercut margin {margin:.4g} mm at {deg:g} deg <= 0: the roller undercuts "
+                "the cam"))
+    else:
+        rho, deg = at(curves.rho_mm, np.argmin)
+        if rho < f.min_curvature_radius_mm - FEASIBILITY_TOL_MM:
+            why = "the profile crosses itself" if rho < 0 else "the flat face cannot follow it"
+            out.append(GeometryViolation(
+                "curvature", f"min radius of curvature {rho:.4g} mm at {deg:g} deg < "
+                f"{f.min_curvature_radius_mm:g} mm: {why}"))
+    if curves.stress_MPa is not None and scene.design is not None and scene.design.sigma_max_MPa:
+        sigma, deg = at(curves.stress_MPa, np.argmax)
+        if sigma > scene.design.sigma_max_MPa * (1.0 + FEASIBILITY_RTOL_STRESS):
+            out.append(GeometryViolation(
+                "stress", f"peak contact stress {sigma:.4g} MPa at {deg:g} deg > sigma_max "
+                f"{scene.design.sigma_max_MPa:g} MPa"))
+    if curves.contact_force_N is not None:
+        force, deg = at(curves.contact_force_N, np.argmin)
+        if force < 0:
+            out.append(GeometryViolation(
+                "contact", f"contact force {force:.4g} N at {deg:g} deg < 0: the follower leaves the cam"))
+    return out
 
 
 # ------------------------------------------------------------------------------- run
@@ -208,7 +319,10 @@ class DesignRun(NamedTuple):
     base_radius_mm: float  # where the curves are evaluated and drawn
     base_radius_source: str  # why that radius
     curves: DesignCurves
-    extremes: dict[str, Extremes]  # max/min of each of evaluate.curve_names; stress at base_radius_mm
+    violations: tuple[GeometryViolation, ...] = ()  # constraints the drawn geometry breaks (empty: usable)
+    # max/min of each of evaluate.curve_names, stress and roller curves at base_radius_mm (exact
+    # unless the scene asks for grid extrema); defaulted because it follows the defaulted violations
+    extremes: dict[str, Extremes] | None = None
 
 
 def run_design(scene: Scene, arrays: SceneArrays | None = None, *,
@@ -227,10 +341,17 @@ def run_design(scene: Scene, arrays: SceneArrays | None = None, *,
     minimum = min_base_radius(scene, arrays)
     design = solve_design(scene, arrays)
     radius, source = drawing_base_radius(design, minimum.radius_mm, base_radius_mm)
-    width = design.result["face_width_mm"] if design is not None else None
-    curves = evaluate_design(scene, arrays, radius, width)
-    extremes = curve_extremes(scene, arrays, curve_names(scene, arrays), radius)
-    return DesignRun(arrays, minimum, design, radius, source, curves, extremes)
+    result = design.result if design is not None else {}
+    rf, e = result.get("roller_radius_mm"), result.get("offset_mm")
+    extremes = curve_extremes(scene, arrays, curve_names(scene, arrays), radius,
+                              roller_radius_mm=rf, offset_mm=e)
+    width = result.get("face_width_mm")
+    if width is None and scene.follower.type == "flat":  # 2 max|s'|, the extremes' (exact or the samples')
+        width = 2.0 * max(extremes["ds"].max, -extremes["ds"].min, 0.0)
+    curves = evaluate_design(scene, arrays, radius, width, roller_radius_mm=rf, offset_mm=e)
+    return DesignRun(arrays, minimum, design, radius, source, curves,
+                     tuple(geometry_violations(curves, scene.follower.min_curvature_radius_mm, extremes)),
+                     extremes)
 
 
 def sweep_scene(scene: Scene, alphas, gammas, *, mode: str, solver: str, seed: int = 0,
@@ -239,10 +360,9 @@ def sweep_scene(scene: Scene, alphas, gammas, *, mode: str, solver: str, seed: i
 
     Returns :class:`camjax.solvers.sweep.SweepResult` (its ``records()`` are the JSON rows).
     """
-    from camjax.problem import problem_from_scene
     from camjax.solvers.sweep import sweep
 
-    problem = problem_from_scene(scene)
+    problem = design_problem(scene)
     return sweep(problem, alphas, gammas, mode=mode, solver=solver, seed=seed, chunk_size=chunk_size)
 
 
@@ -250,15 +370,34 @@ class Report(NamedTuple):
     """A scene's report (JSON-ready dict) with the curves and arrays behind it."""
 
     data: dict[str, Any]
-    curves: DesignCurves
+    curves: DesignCurves  # camjax.rocker.RockerCurves for an oscillating follower
     arrays: SceneArrays
 
 
 def analyse(scene: Scene, arrays: SceneArrays | None = None, *, base_radius_mm: float | None = None,
             dtype=None) -> Report:
-    """:func:`run_design` and its report dict (see :func:`run_design` for the arguments)."""
+    """:func:`run_design` and its report dict (see :func:`run_design` for the arguments).
+
+    An oscillating follower runs :func:`camjax.rocker.run_rocker` instead (lifts in rad, the
+    cam sized for its pivot and arm); its curves are :class:`camjax.rocker.RockerCurves`.
+    """
     from camjax.output.report import build_report
 
+    if scene.follower.oscillating:
+        from camjax.output.rocker import rocker_report
+        from camjax.rocker import run_rocker
+
+        arrays = scene_arrays(scene, dtype=dtype) if arrays is None else arrays
+        design = None
+        if scene.design is not None:
+            from camjax.solvers.base import solve
+
+            d, problem = scene.design, design_problem(scene, arrays)
+            design = solve(problem, (d.alpha, d.gamma), mode=d.mode, solver=d.solver,
+                           seed=d.seed).to_json(problem)
+        rocker = run_rocker(scene, arrays.kin, arrays.cam_speed_rad_s, base_radius_mm, design)
+        violations = rocker_violations(rocker.curves, scene)
+        return Report(rocker_report(scene, arrays, rocker, design, violations), rocker.curves, arrays)
     run = run_design(scene, arrays, base_radius_mm=base_radius_mm, dtype=dtype)
     return Report(build_report(scene, run), run.curves, run.arrays)
 

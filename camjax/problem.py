@@ -12,7 +12,7 @@ with sigma(theta) = C(theta) / sqrt(rho(theta)), rho = R_b + q, q = s + s''. Con
 written ``g <= 0`` in mm (:class:`Constraints`, one value per angle):
 
 - curvature:  rho_min - rho <= 0      (rho > 0: a flat face cannot follow a concavity; rho_min
-  is a tiny margin, 1 um by default, so that "> 0" has a minimum);
+  is the scene's follower.min_curvature_radius_mm, 1 um by default, so that "> 0" has a minimum);
 - stress:     (C / sigma_max)^2 - rho <= 0, which is sigma <= sigma_max for C >= 0 written so that
   it is linear in R_b and stays finite where rho <= 0 (sigma itself saturates there);
 - face_width: 2 |s'| - L <= 0         (symmetric face);
@@ -44,10 +44,8 @@ import numpy as np
 
 from camjax.contact import stress_from_coefficient
 from camjax.extrema import ITERATIONS
-from camjax.numerics import RHO_FLOOR_MM, max_over_angles, positive_part, safe_divide, safe_sqrt
+from camjax.numerics import RHO_FLOOR_MM, finite_float, max_over_angles, positive_part, safe_divide, safe_sqrt
 
-# Smallest admissible radius of curvature (mm): the strict "rho > 0" of SPEC 5 as a margin.
-RHO_MIN_MM = 1e-3
 # A design is feasible when every violation is below these (mm; MPa relative to sigma_max).
 FEASIBILITY_TOL_MM = 1e-6
 FEASIBILITY_RTOL_STRESS = 1e-6
@@ -137,7 +135,7 @@ class Evaluation(NamedTuple):
 
 
 def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=None,
-                       rho_min_mm: float = RHO_MIN_MM, extrema: str | None = None) -> Problem:
+                       rho_min_mm: float | None = None, extrema: str | None = None) -> Problem:
     """Problem of a scene with a [design] section (Python, not traceable: it reads the scene).
 
     Args:
@@ -145,7 +143,8 @@ def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=
       arrays: its :class:`camjax.evaluate.SceneArrays` if already computed (else computed here).
       samples: grid size override (ignored when ``arrays`` is given).
       dtype: floating dtype of the arrays (default float64).
-      rho_min_mm: the curvature margin of the constraint rho > 0.
+      rho_min_mm: the curvature margin of the constraint rho > 0 (default: the scene's
+        follower.min_curvature_radius_mm).
       extrema: "exact" or "grid" (ignored when ``arrays`` is given: theirs applies); default
         the scene's ``[motion] extrema``. Exact: the constraint maxima and the peak stress are
         refined off the grid and the solvers' designs polished (:class:`ExactExtrema`).
@@ -154,6 +153,9 @@ def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=
 
     if scene.design is None:
         raise ValueError("scene has no [design] section: nothing to optimize")
+    if scene.follower.type != "flat":
+        raise ValueError(f"follower.type: {scene.follower.type!r} is not a flat face; use "
+                         "camjax.solvers.base.problem_from_scene (it picks the follower's family)")
     if arrays is None:
         arrays = scene_arrays(scene, samples=samples, dtype=dtype, extrema=extrema)
     if arrays.stress_coefficient is None:
@@ -171,7 +173,7 @@ def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=
         upper=Design(as_(d.base_radius_mm[1]), as_(d.face_width_mm[1])),
         sigma_max_MPa=as_(d.sigma_max_MPa),
         size_norm_mm=as_(d.base_radius_mm[1] + d.face_width_mm[1]),
-        rho_min_mm=as_(rho_min_mm),
+        rho_min_mm=as_(scene.follower.min_curvature_radius_mm if rho_min_mm is None else rho_min_mm),
         exact=None if arrays.model is None else _exact_extrema(arrays, as_(d.sigma_max_MPa)),
     )
 
@@ -644,10 +646,7 @@ def polish_pointwise(problem: Problem, weights: Weights, design: Design, extras:
 
 
 def _f(x) -> float:
-    v = float(np.asarray(x))
-    if not np.isfinite(v):
-        raise ValueError(f"non-finite value {v} in a design result")
-    return v
+    return finite_float(x)
 
 
 def solution_json(problem: Problem, solution) -> dict:

@@ -1,4 +1,4 @@
-"""Process-wide JAX set-up: the persistent compilation cache, in one place.
+"""Process-wide set-up: the persistent compilation cache, and computing so that Ctrl-C is heard.
 
 The CLI calls :func:`enable_compilation_cache` before its first compile; scale-out workers call
 :func:`use_compilation_cache` with the folder the driver hands them, so every process of a run
@@ -40,3 +40,62 @@ def enable_compilation_cache() -> None:
         use_compilation_cache(folder)
     except OSError:
         return  # read-only home: run without the cache
+
+
+COMPUTE_THREAD = "camjax-compute"
+_RUNNING: set = set()  # done-events of interruptible workers that have not finished
+
+
+def interruptible(fn, *args, **kwargs):
+    """``fn(*args, **kwargs)`` run in a worker thread while this (main) thread waits in short slices.
+
+    A long XLA call (a compile, a solver loop, a sweep chunk) holds the thread that made it until
+    it returns, and Python delivers Ctrl-C (KeyboardInterrupt) or SIGTERM only between bytecodes of
+    the main thread: waiting here instead answers within about 0.1 s. On an interrupt the worker is
+    abandoned (it is a daemon thread; :func:`computing` says whether it still runs, and a process
+    that exits while it does must leave through ``os._exit``: XLA aborts when the interpreter
+    shuts down under a running computation). Exceptions of ``fn`` are re-raised here. Called from
+    any other thread, ``fn`` simply runs.
+    """
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        return fn(*args, **kwargs)
+    box: dict = {}
+    done = threading.Event()  # not Thread.is_alive: it can read False after an interrupted join
+
+    def work():
+        try:
+            box["value"] = fn(*args, **kwargs)
+        except BaseException as exc:  # handed to the waiting thread
+            box["error"] = exc
+        finally:
+            done.set()
+            _RUNNING.discard(done)
+
+    _RUNNING.add(done)
+    threading.Thread(target=work, name=COMPUTE_THREAD, daemon=True).start()
+    while not done.wait(0.05):
+        pass
+    if "error" in box:
+        raise box["error"]
+    return box["value"]
+
+
+def computing() -> bool:
+    """True while an abandoned :func:`interruptible` worker still runs."""
+    return any(not done.is_set() for done in list(_RUNNING))
+
+
+def quiet_startup_interrupts() -> None:
+    """Until ``camjax.cli.main`` installs its handlers, Ctrl-C or SIGTERM ends the process with one
+    line (status 130 / 143) instead of a traceback from inside ``import jax`` (about a second)."""
+    import signal
+
+    def leave(signum, frame):
+        os.write(2, b"camjax: interrupted while starting; nothing was written\n")
+        os._exit(143 if signum == signal.SIGTERM else 130)
+
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        if signal.getsignal(sig) is not signal.SIG_IGN:  # an ignored signal (nohup, `&`) stays ignored
+            signal.signal(sig, leave)

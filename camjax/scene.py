@@ -15,12 +15,26 @@ from typing import Any
 
 from camjax.contact import Material
 from camjax.extrema import EXTREMA_MODES
+from camjax.geometry import (
+    DEFAULT_ROTATION,
+    FLAT_MIN_CURVATURE_RADIUS_MM,
+    OSCILLATING_FLAT_MIN_CURVATURE_RADIUS_MM,
+    ROLLER_MAX_PRESSURE_ANGLE_DEG,
+    ROLLER_MIN_CURVATURE_RADIUS_MM,
+    ROTATIONS,
+)
 from camjax.laws import FOURIER_PRESETS, LAWS, FourierSeries, fourier_law, get_law, polynomial_law
-from camjax.loads import FollowerTrain, Guide
+from camjax.loads import FollowerTrain, Guide, RockerTrain
 from camjax.program import KINDS, MotionProgram, Segment
 from camjax.solvers.registry import MODES, SOLVERS
 
-BUILTIN_SCENES = {"default": "default.toml", "thesis-bench": "thesis-bench.toml"}
+BUILTIN_SCENES = {"default": "default.toml", "thesis-bench": "thesis-bench.toml", "roller": "roller.toml"}
+RPM_MAX = 1e6  # cam speed, rev/min: far above any machine, low enough that every load stays finite
+SAMPLES_MAX = 1_000_000  # cam-angle grid: measured to run (design, CSV, DXF) in the README's limits
+# The shortest segment gets at least this many samples. One period of a sine (the acceleration of
+# the cycloidal law, the simplest smooth rise) sampled 8 times shows its peak within
+# 1 - cos(pi / 8) = 8 % and its sign changes; fewer samples cannot resolve the segment's shape.
+SAMPLES_PER_SEGMENT = 8
 
 
 class SceneError(ValueError):
@@ -30,10 +44,27 @@ class SceneError(ValueError):
                  source: str | None = None):
         self.field, self.value, self.problem, self.allowed = field, value, problem, allowed
         self.source = source
-        where = f"{source}: " if source else ""
-        shown = "" if value is _MISSING else f" = {value!r}"
-        tail = f" (allowed: {allowed})" if allowed else ""
-        super().__init__(f"{where}{field}{shown}: {problem}{tail}")
+        where = f"{cut(source)}: " if source else ""
+        shown = "" if value is _MISSING else f" = {quote(value)}"
+        tail = f" (allowed: {cut(allowed, 4 * QUOTE_CHARS)})" if allowed else ""
+        super().__init__(f"{where}{cut(field)}{shown}: {cut(problem, 4 * QUOTE_CHARS)}{tail}")
+
+
+QUOTE_CHARS = 100  # a message quotes at most this many characters of a value (one readable line)
+
+
+def cut(text: str, limit: int = QUOTE_CHARS) -> str:
+    """``text`` cut to about ``limit`` characters for a one-line message, saying how long it was.
+
+    An unknown 50 MB section name must not become a 50 MB error line.
+    """
+    head = "".join(c if c.isprintable() else repr(c)[1:-1] for c in text[:limit])  # one line
+    return head if len(text) <= limit else f"{head}... ({len(text)} characters)"
+
+
+def quote(value: Any, limit: int = QUOTE_CHARS) -> str:
+    """``repr(value)`` cut by :func:`cut`."""
+    return cut(repr(value), limit)
 
 
 _MISSING = object()
@@ -50,17 +81,40 @@ class MotionSpec:
     program: MotionProgram = field(compare=False)
     segments: tuple[dict, ...]  # as written in the scene, for reports
     samples: int = 360  # cam-angle grid size N
+    rotation: str = DEFAULT_ROTATION  # "ccw" or "cw": camjax.geometry.pitch (cw = mirror image)
     extrema: str = "exact"  # "exact": max/min over the angle refined off the grid; "grid": samples
+
+
+FOLLOWER_TYPES = ("flat", "roller", "oscillating_roller", "oscillating_flat")
+OSCILLATING_TYPES = ("oscillating_roller", "oscillating_flat")
 
 
 @dataclass(frozen=True)
 class FollowerSpec:
-    """[follower]: geometry and, when mass or spring is given, the lumped train for loads."""
+    """[follower]: geometry and, when mass/spring (inertia/spring) is given, the lumped train for loads.
 
-    type: str  # "flat" or "roller"
-    train: FollowerTrain | None = None
+    Translating followers ("flat", "roller") move their lifts in mm and carry a
+    :class:`camjax.loads.FollowerTrain`; oscillating ones ("oscillating_roller", "oscillating_flat";
+    :mod:`camjax.geometry.oscillating`) swing an arm through the lifts in rad (``lift_deg`` in the
+    scene) and carry a :class:`camjax.loads.RockerTrain` about the pivot.
+    """
+
+    type: str  # one of FOLLOWER_TYPES
+    train: FollowerTrain | RockerTrain | None = None
     roller_radius_mm: float = 0.0
     offset_mm: float = 0.0
+    # roller: |pressure angle| limit, deg (unused for a flat face, whose pressure angle is 0)
+    max_pressure_angle_deg: float = ROLLER_MAX_PRESSURE_ANGLE_DEG
+    # flat: the margin of rho >= rho_min; roller: smallest convex cam-surface radius (0 = no undercut)
+    min_curvature_radius_mm: float = FLAT_MIN_CURVATURE_RADIUS_MM
+    pivot_distance_mm: float = 0.0  # oscillating: cam centre to pivot, d
+    arm_length_mm: float = 0.0  # oscillating roller: pivot to roller centre, l
+    face_offset_mm: float = 0.0  # oscillating flat face: distance of the face line from the pivot, f
+
+    @property
+    def oscillating(self) -> bool:
+        """True for a rocker follower: lifts in rad, loads about the pivot."""
+        return self.type in OSCILLATING_TYPES
 
 
 @dataclass(frozen=True)
@@ -74,16 +128,29 @@ class ContactSpec:
 
 @dataclass(frozen=True)
 class DesignSpec:
-    """[design]: the optimal-design problem (SPEC 5)."""
+    """[design]: the optimal-design problem (SPEC 5; roller: camjax.roller_problem).
+
+    Every design variable is a (low, high) pair in mm; low == high fixes it (the scene may write
+    a fixed variable as a number). Flat face: base_radius_mm and face_width_mm; roller:
+    base_radius_mm, roller_radius_mm and offset_mm; oscillating roller
+    (:mod:`camjax.oscillating_problem`): base_radius_mm, roller_radius_mm, pivot_distance_mm and
+    arm_length_mm; oscillating flat face (:mod:`camjax.oscillating_flat_problem`): base_radius_mm,
+    pivot_distance_mm and face_offset_mm (the variables of the other types are None).
+    """
 
     base_radius_mm: tuple[float, float]  # bounds [low, high]
-    face_width_mm: tuple[float, float]  # bounds [low, high]
-    sigma_max_MPa: float
+    face_width_mm: tuple[float, float] | None  # bounds [low, high]; flat face only
+    sigma_max_MPa: float | None  # None only for a roller without [contact] (no stress)
     mode: str = "global"  # or "pointwise"
     alpha: float = 1.0  # weight of the size term
     gamma: float = 1.0  # weight of the stress term
     solver: str = "gradient"
     seed: int = 0
+    roller_radius_mm: tuple[float, float] | None = None  # roller and oscillating roller
+    offset_mm: tuple[float, float] | None = None  # roller only
+    pivot_distance_mm: tuple[float, float] | None = None  # oscillating followers
+    arm_length_mm: tuple[float, float] | None = None  # oscillating roller only
+    face_offset_mm: tuple[float, float] | None = None  # oscillating flat face only
 
 
 DYNAMICS_COMPUTE = ("compensation", "robustness", "time_domain", "drive", "nonlinear", "jump",
@@ -295,10 +362,13 @@ def _parse_law(seg: _Reader):
         raise seg.error("law", name, "unknown law", ", ".join([*LAWS, "polynomial", "fourier"])) from None
 
 
-def _parse_motion(r: _Reader) -> MotionSpec:
-    r.check_keys(("rpm", "samples", "segments", "extrema"))
-    rpm = r.number("rpm", low=0.0)
-    samples = r.number("samples", _DEFAULT, low=1, high=10_000_000, integer=True)
+def _parse_motion(r: _Reader, oscillating: bool = False) -> MotionSpec:
+    """[motion]; ``oscillating``: the follower swings, lifts are ``lift_deg`` (kept in rad)."""
+    r.check_keys(("rpm", "samples", "segments", "rotation", "extrema"))
+    lift_key, other_key = ("lift_deg", "lift_mm") if oscillating else ("lift_mm", "lift_deg")
+    rpm = r.number("rpm", low=0.0, high=RPM_MAX)
+    samples = r.number("samples", _DEFAULT, low=1, high=SAMPLES_MAX, integer=True)
+    rotation = r.choice("rotation", ROTATIONS, _DEFAULT)
     extrema = r.choice("extrema", EXTREMA_MODES, _DEFAULT)
     raw = r.table.get("segments")
     if not isinstance(raw, list) or not raw:
@@ -307,16 +377,23 @@ def _parse_motion(r: _Reader) -> MotionSpec:
     segments = []
     for i, item in enumerate(raw):
         seg = _Reader(item, f"{r.path}.segments[{i}]", r.source)
-        seg.check_keys(("kind", "angle_deg", "law", "lift_mm", "exponents", "coefficients", "phases"))
+        if seg.has(other_key):
+            raise seg.error(other_key, seg.table[other_key],
+                            f"{'an oscillating' if oscillating else 'a translating'} follower takes its "
+                            f"lift as {lift_key}", lift_key)
+        seg.check_keys(("kind", "angle_deg", "law", lift_key, "exponents", "coefficients", "phases"))
         kind = seg.choice("kind", KINDS)
         angle = seg.number("angle_deg", low=0.0, low_open=True, high=360.0)
         if kind == "dwell":
-            for extra in ("law", "lift_mm", "exponents", "coefficients", "phases"):
+            for extra in ("law", lift_key, "exponents", "coefficients", "phases"):
                 if seg.has(extra):
                     raise seg.error(extra, seg.table[extra], "a dwell takes only kind and angle_deg")
             segments.append(Segment(kind, angle))
         else:
-            lift = seg.number("lift_mm", low=0.0, low_open=True)
+            lift = seg.number(lift_key, low=0.0, low_open=True)
+            if oscillating and lift >= 180.0:
+                raise seg.error(lift_key, lift, "swings the arm through the line of centres", "< 180")
+            lift = math.radians(lift) if oscillating else lift  # the program keeps rad
             segments.append(Segment(kind, angle, _parse_law(seg), lift))
     try:
         program = MotionProgram.from_segments(segments)
@@ -327,14 +404,36 @@ def _parse_motion(r: _Reader) -> MotionSpec:
         value = total if fld.endswith("angle_deg") else _MISSING
         raise SceneError(f"{r.path}.{fld}", value, problem,
                          "angles summing to 360" if value is not _MISSING else None, r.source) from None
-    return _build(MotionSpec, rpm=rpm, program=program, segments=tuple(dict(s) for s in raw),
-                  samples=samples, extrema=extrema)
+    spec = _build(MotionSpec, rpm=rpm, program=program, segments=tuple(dict(s) for s in raw),
+                  samples=samples, rotation=rotation, extrema=extrema)
+    _check_resolution(spec, r)
+    return spec
+
+
+def samples_needed(program: MotionProgram) -> int:
+    """Smallest grid N that puts :data:`SAMPLES_PER_SEGMENT` samples in the shortest segment."""
+    return math.ceil(SAMPLES_PER_SEGMENT * 360.0 / min(program.angles_deg) - 1e-9)
+
+
+def _check_resolution(motion: MotionSpec, r: _Reader) -> None:
+    angles = motion.program.angles_deg
+    need = samples_needed(motion.program)
+    if motion.samples < need:
+        i = min(range(len(angles)), key=lambda k: angles[k])
+        got = motion.samples * angles[i] / 360.0
+        raise r.error("samples", motion.samples,
+                      f"too coarse: the {angles[i]:g} deg segment {r.path}.segments[{i}] gets "
+                      f"{got:.3g} samples, {SAMPLES_PER_SEGMENT} are needed to resolve it",
+                      f"{need}..{SAMPLES_MAX}")
 
 
 def _parse_follower(r: _Reader) -> FollowerSpec:
+    ftype = r.choice("type", FOLLOWER_TYPES)
+    if ftype in OSCILLATING_TYPES:
+        return _parse_oscillating_follower(r, ftype)
     r.check_keys(("type", "mass_kg", "spring_N_per_m", "preload_mm", "damping_Ns_per_m",
-                  "gravity_m_s2", "roller_radius_mm", "offset_mm"))
-    ftype = r.choice("type", ("flat", "roller"))
+                  "gravity_m_s2", "roller_radius_mm", "offset_mm", "max_pressure_angle_deg",
+                  "min_curvature_radius_mm"))
     train = None
     if r.has("mass_kg") or r.has("spring_N_per_m"):
         train = _build(
@@ -350,14 +449,73 @@ def _parse_follower(r: _Reader) -> FollowerSpec:
             if r.has(key):
                 raise r.error(key, r.table[key], "needs mass_kg or spring_N_per_m (loads are off)")
     if ftype == "roller":
+        limit = r.number("max_pressure_angle_deg", _DEFAULT, low=0.0, low_open=True)
+        if limit is not _DEFAULT and limit >= 90.0:
+            raise r.error("max_pressure_angle_deg", limit, "out of range", "> 0 and < 90")
         return _build(FollowerSpec, type=ftype, train=train,
                       roller_radius_mm=r.number("roller_radius_mm", low=0.0, low_open=True),
-                      offset_mm=r.number("offset_mm", _DEFAULT))
-    for key in ("roller_radius_mm", "offset_mm"):
+                      offset_mm=r.number("offset_mm", _DEFAULT), max_pressure_angle_deg=limit,
+                      # a roller's default differs from the flat face's: 0 = just no undercut
+                      min_curvature_radius_mm=r.number("min_curvature_radius_mm",
+                                                       ROLLER_MIN_CURVATURE_RADIUS_MM, low=0.0))
+    for key in ("roller_radius_mm", "offset_mm", "max_pressure_angle_deg"):
         if r.has(key):
             raise r.error(key, r.table[key], "only for type = 'roller'")
-    return FollowerSpec(type=ftype, train=train)
+    # > 0: a flat face on rho = 0 rides a corner, where the contact stress is unbounded
+    return _build(FollowerSpec, type=ftype, train=train,
+                  min_curvature_radius_mm=r.number("min_curvature_radius_mm", _DEFAULT, low=0.0,
+                                                   low_open=True))
 
+
+OSCILLATING_KEYS = {
+    "oscillating_roller": ("pivot_distance_mm", "arm_length_mm", "roller_radius_mm", "max_pressure_angle_deg",
+                           "min_curvature_radius_mm"),
+    "oscillating_flat": ("pivot_distance_mm", "face_offset_mm", "min_curvature_radius_mm"),
+}
+ROCKER_LOAD_KEYS = ("inertia_kg_m2", "spring_N_m_per_rad", "preload_rad", "damping_N_m_s_per_rad")
+
+
+def _parse_oscillating_follower(r: _Reader, ftype: str) -> FollowerSpec:
+    """[follower] of a rocker: pivot, arm or face, limits, and the train about the pivot.
+
+    Whether the geometry closes for the prime (base) radius the cam gets is checked where that
+    radius is known (the design or the sizing); here d > 0, l > 0 and R_f > 0.
+    """
+    own = OSCILLATING_KEYS[ftype]
+    translating = ("mass_kg", "spring_N_per_m", "preload_mm", "damping_Ns_per_m", "gravity_m_s2", "offset_mm")
+    for key in translating:
+        if r.has(key):
+            raise r.error(key, r.table[key], f"not a key of an {ftype} follower",
+                          ", ".join((*own, *ROCKER_LOAD_KEYS)))
+    r.check_keys(("type", *own, *ROCKER_LOAD_KEYS))
+    train = None
+    if r.has("inertia_kg_m2") or r.has("spring_N_m_per_rad"):
+        train = _build(RockerTrain, inertia_kg_m2=r.number("inertia_kg_m2", _DEFAULT, low=0.0),
+                       spring_N_m_per_rad=r.number("spring_N_m_per_rad", _DEFAULT, low=0.0),
+                       preload_rad=r.number("preload_rad", _DEFAULT),
+                       damping_N_m_s_per_rad=r.number("damping_N_m_s_per_rad", _DEFAULT, low=0.0))
+    else:
+        for key in ("preload_rad", "damping_N_m_s_per_rad"):
+            if r.has(key):
+                raise r.error(key, r.table[key], "needs inertia_kg_m2 or spring_N_m_per_rad (loads are off)")
+    pivot = r.number("pivot_distance_mm", low=0.0, low_open=True)
+    if ftype == "oscillating_flat":
+        # a flat face's own default (rho > 0: a face on rho = 0 rides a corner)
+        return _build(FollowerSpec, type=ftype, train=train, pivot_distance_mm=pivot,
+                      face_offset_mm=r.number("face_offset_mm", _DEFAULT),
+                      min_curvature_radius_mm=r.number("min_curvature_radius_mm",
+                                                       OSCILLATING_FLAT_MIN_CURVATURE_RADIUS_MM, low=0.0,
+                                                       low_open=True))
+    limit = r.number("max_pressure_angle_deg", _DEFAULT, low=0.0, low_open=True)
+    if limit is not _DEFAULT and limit >= 90.0:
+        raise r.error("max_pressure_angle_deg", limit, "out of range", "> 0 and < 90")
+    return _build(FollowerSpec, type=ftype, train=train, pivot_distance_mm=pivot,
+                  arm_length_mm=r.number("arm_length_mm", low=0.0, low_open=True),
+                  roller_radius_mm=r.number("roller_radius_mm", low=0.0, low_open=True),
+                  max_pressure_angle_deg=limit,
+                  # as for a translating roller: 0 = just no undercut
+                  min_curvature_radius_mm=r.number("min_curvature_radius_mm", ROLLER_MIN_CURVATURE_RADIUS_MM,
+                                                   low=0.0))
 
 def _parse_material(r: _Reader) -> Material:
     r.check_keys(("E_MPa", "poisson"))
@@ -371,20 +529,115 @@ def _parse_contact(r: _Reader) -> ContactSpec:
                        cam=_parse_material(r.sub("cam")), follower=_parse_material(r.sub("follower")))
 
 
-def _parse_design(r: _Reader) -> DesignSpec:
-    r.check_keys(("mode", "base_radius_mm", "face_width_mm", "sigma_max_MPa", "alpha", "gamma",
-                  "solver", "seed"))
-    spec = _build(
-        DesignSpec,
-        base_radius_mm=r.interval("base_radius_mm"),
-        face_width_mm=r.interval("face_width_mm"),
-        sigma_max_MPa=r.number("sigma_max_MPa", low=0.0, low_open=True),
+DESIGN_VARIABLES = {"flat": ("base_radius_mm", "face_width_mm"),
+                    "roller": ("base_radius_mm", "roller_radius_mm", "offset_mm"),
+                    "oscillating_roller": ("base_radius_mm", "roller_radius_mm", "pivot_distance_mm",
+                                           "arm_length_mm"),
+                    "oscillating_flat": ("base_radius_mm", "pivot_distance_mm", "face_offset_mm")}
+
+
+def _fixed_or_free(r: _Reader, key: str, default=_MISSING, *, positive: bool = True) -> tuple[float, float]:
+    """A design variable: a number (fixed, returned as (v, v)) or a [low, high] pair (free)."""
+    if r.has(key) and not isinstance(r.table[key], list):
+        v = r.number(key, low=0.0 if positive else None, low_open=positive)
+        return v, v
+    if not r.has(key) and default is not _MISSING:
+        return default
+    if positive:
+        return r.interval(key)
+    v = r.table.get(key)
+    ok = (isinstance(v, list) and len(v) == 2
+          and all(isinstance(x, int | float) and not isinstance(x, bool) and math.isfinite(x) for x in v))
+    if not ok:
+        raise r.error(key, v if r.has(key) else _MISSING, "must be a number (fixed) or a pair [low, high] "
+                      "(free) of finite numbers")
+    if v[0] > v[1]:
+        raise r.error(key, v, "bounds must satisfy low <= high")
+    return float(v[0]), float(v[1])
+
+
+def _rocker_sigma_max(r: _Reader, has_contact: bool, common: dict) -> float | None:
+    """sigma_max_MPa of a roller or rocker [design]: required with [contact], refused without (no stress)."""
+    if has_contact:
+        return r.number("sigma_max_MPa", low=0.0, low_open=True)
+    if r.has("sigma_max_MPa"):
+        raise r.error("sigma_max_MPa", r.table["sigma_max_MPa"], "needs a [contact] section (no "
+                      "stress is modelled without it)")
+    if common["gamma"] != 0:
+        raise r.error("gamma", common["gamma"], "the stress term needs a [contact] section",
+                      "0 without [contact]")
+    return None
+
+
+def _check_rocker_closes(r: _Reader, base, roller, pivot_distance_mm, arm_length_mm) -> None:
+    """Refuse bounds in which no oscillating-roller design closes: |d - l| < R_p < d + l nowhere.
+
+    Designs of the box that do not close are left to the solver's reach constraint; a box with
+    none that does is a scene error naming pivot_distance_mm (the pivot cannot be placed).
+    """
+    (d0, d1), (l0, l1) = pivot_distance_mm, arm_length_mm
+    rp0, rp1 = base[0] + roller[0], base[1] + roller[1]
+    gap = max(d0 - l1, l0 - d1, 0.0)  # smallest |d - l| in the box
+    if rp1 <= gap or rp0 >= d1 + l1:
+        value = list(pivot_distance_mm) if d0 != d1 else d0
+        raise r.error("pivot_distance_mm", value,
+                      f"no design in the bounds closes: the prime radius R_b + R_f ({rp0:g}..{rp1:g} mm) "
+                      f"must lie between |d - l| (>= {gap:g} mm) and d + l (<= {d1 + l1:g} mm)",
+                      "a pivot distance closer to the arm length, or a larger base radius")
+
+
+def _parse_design(r: _Reader, follower: FollowerSpec, has_contact: bool) -> DesignSpec:
+    """[design] of a flat-face or roller follower (DESIGN_VARIABLES says which variables)."""
+    own = DESIGN_VARIABLES[follower.type]
+    others = {v for vs in DESIGN_VARIABLES.values() for v in vs} - set(own)
+    for key in sorted(others):
+        if r.has(key):
+            raise r.error(key, r.table[key], f"is not a design variable of a {follower.type} follower",
+                          ", ".join(own))
+    r.check_keys(("mode", *own, "sigma_max_MPa", "alpha", "gamma", "solver", "seed"))
+    common = dict(
         mode=r.choice("mode", MODES, _DEFAULT),
         alpha=r.number("alpha", _DEFAULT, low=0.0),
-        gamma=r.number("gamma", _DEFAULT, low=0.0),
+        # no stress term without [contact] (a roller may be sized without it)
+        gamma=r.number("gamma", _DEFAULT if has_contact else 0.0, low=0.0),
         solver=r.choice("solver", SOLVERS, _DEFAULT),
         seed=r.number("seed", _DEFAULT, low=0, integer=True),
     )
+    if follower.type == "flat":
+        spec = _build(DesignSpec, base_radius_mm=r.interval("base_radius_mm"),
+                      face_width_mm=r.interval("face_width_mm"),
+                      sigma_max_MPa=r.number("sigma_max_MPa", low=0.0, low_open=True), **common)
+    elif follower.type == "oscillating_flat":
+        base = _fixed_or_free(r, "base_radius_mm")
+        pivot = _fixed_or_free(r, "pivot_distance_mm", (follower.pivot_distance_mm,) * 2)
+        offset = _fixed_or_free(r, "face_offset_mm", (follower.face_offset_mm,) * 2, positive=False)
+        if base[0] + offset[0] >= pivot[1] or base[1] + offset[1] <= 0:
+            raise r.error("pivot_distance_mm", list(pivot) if pivot[0] != pivot[1] else pivot[0],
+                          f"no design in the bounds closes: R_b + face_offset ({base[0] + offset[0]:g}.."
+                          f"{base[1] + offset[1]:g} mm) must lie between 0 and the pivot distance",
+                          "a larger pivot distance")
+        spec = _build(DesignSpec, base_radius_mm=base, face_width_mm=None,
+                      sigma_max_MPa=_rocker_sigma_max(r, has_contact, common), pivot_distance_mm=pivot,
+                      face_offset_mm=offset, **common)
+    else:
+        base = _fixed_or_free(r, "base_radius_mm")
+        roller = _fixed_or_free(r, "roller_radius_mm", (follower.roller_radius_mm,) * 2)
+        if follower.type == "oscillating_roller":
+            variables = dict(
+                pivot_distance_mm=_fixed_or_free(r, "pivot_distance_mm", (follower.pivot_distance_mm,) * 2),
+                arm_length_mm=_fixed_or_free(r, "arm_length_mm", (follower.arm_length_mm,) * 2))
+            _check_rocker_closes(r, base, roller, **variables)
+        else:
+            offset = _fixed_or_free(r, "offset_mm", (follower.offset_mm,) * 2, positive=False)
+            reach = base[0] + roller[0]  # the smallest prime radius in the box
+            if max(abs(offset[0]), abs(offset[1])) >= reach:
+                raise r.error("offset_mm", list(offset) if offset[0] != offset[1] else offset[0],
+                              f"allows |e| >= R_p = R_b + R_f (smallest in the bounds: {reach:g} mm): the "
+                              "follower axis must cut the prime circle", f"|e| < {reach:g}")
+            variables = dict(offset_mm=offset)
+        sigma_max = _rocker_sigma_max(r, has_contact, common)
+        spec = _build(DesignSpec, base_radius_mm=base, face_width_mm=None, sigma_max_MPa=sigma_max,
+                      roller_radius_mm=roller, **variables, **common)
     if spec.alpha == 0 and spec.gamma == 0:
         raise r.error("alpha", 0.0, "alpha and gamma are both zero: nothing to minimize",
                       "alpha >= 0, gamma >= 0, not both 0")
@@ -414,8 +667,12 @@ def _parse_dynamics(r: _Reader, motion: MotionSpec, follower: FollowerSpec) -> D
                   "harmonics", "steps_per_cycle", "transient_tolerance", "max_cycles",
                   "damping_factors", "speed_factors", "wn_factors", "jump_speed_range_hz",
                   "shaping_band", "shaping_harmonics", "shaping_steps"))
-    kind = r.choice("follower", ("translating", "oscillating"))
-    if kind == "oscillating":
+    kind = r.choice("follower", ("translating", "oscillating"),
+                    "oscillating" if follower.oscillating else _MISSING)
+    if follower.oscillating and kind != "oscillating":
+        raise r.error("follower", kind, f"follower.type = {follower.type!r} swings: its dynamics is "
+                      "oscillating", "oscillating")
+    if kind == "oscillating" and not follower.oscillating:  # the older form: rad written as lift_mm
         for i, seg in enumerate(motion.segments):
             lift = seg.get("lift_mm", 0.0)
             if lift > math.pi:
@@ -494,24 +751,18 @@ def scene_from_dict(data: dict, name: str = "scene", source: str | None = None) 
         raise SceneError("motion", _MISSING, "section [motion] is required", source=source)
     if "follower" not in data:
         raise SceneError("follower", _MISSING, "section [follower] is required", source=source)
-    motion = _parse_motion(top.sub("motion"))
+    ftype = data["follower"].get("type") if isinstance(data["follower"], dict) else None
+    motion = _parse_motion(top.sub("motion"), oscillating=ftype in OSCILLATING_TYPES)
     follower = _parse_follower(top.sub("follower"))
     contact = _parse_contact(top.sub("contact")) if "contact" in data else None
     if contact is not None and follower.train is None:
         raise SceneError("contact", _MISSING,
                          "contact stress needs the follower force: give follower.mass_kg and/or "
                          "follower.spring_N_per_m", source=source)
-    if contact is not None and follower.type != "flat":
-        raise SceneError("contact", _MISSING, "contact stress is modelled for a flat-face follower "
-                         "only", "follower.type = 'flat'", source=source)
-    design = _parse_design(top.sub("design")) if "design" in data else None
-    if design is not None:
-        if follower.type != "flat":
-            raise SceneError("design", _MISSING, "the optimal-design problem is for a flat-face "
-                             "follower", "follower.type = 'flat'", source=source)
-        if contact is None:
-            raise SceneError("design", _MISSING, "the objective needs the contact stress: add a "
-                             "[contact] section", source=source)
+    if "design" in data and contact is None and follower.type == "flat":
+        raise SceneError("design", _MISSING, "the objective needs the contact stress: add a "
+                         "[contact] section", source=source)
+    design = _parse_design(top.sub("design"), follower, contact is not None) if "design" in data else None
     guide = _parse_guide(top.sub("guide")) if "guide" in data else None
     if guide is not None and (follower.train is None or follower.type != "flat"):
         raise SceneError("guide", _MISSING, "guide reactions need a flat-face follower with loads "
@@ -530,9 +781,22 @@ def with_design(scene: Scene, **overrides) -> Scene:
     if scene.design is None:
         raise SceneError("design", _MISSING, "the scene has no [design] section to override")
     table = {f.name: getattr(scene.design, f.name) for f in fields(DesignSpec)}
-    table = {k: list(v) if isinstance(v, tuple) else v for k, v in table.items()}
-    design = _parse_design(_Reader({**table, **overrides}, "design", None))
+    table = {k: list(v) if isinstance(v, tuple) else v for k, v in table.items() if v is not None}
+    design = _parse_design(_Reader({**table, **overrides}, "design", None), scene.follower,
+                           scene.contact is not None)
     return replace(scene, design=design)
+
+
+def with_samples(scene: Scene, samples: int) -> Scene:
+    """The scene on a grid of ``samples`` cam angles, checked by the same rules as ``motion.samples``.
+
+    Raises :class:`SceneError` naming ``motion.samples`` when the grid is out of range or too
+    coarse for the shortest segment.
+    """
+    r = _Reader({"samples": samples}, "motion", None)
+    motion = replace(scene.motion, samples=r.number("samples", low=1, high=SAMPLES_MAX, integer=True))
+    _check_resolution(motion, r)
+    return replace(scene, motion=motion)
 
 
 def parse_scene(text: str, name: str = "scene", source: str | None = None) -> Scene:
@@ -541,6 +805,9 @@ def parse_scene(text: str, name: str = "scene", source: str | None = None) -> Sc
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise SceneError("toml", _MISSING, f"not valid TOML ({exc})", source=source) from None
+    except RecursionError:
+        raise SceneError("toml", _MISSING, "nested too deeply to read", "tables and arrays nested a "
+                         "few levels", source=source) from None
     return scene_from_dict(data, name, source)
 
 
@@ -559,7 +826,37 @@ def load_scene(path_or_name: str | Path | None = None) -> Scene:
     if str(path_or_name) in BUILTIN_SCENES and not p.is_file():
         return parse_scene(builtin_scene_text(str(path_or_name)), str(path_or_name),
                            f"<built-in {path_or_name}>")
-    if not p.is_file():
-        raise SceneError("scene", str(path_or_name), "no such file or built-in scene",
+    try:
+        is_file, is_dir = p.is_file(), p.is_dir()
+    except (OSError, ValueError) as exc:  # a name too long, a NUL character
+        raise SceneError("scene", str(path_or_name), f"cannot be used as a path "
+                         f"({getattr(exc, 'strerror', None) or exc})") from None
+    if not is_file:
+        problem = "is a folder, not a scene file" if is_dir else "no such file or built-in scene"
+        raise SceneError("scene", str(path_or_name), problem,
                          f"a TOML file or one of {', '.join(BUILTIN_SCENES)}")
-    return parse_scene(p.read_text(), p.stem, str(p))
+    try:
+        raw = p.read_bytes()
+    except OSError as exc:
+        raise SceneError("scene", str(path_or_name), f"cannot be read ({exc.strerror})") from None
+    return parse_scene(decode_scene(raw, str(p)), p.stem, str(p))
+
+
+def decode_scene(raw: bytes, source: str) -> str:
+    """A scene file's bytes as text: UTF-8 (TOML's encoding), with a BOM tolerated.
+
+    Raises :class:`SceneError` for UTF-16/32 (says so), binary data or other encodings.
+    """
+    if raw.startswith((b"\xff\xfe", b"\xfe\xff")):
+        raise SceneError("scene", _MISSING, "is UTF-16 or UTF-32 text; TOML files are UTF-8",
+                         "save the file as UTF-8", source)
+    try:
+        text = raw.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise SceneError("scene", _MISSING, f"is not UTF-8 text (byte 0x{raw[exc.start]:02x} at offset "
+                         f"{exc.start}); TOML files are UTF-8", "a UTF-8 text file", source) from None
+    if "\x00" in text:
+        i = text.index("\x00")
+        raise SceneError("scene", _MISSING, f"holds a NUL character at offset {i}: a binary file, "
+                         "not a TOML scene", "a UTF-8 text file", source)
+    return text

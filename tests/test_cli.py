@@ -140,11 +140,17 @@ def test_console_entry_point_reports_without_traceback(tmp_path):
     assert not (tmp_path / "out").exists()
 
 
-def test_design_refuses_an_oscillating_follower_scene(tmp_path, capsys):
+def test_design_refuses_rad_lifts_on_a_translating_follower(tmp_path, capsys):
+    # the older way to write an oscillating follower: lift_mm read as rad by [dynamics], with a
+    # translating follower's geometry that cannot describe it
     from camjax import cli
 
+    text = builtin_scene_text("default").replace("lift_mm = 5.0", "lift_mm = 0.5")
+    text += "\n[dynamics]\nfollower = \"oscillating\"\nI3 = 0.3\nc3 = 0.1\nk23 = 1000.0\n"
+    path = tmp_path / "rad.toml"
+    path.write_text(text)
     out = tmp_path / "tb"
-    assert cli.main(["design", "thesis-bench", "--out", str(out)]) == 2
+    assert cli.main(["design", str(path), "--out", str(out)]) == 2
     err = capsys.readouterr().err
-    assert "dynamics.follower = 'oscillating'" in err and "camjax dynamics" in err
+    assert "dynamics.follower = 'oscillating'" in err and "oscillating_roller" in err
     assert not out.exists()

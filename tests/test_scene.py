@@ -139,3 +139,52 @@ def test_design_overrides_are_checked_by_the_scene_rules():
         with pytest.raises(SceneError) as info:
             with_design(scene, **bad)
         assert info.value.field == field
+
+
+ROLLER_FOLLOWER = ('type = "flat"', 'type = "roller"\nroller_radius_mm = 6.0')
+
+
+def test_limits_and_rotation_are_scene_data():
+    from camjax.geometry import FLAT_MIN_CURVATURE_RADIUS_MM
+
+    flat = parse_scene(BASE)
+    assert flat.motion.rotation == "ccw"  # the convention of camjax.geometry.pitch
+    assert flat.follower.min_curvature_radius_mm == FLAT_MIN_CURVATURE_RADIUS_MM
+    roller = parse_scene(BASE.replace(*ROLLER_FOLLOWER))
+    assert roller.follower.max_pressure_angle_deg == 30.0
+    assert roller.follower.min_curvature_radius_mm == 0.0
+    text = BASE.replace(*ROLLER_FOLLOWER).replace("samples = 360", 'samples = 360\nrotation = "cw"')
+    text = text.replace("roller_radius_mm = 6.0", "roller_radius_mm = 6.0\nmax_pressure_angle_deg = 35\n"
+                        "min_curvature_radius_mm = 2.5")
+    sc = parse_scene(text)
+    assert (sc.motion.rotation, sc.follower.max_pressure_angle_deg, sc.follower.min_curvature_radius_mm) == \
+        ("cw", 35.0, 2.5)
+
+
+@pytest.mark.parametrize(
+    "extra, field, words",
+    [
+        ("max_pressure_angle_deg = 90", "follower.max_pressure_angle_deg", "> 0 and < 90"),
+        ("max_pressure_angle_deg = 0", "follower.max_pressure_angle_deg", "out of range"),
+        ("max_pressure_angle_deg = -10", "follower.max_pressure_angle_deg", "out of range"),
+        ("min_curvature_radius_mm = -1", "follower.min_curvature_radius_mm", "out of range"),
+        ("roller_radius_mm = 0", "follower.roller_radius_mm", "out of range"),
+    ],
+)
+def test_bad_roller_limits_name_the_field(extra, field, words):
+    text = BASE.replace('type = "flat"', f'type = "roller"\n{extra}')
+    if "roller_radius_mm" not in extra:
+        text = text.replace('type = "roller"', 'type = "roller"\nroller_radius_mm = 6.0')
+    with pytest.raises(SceneError) as info:
+        parse_scene(text)
+    assert info.value.field == field and words in str(info.value)
+    assert "\n" not in str(info.value)
+
+
+def test_bad_flat_limits_and_rotation_name_the_field():
+    with pytest.raises(SceneError, match=r"follower.max_pressure_angle_deg = 30.*only for type = 'roller'"):
+        parse_scene(BASE.replace('type = "flat"', 'type = "flat"\nmax_pressure_angle_deg = 30'))
+    with pytest.raises(SceneError, match=r"follower.min_curvature_radius_mm = 0.0: out of range \(allowed: > 0\)"):
+        parse_scene(BASE.replace('type = "flat"', 'type = "flat"\nmin_curvature_radius_mm = 0.0'))
+    with pytest.raises(SceneError, match=r"motion.rotation = 'left': is not allowed \(allowed: ccw, cw\)"):
+        parse_scene(BASE.replace("samples = 360", 'samples = 360\nrotation = "left"'))

@@ -15,6 +15,7 @@ PACKAGE = ROOT / "camjax"
 LATER = {
     "camjax.evaluate": ("camjax.problem", "camjax.solvers", "camjax.pipeline", "camjax.output",
                         "camjax.cli"),
+    "camjax.rocker": ("camjax.problem", "camjax.solvers", "camjax.pipeline", "camjax.output", "camjax.cli"),
     "camjax.output": ("camjax.problem", "camjax.solvers", "camjax.pipeline", "camjax.cli",
                       "camjax.scaleout"),
     "camjax.pipeline": ("camjax.cli", "camjax.scaleout"),

@@ -623,7 +623,7 @@ def format_table(cases: Iterable[Case]) -> str:
 
 
 def format_markdown(cases: list[Case]) -> str:
-    """Markdown summary for the README: per-group results and the float32/float64 table."""
+    """Markdown summary (``extremes.md``): per-group results and the float32/float64 table."""
     groups: dict[str, list[Case]] = {}
     for c in cases:
         groups.setdefault(c.group, []).append(c)

@@ -2,6 +2,7 @@
 
 ``report`` formats a :class:`camjax.pipeline.DesignRun` as a JSON-ready dict, ``plots`` draws
 :class:`camjax.evaluate.DesignCurves` (matplotlib loads only when drawing) and ``export`` writes
-the profile CSV, DXF and the PNG figures; ``files`` stages a job's folder and writes strict JSON.
+the profile CSV, DXF and the PNG figures; ``files`` writes strict JSON; ``folder`` checks a
+command's output folder before any work, stages it and swaps it in whole.
 ``plots_dynamics`` draws the figures of a :class:`camjax.dynamics.DynamicsReport`.
 """

@@ -41,35 +41,63 @@ def write_profile_dxf(path: Path, curves: DesignCurves) -> Path:
     """Cam outline as one closed LWPOLYLINE on layer CAM_PROFILE, drawing units mm.
 
     One vertex per sample (the scene's ``samples``); raise ``samples`` for a finer polyline
-    (with 360 samples the chord error on a 30 mm cam is about 1 micrometre).
+    (with 360 samples the chord error on a 30 mm cam is about 1 micrometre). ezdxf writes the
+    document; the polyline's vertices are formatted from the array in one call, since ezdxf adds
+    and writes them one by one (quadratic: 30 s for 5e4 vertices; this way 1e6 take seconds).
     """
+    import io
+
     import ezdxf  # imported here: only the DXF export needs it
 
+    xy = np.column_stack([curves.profile_x_mm, curves.profile_y_mm])
     doc = ezdxf.new("R2010", units=ezdxf.units.MM)
     doc.header["$MEASUREMENT"] = 1  # metric
     doc.layers.add("CAM_PROFILE", color=7)
-    points = np.column_stack([curves.profile_x_mm, curves.profile_y_mm]).tolist()
-    doc.modelspace().add_lwpolyline(points, format="xy", close=True,
+    doc.modelspace().add_lwpolyline(xy[:1].tolist(), format="xy", close=True,
                                     dxfattribs={"layer": "CAM_PROFILE"})
-    doc.saveas(path)
+    stream = io.StringIO()
+    doc.write(stream)
+    head, marker, tail = stream.getvalue().partition("AcDbPolyline\n 90\n1\n 70\n1\n")
+    if not marker:
+        raise RuntimeError("ezdxf wrote the polyline in an unexpected layout")
+    vertices = io.StringIO()
+    np.savetxt(vertices, xy, fmt=" 10\n%.12f\n 20\n%.12f")  # group codes 10/20: vertex x, y
+    rest = tail[tail.index("  0\n"):]  # from the next entity (after the placeholder vertex)
+    with open(path, "w", encoding=doc.output_encoding, newline="\n") as f:
+        f.write(f"{head}AcDbPolyline\n 90\n{len(xy)}\n 70\n1\n")
+        f.write(vertices.getvalue())
+        f.write(rest)
     return path
 
 
-def write_figures(folder: Path, curves: DesignCurves, dpi: int = 100) -> list[Path]:
-    """PNG of every figure the scene declares (see :func:`camjax.output.plots.design_figures`)."""
-    from camjax.output.plots import design_figures  # matplotlib is imported only when drawing
+def write_figures(folder: Path, curves: DesignCurves, dpi: int = 100,
+                  banner: str | None = None) -> list[Path]:
+    """PNG of every figure the scene declares (see :func:`camjax.output.plots.design_figures`).
+
+    ``banner``: text of a red banner stamped on every figure (the constraints the geometry breaks).
+    """
+    from camjax.output.plots import design_figures, stamp_banner  # matplotlib only when drawing
 
     out = []
     for name, fig in design_figures(curves).items():
+        if banner:
+            stamp_banner(fig, banner)
         path = folder / name
         fig.savefig(path, dpi=dpi)
         out.append(path)
     return out
 
 
-def write_design_files(folder: str | Path, curves: DesignCurves, dpi: int = 100) -> list[Path]:
+def write_design_files(folder: str | Path, curves: DesignCurves, dpi: int = 100,
+                       banner: str | None = None) -> list[Path]:
     """Figures, profile.csv and profile.dxf into ``folder`` (created if needed); the written paths."""
+    from camjax.rocker import RockerCurves
+
+    if isinstance(curves, RockerCurves):  # an oscillating follower's files
+        from camjax.output.rocker import write_rocker_files
+
+        return write_rocker_files(folder, curves, dpi, banner)
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
-    return [*write_figures(folder, curves, dpi), write_profile_csv(folder / "profile.csv", curves),
+    return [*write_figures(folder, curves, dpi, banner), write_profile_csv(folder / "profile.csv", curves),
             write_profile_dxf(folder / "profile.dxf", curves)]

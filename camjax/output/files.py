@@ -1,33 +1,36 @@
-"""Writing a job's files: strict JSON, and a staging folder so a failed job leaves nothing behind."""
+"""Strict JSON files (the output folder itself is staged and swapped by :mod:`camjax.output.folder`)."""
 
 from __future__ import annotations
 
-import contextlib
 import json
-import shutil
-import tempfile
-from collections.abc import Iterator
+import math
 from pathlib import Path
 
-
-@contextlib.contextmanager
-def staged_output(out_dir: str | Path) -> Iterator[Path]:
-    """Write into a temporary folder; move the files into ``out_dir`` only if the block succeeds."""
-    out = Path(out_dir)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=".camjax-", dir=out.parent))
-    try:
-        yield tmp
-        out.mkdir(parents=True, exist_ok=True)
-        for item in tmp.iterdir():
-            target = out / item.name
-            if target.is_dir():
-                shutil.rmtree(target)
-            shutil.move(str(item), target)
-    finally:
-        shutil.rmtree(tmp, ignore_errors=True)
+from camjax.numerics import NonFiniteError
 
 
 def write_json(path: Path, data) -> None:
-    """JSON with a trailing newline; NaN/inf are refused (they would not be valid JSON)."""
-    path.write_text(json.dumps(data, indent=2, allow_nan=False) + "\n")
+    """JSON with a trailing newline; NaN/inf are refused (they would not be valid JSON).
+
+    Raises :class:`camjax.numerics.NonFiniteError` naming the first key that holds one.
+    """
+    try:
+        text = json.dumps(data, indent=2, allow_nan=False)
+    except ValueError:
+        raise NonFiniteError(f"non-finite value at {non_finite_key(data)} of {path.name}") from None
+    path.write_text(text + "\n")
+
+
+def non_finite_key(data, at: str = "") -> str | None:
+    """Dotted path of the first inf or NaN in nested dicts and lists (None when there is none)."""
+    if isinstance(data, float) and not math.isfinite(data):
+        return at or "the top level"
+    if isinstance(data, dict):
+        items = data.items()
+    else:
+        items = enumerate(data) if isinstance(data, list | tuple) else ()
+    for key, value in items:
+        found = non_finite_key(value, f"{at}[{key}]" if isinstance(key, int) else f"{at}.{key}".lstrip("."))
+        if found:
+            return found
+    return None

@@ -73,10 +73,11 @@ def profile_figure(curves: DesignCurves) -> Figure:
             label=f"base circle R_b = {rb:.3f} mm")
     ax.plot([0.0], [0.0], "+", color="k")
     theta = np.deg2rad(curves.theta_deg)
+    sign = 1.0 if curves.rotation == "ccw" else -1.0  # a cw cam is the mirror image (X -> -X)
     if curves.follower_type == "flat":
         i = int(np.argmax(np.abs(curves.ds_mm)))
-        axis = np.array([np.sin(theta[i]), np.cos(theta[i])])  # follower axis at this angle
-        along = np.array([np.cos(theta[i]), -np.sin(theta[i])])  # along the face
+        axis = np.array([sign * np.sin(theta[i]), np.cos(theta[i])])  # follower axis at this angle
+        along = np.array([sign * np.cos(theta[i]), -np.sin(theta[i])])  # along the face
         centre = (rb + curves.s_mm[i]) * axis
         half = 0.5 * curves.face_width_mm
         ends = np.array([centre - half * along, centre + half * along])
@@ -102,7 +103,9 @@ def profile_figure(curves: DesignCurves) -> Figure:
     ax.grid(True, alpha=0.3)
     ax.set_xlabel("X (mm)")
     ax.set_ylabel("Y (mm)")
-    ax.set_title("Cam profile (follower axis +Y at θ = 0; θ clockwise)", fontsize=10)
+    turn = "clockwise" if curves.rotation == "ccw" else "counterclockwise"  # contact point vs the cam
+    ax.set_title(f"Cam profile (follower axis +Y at θ = 0; θ {turn}; cam turns {curves.rotation})",
+                 fontsize=10)
     fig.legend(fontsize=7, loc="outside lower center", ncols=2)
     return fig
 
@@ -134,7 +137,8 @@ def loads_figure(curves: DesignCurves) -> Figure:
 
 
 def stress_figure(curves: DesignCurves) -> Figure:
-    """Hertz contact stress (MPa, with the allowed value if any) and profile curvature radius (mm)."""
+    """Hertz contact stress (MPa, with the allowed value if any) below it the flat face's radius of
+    curvature (mm) or the roller's pressure angle (deg, with its limit)."""
     fig = Figure(figsize=(7.0, 4.5), layout="constrained")
     ax_s, ax_r = fig.subplots(2, 1, sharex=True)
     t = curves.theta_deg
@@ -149,15 +153,37 @@ def stress_figure(curves: DesignCurves) -> Figure:
     ax_s.set_ylabel("σ (MPa)")
     ax_s.legend(fontsize=7, loc="upper left")
     _cycle_axis(ax_s, curves, label=False)
-    ax_r.plot(t, curves.rho_mm, color="C2", linewidth=1.2)
+    if curves.rho_mm is not None:  # flat face: the profile's radius of curvature
+        lower, unit, what = curves.rho_mm, "mm", "curvature"
+        ax_r.set_ylabel("ρ (mm)")
+        j = int(np.argmin(lower))
+    else:  # roller: the pressure angle that tilts the normal force F / cos φ
+        lower, unit, what = curves.pressure_angle_deg, "°", "pressure angle"
+        ax_r.set_ylabel("φ (°)")
+        for lim in (-curves.pressure_angle_limit_deg, curves.pressure_angle_limit_deg):
+            ax_r.axhline(lim, color="0.3", linestyle="--", linewidth=0.8)
+        j = int(np.argmax(np.abs(lower)))
+    ax_r.plot(t, lower, color="C2", linewidth=1.2)
     ax_r.axhline(0.0, color="0.3", linewidth=0.6)
-    j = int(np.argmin(curves.rho_mm))
-    ax_r.plot(t[j], curves.rho_mm[j], "o", color="k", markersize=3)
-    ax_r.annotate(f"min {curves.rho_mm[j]:.4g} mm @ {t[j]:g}°", (t[j], curves.rho_mm[j]), fontsize=7,
-                  xytext=(-90, 4), textcoords="offset points")
-    ax_r.set_ylabel("ρ (mm)")
+    ax_r.plot(t[j], lower[j], "o", color="k", markersize=3)
+    ax_r.annotate(f"{'min' if curves.rho_mm is not None else 'max |φ|'} {lower[j]:.4g} {unit} @ {t[j]:g}°",
+                  (t[j], lower[j]), fontsize=7, xytext=(-90, 4), textcoords="offset points")
     _cycle_axis(ax_r, curves)
-    ax_s.set_title(f"Contact stress and curvature at R_b = {curves.base_radius_mm:.3f} mm", fontsize=10)
+    ax_s.set_title(f"Contact stress and {what} at R_b = {curves.base_radius_mm:.3f} mm", fontsize=10)
+    return fig
+
+
+def stamp_banner(fig: Figure, text: str) -> Figure:
+    """A red banner across the top of ``fig`` (e.g. naming the constraints a geometry breaks).
+
+    The layout keeps the top 0.35 inch free for it, so it covers no title or axis.
+    """
+    engine = fig.get_layout_engine()
+    if engine is not None and hasattr(engine, "set"):
+        engine.set(rect=(0.0, 0.0, 1.0, 1.0 - 0.35 / fig.get_figheight()))
+    fig.text(0.5, 0.995, text, ha="center", va="top", fontsize=8, color="white", fontweight="bold",
+             wrap=True, zorder=10, bbox={"boxstyle": "square,pad=0.4", "facecolor": "#c00000",
+                                         "edgecolor": "none"})
     return fig
 
 

@@ -14,10 +14,9 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from camjax import geometry, loads
-from camjax.evaluate import DesignCurves, Extremes, SceneArrays
-from camjax.geometry import PRESSURE_ANGLE_LIMIT_DEG
+from camjax.evaluate import DesignCurves, Extremes, SceneArrays, curve_extremes, curve_names
 from camjax.program import joints
-from camjax.scene import DesignSpec, Scene
+from camjax.scene import DesignSpec, FollowerSpec, Scene
 
 if TYPE_CHECKING:  # the pipeline hands its result down; nothing here calls back into it
     from camjax.pipeline import DesignRun, DesignSolution, MinBaseRadius
@@ -62,7 +61,7 @@ def scaled(e: Extremes, factor: float = 1.0, offset: float = 0.0) -> dict[str, f
             "min": e.min * factor + offset, "min_deg": e.min_deg}
 
 
-def _negative_ranges_deg(values, theta_deg) -> list[list[float]]:
+def negative_ranges_deg(values, theta_deg) -> list[list[float]]:
     """[first, last] sample angles (deg) of each run where values < 0, wrapping over 360."""
     neg = np.asarray(values) < 0
     t = np.asarray(theta_deg)
@@ -87,11 +86,15 @@ def _negative_ranges_deg(values, theta_deg) -> list[list[float]]:
 # ------------------------------------------------------------------------ report pieces
 
 
-def kinematics_block(arrays: SceneArrays, extremes: dict[str, Extremes]) -> dict[str, Any]:
+def kinematics_block(arrays: SceneArrays, extremes: dict[str, Extremes] | None = None) -> dict[str, Any]:
     """Follower motion extrema: displacement (mm), velocity, acceleration, jerk (SI), angles in deg.
 
-    The SI extrema are the per-radian ones times w^k 1e-3 (w > 0: the same angles).
+    The SI extrema are the per-radian ones times w^k 1e-3 (w > 0: the same angles). Without
+    ``extremes``, the samples' own.
     """
+    if extremes is None:
+        t = arrays.theta_deg
+        extremes = {n: Extremes(**extrema(getattr(arrays.kin, n), t)) for n in ("s", "ds", "d2s", "d3s")}
     w = _f(arrays.cam_speed_rad_s)
     return {
         "displacement_mm": scaled(extremes["s"]),
@@ -138,7 +141,7 @@ def loads_block(scene: Scene, arrays: SceneArrays, extremes: dict[str, Extremes]
             "min_force_N": f.min,
             "min_force_deg": f.min_deg,
             "lost": bool(np.any(np.asarray(force) < 0) or f.min < 0),
-            "lost_ranges_deg": _negative_ranges_deg(force, t),
+            "lost_ranges_deg": negative_ranges_deg(force, t),
         },
     }
     if scene.guide is not None:
@@ -165,6 +168,8 @@ def guide_block(scene: Scene, arrays: SceneArrays, extremes: dict[str, Extremes]
         offset = extremes["ds"]  # the contact offset is s'
         worst = {"min": offset.min, "min_deg": offset.min_deg}
     else:
+        # a in Chen's frame, whose friction directions turn with the cam: a cw cam is the mirror
+        # image of the ccw one (face, friction and all), so a = s' for either rotation
         offset = geometry.flat_contact_offset(arrays.kin)
         r = loads.guide_reactions(guide, arrays.force_N, offset)
         reactions = {"cam_force_N": extrema(r.cam_force, t), "reaction_1_N": extrema(r.reaction_1, t),
@@ -190,15 +195,26 @@ def guide_block(scene: Scene, arrays: SceneArrays, extremes: dict[str, Extremes]
 # ------------------------------------------------------------------------- base radius
 
 
-def min_base_radius_block(follower_type: str, minimum: MinBaseRadius) -> dict[str, Any]:
-    """Smallest admissible base radius (mm), the cam angle (deg) where it binds, and the rule."""
-    if follower_type == "flat":
-        rule = "flat face: rho = R_b + s + s'' >= 0 at every cam angle"
-    else:
-        rule = (f"roller: |pressure angle| <= {PRESSURE_ANGLE_LIMIT_DEG:g} deg "
-                "and no undercut at every sample (bisection)")
-    return {"min_base_radius_mm": minimum.radius_mm, "min_base_radius_deg": minimum.angle_deg,
-            "min_base_radius_rule": rule}
+def min_base_radius_block(follower: FollowerSpec, minimum: MinBaseRadius,
+                          exact: bool = False) -> dict[str, Any]:
+    """Smallest admissible base radius (mm), the cam angle (deg) where it binds, and the rule.
+
+    Roller: also the prime-circle radius R_b + R_f, and the rule names the binding limit
+    (pressure angle or undercut) and its angle. ``exact``: the flat face's radius was refined off
+    the grid (every cam angle, not every sample).
+    """
+    out = {"min_base_radius_mm": minimum.radius_mm, "min_base_radius_deg": minimum.angle_deg}
+    if follower.type == "flat":
+        where = "cam angle" if exact else "sample"
+        return {**out, "min_base_radius_rule": f"flat face: rho = R_b + s + s'' >= 0 at every {where}"}
+    f = follower
+    limits = {"pressure_angle": f"pressure angle |phi| <= {f.max_pressure_angle_deg:g} deg",
+              "undercut": f"no undercut (convex cam-surface radius >= {f.min_curvature_radius_mm:g} mm)"}
+    other = next(k for k in limits if k != minimum.binding)
+    rule = (f"roller: {limits[minimum.binding]} binds at {minimum.angle_deg:g} deg "
+            f"(R_f = {f.roller_radius_mm:g} mm, offset {f.offset_mm:g} mm; {limits[other]} holds)")
+    return {**out, "min_prime_radius_mm": minimum.prime_radius_mm, "min_base_radius_rule": rule,
+            "min_base_radius_binding": minimum.binding}
 
 
 def face_width_block(scene: Scene, extremes: dict[str, Extremes]) -> dict[str, Any]:
@@ -224,20 +240,34 @@ def design_block(spec: DesignSpec, solution: DesignSolution) -> dict[str, Any]:
     """The solver's result with the report's additions.
 
     Added to the solver's JSON: ``peak_stress_MPa`` (the design's peak stress computed exactly as
-    the report's stress curve), the smallest admissible R_b and L (``required_*``) with the
-    constraint that binds there, and ``violations`` as readable sentences.
+    the report's stress curve; null for a roller without [contact]), the smallest admissible R_b
+    (and, flat face, L) (``required_*``) with the constraint that binds there, and ``violations``
+    as readable sentences. Roller: R_b required at the design's R_f and offset (pressure angle
+    and undercut), and the design variables base_radius_mm, roller_radius_mm, offset_mm,
+    prime_radius_mm come from the solver.
     """
     out = dict(solution.result)
     sigma_peak, required = solution.peak_stress_MPa, solution.required_base_radius_mm
-    required_width = solution.required_face_width_mm
-    rb_hi, l_hi = spec.base_radius_mm[1], spec.face_width_mm[1]
+    rb_hi = spec.base_radius_mm[1]
     sentences = {
-        "curvature": f"rho <= {solution.rho_min_limit_mm:g} mm somewhere (min rho "
-                     f"{out['rho_min_mm']:.6g} mm): the flat face cannot follow the profile",
-        "stress": f"peak stress {sigma_peak:.6g} MPa > sigma_max {spec.sigma_max_MPa:g} MPa",
-        "face_width": f"face width needs {required_width:.6g} mm > upper bound {l_hi:g} mm",
+        "stress": f"peak stress {sigma_peak or 0.0:.6g} MPa > sigma_max {spec.sigma_max_MPa or 0.0:g} MPa",
         "bounds": "a design variable is outside its bounds",
     }
+    if spec.face_width_mm is not None:  # flat face
+        sentences.update({
+            "curvature": f"rho <= {solution.rho_min_limit_mm:g} mm somewhere (min rho "
+                         f"{out['rho_min_mm']:.6g} mm): the flat face cannot follow the profile",
+            "face_width": f"face width needs {solution.required_face_width_mm:.6g} mm > upper bound "
+                          f"{spec.face_width_mm[1]:g} mm",
+        })
+    else:
+        sentences.update({
+            "pressure_angle": f"pressure angle {out['pressure_angle_max_deg']:.6g} deg at "
+                              f"{out['pressure_angle_max_at_deg']:g} deg > limit "
+                              f"{out['max_pressure_angle_deg']:g} deg",
+            "undercut": f"the roller undercuts the cam: smallest convex cam-surface radius "
+                        f"{out['cam_rho_min_mm']:.6g} mm < {solution.rho_min_limit_mm:g} mm",
+        })
     violations = [sentences[name] for name in out["violated"]]
     if required > rb_hi:
         violations.insert(0, f"base radius needs {required:.6g} mm > upper bound {rb_hi:g} mm")
@@ -247,8 +277,9 @@ def design_block(spec: DesignSpec, solution: DesignSolution) -> dict[str, Any]:
         "required_base_radius_mm": required,
         "required_base_radius_deg": solution.required_base_radius_deg,
         "binding_constraint": solution.binding_constraint,
-        "required_face_width_mm": required_width,
     })
+    if solution.required_face_width_mm is not None:
+        out["required_face_width_mm"] = solution.required_face_width_mm
     return out
 
 
@@ -271,10 +302,11 @@ def evaluated_block(curves: DesignCurves, extremes: dict[str, Extremes]) -> dict
         out["roller"] = {
             "roller_radius_mm": curves.roller_radius_mm,
             "offset_mm": curves.offset_mm,
+            "prime_radius_mm": curves.base_radius_mm + curves.roller_radius_mm,
             "pressure_angle_deg": {"max": deg(phi.max), "max_deg": phi.max_deg, "min": deg(phi.min),
                                    "min_deg": phi.min_deg, "max_abs": deg(worst[0]), "max_abs_deg": worst[1]},
-            "pressure_angle_limit_deg": PRESSURE_ANGLE_LIMIT_DEG,
-            "pressure_angle_ok": bool(deg(worst[0]) <= PRESSURE_ANGLE_LIMIT_DEG),
+            "pressure_angle_limit_deg": curves.pressure_angle_limit_deg,
+            "pressure_angle_ok": bool(deg(worst[0]) <= curves.pressure_angle_limit_deg),
             "pitch_rho_mm": {"min_abs": rho.min, "min_abs_deg": rho.min_deg,
                              "concave": bool(np.any(curves.pitch_rho_mm < 0))},
             "undercut_margin_mm": {"min": margin.min, "min_deg": margin.min_deg},
@@ -283,38 +315,63 @@ def evaluated_block(curves: DesignCurves, extremes: dict[str, Extremes]) -> dict
     return out
 
 
+def feasibility_block(violations) -> dict[str, Any]:
+    """Whether the written geometry is usable, and each broken constraint as {constraint, message}."""
+    return {"feasible": not violations,
+            "violations": [{"constraint": v.constraint, "message": v.message} for v in violations]}
+
+
 # ------------------------------------------------------------------------------ report
 
 
-def build_report(scene: Scene, run: DesignRun) -> dict[str, Any]:
-    """The report of a scene's design run as a plain, JSON-ready dict."""
+def header_block(scene: Scene, arrays: SceneArrays, extremes: dict[str, Extremes] | None = None
+                 ) -> dict[str, Any]:
+    """Keys every report starts with: version, scene, grid, speed, follower, segments, motion, FLCD.
+
+    ``extremes``: the run's (:func:`camjax.evaluate.curve_extremes`; exact when the arrays carry
+    their model); None: the samples' own (an oscillating follower, whose report replaces the
+    kinematics with its own, stays on the grid).
+    """
     import camjax  # the version lives in the package
 
-    arrays = run.arrays
-    data: dict[str, Any] = {
+    return {
         "camjax_version": camjax.__version__,
         "scene": scene.name,
         "dtype": str(arrays.kin.s.dtype),
         "models": sorted(scene.needs()),
         "samples": int(arrays.theta_deg.shape[0]),
         "cam_speed_rpm": scene.motion.rpm,
+        "rotation": scene.motion.rotation,
         "cam_speed_rad_s": _f(arrays.cam_speed_rad_s),
         "follower_type": scene.follower.type,
         "segments": [dict(s) for s in scene.motion.segments],
-        "extrema": "grid" if arrays.model is None else "exact",
-        "kinematics": kinematics_block(arrays, run.extremes),
+        "extrema": "exact" if extremes is not None and arrays.model is not None else "grid",
+        "kinematics": kinematics_block(arrays, extremes),
         "flcd": flcd_block(scene),
         "flcd_units": FLCD_UNITS,
     }
-    block = loads_block(scene, arrays, run.extremes)
+
+
+def build_report(scene: Scene, run: DesignRun) -> dict[str, Any]:
+    """The report of a scene's design run as a plain, JSON-ready dict."""
+    arrays = run.arrays
+    extremes = run.extremes
+    if extremes is None:  # a run built without them: the samples' own
+        extremes = curve_extremes(scene, arrays._replace(model=None), curve_names(scene, arrays),
+                                  run.base_radius_mm, roller_radius_mm=run.curves.roller_radius_mm,
+                                  offset_mm=run.curves.offset_mm)
+    data = header_block(scene, arrays if run.extremes is not None else arrays._replace(model=None), extremes)
+    block = loads_block(scene, arrays, extremes)
     if block is not None:
         data["loads"] = block
-    data.update(min_base_radius_block(scene.follower.type, run.min_base_radius))
-    data.update(face_width_block(scene, run.extremes))
+    data.update(min_base_radius_block(scene.follower, run.min_base_radius,
+                                      run.extremes is not None and arrays.model is not None))
+    data.update(face_width_block(scene, extremes))
     if run.design is not None:
         data["design"] = design_block(scene.design, run.design)
     data["evaluated_at"] = {"base_radius_mm": run.base_radius_mm,
                             "face_width_mm": run.curves.face_width_mm,
-                            "source": run.base_radius_source}
-    data.update(evaluated_block(run.curves, run.extremes))
+                            "source": run.base_radius_source,
+                            **feasibility_block(run.violations)}
+    data.update(evaluated_block(run.curves, extremes))
     return data

@@ -108,8 +108,8 @@ def configure_worker(cache_dir: str | None) -> None:
 @functools.lru_cache(maxsize=8)
 def _problem(scene_text: str, scene_name: str, samples: int):
     """The scene's problem, built once per worker process and scene (blocks of a scene share it)."""
-    from camjax.problem import problem_from_scene
     from camjax.scene import parse_scene
+    from camjax.solvers.base import problem_from_scene
 
     scene = parse_scene(scene_text, scene_name, f"<sweep scene {scene_name}>")
     return problem_from_scene(scene, samples=samples or None)

@@ -41,8 +41,10 @@ def requested(args) -> bool:
 
 def check(args, usage_error) -> None:
     """Validate the options; ``usage_error(message)`` is the CLI's exception class."""
+    from camjax.scene import quote
+
     if args.address is not None and args.backend not in (None, "ray"):
-        raise usage_error(f"--address = {args.address!r}: only the ray backend connects to a cluster "
+        raise usage_error(f"--address = {quote(args.address)}: only the ray backend connects to a cluster "
                           "(allowed: --backend ray)")
     if args.workers is not None and not 1 <= args.workers <= 4096:
         raise usage_error(f"--workers = {args.workers}: out of range (allowed: 1..4096)")

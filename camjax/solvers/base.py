@@ -61,10 +61,12 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from camjax.numerics import finite_float
 from camjax.problem import Weights, weights_of
 from camjax.solvers.registry import (
     CONVERGED,
     FAMILY_MODULES,
+    FOLLOWER_FAMILIES,
     INFEASIBLE,
     MAX_STEPS,
     MODES,
@@ -77,7 +79,7 @@ from camjax.solvers.registry import (
 
 __all__ = [
     "CONVERGED", "INFEASIBLE", "MAX_STEPS", "Raw", "Settings", "Solution", "Timings", "family_of",
-    "in_mode", "solve", "solve_batch", "solver_module", "status_name", "weighting_keys",
+    "in_mode", "problem_from_scene", "solve", "solve_batch", "solver_module", "status_name", "weighting_keys",
 ]
 
 
@@ -98,6 +100,20 @@ def family_of(problem):
     except KeyError:
         raise TypeError(f"problem: {type(problem).__name__} is not a registered problem family "
                         f"({', '.join(FAMILY_MODULES)})") from None
+
+
+def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=None):
+    """The design problem of a scene's [design] section, built by its follower type's family module.
+
+    (Python, not traceable.) ``arrays``: the scene's :class:`camjax.evaluate.SceneArrays` if
+    already computed; ``samples``, ``dtype``: grid size and floating dtype otherwise.
+    """
+    family = FOLLOWER_FAMILIES.get(scene.follower.type)
+    if family is None:
+        raise ValueError(f"follower.type: {scene.follower.type!r} has no design problem "
+                         f"(allowed: {', '.join(FOLLOWER_FAMILIES)})")
+    module = importlib.import_module(FAMILY_MODULES[family])
+    return module.problem_from_scene(scene, arrays, samples=samples, dtype=dtype)
 
 
 def solver_module(name: str):
@@ -224,10 +240,7 @@ class Solution:
 
 
 def _f(x) -> float:
-    v = float(np.asarray(x))
-    if not np.isfinite(v):
-        raise ValueError(f"non-finite value {v} in a design result")
-    return v
+    return finite_float(x)
 
 
 # --------------------------------------------------------------------------------- modes
@@ -266,12 +279,13 @@ def _solution(problem, weights: Weights, raw: Raw, mode: str, solver: str) -> So
     if mode == "pointwise":
         per_angle = raw.design
         design, extras = family.condense_pointwise(problem, per_angle)
-        if hasattr(family, "polish_pointwise"):  # exact extrema: the continuous max over angles
-            design, extras = family.polish_pointwise(problem, weights, design, extras)
+        polish_pointwise = getattr(family, "polish_pointwise", None)  # optional hook (flat face)
+        if polish_pointwise is not None:  # exact extrema: the continuous max over angles
+            design, extras = polish_pointwise(problem, weights, design, extras)
         iterations = jnp.max(iterations)
         converged = None if converged is None else jnp.all(converged)
-    elif hasattr(family, "polish"):  # exact extrema: the final answer is the continuous optimum
-        design = family.polish(problem, weights, design)
+    elif (polish := getattr(family, "polish", None)) is not None:  # optional hook (flat face)
+        design = polish(problem, weights, design)  # exact extrema: the continuous optimum
     ev = family.evaluate(problem, weights, design)
     return Solution(mode, solver, weights.alpha, weights.gamma, design, ev.objective, ev.violation,
                     ev.feasible, _status(ev.feasible, converged), iterations, converged, ev, per_angle,

@@ -28,7 +28,14 @@ SOLVERS = tuple(SOLVER_MODULES)
 # the solvers dispatch on)
 FAMILY_MODULES = {
     "flat_face": "camjax.problem",
+    "roller": "camjax.roller_problem",
+    "oscillating_roller": "camjax.oscillating_problem",
+    "oscillating_flat": "camjax.oscillating_flat_problem",
 }
+# scene follower.type -> the problem family its [design] section builds (the family module's
+# ``problem_from_scene(scene, arrays=None, *, samples=None, dtype=None)``)
+FOLLOWER_FAMILIES = {"flat": "flat_face", "roller": "roller", "oscillating_roller": "oscillating_roller",
+                     "oscillating_flat": "oscillating_flat"}
 
 # Solution.status codes (int32 in the traced result) and their names
 CONVERGED = 0  # the solver's stopping rule was met and the design is feasible

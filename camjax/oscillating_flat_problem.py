@@ -1,0 +1,280 @@
+"""The oscillating flat face's optimal-design problem: a problem family of :mod:`camjax.solvers.base`.
+
+Design variables (:class:`Design`, mm): base radius R_b, pivot distance d and face offset f of a
+rocker with a flat face (:mod:`camjax.geometry.oscillating`); each is free between its bounds or
+fixed (lower == upper). The face starts at psi0 with sin psi0 = (R_b + f) / d.
+
+Objective, weights alpha (size) and gamma (stress):
+
+    F = alpha R_b / R_b,max + gamma max_theta sigma(theta) / sigma_max,
+
+sigma the Hertz stress of the face on the cam, P = M / xi (M the torque about the pivot, xi the
+contact point's distance along the face): sigma = C_M / sqrt(xi rho) with C_M = 0.564 sqrt(M / (w K))
+computed once per scene (xi in m inside). Constraints, one value per angle, ``g <= 0`` in mm:
+
+- reach: (R_b + f) - d and -(R_b + f) (the face touches the base circle: 0 < sin psi0 < 1), the
+  larger of the two, the same at every angle;
+- swing: d (psi0 + s - pi/2) (the face keeps rising: psi < 90 deg, which also keeps xi > 0);
+- curvature: rho_min - rho (a flat face cannot follow a concave cam);
+- stress: C_M^2 / (sigma_max^2 xi) - rho, sigma <= sigma_max written on rho (finite where rho <= 0);
+- and the box bounds, which the solvers keep by projection.
+
+The face length the contact needs (max xi - min xi) is reported with the design.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from camjax import geometry
+from camjax.contact import HERTZ_FACTOR, compliance, stress_from_coefficient
+from camjax.numerics import RHO_FLOOR_MM, capped_divide, floor_positive, positive_part, safe_sqrt
+from camjax.problem import FEASIBILITY_RTOL_STRESS, FEASIBILITY_TOL_MM, Weights
+
+CONSTRAINT_NAMES = ("reach", "swing", "curvature", "stress", "bounds")
+VARIABLES = ("base_radius_mm", "pivot_distance_mm", "face_offset_mm")
+
+
+class Design(NamedTuple):
+    """One oscillating flat-face design (scalars), or a batch of them."""
+
+    base_radius_mm: jax.Array  # R_b, mm
+    pivot_distance_mm: jax.Array  # d, mm
+    face_offset_mm: jax.Array  # f, mm
+
+
+class Problem(NamedTuple):
+    """Design-independent data of one oscillating flat-face design problem on n angles."""
+
+    theta_deg: jax.Array  # (n,) cam angle, degrees
+    s_rad: jax.Array  # (n,) arm swing s, rad
+    ds: jax.Array  # (n,) s', rad/rad
+    d2s: jax.Array  # (n,) s'', rad/rad^2
+    moment_coefficient: jax.Array  # (n,) C_M = 0.564 sqrt(M / (w K)) (0: no stress)
+    lower: Design
+    upper: Design
+    sigma_max_MPa: jax.Array  # ()
+    size_norm_mm: jax.Array  # () R_b,max
+    min_curvature_radius_mm: jax.Array  # ()
+    rotation_sign: jax.Array  # () +1 ccw, -1 cw
+
+
+class Constraints(NamedTuple):
+    """Constraint functions g <= 0, mm, one value per angle (shape (n,) each)."""
+
+    reach: jax.Array
+    swing: jax.Array
+    curvature: jax.Array
+    stress: jax.Array
+
+
+class Violation(NamedTuple):
+    """Worst violation of each constraint in physical units, 0 when satisfied (shape ())."""
+
+    reach: jax.Array  # mm
+    swing: jax.Array  # mm (d times the excess angle)
+    curvature: jax.Array  # mm: rho_min - min rho
+    stress: jax.Array  # MPa
+    bounds: jax.Array  # mm
+
+
+class Evaluation(NamedTuple):
+    """A design judged on the whole grid (shape () each)."""
+
+    objective: jax.Array
+    size_mm: jax.Array  # R_b
+    stress_max_MPa: jax.Array
+    stress_max_deg: jax.Array
+    rho_min_mm: jax.Array
+    rho_min_deg: jax.Array
+    face_length_mm: jax.Array  # max xi - min xi
+    violation: Violation
+    feasible: jax.Array
+
+
+def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=None) -> Problem:
+    """Problem of an oscillating flat-face scene with a [design] section (Python: reads the scene)."""
+    from camjax.evaluate import scene_arrays
+    from camjax.loads import rocker_torque
+
+    if scene.design is None:
+        raise ValueError("scene has no [design] section: nothing to optimize")
+    if scene.follower.type != "oscillating_flat":
+        raise ValueError(f"follower.type: {scene.follower.type!r} is not an oscillating flat face")
+    if arrays is None:
+        arrays = scene_arrays(scene, samples=samples, dtype=dtype)
+    d, f, kin = scene.design, scene.follower, arrays.kin
+    as_ = lambda v: jnp.asarray(v, kin.s.dtype)  # noqa: E731
+    box = [d.base_radius_mm, d.pivot_distance_mm, d.face_offset_mm]
+    coeff = jnp.zeros_like(kin.s)
+    if f.train is not None and scene.contact is not None:
+        c = scene.contact
+        moment = rocker_torque(f.train, kin, arrays.cam_speed_rad_s)
+        coeff = HERTZ_FACTOR * safe_sqrt(moment / (c.cam_width_mm * compliance(c.cam, c.follower)))
+    return Problem(
+        theta_deg=as_(arrays.theta_deg), s_rad=kin.s, ds=kin.ds, d2s=kin.d2s, moment_coefficient=as_(coeff),
+        lower=Design(*(as_(b[0]) for b in box)), upper=Design(*(as_(b[1]) for b in box)),
+        sigma_max_MPa=as_(d.sigma_max_MPa if d.sigma_max_MPa is not None else 1.0),
+        size_norm_mm=as_(d.base_radius_mm[1]), min_curvature_radius_mm=as_(f.min_curvature_radius_mm),
+        rotation_sign=as_(geometry.rotation_sign(scene.motion.rotation)),
+    )
+
+
+def per_angle(problem: Problem) -> Problem:
+    """The n pointwise problems: every grid leaf (n,) -> (n, 1), every scalar leaf -> (n,)."""
+    n = problem.theta_deg.shape[-1]
+    grid = {"theta_deg", "s_rad", "ds", "d2s", "moment_coefficient"}
+    return Problem(**{
+        name: (value[:, None] if name in grid else jax.tree.map(lambda x: jnp.broadcast_to(x, (n,)), value))
+        for name, value in problem._asdict().items()})
+
+
+class _Geometry(NamedTuple):
+    psi: jax.Array  # (n,) arm angle, rad
+    rho: jax.Array  # (n,) cam radius of curvature, mm
+    xi: jax.Array  # (n,) contact distance along the face, mm
+    reach: jax.Array  # () mm
+
+
+def _geometry(problem: Problem, design: Design) -> _Geometry:
+    """The closed forms of camjax.geometry.oscillating with the rotation as data (Q = 1 + sigma s')."""
+    d, f = design.pivot_distance_mm, design.face_offset_mm
+    psi = geometry.face_start_angle(design.base_radius_mm, d, f) + problem.s_rad
+    q = 1.0 + problem.rotation_sign * problem.ds
+    rho = geometry.swing_face_radius_of_curvature(d, f, psi, q, problem.ds, problem.d2s)
+    reach = jnp.maximum(design.base_radius_mm + f - d, -(design.base_radius_mm + f))
+    return _Geometry(psi, rho, capped_divide(d * jnp.cos(psi), q), reach)
+
+
+def stress(problem: Problem, design: Design) -> jax.Array:
+    """Hertz contact stress sigma(theta) (MPa), shape (n,); saturated where rho <= 0."""
+    g = _geometry(problem, design)
+    coeff = problem.moment_coefficient * jax.lax.rsqrt(floor_positive(g.xi * 1e-3, RHO_FLOOR_MM))
+    return stress_from_coefficient(coeff, g.rho)
+
+
+def peak_stress(problem: Problem, design: Design) -> jax.Array:
+    """max_theta sigma (MPa), shape ()."""
+    return jnp.max(stress(problem, design))
+
+
+def size_term(problem: Problem, design: Design) -> jax.Array:
+    """Normalized size R_b / R_b,max."""
+    return design.base_radius_mm / problem.size_norm_mm
+
+
+def objective(problem: Problem, weights: Weights, design: Design) -> jax.Array:
+    """F = alpha R_b / R_b,max + gamma max_theta sigma / sigma_max (shape ())."""
+    return (weights.alpha * size_term(problem, design)
+            + weights.gamma * peak_stress(problem, design) / problem.sigma_max_MPa)
+
+
+def constraints(problem: Problem, design: Design) -> Constraints:
+    """Every angle's constraints as g <= 0 (mm), shape (n,) each; finite for every design."""
+    g = _geometry(problem, design)
+    xi_m = floor_positive(g.xi * 1e-3, RHO_FLOOR_MM)
+    need = problem.moment_coefficient**2 / (problem.sigma_max_MPa**2 * xi_m)
+    return Constraints(
+        reach=jnp.broadcast_to(g.reach, g.rho.shape),
+        swing=design.pivot_distance_mm * (g.psi - 0.5 * math.pi),
+        curvature=problem.min_curvature_radius_mm - g.rho,
+        stress=need - g.rho,
+    )
+
+
+def constraint_maxima(problem: Problem, design: Design) -> Constraints:
+    """max_theta of each constraint, shape () each."""
+    return jax.tree.map(jnp.max, constraints(problem, design))
+
+
+def bounds(problem: Problem) -> tuple[Design, Design]:
+    """(lower, upper) box bounds of the design, mm."""
+    return problem.lower, problem.upper
+
+
+def size_norm(problem: Problem) -> jax.Array:
+    """R_b,max (mm), shape ()."""
+    return problem.size_norm_mm
+
+
+def bounds_violation(problem: Problem, design: Design) -> jax.Array:
+    """Largest distance (mm) of any design variable outside its box; 0 inside."""
+    below = jax.tree.map(lambda x, lo: positive_part(lo - x), design, problem.lower)
+    above = jax.tree.map(lambda x, hi: positive_part(x - hi), design, problem.upper)
+    return jnp.max(jnp.stack(jax.tree.leaves(below) + jax.tree.leaves(above)))
+
+
+def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
+    """Objective, peak stress, smallest curvature radius, face length, violations and feasibility."""
+    g = _geometry(problem, design)
+    sigma = stress(problem, design)
+    i, j = jnp.argmax(sigma), jnp.argmin(g.rho)
+    c = constraint_maxima(problem, design)
+    v = Violation(reach=positive_part(c.reach), swing=positive_part(c.swing),
+                  curvature=positive_part(c.curvature),
+                  stress=positive_part(sigma[i] - problem.sigma_max_MPa),
+                  bounds=bounds_violation(problem, design))
+    feasible = ((v.reach <= FEASIBILITY_TOL_MM) & (v.swing <= FEASIBILITY_TOL_MM)
+                & (v.curvature <= FEASIBILITY_TOL_MM) & (v.bounds <= FEASIBILITY_TOL_MM)
+                & (v.stress <= FEASIBILITY_RTOL_STRESS * problem.sigma_max_MPa))
+    return Evaluation(
+        objective=objective(problem, weights, design), size_mm=design.base_radius_mm,
+        stress_max_MPa=sigma[i], stress_max_deg=problem.theta_deg[i], rho_min_mm=g.rho[j],
+        rho_min_deg=problem.theta_deg[j], face_length_mm=jnp.max(g.xi) - jnp.min(g.xi),
+        violation=v, feasible=feasible,
+    )
+
+
+def condense_pointwise(problem: Problem, per_angle_design: Design) -> tuple[Design, dict]:
+    """The whole-cam design of a pointwise solve: the design of the angle with the largest R_b."""
+    i = jnp.argmax(per_angle_design.base_radius_mm)
+    design = jax.tree.map(lambda x: x[i], per_angle_design)
+    return design, {"base_radius_deg": problem.theta_deg[i], "theta_deg": problem.theta_deg}
+
+
+def violated_constraints(problem: Problem, v: Violation) -> list[str]:
+    """Names of the violated constraints (Python; needs concrete values)."""
+    tol = {name: FEASIBILITY_TOL_MM for name in CONSTRAINT_NAMES}
+    tol["stress"] = FEASIBILITY_RTOL_STRESS * float(problem.sigma_max_MPa)
+    return [name for name in CONSTRAINT_NAMES if float(getattr(v, name)) > tol[name]]
+
+
+def _f(x) -> float:
+    v = float(np.asarray(x))
+    if not np.isfinite(v):
+        raise ValueError(f"non-finite value {v} in a design result")
+    return v
+
+
+def solution_json(problem: Problem, solution) -> dict:
+    """The oscillating flat-face keys of result.json's design block, for one Solution."""
+    d, ev, v = solution.design, solution.evaluation, solution.violation
+    out = {
+        **{name: _f(getattr(d, name)) for name in VARIABLES},
+        "size_mm": _f(d.base_radius_mm),
+        "constraint_violation": {f"{name}_{'MPa' if name == 'stress' else 'mm'}": _f(getattr(v, name))
+                                 for name in CONSTRAINT_NAMES},
+        "stress_max_MPa": _f(ev.stress_max_MPa), "stress_max_deg": _f(ev.stress_max_deg),
+        "rho_min_mm": _f(ev.rho_min_mm), "rho_min_deg": _f(ev.rho_min_deg),
+        "face_length_mm": _f(ev.face_length_mm), "sigma_max_MPa": _f(problem.sigma_max_MPa),
+        **{f"{name[:-3]}_bounds_mm": [_f(getattr(problem.lower, name)), _f(getattr(problem.upper, name))]
+           for name in VARIABLES},
+    }
+    if solution.mode == "pointwise":
+        out["base_radius_deg"] = _f(solution.extras["base_radius_deg"])
+        out["pointwise"] = {"theta_deg": np.asarray(solution.extras["theta_deg"], float).tolist(),
+                            **{name: np.asarray(getattr(solution.pointwise, name), float).tolist()
+                               for name in VARIABLES}}
+    return out
+
+
+def record(solution) -> dict:
+    """The oscillating flat-face keys of a pareto.json row: the design, size R_b and peak stress."""
+    d, ev = solution.design, solution.evaluation
+    return {**{name: _f(getattr(d, name)) for name in VARIABLES}, "size_mm": _f(d.base_radius_mm),
+            "stress_max_MPa": _f(ev.stress_max_MPa), "stress_max_deg": _f(ev.stress_max_deg)}

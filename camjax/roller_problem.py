@@ -1,0 +1,354 @@
+"""The roller follower's optimal-design problem: a problem family of :mod:`camjax.solvers.base`.
+
+Design variables (:class:`Design`, mm): base radius R_b, roller radius R_f and offset e of a
+translating roller follower; each is free between its bounds or fixed (lower == upper).
+
+Objective, weights alpha (size) and gamma (stress), N = R_b,max + R_f,max:
+
+    F = alpha (R_b + R_f) / N + gamma max_theta sigma(theta) / sigma_max,
+
+with the roller's Hertz stress sigma = C sqrt(1 / (cos phi rho_eq)) (:func:`camjax.contact.roller_stress`:
+C from the axial follower force, rho_eq = 1 / (1/rho_c + 1/R_f)). Without [contact] C = 0: no
+stress term and no stress constraint. Constraints, one value per angle, ``g <= 0`` in mm
+(:class:`Constraints`):
+
+- pressure_angle: |s' - e~| - tan(phi_max) (d + s) <= 0, which is |phi| <= phi_max written
+  without the arctan (d = sqrt(R_p^2 - e^2), e~ = e for ccw, -e for cw; finite everywhere);
+- undercut: (R_f + rho_min) (kappa_pitch (R_f + rho_min) - 1) <= 0, i.e. rho_c >= rho_min where
+  the pitch curve is convex (:func:`camjax.geometry.roller_undercut_constraint` times a length;
+  concave parts satisfy it for every roller, as they must);
+- stress: C^2 / (sigma_max^2 cos phi) - rho_eq <= 0, which is sigma <= sigma_max written on the
+  equivalent radius so that it stays finite at and beyond an undercut (rho_eq <= 0 there);
+- and the box bounds, which the solvers keep by projection. The scene checks that the bounds
+  keep |e| < R_p (the follower axis cuts the prime circle) for every design in the box.
+
+Everything that does not depend on the design (s, s', s'', C) is computed once per scene by
+:func:`problem_from_scene`. Modes are those of :mod:`camjax.problem`: :func:`per_angle` gives the
+n one-angle problems; a pointwise solve is condensed into the design of its critical angle, the
+one with the largest prime radius (with R_f and e fixed: the largest R_b, SPEC 5's rule).
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from camjax import geometry
+from camjax.contact import roller_stress
+from camjax.numerics import COS_FLOOR, RHO_FLOOR_MM, floor_positive, positive_part, safe_sqrt
+from camjax.problem import FEASIBILITY_RTOL_STRESS, FEASIBILITY_TOL_MM, Weights
+
+CONSTRAINT_NAMES = ("pressure_angle", "undercut", "stress", "bounds")
+# A design is feasible when |phi| exceeds the limit by at most this (rad): the pressure-angle
+# constraint is met to FEASIBILITY_TOL_MM in mm, which is ~1e-8 rad at R_p ~ 50 mm.
+FEASIBILITY_TOL_RAD = 1e-7
+VARIABLES = ("base_radius_mm", "roller_radius_mm", "offset_mm")
+
+
+class Design(NamedTuple):
+    """One roller-follower design (scalars), or a batch of them (arrays with leading axes)."""
+
+    base_radius_mm: jax.Array  # R_b, mm
+    roller_radius_mm: jax.Array  # R_f, mm
+    offset_mm: jax.Array  # e, mm (follower axis at x = e in the follower frame)
+
+
+class Problem(NamedTuple):
+    """Design-independent data of one roller design problem on an angle grid of n samples."""
+
+    theta_deg: jax.Array  # (n,) cam angle, degrees
+    s_mm: jax.Array  # (n,) s, mm
+    ds_mm: jax.Array  # (n,) s', mm/rad
+    d2s_mm: jax.Array  # (n,) s'', mm/rad^2
+    stress_coefficient: jax.Array  # (n,) C = 0.564 sqrt(F / (w K)), MPa mm^0.5 (0: no stress)
+    lower: Design  # lower bounds, mm
+    upper: Design  # upper bounds, mm
+    sigma_max_MPa: jax.Array  # () allowable contact stress
+    size_norm_mm: jax.Array  # () N = R_b,max + R_f,max
+    tan_max_pressure_angle: jax.Array  # () tan(phi_max)
+    max_pressure_angle_deg: jax.Array  # () phi_max, deg (as the scene gives it)
+    min_curvature_radius_mm: jax.Array  # () smallest convex cam-surface radius allowed
+    rotation_sign: jax.Array  # () +1 ccw, -1 cw (geometry.pitch): e~ = sign e
+
+
+class Constraints(NamedTuple):
+    """Constraint functions g <= 0, mm, one value per angle (shape (n,) each)."""
+
+    pressure_angle: jax.Array  # |s' - e~| - tan(phi_max) (d + s)
+    undercut: jax.Array  # (R_f + rho_min) (kappa (R_f + rho_min) - 1)
+    stress: jax.Array  # C^2 / (sigma_max^2 cos phi) - rho_eq
+
+
+class Violation(NamedTuple):
+    """Worst violation of each constraint in physical units, 0 when satisfied (shape ())."""
+
+    pressure_angle: jax.Array  # rad: max |phi| - phi_max
+    undercut: jax.Array  # mm: rho_min - min rho_c over the convex parts
+    stress: jax.Array  # MPa: max sigma - sigma_max
+    bounds: jax.Array  # mm: largest distance outside the box
+
+
+class Evaluation(NamedTuple):
+    """A design judged on the whole grid (true maxima; shape () each)."""
+
+    objective: jax.Array  # F
+    size_mm: jax.Array  # R_b + R_f, the prime-circle radius
+    stress_max_MPa: jax.Array  # max_theta sigma
+    stress_max_deg: jax.Array  # where it occurs
+    pressure_angle_max_deg: jax.Array  # max_theta |phi|
+    pressure_angle_max_at_deg: jax.Array  # where it occurs
+    cam_rho_min_mm: jax.Array  # smallest convex cam-surface radius rho_c (undercut at <= 0)
+    violation: Violation
+    feasible: jax.Array  # bool
+
+
+# ------------------------------------------------------------------------------ building
+
+
+def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=None) -> Problem:
+    """Problem of a roller scene with a [design] section (Python, not traceable: it reads the scene).
+
+    Args:
+      scene: a :class:`camjax.scene.Scene` with a roller follower and [design].
+      arrays: its :class:`camjax.evaluate.SceneArrays` if already computed (else computed here).
+      samples: grid size override (ignored when ``arrays`` is given).
+      dtype: floating dtype of the arrays (default float64).
+    """
+    from camjax.evaluate import scene_arrays
+
+    if scene.design is None:
+        raise ValueError("scene has no [design] section: nothing to optimize")
+    if scene.follower.type != "roller":
+        raise ValueError(f"follower.type: {scene.follower.type!r} is not a roller follower")
+    if arrays is None:
+        arrays = scene_arrays(scene, samples=samples, dtype=dtype)
+    d, f, kin = scene.design, scene.follower, arrays.kin
+    dt = kin.s.dtype
+    as_ = lambda v: jnp.asarray(v, dt)  # noqa: E731
+    box = [d.base_radius_mm, d.roller_radius_mm, d.offset_mm]
+    coeff = arrays.stress_coefficient
+    return Problem(
+        theta_deg=as_(arrays.theta_deg), s_mm=kin.s, ds_mm=kin.ds, d2s_mm=kin.d2s,
+        stress_coefficient=jnp.zeros_like(kin.s) if coeff is None else as_(coeff),
+        lower=Design(*(as_(b[0]) for b in box)), upper=Design(*(as_(b[1]) for b in box)),
+        sigma_max_MPa=as_(d.sigma_max_MPa if d.sigma_max_MPa is not None else 1.0),
+        size_norm_mm=as_(d.base_radius_mm[1] + d.roller_radius_mm[1]),
+        tan_max_pressure_angle=as_(np.tan(np.radians(f.max_pressure_angle_deg))),
+        max_pressure_angle_deg=as_(f.max_pressure_angle_deg),
+        min_curvature_radius_mm=as_(f.min_curvature_radius_mm),
+        rotation_sign=as_(geometry.rotation_sign(scene.motion.rotation)),
+    )
+
+
+def per_angle(problem: Problem) -> Problem:
+    """The n pointwise problems: every grid leaf (n,) -> (n, 1), every scalar leaf -> (n,)."""
+    n = problem.theta_deg.shape[-1]
+    grid = {"theta_deg", "s_mm", "ds_mm", "d2s_mm", "stress_coefficient"}
+    return Problem(**{
+        name: (value[:, None] if name in grid else jax.tree.map(lambda x: jnp.broadcast_to(x, (n,)), value))
+        for name, value in problem._asdict().items()})
+
+
+# ---------------------------------------------------------------------------- physics
+
+
+class _Kin(NamedTuple):  # the geometry functions' view of the problem's grid (theta unused there)
+    theta: jax.Array
+    s: jax.Array
+    ds: jax.Array
+    d2s: jax.Array
+
+
+class _Terms(NamedTuple):
+    """Per-angle quantities every function of a design shares (shape (n,) each)."""
+
+    w: jax.Array  # d + s, mm: the pitch point's height on the follower axis
+    u: jax.Array  # s' - e~, mm: tan phi = u / w (up to the rotation's sign)
+    inv_cos: jax.Array  # 1 / cos phi = |(w, u)| / w, with cos phi floored at COS_FLOOR
+    kappa: jax.Array  # pitch-curve curvature, 1/mm (convex > 0)
+    rho_eq: jax.Array  # Hertz equivalent radius 1 / (1/rho_c + 1/R_f), mm
+
+
+def _terms(problem: Problem, design: Design) -> _Terms:
+    """The shared per-angle terms of a design.
+
+    The rotation enters only through e~ = sign e (geometry.pitch); with it every formula is the
+    ccw one, and |phi|, cos phi and kappa are those of the true rotation. 1 / cos phi is written
+    as r / w (r = |(w, u)|) to share the root with the curvature and avoid a cos(atan2(.)).
+    """
+    e = problem.rotation_sign * design.offset_mm
+    kin = _Kin(problem.theta_deg, problem.s_mm, problem.ds_mm, problem.d2s_mm)
+    w = geometry.roller_pitch_height(design.base_radius_mm, design.roller_radius_mm, e, kin)
+    u = kin.ds - e
+    r = jnp.sqrt(w**2 + u**2)
+    kappa = geometry.pitch_curvature(w, kin.ds, kin.d2s, e)
+    return _Terms(w, u, r / jnp.maximum(w, COS_FLOOR * r), kappa,
+                  geometry.roller_equivalent_radius(kappa, design.roller_radius_mm))
+
+
+def pressure_angle(problem: Problem, design: Design) -> jax.Array:
+    """phi (rad) per angle, signed as :func:`camjax.geometry.pressure_angle`."""
+    x = _terms(problem, design)
+    return problem.rotation_sign * jnp.arctan2(x.u, x.w)
+
+
+def stress(problem: Problem, design: Design) -> jax.Array:
+    """Hertz contact stress sigma(theta) (MPa), shape (n,); finite (saturated) at an undercut."""
+    x = _terms(problem, design)
+    return roller_stress(problem.stress_coefficient, jnp.arctan2(x.u, x.w), x.rho_eq)
+
+
+def peak_stress(problem: Problem, design: Design) -> jax.Array:
+    """max_theta sigma (MPa), shape (), as sqrt(max_theta C^2 / (cos phi rho_eq)): one root."""
+    x = _terms(problem, design)
+    ratio = problem.stress_coefficient**2 * x.inv_cos / floor_positive(x.rho_eq, RHO_FLOOR_MM)
+    return safe_sqrt(jnp.max(ratio))
+
+
+def size_term(problem: Problem, design: Design) -> jax.Array:
+    """Normalized size (R_b + R_f) / N (dimensionless)."""
+    return (design.base_radius_mm + design.roller_radius_mm) / problem.size_norm_mm
+
+
+def objective(problem: Problem, weights: Weights, design: Design) -> jax.Array:
+    """F = alpha (R_b + R_f) / N + gamma max_theta sigma / sigma_max (dimensionless, shape ())."""
+    return (weights.alpha * size_term(problem, design)
+            + weights.gamma * peak_stress(problem, design) / problem.sigma_max_MPa)
+
+
+def constraints(problem: Problem, design: Design) -> Constraints:
+    """Every angle's constraints as g <= 0 (mm), shape (n,) each; finite for every design."""
+    x = _terms(problem, design)
+    reach = design.roller_radius_mm + problem.min_curvature_radius_mm
+    need = problem.stress_coefficient**2 * x.inv_cos / problem.sigma_max_MPa**2
+    return Constraints(
+        pressure_angle=jnp.abs(x.u) - problem.tan_max_pressure_angle * x.w,
+        undercut=reach * geometry.roller_undercut_constraint(x.kappa, design.roller_radius_mm,
+                                                             problem.min_curvature_radius_mm),
+        stress=need - x.rho_eq,
+    )
+
+
+def constraint_maxima(problem: Problem, design: Design) -> Constraints:
+    """max_theta of each constraint of :func:`constraints`, shape () each.
+
+    One reduction over the stacked constraints: XLA then evaluates the shared terms once per
+    angle instead of once per constraint.
+    """
+    return Constraints(*jnp.max(jnp.stack(constraints(problem, design)), axis=-1))
+
+
+def bounds(problem: Problem) -> tuple[Design, Design]:
+    """(lower, upper) box bounds of the design, mm."""
+    return problem.lower, problem.upper
+
+
+def size_norm(problem: Problem) -> jax.Array:
+    """N = R_b,max + R_f,max (mm): the length the constraints are divided by, shape ()."""
+    return problem.size_norm_mm
+
+
+def bounds_violation(problem: Problem, design: Design) -> jax.Array:
+    """Largest distance (mm) of any design variable outside its box; 0 inside."""
+    below = jax.tree.map(lambda x, lo: positive_part(lo - x), design, problem.lower)
+    above = jax.tree.map(lambda x, hi: positive_part(x - hi), design, problem.upper)
+    return jnp.max(jnp.stack(jax.tree.leaves(below) + jax.tree.leaves(above)))
+
+
+def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
+    """Objective, peak stress and pressure angle (and their angles), violations and feasibility."""
+    x = _terms(problem, design)
+    kappa = x.kappa
+    sigma = stress(problem, design)
+    phi = jnp.abs(jnp.arctan2(x.u, x.w))
+    i, j = jnp.argmax(sigma), jnp.argmax(phi)
+    margin = geometry.roller_undercut_margin(kappa, design.roller_radius_mm, 0.0)  # rho_c, convex parts
+    rho_c_min = jnp.min(margin)
+    v = Violation(
+        pressure_angle=positive_part(phi[j] - jnp.deg2rad(problem.max_pressure_angle_deg)),
+        undercut=positive_part(problem.min_curvature_radius_mm - rho_c_min),
+        stress=positive_part(sigma[i] - problem.sigma_max_MPa),
+        bounds=bounds_violation(problem, design),
+    )
+    feasible = ((v.pressure_angle <= FEASIBILITY_TOL_RAD) & (v.undercut <= FEASIBILITY_TOL_MM)
+                & (v.bounds <= FEASIBILITY_TOL_MM)
+                & (v.stress <= FEASIBILITY_RTOL_STRESS * problem.sigma_max_MPa))
+    return Evaluation(
+        objective=objective(problem, weights, design),
+        size_mm=design.base_radius_mm + design.roller_radius_mm,
+        stress_max_MPa=sigma[i], stress_max_deg=problem.theta_deg[i],
+        pressure_angle_max_deg=jnp.rad2deg(phi[j]), pressure_angle_max_at_deg=problem.theta_deg[j],
+        cam_rho_min_mm=rho_c_min, violation=v, feasible=feasible,
+    )
+
+
+def condense_pointwise(problem: Problem, per_angle_design: Design) -> tuple[Design, dict]:
+    """The whole-cam design of a pointwise solve: the design of the angle with the largest R_b + R_f.
+
+    With R_f and e fixed that is the largest R_b over the angles (SPEC 5's rule). With R_f or e
+    free every angle picks its own; the critical angle's design is reported and judged on the
+    whole grid (its violations, if any, are reported, not hidden). Extras: the critical angle
+    (``prime_radius_deg``) and the grid.
+    """
+    i = jnp.argmax(per_angle_design.base_radius_mm + per_angle_design.roller_radius_mm)
+    design = jax.tree.map(lambda x: x[i], per_angle_design)
+    return design, {"prime_radius_deg": problem.theta_deg[i], "theta_deg": problem.theta_deg}
+
+
+def violated_constraints(problem: Problem, v: Violation) -> list[str]:
+    """Names of the violated constraints (Python; needs concrete values)."""
+    tol = {"pressure_angle": FEASIBILITY_TOL_RAD, "undercut": FEASIBILITY_TOL_MM,
+           "bounds": FEASIBILITY_TOL_MM, "stress": FEASIBILITY_RTOL_STRESS * float(problem.sigma_max_MPa)}
+    return [name for name in CONSTRAINT_NAMES if float(getattr(v, name)) > tol[name]]
+
+
+# ------------------------------------------------------------------------------- output
+
+
+def _f(x) -> float:
+    v = float(np.asarray(x))
+    if not np.isfinite(v):
+        raise ValueError(f"non-finite value {v} in a design result")
+    return v
+
+
+def _design_keys(d: Design) -> dict:
+    return {"base_radius_mm": _f(d.base_radius_mm), "roller_radius_mm": _f(d.roller_radius_mm),
+            "offset_mm": _f(d.offset_mm), "prime_radius_mm": _f(d.base_radius_mm + d.roller_radius_mm)}
+
+
+def solution_json(problem: Problem, solution) -> dict:
+    """The roller keys of result.json's design block, for one :class:`camjax.solvers.base.Solution`."""
+    d, ev, v = solution.design, solution.evaluation, solution.violation
+    out = {
+        **_design_keys(d),
+        "size_mm": _f(d.base_radius_mm + d.roller_radius_mm),
+        "constraint_violation": {"pressure_angle_deg": _f(np.degrees(v.pressure_angle)),
+                                 "undercut_mm": _f(v.undercut), "stress_MPa": _f(v.stress),
+                                 "bounds_mm": _f(v.bounds)},
+        "stress_max_MPa": _f(ev.stress_max_MPa),
+        "stress_max_deg": _f(ev.stress_max_deg),
+        "pressure_angle_max_deg": _f(ev.pressure_angle_max_deg),
+        "pressure_angle_max_at_deg": _f(ev.pressure_angle_max_at_deg),
+        "max_pressure_angle_deg": _f(problem.max_pressure_angle_deg),
+        "cam_rho_min_mm": _f(ev.cam_rho_min_mm),
+        "sigma_max_MPa": _f(problem.sigma_max_MPa),
+        **{f"{name[:-3]}_bounds_mm": [_f(getattr(problem.lower, name)), _f(getattr(problem.upper, name))]
+           for name in VARIABLES},
+    }
+    if solution.mode == "pointwise":
+        out["prime_radius_deg"] = _f(solution.extras["prime_radius_deg"])
+        out["pointwise"] = {"theta_deg": np.asarray(solution.extras["theta_deg"], float).tolist(),
+                            **{name: np.asarray(getattr(solution.pointwise, name), float).tolist()
+                               for name in VARIABLES}}
+    return out
+
+
+def record(solution) -> dict:
+    """The roller keys of a pareto.json row: the design, size R_b + R_f and peak stress."""
+    d, ev = solution.design, solution.evaluation
+    return {**_design_keys(d), "size_mm": _f(d.base_radius_mm + d.roller_radius_mm),
+            "stress_max_MPa": _f(ev.stress_max_MPa), "stress_max_deg": _f(ev.stress_max_deg)}

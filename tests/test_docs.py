@@ -1,0 +1,115 @@
+"""The README's contract (set-up lines first, size, a Python quickstart that runs) and the docs'
+generated figures (every placeholder resolves against the committed JSON)."""
+
+import ast
+import importlib.util
+import math
+import os
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+README = ROOT / "README.md"
+SETUP_LINES = [
+    "python3 -m pip install -e . && camjax design --out out/",
+    'python3 -m pip install -e ".[dev]" && python3 -m pytest -q',
+]
+
+
+def _gen_tables():
+    spec = importlib.util.spec_from_file_location("gen_tables", ROOT / "docs" / "gen_tables.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def _code_blocks(text: str, language: str = "") -> list[str]:
+    return re.findall(r"^```" + language + r"\n(.*?)^```", text, flags=re.S | re.M)
+
+
+def test_readme_starts_with_title_then_the_setup_lines_that_ci_runs():
+    text = README.read_text()
+    assert text.startswith("# camjax\n")
+    first_block = _code_blocks(text)[0].strip().splitlines()
+    assert first_block == SETUP_LINES
+    ci = (ROOT / ".ci" / "run").read_text().splitlines()
+    for line in SETUP_LINES:
+        assert line in ci  # verbatim, as whole lines
+
+
+def test_readme_is_short():
+    # The README is an entry point; the documentation lives in docs/ (8 KB is the agreed budget).
+    assert len(README.read_bytes()) <= 8 * 1024
+
+
+@pytest.mark.slow
+def test_readme_python_quickstart_runs_as_written(tmp_path):
+    code = _code_blocks(README.read_text(), "python")[0]
+    run = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True,
+                         timeout=300, env={**os.environ, "PYTHONPATH": str(ROOT)})
+    assert run.returncode == 0, run.stderr
+    (min_rb, design_rb), (peak, dpeak) = [[float(v) for v in line.split()] for line in
+                                          run.stdout.strip().splitlines()]
+    # The optimized radius must admit the geometry: at least the smallest admissible radius.
+    assert 0 < min_rb <= design_rb
+    # sigma = C / sqrt(R_b + q): positive, and falling as R_b grows (rho grows with R_b).
+    assert math.isfinite(peak) and peak > 0
+    assert dpeak < 0
+
+
+def test_every_docs_placeholder_resolves():
+    gen = _gen_tables()
+    pages = sorted((ROOT / "docs").rglob("*.md"))
+    assert pages
+    for page in pages:
+        text = re.sub(r"\\\{\{.*?\}\}", "", page.read_text())  # escaped examples stay literal
+        out = gen.render(text, str(page))
+        assert not re.search(r"\{\{\s*(table|" + "|".join(gen.SOURCES) + "):", out), page
+
+
+def test_unknown_placeholder_is_an_error():
+    gen = _gen_tables()
+    with pytest.raises(gen.PlaceholderError):
+        gen.render("{{ bench: no.such.key }}")
+    with pytest.raises(gen.PlaceholderError):
+        gen.render("{{ table: no_such_table }}")
+
+
+def test_extremes_tables_account_for_every_case():
+    gen = _gen_tables()
+    data = gen.load("extremes")
+    rows = gen.extremes_groups(data).splitlines()[2:]
+    counted = sum(int(r.split("|")[2]) for r in rows)
+    passed = sum(int(r.split("|")[3]) for r in rows)
+    assert counted == data["summary"]["cases"] == len(data["cases"])
+    assert passed == data["summary"]["passed"]
+
+
+def _documented_modules() -> list[str]:
+    """Every module of the package with a module docstring (an empty ``__init__`` is data only)."""
+    names = []
+    for path in sorted((ROOT / "camjax").rglob("*.py")):
+        if path.name.startswith("_") and path.name != "__init__.py":
+            continue
+        parts = path.relative_to(ROOT).with_suffix("").parts
+        name = ".".join(parts[:-1] if path.name == "__init__.py" else parts)
+        if ast.get_docstring(ast.parse(path.read_text())):
+            names.append(name)
+    return names
+
+
+def test_every_public_module_has_an_api_page_in_the_nav():
+    modules = _documented_modules()
+    assert "camjax.problem" in modules and "camjax" in modules  # the walk finds the package
+    nav = (ROOT / "mkdocs.yml").read_text()
+    for name in modules:
+        page = ROOT / "docs" / "api" / f"{name}.md"
+        assert page.exists(), f"no API page for {name}"
+        assert re.search(rf"^::: {re.escape(name)}$", page.read_text(), flags=re.M), page
+        assert f"api/{name}.md" in nav, f"{name} is not in mkdocs.yml's nav"
+    pages = {p.stem for p in (ROOT / "docs" / "api").glob("camjax*.md")}
+    assert pages == set(modules), f"API pages of modules that do not exist: {pages - set(modules)}"

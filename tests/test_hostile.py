@@ -1,0 +1,597 @@
+"""Hostile input for every command: one line, the right exit status, no traceback, DIR untouched.
+
+Every case runs ``camjax.cli.main(argv)`` in process (fast). Each asserts the exit status, exactly
+one stderr line that names the offending field, option or path, no traceback, nothing on stdout,
+and that the output folder (holding an earlier run's files) is byte-for-byte what it was and no
+staging folder is left beside it. The signal tests need a real process and are marked slow.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from camjax import cli
+from camjax.output import folder as output_folder
+from camjax.scene import QUOTE_CHARS, builtin_scene_text
+
+DEFAULT = builtin_scene_text("default")
+# kinematics and geometry only: no loads, no solver, so a run takes about a second
+KINEMATIC = """
+[motion]
+rpm = 100.0
+samples = 180
+segments = [
+  { kind = "dwell", angle_deg = 90 },
+  { kind = "rise", angle_deg = 90, law = "cycloidal", lift_mm = 4.0 },
+  { kind = "dwell", angle_deg = 90 },
+  { kind = "return", angle_deg = 90, law = "cycloidal", lift_mm = 4.0 },
+]
+[follower]
+type = "flat"
+"""
+
+
+def _variant(old: str, new: str, text: str = DEFAULT) -> str:
+    assert text.count(old) == 1, old
+    return text.replace(old, new)
+
+
+def snapshot(path: Path) -> dict[str, bytes] | None:
+    """Every file under ``path`` (relative name -> bytes); None when nothing is there."""
+    if not path.exists():
+        return None
+    if path.is_file():
+        return {"": path.read_bytes()}
+    return {str(p.relative_to(path)): p.read_bytes() for p in sorted(path.rglob("*")) if p.is_file()}
+
+
+def leftovers(parent: Path) -> list[str]:
+    """Staging or set-aside folders of a run (there must be none once it has returned)."""
+    return sorted(p.name for p in parent.iterdir() if output_folder.STAGING in p.name
+                  or output_folder.OLD in p.name)
+
+
+def run(argv: list[str], capsys) -> tuple[int, str, str]:
+    try:
+        rc = cli.main(argv)
+    except SystemExit as exc:  # argparse's own exit
+        rc = exc.code
+    captured = capsys.readouterr()
+    return rc, captured.out, captured.err
+
+
+# ------------------------------------------------------------------------------ the corpus
+
+# name -> (argv with {dir} = the old output folder, {scene} = the scene file, {file} = a plain
+# file, {tmp} = the test folder; scene text or None; word the stderr line must contain; status)
+SCENE_ARGS = ["design", "{scene}", "--out", "{dir}"]
+NESTED = "a = " + "[" * 100_000 + "]" * 100_000 + "\n"
+CASES: dict[str, tuple[list[str], str | bytes | None, str, int]] = {
+    # scene files the user cannot have meant
+    "binary_scene": (SCENE_ARGS, bytes(range(256)) * 4, "UTF-8", 2),
+    "nul_in_scene": (SCENE_ARGS, DEFAULT.encode() + b"\x00\x01", "NUL", 2),
+    "utf16_scene": (SCENE_ARGS, DEFAULT.encode("utf-16"), "UTF-16", 2),
+    "utf16_be_scene": (SCENE_ARGS, b"\xfe\xff" + DEFAULT.encode("utf-16-be"), "UTF-16", 2),
+    "latin1_scene": (SCENE_ARGS, ("# caf\xe9\n" + DEFAULT).encode("latin-1"), "UTF-8", 2),
+    "empty_scene": (SCENE_ARGS, "", "motion", 2),
+    "not_toml": (SCENE_ARGS, "[motion\nrpm = 1", "toml", 2),
+    "nested_too_deep": (SCENE_ARGS, NESTED, "toml", 2),
+    "huge_unknown_section": (SCENE_ARGS, DEFAULT + "\n[" + "x" * 1_000_000 + "]\n", "unknown key", 2),
+    "huge_unknown_value": (SCENE_ARGS, _variant("mass_kg = 1.0", "mass_kg = 1.0\nmas_kg = '"
+                                                 + "y" * 1_000_000 + "'"), "follower.mas_kg", 2),
+    "newline_in_key": (SCENE_ARGS, DEFAULT + '\n["a\\nb"]\n', "unknown key", 2),
+    "unknown_key": (SCENE_ARGS, _variant("mass_kg = 1.0", "mass_kg = 1.0\nmas_kg = 2.0"), "follower.mas_kg", 2),
+    "rpm_1e160": (SCENE_ARGS, _variant("rpm = 240.0", "rpm = 1e160"), "motion.rpm", 2),
+    "lift_overflows": (SCENE_ARGS, DEFAULT.replace("lift_mm = 5.0", "lift_mm = 1e300"), "overflow", 2),
+    "sigma_max_underflows": (SCENE_ARGS, _variant("sigma_max_MPa = 1230.0", "sigma_max_MPa = 1e-300"),
+                             "overflow", 2),
+    "rpm_over_max": (SCENE_ARGS, _variant("rpm = 240.0", "rpm = 1.0000001e6"), "motion.rpm", 2),
+    "rpm_negative": (SCENE_ARGS, _variant("rpm = 240.0", "rpm = -1.0"), "motion.rpm", 2),
+    "rpm_nan": (SCENE_ARGS, _variant("rpm = 240.0", "rpm = nan"), "motion.rpm", 2),
+    "rpm_inf": (SCENE_ARGS, _variant("rpm = 240.0", "rpm = inf"), "motion.rpm", 2),
+    "rpm_text": (SCENE_ARGS, _variant("rpm = 240.0", 'rpm = "fast"'), "motion.rpm", 2),
+    "rpm_bool": (SCENE_ARGS, _variant("rpm = 240.0", "rpm = true"), "motion.rpm", 2),
+    "samples_1": (SCENE_ARGS, _variant("samples = 360", "samples = 1"), "motion.samples", 2),
+    "samples_too_coarse": (SCENE_ARGS, _variant("samples = 360", "samples = 40"), "motion.samples", 2),
+    "samples_1e7": (SCENE_ARGS, _variant("samples = 360", "samples = 10_000_000"), "motion.samples", 2),
+    "samples_float": (SCENE_ARGS, _variant("samples = 360", "samples = 360.5"), "motion.samples", 2),
+    "angles_not_360": (SCENE_ARGS, _variant("angle_deg = 120 }", "angle_deg = 130 }"), "angle_deg", 2),
+    "unknown_law": (SCENE_ARGS, _variant('80, law = "cycloidal"', '80, law = "cycloid"'),
+                    "motion.segments[1].law", 2),
+    "negative_lift": (SCENE_ARGS, _variant("80, law = \"cycloidal\", lift_mm = 5.0",
+                                           "80, law = \"cycloidal\", lift_mm = -5.0"),
+                      "motion.segments[1].lift_mm", 2),
+    "return_short": (SCENE_ARGS, _variant('60, law = "cycloidal", lift_mm = 5.0',
+                                          '60, law = "cycloidal", lift_mm = 4.0'), "motion.segments", 2),
+    "segments_not_list": (SCENE_ARGS, "[motion]\nrpm = 100.0\nsegments = 3\n[follower]\ntype = 'flat'\n",
+                          "motion.segments", 2),
+    "follower_type": (SCENE_ARGS, _variant('type = "flat"', 'type = "round"'), "follower.type", 2),
+    "roller_without_radius": (SCENE_ARGS, KINEMATIC.replace('type = "flat"', 'type = "roller"'),
+                              "follower.roller_radius_mm", 2),
+    "contact_without_loads": (SCENE_ARGS, KINEMATIC + "[contact]\ncam_width_mm = 10.0\n"
+                              "cam = { E_MPa = 2.1e5, poisson = 0.3 }\n"
+                              "follower = { E_MPa = 2.1e5, poisson = 0.3 }\n", "contact", 2),
+    "poisson_over_half": (SCENE_ARGS, _variant("poisson = 0.26", "poisson = 0.7"), "contact.follower.poisson", 2),
+    "bounds_reversed": (SCENE_ARGS, _variant("[5.0, 40.0]", "[40.0, 5.0]"), "design.base_radius_mm", 2),
+    "sigma_max_zero": (SCENE_ARGS, _variant("sigma_max_MPa = 1230.0", "sigma_max_MPa = 0.0"),
+                       "design.sigma_max_MPa", 2),
+    "weights_both_zero": (SCENE_ARGS, _variant("alpha = 1.0\ngamma = 1.0", "alpha = 0.0\ngamma = 0.0"),
+                          "design.alpha", 2),
+    "section_not_table": (SCENE_ARGS, "motion = 3\n[follower]\ntype = 'flat'\n", "motion = 3: must be a table", 2),
+    "scene_is_a_folder": (["design", "{tmp}", "--out", "{dir}"], None, "scene", 2),
+    "scene_name_too_long": (["design", "{tmp}/" + "s" * 10_000, "--out", "{dir}"], None, "scene", 2),
+    "scene_name_nul": (["design", "a\x00b.toml", "--out", "{dir}"], None, "scene", 2),
+    "scene_missing": (["design", "{tmp}/nothing.toml", "--out", "{dir}"], None, "scene", 2),
+    "swing_lift_on_translating": (SCENE_ARGS, DEFAULT.replace("lift_mm = 5.0", "lift_deg = 5.0", 1),
+                                  "lift_deg", 2),
+    # the output location, checked before any computation
+    "out_empty": (["design", "--out", ""], None, "--out", 2),
+    "out_blank": (["design", "--out", "   "], None, "--out", 2),
+    "out_is_a_file": (["design", "--out", "{file}"], None, "--out", 2),
+    "out_under_a_file": (["design", "--out", "{file}/sub/dir"], None, "--out", 2),
+    "out_nul": (["design", "--out", "{tmp}/a\x00b"], None, "--out", 2),
+    "out_foreign_folder": (["design", "--out", "{tmp}/foreign"], None, "--out", 2),
+    "out_root": (["design", "--out", "/"], None, "--out", 2),
+    "out_long_path_under_a_file": (["design", "--out", "{file}/" + "a" * 10_000], None, "characters)", 2),
+    "sweep_address_long": (["sweep", "--alpha", "1", "--gamma", "1", "--backend", "process", "--address",
+                            "h" * 10_000, "--out", "{dir}"], None, "--address", 2),
+    "out_current_folder": (["design", "--out", "."], None, "--out", 2),
+    "out_parent_folder": (["design", "--out", ".."], None, "--out", 2),
+    "sweep_out_is_a_file": (["sweep", "--alpha", "1", "--gamma", "1", "--out", "{file}"], None, "--out", 2),
+    "extremes_out_is_a_file": (["check-extremes", "--out", "{file}"], None, "--out", 2),
+    "dynamics_out_empty": (["dynamics", "thesis-bench", "--out", ""], None, "--out", 2),
+    "laws_json_folder": (["laws", "--json", "{tmp}"], None, "--json", 2),
+    "laws_json_under_file": (["laws", "--json", "{file}/laws.json"], None, "--json", 2),
+    "laws_json_empty": (["laws", "--json", ""], None, "--json", 2),
+    # options
+    "base_radius_negative": (["design", "--base-radius", "-3", "--out", "{dir}"], None, "--base-radius", 2),
+    "base_radius_nan": (["design", "--base-radius", "nan", "--out", "{dir}"], None, "--base-radius", 2),
+    "base_radius_inf": (["design", "--base-radius", "inf", "--out", "{dir}"], None, "--base-radius", 2),
+    "base_radius_huge": (["design", "--base-radius", "1e300", "--out", "{dir}"], None, "--base-radius", 2),
+    "base_radius_text": (["design", "--base-radius", "ten", "--out", "{dir}"], None, "--base-radius", 2),
+    "dpi_zero": (["design", "--dpi", "0", "--out", "{dir}"], None, "--dpi", 2),
+    "dpi_huge": (["design", "--dpi", "100000", "--out", "{dir}"], None, "--dpi", 2),
+    "samples_zero": (["design", "--samples", "0", "--out", "{dir}"], None, "--samples", 2),
+    "samples_coarse": (["design", "--samples", "40", "--out", "{dir}"], None, "--samples", 2),
+    "samples_over_max": (["design", "--samples", "1000001", "--out", "{dir}"], None, "--samples", 2),
+    "samples_text": (["design", "--samples", "many", "--out", "{dir}"], None, "--samples", 2),
+    "mode_unknown": (["design", "--mode", "best", "--out", "{dir}"], None, "--mode", 2),
+    "alpha_negative": (["design", "--alpha", "-1", "--out", "{dir}"], None, "--alpha", 2),
+    "seed_negative": (["design", "--seed", "-1", "--out", "{dir}"], None, "--seed", 2),
+    "design_option_without_design": (["design", "{scene}", "--mode", "pointwise", "--out", "{dir}"],
+                                     KINEMATIC, "--mode", 2),
+    "unknown_option": (["design", "--colour", "red", "--out", "{dir}"], None, "--colour", 2),
+    "missing_out": (["design"], None, "--out", 2),
+    "no_command": ([], None, "COMMAND", 2),
+    "unknown_command": (["desing", "--out", "{dir}"], None, "desing", 2),
+    "sweep_alpha_text": (["sweep", "--alpha", "1,x", "--gamma", "1", "--out", "{dir}"], None, "--alpha", 2),
+    "sweep_alpha_empty": (["sweep", "--alpha", "", "--gamma", "1", "--out", "{dir}"], None, "--alpha", 2),
+    "sweep_alpha_nan": (["sweep", "--alpha", "nan", "--gamma", "1", "--out", "{dir}"], None, "--alpha", 2),
+    "sweep_alpha_negative": (["sweep", "--alpha", "-1", "--gamma", "1", "--out", "{dir}"], None, "--alpha", 2),
+    "sweep_long_list": (["sweep", "--alpha", "1," + "z" * 10_000, "--gamma", "1", "--out", "{dir}"], None,
+                        "--alpha", 2),
+    "sweep_both_zero": (["sweep", "--alpha", "0", "--gamma", "0", "--out", "{dir}"], None, "--alpha", 2),
+    "sweep_chunk_zero": (["sweep", "--alpha", "1", "--gamma", "1", "--chunk-size", "0", "--out", "{dir}"],
+                         None, "--chunk-size", 2),
+    "sweep_samples_coarse": (["sweep", "--alpha", "1", "--gamma", "1", "--samples", "9", "--out", "{dir}"],
+                             None, "--samples", 2),
+    "sweep_without_design": (["sweep", "{scene}", "--alpha", "1", "--gamma", "1", "--out", "{dir}"],
+                             KINEMATIC, "[design]", 2),
+    "sweep_binary_scene": (["sweep", "{scene}", "--alpha", "1", "--gamma", "1", "--out", "{dir}"],
+                           b"\x89PNG\r\n\x1a\n\x00\x00", "UTF-8", 2),
+    "extremes_binary_scene": (["check-extremes", "{scene}", "--out", "{dir}"], b"\xff\xd8\xff\x00", "UTF-8", 2),
+    "extremes_samples_coarse": (["check-extremes", "--samples", "3", "--out", "{dir}"], None, "--samples", 2),
+    "dynamics_without_section": (["dynamics", "default", "--out", "{dir}"], None, "[dynamics]", 2),
+    "dynamics_dpi": (["dynamics", "thesis-bench", "--dpi", "1", "--out", "{dir}"], None, "--dpi", 2),
+    "dynamics_utf16_scene": (["dynamics", "{scene}", "--out", "{dir}"], DEFAULT.encode("utf-16"), "UTF-16", 2),
+    "dynamics_missing_scene": (["dynamics", "--out", "{dir}"], None, "scene", 2),
+}
+
+
+@pytest.fixture
+def place(tmp_path):
+    """A test folder with an earlier run's output folder, a plain file and a foreign folder."""
+    old = tmp_path / "out"
+    old.mkdir()
+    (old / "result.json").write_text('{"scene": "earlier run"}\n')
+    (old / "loads.png").write_bytes(b"earlier figure")
+    (tmp_path / "plain.txt").write_text("not a folder")
+    (tmp_path / "foreign").mkdir()
+    (tmp_path / "foreign" / "notes.txt").write_text("the user's own file")
+    return tmp_path
+
+
+def _argv(template: list[str], place: Path) -> list[str]:
+    keys = {"dir": str(place / "out"), "scene": str(place / "scene.toml"), "file": str(place / "plain.txt"),
+            "tmp": str(place)}
+    return [a.format(**keys) if "{" in a and "[" not in a else a for a in template]
+
+
+def test_the_corpus_is_large_and_covers_every_command():
+    commands = {argv[0] for argv, *_ in CASES.values() if argv}
+    assert len(CASES) >= 60
+    assert commands == {"design", "sweep", "check-extremes", "dynamics", "laws", "desing"}
+
+
+@pytest.mark.parametrize("name", sorted(CASES))
+def test_hostile_input_is_one_line_and_changes_nothing(name, place, capsys, monkeypatch):
+    monkeypatch.setenv("CAMJAX_COMPILATION_CACHE", "0")
+    template, scene, word, status = CASES[name]
+    if scene is not None:
+        path = place / "scene.toml"
+        path.write_bytes(scene if isinstance(scene, bytes) else scene.encode())
+    before = {p.name: snapshot(p) for p in place.iterdir()}
+    rc, out, err = run(_argv(template, place), capsys)
+    assert rc == status, err
+    lines = err.splitlines()
+    assert len(lines) == 1, err[:2000]
+    assert "Traceback" not in err and out == ""
+    assert word in lines[0]
+    # a value is quoted with at most ~100 characters (plus the message around it)
+    assert len(lines[0]) < 1000
+    assert {p.name: snapshot(p) for p in place.iterdir()} == before
+    assert leftovers(place) == []
+
+
+def test_a_huge_unknown_section_is_quoted_short(place, capsys):
+    (place / "scene.toml").write_text(DEFAULT + "\n[" + "q" * 5_000_000 + "]\n")
+    rc, _, err = run(["design", str(place / "scene.toml"), "--out", str(place / "out")], capsys)
+    assert rc == 2
+    assert err.count("q") <= QUOTE_CHARS + 10 and "5000000 characters" in err
+
+
+def test_an_unwritable_output_folder_is_refused_before_any_work(place, capsys, monkeypatch):
+    # root may write anywhere, so the permission answer is what the check is given
+    target = place / "out"
+    real = os.access
+    monkeypatch.setattr(output_folder.os, "access",
+                        lambda p, mode, **kw: False if Path(p) == target else real(p, mode, **kw))
+    calls = []
+    monkeypatch.setattr("camjax.pipeline.analyse", lambda *a, **k: calls.append(a))
+    before = snapshot(target)
+    rc, _, err = run(["design", "--out", str(target)], capsys)
+    assert rc == 2 and "--out" in err and "permission denied" in err and err.count("\n") == 1
+    assert calls == [] and snapshot(target) == before
+
+
+def test_an_os_error_while_writing_is_one_line_and_changes_nothing(place, capsys, monkeypatch):
+    def full(*args, **kwargs):
+        raise OSError(28, "No space left on device", "profile.csv")
+
+    monkeypatch.setattr("camjax.output.export.write_profile_csv", full)
+    (place / "scene.toml").write_text(KINEMATIC)
+    before = snapshot(place / "out")
+    rc, _, err = run(["design", str(place / "scene.toml"), "--out", str(place / "out"), "--dpi", "20"], capsys)
+    assert rc == 1 and err.count("\n") == 1 and "No space left on device" in err and "Traceback" not in err
+    assert snapshot(place / "out") == before and leftovers(place) == []
+
+
+def test_an_unexpected_error_is_one_line(place, capsys, monkeypatch):
+    def broken(*args, **kwargs):
+        raise ZeroDivisionError("x" * 10_000)
+
+    monkeypatch.setattr("camjax.pipeline.analyse", broken)
+    rc, _, err = run(["design", "--out", str(place / "out")], capsys)
+    assert rc == 1 and err.count("\n") == 1 and "ZeroDivisionError" in err and len(err) < 600
+
+
+# ------------------------------------------------------------------- folders replaced whole
+
+
+def test_a_run_replaces_the_folder_whole(place, capsys):
+    (place / "scene.toml").write_text(KINEMATIC)
+    rc, _, _ = run(["design", str(place / "scene.toml"), "--out", str(place / "out"), "--dpi", "20"], capsys)
+    assert rc == 0
+    # the earlier loads.png is gone: a kinematics-only scene draws no loads
+    assert sorted(p.name for p in (place / "out").iterdir()) == [
+        "profile.csv", "profile.dxf", "profile.png", "result.json", "svaj.png"]
+    assert leftovers(place) == []
+
+
+def test_a_stale_staging_folder_of_a_dead_run_is_cleaned(place, capsys):
+    dead = subprocess.Popen([sys.executable, "-c", "pass"])
+    dead.wait()
+    stale = place / f".out.{output_folder.STAGING}-{dead.pid}"
+    stale.mkdir()
+    (stale / "half.png").write_bytes(b"x" * 1000)
+    aside = place / f".out.{output_folder.OLD}-{dead.pid}"  # killed after setting the old DIR aside
+    aside.mkdir()
+    alive = place / f".out.{output_folder.STAGING}-{os.getppid()}"  # a live process's: kept
+    alive.mkdir()
+    (place / "scene.toml").write_text(KINEMATIC)
+    rc, _, _ = run(["design", str(place / "scene.toml"), "--out", str(place / "out"), "--dpi", "20"], capsys)
+    assert rc == 0
+    assert leftovers(place) == [alive.name]
+
+
+def test_a_folder_set_aside_by_a_killed_run_comes_back(place):
+    dead = subprocess.Popen([sys.executable, "-c", "pass"])
+    dead.wait()
+    out = place / "out"
+    before = snapshot(out)
+    aside = place / f".out.{output_folder.OLD}-{dead.pid}"
+    out.rename(aside)  # a run killed between its two renames
+    output_folder.clean_stale(out)
+    assert snapshot(out) == before and leftovers(place) == []
+
+
+# ------------------------------------------------------------------------ unusable geometry
+
+
+@pytest.fixture(scope="module")
+def infeasible_run(tmp_path_factory):
+    """design --base-radius 10 --strict on the default scene (smallest admissible R_b 24.10 mm)."""
+    out = tmp_path_factory.mktemp("infeasible") / "out"
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("CAMJAX_COMPILATION_CACHE", "0")
+        import io
+        from contextlib import redirect_stderr, redirect_stdout
+
+        err, std = io.StringIO(), io.StringIO()
+        with redirect_stderr(err), redirect_stdout(std):
+            rc = cli.main(["design", "--base-radius", "10", "--strict", "--dpi", "20", "--out", str(out)])
+    return rc, std.getvalue(), err.getvalue(), out
+
+
+def test_infeasible_geometry_is_loud(infeasible_run):
+    import json
+
+    rc, std, err, out = infeasible_run
+    assert rc == cli.STRICT_EXIT
+    data = json.loads((out / "result.json").read_text())
+    at = data["evaluated_at"]
+    assert at["base_radius_mm"] == 10.0 and at["feasible"] is False
+    assert {v["constraint"] for v in at["violations"]} == {"curvature", "stress"}
+    # flat face: rho = R_b + s + s'', so min rho = 10 - (smallest admissible R_b), independently
+    # of the curves; the message prints it to 4 significant figures
+    rho_min = 10.0 - data["min_base_radius_mm"]
+    assert f"{rho_min:.4g} mm" in next(v["message"] for v in at["violations"] if v["constraint"] == "curvature")
+    warnings = err.splitlines()
+    assert len(warnings) == 2 and all(w.startswith("camjax design: warning: ") for w in warnings)
+    assert "R_b = 10.0000 mm" in std and "INFEASIBLE" in std  # the radius the files were drawn at
+    assert (out / "profile.dxf").exists()  # written anyway: --strict only changes the exit status
+
+
+def test_a_feasible_design_has_no_warning(tmp_path, capsys, monkeypatch):
+    # the smallest admissible radius + 1 mm of a kinematics-only scene: rho > 0 everywhere
+    (tmp_path / "scene.toml").write_text(KINEMATIC)
+    rc, std, err = run(["design", str(tmp_path / "scene.toml"), "--strict", "--dpi", "20", "--out",
+                        str(tmp_path / "out")], capsys)
+    assert rc == 0 and err == "" and ": feasible" in std
+
+
+def test_rpm_1e6_runs_with_finite_results(tmp_path, capsys, monkeypatch):
+    import json
+
+    monkeypatch.setenv("CAMJAX_COMPILATION_CACHE", "0")
+    text = KINEMATIC.replace("rpm = 100.0", "rpm = 1e6").replace('type = "flat"', 'type = "flat"\nmass_kg = 1.0'
+                                                                  "\nspring_N_per_m = 3000.0")
+    (tmp_path / "scene.toml").write_text(text)
+    rc, _, err = run(["design", str(tmp_path / "scene.toml"), "--dpi", "20", "--out", str(tmp_path / "out")],
+                     capsys)
+    assert rc == 0 and "Traceback" not in err
+    data = json.loads((tmp_path / "out" / "result.json").read_text(), parse_constant=float.__call__)
+    # 4 mm cycloidal rise over 90 deg: peak s'' = 2 pi h / beta^2 = 2 pi 4 / (pi/2)^2 mm/rad^2,
+    # times omega^2 (omega = 1e6 rpm = 104720 rad/s), times 1e-3 m/mm
+    omega = 1e6 * 2 * 3.141592653589793 / 60
+    peak = 2 * 3.141592653589793 * 4.0 / (3.141592653589793 / 2) ** 2 * omega**2 * 1e-3
+    assert data["kinematics"]["accel_m_s2"]["max"] == pytest.approx(peak, rel=1e-3)  # grid: 1 deg steps
+    assert {v["constraint"] for v in data["evaluated_at"]["violations"]} == {"contact"}
+
+
+# ---------------------------------------------------------------------------------- signals
+
+
+def _start(args: list[str], tmp_path: Path) -> subprocess.Popen:
+    # this checkout's camjax, whatever the working folder
+    root = str(Path(cli.__file__).resolve().parents[1])
+    path = os.pathsep.join([root, *filter(None, [os.environ.get("PYTHONPATH")])])
+    env = {**os.environ, "CAMJAX_COMPILATION_CACHE": "0", "PYTHONUNBUFFERED": "1", "PYTHONPATH": path}
+    return subprocess.Popen([sys.executable, "-m", "camjax.cli", *args], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, env=env, cwd=tmp_path)
+
+
+def _wait_for_import(proc: subprocess.Popen, seconds: float) -> None:
+    """Let the process get past its imports (an interrupt during them cannot be caught)."""
+    time.sleep(seconds)
+    assert proc.poll() is None, proc.communicate()
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("sig, status", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
+def test_sweep_answers_an_interrupt_within_a_second(sig, status, place):
+    before = snapshot(place / "out")
+    # 4000 weightings in chunks of 1000: compiling and solving one takes well over 5 s on 2 cores
+    alphas = ",".join(f"{0.01 * (k + 1):g}" for k in range(2000))
+    proc = _start(["sweep", "--alpha", alphas, "--gamma", "1,2", "--chunk-size", "1000", "--out",
+                   str(place / "out")], place)
+    seen = ""
+    while "sweep (" not in seen:  # the progress bar: the first chunk is being compiled
+        char = proc.stderr.read(1)
+        assert char, proc.communicate()
+        seen += char
+    time.sleep(1.0)
+    sent = time.perf_counter()
+    proc.send_signal(sig)
+    _, err = proc.communicate(timeout=60)
+    waited = time.perf_counter() - sent
+    assert proc.returncode == status, err
+    assert "1/4" not in err  # interrupted in the first chunk
+    assert waited < 1.5, waited  # the process ends within about a second (the worker is abandoned)
+    said = [line for line in err.splitlines() if "camjax sweep:" in line]
+    assert len(said) == 1 and ("interrupted" in said[0] or "terminated" in said[0])
+    assert "Traceback" not in err and "Fatal" not in err
+    assert snapshot(place / "out") == before and leftovers(place) == []
+
+
+@pytest.mark.slow
+def test_design_interrupted_while_writing_leaves_the_folder_as_it_was(place):
+    # a 1e5-sample design spends seconds writing; interrupt it then, again and again
+    before = snapshot(place / "out")
+    for delay in (4.0, 6.0, 8.0):
+        proc = _start(["design", "--samples", "100000", "--dpi", "30", "--out", str(place / "out")], place)
+        _wait_for_import(proc, delay)
+        proc.send_signal(signal.SIGINT)
+        _, err = proc.communicate(timeout=60)
+        after = snapshot(place / "out")
+        if proc.returncode == 0:  # finished first: the whole new set
+            assert "result.json" in after and "profile.dxf" in after and "loads.png" in after
+            return
+        assert proc.returncode == 130 and len(err.strip().splitlines()) == 1, err
+        assert after == before and leftovers(place) == []
+
+
+# ------------------------------------------------------------- interrupted writes (property)
+
+
+class Injected(OSError):
+    """The failure a test injects into the file writing."""
+
+
+def _scene_text(rpm: float, angles: tuple[float, float, float, float], lift: float, law: str,
+                samples: int) -> str:
+    d1, rise, d2, ret = angles
+    return f"""
+[motion]
+rpm = {rpm!r}
+samples = {samples}
+segments = [
+  {{ kind = "dwell", angle_deg = {d1!r} }},
+  {{ kind = "rise", angle_deg = {rise!r}, law = "{law}", lift_mm = {lift!r} }},
+  {{ kind = "dwell", angle_deg = {d2!r} }},
+  {{ kind = "return", angle_deg = {ret!r}, law = "{law}", lift_mm = {lift!r} }},
+]
+[follower]
+type = "flat"
+"""
+
+
+def _counting_writes(monkeypatch, root: Path, fail_at: int, error: type[BaseException]) -> list[str]:
+    """Make the ``fail_at``-th write under ``root`` (file opened for writing, or a rename) raise."""
+    import builtins
+    import io
+
+    seen: list[str] = []
+    real_open, real_replace = builtins.open, os.replace
+
+    def event(what: str) -> None:
+        seen.append(what)
+        if len(seen) == fail_at:
+            raise error(28, "injected failure", what) if error is Injected else error()
+
+    def guarded_open(file, mode="r", *args, **kwargs):
+        if isinstance(file, str | os.PathLike) and str(root) in os.fspath(file) and set(mode) & set("wax+"):
+            event(f"open {Path(os.fspath(file)).name}")
+        return real_open(file, mode, *args, **kwargs)
+
+    def guarded_replace(src, dst, *args, **kwargs):
+        if str(root) in os.fspath(dst):  # the swap: DIR set aside, staging renamed into place
+            event(f"rename {Path(os.fspath(dst)).name}")
+        return real_replace(src, dst, *args, **kwargs)
+
+    monkeypatch.setattr(builtins, "open", guarded_open)
+    monkeypatch.setattr(io, "open", guarded_open)
+    monkeypatch.setattr(os, "replace", guarded_replace)
+    return seen
+
+
+NEW_SET = {"result.json", "svaj.png", "profile.png", "profile.csv", "profile.dxf"}
+
+
+@pytest.mark.slow
+def test_an_interrupted_write_leaves_the_old_or_the_new_complete_folder(tmp_path_factory):
+    import json
+
+    from hypothesis import HealthCheck, given, settings
+    from hypothesis import strategies as st
+
+    base = tmp_path_factory.mktemp("property")
+    old = base / "template"
+    with pytest.MonkeyPatch.context() as mp:  # an earlier run's complete folder (with loads.png etc.)
+        mp.setenv("CAMJAX_COMPILATION_CACHE", "0")
+        assert cli.main(["design", "--dpi", "10", "--out", str(old)]) == 0
+    old_files = snapshot(old)
+
+    angles = st.lists(st.integers(30, 150), min_size=3, max_size=3).filter(lambda a: sum(a) <= 330).map(
+        lambda a: (float(a[0]), float(a[1]), float(a[2]), float(360 - sum(a))))
+
+    @settings(max_examples=8, deadline=None, derandomize=True,
+              suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
+    @given(rpm=st.floats(1.0, 1e4), angles=angles, lift=st.floats(0.5, 20.0),
+           law=st.sampled_from(["cycloidal", "harmonic", "poly_3_4_5"]), extra=st.integers(0, 300),
+           fail_at=st.integers(1, 12), error=st.sampled_from([Injected, KeyboardInterrupt]))
+    def check(rpm, angles, lift, law, extra, fail_at, error):
+        import shutil
+        import uuid
+
+        place = base / uuid.uuid4().hex
+        place.mkdir()
+        shutil.copytree(old, place / "out")
+        samples = 96 + extra  # >= 8 samples in a 30 deg segment
+        (place / "scene.toml").write_text(_scene_text(rpm, angles, lift, law, samples))
+        with pytest.MonkeyPatch.context() as mp:
+            mp.setenv("CAMJAX_COMPILATION_CACHE", "0")
+            seen = _counting_writes(mp, place, fail_at, error)
+            rc = cli.main(["design", str(place / "scene.toml"), "--dpi", "10", "--out", str(place / "out")])
+        after = snapshot(place / "out")
+        outcomes.add(len(seen) >= fail_at)
+        assert leftovers(place) == []
+        if len(seen) < fail_at:  # the run wrote everything before the failure was due
+            assert rc == 0 and set(after) == NEW_SET
+            data = json.loads(after["result.json"])
+            assert data["cam_speed_rpm"] == rpm and data["samples"] == samples
+            assert len(after["profile.csv"].decode().splitlines()) == samples + 1  # header + rows
+        else:
+            assert rc == (1 if error is Injected else 130), seen
+            assert after == old_files
+
+    outcomes: set[bool] = set()
+    check()
+    assert outcomes == {True, False}  # both interrupted and finished runs were drawn
+
+
+def test_roller_violations_agree_with_the_minimum_base_radius():
+    # the bisection of pipeline.min_base_radius (jitted, normalized violations) and the NumPy
+    # checks on the drawn curves are separate computations of the same constraints: 1 % below
+    # the minimum something must break, 1 % above nothing may
+    from camjax.pipeline import run_design
+    from camjax.scene import parse_scene
+
+    scene = parse_scene(KINEMATIC.replace('type = "flat"', 'type = "roller"\nroller_radius_mm = 8.0\n'
+                                          'offset_mm = 3.0'))
+    minimum = run_design(scene).min_base_radius.radius_mm
+    below = run_design(scene, base_radius_mm=0.99 * minimum).violations
+    above = run_design(scene, base_radius_mm=1.01 * minimum).violations
+    assert {v.constraint for v in below} & {"pressure_angle", "undercut"} and above == ()
+
+
+def test_write_json_names_the_non_finite_key(tmp_path):
+    from camjax.numerics import NonFiniteError
+    from camjax.output.files import non_finite_key, write_json
+
+    data = {"a": [1.0, {"b": 2.0, "c": float("nan")}], "d": float("inf")}
+    assert non_finite_key(data) == "a[1].c" and non_finite_key({"x": [1.0]}) is None
+    with pytest.raises(NonFiniteError, match=r"a\[1\]\.c"):
+        write_json(tmp_path / "r.json", data)
+    assert not (tmp_path / "r.json").exists()
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("sig, status", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
+def test_an_interrupt_while_starting_is_one_line(sig, status, place):
+    # half a second in, the process is still importing JAX: no traceback from inside the imports
+    before = snapshot(place / "out")
+    proc = _start(["design", "--out", str(place / "out")], place)
+    time.sleep(0.5)
+    proc.send_signal(sig)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == status, err
+    assert len(err.strip().splitlines()) == 1 and "Traceback" not in err
+    assert snapshot(place / "out") == before and leftovers(place) == []

@@ -1,0 +1,256 @@
+"""Rocker (oscillating-follower) loads, scenes and `camjax design`: the lever relations checked against
+the moments of the contact force computed from positions, Hertz stress on a dwell in closed form,
+scene refusals naming the field, and the design files."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from camjax import cli, contact, geometry, loads
+from camjax.laws import get_law
+from camjax.loads import RockerTrain
+from camjax.program import MotionProgram, Segment, evaluate
+from camjax.scene import SceneError, parse_scene
+
+LIFT = math.radians(20.0)
+PROGRAM = MotionProgram.from_segments([Segment("rise", 120, get_law("poly_3_4_5"), LIFT), Segment("dwell", 60),
+                                       Segment("return", 100, get_law("cycloidal"), LIFT), Segment("dwell", 80)])
+TRAIN = RockerTrain(inertia_kg_m2=0.002, spring_N_m_per_rad=20.0, preload_rad=0.3, damping_N_m_s_per_rad=0.01)
+OMEGA = 30.0  # rad/s
+
+
+def _turn(x, y, a):
+    return np.cos(a) * x - np.sin(a) * y, np.sin(a) * x + np.cos(a) * y
+
+
+def test_rocker_torque_is_the_kinetostatic_balance_about_the_pivot():
+    kin = evaluate(PROGRAM, 720)
+    s, ds, d2s = (np.asarray(v) for v in (kin.s, kin.ds, kin.d2s))
+    # time derivatives by the chain rule at constant speed: psi' = s' w, psi'' = s'' w^2
+    ref = 0.002 * d2s * OMEGA**2 + 0.01 * ds * OMEGA + 20.0 * (s + 0.3)
+    np.testing.assert_allclose(loads.rocker_torque(TRAIN, kin, OMEGA), ref, rtol=1e-14, atol=1e-13)
+
+
+@pytest.mark.parametrize("rotation", ["ccw", "cw"])
+def test_roller_contact_force_and_cam_torque_from_the_moments_of_the_contact_force(rotation):
+    sigma = 1.0 if rotation == "ccw" else -1.0
+    n = 36_000
+    kin = evaluate(PROGRAM, n)
+    th, s = np.asarray(kin.theta), np.asarray(kin.s)
+    d, l, rf, rp = 80.0, 60.0, 8.0, 45.0
+    psi0 = math.acos((d * d + l * l - rp * rp) / (2 * d * l))
+    cx, cy = d - l * np.cos(s + psi0), l * np.sin(s + psi0)  # roller centre, fixed frame
+    x, y = _turn(cx, cy, -sigma * th)  # pitch curve seen from the cam
+    h = 2 * np.pi / n
+    tx, ty = _turn((np.roll(x, -1) - np.roll(x, 1)) / (2 * h), (np.roll(y, -1) - np.roll(y, 1)) / (2 * h),
+                   sigma * th)
+    # contact normal from positions: perpendicular to the pitch tangent, away from the cam centre
+    nx, ny = -ty / np.hypot(tx, ty), tx / np.hypot(tx, ty)
+    flip = np.sign(nx * cx + ny * cy)
+    nx, ny = nx * flip, ny * flip
+    m = np.asarray(loads.rocker_torque(TRAIN, kin, OMEGA))
+    phi = geometry.oscillating_roller_pressure_angle(d, l, psi0, kin, rotation)
+    p = np.asarray(loads.rocker_roller_contact_force(m, l, phi))
+    # P n at the roller centre turns the arm towards larger psi (clockwise) by M: the lever relation
+    moment = -((cx - d) * p * ny - cy * p * nx) * 1e-3
+    # central differences at 0.01 deg: tangent direction to ~1e-9, forces ~200 N: measured 8e-8 N m
+    np.testing.assert_allclose(moment, m, rtol=0, atol=1e-6)
+    # the cam feels -P n at the contact point; the drive balances its moment about the cam centre
+    qx, qy = cx - rf * nx, cy - rf * ny
+    drive = -sigma * (qx * (-p * ny) - qy * (-p * nx)) * 1e-3
+    np.testing.assert_allclose(loads.rocker_cam_torque(m, kin.ds), drive, rtol=0, atol=1e-6)
+
+
+@pytest.mark.parametrize("rotation", ["ccw", "cw"])
+def test_flat_contact_force_and_cam_torque_from_the_moments_of_the_contact_force(rotation):
+    sigma = 1.0 if rotation == "ccw" else -1.0
+    kin = evaluate(PROGRAM, 720)
+    th = np.asarray(kin.theta)
+    d, f, rb = 120.0, 10.0, 95.0
+    g = geometry.oscillating_flat_geometry(d, f, rb, kin, rotation)
+    psi = np.asarray(g.arm_angle)
+    x, y = geometry.oscillating_flat_profile(d, f, rb, kin, rotation)
+    xf, yf = _turn(np.asarray(x), np.asarray(y), sigma * th)  # contact point, fixed frame
+    mx, my = np.sin(psi), np.cos(psi)  # face normal, away from the cam
+    m = np.asarray(loads.rocker_torque(TRAIN, kin, OMEGA))
+    p = np.asarray(loads.rocker_flat_contact_force(m, g.contact_distance))
+    moment = -((xf - d) * p * my - yf * p * mx) * 1e-3
+    np.testing.assert_allclose(moment, m, rtol=1e-12, atol=1e-12)  # exact geometry: round-off only
+    drive = -sigma * (xf * (-p * my) - yf * (-p * mx)) * 1e-3
+    np.testing.assert_allclose(loads.rocker_cam_torque(m, kin.ds), drive, rtol=1e-12, atol=1e-12)
+
+
+def test_hertz_stress_on_a_dwell_in_closed_form():
+    # on a dwell the roller sits on the base circle R_p - R_f: two cylinders, P = M / (l cos phi)
+    # with cos phi from the triangle O-A-C (angle between OC and the path, perpendicular to AC)
+    d, l, rf, rp = 80.0, 60.0, 8.0, 45.0
+    kin = evaluate(MotionProgram.from_segments([Segment("dwell", 360)]), 8)
+    m = np.asarray(loads.rocker_torque(TRAIN, kin, OMEGA))  # = k x0 = 6 N m
+    psi0 = math.acos((d * d + l * l - rp * rp) / (2 * d * l))
+    c = np.array([d - l * math.cos(psi0), l * math.sin(psi0)])
+    path = np.array([l * math.sin(psi0), l * math.cos(psi0)]) / l
+    cos_phi = abs(c @ path) / np.linalg.norm(c)
+    cam, fol = contact.Material(2.1e5, 0.3), contact.Material(1.15e5, 0.26)
+    k = (1 - 0.3**2) / 2.1e5 + (1 - 0.26**2) / 1.15e5
+    p = 6.0 / (l * 1e-3 * cos_phi)
+    ref = 0.564 * math.sqrt(p / 8.0 * (1 / (rp - rf) + 1 / rf) / k)
+    g = geometry.oscillating_roller_geometry(d, l, rf, rp, kin)
+    np.testing.assert_allclose(loads.rocker_roller_contact_force(m, l, g.pressure_angle), p, rtol=1e-13)
+    coeff = contact.stress_coefficient(m / (l * 1e-3), 8.0, cam, fol)
+    sigma = contact.roller_stress(coeff, g.pressure_angle, geometry.roller_equivalent_radius(g.pitch_curvature, rf))
+    np.testing.assert_allclose(sigma, ref, rtol=1e-12)
+
+
+# ---------------------------------------------------------------------------------- scenes
+
+ROLLER_SCENE = """
+[motion]
+rpm = 300.0
+samples = 360
+rotation = "ROT"
+segments = [
+  { kind = "rise",   angle_deg = 120, law = "cycloidal", lift_deg = 20.0 },
+  { kind = "dwell",  angle_deg = 60 },
+  { kind = "return", angle_deg = 120, law = "cycloidal", lift_deg = 20.0 },
+  { kind = "dwell",  angle_deg = 60 },
+]
+
+[follower]
+type = "oscillating_roller"
+pivot_distance_mm = 80.0
+arm_length_mm = 60.0
+roller_radius_mm = 8.0
+inertia_kg_m2 = 0.002
+spring_N_m_per_rad = 20.0
+preload_rad = 0.3
+damping_N_m_s_per_rad = 0.01
+
+[contact]
+cam_width_mm = 8.0
+cam = { E_MPa = 2.1e5, poisson = 0.3 }
+follower = { E_MPa = 2.1e5, poisson = 0.3 }
+"""
+
+FLAT_SCENE = ROLLER_SCENE.replace('type = "oscillating_roller"', 'type = "oscillating_flat"').replace(
+    "arm_length_mm = 60.0\nroller_radius_mm = 8.0", "face_offset_mm = 10.0").replace(
+    "pivot_distance_mm = 80.0", "pivot_distance_mm = 150.0")
+
+
+def test_oscillating_scene_reads_lift_deg_as_rad():
+    scene = parse_scene(ROLLER_SCENE.replace("ROT", "ccw"))
+    assert scene.follower.oscillating and scene.follower.arm_length_mm == 60.0
+    np.testing.assert_allclose(np.asarray(scene.motion.program.lifts), [LIFT, 0.0, LIFT, 0.0], rtol=1e-15)
+    assert scene.follower.train == TRAIN
+    flat = parse_scene(FLAT_SCENE.replace("ROT", "cw"))
+    assert flat.follower.type == "oscillating_flat" and flat.follower.face_offset_mm == 10.0
+
+
+@pytest.mark.parametrize("edit,field,words", [
+    (("lift_deg = 20.0 },\n  { kind = \"dwell\",  angle_deg = 60 },\n  { kind = \"return\"",
+      "lift_mm = 5.0 },\n  { kind = \"dwell\",  angle_deg = 60 },\n  { kind = \"return\""),
+     "motion.segments[0].lift_mm", "lift_deg"),
+    (("arm_length_mm = 60.0\n", ""), "follower.arm_length_mm", "required"),
+    (("pivot_distance_mm = 80.0\n", ""), "follower.pivot_distance_mm", "required"),
+    (("roller_radius_mm = 8.0\n", ""), "follower.roller_radius_mm", "required"),
+    (("lift_deg = 20.0", "lift_deg = 190.0"), "motion.segments[0].lift_deg", "line of centres"),
+    (("inertia_kg_m2 = 0.002", "mass_kg = 0.1"), "follower.mass_kg", "oscillating_roller"),
+    (("arm_length_mm = 60.0", "arm_length_mm = 60.0\noffset_mm = 2.0"), "follower.offset_mm", "oscillating"),
+    (("arm_length_mm = 60.0", "arm_length_mm = -60.0"), "follower.arm_length_mm", "range"),
+])
+def test_bad_oscillating_scenes_name_the_field(edit, field, words):
+    text = ROLLER_SCENE.replace("ROT", "ccw")
+    assert edit[0] in text
+    with pytest.raises(SceneError) as err:
+        parse_scene(text.replace(edit[0], edit[1], 1))
+    assert err.value.field == field, str(err.value)
+    assert words in str(err.value)
+
+
+def test_translating_follower_refuses_lift_deg():
+    text = ROLLER_SCENE.replace("ROT", "ccw").replace('type = "oscillating_roller"', 'type = "roller"')
+    with pytest.raises(SceneError) as err:
+        parse_scene(text)
+    assert err.value.field == "motion.segments[0].lift_deg" and "lift_mm" in str(err.value)
+
+
+def _design(tmp_path, text, *extra):
+    path = tmp_path / "scene.toml"
+    path.write_text(text)
+    out = tmp_path / "out"
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("CAMJAX_COMPILATION_CACHE", "0")
+        rc = cli.main(["design", str(path), "--out", str(out), "--dpi", "30", *extra])
+    return rc, out
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("scene,rotation", [(ROLLER_SCENE, "ccw"), (FLAT_SCENE, "cw")])
+def test_design_writes_the_rocker_files(tmp_path, scene, rotation):
+    rc, out = _design(tmp_path, scene.replace("ROT", rotation))
+    assert rc == 0
+    assert {p.name for p in out.iterdir()} == {"result.json", "svaj.png", "profile.png", "geometry.png",
+                                               "loads.png", "profile.csv", "profile.dxf"}
+    data = json.loads((out / "result.json").read_text(), parse_constant=lambda c: pytest.fail(c))
+    ev = data["evaluated"]
+    assert ev["base_radius_mm"] == math.ceil(data["min_base_radius_mm"] + 1.0)
+    # the CSV is the outline the report describes: on the dwell at theta = 0 it lies on the base circle
+    table = np.loadtxt(out / "profile.csv", delimiter=",", skiprows=1)
+    assert math.hypot(table[0, 1], table[0, 2]) == pytest.approx(ev["base_radius_mm"], rel=1e-12)
+    assert data["loads"]["contact"]["lost"] is False
+    if "prime_radius_mm" in ev:  # the drawn cam is bigger than the smallest, so within the limit
+        assert ev["pressure_angle_ok"] and ev["pressure_angle_deg"]["max_abs"] <= 30.0
+    else:
+        assert ev["curvature_ok"] and ev["face"]["min_length_mm"] > 0
+
+
+@pytest.mark.parametrize("radius,words", [("5", "cannot reach the prime circle"),
+                                          ("135", "cannot reach the prime circle")])  # R_p < |d - l|, > d + l
+def test_design_refuses_a_base_radius_the_rocker_cannot_close(tmp_path, capsys, radius, words):
+    rc, out = _design(tmp_path, ROLLER_SCENE.replace("ROT", "ccw"), "--base-radius", radius)
+    assert rc == 2 and not out.exists()
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--base-radius" in err[0] and words in err[0]
+
+
+def test_design_refuses_an_arm_swung_through_the_line_of_centres(tmp_path, capsys):
+    # psi0 for R_p = 139 mm (d + l = 140) is ~173 deg: a 20 deg swing crosses the line of centres
+    rc, out = _design(tmp_path, ROLLER_SCENE.replace("ROT", "ccw"), "--base-radius", "131")
+    assert rc == 2 and not out.exists()
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "line of centres" in err[0]
+
+
+def test_thesis_bench_keeps_its_lifts_in_rad_exactly():
+    # the dynamics of the bench read the program's lifts: lift_deg must convert back to the
+    # series' 0.48337882 rad to the last bit for `camjax dynamics thesis-bench` to stay unchanged
+    from camjax.scene import load_scene
+
+    scene = load_scene("thesis-bench")
+    assert scene.follower.type == "oscillating_roller" and scene.dynamics.follower == "oscillating"
+    assert [float(x) for x in scene.motion.program.lifts] == [0.48337882, 0.48337882]
+
+
+@pytest.mark.slow
+def test_design_thesis_bench(tmp_path):
+    out = tmp_path / "tb"
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("CAMJAX_COMPILATION_CACHE", "0")
+        assert cli.main(["design", "thesis-bench", "--out", str(out), "--dpi", "30"]) == 0
+    data = json.loads((out / "result.json").read_text())
+    assert data["follower_type"] == "oscillating_roller"
+    assert data["kinematics"]["swing_deg"]["max"] == pytest.approx(math.degrees(0.48337882), rel=1e-15)
+    # sized by the 30 deg rule: at the smallest prime radius |phi| peaks on the limit, so the drawn
+    # (1 mm larger) cam stays below it
+    assert data["min_base_radius_binding"] == "pressure_angle"
+    assert data["evaluated"]["pressure_angle_deg"]["max_abs"] < 30.0
+
+
+def test_design_refuses_a_rocker_no_cam_can_carry(tmp_path, capsys):
+    # a face 10 mm from a pivot only 10 mm from the cam centre: R_b + f < d leaves no base circle
+    text = FLAT_SCENE.replace("ROT", "ccw").replace("pivot_distance_mm = 150.0", "pivot_distance_mm = 10.0")
+    rc, out = _design(tmp_path, text)
+    assert rc == 2 and not out.exists()
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "follower.pivot_distance_mm" in err[0]

@@ -1,0 +1,135 @@
+"""The roller design problem solved by every registered solver and mode, against independent optima:
+a dense scan over (R_b, R_f, e), the closed-form/bisection prime radius, and SciPy."""
+
+import dataclasses
+import math
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import camjax
+from camjax import geometry
+from camjax import roller_problem as R
+from camjax.solvers import scipy_roller
+from camjax.solvers.base import solve
+from camjax.solvers.registry import MODES, SOLVERS
+
+
+@pytest.fixture(scope="module")
+def scene():
+    return camjax.load_scene("roller")
+
+
+@pytest.fixture(scope="module")
+def size_only(scene):
+    return R.problem_from_scene(scene)  # the built-in roller scene has gamma = 0
+
+
+def dense_scan_prime_radius(scene, zooms=3, grid=(41, 11, 41)):
+    """Smallest feasible R_b + R_f over a grid of (R_b, R_f, e) in the [design] box, zoomed.
+
+    Feasibility straight from the geometry (max |phi| <= limit, smallest convex cam radius >=
+    min_curvature_radius_mm), not from the problem's constraint functions.
+    """
+    kin = camjax.scene_arrays(scene).kin
+    f, d = scene.follower, scene.design
+    lim = math.radians(f.max_pressure_angle_deg)
+
+    def cost(rb, rf, e):
+        g = geometry.roller_geometry(rb, rf, e, kin, scene.motion.rotation, f.min_curvature_radius_mm)
+        ok = (jnp.max(jnp.abs(g.pressure_angle)) <= lim) & (jnp.min(g.undercut_margin) >= 0)
+        return jnp.where(ok, rb + rf, jnp.inf)
+
+    cost = jax.jit(jax.vmap(cost))
+    lo = np.array([d.base_radius_mm[0], d.roller_radius_mm[0], d.offset_mm[0]])
+    hi = np.array([d.base_radius_mm[1], d.roller_radius_mm[1], d.offset_mm[1]])
+    box_lo, box_hi = lo.copy(), hi.copy()
+    for _ in range(zooms + 1):
+        axes = [np.linspace(lo[i], hi[i], grid[i]) for i in range(3)]
+        pts = [x.ravel() for x in np.meshgrid(*axes, indexing="ij")]
+        c = np.asarray(cost(*map(jnp.asarray, pts)))
+        k = int(np.argmin(c))
+        best = np.array([p[k] for p in pts])
+        cell = 2 * (hi - lo) / (np.array(grid) - 1)
+        lo, hi = np.maximum(best - cell, box_lo), np.minimum(best + cell, box_hi)
+    return float(c[k]), best
+
+
+def exact_offset_scan(scene):
+    """min over e of the smallest admissible R_p(e) (closed form + bisection), golden-refined in e."""
+    kin = camjax.scene_arrays(scene).kin
+    f, d = scene.follower, scene.design
+    rf = d.roller_radius_mm[0]  # with gamma = 0 the smallest roller is best: undercut only gets easier
+
+    def rp(e):
+        return geometry.roller_min_prime_radius(kin, rf, e, math.radians(f.max_pressure_angle_deg),
+                                                f.min_curvature_radius_mm, scene.motion.rotation).prime_radius_mm
+
+    rp = jax.jit(jax.vmap(rp))
+    es = np.linspace(d.offset_mm[0], d.offset_mm[1], 801)
+    k = int(np.argmin(np.asarray(rp(jnp.asarray(es)))))
+    a, b = es[max(k - 1, 0)], es[min(k + 1, len(es) - 1)]
+    g = (math.sqrt(5) - 1) / 2
+    for _ in range(80):
+        x1, x2 = b - g * (b - a), a + g * (b - a)
+        r1, r2 = np.asarray(rp(jnp.asarray([x1, x2])))
+        a, b = (a, x2) if r1 < r2 else (x1, b)
+    e = 0.5 * (a + b)
+    return float(rp(jnp.asarray([e]))[0]), e
+
+
+@pytest.mark.slow
+def test_gradient_finds_the_optimal_offset(scene, size_only):
+    sol = solve(size_only, (1.0, 0.0), solver="gradient")
+    assert bool(sol.feasible) and sol.status_name == "converged"
+    rp = float(sol.base_radius_mm + sol.roller_radius_mm)
+    exact_rp, exact_e = exact_offset_scan(scene)
+    scan_rp, scan_x = dense_scan_prime_radius(scene)
+    # the scan's best feasible point is feasible, so the optimum can only be smaller; the scan's
+    # final cells (8e-4 mm in R_b, 1e-3 mm in e) bound how much smaller: a few um
+    assert exact_rp <= scan_rp <= exact_rp + 5e-3
+    assert abs(scan_x[2] - exact_e) < 5e-2
+    # the solver reaches the exact optimum to its feasibility tolerance (1e-6 mm)
+    assert rp == pytest.approx(exact_rp, abs=1e-6)
+    assert float(sol.offset_mm) == pytest.approx(exact_e, abs=1e-5)
+    # and the offset pays: against e = 0 the prime circle shrinks by 29 % (the issue's example)
+    centred = R.problem_from_scene(dataclasses.replace(scene, design=dataclasses.replace(
+        scene.design, offset_mm=(0.0, 0.0))))
+    rp0 = float(solve(centred, (1.0, 0.0), solver="gradient").size_mm)
+    assert 1 - rp / rp0 == pytest.approx(0.29, abs=0.01)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("solver", SOLVERS)
+@pytest.mark.parametrize("mode", MODES)
+def test_every_solver_and_mode_solves_the_roller_problem(scene, solver, mode):
+    # R_f and e fixed: then the pointwise design (largest R_b over the angles) is the global one
+    fixed = dataclasses.replace(scene.design, roller_radius_mm=(5.0, 5.0), offset_mm=(1.0, 1.0), gamma=0.0)
+    problem = R.problem_from_scene(dataclasses.replace(scene, design=fixed))
+    sol = solve(problem, (1.0, 0.0), mode=mode, solver=solver)
+    f = scene.follower
+    ref = geometry.roller_min_prime_radius(camjax.scene_arrays(scene).kin, 5.0, 1.0,
+                                           math.radians(f.max_pressure_angle_deg), f.min_curvature_radius_mm)
+    # gradient and hybrid to the feasibility tolerance; the GA (200 generations, decaying
+    # mutation) to 1e-3 mm (measured ~1e-5)
+    tol = 1e-3 if solver == "ga" else 1e-6
+    assert float(sol.base_radius_mm) == pytest.approx(float(ref.prime_radius_mm) - 5.0, abs=tol)
+    assert bool(sol.feasible) or solver == "ga"
+    assert float(sol.roller_radius_mm) == 5.0 and float(sol.offset_mm) == 1.0
+    out = sol.to_json(problem)
+    assert out["prime_radius_mm"] == pytest.approx(out["base_radius_mm"] + 5.0, rel=1e-15)
+    assert sol.record(problem)["offset_mm"] == 1.0
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("weights", [(1.0, 1.0), (0.5, 1.0), (1.0, 0.1)])
+def test_gradient_matches_scipy_slsqp_with_stress(scene, weights):
+    problem = R.problem_from_scene(dataclasses.replace(scene, design=dataclasses.replace(scene.design, gamma=1.0)))
+    ours = solve(problem, weights, solver="gradient")
+    ref = scipy_roller.slsqp(problem, *weights)
+    assert ref.success and ref.max_violation < 1e-9
+    # both converge to the same KKT point; SLSQP's finite-difference Jacobians limit it to ~1e-8
+    assert float(ours.objective) == pytest.approx(ref.objective, rel=1e-7)
+    assert bool(ours.feasible)
