@@ -74,42 +74,91 @@ def parse_float_list(option: str, text: str) -> list[float]:
 # ------------------------------------------------------------------------------ commands
 
 
-@command("laws", "peak values and FLCD status of every registered motion law")
+@command("laws", "peak values, joint classes against dwells and an optional chart of every motion law")
 def _setup_laws(p: argparse.ArgumentParser):
+    p.formatter_class = argparse.RawDescriptionHelpFormatter
+    p.epilog = LAWS_COLUMNS
     p.add_argument("--json", metavar="FILE", help="write the table as JSON instead of printing it")
+    p.add_argument("--plot", metavar="FILE.png",
+                   help="also draw normalized s, v, a, j of every law overlaid (one panel each)")
 
     def run(args) -> int:
         from camjax.laws import LAWS, summarize
+        from camjax.program import MotionProgram, Segment, joints
+
+        plot = check_output_file(args.plot, "--plot") if args.plot is not None else None
+        if plot is not None:
+            from matplotlib.figure import Figure
+
+            kinds = Figure().canvas.get_supported_filetypes()
+            if plot.suffix.lstrip(".").lower() not in kinds:
+                raise UsageError(f"--plot = {args.plot!r}: unknown image type '{plot.suffix}' "
+                                 f"(allowed: {', '.join('.' + k for k in sorted(kinds))})")
+
+        def dwell_joints(law) -> tuple[str, str]:
+            # the law as a rise between two dwells: the FLCD class of the joint before and after it
+            prog = MotionProgram.from_segments([Segment("dwell", 90.0), Segment("rise", 90.0, law, 1.0),
+                                                Segment("dwell", 90.0), Segment("return", 90.0, law, 1.0)])
+            by_deg = {round(j.joint_deg): j.flcd_class for j in joints(prog)}
+            return by_deg[90], by_deg[180]
 
         path = check_output_file(args.json, "--json") if args.json is not None else None
         rows = []
         for law in LAWS.values():
             s = summarize(law)
+            start, end = dwell_joints(law)
             rows.append({
                 "law": s.name,
                 "peak_velocity": s.peak_velocity,
                 "peak_accel_pos": s.peak_accel_pos,
                 "peak_accel_neg": s.peak_accel_neg,
                 "peak_jerk": s.peak_jerk,
+                "joint_after_dwell": start,
+                "joint_before_dwell": end,
                 "flcd_against_dwells": s.flcd_against_dwells,
                 "perturbation_against_dwells": s.perturbation_against_dwells,
             })
+        if plot is not None:
+            import jax.numpy as jnp
+            import numpy as np
+
+            from camjax.output.plots import laws_figure
+
+            x = np.linspace(0.0, 1.0, 501)
+            # legend label: the name and its joint classes after / before a dwell
+            curves = {f"{r['law']} [{r['joint_after_dwell']} / {r['joint_before_dwell']}]":
+                      tuple(np.asarray(v) for v in LAWS[r["law"]](jnp.asarray(x))) for r in rows}
+            kind = plot.suffix.lstrip(".").lower()
+            write_file_atomic(plot, lambda tmp: laws_figure(x, curves).savefig(tmp, dpi=110, format=kind))
         if args.json:
             write_file_atomic(path, lambda tmp: write_json(tmp, {"normalized": True, "laws": rows}))
-            print(f"wrote {args.json}")
+            print(f"wrote {args.json}" + (f", {args.plot}" if plot else ""))
             return 0
-        head = f"{'law':20s} {'|v|max':>8s} {'+a':>9s} {'-a':>9s} {'|j|max':>9s}  FLCD  perturbation"
+        head = (f"{'law':20s} {'max|v|':>7s} {'max a':>8s} {'min a':>8s} {'max|j|':>8s}  "
+                f"{'after dwell':12s} {'before dwell':12s} FLCD")
         print(head)
         print("-" * len(head))
         for r in rows:
-            print(f"{r['law']:20s} {r['peak_velocity']:8.4f} {r['peak_accel_pos']:9.4f} "
-                  f"{r['peak_accel_neg']:9.4f} {r['peak_jerk']:9.3f}  "
-                  f"{'yes' if r['flcd_against_dwells'] else 'NO ':4s}  "
-                  f"{'yes' if r['perturbation_against_dwells'] else 'no'}")
-        print("(normalized: x in [0, 1], lift 1; FLCD and perturbation judged against dwells)")
+            print(f"{r['law']:20s} {r['peak_velocity']:7.4f} {r['peak_accel_pos']:8.4f} "
+                  f"{r['peak_accel_neg']:8.4f} {r['peak_jerk']:8.3f}  {r['joint_after_dwell']:12s} "
+                  f"{r['joint_before_dwell']:12s} {'yes' if r['flcd_against_dwells'] else 'no'}")
+        print(LAWS_COLUMNS)
+        if plot is not None:
+            print(f"wrote {plot}")
         return 0
 
     return run
+
+
+LAWS_COLUMNS = """\
+columns (normalized law p(x): lift 1 over x in [0, 1]):
+  max|v|, max a, min a, max|j|   peaks of |p'|, p'', p'' (most negative) and |p'''|; scale to a
+                                 rise h over beta rad by h/beta, h/beta^2, h/beta^3
+  after dwell, before dwell      class of the joint when the law is a rise starting from / ending
+                                 at a dwell: ok (smooth), perturbation (jerk jumps; allowed),
+                                 jerk (acceleration jumps), shock (velocity jumps)
+  FLCD                           yes = velocity and acceleration continuous at both joints with
+                                 dwells (the law's class there is ok or perturbation)"""
 
 
 @command("design", "report, plots, profile CSV and DXF of a scene's cam design")

@@ -154,3 +154,50 @@ def test_design_refuses_rad_lifts_on_a_translating_follower(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "dynamics.follower = 'oscillating'" in err and "oscillating_roller" in err
     assert not out.exists()
+
+
+def _class_from_end_values(dp, d2p, d3p, tol=1e-9):
+    """FLCD class of a law's joint with a dwell, from its end derivatives alone (a dwell has 0)."""
+    for name, value in (("shock", dp), ("jerk", d2p), ("perturbation", d3p)):
+        if abs(value) > tol:
+            return name
+    return "ok"
+
+
+def test_laws_table_json_and_chart(tmp_path, capsys):
+    import numpy as np
+
+    from camjax.laws import LAWS
+
+    table, chart = tmp_path / "laws.json", tmp_path / "charts" / "laws.png"
+    assert cli.main(["laws", "--json", str(table), "--plot", str(chart)]) == 0
+    rows = {r["law"]: r for r in _strict_json(table)["laws"]}
+    assert list(rows) == list(LAWS)
+    for name, law in LAWS.items():
+        # the law's own end derivatives (NumPy, no program involved) decide the class
+        v = [np.asarray(t) for t in law(np.array([0.0, 1.0]))]
+        start = _class_from_end_values(v[1][0], v[2][0], v[3][0])
+        end = _class_from_end_values(v[1][1], v[2][1], v[3][1])
+        assert (rows[name]["joint_after_dwell"], rows[name]["joint_before_dwell"]) == (start, end), name
+        assert rows[name]["flcd_against_dwells"] == ({start, end} <= {"ok", "perturbation"}), name
+    # SPEC section 1 statements and the constant-velocity law
+    assert rows["uniform"]["joint_after_dwell"] == rows["uniform"]["joint_before_dwell"] == "shock"
+    assert (rows["double_harmonic"]["joint_after_dwell"], rows["double_harmonic"]["joint_before_dwell"]) \
+        == ("ok", "jerk")
+    assert chart.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_laws_table_names_its_columns(capsys):
+    assert cli.main(["laws"]) == 0
+    out = capsys.readouterr().out
+    assert out.splitlines()[0].split()[:2] == ["law", "max|v|"]
+    assert "uniform" in out and "shock" in out
+    assert "FLCD" in out and "yes = velocity and acceleration continuous" in out
+
+
+def test_laws_refuses_an_unknown_image_type(tmp_path, capsys):
+    target = tmp_path / "laws.xyz"
+    assert cli.main(["laws", "--plot", str(target)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--plot" in err[0] and ".png" in err[0]
+    assert not target.exists()

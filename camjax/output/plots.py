@@ -195,3 +195,32 @@ def design_figures(curves: DesignCurves) -> dict[str, Figure]:
     if curves.stress_MPa is not None:
         out["stress.png"] = stress_figure(curves)
     return out
+
+
+def laws_figure(x, laws: dict[str, tuple[np.ndarray, ...]]) -> Figure:
+    """Normalized s, v, a, j of several laws overlaid, one panel each (x and values dimensionless).
+
+    ``laws`` maps a legend label (a law's name, with its joint classes if wanted) to
+    (p, p', p'', p''') sampled at ``x`` in [0, 1], lift 1: the panels compare shapes and peaks.
+    Where a law meets a dwell, the jump in each derivative is its value at x = 0 or x = 1.
+    """
+    fig = Figure(figsize=(10.0, 7.5), layout="constrained")
+    axes = fig.subplots(2, 2, sharex=True).ravel()
+    titles = ["displacement p", "velocity p'", "acceleration p''", "jerk p'''"]
+    # 10 colours x 2 line styles: up to 20 laws stay distinguishable in print
+    styles = [(f"C{k % 10}", "-" if k < 10 else "--") for k in range(len(laws))]
+    for panel, (ax, title) in enumerate(zip(axes, titles, strict=True)):
+        for (name, values), (color, ls) in zip(laws.items(), styles, strict=True):
+            ax.plot(x, values[panel], color=color, linestyle=ls, linewidth=1.1, label=name)
+        ax.axhline(0.0, color="0.3", linewidth=0.5)
+        ax.set_title(title, fontsize=10)
+        ax.grid(True, alpha=0.3)
+        ax.set_xlim(0.0, 1.0)
+        if panel >= 2:
+            ax.set_xlabel("x = (θ − θ_start) / β")
+    handles, labels = axes[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside right center", fontsize=8,
+               title="law [joint after / before a dwell]", title_fontsize=8)
+    fig.suptitle("Motion laws, normalized: lift 1 over x in [0, 1]; derivatives with respect to x",
+                 fontsize=11)
+    return fig
