@@ -37,6 +37,11 @@ def write_profile_csv(path: Path, curves: DesignCurves) -> Path:
     return path
 
 
+def centre_mark_half_mm(curves: DesignCurves) -> float:
+    """Half length of the centre-mark arms: a tenth of the largest radius, at least 1 mm."""
+    return max(1.0, 0.1 * float(np.max(np.hypot(curves.profile_x_mm, curves.profile_y_mm))))
+
+
 def write_profile_dxf(path: Path, curves: DesignCurves) -> Path:
     """Cam outline as one closed LWPOLYLINE on layer CAM_PROFILE, drawing units mm.
 
@@ -44,17 +49,30 @@ def write_profile_dxf(path: Path, curves: DesignCurves) -> Path:
     (with 360 samples the chord error on a 30 mm cam is about 1 micrometre). ezdxf writes the
     document; the polyline's vertices are formatted from the array in one call, since ezdxf adds
     and writes them one by one (quadratic: 30 s for 5e4 vertices; this way 1e6 take seconds).
+    The shaft centre is a cross of two LINEs on layer CENTER; $EXTMIN/$EXTMAX bound both and the
+    active viewport shows them.
     """
     import io
 
     import ezdxf  # imported here: only the DXF export needs it
+    from ezdxf import zoom
 
     xy = np.column_stack([curves.profile_x_mm, curves.profile_y_mm])
-    doc = ezdxf.new("R2010", units=ezdxf.units.MM)
+    doc = ezdxf.new("R2010", units=ezdxf.units.MM, setup=["linetypes"])  # CENTER linetype
     doc.header["$MEASUREMENT"] = 1  # metric
     doc.layers.add("CAM_PROFILE", color=7)
-    doc.modelspace().add_lwpolyline(xy[:1].tolist(), format="xy", close=True,
-                                    dxfattribs={"layer": "CAM_PROFILE"})
+    doc.layers.add("CENTER", color=1, linetype="CENTER")
+    msp = doc.modelspace()
+    msp.add_lwpolyline(xy[:1].tolist(), format="xy", close=True, dxfattribs={"layer": "CAM_PROFILE"})
+    c = centre_mark_half_mm(curves)
+    msp.add_line((-c, 0.0), (c, 0.0), dxfattribs={"layer": "CENTER"})
+    msp.add_line((0.0, -c), (0.0, c), dxfattribs={"layer": "CENTER"})
+    lo = np.minimum(xy.min(axis=0), -c)
+    hi = np.maximum(xy.max(axis=0), c)
+    # ezdxf copies the layout's extents into $EXTMIN/$EXTMAX when it writes
+    msp.dxf.extmin = (float(lo[0]), float(lo[1]), 0.0)
+    msp.dxf.extmax = (float(hi[0]), float(hi[1]), 0.0)
+    zoom.window(msp, msp.dxf.extmin, msp.dxf.extmax)  # open framed on the cam
     stream = io.StringIO()
     doc.write(stream)
     head, marker, tail = stream.getvalue().partition("AcDbPolyline\n 90\n1\n 70\n1\n")
