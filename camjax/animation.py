@@ -290,3 +290,46 @@ def mechanism_from_curves(curves, title: str = "", violation: str | None = None,
         None if curves.pressure_angle_deg is None else np.asarray(curves.pressure_angle_deg),
         title, violation, bad,
     )
+
+
+def _angle_ranges(theta_deg, mask) -> str:
+    """'153–165°, 305–325°': the runs of ``mask`` over the cycle (a run may wrap past 360)."""
+    t, m = np.asarray(theta_deg), np.asarray(mask, bool)
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], m.astype(int), [0]])))
+    runs = [[t[a], t[b - 1]] for a, b in zip(edges[::2], edges[1::2], strict=True)]
+    if len(runs) > 1 and m[0] and m[-1]:  # joined across 360/0
+        runs[0][0] = runs.pop()[0]
+    return ", ".join(f"{a:g}–{b:g}°" if a != b else f"{a:g}°" for a, b in runs)
+
+
+def geometry_violation(curves, pressure_angle_limit_deg: float = 30.0):
+    """(one line naming what the drawn geometry breaks, or None; (N,) mask of the samples).
+
+    Flat face: ρ < 0 (the face cannot follow a concave outline). Roller: undercut
+    (|ρ_pitch| <= R_f) and pressure angle beyond ``pressure_angle_limit_deg``.
+    """
+    t = np.asarray(curves.theta_deg)
+    parts, bad = [], np.zeros(t.shape, bool)
+    if curves.rho_mm is not None:
+        rho = np.asarray(curves.rho_mm)
+        neg = rho < 0
+        if neg.any():
+            j = int(np.argmin(rho))
+            parts.append(f"ρ < 0 on {_angle_ranges(t, neg)} (min {rho[j]:.3g} mm at {t[j]:g}°): "
+                         "the flat face cannot follow the outline there")
+            bad |= neg
+    if curves.undercut_margin_mm is not None:
+        under = np.asarray(curves.undercut_margin_mm) <= 0
+        if under.any():
+            parts.append(f"undercut (|ρ_pitch| ≤ R_f) on {_angle_ranges(t, under)}")
+            bad |= under
+    if curves.pressure_angle_deg is not None:
+        phi = np.abs(np.asarray(curves.pressure_angle_deg))
+        over = phi > pressure_angle_limit_deg
+        if over.any():
+            parts.append(f"pressure angle up to {phi.max():.1f}° > {pressure_angle_limit_deg:g}° on "
+                         f"{_angle_ranges(t, over)}")
+            bad |= over
+    if not parts:
+        return None, bad
+    return f"INFEASIBLE at R_b = {curves.base_radius_mm:.3f} mm: " + "; ".join(parts), bad
