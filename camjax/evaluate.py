@@ -92,6 +92,7 @@ class DesignCurves(NamedTuple):
     undercut_margin_mm: np.ndarray | None  # roller: rho_c - min radius on convex parts (float max on concave)
     pressure_angle_limit_deg: float | None = None  # roller: follower.max_pressure_angle_deg
     rotation: str = "ccw"  # the cam's turning direction (camjax.geometry.pitch)
+    force_parts_N: dict[str, np.ndarray] | None = None  # {"inertia", "damping", "spring", "gravity"}
 
 
 def _np(x):
@@ -131,6 +132,10 @@ def evaluate_design(scene: Scene, arrays: SceneArrays, base_radius_mm: float,
         limit = f.max_pressure_angle_deg
         face_width_mm = None
     m = arrays.motion
+    parts = None
+    if f.train is not None and arrays.force_N is not None:
+        numpy_motion = TimeKinematics(*(np.asarray(v) for v in m))
+        parts = loads.force_parts(f.train, numpy_motion)._asdict()
     return DesignCurves(
         np.asarray(arrays.theta_deg), np.asarray(kin.s), np.asarray(kin.ds), np.asarray(kin.d2s),
         np.asarray(m.velocity), np.asarray(m.accel), np.asarray(m.jerk),
@@ -138,5 +143,5 @@ def evaluate_design(scene: Scene, arrays: SceneArrays, base_radius_mm: float,
         None if face_width_mm is None else float(face_width_mm),
         np.asarray(x), np.asarray(y), _np(rho), _np(arrays.force_N), _np(arrays.torque_Nm),
         _np(stress), None if scene.design is None else scene.design.sigma_max_MPa,
-        rf, e, _np(pitch_x), _np(pitch_y), _np(phi), _np(pitch_rho), _np(margin), limit, rot,
+        rf, e, _np(pitch_x), _np(pitch_y), _np(phi), _np(pitch_rho), _np(margin), limit, rot, parts,
     )
