@@ -161,7 +161,7 @@ columns (normalized law p(x): lift 1 over x in [0, 1]):
                                  dwells (the law's class there is ok or perturbation)"""
 
 
-@command("design", "report, plots, profile CSV and DXF of a scene's cam design")
+@command("design", "report, plots, profile CSV and DXF (and an animation) of a scene's cam design")
 def _setup_design(p: argparse.ArgumentParser):
     p.add_argument("scene", nargs="?", default=None,
                    help="scene TOML file or built-in scene name (default: the embedded default scene)")
@@ -173,10 +173,15 @@ def _setup_design(p: argparse.ArgumentParser):
     p.add_argument("--strict", action="store_true",
                    help="exit with status 3 (after writing) when the geometry written breaks a "
                    "constraint; without it such a run warns on stderr and exits 0")
+    p.add_argument("--animate", action="store_true",
+                   help="also write motion.gif: one turn of the cam with the follower, the contact "
+                        "point and the pressure angle (a broken constraint is named and drawn red)")
     add_design_options(p)
 
     def run(args) -> int:
+        from camjax.output.animation import UndrawableGeometry, check_drawable
         from camjax.output.export import write_design_files
+        from camjax.output.plots import title_block
         from camjax.pipeline import analyse
         from camjax.scene import load_scene
 
@@ -195,6 +200,11 @@ def _setup_design(p: argparse.ArgumentParser):
                              f"lift_deg, or `camjax dynamics {args.scene or scene.name}`)")
         runtime.enable_compilation_cache()
         result = runtime.interruptible(analyse, scene, base_radius_mm=r)
+        try:  # before anything is written: figures and animation need a finite outline
+            check_drawable(result.curves)
+        except UndrawableGeometry as exc:
+            raise UsageError(f"scene {scene.name} at R_b = {result.curves.base_radius_mm:g} mm: "
+                             f"{exc}") from None
         d = result.data
         at = d["evaluated_at"]
         broken = [v["constraint"] for v in at["violations"]]
@@ -202,8 +212,9 @@ def _setup_design(p: argparse.ArgumentParser):
                   f"{', '.join(broken)} violated" if broken else None)
         with replaced_folder(out) as tmp:
             write_json(tmp / "result.json", d)
-            names = ["result.json"] + [p.name for p in write_design_files(tmp, result.curves, args.dpi,
-                                                                          banner)]
+            written = write_design_files(tmp, result.curves, args.dpi, banner, title_block(d),
+                                         animate=args.animate)
+            names = ["result.json"] + [p.name for p in written]
         print(f"scene {d['scene']}: min base radius {d['min_base_radius_mm']:.4f} mm at "
               f"{d['min_base_radius_deg']:g} deg")
         if "design" in d:

@@ -7,8 +7,8 @@ import pytest
 from PIL import Image
 from test_report import ROLLER, reference_motion
 
-from camjax import report
-from camjax.animation import (
+from camjax import pipeline
+from camjax.output.animation import (
     frame_indices,
     frame_poses,
     mechanism_from_curves,
@@ -21,14 +21,14 @@ from camjax.scene import parse_scene
 
 @pytest.fixture(scope="module")
 def flat_mechanism(default_scene, default_arrays):
-    curves = report.analyse(default_scene, default_arrays).curves
+    curves = pipeline.analyse(default_scene, default_arrays).curves
     return mechanism_from_curves(curves, "default")
 
 
 @pytest.fixture(scope="module")
 def roller_mechanism():
     scene = parse_scene(ROLLER, "roller")
-    curves = report.analyse(scene, base_radius_mm=30.0).curves
+    curves = pipeline.analyse(scene, base_radius_mm=30.0).curves
     return mechanism_from_curves(curves, "roller")
 
 
@@ -115,7 +115,7 @@ def test_gif_has_every_frame(flat_mechanism, tmp_path):
 
 
 def test_infeasible_outline_still_animates(default_scene, default_arrays, tmp_path):
-    curves = report.analyse(default_scene, default_arrays, base_radius_mm=10.0).curves
+    curves = pipeline.analyse(default_scene, default_arrays, base_radius_mm=10.0).curves
     bad = curves.rho_mm < 0
     assert bad.any()  # R_b = 10 mm is below the flat face's minimum (about 27 mm)
     m = mechanism_from_curves(curves, "default", violation="ρ < 0: the face cannot follow", bad=bad)
@@ -129,11 +129,11 @@ def test_infeasible_outline_still_animates(default_scene, default_arrays, tmp_pa
 
 
 def test_geometry_violation_names_the_negative_curvature_ranges(default_scene, default_arrays):
-    from camjax.animation import geometry_violation
+    from camjax.output.animation import geometry_violation
 
-    ok = report.analyse(default_scene, default_arrays).curves
+    ok = pipeline.analyse(default_scene, default_arrays).curves
     assert geometry_violation(ok)[0] is None and not geometry_violation(ok)[1].any()
-    bad = report.analyse(default_scene, default_arrays, base_radius_mm=10.0).curves
+    bad = pipeline.analyse(default_scene, default_arrays, base_radius_mm=10.0).curves
     text, mask = geometry_violation(bad)
     # independent: rho = R_b + s + s'' of the reference cycloids, negative where the outline is
     s, _, d2s = reference_motion(bad.theta_deg)

@@ -201,3 +201,37 @@ def test_laws_refuses_an_unknown_image_type(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "--plot" in err[0] and ".png" in err[0]
     assert not target.exists()
+
+
+def test_design_animate_writes_the_gif_even_when_infeasible(tmp_path, capsys):
+    from PIL import Image
+
+    out = tmp_path / "out"
+    # R_b = 10 mm is far below the flat face's smallest admissible radius (about 24 mm)
+    assert cli.main(["design", "--out", str(out), "--dpi", "30", "--base-radius", "10", "--animate"]) == 0
+    printed = capsys.readouterr().out
+    assert "drawn geometry: INFEASIBLE at R_b = 10.000 mm: ρ < 0 on" in printed
+    with Image.open(out / "motion.gif") as im:
+        assert im.n_frames == 72
+    assert "motion.gif" in printed
+
+
+def test_design_refuses_an_undrawable_outline_in_one_line(tmp_path, capsys, monkeypatch):
+    import numpy as np
+
+    from camjax import pipeline
+
+    real = pipeline.evaluate_design
+
+    def broken(*args, **kwargs):  # an outline with a NaN point cannot be drawn
+        curves = real(*args, **kwargs)
+        x = curves.profile_x_mm.copy()
+        x[7] = np.nan
+        return curves._replace(profile_x_mm=x)
+
+    monkeypatch.setattr(pipeline, "evaluate_design", broken)
+    out = tmp_path / "out"
+    assert cli.main(["design", "--out", str(out), "--dpi", "30", "--animate"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "profile_x_mm is not finite at 1 of 360 samples" in err[0]
+    assert not out.exists()

@@ -22,6 +22,10 @@ import numpy as np
 FOLLOWER_TYPES = ("flat", "roller")
 
 
+class UndrawableGeometry(ValueError):
+    """The outline or the motion has non-finite points: there is no mechanism to draw."""
+
+
 class Mechanism(NamedTuple):
     """What the animation draws, per sample (shape (N,) arrays) and per follower.
 
@@ -68,6 +72,17 @@ class FramePoses(NamedTuple):
     pressure_angle_deg: np.ndarray
 
 
+def check_drawable(curves) -> None:
+    """Raise :class:`UndrawableGeometry` naming the first of the outline (profile_x_mm,
+    profile_y_mm) and the motion (s_mm) of ``curves`` (a Mechanism or DesignCurves) that has
+    non-finite points."""
+    for name in ("profile_x_mm", "profile_y_mm", "s_mm"):
+        bad = ~np.isfinite(np.asarray(getattr(curves, name)))
+        if bad.any():
+            raise UndrawableGeometry(f"{name} is not finite at {np.count_nonzero(bad)} of {bad.size} "
+                                     "samples: the cam cannot be drawn")
+
+
 def frame_indices(samples: int, frames: int) -> np.ndarray:
     """Indices of ``frames`` samples evenly spread over one turn of ``samples`` (shape (F,))."""
     if not 1 <= frames <= samples:
@@ -86,6 +101,7 @@ def frame_poses(m: Mechanism, frames: int) -> FramePoses:
     if m.follower_type not in FOLLOWER_TYPES:
         raise ValueError(f"follower_type: '{m.follower_type}' is not drawn; allowed: "
                          f"{', '.join(FOLLOWER_TYPES)}")
+    check_drawable(m)
     k = frame_indices(len(m.theta_deg), frames)
     th = np.deg2rad(np.asarray(m.theta_deg)[k])
     cx, cy = rotate(np.asarray(m.profile_x_mm)[k], np.asarray(m.profile_y_mm)[k], th)
@@ -129,7 +145,11 @@ def motion_frames(m: Mechanism, frames: int = 72) -> MotionFrames:
     reach = max(r_max, abs(m.offset_mm) + half) * 1.08
 
     fig = Figure(figsize=(7.2, 5.0), layout="constrained")
-    ax, ax_s = fig.subplots(1, 2, width_ratios=[1.5, 1.0])
+    grid = fig.add_gridspec(2, 2, width_ratios=[1.5, 1.0], height_ratios=[1.3, 1.0])
+    ax = fig.add_subplot(grid[:, 0])
+    ax_s = fig.add_subplot(grid[0, 1])
+    ax_key = fig.add_subplot(grid[1, 1])  # holds the legend
+    ax_key.set_axis_off()
     ax.set_aspect("equal")
     ax.set_xlim(-reach, reach)
     ax.set_ylim(-r_max * 1.08, top + 0.05 * r_max)
@@ -166,7 +186,7 @@ def motion_frames(m: Mechanism, frames: int = 72) -> MotionFrames:
     (contact,) = ax.plot([], [], "o", color="C3", markersize=5, label="contact point")
     (normal,) = ax.plot([], [], color="C3", linewidth=1.0, linestyle="--",
                         label="contact normal (force line)")
-    label = ax.text(0.02, 0.98, "", transform=ax.transAxes, va="top", fontsize=8,
+    label = ax.text(0.02, 0.02, "", transform=ax.transAxes, va="bottom", fontsize=8,
                     bbox={"boxstyle": "round", "fc": "white", "ec": "0.7", "alpha": 0.9})
     handles, names = ax.get_legend_handles_labels()
     keep = [(h, n) for h, n in zip(handles, names, strict=True) if n != bad_line.get_label() or bad.any()]
@@ -182,8 +202,7 @@ def motion_frames(m: Mechanism, frames: int = 72) -> MotionFrames:
     ax_s.set_xlabel("cam angle θ (deg)")
     ax_s.set_ylabel("follower displacement s (mm)")
     ax_s.grid(True, alpha=0.3)
-    ax_s.set_box_aspect(1.0)
-    ax_s.legend(*zip(*keep, strict=True), fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.22))
+    ax_key.legend(*zip(*keep, strict=True), fontsize=7, loc="center")
 
     def update(i):
         th = np.deg2rad(poses.theta_deg[i])
@@ -282,7 +301,7 @@ def write_motion_gif(path: str | Path, m: Mechanism, frames: int = 72, fps: int 
 
 def mechanism_from_curves(curves, title: str = "", violation: str | None = None,
                           bad=None) -> Mechanism:
-    """The :class:`Mechanism` of a design's :class:`camjax.report.DesignCurves`."""
+    """The :class:`Mechanism` of a design's :class:`camjax.evaluate.DesignCurves`."""
     return Mechanism(
         np.asarray(curves.theta_deg), np.asarray(curves.profile_x_mm), np.asarray(curves.profile_y_mm),
         np.asarray(curves.s_mm), curves.follower_type, float(curves.base_radius_mm),

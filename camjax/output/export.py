@@ -88,16 +88,17 @@ def write_profile_dxf(path: Path, curves: DesignCurves) -> Path:
     return path
 
 
-def write_figures(folder: Path, curves: DesignCurves, dpi: int = 100,
-                  banner: str | None = None) -> list[Path]:
+def write_figures(folder: Path, curves: DesignCurves, dpi: int = 100, banner: str | None = None,
+                  title: str = "") -> list[Path]:
     """PNG of every figure the scene declares (see :func:`camjax.output.plots.design_figures`).
 
-    ``banner``: text of a red banner stamped on every figure (the constraints the geometry breaks).
+    ``banner``: text of a red banner stamped on every figure (the constraints the geometry breaks);
+    ``title``: the run's title block (:func:`camjax.output.plots.title_block`).
     """
     from camjax.output.plots import design_figures, stamp_banner  # matplotlib only when drawing
 
     out = []
-    for name, fig in design_figures(curves).items():
+    for name, fig in design_figures(curves, title).items():
         if banner:
             stamp_banner(fig, banner)
         path = folder / name
@@ -106,9 +107,19 @@ def write_figures(folder: Path, curves: DesignCurves, dpi: int = 100,
     return out
 
 
+def write_animation(path: Path, curves: DesignCurves, title: str = "") -> Path:
+    """motion.gif: one turn of the mechanism, any broken constraint named and drawn in red."""
+    from camjax.output.animation import geometry_violation, mechanism_from_curves, write_motion_gif
+
+    violation, bad = geometry_violation(curves)
+    return write_motion_gif(path, mechanism_from_curves(curves, title, violation, bad))
+
+
 def write_design_files(folder: str | Path, curves: DesignCurves, dpi: int = 100,
-                       banner: str | None = None) -> list[Path]:
-    """Figures, profile.csv and profile.dxf into ``folder`` (created if needed); the written paths."""
+                       banner: str | None = None, title: str = "", animate: bool = False) -> list[Path]:
+    """Figures, profile.csv and profile.dxf (and motion.gif when ``animate``) into ``folder``
+    (created if needed); the written paths. ``banner`` and ``title`` as in :func:`write_figures`.
+    An oscillating follower's files come from :mod:`camjax.output.rocker` (no animation yet)."""
     from camjax.rocker import RockerCurves
 
     if isinstance(curves, RockerCurves):  # an oscillating follower's files
@@ -117,5 +128,9 @@ def write_design_files(folder: str | Path, curves: DesignCurves, dpi: int = 100,
         return write_rocker_files(folder, curves, dpi, banner)
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
-    return [*write_figures(folder, curves, dpi, banner), write_profile_csv(folder / "profile.csv", curves),
-            write_profile_dxf(folder / "profile.dxf", curves)]
+    paths = [*write_figures(folder, curves, dpi, banner, title),
+             write_profile_csv(folder / "profile.csv", curves),
+             write_profile_dxf(folder / "profile.dxf", curves)]
+    if animate:
+        paths.append(write_animation(folder / "motion.gif", curves, title))
+    return paths
