@@ -43,6 +43,13 @@ def scene_arrays(scene: Scene, samples: int | None = None, dtype=None) -> SceneA
     """
     dtype = dtype or jnp.result_type(float)
     n = scene.motion.samples if samples is None else int(samples)
+    # one compiled call for the whole scene (the scene is closed over: its numbers are constants
+    # of the program, so a fresh process finds it in the compilation cache) instead of a dozen
+    # eager operations, each traced and looked up on its own
+    return jax.jit(lambda: _scene_arrays(scene, n, dtype))()
+
+
+def _scene_arrays(scene: Scene, n: int, dtype) -> SceneArrays:
     prog = jax.tree_util.tree_map(lambda x: jnp.asarray(x, dtype), scene.motion.program)
     kin = program.evaluate(prog, n)
     omega = jnp.asarray(program.rpm_to_rad_s(scene.motion.rpm), dtype)
@@ -99,6 +106,27 @@ def _np(x):
     return None if x is None else np.asarray(x)
 
 
+def _geometry_curves(f, rot: str, arrays: SceneArrays, base_radius_mm, rf, e):
+    """Outline, curvature, stress, face width and roller quantities (None where not declared)."""
+    kin = arrays.kin
+    rho = stress = width = pitch_x = pitch_y = phi = pitch_rho = margin = None
+    if f.type == "flat":
+        x, y = geometry.flat_profile(base_radius_mm, kin, rot)
+        rho = geometry.flat_radius_of_curvature(base_radius_mm, kin)
+        if arrays.stress_coefficient is not None:
+            stress = contact.stress_from_coefficient(arrays.stress_coefficient, rho)
+        width = geometry.flat_face_width(kin, symmetric=True)
+    else:
+        x, y = geometry.roller_profile(base_radius_mm, rf, e, kin, rot)
+        pitch_x, pitch_y = geometry.roller_pitch_curve(base_radius_mm, rf, e, kin, rot)
+        g = geometry.roller_geometry(base_radius_mm, rf, e, kin, rot, f.min_curvature_radius_mm)
+        phi, pitch_rho, margin = jnp.rad2deg(g.pressure_angle), g.pitch_radius_of_curvature, g.undercut_margin
+        if arrays.stress_coefficient is not None:
+            rho_eq = geometry.roller_equivalent_radius(g.pitch_curvature, rf)
+            stress = contact.roller_stress(arrays.stress_coefficient, g.pressure_angle, rho_eq)
+    return x, y, rho, stress, width, pitch_x, pitch_y, phi, pitch_rho, margin
+
+
 def evaluate_design(scene: Scene, arrays: SceneArrays, base_radius_mm: float,
                     face_width_mm: float | None = None, *, roller_radius_mm: float | None = None,
                     offset_mm: float | None = None) -> DesignCurves:
@@ -107,29 +135,20 @@ def evaluate_design(scene: Scene, arrays: SceneArrays, base_radius_mm: float,
     ``roller_radius_mm``, ``offset_mm``: a roller's design values (default: the [follower]'s).
     Outlines follow the scene's ``motion.rotation`` (a cw cam is the mirror image of ccw).
     Roller stress: Hertz line contact of the cam surface (rho_c, concave parts included) and the
-    roller under the normal force F / cos phi (:func:`camjax.contact.roller_stress`).
+    roller under the normal force F / cos phi (:func:`camjax.contact.roller_stress`). The
+    geometry is one compiled call (the scene's numbers are its constants).
     """
     kin, f, rot = arrays.kin, scene.follower, scene.motion.rotation
-    rho = stress = pitch_x = pitch_y = phi = pitch_rho = margin = limit = None
-    rf = e = None
-    if f.type == "flat":
-        x, y = geometry.flat_profile(base_radius_mm, kin, rot)
-        rho = geometry.flat_radius_of_curvature(base_radius_mm, kin)
-        if arrays.stress_coefficient is not None:
-            stress = contact.stress_from_coefficient(arrays.stress_coefficient, rho)
-        if face_width_mm is None:
-            face_width_mm = float(np.asarray(geometry.flat_face_width(kin, symmetric=True)))
-    else:
+    rf = e = limit = None
+    if f.type == "roller":
         rf = float(f.roller_radius_mm if roller_radius_mm is None else roller_radius_mm)
         e = float(f.offset_mm if offset_mm is None else offset_mm)
-        x, y = geometry.roller_profile(base_radius_mm, rf, e, kin, rot)
-        pitch_x, pitch_y = geometry.roller_pitch_curve(base_radius_mm, rf, e, kin, rot)
-        g = geometry.roller_geometry(base_radius_mm, rf, e, kin, rot, f.min_curvature_radius_mm)
-        phi, pitch_rho, margin = jnp.rad2deg(g.pressure_angle), g.pitch_radius_of_curvature, g.undercut_margin
-        if arrays.stress_coefficient is not None:
-            rho_eq = geometry.roller_equivalent_radius(g.pitch_curvature, rf)
-            stress = contact.roller_stress(arrays.stress_coefficient, g.pressure_angle, rho_eq)
         limit = f.max_pressure_angle_deg
+    x, y, rho, stress, width, pitch_x, pitch_y, phi, pitch_rho, margin = jax.jit(
+        lambda a, r: _geometry_curves(f, rot, a, r, rf, e))(arrays, base_radius_mm)
+    if f.type == "flat" and face_width_mm is None:
+        face_width_mm = float(np.asarray(width))
+    elif f.type != "flat":
         face_width_mm = None
     m = arrays.motion
     parts = None

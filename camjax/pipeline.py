@@ -24,6 +24,7 @@ from __future__ import annotations
 import math
 from typing import Any, NamedTuple
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 
@@ -63,7 +64,7 @@ def min_base_radius(scene: Scene, arrays: SceneArrays) -> MinBaseRadius:
     t = np.asarray(arrays.theta_deg)
     f = scene.follower
     if f.type == "flat":
-        r, i = geometry.flat_min_base_radius(arrays.kin)
+        r, i = jax.jit(geometry.flat_min_base_radius)(arrays.kin)
         return MinBaseRadius(_f(r), _f(t[int(i)]), "curvature")
     sizing = geometry.roller_min_prime_radius(arrays.kin, f.roller_radius_mm, f.offset_mm,
                                               math.radians(f.max_pressure_angle_deg),
@@ -112,17 +113,26 @@ def solve_design(scene: Scene, arrays: SceneArrays) -> DesignSolution | None:
     out = solve(problem, (d.alpha, d.gamma), mode=d.mode, solver=d.solver, seed=d.seed).to_json(problem)
     if scene.follower.type == "roller":
         return _roller_design_solution(scene, arrays, out)
-    from camjax import problem as P
-
-    rho = geometry.flat_radius_of_curvature(out["base_radius_mm"], arrays.kin)
-    sigma_peak = _f(jnp.max(contact.stress_from_coefficient(arrays.stress_coefficient, rho)))
-    stress_rho = np.asarray(P.stress_rho_need(problem))
-    need = np.asarray(P.rho_need(problem) - problem.q_mm)  # max over angles: P.required_base_radius
+    sigma_peak, stress_rho, need, width = jax.device_get(
+        _design_needs(problem, arrays.stress_coefficient, arrays.kin, out["base_radius_mm"]))
+    sigma_peak, width = float(sigma_peak), float(width)
     i = int(np.argmax(need))
     return DesignSolution(
         out, sigma_peak, float(need[i]), _f(t[i]),
         "stress" if stress_rho[i] >= float(problem.rho_min_mm) else "curvature",
-        _f(P.required_face_width(problem)), float(problem.rho_min_mm))
+        width, float(problem.rho_min_mm))
+
+
+@jax.jit
+def _design_needs(problem, stress_coefficient, kin, base_radius_mm):
+    """Peak stress at the design, per-angle stress need and R_b need, the face width need (one
+    compiled call)."""
+    from camjax import problem as P
+
+    rho = geometry.flat_radius_of_curvature(base_radius_mm, kin)
+    sigma_peak = jnp.max(contact.stress_from_coefficient(stress_coefficient, rho))
+    need = P.rho_need(problem) - problem.q_mm  # max over angles: P.required_base_radius
+    return sigma_peak, P.stress_rho_need(problem), need, P.required_face_width(problem)
 
 
 def _roller_design_solution(scene: Scene, arrays: SceneArrays, out: dict) -> DesignSolution:

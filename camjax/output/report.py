@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 from typing import TYPE_CHECKING, Any
 
+import jax
 import numpy as np
 
 from camjax import geometry, loads
@@ -108,7 +109,7 @@ def loads_block(scene: Scene, arrays: SceneArrays) -> dict[str, Any] | None:
         "force_N": extrema(force, t),
         "torque_Nm": extrema(arrays.torque_Nm, t),
         "contact": {
-            "min_force_N": _f(loads.contact_margin(force)),
+            "min_force_N": _f(jax.jit(loads.contact_margin)(force)),
             "min_force_deg": trough(force, t)["min_deg"],
             "lost": bool(np.any(np.asarray(force) < 0)),
             "lost_ranges_deg": negative_ranges_deg(force, t),
@@ -182,11 +183,18 @@ def face_width_block(scene: Scene, arrays: SceneArrays) -> dict[str, Any]:
     if scene.follower.type != "flat":
         return {}
     t, kin = arrays.theta_deg, arrays.kin
+    symmetric, asymmetric = _face_widths(kin)
     return {
-        "min_face_width_mm": _f(geometry.flat_face_width(kin, symmetric=True)),
-        "min_face_width_asymmetric_mm": _f(geometry.flat_face_width(kin, symmetric=False)),
+        "min_face_width_mm": _f(symmetric),
+        "min_face_width_asymmetric_mm": _f(asymmetric),
         "contact_offset_mm": extrema(geometry.flat_contact_offset(kin), t),
     }
+
+
+@jax.jit
+def _face_widths(kin):
+    """Symmetric and asymmetric minimum face widths, mm (one compiled call)."""
+    return geometry.flat_face_width(kin, symmetric=True), geometry.flat_face_width(kin, symmetric=False)
 
 
 # ------------------------------------------------------------------------------ design
