@@ -8,7 +8,7 @@ command runs once untimed first so that the compilation cache is warm. CPU time 
 the child) is reported beside the wall time (``cli.<name>_cpu_s``): on a shared machine the wall
 time also measures the other processes.
 
-One function per command (:func:`dynamics`); add another the same way.
+One function per command (:func:`dynamics`, :func:`design`); add another the same way.
 """
 
 from __future__ import annotations
@@ -74,7 +74,29 @@ def dynamics(runs: int, reference: dict) -> dict:
             "cli.dynamics_phases_s": phases}
 
 
-COMMANDS = {"dynamics": dynamics}
+def design(runs: int, reference: dict) -> dict:
+    """``camjax design`` on the default scene (this checkout's package, a temporary output folder).
+
+    Phases from the command's progress lines: import (until "computing": Python, JAX, camjax
+    and the scene), compute (the design run and its report), plots (the PNG figures, matplotlib
+    imported inside), files (result.json, profile.csv, profile.dxf with ezdxf imported inside).
+    """
+    with tempfile.TemporaryDirectory(prefix="camjax-cli-timing-") as tmp:
+        argv = [sys.executable, "-m", "camjax.cli", "design", "--out", str(Path(tmp) / "out")]
+        r = _median_runs(argv, runs)
+    names = {"computing": "compute", "figures": "plots", "files": "files"}
+    marks = [(0.0, "import"),
+             *((t, names[line.removeprefix("camjax design: ")]) for t, line in r["phases_s"]),
+             (r["wall_s"], "")]  # "files" runs to the end of the process (exit included)
+    phases = {name: round(t_next - t, 3)
+              for (t, name), (t_next, _) in zip(marks[:-1], marks[1:], strict=True)}
+    return {"cli.design_s": r["wall_s"], "cli.design_walls_s": r["walls_s"], "cli.design_cpu_s": r["cpu_s"],
+            "cli.design_over_import": r["wall_s"] / reference["cli.import_jax_s"],
+            "cli.design_cpu_over_import": r["cpu_s"] / reference["cli.import_jax_cpu_s"],
+            "cli.design_phases_s": phases}
+
+
+COMMANDS = {"dynamics": dynamics, "design": design}
 
 
 def main(argv: list[str] | None = None) -> int:

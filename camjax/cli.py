@@ -81,12 +81,14 @@ def _setup_laws(p: argparse.ArgumentParser):
     p.add_argument("--json", metavar="FILE", help="write the table as JSON instead of printing it")
     p.add_argument("--plot", metavar="FILE.png",
                    help="also draw normalized s, v, a, j of every law overlaid (one panel each)")
+    p.add_argument("--dpi", type=int, default=110, help="resolution of the --plot image (default 110)")
 
     def run(args) -> int:
         from camjax.laws import LAWS, summarize
         from camjax.program import MotionProgram, Segment, joints
 
         plot = check_output_file(args.plot, "--plot") if args.plot is not None else None
+        check_dpi(args.dpi)
         if plot is not None:
             from matplotlib.figure import Figure
 
@@ -129,7 +131,7 @@ def _setup_laws(p: argparse.ArgumentParser):
             curves = {f"{r['law']} [{r['joint_after_dwell']} / {r['joint_before_dwell']}]":
                       tuple(np.asarray(v) for v in LAWS[r["law"]](jnp.asarray(x))) for r in rows}
             kind = plot.suffix.lstrip(".").lower()
-            write_file_atomic(plot, lambda tmp: laws_figure(x, curves).savefig(tmp, dpi=110, format=kind))
+            write_file_atomic(plot, lambda tmp: laws_figure(x, curves).savefig(tmp, dpi=args.dpi, format=kind))
         if args.json:
             write_file_atomic(path, lambda tmp: write_json(tmp, {"normalized": True, "laws": rows}))
             print(f"wrote {args.json}" + (f", {args.plot}" if plot else ""))
@@ -199,6 +201,12 @@ def _setup_design(p: argparse.ArgumentParser):
                              f"(allowed: follower.type = 'oscillating_roller' or 'oscillating_flat' with "
                              f"lift_deg, or `camjax dynamics {args.scene or scene.name}`)")
         runtime.enable_compilation_cache()
+
+        def progress(phase: str) -> None:  # a run takes seconds: say what it is doing
+            sys.stderr.write(f"camjax design: {phase}\n")
+            sys.stderr.flush()
+
+        progress("computing")
         result = runtime.interruptible(analyse, scene, base_radius_mm=r)
         try:  # before anything is written: figures and animation need a finite outline
             check_drawable(result.curves)
@@ -213,7 +221,7 @@ def _setup_design(p: argparse.ArgumentParser):
         with replaced_folder(out) as tmp:
             write_json(tmp / "result.json", d)
             written = write_design_files(tmp, result.curves, args.dpi, banner, title_block(d),
-                                         animate=args.animate)
+                                         animate=args.animate, progress=progress)
             names = ["result.json"] + [p.name for p in written]
         print(f"scene {d['scene']}: min base radius {d['min_base_radius_mm']:.4f} mm at "
               f"{d['min_base_radius_deg']:g} deg")

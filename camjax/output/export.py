@@ -116,10 +116,12 @@ def write_animation(path: Path, curves: DesignCurves, title: str = "") -> Path:
 
 
 def write_design_files(folder: str | Path, curves: DesignCurves, dpi: int = 100,
-                       banner: str | None = None, title: str = "", animate: bool = False) -> list[Path]:
+                       banner: str | None = None, title: str = "", animate: bool = False,
+                       progress=None) -> list[Path]:
     """Figures, profile.csv and profile.dxf (and motion.gif when ``animate``) into ``folder``
-    (created if needed); the written paths. ``banner`` and ``title`` as in :func:`write_figures`.
-    An oscillating follower's files come from :mod:`camjax.output.rocker` (no animation yet)."""
+    (created if needed); the written paths. ``banner`` and ``title`` as in :func:`write_figures`;
+    ``progress(phase)`` (optional) is told "figures", "files" and "animation" as each starts. An
+    oscillating follower's files come from :mod:`camjax.output.rocker` (no animation yet)."""
     from camjax.rocker import RockerCurves
 
     if isinstance(curves, RockerCurves):  # an oscillating follower's files
@@ -128,9 +130,13 @@ def write_design_files(folder: str | Path, curves: DesignCurves, dpi: int = 100,
         return write_rocker_files(folder, curves, dpi, banner)
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
-    paths = [*write_figures(folder, curves, dpi, banner, title),
-             write_profile_csv(folder / "profile.csv", curves),
-             write_profile_dxf(folder / "profile.dxf", curves)]
+    say = progress or (lambda phase: None)
+    say("figures")
+    paths = write_figures(folder, curves, dpi, banner, title)
+    say("files")
+    paths += [write_profile_csv(folder / "profile.csv", curves),
+              write_profile_dxf(folder / "profile.dxf", curves)]
     if animate:
+        say("animation")
         paths.append(write_animation(folder / "motion.gif", curves, title))
     return paths
