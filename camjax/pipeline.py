@@ -65,7 +65,8 @@ def min_base_radius(scene: Scene, arrays: SceneArrays) -> MinBaseRadius:
     f = scene.follower
     if f.type == "flat":
         r, i = jax.jit(geometry.flat_min_base_radius)(arrays.kin)
-        return MinBaseRadius(_f(r), _f(t[int(i)]), "curvature")
+        # + 0.0: -0.0 (s = s'' = 0 somewhere, e.g. uniform laws) reads as 0
+        return MinBaseRadius(_f(r) + 0.0, _f(t[int(i)]), "curvature")
     sizing = geometry.roller_min_prime_radius(arrays.kin, f.roller_radius_mm, f.offset_mm,
                                               math.radians(f.max_pressure_angle_deg),
                                               f.min_curvature_radius_mm, scene.motion.rotation)

@@ -111,7 +111,10 @@ def svaj_figure(curves: DesignCurves, title: str = "") -> Figure:
         ax.plot(*closed(t, values), color=f"C{k}", linewidth=1.2)
         ax.set_ylabel(name)
         ax.axhline(0.0, color="0.3", linewidth=0.5)
-        if k > 0:
+        flat = np.ptp(values) <= 1e-9 * (1.0 + np.max(np.abs(values)))  # e.g. a of the uniform law
+        if flat:  # a fixed span: autoscaling would blow rounding noise (1e-17) up to full height
+            ax.set_ylim(values[0] - 1.0, values[0] + 1.0)
+        elif k > 0:
             _mark_extremes(ax, t, values, fmt)
         ax.margins(y=0.12)
         _cycle_axis(ax, curves, label=k == 3)
