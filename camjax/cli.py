@@ -17,6 +17,7 @@ import argparse
 import os
 import signal
 import sys
+import threading
 from collections.abc import Callable
 from pathlib import Path
 
@@ -131,7 +132,8 @@ def _setup_laws(p: argparse.ArgumentParser):
             curves = {f"{r['law']} [{r['joint_after_dwell']} / {r['joint_before_dwell']}]":
                       tuple(np.asarray(v) for v in LAWS[r["law"]](jnp.asarray(x))) for r in rows}
             kind = plot.suffix.lstrip(".").lower()
-            write_file_atomic(plot, lambda tmp: laws_figure(x, curves).savefig(tmp, dpi=args.dpi, format=kind))
+            write_file_atomic(plot, lambda tmp: laws_figure(x, curves).savefig(tmp, dpi=args.dpi,
+                                                                               format=kind))
         if args.json:
             write_file_atomic(path, lambda tmp: write_json(tmp, {"normalized": True, "laws": rows}))
             print(f"wrote {args.json}" + (f", {args.plot}" if plot else ""))
@@ -207,7 +209,11 @@ def _setup_design(p: argparse.ArgumentParser):
             sys.stderr.flush()
 
         progress("computing")
+        # matplotlib and ezdxf (~0.6 s of imports) load in a second thread while JAX computes
+        preload = threading.Thread(target=_import_drawing_modules, daemon=True)
+        preload.start()
         result = runtime.interruptible(analyse, scene, base_radius_mm=r)
+        preload.join()
         try:  # before anything is written: figures and animation need a finite outline
             check_drawable(result.curves)
         except UndrawableGeometry as exc:
@@ -253,6 +259,14 @@ def _setup_design(p: argparse.ArgumentParser):
         return STRICT_EXIT if broken and args.strict else 0
 
     return run
+
+
+def _import_drawing_modules() -> None:
+    """Import what drawing and the DXF need (run in a thread beside the computation)."""
+    import ezdxf  # noqa: F401
+    import matplotlib.backends.backend_agg  # noqa: F401
+
+    import camjax.output.plots  # noqa: F401
 
 
 def add_samples_option(p: argparse.ArgumentParser) -> None:
