@@ -2,13 +2,15 @@
 
 Written against plain arrays (:class:`Mechanism`: the outline in cam coordinates, s(theta) and
 the follower's type and sizes), so that a new follower type needs only its pose in
-:func:`frame_poses` and its artist in :func:`motion_animation`. Conventions are those of
+:func:`frame_poses` and its artist in :func:`motion_frames`. Conventions are those of
 :mod:`camjax.geometry`: in cam coordinates the follower axis is +Y at theta = 0 and the contact
 point at cam angle theta lies at polar angle theta clockwise from +Y. In the fixed (frame)
 coordinates drawn here the follower slides along +Y and the cam turns counter-clockwise: a cam
 point P is drawn at R(theta) P, R the rotation by +theta.
 
-Figures are built without pyplot (Agg through ``Figure``), like :mod:`camjax.plots`.
+Figures are built without pyplot (Agg through ``Figure``), like :mod:`camjax.output.plots`;
+matplotlib is imported only when drawing. Functions here take NumPy arrays and are not traced
+by JAX (nothing here is differentiated).
 """
 
 from __future__ import annotations
@@ -40,7 +42,7 @@ class Mechanism(NamedTuple):
       offset_mm: offset e of the roller's axis from the cam centre, mm (roller only).
       pressure_angle_deg: angle between the contact normal and the follower axis, deg, (N,);
         None means 0 (a flat face perpendicular to its stem).
-      title: one line drawn above the mechanism.
+      title: drawn above the mechanism (a title block: one or more lines).
       violation: one line drawn in red when the geometry breaks a constraint (None: feasible).
       bad: (N,) booleans, samples where the outline breaks a constraint (drawn red); None: none.
     """
