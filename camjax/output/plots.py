@@ -274,7 +274,7 @@ def loads_figure(curves: DesignCurves, title: str = "") -> Figure:
     i = int(np.argmin(force))
     ax_f.plot(t[i], force[i], "o", color="C3", markersize=4)
     verdict = "the follower stays on the cam" if force[i] > 0 else "the follower leaves the cam"
-    ax_f.axhline(force[i], color="C3", linewidth=0.6, linestyle=":")
+    ax_f.axhline(force[i], color="C3", linewidth=0.7, linestyle="--", label="contact margin (min F)")
     ax_f.annotate(f"contact margin: min F = {force[i]:.4g} N at {t[i]:g}° ({verdict})",
                   (t[i], force[i]), fontsize=7, xytext=(-8, -12), textcoords="offset points",
                   ha="right", va="top", bbox={"boxstyle": "round,pad=0.2", "fc": "white", "ec": "0.7"})

@@ -319,7 +319,7 @@ def weighting_keys(seed: int, count: int, offset: int = 0) -> jax.Array:
     One compiled call: run eagerly, key, fold_in and arange would each be compiled on their own.
     """
     base = jax.random.key(seed)
-    return jax.vmap(lambda i: jax.random.fold_in(base, i))(jnp.arange(offset, offset + count))
+    return jax.vmap(lambda i: jax.random.fold_in(base, i))(offset + jnp.arange(count))
 
 
 _COMPILED: dict = {}
