@@ -85,8 +85,10 @@ def _setup_laws(p: argparse.ArgumentParser):
     p.add_argument("--dpi", type=int, default=110, help="resolution of the --plot image (default 110)")
 
     def run(args) -> int:
+        import jax.numpy as jnp
+
         from camjax.laws import LAWS, summarize
-        from camjax.program import MotionProgram, Segment, joints
+        from camjax.program import classify_jump
 
         plot = check_output_file(args.plot, "--plot") if args.plot is not None else None
         check_dpi(args.dpi)
@@ -99,11 +101,12 @@ def _setup_laws(p: argparse.ArgumentParser):
                                  f"(allowed: {', '.join('.' + k for k in sorted(kinds))})")
 
         def dwell_joints(law) -> tuple[str, str]:
-            # the law as a rise between two dwells: the FLCD class of the joint before and after it
-            prog = MotionProgram.from_segments([Segment("dwell", 90.0), Segment("rise", 90.0, law, 1.0),
-                                                Segment("dwell", 90.0), Segment("return", 90.0, law, 1.0)])
-            by_deg = {round(j.joint_deg): j.flcd_class for j in joints(prog)}
-            return by_deg[90], by_deg[180]
+            # the law as a rise from a dwell and into a dwell: the jumps at the joints are its end
+            # values (a dwell has zero derivatives); normalized, so every scale is 1
+            v = law(jnp.asarray([0.0, 1.0]))
+            start = classify_jump([0.0, float(v.dp[0]), float(v.d2p[0]), float(v.d3p[0])], [1.0] * 4)
+            end = classify_jump([0.0, -float(v.dp[1]), -float(v.d2p[1]), -float(v.d3p[1])], [1.0] * 4)
+            return start, end
 
         path = check_output_file(args.json, "--json") if args.json is not None else None
         rows = []
@@ -122,7 +125,6 @@ def _setup_laws(p: argparse.ArgumentParser):
                 "perturbation_against_dwells": s.perturbation_against_dwells,
             })
         if plot is not None:
-            import jax.numpy as jnp
             import numpy as np
 
             from camjax.output.plots import laws_figure

@@ -164,6 +164,7 @@ def _class_from_end_values(dp, d2p, d3p, tol=1e-9):
     return "ok"
 
 
+@pytest.mark.slow
 def test_laws_table_json_and_chart(tmp_path, capsys):
     import numpy as np
 
@@ -180,6 +181,15 @@ def test_laws_table_json_and_chart(tmp_path, capsys):
         end = _class_from_end_values(v[1][1], v[2][1], v[3][1])
         assert (rows[name]["joint_after_dwell"], rows[name]["joint_before_dwell"]) == (start, end), name
         assert rows[name]["flcd_against_dwells"] == ({start, end} <= {"ok", "perturbation"}), name
+    # the classes of real joints: each law as rise and return between dwells (program.joints)
+    from camjax.program import MotionProgram, Segment, joints
+
+    for name in ("uniform", "double_harmonic", "poly_3_4"):
+        law = LAWS[name]
+        prog = MotionProgram.from_segments([Segment("dwell", 90.0), Segment("rise", 90.0, law, 1.0),
+                                            Segment("dwell", 90.0), Segment("return", 90.0, law, 1.0)])
+        by_deg = {round(j.joint_deg): j.flcd_class for j in joints(prog)}
+        assert (rows[name]["joint_after_dwell"], rows[name]["joint_before_dwell"]) == (by_deg[90], by_deg[180])
     # SPEC section 1 statements and the constant-velocity law
     assert rows["uniform"]["joint_after_dwell"] == rows["uniform"]["joint_before_dwell"] == "shock"
     assert (rows["double_harmonic"]["joint_after_dwell"], rows["double_harmonic"]["joint_before_dwell"]) \
@@ -203,6 +213,7 @@ def test_laws_refuses_an_unknown_image_type(tmp_path, capsys):
     assert not target.exists()
 
 
+@pytest.mark.slow
 def test_design_animate_writes_the_gif_even_when_infeasible(tmp_path, capsys):
     from PIL import Image
 
