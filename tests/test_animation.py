@@ -141,3 +141,19 @@ def test_geometry_violation_names_the_negative_curvature_ranges(default_scene, d
     assert text.startswith("INFEASIBLE at R_b = 10.000 mm: ρ < 0 on ")
     # two runs: late in the rise and in the return (one line, ranges in degrees)
     assert text.count("–") == 2 and "\n" not in text
+
+
+def test_clockwise_cam_is_the_mirror_image(roller_mechanism):
+    # a cw cam: outline mirrored (X -> -X), turning the other way; the follower moves the same and
+    # every contact point is the mirror of the ccw one (the mechanism seen from behind)
+    m = roller_mechanism
+    cw = m._replace(profile_x_mm=-np.asarray(m.profile_x_mm), offset_mm=-m.offset_mm, rotation="cw",
+                    pressure_angle_deg=-np.asarray(m.pressure_angle_deg))
+    a, b = frame_poses(m, 24), frame_poses(cw, 24)
+    np.testing.assert_allclose(b.follower_y_mm, a.follower_y_mm, atol=1e-12)
+    np.testing.assert_allclose(b.follower_x_mm, -a.follower_x_mm, atol=1e-12)
+    np.testing.assert_allclose(b.contact_x_mm, -a.contact_x_mm, atol=1e-9)
+    np.testing.assert_allclose(b.contact_y_mm, a.contact_y_mm, atol=1e-9)
+    motion_frames(cw, 4).update(2)  # draws
+    with pytest.raises(ValueError, match="rotation"):
+        frame_poses(m._replace(rotation="left"), 4)

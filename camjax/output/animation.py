@@ -45,6 +45,8 @@ class Mechanism(NamedTuple):
       title: drawn above the mechanism (a title block: one or more lines).
       violation: one line drawn in red when the geometry breaks a constraint (None: feasible).
       bad: (N,) booleans, samples where the outline breaks a constraint (drawn red); None: none.
+      rotation: "ccw" (the cam turns counter-clockwise) or "cw" (its outline is the mirror image,
+        X -> -X, and it turns clockwise).
     """
 
     theta_deg: np.ndarray
@@ -60,6 +62,7 @@ class Mechanism(NamedTuple):
     title: str = ""
     violation: str | None = None
     bad: np.ndarray | None = None
+    rotation: str = "ccw"
 
 
 class FramePoses(NamedTuple):
@@ -98,6 +101,13 @@ def rotate(x, y, theta_rad):
     return x * c - y * s, x * s + y * c
 
 
+def _turn(m: Mechanism) -> float:
+    """+1 for a counter-clockwise cam, -1 for a clockwise one (the sign of its rotation)."""
+    if m.rotation not in ("ccw", "cw"):
+        raise ValueError(f"rotation: '{m.rotation}' is not allowed; use ccw or cw")
+    return 1.0 if m.rotation == "ccw" else -1.0
+
+
 def frame_poses(m: Mechanism, frames: int) -> FramePoses:
     """Follower, contact point and pressure angle at ``frames`` evenly spread cam angles."""
     if m.follower_type not in FOLLOWER_TYPES:
@@ -106,7 +116,7 @@ def frame_poses(m: Mechanism, frames: int) -> FramePoses:
     check_drawable(m)
     k = frame_indices(len(m.theta_deg), frames)
     th = np.deg2rad(np.asarray(m.theta_deg)[k])
-    cx, cy = rotate(np.asarray(m.profile_x_mm)[k], np.asarray(m.profile_y_mm)[k], th)
+    cx, cy = rotate(np.asarray(m.profile_x_mm)[k], np.asarray(m.profile_y_mm)[k], _turn(m) * th)
     s = np.asarray(m.s_mm)[k]
     if m.follower_type == "flat":
         fx, fy = np.zeros_like(s), m.base_radius_mm + s  # the face's centre, on the axis
@@ -169,11 +179,12 @@ def motion_frames(m: Mechanism, frames: int = 72) -> MotionFrames:
     bad = np.zeros(len(x), bool) if m.bad is None else np.asarray(m.bad, bool)
     (bad_line,) = ax.plot([], [], color="C3", linewidth=2.2, label="outline breaking a constraint")
     (key,) = ax.plot([0.0, 0.0], [0.0, 0.6 * m.base_radius_mm], color="C0", linewidth=2.0)
-    # direction of rotation: an arc arrow below the centre, left to right (counter-clockwise)
-    ax.add_patch(FancyArrowPatch((-0.35 * m.base_radius_mm, -0.2 * m.base_radius_mm),
-                                 (0.35 * m.base_radius_mm, -0.2 * m.base_radius_mm),
-                                 connectionstyle="arc3,rad=0.8", arrowstyle="-|>", mutation_scale=12,
-                                 color="0.25", linewidth=1.2))
+    # direction of rotation: an arc arrow below the centre, left to right for counter-clockwise
+    turn = _turn(m)
+    ax.add_patch(FancyArrowPatch((-0.35 * turn * m.base_radius_mm, -0.2 * m.base_radius_mm),
+                                 (0.35 * turn * m.base_radius_mm, -0.2 * m.base_radius_mm),
+                                 connectionstyle=f"arc3,rad={0.8 * turn}", arrowstyle="-|>",
+                                 mutation_scale=12, color="0.25", linewidth=1.2))
     ax.text(0.0, -0.62 * m.base_radius_mm, "ω", ha="center", va="center", fontsize=9, color="0.25")
     (stem_line,) = ax.plot([], [], color="C1", linewidth=2.0)
     if flat:
@@ -207,7 +218,7 @@ def motion_frames(m: Mechanism, frames: int = 72) -> MotionFrames:
     ax_key.legend(*zip(*keep, strict=True), fontsize=7, loc="center")
 
     def update(i):
-        th = np.deg2rad(poses.theta_deg[i])
+        th = turn * np.deg2rad(poses.theta_deg[i])
         xr, yr = rotate(x, y, th)
         cam_line.set_data(xr, yr)
         cam_fill.set_xy(np.column_stack([xr, yr]))
