@@ -5,7 +5,8 @@ import math
 import numpy as np
 import pytest
 from PIL import Image
-from test_report import ROLLER, reference_motion
+from reference import reference_motion
+from test_report import ROLLER
 
 from camjax import pipeline
 from camjax.output.animation import (

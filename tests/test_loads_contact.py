@@ -97,7 +97,15 @@ def test_gradients_finite_for_any_base_radius_lift_speed_spring(default_scene):
 
 
 def test_force_parts_of_the_reference_case_add_up(default_scene, default_arrays):
-    from test_report import DAMPING, MASS, OMEGA, PRELOAD_M, SPRING, G, reference_motion
+    from reference import (
+        CAM_SPEED_RAD_S,
+        DAMPING_NS_PER_M,
+        GRAVITY_M_S2,
+        MASS_KG,
+        PRELOAD_MM,
+        SPRING_N_PER_M,
+        reference_motion,
+    )
 
     from camjax.evaluate import evaluate_design
 
@@ -106,8 +114,9 @@ def test_force_parts_of_the_reference_case_add_up(default_scene, default_arrays)
     assert list(parts) == ["inertia", "damping", "spring", "gravity"]
     # each term from the closed-form cycloids (NumPy), SI; 1e-9 N: float64 rounding of ~60 N
     s, ds, d2s = reference_motion(curves.theta_deg)
-    np.testing.assert_allclose(parts["inertia"], MASS * d2s * OMEGA**2 * 1e-3, atol=1e-9)
-    np.testing.assert_allclose(parts["damping"], DAMPING * ds * OMEGA * 1e-3, atol=1e-9)
-    np.testing.assert_allclose(parts["spring"], SPRING * (s * 1e-3 + PRELOAD_M), atol=1e-9)
-    np.testing.assert_allclose(parts["gravity"], MASS * G, atol=1e-12)
+    w = CAM_SPEED_RAD_S
+    np.testing.assert_allclose(parts["inertia"], MASS_KG * d2s * w**2 * 1e-3, atol=1e-9)
+    np.testing.assert_allclose(parts["damping"], DAMPING_NS_PER_M * ds * w * 1e-3, atol=1e-9)
+    np.testing.assert_allclose(parts["spring"], SPRING_N_PER_M * (s + PRELOAD_MM) * 1e-3, atol=1e-9)
+    np.testing.assert_allclose(parts["gravity"], MASS_KG * GRAVITY_M_S2, atol=1e-12)
     np.testing.assert_allclose(sum(parts.values()), curves.force_N, atol=1e-9)

@@ -2,7 +2,7 @@
 
 import numpy as np
 import pytest
-from test_report import reference_motion
+from reference import reference_motion
 
 from camjax import pipeline
 from camjax.output import plots
