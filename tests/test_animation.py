@@ -158,3 +158,21 @@ def test_clockwise_cam_is_the_mirror_image(roller_mechanism):
     motion_frames(cw, 4).update(2)  # draws
     with pytest.raises(ValueError, match="rotation"):
         frame_poses(m._replace(rotation="left"), 4)
+
+
+@pytest.mark.parametrize("rotation", ["ccw", "cw"])
+def test_builtin_roller_touches_its_roller_for_either_rotation(rotation):
+    import dataclasses
+
+    from camjax.scene import load_scene
+
+    scene = load_scene("roller")
+    scene = dataclasses.replace(scene, motion=dataclasses.replace(scene.motion, rotation=rotation))
+    m = mechanism_from_curves(pipeline.analyse(scene).curves)
+    assert m.rotation == rotation
+    p = frame_poses(m, 18)
+    dx, dy = p.follower_x_mm - p.contact_x_mm, p.follower_y_mm - p.contact_y_mm
+    # the outline (camjax.geometry, mirrored for cw) turned into the frame touches the roller, and
+    # the line to its centre is at the pressure angle (1e-9: rounding of the rotation)
+    np.testing.assert_allclose(np.hypot(dx, dy), m.roller_radius_mm, atol=1e-9)
+    np.testing.assert_allclose(np.rad2deg(np.arctan2(-dx, dy)), p.pressure_angle_deg, atol=1e-7)

@@ -22,6 +22,10 @@ from typing import NamedTuple
 import numpy as np
 
 FOLLOWER_TYPES = ("flat", "roller")
+# violations smaller than the solvers' feasibility tolerances (camjax.problem.FEASIBILITY_TOL_MM
+# and its relative one) are not drawn as such: an optimum sits on its active limits
+LENGTH_TOL_MM = 1e-6
+ANGLE_RTOL = 1e-6
 
 
 class UndrawableGeometry(ValueError):
@@ -320,7 +324,7 @@ def mechanism_from_curves(curves, title: str = "", violation: str | None = None,
         np.asarray(curves.s_mm), curves.follower_type, float(curves.base_radius_mm),
         curves.face_width_mm, curves.roller_radius_mm, float(curves.offset_mm or 0.0),
         None if curves.pressure_angle_deg is None else np.asarray(curves.pressure_angle_deg),
-        title, violation, bad,
+        title, violation, bad, curves.rotation,
     )
 
 
@@ -334,30 +338,34 @@ def _angle_ranges(theta_deg, mask) -> str:
     return ", ".join(f"{a:g}–{b:g}°" if a != b else f"{a:g}°" for a, b in runs)
 
 
-def geometry_violation(curves, pressure_angle_limit_deg: float = 30.0):
+def geometry_violation(curves, pressure_angle_limit_deg: float | None = None):
     """(one line naming what the drawn geometry breaks, or None; (N,) mask of the samples).
 
-    Flat face: ρ < 0 (the face cannot follow a concave outline). Roller: undercut
-    (|ρ_pitch| <= R_f) and pressure angle beyond ``pressure_angle_limit_deg``.
+    Flat face: ρ < 0 (the face cannot follow a concave outline). Roller: undercut (margin < 0)
+    and pressure angle beyond ``pressure_angle_limit_deg`` (default: the curves' own limit, the
+    scene's follower.max_pressure_angle_deg). An optimum sits on its active limits: the solvers'
+    tolerances (1e-6 mm, 1e-6 relative) apply, so a design they call feasible is drawn as such.
     """
     t = np.asarray(curves.theta_deg)
+    if pressure_angle_limit_deg is None:
+        pressure_angle_limit_deg = curves.pressure_angle_limit_deg
     parts, bad = [], np.zeros(t.shape, bool)
     if curves.rho_mm is not None:
         rho = np.asarray(curves.rho_mm)
-        neg = rho < 0
+        neg = rho < -LENGTH_TOL_MM
         if neg.any():
             j = int(np.argmin(rho))
             parts.append(f"ρ < 0 on {_angle_ranges(t, neg)} (min {rho[j]:.3g} mm at {t[j]:g}°): "
                          "the flat face cannot follow the outline there")
             bad |= neg
     if curves.undercut_margin_mm is not None:
-        under = np.asarray(curves.undercut_margin_mm) <= 0
+        under = np.asarray(curves.undercut_margin_mm) < -LENGTH_TOL_MM
         if under.any():
-            parts.append(f"undercut (|ρ_pitch| ≤ R_f) on {_angle_ranges(t, under)}")
+            parts.append(f"undercut on {_angle_ranges(t, under)}")
             bad |= under
-    if curves.pressure_angle_deg is not None:
+    if curves.pressure_angle_deg is not None and pressure_angle_limit_deg is not None:
         phi = np.abs(np.asarray(curves.pressure_angle_deg))
-        over = phi > pressure_angle_limit_deg
+        over = phi > pressure_angle_limit_deg * (1.0 + ANGLE_RTOL)
         if over.any():
             parts.append(f"pressure angle up to {phi.max():.1f}° > {pressure_angle_limit_deg:g}° on "
                          f"{_angle_ranges(t, over)}")

@@ -21,7 +21,7 @@ from camjax.evaluate import DesignCurves
 _JOINT_STYLE = {"color": "0.6", "linestyle": ":", "linewidth": 0.8}
 _SIZE = (7.0, 6.4)
 _TITLE_FONT = 7.5
-ROTATION = "cam turns counter-clockwise"
+TURNS = {"ccw": "counter-clockwise", "cw": "clockwise"}  # scene motion.rotation -> words
 
 
 # ---------------------------------------------------------------------------- helpers
@@ -37,7 +37,8 @@ def title_block(data: Mapping) -> str:
             text += f" {seg['law']} {seg.get('lift_mm', 0.0):g} mm"
         segments.append(text)
     head = (f"scene {data.get('scene', '?')} · {data.get('cam_speed_rpm', float('nan')):g} rpm, "
-            f"{ROTATION} · {data.get('follower_type', '?')} follower")
+            f"cam turns {TURNS.get(data.get('rotation', 'ccw'), '?')} · "
+            f"{data.get('follower_type', '?')} follower")
     at = data.get("evaluated_at", {})
     radii = []
     if "base_radius_mm" in at:
@@ -133,25 +134,27 @@ def _dimension(ax, start, end, text: str, color: str = "0.15", **text_kw) -> Non
                 **text_kw)
 
 
-def _rotation_arrow(ax, radius: float, toward_deg: float, label: str = "ω") -> None:
-    """Counter-clockwise arc arrow around the centre (the cam's direction of rotation), centred
-    on the polar direction ``toward_deg`` (counter-clockwise from +X)."""
+def _rotation_arrow(ax, radius: float, toward_deg: float, sign: float, label: str = "ω") -> None:
+    """Arc arrow around the centre in the cam's direction of rotation (``sign`` +1:
+    counter-clockwise, -1: clockwise), centred on the polar direction ``toward_deg``
+    (counter-clockwise from +X)."""
     from matplotlib.patches import FancyArrowPatch
 
-    a, b = np.deg2rad(toward_deg - 70.0), np.deg2rad(toward_deg + 70.0)
+    a, b = np.deg2rad(toward_deg - 70.0 * sign), np.deg2rad(toward_deg + 70.0 * sign)
     ax.add_patch(FancyArrowPatch((radius * np.cos(a), radius * np.sin(a)),
                                  (radius * np.cos(b), radius * np.sin(b)),
-                                 connectionstyle="arc3,rad=0.45", arrowstyle="-|>", mutation_scale=11,
-                                 color="0.25", linewidth=1.1))
+                                 connectionstyle=f"arc3,rad={0.45 * sign}", arrowstyle="-|>",
+                                 mutation_scale=11, color="0.25", linewidth=1.1))
     c = np.deg2rad(toward_deg)
     ax.text(1.5 * radius * np.cos(c), 1.5 * radius * np.sin(c), label, ha="center", va="center",
             fontsize=8, color="0.25")
 
 
-def _angle_ring(ax, radius: float) -> None:
-    """Ticks every 30 deg of cam angle on a ring around the cam (θ clockwise from +Y)."""
+def _angle_ring(ax, radius: float, sign: float) -> None:
+    """Ticks every 30 deg of cam angle on a ring around the cam (θ from +Y, clockwise on a
+    counter-clockwise cam, ``sign`` = +1; mirrored for a clockwise one, ``sign`` = -1)."""
     for deg in range(0, 360, 30):
-        u = np.array([np.sin(np.deg2rad(deg)), np.cos(np.deg2rad(deg))])
+        u = np.array([sign * np.sin(np.deg2rad(deg)), np.cos(np.deg2rad(deg))])
         ax.plot(*np.column_stack([radius * u, 1.05 * radius * u]), color="0.35", linewidth=0.8)
         ax.text(*(1.13 * radius * u), f"{deg}°", fontsize=6.5, ha="center", va="center", color="0.3")
     phi = np.linspace(0.0, 2.0 * np.pi, 181)
@@ -180,12 +183,13 @@ def profile_figure(curves: DesignCurves, title: str = "") -> Figure:
             label=f"base circle R_b = {rb:.3f} mm")
     ax.plot([0.0], [0.0], "+", color="k", markersize=9)
     theta = np.deg2rad(t)
+    sign = 1.0 if curves.rotation == "ccw" else -1.0  # a cw cam is the mirror image (X -> -X)
     radius = np.hypot(x, y)
     reach = float(np.max(radius))
     if curves.follower_type == "flat":
         i = int(np.argmax(np.abs(curves.ds_mm)))
-        axis = np.array([np.sin(theta[i]), np.cos(theta[i])])  # follower axis at this angle
-        along = np.array([np.cos(theta[i]), -np.sin(theta[i])])  # along the face
+        axis = np.array([sign * np.sin(theta[i]), np.cos(theta[i])])  # follower axis at this angle
+        along = np.array([sign * np.cos(theta[i]), -np.sin(theta[i])])  # along the face
         centre = (rb + curves.s_mm[i]) * axis
         half = 0.5 * curves.face_width_mm
         ends = np.array([centre - half * along, centre + half * along])
@@ -211,7 +215,7 @@ def profile_figure(curves: DesignCurves, title: str = "") -> Figure:
         ax.plot(cx + rf * np.sin(phi), cy + rf * np.cos(phi), color="C1", linewidth=1.5,
                 label=f"roller follower, R_f = {rf:g} mm, at θ = {t[i]:g}° "
                       f"(largest pressure angle {curves.pressure_angle_deg[i]:.1f}°)")
-        axis = np.array([np.sin(theta[i]), np.cos(theta[i])])  # follower axis at this angle
+        axis = np.array([sign * np.sin(theta[i]), np.cos(theta[i])])  # follower axis at this angle
         stem = np.array([[cx, cy], [cx, cy] + (rf + 0.35 * rb) * axis])
         ax.plot(stem[:, 0], stem[:, 1], color="C1", linewidth=1.5)
         ax.plot(x[i], y[i], "o", color="C3", markersize=4, label="contact point")
@@ -227,16 +231,16 @@ def profile_figure(curves: DesignCurves, title: str = "") -> Figure:
     # lift: base circle to R_b + h, radially, in the middle of the highest part of the motion
     top = np.flatnonzero(curves.s_mm >= np.max(curves.s_mm) - 1e-9 * max(1.0, np.max(curves.s_mm)))
     k = int(top[len(top) // 2])
-    u = np.array([np.sin(theta[k]), np.cos(theta[k])])
+    u = np.array([sign * np.sin(theta[k]), np.cos(theta[k])])
     lift = float(np.max(curves.s_mm) - np.min(curves.s_mm))
     _dimension(ax, (rb + np.min(curves.s_mm)) * u, (rb + np.max(curves.s_mm)) * u, f"lift h = {lift:.3g} mm")
     # largest radius of the outline, centre to the outline
     m = int(np.argmax(radius))
     _dimension(ax, (0.0, 0.0), (x[m], y[m]), f"R_max = {radius[m]:.3f} mm\nat θ = {t[m]:g}°")
     # the arrow sits opposite the largest-radius dimension, clear of it
-    _rotation_arrow(ax, 0.3 * rb, float(np.degrees(np.arctan2(-y[m], -x[m]))))
+    _rotation_arrow(ax, 0.3 * rb, float(np.degrees(np.arctan2(-y[m], -x[m]))), sign)
     ring = 1.06 * reach
-    _angle_ring(ax, ring)
+    _angle_ring(ax, ring, sign)
     lim = 1.22 * ring
     ax.set_xlim(-lim, lim)
     ax.set_ylim(-lim, lim)
@@ -244,8 +248,9 @@ def profile_figure(curves: DesignCurves, title: str = "") -> Figure:
     ax.grid(True, alpha=0.25)
     ax.set_xlabel("X (mm)")
     ax.set_ylabel("Y (mm)")
-    _title(fig, title, "Cam profile in cam coordinates: follower axis +Y at θ = 0, θ clockwise; "
-                       f"the {ROTATION} (ω)")
+    turns = TURNS[curves.rotation]
+    _title(fig, title, "Cam profile in cam coordinates: follower axis +Y at θ = 0, θ "
+                       f"{TURNS['cw' if curves.rotation == 'ccw' else 'ccw']}; the cam turns {turns} (ω)")
     fig.legend(fontsize=7, loc="outside lower center", ncols=2)
     return fig
 
@@ -341,24 +346,31 @@ def stress_figure(curves: DesignCurves, title: str = "") -> Figure:
     ax_s.set_ylabel("σ (MPa)")
     ax_s.legend(fontsize=7, loc="upper right")
     _cycle_axis(ax_s, curves, label=False)
-    if curves.rho_mm is not None:
-        rho, name = curves.rho_mm, "ρ (mm)"
-    else:
-        rho, name = curves.pitch_rho_mm, "ρ pitch (mm)"
-    ax_r.plot(*closed(t, rho), color="C2", linewidth=1.2)
+    if curves.rho_mm is not None:  # flat face: the profile's radius of curvature
+        lower, name, what = curves.rho_mm, "ρ (mm)", "radius of curvature"
+        j = int(np.argmin(lower))
+        label = f"smallest {lower[j]:.4g} mm @ {t[j]:g}°"
+    else:  # roller: the pressure angle that tilts the normal force F / cos φ
+        lower, name, what = curves.pressure_angle_deg, "φ (°)", "pressure angle"
+        limit = curves.pressure_angle_limit_deg
+        for lim in (-limit, limit):
+            ax_r.axhline(lim, color="0.3", linestyle="--", linewidth=0.8)
+        ax_r.text(0.01, 0.96, f"limit ±{limit:g}°", transform=ax_r.transAxes, fontsize=7, va="top")
+        j = int(np.argmax(np.abs(lower)))
+        label = f"max |φ| {abs(lower[j]):.4g}° @ {t[j]:g}°"
+    ax_r.plot(*closed(t, lower), color="C2", linewidth=1.2)
     ax_r.axhline(0.0, color="0.3", linewidth=0.6)
-    j = int(np.argmin(np.abs(rho) if curves.rho_mm is None else rho))
-    ax_r.plot(t[j], rho[j], "o", color="k", markersize=3)
-    ax_r.annotate(f"smallest {rho[j]:.4g} mm @ {t[j]:g}°", (t[j], rho[j]), fontsize=7, xytext=(-6, 4),
-                  textcoords="offset points", ha="right")
-    if curves.rho_mm is not None and (rho < 0).any():
-        ax_r.fill_between(t, 0, 1, where=rho < 0, transform=ax_r.get_xaxis_transform(), color="C3",
+    ax_r.plot(t[j], lower[j], "o", color="k", markersize=3)
+    ax_r.annotate(label, (t[j], lower[j]), fontsize=7, xytext=(-6, 4), textcoords="offset points",
+                  ha="right")
+    if curves.rho_mm is not None and (lower < 0).any():
+        ax_r.fill_between(t, 0, 1, where=lower < 0, transform=ax_r.get_xaxis_transform(), color="C3",
                           alpha=0.2, label="ρ < 0: the face cannot follow")
         ax_r.legend(fontsize=7, loc="upper left")
     ax_r.set_ylabel(name)
     ax_r.margins(y=0.15)
     _cycle_axis(ax_r, curves)
-    _title(fig, title, f"Contact stress and radius of curvature at R_b = {curves.base_radius_mm:.3f} mm")
+    _title(fig, title, f"Contact stress and {what} at R_b = {curves.base_radius_mm:.3f} mm")
     return fig
 
 
