@@ -221,7 +221,7 @@ def test_design_animate_writes_the_gif_even_when_infeasible(tmp_path, capsys):
     # R_b = 10 mm is far below the flat face's smallest admissible radius (about 24 mm)
     assert cli.main(["design", "--out", str(out), "--dpi", "30", "--base-radius", "10", "--animate"]) == 0
     printed = capsys.readouterr().out
-    assert "drawn geometry: INFEASIBLE at R_b = 10.000 mm: ρ < 0 on" in printed
+    assert "files drawn at R_b = 10.0000 mm" in printed and "INFEASIBLE (curvature" in printed
     with Image.open(out / "motion.gif") as im:
         assert im.n_frames == 72
     assert "motion.gif" in printed

@@ -328,48 +328,19 @@ def mechanism_from_curves(curves, title: str = "", violation: str | None = None,
     )
 
 
-def _angle_ranges(theta_deg, mask) -> str:
-    """'153–165°, 305–325°': the runs of ``mask`` over the cycle (a run may wrap past 360)."""
-    t, m = np.asarray(theta_deg), np.asarray(mask, bool)
-    edges = np.flatnonzero(np.diff(np.concatenate([[0], m.astype(int), [0]])))
-    runs = [[t[a], t[b - 1]] for a, b in zip(edges[::2], edges[1::2], strict=True)]
-    if len(runs) > 1 and m[0] and m[-1]:  # joined across 360/0
-        runs[0][0] = runs.pop()[0]
-    return ", ".join(f"{a:g}–{b:g}°" if a != b else f"{a:g}°" for a, b in runs)
+def violation_samples(curves) -> np.ndarray:
+    """(N,) booleans: the samples where the outline breaks a constraint, to be drawn red.
 
-
-def geometry_violation(curves, pressure_angle_limit_deg: float | None = None):
-    """(one line naming what the drawn geometry breaks, or None; (N,) mask of the samples).
-
-    Flat face: ρ < 0 (the face cannot follow a concave outline). Roller: undercut (margin < 0)
-    and pressure angle beyond ``pressure_angle_limit_deg`` (default: the curves' own limit, the
-    scene's follower.max_pressure_angle_deg). An optimum sits on its active limits: the solvers'
-    tolerances (1e-6 mm, 1e-6 relative) apply, so a design they call feasible is drawn as such.
+    The outline checks of :func:`camjax.pipeline.geometry_violations`, per sample: flat face
+    ρ < 0 (the outline crosses itself); roller undercut (margin < 0) and |pressure angle| over its
+    limit. Within the solvers' tolerances nothing is marked (an optimum sits on its limits).
     """
-    t = np.asarray(curves.theta_deg)
-    if pressure_angle_limit_deg is None:
-        pressure_angle_limit_deg = curves.pressure_angle_limit_deg
-    parts, bad = [], np.zeros(t.shape, bool)
+    bad = np.zeros(np.shape(curves.theta_deg), bool)
     if curves.rho_mm is not None:
-        rho = np.asarray(curves.rho_mm)
-        neg = rho < -LENGTH_TOL_MM
-        if neg.any():
-            j = int(np.argmin(rho))
-            parts.append(f"ρ < 0 on {_angle_ranges(t, neg)} (min {rho[j]:.3g} mm at {t[j]:g}°): "
-                         "the flat face cannot follow the outline there")
-            bad |= neg
+        bad |= np.asarray(curves.rho_mm) < -LENGTH_TOL_MM
     if curves.undercut_margin_mm is not None:
-        under = np.asarray(curves.undercut_margin_mm) < -LENGTH_TOL_MM
-        if under.any():
-            parts.append(f"undercut on {_angle_ranges(t, under)}")
-            bad |= under
-    if curves.pressure_angle_deg is not None and pressure_angle_limit_deg is not None:
-        phi = np.abs(np.asarray(curves.pressure_angle_deg))
-        over = phi > pressure_angle_limit_deg * (1.0 + ANGLE_RTOL)
-        if over.any():
-            parts.append(f"pressure angle up to {phi.max():.1f}° > {pressure_angle_limit_deg:g}° on "
-                         f"{_angle_ranges(t, over)}")
-            bad |= over
-    if not parts:
-        return None, bad
-    return f"INFEASIBLE at R_b = {curves.base_radius_mm:.3f} mm: " + "; ".join(parts), bad
+        bad |= np.asarray(curves.undercut_margin_mm) < -LENGTH_TOL_MM
+    limit = curves.pressure_angle_limit_deg
+    if curves.pressure_angle_deg is not None and limit is not None:
+        bad |= np.abs(np.asarray(curves.pressure_angle_deg)) > limit * (1.0 + ANGLE_RTOL)
+    return bad

@@ -107,12 +107,12 @@ def write_figures(folder: Path, curves: DesignCurves, dpi: int = 100, banner: st
     return out
 
 
-def write_animation(path: Path, curves: DesignCurves, title: str = "") -> Path:
-    """motion.gif: one turn of the mechanism, any broken constraint named and drawn in red."""
-    from camjax.output.animation import geometry_violation, mechanism_from_curves, write_motion_gif
+def write_animation(path: Path, curves: DesignCurves, title: str = "", banner: str | None = None) -> Path:
+    """motion.gif: one turn of the mechanism; ``banner`` (the broken constraints) above it in red
+    and the outline where it breaks them drawn red."""
+    from camjax.output.animation import mechanism_from_curves, violation_samples, write_motion_gif
 
-    violation, bad = geometry_violation(curves)
-    return write_motion_gif(path, mechanism_from_curves(curves, title, violation, bad))
+    return write_motion_gif(path, mechanism_from_curves(curves, title, banner, violation_samples(curves)))
 
 
 def write_design_files(folder: str | Path, curves: DesignCurves, dpi: int = 100,
@@ -138,5 +138,5 @@ def write_design_files(folder: str | Path, curves: DesignCurves, dpi: int = 100,
               write_profile_dxf(folder / "profile.dxf", curves)]
     if animate:
         say("animation")
-        paths.append(write_animation(folder / "motion.gif", curves, title))
+        paths.append(write_animation(folder / "motion.gif", curves, title, banner))
     return paths

@@ -63,7 +63,7 @@ def closed(theta_deg, values):
 
 
 def _title(fig: Figure, title: str, what: str) -> None:
-    """Figure title: what it shows (bold line), then the run's title block."""
+    """Figure title: what it shows, then the run's title block (top left)."""
     fig.suptitle(what + ("\n" + title if title else ""), fontsize=_TITLE_FONT, x=0.01, ha="left",
                  linespacing=1.3)
 
@@ -377,11 +377,22 @@ def stress_figure(curves: DesignCurves, title: str = "") -> Figure:
 def stamp_banner(fig: Figure, text: str) -> Figure:
     """A red banner across the top of ``fig`` (e.g. naming the constraints a geometry breaks).
 
-    The layout keeps the top 0.35 inch free for it, so it covers no title or axis.
+    The figure's title block moves below the banner and the layout keeps both free, so the
+    banner covers no title, axis or legend.
     """
+    height = fig.get_figheight()
+    top = 1.0 - 0.35 / height  # the banner's 0.35 inch
+    title = fig.get_suptitle()
+    if title:  # re-placed at an explicit height under the banner (the layout leaves it alone then)
+        old = fig._suptitle
+        lines = title.count("\n") + 1
+        title_in = lines * old.get_fontsize() * old.get_linespacing() / 72.0 + 0.05
+        fig.suptitle(title, x=old.get_position()[0], y=top, ha=old.get_ha(), va="top",
+                     fontsize=old.get_fontsize(), linespacing=old.get_linespacing())
+        top -= title_in / height
     engine = fig.get_layout_engine()
     if engine is not None and hasattr(engine, "set"):
-        engine.set(rect=(0.0, 0.0, 1.0, 1.0 - 0.35 / fig.get_figheight()))
+        engine.set(rect=(0.0, 0.0, 1.0, top))
     fig.text(0.5, 0.995, text, ha="center", va="top", fontsize=8, color="white", fontweight="bold",
              wrap=True, zorder=10, bbox={"boxstyle": "square,pad=0.4", "facecolor": "#c00000",
                                          "edgecolor": "none"})
