@@ -27,11 +27,12 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 
 
-def _run(argv: list[str]) -> tuple[float, float, list[tuple[float, str]]]:
+def _run(argv: list[str], env: dict | None = None) -> tuple[float, float, list[tuple[float, str]]]:
     """(wall s, child CPU s, [(s since start, stderr line)]) of one run from the repository root."""
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     start = time.perf_counter()
-    proc = subprocess.Popen(argv, cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    proc = subprocess.Popen(argv, cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+                            env=env)
     lines = [(time.perf_counter() - start, line.rstrip("\n")) for line in proc.stderr]
     if proc.wait() != 0:
         raise RuntimeError(f"{' '.join(argv)} exited {proc.returncode}: {lines[-3:]}")
@@ -41,10 +42,10 @@ def _run(argv: list[str]) -> tuple[float, float, list[tuple[float, str]]]:
     return wall, cpu, lines
 
 
-def _median_runs(argv: list[str], runs: int, warmup: bool = True) -> dict:
+def _median_runs(argv: list[str], runs: int, warmup: bool = True, env: dict | None = None) -> dict:
     if warmup:
-        _run(argv)
-    results = [_run(argv) for _ in range(runs)]
+        _run(argv, env)
+    results = [_run(argv, env) for _ in range(runs)]
     walls = [r[0] for r in results]
     pick = results[walls.index(sorted(walls)[len(walls) // 2])]
     return {"wall_s": statistics.median(walls), "cpu_s": statistics.median(r[1] for r in results),
@@ -83,7 +84,8 @@ def design(runs: int, reference: dict) -> dict:
     """
     with tempfile.TemporaryDirectory(prefix="camjax-cli-timing-") as tmp:
         argv = [sys.executable, "-m", "camjax.cli", "design", "--out", str(Path(tmp) / "out")]
-        r = _median_runs(argv, runs)
+        # piped, design prints its phases only when asked
+        r = _median_runs(argv, runs, env={**os.environ, "CAMJAX_PROGRESS": "1"})
     names = {"computing": "compute", "figures": "plots", "files": "files"}
     marks = [(0.0, "import"),
              *((t, names[line.removeprefix("camjax design: ")]) for t, line in r["phases_s"]),

@@ -206,9 +206,14 @@ def _setup_design(p: argparse.ArgumentParser):
                              f"lift_deg, or `camjax dynamics {args.scene or scene.name}`)")
         runtime.enable_compilation_cache()
 
-        def progress(phase: str) -> None:  # a run takes seconds: say what it is doing
-            sys.stderr.write(f"camjax design: {phase}\n")
-            sys.stderr.flush()
+        # a run takes seconds: on a terminal (or with CAMJAX_PROGRESS=1) say what it is doing;
+        # piped, stderr keeps its contract of one line on failure
+        show = sys.stderr.isatty() or os.environ.get("CAMJAX_PROGRESS") == "1"
+
+        def progress(phase: str) -> None:
+            if show:
+                sys.stderr.write(f"camjax design: {phase}\n")
+                sys.stderr.flush()
 
         progress("computing")
         # matplotlib and ezdxf (~0.6 s of imports) load in a second thread while JAX computes
