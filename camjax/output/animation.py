@@ -86,6 +86,8 @@ def check_drawable(curves) -> None:
     profile_y_mm) and the motion (s_mm) of ``curves`` (a Mechanism or DesignCurves) that has
     non-finite points."""
     for name in ("profile_x_mm", "profile_y_mm", "s_mm"):
+        if not hasattr(curves, name):  # e.g. an oscillating follower's curves: motion in deg
+            continue
         bad = ~np.isfinite(np.asarray(getattr(curves, name)))
         if bad.any():
             raise UndrawableGeometry(f"{name} is not finite at {np.count_nonzero(bad)} of {bad.size} "

@@ -34,7 +34,8 @@ def title_block(data: Mapping) -> str:
     for seg in data.get("segments", []):
         text = f"{seg['kind']} {seg['angle_deg']:g}°"
         if seg.get("law"):
-            text += f" {seg['law']} {seg.get('lift_mm', 0.0):g} mm"
+            lift = f"{seg['lift_deg']:g}°" if "lift_deg" in seg else f"{seg.get('lift_mm', 0.0):g} mm"
+            text += f" {seg['law']} {lift}"
         segments.append(text)
     head = (f"scene {data.get('scene', '?')} · {data.get('cam_speed_rpm', float('nan')):g} rpm, "
             f"cam turns {TURNS.get(data.get('rotation', 'ccw'), '?')} · "
