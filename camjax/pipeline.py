@@ -181,6 +181,7 @@ def geometry_violations(curves: DesignCurves, rho_min_mm: float = 0.0) -> list[G
     stress), so a design the solver calls feasible is not flagged here.
     """
     from camjax.problem import FEASIBILITY_RTOL_STRESS, FEASIBILITY_TOL_MM
+    from camjax.roller_problem import FEASIBILITY_TOL_RAD
 
     t, out = curves.theta_deg, []
 
@@ -209,13 +210,13 @@ def geometry_violations(curves: DesignCurves, rho_min_mm: float = 0.0) -> list[G
                 "the contact runs off the face"))
     if curves.pressure_angle_deg is not None:
         phi, deg = at(np.abs(curves.pressure_angle_deg), np.argmax)
-        if phi > curves.pressure_angle_limit_deg:
+        if phi > curves.pressure_angle_limit_deg + math.degrees(FEASIBILITY_TOL_RAD):
             out.append(GeometryViolation(
                 "pressure_angle", f"|pressure angle| {phi:.4g} deg at {deg:g} deg > "
                 f"{curves.pressure_angle_limit_deg:g} deg"))
     if curves.undercut_margin_mm is not None:
         margin, deg = at(curves.undercut_margin_mm, np.argmin)
-        if margin <= 0:
+        if margin < -FEASIBILITY_TOL_MM:
             out.append(GeometryViolation(
                 "undercut", f"undercut margin {margin:.4g} mm at {deg:g} deg <= 0: the roller undercuts "
                 "the cam"))
@@ -238,6 +239,7 @@ def rocker_violations(curves, scene: Scene) -> list[GeometryViolation]:
     :func:`geometry_violations`.
     """
     from camjax.problem import FEASIBILITY_RTOL_STRESS, FEASIBILITY_TOL_MM
+    from camjax.roller_problem import FEASIBILITY_TOL_RAD
 
     f, t, out = scene.follower, curves.theta_deg, []
 
@@ -247,12 +249,12 @@ def rocker_violations(curves, scene: Scene) -> list[GeometryViolation]:
 
     if curves.undercut_margin_mm is not None:
         phi, deg = at(np.abs(curves.pressure_angle_deg), np.argmax)
-        if phi > f.max_pressure_angle_deg:
+        if phi > f.max_pressure_angle_deg + math.degrees(FEASIBILITY_TOL_RAD):
             out.append(GeometryViolation(
                 "pressure_angle", f"|pressure angle| {phi:.4g} deg at {deg:g} deg > "
                 f"{f.max_pressure_angle_deg:g} deg"))
         margin, deg = at(curves.undercut_margin_mm, np.argmin)
-        if margin <= 0:
+        if margin < -FEASIBILITY_TOL_MM:
             out.append(GeometryViolation(
                 "undercut", f"undercut margin {margin:.4g} mm at {deg:g} deg <= 0: the roller undercuts "
                 "the cam"))
