@@ -8,7 +8,7 @@ command runs once untimed first so that the compilation cache is warm. CPU time 
 the child) is reported beside the wall time (``cli.<name>_cpu_s``): on a shared machine the wall
 time also measures the other processes.
 
-One function per command (:func:`dynamics`); add another the same way.
+One function per command (:func:`dynamics`, :func:`design`); add another the same way.
 """
 
 from __future__ import annotations
@@ -27,11 +27,12 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 
 
-def _run(argv: list[str]) -> tuple[float, float, list[tuple[float, str]]]:
+def _run(argv: list[str], env: dict | None = None) -> tuple[float, float, list[tuple[float, str]]]:
     """(wall s, child CPU s, [(s since start, stderr line)]) of one run from the repository root."""
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     start = time.perf_counter()
-    proc = subprocess.Popen(argv, cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    proc = subprocess.Popen(argv, cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+                            env=env)
     lines = [(time.perf_counter() - start, line.rstrip("\n")) for line in proc.stderr]
     if proc.wait() != 0:
         raise RuntimeError(f"{' '.join(argv)} exited {proc.returncode}: {lines[-3:]}")
@@ -41,10 +42,10 @@ def _run(argv: list[str]) -> tuple[float, float, list[tuple[float, str]]]:
     return wall, cpu, lines
 
 
-def _median_runs(argv: list[str], runs: int, warmup: bool = True) -> dict:
+def _median_runs(argv: list[str], runs: int, warmup: bool = True, env: dict | None = None) -> dict:
     if warmup:
-        _run(argv)
-    results = [_run(argv) for _ in range(runs)]
+        _run(argv, env)
+    results = [_run(argv, env) for _ in range(runs)]
     walls = [r[0] for r in results]
     pick = results[walls.index(sorted(walls)[len(walls) // 2])]
     return {"wall_s": statistics.median(walls), "cpu_s": statistics.median(r[1] for r in results),
@@ -74,7 +75,30 @@ def dynamics(runs: int, reference: dict) -> dict:
             "cli.dynamics_phases_s": phases}
 
 
-COMMANDS = {"dynamics": dynamics}
+def design(runs: int, reference: dict) -> dict:
+    """``camjax design`` on the default scene (this checkout's package, a temporary output folder).
+
+    Phases from the command's progress lines: import (until "computing": Python, JAX, camjax
+    and the scene), compute (the design run and its report), plots (the PNG figures, matplotlib
+    imported inside), files (result.json, profile.csv, profile.dxf with ezdxf imported inside).
+    """
+    with tempfile.TemporaryDirectory(prefix="camjax-cli-timing-") as tmp:
+        argv = [sys.executable, "-m", "camjax.cli", "design", "--out", str(Path(tmp) / "out")]
+        # piped, design prints its phases only when asked
+        r = _median_runs(argv, runs, env={**os.environ, "CAMJAX_PROGRESS": "1"})
+    names = {"computing": "compute", "figures": "plots", "files": "files"}
+    marks = [(0.0, "import"),
+             *((t, names[line.removeprefix("camjax design: ")]) for t, line in r["phases_s"]),
+             (r["wall_s"], "")]  # "files" runs to the end of the process (exit included)
+    phases = {name: round(t_next - t, 3)
+              for (t, name), (t_next, _) in zip(marks[:-1], marks[1:], strict=True)}
+    return {"cli.design_s": r["wall_s"], "cli.design_walls_s": r["walls_s"], "cli.design_cpu_s": r["cpu_s"],
+            "cli.design_over_import": r["wall_s"] / reference["cli.import_jax_s"],
+            "cli.design_cpu_over_import": r["cpu_s"] / reference["cli.import_jax_cpu_s"],
+            "cli.design_phases_s": phases}
+
+
+COMMANDS = {"dynamics": dynamics, "design": design}
 
 
 def main(argv: list[str] | None = None) -> int:

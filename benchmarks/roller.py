@@ -12,9 +12,10 @@ results. "Matched accuracy": a camjax method is compared with a SciPy one when i
 no larger (or both are within GAP_TOLERANCE) and it has no more infeasible results; the GA
 figure uses the GA if it matches differential evolution, else the hybrid (named in the JSON).
 
-SciPy runs on evenly spaced subsets of the weightings (SLSQP ~0.5 s and differential evolution
-~4 s per weighting on this machine); its time is scaled to all weightings by the mean per
-weighting and the JSON says so (``extrapolated``). Timings on a shared machine are noisy.
+SciPy runs on evenly spaced subsets of the weightings (SLSQP 0.04 to 0.7 s and differential
+evolution 0.7 to 4 s per weighting on this machine, depending on its load); its time is scaled
+to all weightings by the mean per weighting and the JSON says so (``extrapolated``). Timings on a
+shared machine are noisy.
 
 Run alone: ``python -m benchmarks.roller --out roller.json [--quick]`` (keys ``roller.*``), or as
 part of ``benchmarks/run.py``.

@@ -17,6 +17,7 @@ import argparse
 import os
 import signal
 import sys
+import threading
 from collections.abc import Callable
 from pathlib import Path
 
@@ -74,45 +75,99 @@ def parse_float_list(option: str, text: str) -> list[float]:
 # ------------------------------------------------------------------------------ commands
 
 
-@command("laws", "peak values and FLCD status of every registered motion law")
+@command("laws", "peak values, joint classes against dwells and an optional chart of every motion law")
 def _setup_laws(p: argparse.ArgumentParser):
+    p.formatter_class = argparse.RawDescriptionHelpFormatter
+    p.epilog = LAWS_COLUMNS
     p.add_argument("--json", metavar="FILE", help="write the table as JSON instead of printing it")
+    p.add_argument("--plot", metavar="FILE.png",
+                   help="also draw normalized s, v, a, j of every law overlaid (one panel each)")
+    p.add_argument("--dpi", type=int, default=110, help="resolution of the --plot image (default 110)")
 
     def run(args) -> int:
+        import jax.numpy as jnp
+
         from camjax.laws import LAWS, summarize
+        from camjax.program import classify_jump
+
+        plot = check_output_file(args.plot, "--plot") if args.plot is not None else None
+        check_dpi(args.dpi)
+        if plot is not None:
+            from matplotlib.figure import Figure
+
+            kinds = Figure().canvas.get_supported_filetypes()
+            if plot.suffix.lstrip(".").lower() not in kinds:
+                raise UsageError(f"--plot = {args.plot!r}: unknown image type '{plot.suffix}' "
+                                 f"(allowed: {', '.join('.' + k for k in sorted(kinds))})")
+
+        def dwell_joints(law) -> tuple[str, str]:
+            # the law as a rise from a dwell and into a dwell: the jumps at the joints are its end
+            # values (a dwell has zero derivatives); normalized, so every scale is 1
+            v = law(jnp.asarray([0.0, 1.0]))
+            start = classify_jump([0.0, float(v.dp[0]), float(v.d2p[0]), float(v.d3p[0])], [1.0] * 4)
+            end = classify_jump([0.0, -float(v.dp[1]), -float(v.d2p[1]), -float(v.d3p[1])], [1.0] * 4)
+            return start, end
 
         path = check_output_file(args.json, "--json") if args.json is not None else None
         rows = []
         for law in LAWS.values():
             s = summarize(law)
+            start, end = dwell_joints(law)
             rows.append({
                 "law": s.name,
                 "peak_velocity": s.peak_velocity,
                 "peak_accel_pos": s.peak_accel_pos,
                 "peak_accel_neg": s.peak_accel_neg,
                 "peak_jerk": s.peak_jerk,
+                "joint_after_dwell": start,
+                "joint_before_dwell": end,
                 "flcd_against_dwells": s.flcd_against_dwells,
                 "perturbation_against_dwells": s.perturbation_against_dwells,
             })
+        if plot is not None:
+            import numpy as np
+
+            from camjax.output.plots import laws_figure
+
+            x = np.linspace(0.0, 1.0, 501)
+            # legend label: the name and its joint classes after / before a dwell
+            curves = {f"{r['law']} [{r['joint_after_dwell']} / {r['joint_before_dwell']}]":
+                      tuple(np.asarray(v) for v in LAWS[r["law"]](jnp.asarray(x))) for r in rows}
+            kind = plot.suffix.lstrip(".").lower()
+            write_file_atomic(plot, lambda tmp: laws_figure(x, curves).savefig(tmp, dpi=args.dpi,
+                                                                               format=kind))
         if args.json:
             write_file_atomic(path, lambda tmp: write_json(tmp, {"normalized": True, "laws": rows}))
-            print(f"wrote {args.json}")
+            print(f"wrote {args.json}" + (f", {args.plot}" if plot else ""))
             return 0
-        head = f"{'law':20s} {'|v|max':>8s} {'+a':>9s} {'-a':>9s} {'|j|max':>9s}  FLCD  perturbation"
+        head = (f"{'law':20s} {'max|v|':>7s} {'max a':>8s} {'min a':>8s} {'max|j|':>8s}  "
+                f"{'after dwell':12s} {'before dwell':12s} FLCD")
         print(head)
         print("-" * len(head))
         for r in rows:
-            print(f"{r['law']:20s} {r['peak_velocity']:8.4f} {r['peak_accel_pos']:9.4f} "
-                  f"{r['peak_accel_neg']:9.4f} {r['peak_jerk']:9.3f}  "
-                  f"{'yes' if r['flcd_against_dwells'] else 'NO ':4s}  "
-                  f"{'yes' if r['perturbation_against_dwells'] else 'no'}")
-        print("(normalized: x in [0, 1], lift 1; FLCD and perturbation judged against dwells)")
+            print(f"{r['law']:20s} {r['peak_velocity']:7.4f} {r['peak_accel_pos']:8.4f} "
+                  f"{r['peak_accel_neg']:8.4f} {r['peak_jerk']:8.3f}  {r['joint_after_dwell']:12s} "
+                  f"{r['joint_before_dwell']:12s} {'yes' if r['flcd_against_dwells'] else 'no'}")
+        print(LAWS_COLUMNS)
+        if plot is not None:
+            print(f"wrote {plot}")
         return 0
 
     return run
 
 
-@command("design", "report, plots, profile CSV and DXF of a scene's cam design")
+LAWS_COLUMNS = """\
+columns (normalized law p(x): lift 1 over x in [0, 1]):
+  max|v|, max a, min a, max|j|   peaks of |p'|, p'', p'' (most negative) and |p'''|; scale to a
+                                 rise h over beta rad by h/beta, h/beta^2, h/beta^3
+  after dwell, before dwell      class of the joint when the law is a rise starting from / ending
+                                 at a dwell: ok (smooth), perturbation (jerk jumps; allowed),
+                                 jerk (acceleration jumps), shock (velocity jumps)
+  FLCD                           yes = velocity and acceleration continuous at both joints with
+                                 dwells (the law's class there is ok or perturbation)"""
+
+
+@command("design", "report, plots, profile CSV and DXF (and an animation) of a scene's cam design")
 def _setup_design(p: argparse.ArgumentParser):
     p.add_argument("scene", nargs="?", default=None,
                    help="scene TOML file or built-in scene name (default: the embedded default scene)")
@@ -124,10 +179,15 @@ def _setup_design(p: argparse.ArgumentParser):
     p.add_argument("--strict", action="store_true",
                    help="exit with status 3 (after writing) when the geometry written breaks a "
                    "constraint; without it such a run warns on stderr and exits 0")
+    p.add_argument("--animate", action="store_true",
+                   help="also write motion.gif: one turn of the cam with the follower, the contact "
+                        "point and the pressure angle (a broken constraint is named and drawn red)")
     add_design_options(p)
 
     def run(args) -> int:
+        from camjax.output.animation import UndrawableGeometry, check_drawable
         from camjax.output.export import write_design_files
+        from camjax.output.plots import title_block
         from camjax.pipeline import analyse
         from camjax.scene import load_scene
 
@@ -144,8 +204,32 @@ def _setup_design(p: argparse.ArgumentParser):
                              "geometry of this scene's follower.type is for lifts in mm "
                              f"(allowed: follower.type = 'oscillating_roller' or 'oscillating_flat' with "
                              f"lift_deg, or `camjax dynamics {args.scene or scene.name}`)")
+        if args.animate and scene.follower.oscillating:
+            raise UsageError(f"--animate: scene {scene.name} has an oscillating follower "
+                             f"({scene.follower.type}); the animation draws translating flat-face and "
+                             "roller followers (allowed: leave out --animate)")
         runtime.enable_compilation_cache()
+
+        # a run takes seconds: on a terminal (or with CAMJAX_PROGRESS=1) say what it is doing;
+        # piped, stderr keeps its contract of one line on failure
+        show = sys.stderr.isatty() or os.environ.get("CAMJAX_PROGRESS") == "1"
+
+        def progress(phase: str) -> None:
+            if show:
+                sys.stderr.write(f"camjax design: {phase}\n")
+                sys.stderr.flush()
+
+        progress("computing")
+        # matplotlib and ezdxf (~0.6 s of imports) load in a second thread while JAX computes
+        preload = threading.Thread(target=_import_drawing_modules, daemon=True)
+        preload.start()
         result = runtime.interruptible(analyse, scene, base_radius_mm=r)
+        preload.join()
+        try:  # before anything is written: figures and animation need a finite outline
+            check_drawable(result.curves)
+        except UndrawableGeometry as exc:
+            raise UsageError(f"scene {scene.name} at R_b = {result.curves.base_radius_mm:g} mm: "
+                             f"{exc}") from None
         d = result.data
         at = d["evaluated_at"]
         broken = [v["constraint"] for v in at["violations"]]
@@ -153,8 +237,9 @@ def _setup_design(p: argparse.ArgumentParser):
                   f"{', '.join(broken)} violated" if broken else None)
         with replaced_folder(out) as tmp:
             write_json(tmp / "result.json", d)
-            names = ["result.json"] + [p.name for p in write_design_files(tmp, result.curves, args.dpi,
-                                                                          banner)]
+            written = write_design_files(tmp, result.curves, args.dpi, banner, title_block(d),
+                                         animate=args.animate, progress=progress)
+            names = ["result.json"] + [p.name for p in written]
         print(f"scene {d['scene']}: min base radius {d['min_base_radius_mm']:.4f} mm at "
               f"{d['min_base_radius_deg']:g} deg")
         if "design" in d:
@@ -185,6 +270,14 @@ def _setup_design(p: argparse.ArgumentParser):
         return STRICT_EXIT if broken and args.strict else 0
 
     return run
+
+
+def _import_drawing_modules() -> None:
+    """Import what drawing and the DXF need (run in a thread beside the computation)."""
+    import ezdxf  # noqa: F401
+    import matplotlib.backends.backend_agg  # noqa: F401
+
+    import camjax.output.plots  # noqa: F401
 
 
 def add_samples_option(p: argparse.ArgumentParser) -> None:

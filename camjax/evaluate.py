@@ -105,6 +105,16 @@ def scene_arrays(scene: Scene, samples: int | None = None, dtype=None, extrema: 
         raise ValueError(f"extrema: '{mode}' is not allowed; use {', '.join(extrema_mod.EXTREMA_MODES)}")
     dtype = dtype or jnp.result_type(float)
     n = scene.motion.samples if samples is None else int(samples)
+    # one compiled call for the whole scene (the scene is closed over: its numbers are constants
+    # of the program, so a fresh process finds it in the compilation cache) instead of a dozen
+    # eager operations, each traced and looked up on its own
+    arrays = jax.jit(lambda: _scene_arrays(scene, n, dtype))()
+    # an oscillating follower's extrema stay on the grid (camjax.rocker evaluates its curves)
+    model = scene_model(scene, dtype) if mode == "exact" and not scene.follower.oscillating else None
+    return arrays._replace(model=model)
+
+
+def _scene_arrays(scene: Scene, n: int, dtype) -> SceneArrays:
     prog = jax.tree_util.tree_map(lambda x: jnp.asarray(x, dtype), scene.motion.program)
     kin = program.evaluate(prog, n)
     omega = jnp.asarray(program.rpm_to_rad_s(scene.motion.rpm), dtype)
@@ -118,9 +128,7 @@ def scene_arrays(scene: Scene, samples: int | None = None, dtype=None, extrema: 
             c = scene.contact
             coeff = contact.stress_coefficient(force, c.cam_width_mm, c.cam, c.follower)
     theta_deg = program.sample_angles_deg(n, dtype)
-    # an oscillating follower's extrema stay on the grid (camjax.rocker evaluates its curves)
-    model = scene_model(scene, dtype) if mode == "exact" and not scene.follower.oscillating else None
-    return SceneArrays(theta_deg, kin, motion, omega, force, torque, coeff, model)
+    return SceneArrays(theta_deg, kin, motion, omega, force, torque, coeff)
 
 
 class DesignCurves(NamedTuple):
@@ -156,10 +164,32 @@ class DesignCurves(NamedTuple):
     undercut_margin_mm: np.ndarray | None  # roller: rho_c - min radius on convex parts (float max on concave)
     pressure_angle_limit_deg: float | None = None  # roller: follower.max_pressure_angle_deg
     rotation: str = "ccw"  # the cam's turning direction (camjax.geometry.pitch)
+    force_parts_N: dict[str, np.ndarray] | None = None  # {"inertia", "damping", "spring", "gravity"}
 
 
 def _np(x):
     return None if x is None else np.asarray(x)
+
+
+def _geometry_curves(f, rot: str, arrays: SceneArrays, base_radius_mm, rf, e):
+    """Outline, curvature, stress, face width and roller quantities (None where not declared)."""
+    kin = arrays.kin
+    rho = stress = width = pitch_x = pitch_y = phi = pitch_rho = margin = None
+    if f.type == "flat":
+        x, y = geometry.flat_profile(base_radius_mm, kin, rot)
+        rho = geometry.flat_radius_of_curvature(base_radius_mm, kin)
+        if arrays.stress_coefficient is not None:
+            stress = contact.stress_from_coefficient(arrays.stress_coefficient, rho)
+        width = geometry.flat_face_width(kin, symmetric=True)
+    else:
+        x, y = geometry.roller_profile(base_radius_mm, rf, e, kin, rot)
+        pitch_x, pitch_y = geometry.roller_pitch_curve(base_radius_mm, rf, e, kin, rot)
+        g = geometry.roller_geometry(base_radius_mm, rf, e, kin, rot, f.min_curvature_radius_mm)
+        phi, pitch_rho, margin = jnp.rad2deg(g.pressure_angle), g.pitch_radius_of_curvature, g.undercut_margin
+        if arrays.stress_coefficient is not None:
+            rho_eq = geometry.roller_equivalent_radius(g.pitch_curvature, rf)
+            stress = contact.roller_stress(arrays.stress_coefficient, g.pressure_angle, rho_eq)
+    return x, y, rho, stress, width, pitch_x, pitch_y, phi, pitch_rho, margin
 
 
 def evaluate_design(scene: Scene, arrays: SceneArrays, base_radius_mm: float,
@@ -170,31 +200,26 @@ def evaluate_design(scene: Scene, arrays: SceneArrays, base_radius_mm: float,
     ``roller_radius_mm``, ``offset_mm``: a roller's design values (default: the [follower]'s).
     Outlines follow the scene's ``motion.rotation`` (a cw cam is the mirror image of ccw).
     Roller stress: Hertz line contact of the cam surface (rho_c, concave parts included) and the
-    roller under the normal force F / cos phi (:func:`camjax.contact.roller_stress`).
+    roller under the normal force F / cos phi (:func:`camjax.contact.roller_stress`). The
+    geometry is one compiled call (the scene's numbers are its constants).
     """
     kin, f, rot = arrays.kin, scene.follower, scene.motion.rotation
-    rho = stress = pitch_x = pitch_y = phi = pitch_rho = margin = limit = None
-    rf = e = None
-    if f.type == "flat":
-        x, y = geometry.flat_profile(base_radius_mm, kin, rot)
-        rho = geometry.flat_radius_of_curvature(base_radius_mm, kin)
-        if arrays.stress_coefficient is not None:
-            stress = contact.stress_from_coefficient(arrays.stress_coefficient, rho)
-        if face_width_mm is None:
-            face_width_mm = float(np.asarray(geometry.flat_face_width(kin, symmetric=True)))
-    else:
+    rf = e = limit = None
+    if f.type == "roller":
         rf = float(f.roller_radius_mm if roller_radius_mm is None else roller_radius_mm)
         e = float(f.offset_mm if offset_mm is None else offset_mm)
-        x, y = geometry.roller_profile(base_radius_mm, rf, e, kin, rot)
-        pitch_x, pitch_y = geometry.roller_pitch_curve(base_radius_mm, rf, e, kin, rot)
-        g = geometry.roller_geometry(base_radius_mm, rf, e, kin, rot, f.min_curvature_radius_mm)
-        phi, pitch_rho, margin = jnp.rad2deg(g.pressure_angle), g.pitch_radius_of_curvature, g.undercut_margin
-        if arrays.stress_coefficient is not None:
-            rho_eq = geometry.roller_equivalent_radius(g.pitch_curvature, rf)
-            stress = contact.roller_stress(arrays.stress_coefficient, g.pressure_angle, rho_eq)
         limit = f.max_pressure_angle_deg
+    x, y, rho, stress, width, pitch_x, pitch_y, phi, pitch_rho, margin = jax.jit(
+        lambda a, r: _geometry_curves(f, rot, a, r, rf, e))(arrays, base_radius_mm)
+    if f.type == "flat" and face_width_mm is None:
+        face_width_mm = float(np.asarray(width))
+    elif f.type != "flat":
         face_width_mm = None
     m = arrays.motion
+    parts = None
+    if f.train is not None and arrays.force_N is not None:
+        numpy_motion = TimeKinematics(*(np.asarray(v) for v in m))
+        parts = loads.force_parts(f.train, numpy_motion)._asdict()
     return DesignCurves(
         np.asarray(arrays.theta_deg), np.asarray(kin.s), np.asarray(kin.ds), np.asarray(kin.d2s),
         np.asarray(m.velocity), np.asarray(m.accel), np.asarray(m.jerk),
@@ -202,7 +227,7 @@ def evaluate_design(scene: Scene, arrays: SceneArrays, base_radius_mm: float,
         None if face_width_mm is None else float(face_width_mm),
         np.asarray(x), np.asarray(y), _np(rho), _np(arrays.force_N), _np(arrays.torque_Nm),
         _np(stress), None if scene.design is None else scene.design.sigma_max_MPa,
-        rf, e, _np(pitch_x), _np(pitch_y), _np(phi), _np(pitch_rho), _np(margin), limit, rot,
+        rf, e, _np(pitch_x), _np(pitch_y), _np(phi), _np(pitch_rho), _np(margin), limit, rot, parts,
     )
 
 

@@ -42,14 +42,27 @@ class Law:
       name: registry name, or a generated description for parametric laws.
       evaluate: x -> LawValues, pure JAX, elementwise over any shape of x in [0, 1].
       description: one line for tables and reports.
+      end_velocity: p' at both ends; 0 for every rest-to-rest law, 1 for the uniform law (whose
+        joints against dwells are therefore velocity jumps, "shock" in the FLCD classes).
     """
 
     name: str
     evaluate: Callable[[jax.Array], LawValues] = field(repr=False)
     description: str = ""
+    end_velocity: float = 0.0
 
     def __call__(self, x: jax.Array) -> LawValues:
         return self.evaluate(jnp.asarray(x))
+
+
+# ------------------------------------------------------------------------------- uniform
+
+
+def _uniform(x):
+    # constant velocity, the textbook's first law: p'' and p''' vanish inside, so the whole
+    # change of velocity happens at the ends (a shock against a dwell)
+    z = jnp.zeros_like(x)
+    return LawValues(x, jnp.ones_like(x), z, z)
 
 
 # ---------------------------------------------------------------------------- trigonometric
@@ -360,6 +373,7 @@ def fourier_law(series: FourierSeries) -> Law:
 # ------------------------------------------------------------------------------- registry
 
 LAWS: dict[str, Law] = {
+    "uniform": Law("uniform", _uniform, "uniform (constant velocity) x", end_velocity=1.0),
     "harmonic": Law("harmonic", _harmonic, "simple harmonic 1/2 (1 - cos pi x)"),
     "cycloidal": Law("cycloidal", _cycloidal, "cycloidal x - sin(2 pi x)/(2 pi)"),
     "double_harmonic": Law("double_harmonic", _double_harmonic,

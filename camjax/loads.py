@@ -24,14 +24,30 @@ class FollowerTrain(NamedTuple):
     gravity_m_s2: float = 9.81
 
 
+class ForceParts(NamedTuple):
+    """The terms of the kinetostatic contact force, N, each with the shape of the motion arrays."""
+
+    inertia: jax.Array  # m y''
+    damping: jax.Array  # c y'
+    spring: jax.Array  # k (y + x0)
+    gravity: jax.Array  # m g, constant over the cycle
+
+
+def force_parts(train: FollowerTrain, motion: TimeKinematics) -> ForceParts:
+    """Inertia, damping, spring and gravity terms of F (N); plain arithmetic, so NumPy arrays in
+    give NumPy arrays out (the figures draw them without a JAX dispatch)."""
+    return ForceParts(
+        train.mass_kg * motion.accel,
+        train.damping_Ns_per_m * motion.velocity,
+        train.spring_N_per_m * (motion.y + train.preload_mm * 1e-3),
+        train.mass_kg * train.gravity_m_s2 + 0.0 * motion.y,
+    )
+
+
 def kinetostatic_force(train: FollowerTrain, motion: TimeKinematics) -> jax.Array:
     """Cam-follower contact force F = m y'' + c y' + k (y + x0) + m g, N (< 0: contact lost)."""
-    return (
-        train.mass_kg * motion.accel
-        + train.damping_Ns_per_m * motion.velocity
-        + train.spring_N_per_m * (motion.y + train.preload_mm * 1e-3)
-        + train.mass_kg * train.gravity_m_s2
-    )
+    p = force_parts(train, motion)
+    return p.inertia + p.damping + p.spring + p.gravity
 
 
 def cam_torque(force_N: jax.Array, ds_mm_per_rad: jax.Array) -> jax.Array:

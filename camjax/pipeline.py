@@ -24,6 +24,7 @@ from __future__ import annotations
 import math
 from typing import Any, NamedTuple
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 
@@ -78,8 +79,9 @@ def min_base_radius(scene: Scene, arrays: SceneArrays) -> MinBaseRadius:
         return MinBaseRadius(-q.min, q.min_deg, "curvature")
     f = scene.follower
     if f.type == "flat":
-        r, i = geometry.flat_min_base_radius(arrays.kin)
-        return MinBaseRadius(_f(r), _f(t[int(i)]), "curvature")
+        r, i = jax.jit(geometry.flat_min_base_radius)(arrays.kin)
+        # + 0.0: -0.0 (s = s'' = 0 somewhere, e.g. uniform laws) reads as 0
+        return MinBaseRadius(_f(r) + 0.0, _f(t[int(i)]), "curvature")
     sizing = geometry.roller_min_prime_radius(arrays.kin, f.roller_radius_mm, f.offset_mm,
                                               math.radians(f.max_pressure_angle_deg),
                                               f.min_curvature_radius_mm, scene.motion.rotation)
@@ -133,9 +135,9 @@ def solve_design(scene: Scene, arrays: SceneArrays) -> DesignSolution | None:
     out = solve(problem, (d.alpha, d.gamma), mode=d.mode, solver=d.solver, seed=d.seed).to_json(problem)
     if scene.follower.type == "roller":
         return _roller_design_solution(scene, arrays, out)
-    from camjax import problem as P
-
     if problem.exact is not None:  # every figure refined off the grid
+        from camjax import problem as P
+
         e = problem.exact
         curvature = float(problem.rho_min_mm - e.q_min_mm)
         stress_need = float(e.stress_need_mm)
@@ -144,15 +146,26 @@ def solve_design(scene: Scene, arrays: SceneArrays) -> DesignSolution | None:
             out, out["stress_max_MPa"], max(curvature, stress_need),
             _f(e.stress_need_deg if binding == "stress" else e.q_min_deg), binding,
             _f(P.required_face_width(problem)), float(problem.rho_min_mm))
-    rho = geometry.flat_radius_of_curvature(out["base_radius_mm"], arrays.kin)
-    sigma_peak = _f(jnp.max(contact.stress_from_coefficient(arrays.stress_coefficient, rho)))
-    stress_rho = np.asarray(P.stress_rho_need(problem))
-    need = np.asarray(P.rho_need(problem) - problem.q_mm)  # max over angles: P.required_base_radius
+    sigma_peak, stress_rho, need, width = jax.device_get(
+        _design_needs(problem, arrays.stress_coefficient, arrays.kin, out["base_radius_mm"]))
+    sigma_peak, width = float(sigma_peak), float(width)
     i = int(np.argmax(need))
     return DesignSolution(
         out, sigma_peak, float(need[i]), _f(t[i]),
         "stress" if stress_rho[i] >= float(problem.rho_min_mm) else "curvature",
-        _f(P.required_face_width(problem)), float(problem.rho_min_mm))
+        width, float(problem.rho_min_mm))
+
+
+@jax.jit
+def _design_needs(problem, stress_coefficient, kin, base_radius_mm):
+    """Peak stress at the design, per-angle stress need and R_b need, the face width need (one
+    compiled call)."""
+    from camjax import problem as P
+
+    rho = geometry.flat_radius_of_curvature(base_radius_mm, kin)
+    sigma_peak = jnp.max(contact.stress_from_coefficient(stress_coefficient, rho))
+    need = P.rho_need(problem) - problem.q_mm  # max over angles: P.required_base_radius
+    return sigma_peak, P.stress_rho_need(problem), need, P.required_face_width(problem)
 
 
 def _roller_design_solution(scene: Scene, arrays: SceneArrays, out: dict) -> DesignSolution:
@@ -206,6 +219,7 @@ def geometry_violations(curves: DesignCurves, rho_min_mm: float = 0.0,
     problem constrains them.
     """
     from camjax.problem import FEASIBILITY_RTOL_STRESS, FEASIBILITY_TOL_MM
+    from camjax.roller_problem import FEASIBILITY_TOL_RAD
 
     t, out, ex = curves.theta_deg, [], extremes or {}
 
@@ -239,13 +253,13 @@ def geometry_violations(curves: DesignCurves, rho_min_mm: float = 0.0,
                 "the contact runs off the face"))
     if curves.pressure_angle_deg is not None:
         phi, deg = at(np.abs(curves.pressure_angle_deg), np.argmax)
-        if phi > curves.pressure_angle_limit_deg:
+        if phi > curves.pressure_angle_limit_deg + math.degrees(FEASIBILITY_TOL_RAD):
             out.append(GeometryViolation(
                 "pressure_angle", f"|pressure angle| {phi:.4g} deg at {deg:g} deg > "
                 f"{curves.pressure_angle_limit_deg:g} deg"))
     if curves.undercut_margin_mm is not None:
         margin, deg = at(curves.undercut_margin_mm, np.argmin)
-        if margin <= 0:
+        if margin < -FEASIBILITY_TOL_MM:
             out.append(GeometryViolation(
                 "undercut", f"undercut margin {margin:.4g} mm at {deg:g} deg <= 0: the roller undercuts "
                 "the cam"))
@@ -268,6 +282,7 @@ def rocker_violations(curves, scene: Scene) -> list[GeometryViolation]:
     :func:`geometry_violations`.
     """
     from camjax.problem import FEASIBILITY_RTOL_STRESS, FEASIBILITY_TOL_MM
+    from camjax.roller_problem import FEASIBILITY_TOL_RAD
 
     f, t, out = scene.follower, curves.theta_deg, []
 
@@ -277,12 +292,12 @@ def rocker_violations(curves, scene: Scene) -> list[GeometryViolation]:
 
     if curves.undercut_margin_mm is not None:
         phi, deg = at(np.abs(curves.pressure_angle_deg), np.argmax)
-        if phi > f.max_pressure_angle_deg:
+        if phi > f.max_pressure_angle_deg + math.degrees(FEASIBILITY_TOL_RAD):
             out.append(GeometryViolation(
                 "pressure_angle", f"|pressure angle| {phi:.4g} deg at {deg:g} deg > "
                 f"{f.max_pressure_angle_deg:g} deg"))
         margin, deg = at(curves.undercut_margin_mm, np.argmin)
-        if margin <= 0:
+        if margin < -FEASIBILITY_TOL_MM:
             out.append(GeometryViolation(
                 "undercut", f"undercut margin {margin:.4g} mm at {deg:g} deg <= 0: the roller undercuts "
                 "the cam"))

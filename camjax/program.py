@@ -259,6 +259,17 @@ def classify_jump(jumps: Sequence[float], scale: Sequence[float], rtol: float = 
     return "ok"
 
 
+@jax.jit
+def _joint_limits(program: MotionProgram):
+    """Every segment's (s, s', s'', s''') at x = 1 and at x = 0, and the largest lift: one compiled
+    call rather than a few dozen eager operations."""
+    n = len(program.kinds)
+    levels = _levels(program)
+    ends = [_segment_values(program, i, jnp.asarray(1.0), levels[i]) for i in range(n)]
+    begins = [_segment_values(program, i, jnp.asarray(0.0), levels[i]) for i in range(n)]
+    return ends, begins, jnp.max(jnp.abs(program.lifts))
+
+
 def joints(program: MotionProgram, rtol: float = 1e-9) -> list[Joint]:
     """FLCD analysis at every joint, including the wrap-around joint at 360/0 deg.
 
@@ -266,12 +277,10 @@ def joints(program: MotionProgram, rtol: float = 1e-9) -> list[Joint]:
     A program of a single segment has one joint (with itself, across 360 deg).
     """
     n = len(program.kinds)
-    levels = _levels(program)
-    ends = [_segment_values(program, i, jnp.asarray(1.0), levels[i]) for i in range(n)]
-    begins = [_segment_values(program, i, jnp.asarray(0.0), levels[i]) for i in range(n)]
+    ends, begins, lift = jax.device_get(_joint_limits(program))
     # scales so that "zero" is judged relative to the size of the motion, per derivative order
     beta_min = math.radians(min(program.angles_deg))
-    h = max(float(jnp.max(jnp.abs(program.lifts))), 1e-300)
+    h = max(float(lift), 1e-300)
     scale = [h, h / beta_min, h / beta_min**2, h / beta_min**3]
     out = []
     starts = program.start_deg

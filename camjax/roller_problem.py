@@ -22,6 +22,11 @@ stress term and no stress constraint. Constraints, one value per angle, ``g <= 0
 - and the box bounds, which the solvers keep by projection. The scene checks that the bounds
   keep |e| < R_p (the follower axis cuts the prime circle) for every design in the box.
 
+The solvers work in this family's own unit-box coordinates (:func:`to_unit`, :func:`from_unit`):
+the prime radius R_b + R_f instead of R_b, floored at the closed-form smallest prime radius that
+meets the pressure-angle limit at the design's offset, so that the optimum's flat valley
+(R_b + R_f = const) and its curved valley along the pressure-angle limit lie along the axes.
+
 Everything that does not depend on the design (s, s', s'', C) is computed once per scene by
 :func:`problem_from_scene`. Modes are those of :mod:`camjax.problem`: :func:`per_angle` gives the
 n one-angle problems; a pointwise solve is condensed into the design of its critical angle, the
@@ -249,6 +254,86 @@ def bounds(problem: Problem) -> tuple[Design, Design]:
 def size_norm(problem: Problem) -> jax.Array:
     """N = R_b,max + R_f,max (mm): the length the constraints are divided by, shape ()."""
     return problem.size_norm_mm
+
+
+# ------------------------------------------------------------------ solver coordinates
+
+
+def _unit(x, lo, hi):
+    return (x - lo) / jnp.where(hi > lo, hi - lo, 1.0)
+
+
+def _from(v, lo, hi):
+    return lo + v * jnp.where(hi > lo, hi - lo, 1.0)
+
+
+def _straight_through(x, clipped):
+    """``clipped`` in value, the gradient of ``x``: a variable pushed past a moving limit is still
+    drawn back by the objective instead of sitting where a clip would give it a zero gradient."""
+    return x + jax.lax.stop_gradient(clipped - x)
+
+
+def _prime_box(problem: Problem) -> tuple[jax.Array, jax.Array, jax.Array]:
+    """(smallest and largest prime radius in the box, whether R_b is free)."""
+    lo, hi = problem.lower, problem.upper
+    return (lo.base_radius_mm + lo.roller_radius_mm, hi.base_radius_mm + hi.roller_radius_mm,
+            hi.base_radius_mm > lo.base_radius_mm)
+
+
+def to_unit(problem: Problem, design: Design) -> Design:
+    """Design (mm) -> the solvers' unit-box coordinates (not clipped); :func:`from_unit` inverts it.
+
+    With R_b free the first coordinate is the prime radius R_p = R_b + R_f over its range in the
+    box, the second R_f over its bounds and the third e over its bounds. The size, the pressure
+    angle and the pitch-curve curvature depend on R_p and e only, so trading R_f between stress
+    and undercut at a fixed size (the optimum's flat valley R_b + R_f = const) moves one
+    coordinate instead of the diagonal of (R_b, R_f). With R_b fixed each variable is scaled by
+    its own bounds (as for every family).
+    """
+    p_lo, p_hi, rb_free = _prime_box(problem)
+    plain = jax.tree.map(_unit, design, problem.lower, problem.upper)
+    prime = _unit(design.base_radius_mm + design.roller_radius_mm, p_lo, p_hi)
+    return plain._replace(base_radius_mm=jnp.where(rb_free, prime, plain.base_radius_mm))
+
+
+def from_unit(problem: Problem, u: Design) -> Design:
+    """The solvers' unit-box coordinates -> design (mm): the inverse of :func:`to_unit` on the box,
+    with the prime circle floored at the pressure-angle limit.
+
+    With R_b free, R_p from the first coordinate is raised where it is below the smallest prime
+    radius that meets the pressure-angle limit at the offset e (closed form,
+    :func:`min_prime_radius_for_pressure_angle`). There R_p follows e along the limit exactly: the
+    curved valley where the optimum rides that limit (R_p falling as e moves towards the
+    balance of rise and return) becomes a problem in e and R_f alone, and every design the
+    solvers see meets the limit. Below the floor the first coordinate keeps the gradient of R_p
+    (straight-through), so a weighting that wants a larger prime circle lifts it off the limit.
+    R_f (second coordinate) is then clipped to the roller radii that keep R_b = R_p - R_f within
+    its bounds, also straight-through. Every unit-box point maps into the box (unless the limit
+    itself needs a prime circle larger than the box allows).
+    """
+    lo, hi = problem.lower, problem.upper
+    p_lo, p_hi, rb_free = _prime_box(problem)
+    plain = jax.tree.map(_from, u, lo, hi)
+    raw = _from(u.base_radius_mm, p_lo, p_hi)
+    floor = jnp.minimum(min_prime_radius_for_pressure_angle(problem, plain.offset_mm), p_hi)
+    height = raw - jax.lax.stop_gradient(floor)  # the gradient of R_p in the first coordinate only
+    prime = jnp.where(height > 0, raw, floor + _straight_through(height, jnp.zeros_like(height)))
+    rf = plain.roller_radius_mm
+    rf = _straight_through(rf, jnp.clip(rf, jnp.maximum(lo.roller_radius_mm, prime - hi.base_radius_mm),
+                                        jnp.minimum(hi.roller_radius_mm, prime - lo.base_radius_mm)))
+    return plain._replace(base_radius_mm=jnp.where(rb_free, prime - rf, plain.base_radius_mm),
+                          roller_radius_mm=jnp.where(rb_free, rf, plain.roller_radius_mm))
+
+
+def min_prime_radius_for_pressure_angle(problem: Problem, offset_mm: jax.Array) -> jax.Array:
+    """Smallest R_p (mm) with |phi| <= the limit at every angle for offset e, in closed form.
+
+    |s' - e~| <= tan(phi_max) (d + s) at every angle  <=>  d >= max(|s' - e~| / tan(phi_max) - s),
+    and R_p = sqrt(e^2 + d^2) (as :func:`camjax.geometry.roller_min_prime_radius_for_pressure_angle`).
+    """
+    e = jnp.expand_dims(problem.rotation_sign * offset_mm, -1)  # (..., 1) against the grid (n,)
+    d_min = jnp.max(jnp.abs(problem.ds_mm - e) / problem.tan_max_pressure_angle - problem.s_mm, axis=-1)
+    return safe_sqrt(offset_mm**2 + positive_part(d_min) ** 2)  # 0 (finite gradient) at e = 0 = d_min
 
 
 def bounds_violation(problem: Problem, design: Design) -> jax.Array:

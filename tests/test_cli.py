@@ -154,3 +154,105 @@ def test_design_refuses_rad_lifts_on_a_translating_follower(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "dynamics.follower = 'oscillating'" in err and "oscillating_roller" in err
     assert not out.exists()
+
+
+def _class_from_end_values(dp, d2p, d3p, tol=1e-9):
+    """FLCD class of a law's joint with a dwell, from its end derivatives alone (a dwell has 0)."""
+    for name, value in (("shock", dp), ("jerk", d2p), ("perturbation", d3p)):
+        if abs(value) > tol:
+            return name
+    return "ok"
+
+
+@pytest.mark.slow
+def test_laws_table_json_and_chart(tmp_path, capsys):
+    import numpy as np
+
+    from camjax.laws import LAWS
+
+    table, chart = tmp_path / "laws.json", tmp_path / "charts" / "laws.png"
+    assert cli.main(["laws", "--json", str(table), "--plot", str(chart)]) == 0
+    rows = {r["law"]: r for r in _strict_json(table)["laws"]}
+    assert list(rows) == list(LAWS)
+    for name, law in LAWS.items():
+        # the law's own end derivatives (NumPy, no program involved) decide the class
+        v = [np.asarray(t) for t in law(np.array([0.0, 1.0]))]
+        start = _class_from_end_values(v[1][0], v[2][0], v[3][0])
+        end = _class_from_end_values(v[1][1], v[2][1], v[3][1])
+        assert (rows[name]["joint_after_dwell"], rows[name]["joint_before_dwell"]) == (start, end), name
+        assert rows[name]["flcd_against_dwells"] == ({start, end} <= {"ok", "perturbation"}), name
+    # the classes of real joints: each law as rise and return between dwells (program.joints)
+    from camjax.program import MotionProgram, Segment, joints
+
+    for name in ("uniform", "double_harmonic", "poly_3_4"):
+        law = LAWS[name]
+        prog = MotionProgram.from_segments([Segment("dwell", 90.0), Segment("rise", 90.0, law, 1.0),
+                                            Segment("dwell", 90.0), Segment("return", 90.0, law, 1.0)])
+        by_deg = {round(j.joint_deg): j.flcd_class for j in joints(prog)}
+        assert (rows[name]["joint_after_dwell"], rows[name]["joint_before_dwell"]) == (by_deg[90], by_deg[180])
+    # SPEC section 1 statements and the constant-velocity law
+    assert rows["uniform"]["joint_after_dwell"] == rows["uniform"]["joint_before_dwell"] == "shock"
+    assert (rows["double_harmonic"]["joint_after_dwell"], rows["double_harmonic"]["joint_before_dwell"]) \
+        == ("ok", "jerk")
+    assert chart.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_laws_table_names_its_columns(capsys):
+    assert cli.main(["laws"]) == 0
+    out = capsys.readouterr().out
+    assert out.splitlines()[0].split()[:2] == ["law", "max|v|"]
+    assert "uniform" in out and "shock" in out
+    assert "FLCD" in out and "yes = velocity and acceleration continuous" in out
+
+
+def test_laws_refuses_an_unknown_image_type(tmp_path, capsys):
+    target = tmp_path / "laws.xyz"
+    assert cli.main(["laws", "--plot", str(target)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--plot" in err[0] and ".png" in err[0]
+    assert not target.exists()
+
+
+@pytest.mark.slow
+def test_design_animate_writes_the_gif_even_when_infeasible(tmp_path, capsys):
+    from PIL import Image
+
+    out = tmp_path / "out"
+    # R_b = 10 mm is far below the flat face's smallest admissible radius (about 24 mm)
+    assert cli.main(["design", "--out", str(out), "--dpi", "30", "--base-radius", "10", "--animate"]) == 0
+    printed = capsys.readouterr().out
+    assert "files drawn at R_b = 10.0000 mm" in printed and "INFEASIBLE (curvature" in printed
+    with Image.open(out / "motion.gif") as im:
+        assert im.n_frames == 72
+    assert "motion.gif" in printed
+
+
+def test_design_refuses_an_undrawable_outline_in_one_line(tmp_path, capsys, monkeypatch):
+    import numpy as np
+
+    from camjax import pipeline
+
+    real = pipeline.evaluate_design
+
+    def broken(*args, **kwargs):  # an outline with a NaN point cannot be drawn
+        curves = real(*args, **kwargs)
+        x = curves.profile_x_mm.copy()
+        x[7] = np.nan
+        return curves._replace(profile_x_mm=x)
+
+    monkeypatch.setattr(pipeline, "evaluate_design", broken)
+    out = tmp_path / "out"
+    assert cli.main(["design", "--out", str(out), "--dpi", "30", "--animate"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    # one error line naming what cannot be drawn (no traceback)
+    assert len(err) == 1
+    assert err[0].startswith("camjax design: error: ") and "profile_x_mm is not finite at 1 of 360" in err[0]
+    assert not out.exists()
+
+
+def test_design_animate_refuses_an_oscillating_follower_in_one_line(tmp_path, capsys):
+    out = tmp_path / "out"
+    assert cli.main(["design", "thesis-bench", "--out", str(out), "--animate"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--animate" in err[0] and "oscillating" in err[0]
+    assert not out.exists()

@@ -114,3 +114,28 @@ def test_roller_outline_is_envelope_of_roller_circles():
     # times that is ~2e-7 mm (measured 1.8e-7)
     assert np.max(np.hypot(ex - c.profile_x_mm, ey - c.profile_y_mm)) < 1e-6
     assert math.isclose(c.base_radius_mm, 34.0)
+
+
+def test_dxf_extents_and_centre_mark(written, csv_table):
+    folder, _ = written
+    doc = ezdxf.readfile(folder / "profile.dxf")
+    lines = doc.modelspace().query("LINE")
+    assert len(lines) == 2 and {ln.dxf.layer for ln in lines} == {"CENTER"}
+    assert "CENTER" in doc.layers
+    # the two arms cross at the shaft centre (0, 0): one along X, one along Y
+    for ln in lines:
+        a, b = np.array(ln.dxf.start)[:2], np.array(ln.dxf.end)[:2]
+        np.testing.assert_allclose((a + b) / 2, [0.0, 0.0], atol=1e-12)
+        assert np.count_nonzero(np.abs(b - a) > 0) == 1
+    # extents = the bounding box of every entity, recomputed here from the CSV outline and the
+    # arms (1e-9 mm: the CSV carries 12 decimals)
+    xy = csv_table[1][:, 1:3]
+    arms = np.array([np.array(ln.dxf.start)[:2] for ln in lines] + [np.array(ln.dxf.end)[:2] for ln in lines])
+    pts = np.vstack([xy, arms])
+    np.testing.assert_allclose(np.array(doc.header["$EXTMIN"])[:2], pts.min(axis=0), atol=1e-9)
+    np.testing.assert_allclose(np.array(doc.header["$EXTMAX"])[:2], pts.max(axis=0), atol=1e-9)
+    # the outline itself sets the extents (the mark is inside the cam)
+    np.testing.assert_allclose(np.array(doc.header["$EXTMAX"])[:2], xy.max(axis=0), atol=1e-9)
+    # the drawing is self-consistent: the CENTER layer's linetype is defined, audit finds nothing
+    assert "CENTER" in doc.linetypes
+    assert not doc.audit().has_errors

@@ -77,7 +77,10 @@ def test_peaks_match_closed_forms(name):
 def test_boundary_values(name):
     v = LAWS[name](jnp.asarray([0.0, 1.0]))
     np.testing.assert_allclose(v.p, [0.0, 1.0], atol=1e-14)
-    np.testing.assert_allclose(v.dp, [0.0, 0.0], atol=1e-12)
+    # rest-to-rest laws start and end at rest; the uniform law moves at p' = 1 throughout
+    end_v = 1.0 if name == "uniform" else 0.0
+    np.testing.assert_allclose(v.dp, [end_v, end_v], atol=1e-12)
+    assert LAWS[name].end_velocity == end_v
 
 
 @pytest.mark.parametrize("name", list(LAWS))
@@ -187,3 +190,38 @@ def test_fourier_preset_and_law():
     assert series.harmonics == ((2, 0.5, 0.3),)
     with pytest.raises(ValueError, match="phases"):
         FourierSeries.from_mapping({"h1": 1.0}, {"phi3": 0.1})
+
+
+def test_uniform_law_is_constant_velocity():
+    x = jnp.linspace(0.0, 1.0, 101)
+    v = LAWS["uniform"](x)
+    # closed form p = x: p' = 1, p'' = p''' = 0 exactly (no rounding in the formula)
+    np.testing.assert_array_equal(v.p, x)
+    np.testing.assert_array_equal(v.dp, np.ones(101))
+    np.testing.assert_array_equal(v.d2p, np.zeros(101))
+    np.testing.assert_array_equal(v.d3p, np.zeros(101))
+    # the slope from differences of the positions alone (exact for a line up to rounding)
+    np.testing.assert_allclose(np.diff(np.asarray(v.p)) / np.diff(np.asarray(x)), 1.0, rtol=1e-12)
+    s = summarize(LAWS["uniform"], samples=11)
+    assert s.flcd_against_dwells is False and s.perturbation_against_dwells is False
+    assert (s.peak_velocity, s.peak_accel_pos, s.peak_accel_neg, s.peak_jerk) == (1.0, 0.0, 0.0, 0.0)
+
+
+def test_uniform_joints_against_dwells_are_shocks():
+    from camjax.program import MotionProgram, Segment, joints
+
+    uni = LAWS["uniform"]
+    lift, rise_deg, ret_deg = 8.0, 90.0, 120.0
+    prog = MotionProgram.from_segments([
+        Segment("dwell", 60.0), Segment("rise", rise_deg, uni, lift),
+        Segment("dwell", 90.0), Segment("return", ret_deg, uni, lift),
+    ])
+    js = joints(prog)
+    # every joint of a uniform segment with a dwell is a velocity jump of lift / beta (mm/rad)
+    assert [j.flcd_class for j in js] == ["shock"] * 4
+    by_angle = {round(j.joint_deg): j for j in js}
+    assert by_angle[60].jump_v == pytest.approx(lift / math.radians(rise_deg), rel=1e-12)
+    assert by_angle[150].jump_v == pytest.approx(-lift / math.radians(rise_deg), rel=1e-12)
+    assert by_angle[240].jump_v == pytest.approx(-lift / math.radians(ret_deg), rel=1e-12)
+    assert by_angle[0].jump_v == pytest.approx(lift / math.radians(ret_deg), rel=1e-12)
+    assert all(j.jump_s == pytest.approx(0.0, abs=1e-12) for j in js)

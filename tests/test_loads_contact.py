@@ -94,3 +94,29 @@ def test_gradients_finite_for_any_base_radius_lift_speed_spring(default_scene):
     e = jnp.asarray([1e-5, 0, 0, 0])
     fd = (peak_stress(x + e) - peak_stress(x - e)) / 2e-5
     assert float(grad(x)[0]) == pytest.approx(float(fd), rel=1e-6)
+
+
+def test_force_parts_of_the_reference_case_add_up(default_scene, default_arrays):
+    from reference import (
+        CAM_SPEED_RAD_S,
+        DAMPING_NS_PER_M,
+        GRAVITY_M_S2,
+        MASS_KG,
+        PRELOAD_MM,
+        SPRING_N_PER_M,
+        reference_motion,
+    )
+
+    from camjax.evaluate import evaluate_design
+
+    curves = evaluate_design(default_scene, default_arrays, 30.0)
+    parts = curves.force_parts_N
+    assert list(parts) == ["inertia", "damping", "spring", "gravity"]
+    # each term from the closed-form cycloids (NumPy), SI; 1e-9 N: float64 rounding of ~60 N
+    s, ds, d2s = reference_motion(curves.theta_deg)
+    w = CAM_SPEED_RAD_S
+    np.testing.assert_allclose(parts["inertia"], MASS_KG * d2s * w**2 * 1e-3, atol=1e-9)
+    np.testing.assert_allclose(parts["damping"], DAMPING_NS_PER_M * ds * w * 1e-3, atol=1e-9)
+    np.testing.assert_allclose(parts["spring"], SPRING_N_PER_M * (s + PRELOAD_MM) * 1e-3, atol=1e-9)
+    np.testing.assert_allclose(parts["gravity"], MASS_KG * GRAVITY_M_S2, atol=1e-12)
+    np.testing.assert_allclose(sum(parts.values()), curves.force_N, atol=1e-9)

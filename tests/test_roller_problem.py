@@ -93,3 +93,60 @@ def test_per_angle_problems_have_one_angle_each(roller_problem):
     full = R.constraints(roller_problem, x)
     np.testing.assert_allclose(jnp.concatenate(jax.tree.leaves(R.constraints(one, x))),
                                [v[17] for v in full], rtol=1e-15)
+
+
+def test_solver_coordinates_invert_and_cover_the_box(roller_problem):
+    from camjax.solvers.gradient import from_unit, to_unit
+
+    p = roller_problem
+    rng = np.random.default_rng(1)
+    lo = np.array([float(x) for x in p.lower])
+    hi = np.array([float(x) for x in p.upper])
+    x = rng.uniform(lo, hi, size=(400, 3))
+    d = R.Design(*(jnp.asarray(x[:, j]) for j in range(3)))
+    phi_ok = np.asarray(jax.vmap(lambda d: jnp.max(jnp.abs(R.pressure_angle(p, d))))(d)) <= math.radians(30)
+    u = to_unit(p, d)
+    # every design of the box has coordinates in the unit box
+    assert all(float(jnp.min(v)) >= -1e-12 and float(jnp.max(v)) <= 1 + 1e-12 for v in u)
+    # a design within the pressure-angle limit maps back to itself (round-off: a few ulps of
+    # the ~50 mm prime-radius range) ...
+    back = from_unit(p, u)
+    assert phi_ok.sum() > 100
+    for a, b in zip(back, d, strict=True):
+        np.testing.assert_allclose(np.asarray(a)[phi_ok], np.asarray(b)[phi_ok], rtol=0, atol=1e-12)
+    # ... one beyond it keeps R_f and e and gets the smallest prime circle that meets the limit,
+    # which the positions say is on the limit (|phi| = 30 deg at its worst angle)
+    bad = ~phi_ok
+    for name in ("roller_radius_mm", "offset_mm"):
+        np.testing.assert_allclose(np.asarray(getattr(back, name))[bad], np.asarray(getattr(d, name))[bad],
+                                   rtol=0, atol=1e-12)
+    worst = jax.vmap(lambda d: jnp.max(jnp.abs(R.pressure_angle(p, d))))(back)
+    np.testing.assert_allclose(np.degrees(np.asarray(worst)[bad]), 30.0, rtol=0, atol=1e-9)
+    # the first coordinate is the prime radius alone: moving along the R_b + R_f = const valley
+    # changes only the second
+    v = from_unit(p, R.Design(jnp.full(50, 0.5), jnp.linspace(0, 1, 50), jnp.zeros(50)))
+    rp = np.asarray(v.base_radius_mm + v.roller_radius_mm)
+    np.testing.assert_allclose(rp, rp[0], rtol=0, atol=1e-12)
+    # every unit-box point maps into the bounds (R_f is clipped to keep R_b inside its own)
+    w = rng.uniform(0, 1, size=(500, 3))
+    v = from_unit(p, R.Design(*(jnp.asarray(w[:, j]) for j in range(3))))
+    for val, a, b in zip(v, lo, hi, strict=True):
+        assert float(jnp.min(val)) >= a - 1e-12 and float(jnp.max(val)) <= b + 1e-12
+    # and the map keeps finite gradients, also for a one-angle problem at e = 0 on a dwell
+    one = jax.tree.map(lambda x: x[100], R.per_angle(p))  # 100 deg: a dwell, s' = 0
+    for prob in (p, one):
+        g = jax.grad(lambda u, prob=prob: sum(from_unit(prob, u)))(R.Design(*map(jnp.asarray, (0.0, 0.5, 0.5))))
+        assert all(np.isfinite(float(x)) for x in g)
+
+
+def test_solver_coordinates_are_the_plain_box_scaling_with_a_fixed_radius(roller_problem):
+    from camjax.solvers.gradient import from_unit, to_unit
+
+    # with R_f fixed the prime radius is R_b plus a constant: each variable keeps its own scaling
+    p = roller_problem._replace(lower=roller_problem.lower._replace(roller_radius_mm=jnp.asarray(5.0)),
+                                upper=roller_problem.upper._replace(roller_radius_mm=jnp.asarray(5.0)))
+    d = R.Design(jnp.asarray(21.0), jnp.asarray(5.0), jnp.asarray(1.0))
+    u = to_unit(p, d)
+    assert float(u.base_radius_mm) == pytest.approx((21.0 - 2.0) / 38.0, abs=1e-15)
+    assert float(u.offset_mm) == pytest.approx(5.0 / 8.0, abs=1e-15)
+    assert float(from_unit(p, u).base_radius_mm) == pytest.approx(21.0, abs=1e-13)

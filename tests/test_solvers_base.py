@@ -106,3 +106,14 @@ def test_registry_imports_neither_jax_nor_numpy():
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "[]"
+
+
+def test_weighting_keys_do_not_depend_on_chunking():
+    import jax
+
+    from camjax.solvers.base import weighting_keys
+
+    whole = jax.random.key_data(weighting_keys(7, 6))
+    # a chunk starting at weighting 2 draws the same keys as rows 2..5 of the whole batch
+    np.testing.assert_array_equal(jax.random.key_data(weighting_keys(7, 4, 2)), whole[2:])
+    assert len({tuple(k) for k in np.asarray(whole)}) == 6  # distinct keys

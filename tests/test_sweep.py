@@ -159,3 +159,37 @@ def test_cli_design_overrides_are_validated(tmp_path, capsys):
     assert "nothing to minimize" in capsys.readouterr().err
     assert cli.main(["design", "--out", str(out), "--gamma", "-2"]) == 2
     assert not out.exists()
+
+
+def _overlap(a, b) -> bool:
+    return not (a[2] <= b[0] or a[0] >= b[2] or a[3] <= b[1] or a[1] >= b[3])
+
+
+def test_place_labels_never_overlaps():
+    rng = np.random.default_rng(0)
+    anchors = rng.uniform(0, 300, size=(80, 2))  # crowded: many labels find no place
+    sizes = [(40.0, 9.0)] * 80
+    markers = [(x - 4, y - 4, x + 4, y + 4) for x, y in anchors]
+    spots = S.place_labels(anchors, sizes, markers, bounds_px=(0, 0, 300, 300))
+    boxes = [(x, y, x + 40.0, y + 9.0) for x, y in (s for s in spots if s is not None)]
+    assert 10 < len(boxes) < 80
+    for i, a in enumerate(boxes):
+        assert 0 <= a[0] and a[2] <= 300 and 0 <= a[1] and a[3] <= 300
+        assert not any(_overlap(a, m) for m in markers)
+        assert not any(_overlap(a, b) for b in boxes[i + 1:])
+
+
+def test_pareto_labels_do_not_overlap_when_drawn(big_sweep):
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    fig = S.plot_pareto(big_sweep)
+    renderer = FigureCanvasAgg(fig).get_renderer()
+    ax = fig.axes[0]
+    labels = [t for t in ax.texts if "/" in t.get_text()]
+    assert len(labels) >= 3
+    # measured by the renderer (not the placement's own size estimate)
+    boxes = [t.get_window_extent(renderer).extents for t in labels]
+    for i, a in enumerate(boxes):
+        assert not any(_overlap(a, b) for b in boxes[i + 1:]), labels[i].get_text()
+    legend = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert any("(+n)" in t for t in legend) and any("non-dominated" in t for t in legend)

@@ -89,13 +89,14 @@ def law_cases() -> list[Case]:
     x = jnp.linspace(0.0, 1.0, 4001)
     for name, law in LAWS.items():
         v = law(ends)
-        bc = max(abs(float(v.p[0])), abs(float(v.p[3]) - 1.0), abs(float(v.dp[0])), abs(float(v.dp[3])))
+        bc = max(abs(float(v.p[0])), abs(float(v.p[3]) - 1.0),
+                 abs(float(v.dp[0]) - law.end_velocity), abs(float(v.dp[3]) - law.end_velocity))
         # 1e-15 inside an end: p moves by at most max|p'| 1e-15 ~ 3e-15
         near = max(abs(float(v.p[1] - v.p[0])), abs(float(v.p[2] - v.p[3])))
         out.append(
             _case(
                 "laws",
-                f"{name}: boundary conditions p(0)=0, p(1)=1, p'=0",
+                f"{name}: boundary conditions p(0)=0, p(1)=1, p'={law.end_velocity:g}",
                 bc,
                 0.0,
                 1e-13,

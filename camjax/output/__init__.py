@@ -4,5 +4,6 @@
 :class:`camjax.evaluate.DesignCurves` (matplotlib loads only when drawing) and ``export`` writes
 the profile CSV, DXF and the PNG figures; ``files`` writes strict JSON; ``folder`` checks a
 command's output folder before any work, stages it and swaps it in whole.
-``plots_dynamics`` draws the figures of a :class:`camjax.dynamics.DynamicsReport`.
+``animation`` draws the mechanism turning (``motion.gif``) from plain arrays, and
+``plots_dynamics`` the figures of a :class:`camjax.dynamics.DynamicsReport`.
 """

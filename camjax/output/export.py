@@ -37,6 +37,11 @@ def write_profile_csv(path: Path, curves: DesignCurves) -> Path:
     return path
 
 
+def centre_mark_half_mm(curves: DesignCurves) -> float:
+    """Half length of the centre-mark arms: a tenth of the largest radius, at least 1 mm."""
+    return max(1.0, 0.1 * float(np.max(np.hypot(curves.profile_x_mm, curves.profile_y_mm))))
+
+
 def write_profile_dxf(path: Path, curves: DesignCurves) -> Path:
     """Cam outline as one closed LWPOLYLINE on layer CAM_PROFILE, drawing units mm.
 
@@ -44,17 +49,30 @@ def write_profile_dxf(path: Path, curves: DesignCurves) -> Path:
     (with 360 samples the chord error on a 30 mm cam is about 1 micrometre). ezdxf writes the
     document; the polyline's vertices are formatted from the array in one call, since ezdxf adds
     and writes them one by one (quadratic: 30 s for 5e4 vertices; this way 1e6 take seconds).
+    The shaft centre is a cross of two LINEs on layer CENTER; $EXTMIN/$EXTMAX bound both and the
+    active viewport shows them.
     """
     import io
 
     import ezdxf  # imported here: only the DXF export needs it
+    from ezdxf import zoom
 
     xy = np.column_stack([curves.profile_x_mm, curves.profile_y_mm])
-    doc = ezdxf.new("R2010", units=ezdxf.units.MM)
+    doc = ezdxf.new("R2010", units=ezdxf.units.MM, setup=["linetypes"])  # CENTER linetype
     doc.header["$MEASUREMENT"] = 1  # metric
     doc.layers.add("CAM_PROFILE", color=7)
-    doc.modelspace().add_lwpolyline(xy[:1].tolist(), format="xy", close=True,
-                                    dxfattribs={"layer": "CAM_PROFILE"})
+    doc.layers.add("CENTER", color=1, linetype="CENTER")
+    msp = doc.modelspace()
+    msp.add_lwpolyline(xy[:1].tolist(), format="xy", close=True, dxfattribs={"layer": "CAM_PROFILE"})
+    c = centre_mark_half_mm(curves)
+    msp.add_line((-c, 0.0), (c, 0.0), dxfattribs={"layer": "CENTER"})
+    msp.add_line((0.0, -c), (0.0, c), dxfattribs={"layer": "CENTER"})
+    lo = np.minimum(xy.min(axis=0), -c)
+    hi = np.maximum(xy.max(axis=0), c)
+    # ezdxf copies the layout's extents into $EXTMIN/$EXTMAX when it writes
+    msp.dxf.extmin = (float(lo[0]), float(lo[1]), 0.0)
+    msp.dxf.extmax = (float(hi[0]), float(hi[1]), 0.0)
+    zoom.window(msp, msp.dxf.extmin, msp.dxf.extmax)  # open framed on the cam
     stream = io.StringIO()
     doc.write(stream)
     head, marker, tail = stream.getvalue().partition("AcDbPolyline\n 90\n1\n 70\n1\n")
@@ -70,16 +88,17 @@ def write_profile_dxf(path: Path, curves: DesignCurves) -> Path:
     return path
 
 
-def write_figures(folder: Path, curves: DesignCurves, dpi: int = 100,
-                  banner: str | None = None) -> list[Path]:
+def write_figures(folder: Path, curves: DesignCurves, dpi: int = 100, banner: str | None = None,
+                  title: str = "") -> list[Path]:
     """PNG of every figure the scene declares (see :func:`camjax.output.plots.design_figures`).
 
-    ``banner``: text of a red banner stamped on every figure (the constraints the geometry breaks).
+    ``banner``: text of a red banner stamped on every figure (the constraints the geometry breaks);
+    ``title``: the run's title block (:func:`camjax.output.plots.title_block`).
     """
     from camjax.output.plots import design_figures, stamp_banner  # matplotlib only when drawing
 
     out = []
-    for name, fig in design_figures(curves).items():
+    for name, fig in design_figures(curves, title).items():
         if banner:
             stamp_banner(fig, banner)
         path = folder / name
@@ -88,9 +107,21 @@ def write_figures(folder: Path, curves: DesignCurves, dpi: int = 100,
     return out
 
 
+def write_animation(path: Path, curves: DesignCurves, title: str = "", banner: str | None = None) -> Path:
+    """motion.gif: one turn of the mechanism; ``banner`` (the broken constraints) above it in red
+    and the outline where it breaks them drawn red."""
+    from camjax.output.animation import mechanism_from_curves, violation_samples, write_motion_gif
+
+    return write_motion_gif(path, mechanism_from_curves(curves, title, banner, violation_samples(curves)))
+
+
 def write_design_files(folder: str | Path, curves: DesignCurves, dpi: int = 100,
-                       banner: str | None = None) -> list[Path]:
-    """Figures, profile.csv and profile.dxf into ``folder`` (created if needed); the written paths."""
+                       banner: str | None = None, title: str = "", animate: bool = False,
+                       progress=None) -> list[Path]:
+    """Figures, profile.csv and profile.dxf (and motion.gif when ``animate``) into ``folder``
+    (created if needed); the written paths. ``banner`` and ``title`` as in :func:`write_figures`;
+    ``progress(phase)`` (optional) is told "figures", "files" and "animation" as each starts. An
+    oscillating follower's files come from :mod:`camjax.output.rocker` (no animation yet)."""
     from camjax.rocker import RockerCurves
 
     if isinstance(curves, RockerCurves):  # an oscillating follower's files
@@ -99,5 +130,13 @@ def write_design_files(folder: str | Path, curves: DesignCurves, dpi: int = 100,
         return write_rocker_files(folder, curves, dpi, banner)
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
-    return [*write_figures(folder, curves, dpi, banner), write_profile_csv(folder / "profile.csv", curves),
-            write_profile_dxf(folder / "profile.dxf", curves)]
+    say = progress or (lambda phase: None)
+    say("figures")
+    paths = write_figures(folder, curves, dpi, banner, title)
+    say("files")
+    paths += [write_profile_csv(folder / "profile.csv", curves),
+              write_profile_dxf(folder / "profile.dxf", curves)]
+    if animate:
+        say("animation")
+        paths.append(write_animation(folder / "motion.gif", curves, title, banner))
+    return paths

@@ -321,10 +321,14 @@ def solve_batch(problem, weights: Weights, keys: jax.Array, mode: str = "global"
     return jax.vmap(one, in_axes=(None, 0, 0))(problem, weights, keys)
 
 
+@partial(jax.jit, static_argnames="count")
 def weighting_keys(seed: int, count: int, offset: int = 0) -> jax.Array:
-    """One key per weighting, fold_in(key(seed), offset + i): independent of chunking."""
+    """One key per weighting, fold_in(key(seed), offset + i): independent of chunking.
+
+    One compiled call: run eagerly, key, fold_in and arange would each be compiled on their own.
+    """
     base = jax.random.key(seed)
-    return jax.vmap(lambda i: jax.random.fold_in(base, i))(jnp.arange(offset, offset + count))
+    return jax.vmap(lambda i: jax.random.fold_in(base, i))(offset + jnp.arange(count))
 
 
 _COMPILED: dict = {}
@@ -357,6 +361,6 @@ def solve(problem, weights: Weights | tuple[float, float] = (1.0, 1.0), *, mode:
         compile_s = time.perf_counter() - t0
         _COMPILED[cache_key] = compiled
     t1 = time.perf_counter()
-    res = jax.block_until_ready(compiled(*args))
+    res = jax.device_get(compiled(*args))  # NumPy leaves: indexing them dispatches nothing
     t2 = time.perf_counter()
     return dataclasses.replace(res[0], timings=Timings(compile_s, t2 - t1))

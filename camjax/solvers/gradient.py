@@ -173,14 +173,25 @@ def _u_max(problem: Problem) -> Design:
 
 
 def to_unit(problem: Problem, design: Design) -> Design:
-    """Design (mm) -> unit box coordinates (not clipped)."""
-    lower = family_of(problem).bounds(problem)[0]
+    """Design (mm) -> unit box coordinates (not clipped).
+
+    A family may define its own ``to_unit``/``from_unit`` (a bijection of the same unit box onto
+    its bounds, one coordinate per variable, fixed where the variable is fixed) when the plain
+    per-variable scaling is badly conditioned for its optimum; the solvers then work in those.
+    """
+    family = family_of(problem)
+    if hasattr(family, "to_unit"):
+        return family.to_unit(problem, design)
+    lower = family.bounds(problem)[0]
     return jax.tree.map(lambda x, lo, w: (x - lo) / w, design, lower, _span(problem))
 
 
 def from_unit(problem: Problem, u: Design) -> Design:
-    """Unit box coordinates -> design (mm)."""
-    lower = family_of(problem).bounds(problem)[0]
+    """Unit box coordinates -> design (mm) (a family's own ``from_unit`` if it has one)."""
+    family = family_of(problem)
+    if hasattr(family, "from_unit"):
+        return family.from_unit(problem, u)
+    lower = family.bounds(problem)[0]
     return jax.tree.map(lambda v, lo, w: lo + v * w, u, lower, _span(problem))
 
 

@@ -154,14 +154,52 @@ def _label_points(size, stress, front, max_labels: int, near: float = 0.025) -> 
     return [(i, k) for i, k in labels]
 
 
+def place_labels(anchors_px, sizes_px, obstacles_px=(), bounds_px=None, gap_px: float = 7.0,
+                 pad_px: float = 1.5) -> list[tuple[float, float] | None]:
+    """Greedy, overlap-free placement of text boxes next to their anchor points (display pixels).
+
+    Each label tries, in order, the places right, left, above, below and on the diagonals of its
+    anchor at ``gap_px`` (then at twice that) and takes the first box that overlaps no placed box
+    and no obstacle (e.g. marker boxes, points along a curve) and lies inside ``bounds_px``
+    (x0, y0, x1, y1) when given; a label with no free place gets None (the caller leaves it out
+    and says so). Returns, per label, the lower-left corner of its box or None.
+    """
+    placed = [np.asarray(b, float) for b in obstacles_px]  # (x0, y0, x1, y1)
+    out: list[tuple[float, float] | None] = []
+    for (x, y), (w, h) in zip(anchors_px, sizes_px, strict=True):
+        spot = None
+        for g in (gap_px, 2.0 * gap_px):
+            candidates = [(x + g, y - h / 2), (x - g - w, y - h / 2), (x - w / 2, y + g),
+                          (x - w / 2, y - g - h), (x + g, y + g / 2), (x - g - w, y + g / 2),
+                          (x + g, y - g / 2 - h), (x - g - w, y - g / 2 - h)]
+            for x0, y0 in candidates:
+                box = np.array([x0 - pad_px, y0 - pad_px, x0 + w + pad_px, y0 + h + pad_px])
+                if bounds_px is not None and not (bounds_px[0] <= box[0] and box[2] <= bounds_px[2]
+                                                  and bounds_px[1] <= box[1] and box[3] <= bounds_px[3]):
+                    continue
+                if all(box[2] <= o[0] or box[0] >= o[2] or box[3] <= o[1] or box[1] >= o[3]
+                       for o in placed):
+                    placed.append(box)
+                    spot = (float(x0), float(y0))
+                    break
+            if spot is not None:
+                break
+        out.append(spot)
+    return out
+
+
 def plot_pareto(sweep_result: SweepResult, path=None, *, max_labels: int = 24, title: str | None = None):
     """Cam size (R_b + L, mm) against peak contact stress (MPa), one point per weighting.
 
     Points are coloured by log10(alpha / gamma) and labelled "alpha/gamma" (every point of the
-    non-dominated front, others thinned to about ``max_labels`` labels); the front is drawn as a
-    line; infeasible weightings are hollow. Returns the matplotlib Figure; saves it when ``path``.
+    non-dominated front first, others thinned to about ``max_labels`` labels; "(+n)" counts the
+    other weightings that land on the same point); labels are placed so that none overlaps
+    another label or a marker, and one that finds no free place is left out (the count is
+    printed in the figure). The front is drawn as a line; infeasible weightings are hollow red.
+    Returns the matplotlib Figure; saves it when ``path``.
     """
     from matplotlib.figure import Figure  # no pyplot: no global state, any backend
+    from matplotlib.lines import Line2D
 
     r = sweep_result
     size, stress = r.column("size_mm"), r.column("stress_max_MPa")
@@ -173,28 +211,55 @@ def plot_pareto(sweep_result: SweepResult, path=None, *, max_labels: int = 24, t
     span = (ratio[finite].min(), ratio[finite].max()) if finite.any() else (0.0, 1.0)
     colour = np.clip(np.where(finite, ratio, span[1]), *span) if span[0] < span[1] else np.zeros_like(ratio)
 
-    fig = Figure(figsize=(7.5, 5.5), layout="constrained")
-    ax = fig.subplots()
+    fig = Figure(figsize=(8.0, 5.8), dpi=100)
+    ax = fig.add_axes((0.09, 0.1, 0.74, 0.8))
+    cax = fig.add_axes((0.85, 0.1, 0.02, 0.8))
     sc = ax.scatter(size[feasible], stress[feasible], c=colour[feasible], cmap="viridis", s=28,
-                    vmin=span[0], vmax=max(span[1], span[0] + 1e-9), zorder=3, label="feasible")
+                    vmin=span[0], vmax=max(span[1], span[0] + 1e-9), zorder=3)
     if (~feasible).any():
         ax.scatter(size[~feasible], stress[~feasible], facecolors="none", edgecolors="tab:red", s=34,
-                   zorder=3, label="infeasible")
+                   zorder=3)
     if front.any():
         order = np.argsort(size[front])
-        ax.plot(size[front][order], stress[front][order], "-", color="black", lw=1.2, zorder=2,
-                label="non-dominated front")
-    fig.colorbar(sc, ax=ax, label="log10(alpha / gamma)")
-    for i, extra in _label_points(size, stress, front, max_labels):
-        more = f" (+{extra})" if extra else ""
-        ax.annotate(f"{alpha[i]:.3g}/{gamma[i]:.3g}{more}", (size[i], stress[i]),
-                    textcoords="offset points", xytext=(4, 3), fontsize=7, color="0.25")
+        ax.plot(size[front][order], stress[front][order], "-", color="black", lw=1.2, zorder=2)
+    fig.colorbar(sc, cax=cax, label="log10(α / γ)   (low: stress-weighted, high: size-weighted)")
+    ax.margins(0.08)
+    ax.autoscale_view()
+    # labels: measured in display pixels against the final limits, placed without overlap
+    chosen = _label_points(size, stress, front, max_labels)
+    texts = [f"{alpha[i]:.3g}/{gamma[i]:.3g}" + (f" (+{extra})" if extra else "") for i, extra in chosen]
+    font_px = 7 * fig.dpi / 72
+    sizes = [(0.6 * font_px * len(t), 1.2 * font_px) for t in texts]  # DejaVu Sans ~0.6 em/char
+    xy = ax.transData.transform(np.column_stack([size, stress]))
+    marker = 4.0  # half size of a marker box, pixels
+    obstacles = [(x - marker, y - marker, x + marker, y + marker) for x, y in xy]
+    if front.any():  # keep labels off the front line: its points every ~3 px are obstacles too
+        line = xy[front][np.argsort(size[front])]
+        for p, q in zip(line[:-1], line[1:], strict=True):
+            for f in np.linspace(0.0, 1.0, int(np.hypot(*(q - p)) // 3) + 2):
+                c = p + f * (q - p)
+                obstacles.append((c[0] - 1.0, c[1] - 1.0, c[0] + 1.0, c[1] + 1.0))
+    spots = place_labels([xy[i] for i, _ in chosen], sizes, obstacles, ax.bbox.extents)
+    left_out = 0
+    for text, spot in zip(texts, spots, strict=True):
+        if spot is None:
+            left_out += 1
+            continue
+        ax.annotate(text, ax.transData.inverted().transform(spot), fontsize=7, color="0.25",
+                    va="bottom", ha="left", annotation_clip=False)
     ax.set_xlabel("cam size R_b + L (mm)")
     ax.set_ylabel("peak contact stress (MPa)")
-    ax.set_title(title or f"size vs stress over {size.size} weightings ({r.solver}, {r.mode}); "
-                 "labels alpha/gamma", fontsize=10)
+    ax.set_title(title or f"Size vs stress over {size.size} weightings ({r.solver}, {r.mode})", fontsize=10)
     ax.grid(True, alpha=0.3)
-    ax.legend(loc="upper right", fontsize=8)
+    handles = [Line2D([], [], marker="o", linestyle="", color="C2", label="feasible weighting (colour: α/γ)"),
+               Line2D([], [], marker="o", linestyle="", markerfacecolor="none", markeredgecolor="tab:red",
+                      label="infeasible weighting"),
+               Line2D([], [], color="black", label="non-dominated front"),
+               Line2D([], [], linestyle="", label="label α/γ: weights of size and stress"),
+               Line2D([], [], linestyle="", label="(+n): n more weightings at that point")]
+    if left_out:
+        handles.append(Line2D([], [], linestyle="", label=f"{left_out} label(s) left out: no free place"))
+    ax.legend(handles=handles, loc="upper right", fontsize=7, handlelength=1.2)
     if path is not None:
         fig.savefig(path, dpi=120)
     return fig

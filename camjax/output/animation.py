@@ -1,0 +1,348 @@
+"""Animation of the mechanism: the cam turning, the follower moving, contact and pressure angle.
+
+Written against plain arrays (:class:`Mechanism`: the outline in cam coordinates, s(theta) and
+the follower's type and sizes), so that a new follower type needs only its pose in
+:func:`frame_poses` and its artist in :func:`motion_frames`. Conventions are those of
+:mod:`camjax.geometry`: in cam coordinates the follower axis is +Y at theta = 0 and the contact
+point at cam angle theta lies at polar angle theta clockwise from +Y. In the fixed (frame)
+coordinates drawn here the follower slides along +Y and the cam turns counter-clockwise: a cam
+point P is drawn at R(theta) P, R the rotation by +theta.
+
+Figures are built without pyplot (Agg through ``Figure``), like :mod:`camjax.output.plots`;
+matplotlib is imported only when drawing. Functions here take NumPy arrays and are not traced
+by JAX (nothing here is differentiated).
+"""
+
+from __future__ import annotations
+
+import textwrap
+from pathlib import Path
+from typing import NamedTuple
+
+import numpy as np
+
+FOLLOWER_TYPES = ("flat", "roller")
+# violations smaller than the solvers' feasibility tolerances (camjax.problem.FEASIBILITY_TOL_MM
+# and its relative one) are not drawn as such: an optimum sits on its active limits
+LENGTH_TOL_MM = 1e-6
+ANGLE_RTOL = 1e-6
+
+
+class UndrawableGeometry(ValueError):
+    """The outline or the motion has non-finite points: there is no mechanism to draw."""
+
+
+class Mechanism(NamedTuple):
+    """What the animation draws, per sample (shape (N,) arrays) and per follower.
+
+    Attributes:
+      theta_deg: cam angle of each sample, deg, increasing over one turn.
+      profile_x_mm, profile_y_mm: cam outline in cam coordinates (the contact point of sample k).
+      s_mm: follower displacement s(theta), mm.
+      follower_type: "flat" or "roller".
+      base_radius_mm: R_b, mm.
+      face_width_mm: flat face width L, mm (flat only).
+      roller_radius_mm: R_f, mm (roller only).
+      offset_mm: offset e of the roller's axis from the cam centre, mm (roller only).
+      pressure_angle_deg: angle between the contact normal and the follower axis, deg, (N,);
+        None means 0 (a flat face perpendicular to its stem).
+      title: drawn above the mechanism (a title block: one or more lines).
+      violation: one line drawn in red when the geometry breaks a constraint (None: feasible).
+      bad: (N,) booleans, samples where the outline breaks a constraint (drawn red); None: none.
+      rotation: "ccw" (the cam turns counter-clockwise) or "cw" (its outline is the mirror image,
+        X -> -X, and it turns clockwise).
+    """
+
+    theta_deg: np.ndarray
+    profile_x_mm: np.ndarray
+    profile_y_mm: np.ndarray
+    s_mm: np.ndarray
+    follower_type: str
+    base_radius_mm: float
+    face_width_mm: float | None = None
+    roller_radius_mm: float | None = None
+    offset_mm: float = 0.0
+    pressure_angle_deg: np.ndarray | None = None
+    title: str = ""
+    violation: str | None = None
+    bad: np.ndarray | None = None
+    rotation: str = "ccw"
+
+
+class FramePoses(NamedTuple):
+    """Pose of the mechanism at each animated sample (shape (F,) each, fixed coordinates, mm)."""
+
+    index: np.ndarray  # sample index k of each frame
+    theta_deg: np.ndarray  # cam angle, deg
+    follower_x_mm: np.ndarray  # flat: centre of the face; roller: centre of the roller
+    follower_y_mm: np.ndarray
+    contact_x_mm: np.ndarray
+    contact_y_mm: np.ndarray
+    pressure_angle_deg: np.ndarray
+
+
+def check_drawable(curves) -> None:
+    """Raise :class:`UndrawableGeometry` naming the first of the outline (profile_x_mm,
+    profile_y_mm) and the motion (s_mm) of ``curves`` (a Mechanism or DesignCurves) that has
+    non-finite points."""
+    for name in ("profile_x_mm", "profile_y_mm", "s_mm"):
+        if not hasattr(curves, name):  # e.g. an oscillating follower's curves: motion in deg
+            continue
+        bad = ~np.isfinite(np.asarray(getattr(curves, name)))
+        if bad.any():
+            raise UndrawableGeometry(f"{name} is not finite at {np.count_nonzero(bad)} of {bad.size} "
+                                     "samples: the cam cannot be drawn")
+
+
+def frame_indices(samples: int, frames: int) -> np.ndarray:
+    """Indices of ``frames`` samples evenly spread over one turn of ``samples`` (shape (F,))."""
+    if not 1 <= frames <= samples:
+        raise ValueError(f"frames: {frames} must be in 1..{samples} (the samples of one turn)")
+    return np.floor(np.arange(frames) * samples / frames + 1e-9).astype(int)
+
+
+def rotate(x, y, theta_rad):
+    """(x, y) turned counter-clockwise by theta (rad): cam coordinates -> fixed coordinates."""
+    c, s = np.cos(theta_rad), np.sin(theta_rad)
+    return x * c - y * s, x * s + y * c
+
+
+def _turn(m: Mechanism) -> float:
+    """+1 for a counter-clockwise cam, -1 for a clockwise one (the sign of its rotation)."""
+    if m.rotation not in ("ccw", "cw"):
+        raise ValueError(f"rotation: '{m.rotation}' is not allowed; use ccw or cw")
+    return 1.0 if m.rotation == "ccw" else -1.0
+
+
+def frame_poses(m: Mechanism, frames: int) -> FramePoses:
+    """Follower, contact point and pressure angle at ``frames`` evenly spread cam angles."""
+    if m.follower_type not in FOLLOWER_TYPES:
+        raise ValueError(f"follower_type: '{m.follower_type}' is not drawn; allowed: "
+                         f"{', '.join(FOLLOWER_TYPES)}")
+    check_drawable(m)
+    k = frame_indices(len(m.theta_deg), frames)
+    th = np.deg2rad(np.asarray(m.theta_deg)[k])
+    cx, cy = rotate(np.asarray(m.profile_x_mm)[k], np.asarray(m.profile_y_mm)[k], _turn(m) * th)
+    s = np.asarray(m.s_mm)[k]
+    if m.follower_type == "flat":
+        fx, fy = np.zeros_like(s), m.base_radius_mm + s  # the face's centre, on the axis
+    else:
+        rp = m.base_radius_mm + m.roller_radius_mm  # prime circle; the pitch point is at (e, d + s)
+        fx = np.full_like(s, m.offset_mm)
+        fy = np.sqrt(max(rp**2 - m.offset_mm**2, 0.0)) + s
+    phi = np.zeros_like(s) if m.pressure_angle_deg is None else np.asarray(m.pressure_angle_deg)[k]
+    return FramePoses(k, np.rad2deg(th), fx, fy, cx, cy, phi)
+
+
+class MotionFrames(NamedTuple):
+    """A figure and the function that poses it at frame i (0..F-1)."""
+
+    figure: object  # matplotlib Figure
+    update: object  # i -> tuple of the moved artists
+    poses: FramePoses
+    artists: dict  # "cam", "follower", "contact", "normal", "label", "marker"; "moving": all that move
+
+
+def motion_frames(m: Mechanism, frames: int = 72) -> MotionFrames:
+    """The mechanism's figure and an ``update(i)`` that draws frame i (theta of poses.index[i]).
+
+    The cam turns counter-clockwise; the small s(theta) panel marks where in the cycle the frame
+    is. ``artists`` lets a caller (or a test) read back what frame i shows.
+    """
+    from matplotlib.figure import Figure
+    from matplotlib.patches import Circle, FancyArrowPatch
+
+    poses = frame_poses(m, frames)
+    x, y = np.asarray(m.profile_x_mm), np.asarray(m.profile_y_mm)
+    r_max = float(np.max(np.hypot(x, y)))
+    s = np.asarray(m.s_mm)
+    flat = m.follower_type == "flat"
+    half = 0.5 * (m.face_width_mm if flat else 2.0 * m.roller_radius_mm)
+    stem = 0.5 * r_max + (0.0 if flat else m.roller_radius_mm)
+    top = float(np.max(poses.follower_y_mm)) + stem
+    reach = max(r_max, abs(m.offset_mm) + half) * 1.08
+
+    fig = Figure(figsize=(7.2, 5.0), layout="constrained")
+    grid = fig.add_gridspec(2, 2, width_ratios=[1.5, 1.0], height_ratios=[1.3, 1.0])
+    ax = fig.add_subplot(grid[:, 0])
+    ax_s = fig.add_subplot(grid[0, 1])
+    ax_key = fig.add_subplot(grid[1, 1])  # holds the legend
+    ax_key.set_axis_off()
+    ax.set_aspect("equal")
+    ax.set_xlim(-reach, reach)
+    ax.set_ylim(-r_max * 1.08, top + 0.05 * r_max)
+    ax.set_xlabel("x (mm)")
+    ax.set_ylabel("y (mm)")
+    ax.grid(True, alpha=0.25)
+    ax.plot([0.0], [0.0], "+", color="k", markersize=8)
+    # guide of the follower stem: two fixed bars beside it
+    gx = (m.offset_mm if not flat else 0.0) + np.array([-1.0, 1.0]) * 0.12 * r_max
+    gy = top - 0.35 * stem
+    for xg in gx:
+        ax.plot([xg, xg], [gy, top], color="0.35", linewidth=2.5)
+    cam_fill = ax.fill(x, y, color="C0", alpha=0.18, label="cam")[0]
+    (cam_line,) = ax.plot(x, y, color="C0", linewidth=1.4)
+    bad = np.zeros(len(x), bool) if m.bad is None else np.asarray(m.bad, bool)
+    (bad_line,) = ax.plot([], [], color="C3", linewidth=2.2, label="outline breaking a constraint")
+    (key,) = ax.plot([0.0, 0.0], [0.0, 0.6 * m.base_radius_mm], color="C0", linewidth=2.0)
+    # direction of rotation: an arc arrow below the centre, left to right for counter-clockwise
+    turn = _turn(m)
+    ax.add_patch(FancyArrowPatch((-0.35 * turn * m.base_radius_mm, -0.2 * m.base_radius_mm),
+                                 (0.35 * turn * m.base_radius_mm, -0.2 * m.base_radius_mm),
+                                 connectionstyle=f"arc3,rad={0.8 * turn}", arrowstyle="-|>",
+                                 mutation_scale=12, color="0.25", linewidth=1.2))
+    ax.text(0.0, -0.62 * m.base_radius_mm, "ω", ha="center", va="center", fontsize=9, color="0.25")
+    (stem_line,) = ax.plot([], [], color="C1", linewidth=2.0)
+    if flat:
+        (follower,) = ax.plot([], [], color="C1", linewidth=4.0, solid_capstyle="butt",
+                              label=f"flat face, L = {m.face_width_mm:.2f} mm")
+        roller = None
+    else:
+        roller = Circle((0.0, 0.0), m.roller_radius_mm, fill=False, color="C1", linewidth=2.0,
+                        label=f"roller, R_f = {m.roller_radius_mm:g} mm")
+        ax.add_patch(roller)
+        (follower,) = ax.plot([], [], "o", color="C1", markersize=3)  # roller centre
+    (contact,) = ax.plot([], [], "o", color="C3", markersize=5, label="contact point")
+    (normal,) = ax.plot([], [], color="C3", linewidth=1.0, linestyle="--",
+                        label="contact normal (force line)")
+    label = ax.text(0.02, 0.02, "", transform=ax.transAxes, va="bottom", fontsize=8,
+                    bbox={"boxstyle": "round", "fc": "white", "ec": "0.7", "alpha": 0.9})
+    handles, names = ax.get_legend_handles_labels()
+    keep = [(h, n) for h, n in zip(handles, names, strict=True) if n != bad_line.get_label() or bad.any()]
+    if m.violation:  # above the s panel, where it covers nothing that moves
+        ax_s.set_title(textwrap.fill(m.violation, 44), fontsize=8, color="C3", loc="left")
+    fig.suptitle(m.title or "Cam mechanism", fontsize=9)
+
+    t = np.asarray(m.theta_deg)
+    ax_s.plot(np.append(t, 360.0), np.append(s, s[0]), color="C1", linewidth=1.2)
+    (marker,) = ax_s.plot([], [], "o", color="C3", markersize=5)
+    ax_s.set_xlim(0.0, 360.0)
+    ax_s.set_xticks(np.arange(0, 361, 90))
+    ax_s.set_xlabel("cam angle θ (deg)")
+    ax_s.set_ylabel("follower displacement s (mm)")
+    ax_s.grid(True, alpha=0.3)
+    ax_key.legend(*zip(*keep, strict=True), fontsize=7, loc="center")
+
+    def update(i):
+        th = turn * np.deg2rad(poses.theta_deg[i])
+        xr, yr = rotate(x, y, th)
+        cam_line.set_data(xr, yr)
+        cam_fill.set_xy(np.column_stack([xr, yr]))
+        bad_line.set_data(np.where(bad, xr, np.nan), np.where(bad, yr, np.nan))
+        key.set_data(*rotate(np.array([0.0, 0.0]), np.array([0.0, 0.6 * m.base_radius_mm]), th))
+        fx, fy = poses.follower_x_mm[i], poses.follower_y_mm[i]
+        if flat:
+            follower.set_data([fx - half, fx + half], [fy, fy])
+        else:
+            roller.center = (fx, fy)
+            follower.set_data([fx], [fy])
+        stem_line.set_data([fx, fx], [fy, fy + stem])
+        cx, cy = poses.contact_x_mm[i], poses.contact_y_mm[i]
+        contact.set_data([cx], [cy])
+        phi = poses.pressure_angle_deg[i]
+        # the force line: from the contact point along the common normal, at phi from the
+        # follower axis; for a roller it runs through the roller's centre, (-sin phi, cos phi)
+        # with phi = atan((s' - e) / (d + s)) of camjax.geometry
+        length = 0.45 * r_max
+        normal.set_data([cx, cx - length * np.sin(np.deg2rad(phi))],
+                        [cy, cy + length * np.cos(np.deg2rad(phi))])
+        label.set_text(f"θ = {poses.theta_deg[i]:5.1f}°\ns = {s[poses.index[i]]:6.3f} mm\n"
+                       f"pressure angle φ = {phi:5.1f}°")
+        marker.set_data([poses.theta_deg[i]], [s[poses.index[i]]])
+        return cam_line, cam_fill, bad_line, key, follower, stem_line, contact, normal, label, marker
+
+    update(0)
+    artists = {"cam": cam_line, "follower": roller if roller is not None else follower,
+               "contact": contact, "normal": normal, "label": label, "marker": marker,
+               "moving": [cam_fill, cam_line, bad_line, key, stem_line, follower, contact, normal,
+                          label, marker] + ([roller] if roller is not None else [])}
+    return MotionFrames(fig, update, poses, artists)
+
+
+def motion_animation(m: Mechanism, frames: int = 72, interval_ms: int = 60):
+    """A matplotlib ``FuncAnimation`` of one turn (for notebooks and interactive backends)."""
+    from matplotlib.animation import FuncAnimation
+
+    mf = motion_frames(m, frames)
+    return FuncAnimation(mf.figure, mf.update, frames=len(mf.poses.index), interval=interval_ms)
+
+
+def _blitting_pillow_writer(moving, fps: int):
+    """A PillowWriter that draws the still parts once and only the ``moving`` artists per frame.
+
+    The stock writer redraws the whole figure for every frame (~0.2 s each with ticks, grid and
+    the s panel on a busy 2-core machine); restoring a saved background and drawing the handful
+    of moving artists costs a few ms. Frames are stored as 64-colour palette images.
+    """
+    from matplotlib.animation import PillowWriter
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from PIL import Image
+
+    class BlittingPillowWriter(PillowWriter):
+        def setup(self, fig, outfile, dpi=None):
+            super().setup(fig, outfile, dpi=dpi)
+            fig.set_dpi(self.dpi)
+            self._canvas = FigureCanvasAgg(fig)
+            for artist in moving:
+                artist.set_animated(True)  # left out of canvas.draw: the background
+            self._canvas.draw()
+            fig.set_layout_engine("none")  # keep the layout of that draw for every frame
+            self._background = self._canvas.copy_from_bbox(fig.bbox)
+
+        def grab_frame(self, **savefig_kwargs):
+            self._canvas.restore_region(self._background)
+            for artist in moving:
+                self.fig.draw_artist(artist)
+            w, h = self._canvas.get_width_height()
+            rgb = Image.frombuffer("RGBA", (w, h), self._canvas.buffer_rgba(), "raw", "RGBA", 0,
+                                   1).convert("RGB")
+            # one palette for every frame, taken from the first (it holds every colour drawn):
+            # no flicker between frames, and mapping to it is ~30x faster than a fresh quantize
+            if not self._frames:
+                self._palette = rgb.quantize(colors=64, method=Image.Quantize.FASTOCTREE)
+            self._frames.append(rgb.quantize(palette=self._palette, dither=Image.Dither.NONE))
+
+    return BlittingPillowWriter(fps=fps)
+
+
+def write_motion_gif(path: str | Path, m: Mechanism, frames: int = 72, fps: int = 18,
+                     dpi: int = 72) -> Path:
+    """motion.gif of one turn (matplotlib's Pillow writer, loops forever); returns the path."""
+    mf = motion_frames(m, frames)
+    path = Path(path)
+    writer = _blitting_pillow_writer(mf.artists["moving"], fps)
+    with writer.saving(mf.figure, path, dpi):
+        for i in range(len(mf.poses.index)):
+            mf.update(i)
+            writer.grab_frame()
+    return path
+
+
+def mechanism_from_curves(curves, title: str = "", violation: str | None = None,
+                          bad=None) -> Mechanism:
+    """The :class:`Mechanism` of a design's :class:`camjax.evaluate.DesignCurves`."""
+    return Mechanism(
+        np.asarray(curves.theta_deg), np.asarray(curves.profile_x_mm), np.asarray(curves.profile_y_mm),
+        np.asarray(curves.s_mm), curves.follower_type, float(curves.base_radius_mm),
+        curves.face_width_mm, curves.roller_radius_mm, float(curves.offset_mm or 0.0),
+        None if curves.pressure_angle_deg is None else np.asarray(curves.pressure_angle_deg),
+        title, violation, bad, curves.rotation,
+    )
+
+
+def violation_samples(curves) -> np.ndarray:
+    """(N,) booleans: the samples where the outline breaks a constraint, to be drawn red.
+
+    The outline checks of :func:`camjax.pipeline.geometry_violations`, per sample: flat face
+    ρ < 0 (the outline crosses itself); roller undercut (margin < 0) and |pressure angle| over its
+    limit. Within the solvers' tolerances nothing is marked (an optimum sits on its limits).
+    """
+    bad = np.zeros(np.shape(curves.theta_deg), bool)
+    if curves.rho_mm is not None:
+        bad |= np.asarray(curves.rho_mm) < -LENGTH_TOL_MM
+    if curves.undercut_margin_mm is not None:
+        bad |= np.asarray(curves.undercut_margin_mm) < -LENGTH_TOL_MM
+    limit = curves.pressure_angle_limit_deg
+    if curves.pressure_angle_deg is not None and limit is not None:
+        bad |= np.abs(np.asarray(curves.pressure_angle_deg)) > limit * (1.0 + ANGLE_RTOL)
+    return bad

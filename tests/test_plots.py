@@ -1,0 +1,95 @@
+"""Design figures: closed cycles, the title block, the stress scale and margin, load parts."""
+
+import numpy as np
+import pytest
+from reference import reference_motion
+
+from camjax import pipeline
+from camjax.output import plots
+
+
+@pytest.fixture(scope="module")
+def default_run(default_scene, default_arrays):
+    return pipeline.analyse(default_scene, default_arrays)
+
+
+@pytest.fixture(scope="module")
+def figures(default_run):
+    return plots.design_figures(default_run.curves, plots.title_block(default_run.data))
+
+
+def _curves(ax):
+    return [ln for ln in ax.get_lines() if len(ln.get_xdata()) > 10]
+
+
+def test_every_cycle_is_closed_at_360(figures):
+    for name in ("svaj.png", "loads.png", "stress.png"):
+        for ax in figures[name].axes:
+            for line in _curves(ax):
+                x, y = np.asarray(line.get_xdata()), np.asarray(line.get_ydata())
+                assert x[0] == 0.0 and x[-1] == 360.0, name
+                assert y[-1] == y[0] or (np.isnan(y[-1]) and np.isnan(y[0])), name
+
+
+def test_svaj_displacement_is_the_reference_motion(figures):
+    line = _curves(figures["svaj.png"].axes[0])[0]
+    x, y = np.asarray(line.get_xdata()), np.asarray(line.get_ydata())
+    s, _, _ = reference_motion(x)  # closed-form cycloids; 360 deg wraps to 0
+    np.testing.assert_allclose(y, s, atol=1e-12)
+
+
+def test_title_block_names_the_run(figures, default_run):
+    text = plots.title_block(default_run.data)
+    lines = text.splitlines()
+    assert len(lines) == 3
+    assert "scene default" in lines[0] and "240 rpm" in lines[0] and "counter-clockwise" in lines[0]
+    assert lines[1] == "dwell 100° · rise 80° cycloidal 5 mm · dwell 120° · return 60° cycloidal 5 mm"
+    rb = default_run.data["design"]["base_radius_mm"]
+    assert f"R_b = {rb:.3f} mm" in lines[2] and "feasible" in lines[2]
+    for fig in figures.values():
+        assert text in fig._suptitle.get_text()
+
+
+def test_stress_axis_follows_the_data_and_states_the_margin(figures, default_run):
+    ax = figures["stress.png"].axes[0]
+    curves = default_run.curves
+    peak, smax = float(np.max(curves.stress_MPa)), curves.sigma_max_MPa
+    low, high = ax.get_ylim()
+    # the reference design peaks at ~162 MPa against sigma_max = 1230: the axis stays near the data
+    assert low <= float(np.min(curves.stress_MPa)) and peak < high < 0.5 * smax
+    texts = " ".join(t.get_text() for t in ax.texts)
+    assert f"margin {smax - peak:.4g} MPa" in texts and f"{peak / smax:.0%} of σ_max" in texts
+
+
+def test_loads_parts_add_up_to_the_drawn_total(figures):
+    ax = figures["loads.png"].axes[0]
+    by_label = {ln.get_label(): np.asarray(ln.get_ydata()) for ln in _curves(ax)}
+    parts = [by_label[k] for k in ("inertia", "spring", "damping", "gravity")]
+    # 1e-9 N: float64 rounding of a ~60 N sum
+    np.testing.assert_allclose(sum(parts), by_label["total contact force F"], atol=1e-9)
+    assert any("contact margin: min F" in t.get_text() for t in ax.texts)
+
+
+def test_profile_marks_angles_dimensions_and_smallest_rho(figures, default_run):
+    fig = figures["profile.png"]
+    ax = fig.axes[0]
+    texts = [t.get_text() for t in ax.texts]
+    assert [f"{d}°" for d in range(0, 360, 30)] == [t for t in texts if t.endswith("°") and t[:-1].isdigit()]
+    assert any(t.startswith("lift h = 5 mm") for t in texts)
+    r_max = float(np.max(np.hypot(default_run.curves.profile_x_mm, default_run.curves.profile_y_mm)))
+    assert any(t.startswith(f"R_max = {r_max:.3f} mm") for t in texts)
+    legend = [t.get_text() for t in fig.legends[0].get_texts()]
+    rho = default_run.curves.rho_mm
+    assert any(t.startswith("flat-face follower") for t in legend)
+    assert f"smallest ρ = {rho.min():.3g} mm at θ = {default_run.curves.theta_deg[np.argmin(rho)]:g}°" in legend
+
+
+def test_infeasible_design_draws_without_valid_stress_where_rho_is_negative(default_scene, default_arrays):
+    run = pipeline.analyse(default_scene, default_arrays, base_radius_mm=10.0)
+    figs = plots.design_figures(run.curves, plots.title_block(run.data))
+    ax = figs["stress.png"].axes[0]
+    y = np.asarray(_curves(ax)[0].get_ydata())[:-1]
+    np.testing.assert_array_equal(np.isnan(y), run.curves.rho_mm <= 0)
+    assert any("EXCEEDED" in t.get_text() for t in ax.texts)
+    legend = [t.get_text() for t in figs["profile.png"].legends[0].get_texts()]
+    assert "ρ < 0: the face cannot follow the outline" in legend
