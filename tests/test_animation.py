@@ -158,6 +158,7 @@ def test_clockwise_cam_is_the_mirror_image(roller_mechanism):
         frame_poses(m._replace(rotation="left"), 4)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("rotation", ["ccw", "cw"])
 def test_builtin_roller_touches_its_roller_for_either_rotation(rotation):
     import dataclasses

@@ -95,6 +95,7 @@ def test_per_angle_problems_have_one_angle_each(roller_problem):
                                [v[17] for v in full], rtol=1e-15)
 
 
+@pytest.mark.slow
 def test_solver_coordinates_invert_and_cover_the_box(roller_problem):
     from camjax.solvers.gradient import from_unit, to_unit
 
