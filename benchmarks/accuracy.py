@@ -40,7 +40,7 @@ def design_figures(program, design, scene, samples: int, dtype) -> dict:
     """Scene -> the four figures on an N-sample grid (traceable; ``scene`` and N are static)."""
     sc = _with_program(scene, program)
     arrays = evaluate.scene_arrays(sc, samples=samples, dtype=dtype)
-    problem = P.problem_from_scene(sc, arrays)
+    problem = P.problem_from_scene(sc, arrays, extrema="grid")
     weights = P.weights_of(1.0, 1.0, dtype)
     need = -(problem.q_mm)
     best = P.global_optimum(problem, weights)
@@ -66,7 +66,7 @@ def _errors(values: dict, reference: dict) -> dict:
 
 def reference(scene) -> tuple[dict, P.Design]:
     """Float64, 36 000-sample figures and the reference optimum design."""
-    problem = P.problem_from_scene(scene, samples=REFERENCE_SAMPLES, dtype=jnp.float64)
+    problem = P.problem_from_scene(scene, samples=REFERENCE_SAMPLES, dtype=jnp.float64, extrema="grid")
     best = P.global_optimum(problem, P.weights_of(1.0, 1.0))
     figures = design_figures(scene.motion.program, best, scene, REFERENCE_SAMPLES, jnp.float64)
     return {k: float(v) for k, v in figures.items()}, best
@@ -114,7 +114,7 @@ def _solver_row(knob: str, label: str, t, design, exact_mm: float, ref: dict, de
 
 def solver_trade(scene, ref: dict, quick: bool, repeats: int) -> list[dict]:
     """Gradient iterations and GA population x generations on the default grid (global, alpha=gamma=1)."""
-    problem = P.problem_from_scene(scene, samples=DEFAULT_SAMPLES)
+    problem = P.problem_from_scene(scene, samples=DEFAULT_SAMPLES, extrema="grid")
     weights = P.weights_of(1.0, 1.0)
     exact_mm = float(P.global_optimum(problem, weights).base_radius_mm)
     rows = []

@@ -80,7 +80,7 @@ def agreement(f, problem, weights, designs: P.Design) -> dict:
 
 def run(scene, quick: bool) -> dict:
     """Benchmark 5."""
-    problem = P.problem_from_scene(scene)
+    problem = P.problem_from_scene(scene, extrema="grid")
     weights = P.weights_of(1.0, 1.0)
     one = P.Design(jnp.asarray(30.0), jnp.asarray(20.0))
     population = 10**3 if quick else 10**4

@@ -18,7 +18,7 @@ from camjax.solvers import gradient
 
 def run(scene, quick: bool) -> dict:
     """Benchmark 1 (alpha = gamma = 1, N = 360, float64)."""
-    problem = P.problem_from_scene(scene)
+    problem = P.problem_from_scene(scene, extrema="grid")
     weights = P.weights_of(1.0, 1.0)
     loop = baselines.pointwise_slsqp(problem, 1.0, 1.0)
     # Interleave the two (rounds of: camjax median of 10 calls, one SciPy loop) so that a change

@@ -105,7 +105,7 @@ def measure_samples(scene_obj, weights, sample_sizes, population: int, repeats: 
     rows = []
     fused = blocked(fz.fused_fitness)
     for n in sample_sizes:
-        problem = P.problem_from_scene(scene_obj, samples=n, dtype=dtype)
+        problem = P.problem_from_scene(scene_obj, samples=n, dtype=dtype, extrema="grid")
         w = P.weights_of(float(weights.alpha), float(weights.gamma), dtype)
         designs = fz.random_designs(problem, population)
         t_lib, _ = time_jit(fz.library_fitness, problem, w, designs, repeats=repeats)
@@ -152,7 +152,7 @@ def angle_cliff(
     kernel (:func:`benchmarks.fitness.tiled_fitness`) that avoids the cliff, at ``tiled_n``."""
     out = {"population": population}
     for n in sizes:
-        problem = P.problem_from_scene(scene_obj, samples=n)
+        problem = P.problem_from_scene(scene_obj, samples=n, extrema="grid")
         designs = fz.random_designs(problem, population)
         t, _ = time_jit(fz.library_fitness, problem, weights, designs, repeats=3)
         out[str(n)] = {
@@ -160,7 +160,7 @@ def angle_cliff(
             "thunks": profile_thunks(compile_for(fz.library_fitness, problem, weights, designs), problem,
                                      weights, designs, top=2),
         }
-    problem = P.problem_from_scene(scene_obj, samples=tiled_n)
+    problem = P.problem_from_scene(scene_obj, samples=tiled_n, extrema="grid")
     designs = fz.random_designs(problem, population)
     t_lib, out_lib = time_jit(fz.library_fitness, problem, weights, designs, repeats=3)
     t_tiled, out_tiled = time_jit(fz.tiled_fitness, fz.fused_scene(problem), weights, designs, repeats=3)
@@ -206,7 +206,7 @@ def _exponent(rows, key_x, key_t, x_min) -> float | None:
 
 def run(scene_obj, quick: bool) -> dict:
     """Benchmark 4 and the fitness targets (``fitness.evaluations_per_s``, ``fitness.numpy_ratio``)."""
-    problem = P.problem_from_scene(scene_obj)
+    problem = P.problem_from_scene(scene_obj, extrema="grid")
     weights = P.weights_of(1.0, 1.0)
     pops = [10, 1000, 10**4] if quick else [10, 100, 1000, 10**4, 10**5, 10**6]
     by_pop = measure_population(

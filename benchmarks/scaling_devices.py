@@ -45,7 +45,7 @@ def _device_child(devices: int, solver: str, mode: str, weightings: int, repeats
     from camjax.solvers import ga
     from camjax.solvers.sweep import solve_batch
 
-    problem = problem_from_scene(camjax.load_scene())
+    problem = problem_from_scene(camjax.load_scene(), extrema="grid")
     alpha = jnp.logspace(-2, 2, weightings)
     weights = Weights(alpha, jnp.ones_like(alpha))
     keys = ga.weighting_keys(0, weightings)

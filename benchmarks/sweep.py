@@ -107,7 +107,7 @@ def _camjax(problem, weights: P.Weights, repeats: int) -> dict:
 def run(scene, quick: bool) -> dict:
     """Benchmark 2: 100 weightings (--quick: 20, SciPy on 4 of them, its time extrapolated, said so)."""
     count = 20 if quick else 100
-    problem = P.problem_from_scene(scene)
+    problem = P.problem_from_scene(scene, extrema="grid")
     alpha, gamma = weightings(count)
     weights = P.weights_of(alpha, gamma)
     scan = jax.jit(dense_scan)(problem, weights)

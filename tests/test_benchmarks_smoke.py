@@ -18,7 +18,7 @@ from camjax import problem as P  # noqa: E402
 
 @pytest.mark.slow
 def test_fitness_implementations_agree():
-    problem = P.problem_from_scene(camjax.load_scene(), samples=90)
+    problem = P.problem_from_scene(camjax.load_scene(), samples=90, extrema="grid")
     weights = P.weights_of(1.0, 1.0)
     designs = fz.random_designs(problem, 37)
     lib = fz.library_fitness(problem, weights, designs)

@@ -513,7 +513,7 @@ def optimization_cases(scene: Scene) -> list[Case]:
             "optimization", "GA population 2: result finite", res.objective, res.base_radius_mm, res.violation
         )
     )
-    one = pb.problem_from_scene(scene, samples=1)
+    one = pb.problem_from_scene(scene, samples=1, extrema="grid")
     res = sweep.solve(one, 1.0, 1.0, mode="pointwise")
     ref = pb.pointwise_optimum(one, pb.weights_of(1.0, 1.0))
     out.append(
