@@ -13,6 +13,7 @@ the new run's files, or, on any failure or interruption, exactly what it held be
 
 from __future__ import annotations
 
+import _thread
 import argparse
 import os
 import signal
@@ -561,6 +562,14 @@ def _raise_terminated(signum, frame):
     raise Terminated()
 
 
+def _signal_later(sig: int, delay_s: float = 0.01) -> None:
+    """Send ``sig`` to this process after ``delay_s`` (run in a thread of its own)."""
+    import time
+
+    time.sleep(delay_s)
+    os.kill(os.getpid(), sig)
+
+
 def _install_signal_handlers() -> Callable[[], None]:
     """SIGINT -> KeyboardInterrupt, SIGTERM -> :class:`Terminated`; returns the undo function."""
     import threading
@@ -571,8 +580,25 @@ def _install_signal_handlers() -> Callable[[], None]:
     for sig, handler in ((signal.SIGINT, signal.default_int_handler), (signal.SIGTERM, _raise_terminated)):
         if previous[sig] is not signal.SIG_IGN:  # an ignored signal (nohup, `&`) stays ignored
             signal.signal(sig, handler)
+    previous_hook = sys.unraisablehook
+
+    def redeliver(unraisable):
+        # A signal that lands inside a garbage-collection callback (XLA registers one) raises there,
+        # where Python can only print "Exception ignored" and drop it: send it again, so that the
+        # handler runs at the next safe point and the interrupt is neither lost nor a second line.
+        exc = unraisable.exc_value
+        if isinstance(exc, KeyboardInterrupt):
+            sig = signal.SIGTERM if isinstance(exc, Terminated) else signal.SIGINT
+            # from another thread, a moment later (a signal sent here would run its handler inside
+            # this hook; threading.Thread.start would wait here too, so the low-level start is used)
+            _thread.start_new_thread(_signal_later, (sig,))
+            return
+        previous_hook(unraisable)
+
+    sys.unraisablehook = redeliver
 
     def undo():
+        sys.unraisablehook = previous_hook
         for sig, handler in previous.items():
             signal.signal(sig, handler if handler is not None else signal.SIG_DFL)
 
