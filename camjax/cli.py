@@ -562,12 +562,18 @@ def _raise_terminated(signum, frame):
     raise Terminated()
 
 
+_INTERRUPT_HANDLED = threading.Event()  # set once main() has caught an interrupt
+
+
 def _signal_later(sig: int, delay_s: float = 0.01) -> None:
-    """Send ``sig`` to this process after ``delay_s`` (run in a thread of its own)."""
+    """Send ``sig`` to this process after ``delay_s`` (run in a thread of its own), unless the
+    interrupt has reached ``main`` meanwhile by another path (then a second copy would kill the
+    process after its one-line message)."""
     import time
 
     time.sleep(delay_s)
-    os.kill(os.getpid(), sig)
+    if not _INTERRUPT_HANDLED.is_set():
+        os.kill(os.getpid(), sig)
 
 
 def _install_signal_handlers() -> Callable[[], None]:
@@ -581,6 +587,7 @@ def _install_signal_handlers() -> Callable[[], None]:
         if previous[sig] is not signal.SIG_IGN:  # an ignored signal (nohup, `&`) stays ignored
             signal.signal(sig, handler)
     previous_hook = sys.unraisablehook
+    _INTERRUPT_HANDLED.clear()
 
     def redeliver(unraisable):
         # A signal that lands inside a garbage-collection callback (XLA registers one) raises there,
@@ -598,6 +605,7 @@ def _install_signal_handlers() -> Callable[[], None]:
     sys.unraisablehook = redeliver
 
     def undo():
+        _INTERRUPT_HANDLED.set()  # no re-sent signal after the handlers are gone
         sys.unraisablehook = previous_hook
         for sig, handler in previous.items():
             signal.signal(sig, handler if handler is not None else signal.SIG_DFL)
@@ -628,6 +636,7 @@ def main(argv: list[str] | None = None) -> int:
               "default scene's)", file=sys.stderr)
         return 2
     except KeyboardInterrupt as exc:
+        _INTERRUPT_HANDLED.set()  # a re-sent copy of this signal (see _signal_later) is void now
         code, what = (143, "terminated") if isinstance(exc, Terminated) else (130, "interrupted")
         print(f"{prog}: {what}; the output folder is left as it was", file=sys.stderr)
         if argv is None and runtime.computing():  # a computation cannot be stopped: leave now
