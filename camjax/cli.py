@@ -20,6 +20,7 @@ import signal
 import sys
 import threading
 from collections.abc import Callable
+from contextlib import ExitStack
 from pathlib import Path
 
 import camjax  # noqa: F401  (turns on x64 before any array is made)
@@ -186,9 +187,6 @@ def _setup_design(p: argparse.ArgumentParser):
     add_design_options(p)
 
     def run(args) -> int:
-        from camjax.output.animation import UndrawableGeometry, check_drawable
-        from camjax.output.export import write_design_files
-        from camjax.output.plots import title_block
         from camjax.pipeline import analyse
         from camjax.scene import load_scene
 
@@ -209,7 +207,7 @@ def _setup_design(p: argparse.ArgumentParser):
             raise UsageError(f"--animate: scene {scene.name} has an oscillating follower "
                              f"({scene.follower.type}); the animation draws translating flat-face and "
                              "roller followers (allowed: leave out --animate)")
-        runtime.enable_compilation_cache()
+        runtime.enable_caches()
 
         # a run takes seconds: on a terminal (or with CAMJAX_PROGRESS=1) say what it is doing;
         # piped, stderr keeps its contract of one line on failure
@@ -221,64 +219,90 @@ def _setup_design(p: argparse.ArgumentParser):
                 sys.stderr.flush()
 
         progress("computing")
-        # matplotlib and ezdxf (~0.6 s of imports) load in a second thread while JAX computes
-        preload = threading.Thread(target=_import_drawing_modules, daemon=True)
-        preload.start()
-        result = runtime.interruptible(analyse, scene, base_radius_mm=r)
-        preload.join()
-        try:  # before anything is written: figures and animation need a finite outline
-            check_drawable(result.curves)
-        except UndrawableGeometry as exc:
-            raise UsageError(f"scene {scene.name} at R_b = {result.curves.base_radius_mm:g} mm: "
-                             f"{exc}") from None
-        d = result.data
-        at = d["evaluated_at"]
-        broken = [v["constraint"] for v in at["violations"]]
-        banner = (f"INFEASIBLE GEOMETRY at R_b = {at['base_radius_mm']:.4g} mm: "
-                  f"{', '.join(broken)} violated" if broken else None)
-        with replaced_folder(out) as tmp:
-            write_json(tmp / "result.json", d)
-            written = write_design_files(tmp, result.curves, args.dpi, banner, title_block(d),
-                                         animate=args.animate, progress=progress)
-            names = ["result.json"] + [p.name for p in written]
-        print(f"scene {d['scene']}: min base radius {d['min_base_radius_mm']:.4f} mm at "
-              f"{d['min_base_radius_deg']:g} deg")
-        if "design" in d:
-            g = d["design"]
-            if "face_width_mm" in g:
-                sizes = f"L = {g['face_width_mm']:.4f} mm"
-            elif "arm_length_mm" in g:
-                sizes = (f"R_f = {g['roller_radius_mm']:.4f} mm, pivot {g['pivot_distance_mm']:.4f} mm, "
-                         f"arm {g['arm_length_mm']:.4f} mm, R_p = {g['prime_radius_mm']:.4f} mm")
-            elif "face_offset_mm" in g:
-                sizes = (f"pivot {g['pivot_distance_mm']:.4f} mm, face offset {g['face_offset_mm']:.4f} mm, "
-                         f"face {g['face_length_mm']:.4f} mm")
-            else:
-                sizes = (f"R_f = {g['roller_radius_mm']:.4f} mm, offset {g['offset_mm']:.4f} mm, "
-                         f"R_p = {g['prime_radius_mm']:.4f} mm")
-            print(f"design ({g['solver']}): R_b = {g['base_radius_mm']:.4f} mm, {sizes}, "
-                  f"objective {g['objective']:.5f}, feasible {g['feasible']}")
-        width = f", L = {at['face_width_mm']:.4f} mm" if at.get("face_width_mm") is not None else ""
-        if "roller" in d:
-            roller = d["roller"]
-            width = f", R_f = {roller['roller_radius_mm']:.4f} mm, offset {roller['offset_mm']:.4f} mm"
-        state = f"INFEASIBLE ({', '.join(broken)})" if broken else "feasible"
-        print(f"files drawn at R_b = {at['base_radius_mm']:.4f} mm{width} ({at['source']}): {state}")
-        print(f"wrote {', '.join(names)} to {args.out}")
-        for v in at["violations"]:
-            print(f"camjax design: warning: the geometry written breaks {v['constraint']}: {v['message']}",
-                  file=sys.stderr)
-        return STRICT_EXIT if broken and args.strict else 0
+        with ExitStack() as stack:
+            # the figures' processes import matplotlib while JAX computes; ezdxf (and matplotlib
+            # for an animation or an oscillating follower's figures) loads in a second thread
+            workers = None if scene.follower.oscillating else _figure_workers(stack)
+            preload = threading.Thread(target=_import_drawing_modules, daemon=True,
+                                       args=(workers is None or args.animate,))
+            preload.start()
+            result = runtime.interruptible(analyse, scene, base_radius_mm=r)
+            preload.join()
+            return _write_design(args, out, scene, result, workers, progress)
 
     return run
 
 
-def _import_drawing_modules() -> None:
-    """Import what drawing and the DXF need (run in a thread beside the computation)."""
-    import ezdxf  # noqa: F401
-    import matplotlib.backends.backend_agg  # noqa: F401
+def _figure_workers(stack):
+    """Started :class:`camjax.output.drawing.FigureWorkers` (closed with ``stack``), or None
+    where processes cannot be started (the figures are then drawn in this one)."""
+    from camjax.output.drawing import FigureWorkers
 
-    import camjax.output.plots  # noqa: F401
+    try:
+        return stack.enter_context(FigureWorkers())
+    except OSError:
+        return None
+
+
+def _write_design(args, out, scene, result, workers, progress) -> int:
+    """Check, write and report a computed design run (``camjax design``'s second half)."""
+    from camjax.output.animation import UndrawableGeometry, check_drawable
+    from camjax.output.export import write_design_files
+    from camjax.output.titles import title_block
+
+    try:  # before anything is written: figures and animation need a finite outline
+        check_drawable(result.curves)
+    except UndrawableGeometry as exc:
+        raise UsageError(f"scene {scene.name} at R_b = {result.curves.base_radius_mm:g} mm: "
+                         f"{exc}") from None
+    d = result.data
+    at = d["evaluated_at"]
+    broken = [v["constraint"] for v in at["violations"]]
+    banner = (f"INFEASIBLE GEOMETRY at R_b = {at['base_radius_mm']:.4g} mm: "
+              f"{', '.join(broken)} violated" if broken else None)
+    with replaced_folder(out) as tmp:
+        write_json(tmp / "result.json", d)
+        written = write_design_files(tmp, result.curves, args.dpi, banner, title_block(d),
+                                     animate=args.animate, progress=progress, figure_workers=workers)
+        names = ["result.json"] + [p.name for p in written]
+    print(f"scene {d['scene']}: min base radius {d['min_base_radius_mm']:.4f} mm at "
+          f"{d['min_base_radius_deg']:g} deg")
+    if "design" in d:
+        g = d["design"]
+        if "face_width_mm" in g:
+            sizes = f"L = {g['face_width_mm']:.4f} mm"
+        elif "arm_length_mm" in g:
+            sizes = (f"R_f = {g['roller_radius_mm']:.4f} mm, pivot {g['pivot_distance_mm']:.4f} mm, "
+                     f"arm {g['arm_length_mm']:.4f} mm, R_p = {g['prime_radius_mm']:.4f} mm")
+        elif "face_offset_mm" in g:
+            sizes = (f"pivot {g['pivot_distance_mm']:.4f} mm, face offset {g['face_offset_mm']:.4f} mm, "
+                     f"face {g['face_length_mm']:.4f} mm")
+        else:
+            sizes = (f"R_f = {g['roller_radius_mm']:.4f} mm, offset {g['offset_mm']:.4f} mm, "
+                     f"R_p = {g['prime_radius_mm']:.4f} mm")
+        print(f"design ({g['solver']}): R_b = {g['base_radius_mm']:.4f} mm, {sizes}, "
+              f"objective {g['objective']:.5f}, feasible {g['feasible']}")
+    width = f", L = {at['face_width_mm']:.4f} mm" if at.get("face_width_mm") is not None else ""
+    if "roller" in d:
+        roller = d["roller"]
+        width = f", R_f = {roller['roller_radius_mm']:.4f} mm, offset {roller['offset_mm']:.4f} mm"
+    state = f"INFEASIBLE ({', '.join(broken)})" if broken else "feasible"
+    print(f"files drawn at R_b = {at['base_radius_mm']:.4f} mm{width} ({at['source']}): {state}")
+    print(f"wrote {', '.join(names)} to {args.out}")
+    for v in at["violations"]:
+        print(f"camjax design: warning: the geometry written breaks {v['constraint']}: {v['message']}",
+              file=sys.stderr)
+    return STRICT_EXIT if broken and args.strict else 0
+
+
+def _import_drawing_modules(matplotlib: bool = True) -> None:
+    """Import what the DXF (and drawing here) needs (run in a thread beside the computation)."""
+    import ezdxf  # noqa: F401
+
+    if matplotlib:
+        import matplotlib.backends.backend_agg  # noqa: F401
+
+        import camjax.output.plots  # noqa: F401
 
 
 def add_samples_option(p: argparse.ArgumentParser) -> None:
@@ -391,7 +415,7 @@ def _setup_sweep(p: argparse.ArgumentParser):
         d = apply_design_options(scene, overrides).design
         mode, solver, seed = d.mode, d.solver, d.seed
         scaleout.check(args, UsageError)
-        runtime.enable_compilation_cache()
+        runtime.enable_caches()
         start = time.perf_counter()
         if scaleout.requested(args):  # blocks on a backend, stored in --out as they finish
             import jax
@@ -488,7 +512,7 @@ def _setup_dynamics(p: argparse.ArgumentParser):
         if scene.dynamics is None:
             raise UsageError(f"scene '{scene.name}' has no [dynamics] section: nothing to compute "
                              "(allowed: a scene with [dynamics], e.g. thesis-bench)")
-        runtime.enable_compilation_cache()
+        runtime.enable_caches()
 
         def progress(line: str) -> None:  # one write per line: two threads report
             sys.stderr.write(f"camjax dynamics: {line}\n")

@@ -17,7 +17,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from camjax import contact, geometry, loads, program
+from camjax import contact, geometry, loads, program, runtime
 from camjax import extrema as extrema_mod
 from camjax.contact import Material
 from camjax.loads import FollowerTrain, Guide
@@ -331,7 +331,7 @@ def curve_names(scene: Scene, arrays: SceneArrays, with_stress: bool = True) -> 
     return tuple(names)
 
 
-@partial(jax.jit, static_argnames=("names",))
+@runtime.program_cache(static_argnames=("names",))
 def _refined_extremes(model: SceneModel, consts: CurveConstants, grid: jax.Array, base_radius_mm,
                       names: tuple[str, ...]):
     """Max and min of every named curve, refined off the grid ``grid`` (Q, N), in one program.

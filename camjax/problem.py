@@ -42,6 +42,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from camjax import runtime
 from camjax.contact import stress_from_coefficient
 from camjax.extrema import ITERATIONS
 from camjax.numerics import RHO_FLOOR_MM, finite_float, max_over_angles, positive_part, safe_divide, safe_sqrt
@@ -184,7 +185,7 @@ def _problem_curves(p, sigma_max_MPa) -> jax.Array:
     return jnp.stack([-q, (p.stress_coefficient / sigma_max_MPa) ** 2 - q, p.kin.ds])
 
 
-@jax.jit
+@runtime.program_cache
 def _exact_maxima(model, sigma_max_MPa, grid):
     """max -q, max stress need, max s', max -s' refined off the grid (3, N): Extremum of shape (4,)."""
     from camjax import extrema

@@ -19,7 +19,8 @@ def pytest_configure(config):
 
 
 def _persistent_compilation_cache(config) -> None:
-    """Keep compiled kernels between test runs, in .pytest_cache/d/jax-compilation.
+    """Keep compiled kernels between test runs, in .pytest_cache/d/jax-compilation (and the CLI's
+    saved programs in .pytest_cache/d/jax-programs).
 
     XLA compiles are most of the suite's time; with them cached, a repeated quick loop
     (``-m "not slow"``) runs far faster. Turned on here, before any test, so a session does not
@@ -29,9 +30,12 @@ def _persistent_compilation_cache(config) -> None:
     cache = getattr(config, "cache", None)
     if os.environ.get("CAMJAX_COMPILATION_CACHE") == "0" or cache is None:
         os.environ["CAMJAX_COMPILATION_CACHE"] = "0"
+        os.environ.setdefault("CAMJAX_PROGRAM_CACHE", "0")
         return
     if not jax.config.jax_compilation_cache_dir:  # one set through JAX itself wins
         use_compilation_cache(cache.mkdir("jax-compilation"))
+    # the CLI tests' saved programs (camjax.runtime.program_cache) stay out of the user's home too
+    os.environ.setdefault("CAMJAX_PROGRAM_CACHE", str(cache.mkdir("jax-programs")))
 
 
 @pytest.fixture(scope="session")

@@ -5,7 +5,7 @@ import pytest
 from reference import reference_motion
 
 from camjax import pipeline
-from camjax.output import plots
+from camjax.output import plots, titles
 
 
 @pytest.fixture(scope="module")
@@ -15,7 +15,7 @@ def default_run(default_scene, default_arrays):
 
 @pytest.fixture(scope="module")
 def figures(default_run):
-    return plots.design_figures(default_run.curves, plots.title_block(default_run.data))
+    return plots.design_figures(default_run.curves, titles.title_block(default_run.data))
 
 
 def _curves(ax):
@@ -39,7 +39,7 @@ def test_svaj_displacement_is_the_reference_motion(figures):
 
 
 def test_title_block_names_the_run(figures, default_run):
-    text = plots.title_block(default_run.data)
+    text = titles.title_block(default_run.data)
     lines = text.splitlines()
     assert len(lines) == 3
     assert "scene default" in lines[0] and "240 rpm" in lines[0] and "counter-clockwise" in lines[0]
@@ -86,7 +86,7 @@ def test_profile_marks_angles_dimensions_and_smallest_rho(figures, default_run):
 
 def test_infeasible_design_draws_without_valid_stress_where_rho_is_negative(default_scene, default_arrays):
     run = pipeline.analyse(default_scene, default_arrays, base_radius_mm=10.0)
-    figs = plots.design_figures(run.curves, plots.title_block(run.data))
+    figs = plots.design_figures(run.curves, titles.title_block(run.data))
     ax = figs["stress.png"].axes[0]
     y = np.asarray(_curves(ax)[0].get_ydata())[:-1]
     np.testing.assert_array_equal(np.isnan(y), run.curves.rho_mm <= 0)

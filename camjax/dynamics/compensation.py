@@ -6,12 +6,12 @@ Units as in :mod:`camjax.dynamics.plant`; cam speed Omega in rad/s.
 
 from __future__ import annotations
 
-from functools import partial
 from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
 
+from camjax import runtime
 from camjax.dynamics.harmonics import (
     TWO_PI,
     CamHarmonics,
@@ -46,7 +46,7 @@ def compensate_time(values: CamValues, plant: Plant, cam_speed_rad_s) -> jax.Arr
             + plant.inertia / plant.stiffness * w**2 * values.d2f)
 
 
-@jax.jit
+@runtime.program_cache
 def robustness_grid(cam: CamHarmonics, target: CamHarmonics, plant: Plant, cam_speed_rad_s,
                     damping_factors: jax.Array, speed_factors: jax.Array, wn_factors: jax.Array,
                     phi: jax.Array) -> jax.Array:
@@ -75,7 +75,7 @@ class NonlinearCompensation(NamedTuple):
     fit_rms: jax.Array  # RMS of f_nl(theta1(t_k)) - theta2bar(t_k), motion units
 
 
-@partial(jax.jit, static_argnames=("n_harmonics", "n_cycles", "steps_per_cycle"))
+@runtime.program_cache(static_argnames=("n_harmonics", "n_cycles", "steps_per_cycle"))
 def compensate_nonlinear(cam: CamHarmonics, drive: Drive, plant: Plant, cam_speed_rad_s,
                          n_harmonics: int, n_cycles: int, steps_per_cycle: int = 720
                          ) -> NonlinearCompensation:

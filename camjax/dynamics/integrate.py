@@ -15,6 +15,7 @@ from typing import NamedTuple
 import jax
 import jax.numpy as jnp
 
+from camjax import runtime
 from camjax.dynamics.harmonics import TWO_PI, CamHarmonics, cam_grid, evaluate_cam
 from camjax.dynamics.plant import Plant, damping_ratio, natural_frequency_rad_s
 
@@ -190,7 +191,7 @@ def _drive_rhs(cam, drive, plant, omega):
     return rhs
 
 
-@partial(jax.jit, static_argnames=("n_cycles", "steps_per_cycle"))
+@runtime.program_cache(static_argnames=("n_cycles", "steps_per_cycle"))
 def simulate_drive(cam: CamHarmonics, drive: Drive, plant: Plant, cam_speed_rad_s,
                    n_cycles: int, steps_per_cycle: int = 720) -> DriveResponse:
     """RK4 of the full model (SPEC 6, drive flexibility) from theta1 = Omega t, rest load.

@@ -6,12 +6,12 @@ Forces in N (translating follower) or torques in N m (oscillating); speeds in ra
 
 from __future__ import annotations
 
-from functools import partial
 from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
 
+from camjax import runtime
 from camjax.dynamics.harmonics import CamHarmonics, evaluate_cam
 from camjax.dynamics.plant import Plant, natural_frequency_rad_s, steady_state
 
@@ -55,7 +55,7 @@ class JumpSpeed(NamedTuple):
     found: jax.Array  # bool
 
 
-@partial(jax.jit, static_argnames=("n_grid", "n_bisect"))
+@runtime.program_cache(static_argnames=("n_grid", "n_bisect"))
 def jump_speed(cam: CamHarmonics, plant: Plant, closure: ForceClosure, phi: jax.Array,
                speed_low_rad_s, speed_high_rad_s, n_grid: int = 256, n_bisect: int = 60) -> JumpSpeed:
     """Lowest speed in [low, high] where min_phi F = 0 (contact just lost).

@@ -5,13 +5,13 @@ steady-state dynamics.
 
 from __future__ import annotations
 
-from functools import partial
 from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
 import optax
 
+from camjax import runtime
 from camjax.dynamics.harmonics import CamHarmonics, evaluate_cam, mean_square
 from camjax.dynamics.plant import Plant, tracking_error_harmonics
 
@@ -32,7 +32,7 @@ def band_tracking_ms(cam: CamHarmonics, plant: Plant, speeds_rad_s: jax.Array) -
         speeds_rad_s))
 
 
-@partial(jax.jit, static_argnames=("steps",))
+@runtime.program_cache(static_argnames=("steps",))
 def shape_law(cam0: CamHarmonics, plant: Plant, speeds_rad_s: jax.Array, constraint_phi: jax.Array,
               constraint_values: jax.Array, scale, steps: int = 200,
               penalty: float = 1e4) -> ShapingResult:

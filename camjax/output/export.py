@@ -93,7 +93,7 @@ def write_figures(folder: Path, curves: DesignCurves, dpi: int = 100, banner: st
     """PNG of every figure the scene declares (see :func:`camjax.output.plots.design_figures`).
 
     ``banner``: text of a red banner stamped on every figure (the constraints the geometry breaks);
-    ``title``: the run's title block (:func:`camjax.output.plots.title_block`).
+    ``title``: the run's title block (:func:`camjax.output.titles.title_block`).
     """
     from camjax.output.plots import design_figures, stamp_banner  # matplotlib only when drawing
 
@@ -117,11 +117,15 @@ def write_animation(path: Path, curves: DesignCurves, title: str = "", banner: s
 
 def write_design_files(folder: str | Path, curves: DesignCurves, dpi: int = 100,
                        banner: str | None = None, title: str = "", animate: bool = False,
-                       progress=None) -> list[Path]:
+                       progress=None, figure_workers=None) -> list[Path]:
     """Figures, profile.csv and profile.dxf (and motion.gif when ``animate``) into ``folder``
     (created if needed); the written paths. ``banner`` and ``title`` as in :func:`write_figures`;
     ``progress(phase)`` (optional) is told "figures", "files" and "animation" as each starts. An
-    oscillating follower's files come from :mod:`camjax.output.rocker` (no animation yet)."""
+    oscillating follower's files come from :mod:`camjax.output.rocker` (no animation yet).
+
+    ``figure_workers``: a started :class:`camjax.output.drawing.FigureWorkers` draws the figures
+    in its processes while this one writes the profile files (the same figures as without it).
+    """
     from camjax.rocker import RockerCurves
 
     if isinstance(curves, RockerCurves):  # an oscillating follower's files
@@ -132,10 +136,16 @@ def write_design_files(folder: str | Path, curves: DesignCurves, dpi: int = 100,
     folder.mkdir(parents=True, exist_ok=True)
     say = progress or (lambda phase: None)
     say("figures")
-    paths = write_figures(folder, curves, dpi, banner, title)
+    if figure_workers is not None:
+        figure_workers.draw(folder, curves, dpi, banner, title)
+    else:
+        paths = write_figures(folder, curves, dpi, banner, title)
     say("files")
-    paths += [write_profile_csv(folder / "profile.csv", curves),
-              write_profile_dxf(folder / "profile.dxf", curves)]
+    files = [write_profile_csv(folder / "profile.csv", curves),
+             write_profile_dxf(folder / "profile.dxf", curves)]
+    if figure_workers is not None:
+        paths = figure_workers.wait()
+    paths += files
     if animate:
         say("animation")
         paths.append(write_animation(folder / "motion.gif", curves, title, banner))

@@ -5,55 +5,30 @@ built without pyplot (no global state, no GUI backend: ``Figure.savefig`` render
 that plotting is safe in scripts, tests and threads. Saving is the caller's job (``export.py``).
 Angles are in degrees on every horizontal axis; the vertical dotted lines mark segment joints.
 Every cycle is drawn closed, 0 to 360 deg inclusive: the value at 360 deg is the one at 0 (the
-motion is periodic). A ``title`` (see :func:`title_block`) names the run on every figure, so
-printouts of two runs can be told apart.
+motion is periodic). A ``title`` (see :func:`camjax.output.titles.title_block`) names the run on
+every figure, so printouts of two runs can be told apart. The module imports NumPy and matplotlib
+only (not JAX), so that :mod:`camjax.output.drawing` can draw in processes of their own.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable
+from typing import TYPE_CHECKING
 
 import numpy as np
 from matplotlib.figure import Figure
 
-from camjax.evaluate import DesignCurves
+from camjax.output.titles import TURNS
+
+if TYPE_CHECKING:  # imported without JAX: figures are drawn in worker processes (camjax.output.drawing)
+    from camjax.evaluate import DesignCurves
 
 _JOINT_STYLE = {"color": "0.6", "linestyle": ":", "linewidth": 0.8}
 _SIZE = (7.0, 6.4)
 _TITLE_FONT = 7.5
-TURNS = {"ccw": "counter-clockwise", "cw": "clockwise"}  # scene motion.rotation -> words
 
 
 # ---------------------------------------------------------------------------- helpers
-
-
-def title_block(data: Mapping) -> str:
-    """Three lines naming a run, from a design report's dict: scene, speed, rotation and follower;
-    the segments' laws and lifts; the radii the figures are drawn at."""
-    segments = []
-    for seg in data.get("segments", []):
-        text = f"{seg['kind']} {seg['angle_deg']:g}°"
-        if seg.get("law"):
-            lift = f"{seg['lift_deg']:g}°" if "lift_deg" in seg else f"{seg.get('lift_mm', 0.0):g} mm"
-            text += f" {seg['law']} {lift}"
-        segments.append(text)
-    head = (f"scene {data.get('scene', '?')} · {data.get('cam_speed_rpm', float('nan')):g} rpm, "
-            f"cam turns {TURNS.get(data.get('rotation', 'ccw'), '?')} · "
-            f"{data.get('follower_type', '?')} follower")
-    at = data.get("evaluated_at", {})
-    radii = []
-    if "base_radius_mm" in at:
-        radii.append(f"R_b = {at['base_radius_mm']:.3f} mm")
-    if at.get("face_width_mm") is not None:
-        radii.append(f"L = {at['face_width_mm']:.3f} mm")
-    roller = data.get("roller")
-    if roller:
-        radii.append(f"R_f = {roller['roller_radius_mm']:g} mm, e = {roller['offset_mm']:g} mm")
-    design = data.get("design")
-    tail = f" ({at['source']})" if "source" in at else ""
-    if design is not None and at.get("source") == "design":
-        tail = f" (design: {design['solver']}, {'feasible' if design['feasible'] else 'INFEASIBLE'})"
-    return "\n".join([head, " · ".join(segments), ", ".join(radii) + tail])
 
 
 def closed(theta_deg, values):
@@ -400,14 +375,20 @@ def stamp_banner(fig: Figure, text: str) -> Figure:
     return fig
 
 
-def design_figures(curves: DesignCurves, title: str = "") -> dict[str, Figure]:
-    """{file name: figure} for what the scene declares: no loads or stress figure without them."""
-    out = {"svaj.png": svaj_figure(curves, title), "profile.png": profile_figure(curves, title)}
+def figure_builders(curves: DesignCurves) -> dict[str, Callable[[DesignCurves, str], Figure]]:
+    """{file name: figure function} for what the scene declares: no loads or stress figure
+    without them (nothing is drawn here)."""
+    out = {"svaj.png": svaj_figure, "profile.png": profile_figure}
     if curves.force_N is not None:
-        out["loads.png"] = loads_figure(curves, title)
+        out["loads.png"] = loads_figure
     if curves.stress_MPa is not None:
-        out["stress.png"] = stress_figure(curves, title)
+        out["stress.png"] = stress_figure
     return out
+
+
+def design_figures(curves: DesignCurves, title: str = "") -> dict[str, Figure]:
+    """{file name: figure} of :func:`figure_builders`, drawn."""
+    return {name: build(curves, title) for name, build in figure_builders(curves).items()}
 
 
 def laws_figure(x, laws: dict[str, tuple[np.ndarray, ...]]) -> Figure:

@@ -61,6 +61,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from camjax import runtime
 from camjax.numerics import finite_float
 from camjax.problem import Weights, weights_of
 from camjax.solvers.registry import (
@@ -321,6 +322,9 @@ def solve_batch(problem, weights: Weights, keys: jax.Array, mode: str = "global"
     return jax.vmap(one, in_axes=(None, 0, 0))(problem, weights, keys)
 
 
+_solve_program = runtime.program_cache(solve_batch, static_argnames=("mode", "solver", "settings"))
+
+
 @partial(jax.jit, static_argnames="count")
 def weighting_keys(seed: int, count: int, offset: int = 0) -> jax.Array:
     """One key per weighting, fold_in(key(seed), offset + i): independent of chunking.
@@ -357,7 +361,10 @@ def solve(problem, weights: Weights | tuple[float, float] = (1.0, 1.0), *, mode:
     compiled, compile_s = _COMPILED.get(cache_key), 0.0
     if compiled is None:
         t0 = time.perf_counter()
-        compiled = solve_batch.lower(*args, mode, solver, settings).compile()
+        if runtime.program_cache_on():  # a saved program: no tracing (the command line)
+            compiled = _solve_program.load(*args, mode=mode, solver=solver, settings=settings)
+        else:
+            compiled = solve_batch.lower(*args, mode, solver, settings).compile()
         compile_s = time.perf_counter() - t0
         _COMPILED[cache_key] = compiled
     t1 = time.perf_counter()

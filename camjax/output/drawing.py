@@ -1,0 +1,137 @@
+"""Figures drawn in processes of their own, started before the computation they draw.
+
+Drawing a design's four PNG figures takes about as long on 2 CPU cores as computing the design
+when JAX's caches are warm, and importing matplotlib a third of that. :class:`FigureWorkers`
+starts fresh Python processes that import NumPy and matplotlib (not JAX: they enter the camjax
+package without running its ``__init__``) while the caller computes; :meth:`FigureWorkers.draw`
+then hands them the curves and each draws and writes its share of
+:func:`camjax.output.plots.figure_builders`. The figures are the ones
+:func:`camjax.output.export.write_figures` draws in-process, byte for byte.
+
+A worker that cannot start, or fails, is reported as an exception from :meth:`FigureWorkers.wait`
+(one line); :meth:`FigureWorkers.close` ends every worker still running (the caller's ``with``).
+"""
+
+from __future__ import annotations
+
+import pickle
+import subprocess
+import sys
+import types
+from pathlib import Path
+
+# A worker: the camjax package as a bare namespace (its __init__ imports JAX), then serve().
+_BOOT = ("import sys, types; package = types.ModuleType('camjax'); package.__path__ = [sys.argv[1]]; "
+         "sys.modules['camjax'] = package; from camjax.output.drawing import serve; serve()")
+PACKAGE_DIR = Path(__file__).resolve().parent.parent
+
+
+class DrawingError(RuntimeError):
+    """A figure worker failed: its one-line reason."""
+
+
+class FigureWorkers:
+    """``count`` figure processes, started now, importing matplotlib while the caller computes.
+
+    Use as a context manager; :meth:`draw` once, then :meth:`wait` for the written paths.
+    """
+
+    def __init__(self, count: int = 2):
+        self._procs: list[subprocess.Popen] = []
+        try:
+            for _ in range(count):
+                self._procs.append(subprocess.Popen(
+                    [sys.executable, "-c", _BOOT, str(PACKAGE_DIR)], stdin=subprocess.PIPE,
+                    stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, start_new_session=True))
+        except OSError:
+            self.close()
+            raise
+
+    def draw(self, folder: str | Path, curves, dpi: int = 100, banner: str | None = None,
+             title: str = "") -> None:
+        """Send the job: worker k of n draws figures k, k + n, ... of the curves into ``folder``
+        (``curves``: :class:`camjax.evaluate.DesignCurves`; the rest as
+        :func:`camjax.output.export.write_figures`)."""
+        fields = {k: _plain(v) for k, v in curves._asdict().items()}
+        for k, proc in enumerate(self._procs):
+            job = {"folder": str(folder), "curves": fields, "dpi": dpi, "banner": banner, "title": title,
+                   "share": (k, len(self._procs))}
+            try:
+                proc.stdin.write(pickle.dumps(job))
+                proc.stdin.close()
+            except OSError:  # the worker is gone: wait() says why
+                pass
+
+    def wait(self) -> list[Path]:
+        """The written figures, in :func:`~camjax.output.plots.figure_builders` order;
+        :class:`DrawingError` if a worker failed."""
+        written: dict[int, Path] = {}
+        for proc in self._procs:
+            out = proc.stdout.read()
+            code = proc.wait()
+            try:
+                reply = pickle.loads(out)
+            except Exception:
+                raise DrawingError(f"a figure process exited with status {code} and no reply") from None
+            if "error" in reply:
+                raise DrawingError(f"drawing the figures failed: {reply['error']}")
+            written.update({int(i): Path(p) for i, p in reply["written"]})
+        return [written[i] for i in sorted(written)]
+
+    def close(self) -> None:
+        """End every worker still running (after :meth:`wait` there are none)."""
+        for proc in self._procs:
+            if proc.poll() is None:
+                proc.kill()
+                proc.wait()
+            for stream in (proc.stdin, proc.stdout):
+                if stream is not None and not stream.closed:
+                    stream.close()
+
+    def __enter__(self) -> FigureWorkers:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+
+def _plain(value):
+    """A curve field as something a worker unpickles without JAX: NumPy arrays, floats, str."""
+    if value is None or isinstance(value, (str, bool, int, float)):
+        return value
+    if isinstance(value, dict):
+        return {k: _plain(v) for k, v in value.items()}
+    if isinstance(value, (tuple, list)):
+        return type(value)(_plain(v) for v in value)
+    import numpy as np
+
+    return np.asarray(value)
+
+
+def serve() -> None:
+    """A worker's main: import matplotlib, read one job from stdin, draw its share, reply on
+    stdout (pickled ``{"written": [(index, path), ...]}`` or ``{"error": "one line"}``)."""
+    from matplotlib.backends import backend_agg  # noqa: F401  (imported before the job arrives)
+
+    from camjax.output import plots
+
+    reply: dict
+    try:
+        job = pickle.loads(sys.stdin.buffer.read())
+        curves = types.SimpleNamespace(**job["curves"])
+        k, n = job["share"]
+        folder = Path(job["folder"])
+        written = []
+        for i, (name, build) in enumerate(plots.figure_builders(curves).items()):
+            if i % n != k:
+                continue
+            fig = build(curves, job["title"])
+            if job["banner"]:
+                plots.stamp_banner(fig, job["banner"])
+            fig.savefig(folder / name, dpi=job["dpi"])
+            written.append((i, str(folder / name)))
+        reply = {"written": written}
+    except BaseException as exc:  # reported to the caller as one line
+        reply = {"error": f"{type(exc).__name__}: {exc}"[:300]}
+    sys.stdout.buffer.write(pickle.dumps(reply))
+    sys.stdout.buffer.flush()
