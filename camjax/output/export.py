@@ -121,13 +121,13 @@ def write_design_files(folder: str | Path, curves: DesignCurves, dpi: int = 100,
     """Figures, profile.csv and profile.dxf (and motion.gif when ``animate``) into ``folder``
     (created if needed); the written paths. ``banner`` and ``title`` as in :func:`write_figures`;
     ``progress(phase)`` (optional) is told "figures", "files" and "animation" as each starts. An
-    oscillating follower's files come from :mod:`camjax.output.rocker` (no animation yet)."""
+    oscillating follower's files come from :mod:`camjax.output.rocker`."""
     from camjax.rocker import RockerCurves
 
     if isinstance(curves, RockerCurves):  # an oscillating follower's files
         from camjax.output.rocker import write_rocker_files
 
-        return write_rocker_files(folder, curves, dpi, banner)
+        return write_rocker_files(folder, curves, dpi, banner, title, animate, progress)
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     say = progress or (lambda phase: None)
