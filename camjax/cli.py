@@ -203,10 +203,6 @@ def _setup_design(p: argparse.ArgumentParser):
                              "geometry of this scene's follower.type is for lifts in mm "
                              f"(allowed: follower.type = 'oscillating_roller' or 'oscillating_flat' with "
                              f"lift_deg, or `camjax dynamics {args.scene or scene.name}`)")
-        if args.animate and scene.follower.oscillating:
-            raise UsageError(f"--animate: scene {scene.name} has an oscillating follower "
-                             f"({scene.follower.type}); the animation draws translating flat-face and "
-                             "roller followers (allowed: leave out --animate)")
         runtime.enable_caches()
 
         # a run takes seconds: on a terminal (or with CAMJAX_PROGRESS=1) say what it is doing;

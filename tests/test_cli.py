@@ -248,11 +248,3 @@ def test_design_refuses_an_undrawable_outline_in_one_line(tmp_path, capsys, monk
     assert len(err) == 1
     assert err[0].startswith("camjax design: error: ") and "profile_x_mm is not finite at 1 of 360" in err[0]
     assert not out.exists()
-
-
-def test_design_animate_refuses_an_oscillating_follower_in_one_line(tmp_path, capsys):
-    out = tmp_path / "out"
-    assert cli.main(["design", "thesis-bench", "--out", str(out), "--animate"]) == 2
-    err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and "--animate" in err[0] and "oscillating" in err[0]
-    assert not out.exists()

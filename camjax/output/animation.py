@@ -6,7 +6,11 @@ the follower's type and sizes), so that a new follower type needs only its pose 
 :mod:`camjax.geometry`: in cam coordinates the follower axis is +Y at theta = 0 and the contact
 point at cam angle theta lies at polar angle theta clockwise from +Y. In the fixed (frame)
 coordinates drawn here the follower slides along +Y and the cam turns counter-clockwise: a cam
-point P is drawn at R(theta) P, R the rotation by +theta.
+point P is drawn at R(theta) P, R the rotation by +theta (a clockwise cam: R(-theta) P).
+
+Oscillating (rocker) followers are drawn in the fixed frame of :mod:`camjax.geometry.oscillating`
+(the same rotation of the outline): the pivot at (d, 0), the arm at psi = psi0 + s from the line
+of centres; the roller centre, the face line and their start angles come from that module.
 
 Figures are built without pyplot (Agg through ``Figure``), like :mod:`camjax.output.plots`;
 matplotlib is imported only when drawing. Functions here take NumPy arrays and are not traced
@@ -21,7 +25,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-FOLLOWER_TYPES = ("flat", "roller")
+FOLLOWER_TYPES = ("flat", "roller", "oscillating_roller", "oscillating_flat")
+OSCILLATING_TYPES = ("oscillating_roller", "oscillating_flat")
 # violations smaller than the solvers' feasibility tolerances (camjax.problem.FEASIBILITY_TOL_MM
 # and its relative one) are not drawn as such: an optimum sits on its active limits
 LENGTH_TOL_MM = 1e-6
@@ -38,8 +43,8 @@ class Mechanism(NamedTuple):
     Attributes:
       theta_deg: cam angle of each sample, deg, increasing over one turn.
       profile_x_mm, profile_y_mm: cam outline in cam coordinates (the contact point of sample k).
-      s_mm: follower displacement s(theta), mm.
-      follower_type: "flat" or "roller".
+      s_mm: follower displacement s(theta), mm; None for an oscillating follower (see swing_deg).
+      follower_type: "flat", "roller", "oscillating_roller" or "oscillating_flat".
       base_radius_mm: R_b, mm.
       face_width_mm: flat face width L, mm (flat only).
       roller_radius_mm: R_f, mm (roller only).
@@ -51,6 +56,12 @@ class Mechanism(NamedTuple):
       bad: (N,) booleans, samples where the outline breaks a constraint (drawn red); None: none.
       rotation: "ccw" (the cam turns counter-clockwise) or "cw" (its outline is the mirror image,
         X -> -X, and it turns clockwise).
+      pivot_distance_mm: d, the pivot's distance from the cam centre, mm (oscillating only).
+      arm_length_mm: l, pivot to roller centre, mm (oscillating roller only).
+      face_offset_mm: f, the face's distance from the pivot, mm (oscillating flat only).
+      arm_start_angle_deg: psi0, the arm's angle from the line of centres at s = 0, deg
+        (oscillating only).
+      swing_deg: (N,) the arm's swing s(theta) from psi0, deg (oscillating only): psi = psi0 + s.
     """
 
     theta_deg: np.ndarray
@@ -67,6 +78,22 @@ class Mechanism(NamedTuple):
     violation: str | None = None
     bad: np.ndarray | None = None
     rotation: str = "ccw"
+    pivot_distance_mm: float | None = None
+    arm_length_mm: float | None = None
+    face_offset_mm: float | None = None
+    arm_start_angle_deg: float | None = None
+    swing_deg: np.ndarray | None = None
+
+    @property
+    def oscillating(self) -> bool:
+        """True for a rocker: the arm swings about the pivot instead of sliding."""
+        return self.follower_type in OSCILLATING_TYPES
+
+    def motion(self) -> tuple[np.ndarray, str]:
+        """(N,) the follower's motion over the turn and its axis label: s in mm, or the swing in deg."""
+        if self.oscillating:
+            return np.asarray(self.swing_deg), "arm swing s (deg)"
+        return np.asarray(self.s_mm), "follower displacement s (mm)"
 
 
 class FramePoses(NamedTuple):
@@ -74,21 +101,24 @@ class FramePoses(NamedTuple):
 
     index: np.ndarray  # sample index k of each frame
     theta_deg: np.ndarray  # cam angle, deg
-    follower_x_mm: np.ndarray  # flat: centre of the face; roller: centre of the roller
+    # flat: centre of the face; roller and oscillating roller: centre of the roller; oscillating
+    # flat: the foot of the pivot on the face (A - f m)
+    follower_x_mm: np.ndarray
     follower_y_mm: np.ndarray
     contact_x_mm: np.ndarray
     contact_y_mm: np.ndarray
     pressure_angle_deg: np.ndarray
+    arm_angle_deg: np.ndarray | None = None  # oscillating: psi = psi0 + s, deg from the line of centres
 
 
 def check_drawable(curves) -> None:
     """Raise :class:`UndrawableGeometry` naming the first of the outline (profile_x_mm,
-    profile_y_mm) and the motion (s_mm) of ``curves`` (a Mechanism or DesignCurves) that has
-    non-finite points."""
-    for name in ("profile_x_mm", "profile_y_mm", "s_mm"):
-        if not hasattr(curves, name):  # e.g. an oscillating follower's curves: motion in deg
+    profile_y_mm) and the motion (s_mm, or a rocker's swing_deg) of ``curves`` (a Mechanism,
+    DesignCurves or RockerCurves) that has non-finite points."""
+    for name in ("profile_x_mm", "profile_y_mm", "s_mm", "swing_deg"):
+        if getattr(curves, name, None) is None:  # s_mm of a rocker, swing_deg of a slider
             continue
-        bad = ~np.isfinite(np.asarray(getattr(curves, name)))
+        bad = ~np.isfinite(np.asarray(getattr(curves, name), dtype=float))
         if bad.any():
             raise UndrawableGeometry(f"{name} is not finite at {np.count_nonzero(bad)} of {bad.size} "
                                      "samples: the cam cannot be drawn")
@@ -123,6 +153,11 @@ def frame_poses(m: Mechanism, frames: int) -> FramePoses:
     k = frame_indices(len(m.theta_deg), frames)
     th = np.deg2rad(np.asarray(m.theta_deg)[k])
     cx, cy = rotate(np.asarray(m.profile_x_mm)[k], np.asarray(m.profile_y_mm)[k], _turn(m) * th)
+    phi = np.zeros(len(k)) if m.pressure_angle_deg is None else np.asarray(m.pressure_angle_deg)[k]
+    if m.oscillating:
+        psi_deg = m.arm_start_angle_deg + np.asarray(m.swing_deg)[k]
+        fx, fy = _rocker_points(m, np.deg2rad(psi_deg))
+        return FramePoses(k, np.rad2deg(th), fx, fy, cx, cy, phi, psi_deg)
     s = np.asarray(m.s_mm)[k]
     if m.follower_type == "flat":
         fx, fy = np.zeros_like(s), m.base_radius_mm + s  # the face's centre, on the axis
@@ -130,8 +165,20 @@ def frame_poses(m: Mechanism, frames: int) -> FramePoses:
         rp = m.base_radius_mm + m.roller_radius_mm  # prime circle; the pitch point is at (e, d + s)
         fx = np.full_like(s, m.offset_mm)
         fy = np.sqrt(max(rp**2 - m.offset_mm**2, 0.0)) + s
-    phi = np.zeros_like(s) if m.pressure_angle_deg is None else np.asarray(m.pressure_angle_deg)[k]
     return FramePoses(k, np.rad2deg(th), fx, fy, cx, cy, phi)
+
+
+def _rocker_points(m: Mechanism, psi) -> tuple[np.ndarray, np.ndarray]:
+    """The rocker's moving reference point at arm angles psi (rad), fixed frame, mm: the roller
+    centre (:func:`camjax.geometry.oscillating.roller_centre`) or the foot of the pivot on the face,
+    A - f m with m = (sin psi, cos psi) the face normal (:mod:`camjax.geometry.oscillating`)."""
+    from camjax.geometry.oscillating import roller_centre
+
+    d = m.pivot_distance_mm
+    if m.follower_type == "oscillating_roller":
+        return tuple(np.asarray(v, dtype=float) for v in roller_centre(d, m.arm_length_mm, psi))
+    f = m.face_offset_mm
+    return d - f * np.sin(psi), -f * np.cos(psi)
 
 
 class MotionFrames(NamedTuple):
@@ -140,27 +187,26 @@ class MotionFrames(NamedTuple):
     figure: object  # matplotlib Figure
     update: object  # i -> tuple of the moved artists
     poses: FramePoses
-    artists: dict  # "cam", "follower", "contact", "normal", "label", "marker"; "moving": all that move
+    # "cam", "bad" (the outline breaking a constraint), "follower", "contact", "normal", "label",
+    # "marker"; a rocker's "arm", "path" and "face"; "moving": all that move
+    artists: dict
 
 
 def motion_frames(m: Mechanism, frames: int = 72) -> MotionFrames:
     """The mechanism's figure and an ``update(i)`` that draws frame i (theta of poses.index[i]).
 
-    The cam turns counter-clockwise; the small s(theta) panel marks where in the cycle the frame
-    is. ``artists`` lets a caller (or a test) read back what frame i shows.
+    The cam turns counter-clockwise (clockwise for ``rotation = "cw"``); the small s(theta) panel
+    marks where in the cycle the frame is. ``artists`` lets a caller (or a test) read back what
+    frame i shows; a rocker adds "arm" (pivot to roller centre, or pivot to the face's foot),
+    "face" (oscillating flat) and "path" (the direction the follower point in contact moves).
     """
     from matplotlib.figure import Figure
-    from matplotlib.patches import Circle, FancyArrowPatch
+    from matplotlib.patches import FancyArrowPatch
 
     poses = frame_poses(m, frames)
     x, y = np.asarray(m.profile_x_mm), np.asarray(m.profile_y_mm)
     r_max = float(np.max(np.hypot(x, y)))
-    s = np.asarray(m.s_mm)
-    flat = m.follower_type == "flat"
-    half = 0.5 * (m.face_width_mm if flat else 2.0 * m.roller_radius_mm)
-    stem = 0.5 * r_max + (0.0 if flat else m.roller_radius_mm)
-    top = float(np.max(poses.follower_y_mm)) + stem
-    reach = max(r_max, abs(m.offset_mm) + half) * 1.08
+    s, s_label = m.motion()
 
     fig = Figure(figsize=(7.2, 5.0), layout="constrained")
     grid = fig.add_gridspec(2, 2, width_ratios=[1.5, 1.0], height_ratios=[1.3, 1.0])
@@ -169,17 +215,10 @@ def motion_frames(m: Mechanism, frames: int = 72) -> MotionFrames:
     ax_key = fig.add_subplot(grid[1, 1])  # holds the legend
     ax_key.set_axis_off()
     ax.set_aspect("equal")
-    ax.set_xlim(-reach, reach)
-    ax.set_ylim(-r_max * 1.08, top + 0.05 * r_max)
     ax.set_xlabel("x (mm)")
     ax.set_ylabel("y (mm)")
     ax.grid(True, alpha=0.25)
     ax.plot([0.0], [0.0], "+", color="k", markersize=8)
-    # guide of the follower stem: two fixed bars beside it
-    gx = (m.offset_mm if not flat else 0.0) + np.array([-1.0, 1.0]) * 0.12 * r_max
-    gy = top - 0.35 * stem
-    for xg in gx:
-        ax.plot([xg, xg], [gy, top], color="0.35", linewidth=2.5)
     cam_fill = ax.fill(x, y, color="C0", alpha=0.18, label="cam")[0]
     (cam_line,) = ax.plot(x, y, color="C0", linewidth=1.4)
     bad = np.zeros(len(x), bool) if m.bad is None else np.asarray(m.bad, bool)
@@ -192,16 +231,7 @@ def motion_frames(m: Mechanism, frames: int = 72) -> MotionFrames:
                                  connectionstyle=f"arc3,rad={0.8 * turn}", arrowstyle="-|>",
                                  mutation_scale=12, color="0.25", linewidth=1.2))
     ax.text(0.0, -0.62 * m.base_radius_mm, "ω", ha="center", va="center", fontsize=9, color="0.25")
-    (stem_line,) = ax.plot([], [], color="C1", linewidth=2.0)
-    if flat:
-        (follower,) = ax.plot([], [], color="C1", linewidth=4.0, solid_capstyle="butt",
-                              label=f"flat face, L = {m.face_width_mm:.2f} mm")
-        roller = None
-    else:
-        roller = Circle((0.0, 0.0), m.roller_radius_mm, fill=False, color="C1", linewidth=2.0,
-                        label=f"roller, R_f = {m.roller_radius_mm:g} mm")
-        ax.add_patch(roller)
-        (follower,) = ax.plot([], [], "o", color="C1", markersize=3)  # roller centre
+    follower = (_rocker_artists if m.oscillating else _slider_artists)(ax, m, poses, r_max)
     (contact,) = ax.plot([], [], "o", color="C3", markersize=5, label="contact point")
     (normal,) = ax.plot([], [], color="C3", linewidth=1.0, linestyle="--",
                         label="contact normal (force line)")
@@ -219,9 +249,10 @@ def motion_frames(m: Mechanism, frames: int = 72) -> MotionFrames:
     ax_s.set_xlim(0.0, 360.0)
     ax_s.set_xticks(np.arange(0, 361, 90))
     ax_s.set_xlabel("cam angle θ (deg)")
-    ax_s.set_ylabel("follower displacement s (mm)")
+    ax_s.set_ylabel(s_label)
     ax_s.grid(True, alpha=0.3)
     ax_key.legend(*zip(*keep, strict=True), fontsize=7, loc="center")
+    length = 0.45 * r_max  # of the drawn force line
 
     def update(i):
         th = turn * np.deg2rad(poses.theta_deg[i])
@@ -230,6 +261,66 @@ def motion_frames(m: Mechanism, frames: int = 72) -> MotionFrames:
         cam_fill.set_xy(np.column_stack([xr, yr]))
         bad_line.set_data(np.where(bad, xr, np.nan), np.where(bad, yr, np.nan))
         key.set_data(*rotate(np.array([0.0, 0.0]), np.array([0.0, 0.6 * m.base_radius_mm]), th))
+        moved = follower.update(i)
+        cx, cy = poses.contact_x_mm[i], poses.contact_y_mm[i]
+        contact.set_data([cx], [cy])
+        nx, ny = follower.normal(i)
+        normal.set_data([cx, cx + length * nx], [cy, cy + length * ny])
+        phi = poses.pressure_angle_deg[i]
+        k = poses.index[i]
+        where = (f"s = {s[k]:6.2f}°, ψ = {poses.arm_angle_deg[i]:6.2f}°" if m.oscillating
+                 else f"s = {s[k]:6.3f} mm")
+        label.set_text(f"θ = {poses.theta_deg[i]:5.1f}°\n{where}\npressure angle φ = {phi:5.1f}°")
+        marker.set_data([poses.theta_deg[i]], [s[k]])
+        return cam_line, cam_fill, bad_line, key, *moved, contact, normal, label, marker
+
+    ax.set_xlim(*follower.xlim)
+    ax.set_ylim(*follower.ylim)
+    update(0)
+    artists = {"cam": cam_line, "bad": bad_line, "contact": contact, "normal": normal, "label": label,
+               "marker": marker, **follower.artists,
+               "moving": [cam_fill, cam_line, bad_line, key, *follower.moving, contact, normal, label,
+                          marker]}
+    return MotionFrames(fig, update, poses, artists)
+
+
+class _FollowerArtists(NamedTuple):
+    """A follower type's drawing: its artists, how frame i moves them, the axis limits."""
+
+    artists: dict  # names a test reads back ("follower", "arm", ...)
+    moving: list  # every artist update() moves (blitted by the GIF writer)
+    update: object  # i -> tuple of the moved artists
+    normal: object  # i -> (n_x, n_y), unit contact normal at frame i, from the cam towards the follower
+    xlim: tuple[float, float]
+    ylim: tuple[float, float]
+
+
+def _slider_artists(ax, m: Mechanism, poses: FramePoses, r_max: float) -> _FollowerArtists:
+    """A translating flat face or roller on its stem, sliding in a guide along +Y."""
+    from matplotlib.patches import Circle
+
+    flat = m.follower_type == "flat"
+    half = 0.5 * (m.face_width_mm if flat else 2.0 * m.roller_radius_mm)
+    stem = 0.5 * r_max + (0.0 if flat else m.roller_radius_mm)
+    top = float(np.max(poses.follower_y_mm)) + stem
+    reach = max(r_max, abs(m.offset_mm) + half) * 1.08
+    # guide of the follower stem: two fixed bars beside it
+    gx = (m.offset_mm if not flat else 0.0) + np.array([-1.0, 1.0]) * 0.12 * r_max
+    gy = top - 0.35 * stem
+    for xg in gx:
+        ax.plot([xg, xg], [gy, top], color="0.35", linewidth=2.5)
+    (stem_line,) = ax.plot([], [], color="C1", linewidth=2.0)
+    if flat:
+        (follower,) = ax.plot([], [], color="C1", linewidth=4.0, solid_capstyle="butt",
+                              label=f"flat face, L = {m.face_width_mm:.2f} mm")
+        roller = None
+    else:
+        roller = Circle((0.0, 0.0), m.roller_radius_mm, fill=False, color="C1", linewidth=2.0,
+                        label=f"roller, R_f = {m.roller_radius_mm:g} mm")
+        ax.add_patch(roller)
+        (follower,) = ax.plot([], [], "o", color="C1", markersize=3)  # roller centre
+
+    def update(i):
         fx, fy = poses.follower_x_mm[i], poses.follower_y_mm[i]
         if flat:
             follower.set_data([fx - half, fx + half], [fy, fy])
@@ -237,26 +328,102 @@ def motion_frames(m: Mechanism, frames: int = 72) -> MotionFrames:
             roller.center = (fx, fy)
             follower.set_data([fx], [fy])
         stem_line.set_data([fx, fx], [fy, fy + stem])
-        cx, cy = poses.contact_x_mm[i], poses.contact_y_mm[i]
-        contact.set_data([cx], [cy])
-        phi = poses.pressure_angle_deg[i]
-        # the force line: from the contact point along the common normal, at phi from the
-        # follower axis; for a roller it runs through the roller's centre, (-sin phi, cos phi)
-        # with phi = atan((s' - e) / (d + s)) of camjax.geometry
-        length = 0.45 * r_max
-        normal.set_data([cx, cx - length * np.sin(np.deg2rad(phi))],
-                        [cy, cy + length * np.cos(np.deg2rad(phi))])
-        label.set_text(f"θ = {poses.theta_deg[i]:5.1f}°\ns = {s[poses.index[i]]:6.3f} mm\n"
-                       f"pressure angle φ = {phi:5.1f}°")
-        marker.set_data([poses.theta_deg[i]], [s[poses.index[i]]])
-        return cam_line, cam_fill, bad_line, key, follower, stem_line, contact, normal, label, marker
+        return (follower, stem_line) + (() if roller is None else (roller,))
 
-    update(0)
-    artists = {"cam": cam_line, "follower": roller if roller is not None else follower,
-               "contact": contact, "normal": normal, "label": label, "marker": marker,
-               "moving": [cam_fill, cam_line, bad_line, key, stem_line, follower, contact, normal,
-                          label, marker] + ([roller] if roller is not None else [])}
-    return MotionFrames(fig, update, poses, artists)
+    def normal(i):
+        # the force line at phi from the follower axis; for a roller it runs through the roller's
+        # centre, (-sin phi, cos phi) with phi = atan((s' - e) / (d + s)) of camjax.geometry
+        phi = np.deg2rad(poses.pressure_angle_deg[i])
+        return -np.sin(phi), np.cos(phi)
+
+    moving = [stem_line, follower] + ([roller] if roller is not None else [])
+    return _FollowerArtists({"follower": roller if roller is not None else follower}, moving, update,
+                            normal, (-reach, reach), (-r_max * 1.08, top + 0.05 * r_max))
+
+
+def _rocker_artists(ax, m: Mechanism, poses: FramePoses, r_max: float) -> _FollowerArtists:
+    """An oscillating roller or flat face: the pivot, the arm swinging about it, the roller at the
+    arm's end (or the face at its offset), and the path of the follower point in contact."""
+    from matplotlib.patches import Circle
+
+    d = m.pivot_distance_mm
+    roller = m.follower_type == "oscillating_roller"
+    # the whole turn, for the fixed parts and the axis limits
+    every = frame_poses(m, len(m.theta_deg))
+    psi = np.deg2rad(every.arm_angle_deg)
+    ax.plot([d], [0.0], "o", color="k", markersize=7, markerfacecolor="w", zorder=4,
+            label=f"pivot, d = {d:g} mm")
+    if roller:
+        rf, arm = m.roller_radius_mm, m.arm_length_mm
+        arc = np.linspace(psi.min(), psi.max(), 60)
+        ax.plot(*_rocker_points(m, arc), color="0.45", linewidth=0.8, linestyle=":",
+                label="arc of the roller centre")
+        circle = Circle((0.0, 0.0), rf, fill=False, color="C1", linewidth=2.0,
+                        label=f"roller, R_f = {rf:g} mm")
+        ax.add_patch(circle)
+        (centre,) = ax.plot([], [], "o", color="C1", markersize=3)
+        (arm_line,) = ax.plot([], [], color="C1", linewidth=3.0, solid_capstyle="round",
+                              label=f"arm, l = {arm:g} mm")
+        xs = np.concatenate([every.follower_x_mm - rf, every.follower_x_mm + rf])
+        ys = np.concatenate([every.follower_y_mm - rf, every.follower_y_mm + rf])
+        face = None
+    else:
+        f = m.face_offset_mm
+        # the stretch of the face the contact sweeps, measured along u = (-cos psi, sin psi) from
+        # the pivot's foot (positive towards the cam centre), drawn with a margin and from the foot
+        u = np.stack([-np.cos(psi), np.sin(psi)])
+        xi = np.sum((np.stack([every.contact_x_mm, every.contact_y_mm])
+                     - np.stack([every.follower_x_mm, every.follower_y_mm])) * u, axis=0)
+        lo, hi = min(0.0, float(xi.min())), float(xi.max())
+        pad = 0.1 * (hi - lo) + 0.02 * r_max
+        span = np.array([lo - pad, hi + pad])
+        (face,) = ax.plot([], [], color="C1", linewidth=4.0, solid_capstyle="butt",
+                          label=f"flat face, offset f = {f:g} mm")
+        (arm_line,) = ax.plot([], [], color="C1", linewidth=2.0, label="arm (pivot to face)")
+        circle = centre = None
+        ends_x = every.follower_x_mm[:, None] + span[None, :] * u[0][:, None]
+        ends_y = every.follower_y_mm[:, None] + span[None, :] * u[1][:, None]
+        xs, ys = ends_x.ravel(), ends_y.ravel()
+    (path,) = ax.plot([], [], color="0.35", linewidth=1.0, linestyle=":",
+                      label="path of the " + ("roller centre" if roller else "face point in contact"))
+
+    def update(i):
+        fx, fy = poses.follower_x_mm[i], poses.follower_y_mm[i]
+        p = np.deg2rad(poses.arm_angle_deg[i])
+        arm_line.set_data([d, fx], [0.0, fy])
+        if roller:
+            circle.center = (fx, fy)
+            centre.set_data([fx], [fy])
+            ox, oy = fx, fy
+        else:
+            face.set_data(fx - span * np.cos(p), fy + span * np.sin(p))
+            ox, oy = poses.contact_x_mm[i], poses.contact_y_mm[i]
+        # the point turns about the pivot with the arm (clockwise as psi grows): its path is
+        # perpendicular to pivot -> point; phi is the angle between it and the force line
+        rx, ry = ox - d, oy
+        n = np.hypot(rx, ry)
+        reach = 0.45 * r_max - (m.roller_radius_mm if roller else 0.0)
+        path.set_data([ox, ox + reach * ry / n], [oy, oy - reach * rx / n])
+        return (arm_line, path) + ((circle, centre) if roller else (face,))
+
+    def normal(i):
+        if roller:  # from the contact point through the roller centre
+            nx = poses.follower_x_mm[i] - poses.contact_x_mm[i]
+            ny = poses.follower_y_mm[i] - poses.contact_y_mm[i]
+            n = np.hypot(nx, ny)
+            return nx / n, ny / n
+        p = np.deg2rad(poses.arm_angle_deg[i])
+        return np.sin(p), np.cos(p)  # the face normal m, away from the cam
+
+    moving = [arm_line, path] + ([circle, centre] if roller else [face])
+    xs = np.concatenate([xs, [d, -r_max, r_max]])
+    ys = np.concatenate([ys, [0.0, -r_max, r_max]])
+    pad = 0.06 * max(np.ptp(xs), np.ptp(ys))
+    artists = {"follower": circle if roller else face, "arm": arm_line, "path": path}
+    if not roller:
+        artists["face"] = face
+    return _FollowerArtists(artists, moving, update, normal, (xs.min() - pad, xs.max() + pad),
+                            (ys.min() - pad, ys.max() + pad))
 
 
 def motion_animation(m: Mechanism, frames: int = 72, interval_ms: int = 60):
@@ -345,4 +512,37 @@ def violation_samples(curves) -> np.ndarray:
     limit = curves.pressure_angle_limit_deg
     if curves.pressure_angle_deg is not None and limit is not None:
         bad |= np.abs(np.asarray(curves.pressure_angle_deg)) > limit * (1.0 + ANGLE_RTOL)
+    return bad
+
+
+def mechanism_from_rocker(curves, title: str = "", violation: str | None = None,
+                          bad=None) -> Mechanism:
+    """The :class:`Mechanism` of an oscillating follower's :class:`camjax.rocker.RockerCurves`."""
+    roller = curves.follower_type == "oscillating_roller"
+    return Mechanism(
+        np.asarray(curves.theta_deg), np.asarray(curves.profile_x_mm), np.asarray(curves.profile_y_mm),
+        None, curves.follower_type, float(curves.base_radius_mm),
+        roller_radius_mm=curves.roller_radius_mm if roller else None,
+        pressure_angle_deg=np.asarray(curves.pressure_angle_deg), title=title, violation=violation,
+        bad=bad, rotation=curves.rotation, pivot_distance_mm=float(curves.pivot_distance_mm),
+        arm_length_mm=curves.arm_length_mm if roller else None,
+        face_offset_mm=None if roller else curves.face_offset_mm,
+        arm_start_angle_deg=float(curves.arm_start_angle_deg), swing_deg=np.asarray(curves.swing_deg),
+    )
+
+
+def rocker_violation_samples(curves, max_pressure_angle_deg: float | None = None) -> np.ndarray:
+    """(N,) booleans: where a rocker's outline breaks a constraint, to be drawn red.
+
+    Roller: undercut (margin < 0, the margin holds the scene's smallest radius of curvature) and,
+    given its limit (deg), |pressure angle| over it; flat face: rho < 0 (the outline crosses
+    itself), as :func:`violation_samples`. Within the solvers' tolerances nothing is marked.
+    """
+    bad = np.zeros(np.shape(curves.theta_deg), bool)
+    if curves.undercut_margin_mm is not None:
+        bad |= np.asarray(curves.undercut_margin_mm) < -LENGTH_TOL_MM
+    else:
+        bad |= np.asarray(curves.rho_mm) < -LENGTH_TOL_MM
+    if max_pressure_angle_deg is not None and curves.undercut_margin_mm is not None:
+        bad |= np.abs(np.asarray(curves.pressure_angle_deg)) > max_pressure_angle_deg * (1.0 + ANGLE_RTOL)
     return bad

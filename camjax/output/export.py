@@ -121,7 +121,7 @@ def write_design_files(folder: str | Path, curves: DesignCurves, dpi: int = 100,
     """Figures, profile.csv and profile.dxf (and motion.gif when ``animate``) into ``folder``
     (created if needed); the written paths. ``banner`` and ``title`` as in :func:`write_figures`;
     ``progress(phase)`` (optional) is told "figures", "files" and "animation" as each starts. An
-    oscillating follower's files come from :mod:`camjax.output.rocker` (no animation yet).
+    oscillating follower's files come from :mod:`camjax.output.rocker`.
 
     ``figure_workers``: a started :class:`camjax.output.drawing.FigureWorkers` draws the figures
     in its processes while this one writes the profile files (the same figures as without it).
@@ -131,7 +131,7 @@ def write_design_files(folder: str | Path, curves: DesignCurves, dpi: int = 100,
     if isinstance(curves, RockerCurves):  # an oscillating follower's files
         from camjax.output.rocker import write_rocker_files
 
-        return write_rocker_files(folder, curves, dpi, banner)
+        return write_rocker_files(folder, curves, dpi, banner, title, animate, progress)
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     say = progress or (lambda phase: None)

@@ -1,4 +1,5 @@
-"""A rocker (oscillating-follower) design's report dict, profile.csv, profile.dxf and figures.
+"""A rocker (oscillating-follower) design's report dict, profile.csv, profile.dxf, figures and
+motion.gif (:mod:`camjax.output.animation`).
 
 The same files as a translating follower's (:mod:`camjax.export`): the outline in cam coordinates
 (convention of :mod:`camjax.geometry.pitch`), one DXF polyline, and figures built without pyplot.
@@ -155,24 +156,45 @@ def rocker_figures(curves: RockerCurves) -> dict[str, Figure]:
 
 
 def write_rocker_files(folder: str | Path, curves: RockerCurves, dpi: int = 100,
-                       banner: str | None = None) -> list[Path]:
-    """Figures, profile.csv and profile.dxf into ``folder`` (created if needed); the written paths.
+                       banner: str | None = None, title: str = "", animate: bool = False,
+                       progress=None) -> list[Path]:
+    """Figures, profile.csv and profile.dxf (and motion.gif when ``animate``) into ``folder``
+    (created if needed); the written paths.
 
-    ``banner``: text of a red banner stamped on every figure (the constraints the geometry breaks).
+    ``banner``: text of a red banner stamped on every figure (the constraints the geometry breaks)
+    and drawn in red on the animation; ``title``: the animation's title block; ``progress(phase)``
+    (optional) is told "figures", "files" and "animation" as each starts.
     """
     from camjax.output.plots import stamp_banner
 
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
+    say = progress or (lambda phase: None)
+    say("figures")
     out = []
     for name, fig in rocker_figures(curves).items():
         if banner:
             stamp_banner(fig, banner)
         fig.savefig(folder / name, dpi=dpi)
         out.append(folder / name)
+    say("files")
     # the DXF writer reads only the outline (profile_x_mm, profile_y_mm)
-    return [*out, write_rocker_profile_csv(folder / "profile.csv", curves),
+    out += [write_rocker_profile_csv(folder / "profile.csv", curves),
             write_profile_dxf(folder / "profile.dxf", curves)]
+    if animate:
+        say("animation")
+        out.append(write_rocker_animation(folder / "motion.gif", curves, title, banner))
+    return out
+
+
+def write_rocker_animation(path: Path, curves: RockerCurves, title: str = "",
+                           banner: str | None = None) -> Path:
+    """motion.gif: one turn of the cam with the rocker; ``banner`` (the broken constraints) drawn
+    in red and the outline where it undercuts (roller) or crosses itself (flat face) drawn red."""
+    from camjax.output.animation import mechanism_from_rocker, rocker_violation_samples, write_motion_gif
+
+    return write_motion_gif(path, mechanism_from_rocker(curves, title, banner,
+                                                        rocker_violation_samples(curves)))
 
 
 # ------------------------------------------------------------------------------ report
