@@ -79,6 +79,7 @@ class RockerCurves(NamedTuple):
     contact_force_N: np.ndarray | None  # normal contact force
     torque_Nm: np.ndarray | None  # cam shaft torque
     stress_MPa: np.ndarray | None  # Hertz contact stress
+    pressure_angle_limit_deg: float | None = None  # roller: follower.max_pressure_angle_deg
 
 
 def _f(x) -> float:
@@ -219,6 +220,7 @@ def evaluate_rocker(scene, kin: Kinematics, cam_speed_rad_s, base_radius_mm: flo
         rho_mm=np.asarray(rho), pitch_rho_mm=arr(pitch_rho), undercut_margin_mm=arr(margin),
         contact_distance_mm=arr(xi), pivot_torque_Nm=arr(moment), contact_force_N=arr(force),
         torque_Nm=arr(torque), stress_MPa=arr(stress),
+        pressure_angle_limit_deg=None if rp is None else float(f.max_pressure_angle_deg),
     )
 
 

@@ -261,3 +261,13 @@ def test_design_animates_an_infeasible_rocker(tmp_path, capsys):
     assert "INFEASIBLE (pressure_angle" in printed
     with Image.open(out / "motion.gif") as im:
         assert im.n_frames == 72
+
+
+def test_roller_rocker_past_its_pressure_angle_limit_is_drawn_red():
+    """R_b = 14 mm on the roller scene: |phi| passes the scene's 30 deg limit on part of the turn
+    (the CLI test above reports it); exactly those samples (and any undercut) are drawn red."""
+    curves = pipeline.analyse(_scene("oscillating_roller", "ccw"), base_radius_mm=14.0).curves
+    assert curves.pressure_angle_limit_deg == 30.0  # the scene's follower.max_pressure_angle_deg default
+    over = np.abs(curves.pressure_angle_deg) > 30.0 * (1 + 1e-6)
+    assert 0 < over.sum() < over.size
+    np.testing.assert_array_equal(rocker_violation_samples(curves), over | (curves.undercut_margin_mm < -1e-6))

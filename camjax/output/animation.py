@@ -534,10 +534,13 @@ def mechanism_from_rocker(curves, title: str = "", violation: str | None = None,
 def rocker_violation_samples(curves, max_pressure_angle_deg: float | None = None) -> np.ndarray:
     """(N,) booleans: where a rocker's outline breaks a constraint, to be drawn red.
 
-    Roller: undercut (margin < 0, the margin holds the scene's smallest radius of curvature) and,
-    given its limit (deg), |pressure angle| over it; flat face: rho < 0 (the outline crosses
-    itself), as :func:`violation_samples`. Within the solvers' tolerances nothing is marked.
+    Roller: undercut (margin < 0, the margin holds the scene's smallest radius of curvature) and
+    |pressure angle| over its limit (deg; default the curves' ``pressure_angle_limit_deg``); flat
+    face: rho < 0 (the outline crosses itself), as :func:`violation_samples`. Within the solvers'
+    tolerances nothing is marked.
     """
+    if max_pressure_angle_deg is None:
+        max_pressure_angle_deg = getattr(curves, "pressure_angle_limit_deg", None)
     bad = np.zeros(np.shape(curves.theta_deg), bool)
     if curves.undercut_margin_mm is not None:
         bad |= np.asarray(curves.undercut_margin_mm) < -LENGTH_TOL_MM

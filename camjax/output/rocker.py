@@ -190,7 +190,8 @@ def write_rocker_files(folder: str | Path, curves: RockerCurves, dpi: int = 100,
 def write_rocker_animation(path: Path, curves: RockerCurves, title: str = "",
                            banner: str | None = None) -> Path:
     """motion.gif: one turn of the cam with the rocker; ``banner`` (the broken constraints) drawn
-    in red and the outline where it undercuts (roller) or crosses itself (flat face) drawn red."""
+    in red and the outline where it undercuts or passes the pressure-angle limit (roller) or crosses
+    itself (flat face) drawn red."""
     from camjax.output.animation import mechanism_from_rocker, rocker_violation_samples, write_motion_gif
 
     return write_motion_gif(path, mechanism_from_rocker(curves, title, banner,
