@@ -216,26 +216,28 @@ def _setup_design(p: argparse.ArgumentParser):
 
         progress("computing")
         with ExitStack() as stack:
-            # the figures' processes import matplotlib while JAX computes; ezdxf (and matplotlib
-            # for an animation or an oscillating follower's figures) loads in a second thread
-            workers = None if scene.follower.oscillating else _figure_workers(stack)
-            preload = threading.Thread(target=_import_drawing_modules, daemon=True,
-                                       args=(workers is None or args.animate,))
-            preload.start()
+            # the drawing processes import matplotlib and ezdxf while JAX computes; without them
+            # (an oscillating follower) or for an animation they load in a second thread here
+            workers = None if scene.follower.oscillating else _drawing_workers(stack)
+            preload = None
+            if workers is None or args.animate:
+                preload = threading.Thread(target=_import_drawing_modules, daemon=True)
+                preload.start()
             result = runtime.interruptible(analyse, scene, base_radius_mm=r)
-            preload.join()
+            if preload is not None:
+                preload.join()
             return _write_design(args, out, scene, result, workers, progress)
 
     return run
 
 
-def _figure_workers(stack):
-    """Started :class:`camjax.output.drawing.FigureWorkers` (closed with ``stack``), or None
-    where processes cannot be started (the figures are then drawn in this one)."""
-    from camjax.output.drawing import FigureWorkers
+def _drawing_workers(stack):
+    """Started :class:`camjax.output.drawing.DrawingWorkers` (closed with ``stack``), or None
+    where processes cannot be started (the figures and the DXF are then drawn in this one)."""
+    from camjax.output.drawing import DrawingWorkers
 
     try:
-        return stack.enter_context(FigureWorkers())
+        return stack.enter_context(DrawingWorkers())
     except OSError:
         return None
 
@@ -259,7 +261,7 @@ def _write_design(args, out, scene, result, workers, progress) -> int:
     with replaced_folder(out) as tmp:
         write_json(tmp / "result.json", d)
         written = write_design_files(tmp, result.curves, args.dpi, banner, title_block(d),
-                                     animate=args.animate, progress=progress, figure_workers=workers)
+                                     animate=args.animate, progress=progress, workers=workers)
         names = ["result.json"] + [p.name for p in written]
     print(f"scene {d['scene']}: min base radius {d['min_base_radius_mm']:.4f} mm at "
           f"{d['min_base_radius_deg']:g} deg")
@@ -291,14 +293,12 @@ def _write_design(args, out, scene, result, workers, progress) -> int:
     return STRICT_EXIT if broken and args.strict else 0
 
 
-def _import_drawing_modules(matplotlib: bool = True) -> None:
-    """Import what the DXF (and drawing here) needs (run in a thread beside the computation)."""
+def _import_drawing_modules() -> None:
+    """Import what drawing and the DXF need (run in a thread beside the computation)."""
     import ezdxf  # noqa: F401
+    import matplotlib.backends.backend_agg  # noqa: F401
 
-    if matplotlib:
-        import matplotlib.backends.backend_agg  # noqa: F401
-
-        import camjax.output.plots  # noqa: F401
+    import camjax.output.plots  # noqa: F401
 
 
 def add_samples_option(p: argparse.ArgumentParser) -> None:

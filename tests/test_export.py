@@ -141,12 +141,12 @@ def test_dxf_extents_and_centre_mark(written, csv_table):
     assert not doc.audit().has_errors
 
 
-def test_figure_workers_draw_the_in_process_figures_byte_for_byte(default_scene, default_arrays, tmp_path):
-    """The worker processes (camjax.output.drawing) draw what write_figures draws here: the same
-    PNG bytes (same matplotlib, same functions, same inputs: any difference is a lost field or
-    a different conversion on the way). An infeasible design with its banner, and 3 workers for
-    4 figures so that one worker draws two and the order is restored."""
-    from camjax.output.drawing import FigureWorkers
+def test_drawing_workers_write_the_in_process_files_byte_for_byte(default_scene, default_arrays, tmp_path):
+    """The worker processes (camjax.output.drawing) write what write_figures and write_profile_dxf
+    write here: the same PNG and DXF bytes (same matplotlib and ezdxf, same functions, same
+    inputs: any difference is a lost field or a different conversion on the way). An infeasible
+    design with its banner, and 3 workers for 5 files so that the order has to be restored."""
+    from camjax.output.drawing import DrawingWorkers
     from camjax.output.titles import title_block
 
     run = pipeline.analyse(default_scene, default_arrays, base_radius_mm=10.0)
@@ -154,26 +154,37 @@ def test_figure_workers_draw_the_in_process_figures_byte_for_byte(default_scene,
     (tmp_path / "here").mkdir()
     (tmp_path / "there").mkdir()
     here = export.write_figures(tmp_path / "here", run.curves, 40, banner, title)
-    with FigureWorkers(3) as workers:
+    here.append(export.write_profile_dxf(tmp_path / "here" / "profile.dxf", run.curves))
+    with DrawingWorkers(3) as workers:
         workers.draw(tmp_path / "there", run.curves, 40, banner, title)
         there = workers.wait()
     assert [p.name for p in there] == [p.name for p in here] == ["svaj.png", "profile.png", "loads.png",
-                                                                 "stress.png"]
-    for a, b in zip(here, there, strict=True):
+                                                                 "stress.png", "profile.dxf"]
+    for a, b in zip(here[:-1], there[:-1], strict=True):
         assert a.read_bytes() == b.read_bytes(), a.name
+    # a DXF carries its creation time and fresh GUIDs: compare what it draws
+    assert _dxf_content(here[-1]) == _dxf_content(there[-1])
 
 
-def test_figure_worker_failure_is_one_line(default_report, tmp_path):
-    from camjax.output.drawing import DrawingError, FigureWorkers
+def _dxf_content(path):
+    doc = ezdxf.readfile(path)
+    msp = doc.modelspace()
+    return ([tuple(map(tuple, e.get_points("xy"))) for e in msp.query("LWPOLYLINE")],
+            [(e.dxf.layer, tuple(e.dxf.start), tuple(e.dxf.end)) for e in msp.query("LINE")],
+            tuple(doc.header["$EXTMIN"]), tuple(doc.header["$EXTMAX"]))
 
-    with FigureWorkers(1) as workers:
+
+def test_drawing_worker_failure_is_one_line(default_report, tmp_path):
+    from camjax.output.drawing import DrawingError, DrawingWorkers
+
+    with DrawingWorkers(1) as workers:
         workers.draw(tmp_path / "missing" / "folder", default_report.curves, 40)
-        with pytest.raises(DrawingError, match=r"^drawing the figures failed: FileNotFoundError") as info:
+        with pytest.raises(DrawingError, match=r"^drawing the figures and the DXF failed: FileNotFoundError") as info:
             workers.wait()
     assert "\n" not in str(info.value)
 
 
-def test_figure_workers_do_not_import_jax():
+def test_drawing_workers_do_not_import_jax():
     """A worker enters camjax without its __init__ (which imports JAX): that is its head start."""
     import subprocess
     import sys
@@ -181,7 +192,7 @@ def test_figure_workers_do_not_import_jax():
     from camjax.output import drawing
 
     code = drawing._BOOT.replace("from camjax.output.drawing import serve; serve()",
-                                 "import camjax.output.plots, camjax.output.drawing; "
+                                 "import camjax.output.plots, camjax.output.export, camjax.output.drawing; "
                                  "print('jax' in sys.modules)")
     out = subprocess.run([sys.executable, "-c", code, str(drawing.PACKAGE_DIR)], capture_output=True,
                          text=True, check=True)

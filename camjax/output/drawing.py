@@ -1,15 +1,16 @@
-"""Figures drawn in processes of their own, started before the computation they draw.
+"""Figures and the DXF drawn in processes of their own, started before the computation they draw.
 
 Drawing a design's four PNG figures takes about as long on 2 CPU cores as computing the design
-when JAX's caches are warm, and importing matplotlib a third of that. :class:`FigureWorkers`
-starts fresh Python processes that import NumPy and matplotlib (not JAX: they enter the camjax
-package without running its ``__init__``) while the caller computes; :meth:`FigureWorkers.draw`
-then hands them the curves and each draws and writes its share of
-:func:`camjax.output.plots.figure_builders`. The figures are the ones
-:func:`camjax.output.export.write_figures` draws in-process, byte for byte.
+when JAX's caches are warm, and importing matplotlib and ezdxf half of that again.
+:class:`DrawingWorkers` starts fresh Python processes that import NumPy, matplotlib and ezdxf (not
+JAX: they enter the camjax package without running its ``__init__``) while the caller computes;
+:meth:`DrawingWorkers.draw` then hands them the curves and each draws and writes its share of
+the figures of :func:`camjax.output.plots.figure_builders` and profile.dxf. The files are the
+ones :func:`camjax.output.export.write_figures` and
+:func:`camjax.output.export.write_profile_dxf` write in-process, byte for byte.
 
-A worker that cannot start, or fails, is reported as an exception from :meth:`FigureWorkers.wait`
-(one line); :meth:`FigureWorkers.close` ends every worker still running (the caller's ``with``).
+A worker that cannot start, or fails, is reported as an exception from :meth:`DrawingWorkers.wait`
+(one line); :meth:`DrawingWorkers.close` ends every worker still running (the caller's ``with``).
 """
 
 from __future__ import annotations
@@ -30,8 +31,9 @@ class DrawingError(RuntimeError):
     """A figure worker failed: its one-line reason."""
 
 
-class FigureWorkers:
-    """``count`` figure processes, started now, importing matplotlib while the caller computes.
+class DrawingWorkers:
+    """``count`` drawing processes, started now, importing matplotlib and ezdxf while the caller
+    computes.
 
     Use as a context manager; :meth:`draw` once, then :meth:`wait` for the written paths.
     """
@@ -49,9 +51,9 @@ class FigureWorkers:
 
     def draw(self, folder: str | Path, curves, dpi: int = 100, banner: str | None = None,
              title: str = "") -> None:
-        """Send the job: worker k of n draws figures k, k + n, ... of the curves into ``folder``
-        (``curves``: :class:`camjax.evaluate.DesignCurves`; the rest as
-        :func:`camjax.output.export.write_figures`)."""
+        """Send the job: worker k of n writes files k, k + n, ... of (the figures, profile.dxf)
+        of the curves into ``folder`` (``curves``: :class:`camjax.evaluate.DesignCurves`; the
+        rest as :func:`camjax.output.export.write_figures`)."""
         fields = {k: _plain(v) for k, v in curves._asdict().items()}
         for k, proc in enumerate(self._procs):
             job = {"folder": str(folder), "curves": fields, "dpi": dpi, "banner": banner, "title": title,
@@ -63,8 +65,8 @@ class FigureWorkers:
                 pass
 
     def wait(self) -> list[Path]:
-        """The written figures, in :func:`~camjax.output.plots.figure_builders` order;
-        :class:`DrawingError` if a worker failed."""
+        """The written files: the figures in :func:`~camjax.output.plots.figure_builders` order,
+        then profile.dxf; :class:`DrawingError` if a worker failed."""
         written: dict[int, Path] = {}
         for proc in self._procs:
             out = proc.stdout.read()
@@ -72,9 +74,9 @@ class FigureWorkers:
             try:
                 reply = pickle.loads(out)
             except Exception:
-                raise DrawingError(f"a figure process exited with status {code} and no reply") from None
+                raise DrawingError(f"a drawing process exited with status {code} and no reply") from None
             if "error" in reply:
-                raise DrawingError(f"drawing the figures failed: {reply['error']}")
+                raise DrawingError(f"drawing the figures and the DXF failed: {reply['error']}")
             written.update({int(i): Path(p) for i, p in reply["written"]})
         return [written[i] for i in sorted(written)]
 
@@ -88,7 +90,7 @@ class FigureWorkers:
                 if stream is not None and not stream.closed:
                     stream.close()
 
-    def __enter__(self) -> FigureWorkers:
+    def __enter__(self) -> DrawingWorkers:
         return self
 
     def __exit__(self, *exc) -> None:
@@ -109,11 +111,12 @@ def _plain(value):
 
 
 def serve() -> None:
-    """A worker's main: import matplotlib, read one job from stdin, draw its share, reply on
-    stdout (pickled ``{"written": [(index, path), ...]}`` or ``{"error": "one line"}``)."""
-    from matplotlib.backends import backend_agg  # noqa: F401  (imported before the job arrives)
+    """A worker's main: import matplotlib and ezdxf, read one job from stdin, write its share,
+    reply on stdout (pickled ``{"written": [(index, path), ...]}`` or ``{"error": "one line"}``)."""
+    import ezdxf  # noqa: F401  (both imported before the job arrives)
+    from matplotlib.backends import backend_agg  # noqa: F401
 
-    from camjax.output import plots
+    from camjax.output import export, plots
 
     reply: dict
     try:
@@ -121,14 +124,18 @@ def serve() -> None:
         curves = types.SimpleNamespace(**job["curves"])
         k, n = job["share"]
         folder = Path(job["folder"])
+        tasks = list(plots.figure_builders(curves).items()) + [("profile.dxf", None)]
         written = []
-        for i, (name, build) in enumerate(plots.figure_builders(curves).items()):
+        for i, (name, build) in enumerate(tasks):
             if i % n != k:
                 continue
-            fig = build(curves, job["title"])
-            if job["banner"]:
-                plots.stamp_banner(fig, job["banner"])
-            fig.savefig(folder / name, dpi=job["dpi"])
+            if build is None:
+                export.write_profile_dxf(folder / name, curves)
+            else:
+                fig = build(curves, job["title"])
+                if job["banner"]:
+                    plots.stamp_banner(fig, job["banner"])
+                fig.savefig(folder / name, dpi=job["dpi"])
             written.append((i, str(folder / name)))
         reply = {"written": written}
     except BaseException as exc:  # reported to the caller as one line

@@ -9,10 +9,12 @@ theta measured clockwise).
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from camjax.evaluate import DesignCurves
+if TYPE_CHECKING:  # imported without JAX: the DXF is written in worker processes (camjax.output.drawing)
+    from camjax.evaluate import DesignCurves
 
 CSV_FORMAT = "%.12f"  # 1e-12 mm: far below any machining tolerance, round-trips the geometry
 
@@ -117,14 +119,14 @@ def write_animation(path: Path, curves: DesignCurves, title: str = "", banner: s
 
 def write_design_files(folder: str | Path, curves: DesignCurves, dpi: int = 100,
                        banner: str | None = None, title: str = "", animate: bool = False,
-                       progress=None, figure_workers=None) -> list[Path]:
+                       progress=None, workers=None) -> list[Path]:
     """Figures, profile.csv and profile.dxf (and motion.gif when ``animate``) into ``folder``
     (created if needed); the written paths. ``banner`` and ``title`` as in :func:`write_figures`;
     ``progress(phase)`` (optional) is told "figures", "files" and "animation" as each starts. An
     oscillating follower's files come from :mod:`camjax.output.rocker`.
 
-    ``figure_workers``: a started :class:`camjax.output.drawing.FigureWorkers` draws the figures
-    in its processes while this one writes the profile files (the same figures as without it).
+    ``workers``: started :class:`camjax.output.drawing.DrawingWorkers` draw the figures and the
+    DXF in their processes while this one writes the CSV (the same files as without them).
     """
     from camjax.rocker import RockerCurves
 
@@ -136,16 +138,17 @@ def write_design_files(folder: str | Path, curves: DesignCurves, dpi: int = 100,
     folder.mkdir(parents=True, exist_ok=True)
     say = progress or (lambda phase: None)
     say("figures")
-    if figure_workers is not None:
-        figure_workers.draw(folder, curves, dpi, banner, title)
+    if workers is not None:
+        workers.draw(folder, curves, dpi, banner, title)
+        say("files")
+        csv = write_profile_csv(folder / "profile.csv", curves)
+        *paths, dxf = workers.wait()
+        paths += [csv, dxf]
     else:
         paths = write_figures(folder, curves, dpi, banner, title)
-    say("files")
-    files = [write_profile_csv(folder / "profile.csv", curves),
-             write_profile_dxf(folder / "profile.dxf", curves)]
-    if figure_workers is not None:
-        paths = figure_workers.wait()
-    paths += files
+        say("files")
+        paths += [write_profile_csv(folder / "profile.csv", curves),
+                  write_profile_dxf(folder / "profile.dxf", curves)]
     if animate:
         say("animation")
         paths.append(write_animation(folder / "motion.gif", curves, title, banner))
