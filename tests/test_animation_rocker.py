@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 from PIL import Image
 from reference import reference_motion
+from test_cli import break_outline
 from test_rocker import FLAT_SCENE, ROLLER_SCENE
 
 from camjax import cli, pipeline
@@ -220,15 +221,7 @@ def test_undrawable_rocker_is_refused(rocker):
 def test_design_refuses_an_undrawable_rocker_in_one_line(tmp_path, capsys, monkeypatch):
     from camjax import rocker
 
-    real = rocker.evaluate_rocker
-
-    def broken(*args, **kwargs):  # an outline with a NaN point cannot be drawn
-        curves = real(*args, **kwargs)
-        y = curves.profile_y_mm.copy()
-        y[11] = np.inf
-        return curves._replace(profile_y_mm=y)
-
-    monkeypatch.setattr(rocker, "evaluate_rocker", broken)
+    break_outline(monkeypatch, rocker, "evaluate_rocker", "profile_y_mm", 11, float("inf"))
     path = tmp_path / "scene.toml"
     path.write_text(ROLLER_SCENE.replace("ROT", "ccw"))
     out = tmp_path / "out"

@@ -227,20 +227,24 @@ def test_design_animate_writes_the_gif_even_when_infeasible(tmp_path, capsys):
     assert "motion.gif" in printed
 
 
-def test_design_refuses_an_undrawable_outline_in_one_line(tmp_path, capsys, monkeypatch):
-    import numpy as np
+def break_outline(monkeypatch, module, function: str, field: str, index: int, value: float) -> None:
+    """Make ``module.function`` (an evaluation returning curves) put ``value`` at ``field[index]``:
+    an outline with a NaN or infinite point cannot be drawn."""
+    real = getattr(module, function)
 
+    def broken(*args, **kwargs):
+        curves = real(*args, **kwargs)
+        values = getattr(curves, field).copy()
+        values[index] = value
+        return curves._replace(**{field: values})
+
+    monkeypatch.setattr(module, function, broken)
+
+
+def test_design_refuses_an_undrawable_outline_in_one_line(tmp_path, capsys, monkeypatch):
     from camjax import pipeline
 
-    real = pipeline.evaluate_design
-
-    def broken(*args, **kwargs):  # an outline with a NaN point cannot be drawn
-        curves = real(*args, **kwargs)
-        x = curves.profile_x_mm.copy()
-        x[7] = np.nan
-        return curves._replace(profile_x_mm=x)
-
-    monkeypatch.setattr(pipeline, "evaluate_design", broken)
+    break_outline(monkeypatch, pipeline, "evaluate_design", "profile_x_mm", 7, float("nan"))
     out = tmp_path / "out"
     assert cli.main(["design", "--out", str(out), "--dpi", "30", "--animate"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
