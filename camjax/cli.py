@@ -233,11 +233,18 @@ def _setup_design(p: argparse.ArgumentParser):
 
 def _drawing_workers(stack):
     """Started :class:`camjax.output.drawing.DrawingWorkers` (closed with ``stack``), or None
-    where processes cannot be started (the figures and the DXF are then drawn in this one)."""
+    where processes cannot be started or $CAMJAX_DRAWING_PROCESSES is 0 (the figures and the DXF
+    are then drawn in this one). $CAMJAX_DRAWING_PROCESSES: how many (default 2)."""
     from camjax.output.drawing import DrawingWorkers
 
+    text = os.environ.get("CAMJAX_DRAWING_PROCESSES", "2")
+    if not (text.isdigit() and int(text) <= 16):
+        raise UsageError(f"CAMJAX_DRAWING_PROCESSES = {quote(text)}: not a count (allowed: 0 to 16; 0 "
+                         "draws in the command's own process)")
+    if int(text) == 0:
+        return None
     try:
-        return stack.enter_context(DrawingWorkers())
+        return stack.enter_context(DrawingWorkers(int(text)))
     except OSError:
         return None
 
@@ -680,5 +687,24 @@ def main(argv: list[str] | None = None) -> int:
         undo()
 
 
+def entry() -> None:
+    """The ``camjax`` command (and ``python -m camjax.cli``): :func:`main`, then leave at once.
+
+    The interpreter's teardown after a JAX computation (its backends and about a thousand
+    modules) takes 0.2 s, a tenth of a warm design run; every file is written and closed and
+    every child process waited for by then, so the process ends with ``os._exit`` after flushing
+    its output. Ray, when a command used it, shuts down through the normal exit.
+    """
+    code = main()
+    try:
+        sys.stdout.flush()
+        sys.stderr.flush()
+    except OSError:  # a closed pipe: nothing more can be said
+        pass
+    if "ray" in sys.modules:
+        sys.exit(code)
+    os._exit(code)
+
+
 if __name__ == "__main__":
-    sys.exit(main())
+    entry()

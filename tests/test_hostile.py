@@ -539,6 +539,7 @@ def test_an_interrupted_write_leaves_the_old_or_the_new_complete_folder(tmp_path
         (place / "scene.toml").write_text(_scene_text(rpm, angles, lift, law, samples))
         with pytest.MonkeyPatch.context() as mp:
             mp.setenv("CAMJAX_COMPILATION_CACHE", "0")
+            mp.setenv("CAMJAX_DRAWING_PROCESSES", "0")  # every write in this process, where it is counted
             seen = _counting_writes(mp, place, fail_at, error)
             rc = cli.main(["design", str(place / "scene.toml"), "--dpi", "10", "--out", str(place / "out")])
         after = snapshot(place / "out")
@@ -556,6 +557,29 @@ def test_an_interrupted_write_leaves_the_old_or_the_new_complete_folder(tmp_path
     outcomes: set[bool] = set()
     check()
     assert outcomes == {True, False}  # both interrupted and finished runs were drawn
+
+
+def test_a_failed_drawing_process_leaves_the_folder_as_it_was(place, monkeypatch, capsys):
+    """A drawing process that fails (here: its figure function raises) ends the run with one
+    line and status 1, and the output folder keeps its old files."""
+    from camjax.output import drawing
+
+    before = snapshot(place / "out")
+    boot = drawing._BOOT.replace("serve()", "import camjax.output.plots as p; "
+                                 "p.svaj_figure = p.profile_figure = lambda *a: 1 / 0; serve()")
+    monkeypatch.setattr(drawing, "_BOOT", boot)  # both workers fail: ZeroDivisionError
+    rc = cli.main(["design", "--dpi", "10", "--out", str(place / "out")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 1 and len(err) == 1, err
+    assert err[0].startswith("camjax design: error: DrawingError: drawing the figures and the DXF failed")
+    assert snapshot(place / "out") == before and leftovers(place) == []
+
+
+def test_drawing_processes_count_is_checked(place, monkeypatch, capsys):
+    monkeypatch.setenv("CAMJAX_DRAWING_PROCESSES", "many")
+    assert cli.main(["design", "--out", str(place / "out")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "CAMJAX_DRAWING_PROCESSES = 'many': not a count (allowed: 0 to 16" in err
 
 
 def test_roller_violations_agree_with_the_minimum_base_radius():

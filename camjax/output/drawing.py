@@ -25,6 +25,7 @@ from pathlib import Path
 _BOOT = ("import sys, types; package = types.ModuleType('camjax'); package.__path__ = [sys.argv[1]]; "
          "sys.modules['camjax'] = package; from camjax.output.drawing import serve; serve()")
 PACKAGE_DIR = Path(__file__).resolve().parent.parent
+DXF_NAME = "profile.dxf"  # written after the figures, as camjax.output.export.write_design_files does
 
 
 class DrawingError(RuntimeError):
@@ -124,13 +125,13 @@ def serve() -> None:
         curves = types.SimpleNamespace(**job["curves"])
         k, n = job["share"]
         folder = Path(job["folder"])
-        tasks = list(plots.figure_builders(curves).items()) + [("profile.dxf", None)]
+        tasks = list(plots.figure_builders(curves).items()) + [(DXF_NAME, export.write_profile_dxf)]
         written = []
         for i, (name, build) in enumerate(tasks):
             if i % n != k:
                 continue
-            if build is None:
-                export.write_profile_dxf(folder / name, curves)
+            if name == DXF_NAME:
+                build(folder / name, curves)
             else:
                 fig = build(curves, job["title"])
                 if job["banner"]:
