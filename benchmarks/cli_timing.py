@@ -78,9 +78,11 @@ def dynamics(runs: int, reference: dict) -> dict:
 def design(runs: int, reference: dict) -> dict:
     """``camjax design`` on the default scene (this checkout's package, a temporary output folder).
 
-    Phases from the command's progress lines: import (until "computing": Python, JAX, camjax
-    and the scene), compute (the design run and its report), plots (the PNG figures, matplotlib
-    imported inside), files (result.json, profile.csv, profile.dxf with ezdxf imported inside).
+    Phases from the command's progress lines, each lasting until the next: import (until
+    "computing": Python, JAX, camjax and the scene), compute (the design run and its report),
+    files (result.json and profile.csv written here, while the drawing processes draw), plots
+    (waiting for the drawing processes: the PNG figures and profile.dxf, then the folder swap and
+    the exit).
     """
     with tempfile.TemporaryDirectory(prefix="camjax-cli-timing-") as tmp:
         argv = [sys.executable, "-m", "camjax.cli", "design", "--out", str(Path(tmp) / "out")]
@@ -89,7 +91,7 @@ def design(runs: int, reference: dict) -> dict:
     names = {"computing": "compute", "figures": "plots", "files": "files"}
     marks = [(0.0, "import"),
              *((t, names[line.removeprefix("camjax design: ")]) for t, line in r["phases_s"]),
-             (r["wall_s"], "")]  # "files" runs to the end of the process (exit included)
+             (r["wall_s"], "")]  # the last phase runs to the end of the process (exit included)
     phases = {name: round(t_next - t, 3)
               for (t, name), (t_next, _) in zip(marks[:-1], marks[1:], strict=True)}
     return {"cli.design_s": r["wall_s"], "cli.design_walls_s": r["walls_s"], "cli.design_cpu_s": r["cpu_s"],

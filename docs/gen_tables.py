@@ -1,6 +1,6 @@
 """Tables and figures of the documentation, generated from the JSON that camjax's own commands write.
 
-Four sources, all committed (:data:`SOURCES`):
+Six sources, all committed (:data:`SOURCES`):
 
 - ``bench``, ``benchmarks/results/full.json``: ``python benchmarks/run.py --out
   benchmarks/results/full.json``;
@@ -11,7 +11,9 @@ Four sources, all committed (:data:`SOURCES`):
 - ``dynamics``, ``docs/data/thesis-bench/dynamics.json``: ``python -m camjax.cli dynamics
   thesis-bench --out DIR``, then ``cp DIR/dynamics.json docs/data/thesis-bench/``;
 - ``roller``, ``benchmarks/results/roller.json``: ``python -m benchmarks.roller --out
-  benchmarks/results/roller.json``.
+  benchmarks/results/roller.json``;
+- ``cli``, ``benchmarks/results/cli_timing.json``: ``python benchmarks/cli_timing.py --runs 5 --out
+  benchmarks/results/cli_timing.json``.
 
 A page asks for a table with a line ``{{ table: NAME }}`` (NAME one of :data:`TABLES`) and for a
 single figure with ``{{ SOURCE: dotted.path[*factor][:format] }}``, e.g.
@@ -39,6 +41,7 @@ SOURCES = {
     "result": ROOT / "docs" / "data" / "default" / "result.json",
     "dynamics": ROOT / "docs" / "data" / "thesis-bench" / "dynamics.json",
     "roller": ROOT / "benchmarks" / "results" / "roller.json",
+    "cli": ROOT / "benchmarks" / "results" / "cli_timing.json",
 }
 
 
@@ -57,14 +60,13 @@ def _g(v, digits: int = 3) -> str:
 
 
 def lookup(data, path: str):
-    """``data`` followed along a dotted path; integer parts index lists."""
-    value = data
-    for part in path.split("."):
-        if isinstance(value, list):
-            value = value[int(part)]
-        else:
-            value = value[part]
-    return value
+    """``data`` followed along a dotted path; integer parts index lists. A key that itself holds
+    dots (``cli.design_s``) is taken whole where the rest of the path names it."""
+    if isinstance(data, dict) and path in data:
+        return data[path]
+    head, _, rest = path.partition(".")
+    value = data[int(head)] if isinstance(data, list) else data[head]
+    return lookup(value, rest) if rest else value
 
 
 # ------------------------------------------------------------------------------------ benchmark

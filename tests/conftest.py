@@ -19,23 +19,23 @@ def pytest_configure(config):
 
 
 def _persistent_compilation_cache(config) -> None:
-    """Keep compiled kernels between test runs, in .pytest_cache/d/jax-compilation (and the CLI's
-    saved programs in .pytest_cache/d/jax-programs).
+    """Keep compiled kernels between test runs, in .pytest_cache/d/jax-compilation.
 
     XLA compiles are most of the suite's time; with them cached, a repeated quick loop
     (``-m "not slow"``) runs far faster. Turned on here, before any test, so a session does not
     depend on which CLI test first turns on the command's own cache. CAMJAX_COMPILATION_CACHE=0 (or
     ``-p no:cacheprovider``) runs without it, and then no CLI test turns one on either.
     """
+    # The CLI tests trace as the library does: a saved program (camjax.runtime.program_cache)
+    # compiles a module of its own, which would add a compile per scene shape to a fresh run;
+    # tests/test_runtime.py and the CLI tests marked for it turn the program cache on themselves.
+    os.environ.setdefault("CAMJAX_PROGRAM_CACHE", "0")
     cache = getattr(config, "cache", None)
     if os.environ.get("CAMJAX_COMPILATION_CACHE") == "0" or cache is None:
         os.environ["CAMJAX_COMPILATION_CACHE"] = "0"
-        os.environ.setdefault("CAMJAX_PROGRAM_CACHE", "0")
         return
     if not jax.config.jax_compilation_cache_dir:  # one set through JAX itself wins
         use_compilation_cache(cache.mkdir("jax-compilation"))
-    # the CLI tests' saved programs (camjax.runtime.program_cache) stay out of the user's home too
-    os.environ.setdefault("CAMJAX_PROGRAM_CACHE", str(cache.mkdir("jax-programs")))
 
 
 @pytest.fixture(scope="session")

@@ -124,3 +124,33 @@ def test_design_solve_through_a_saved_program_matches(cache, default_scene, defa
     base._COMPILED.clear()
     _same(saved.design, traced.design)
     _same(saved.evaluation, traced.evaluation)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("command, scene, name", [("design", "roller", "result.json"),
+                                                  ("dynamics", "thesis-bench", "dynamics.json")])
+def test_cli_with_saved_programs_writes_what_it_writes_without(command, scene, name, tmp_path, monkeypatch):
+    """The command line as users run it (program cache on: first run exports, second loads)
+    against the same command with the cache off: the same JSON, value for value."""
+    import json
+
+    from camjax import cli
+
+    monkeypatch.setenv("CAMJAX_PROGRAM_CACHE", "0")
+    assert cli.main([command, scene, "--out", str(tmp_path / "off")]) == 0
+    before = runtime._PROGRAM_DIR[0]
+    monkeypatch.setenv("CAMJAX_PROGRAM_CACHE", str(tmp_path / "programs"))
+    try:
+        assert cli.main([command, scene, "--out", str(tmp_path / "cold")]) == 0
+        assert list((tmp_path / "programs").glob(f"*{runtime.PROGRAM_SUFFIX}"))
+        runtime._LOADED.clear()  # as a fresh process: read the saved programs back
+        from camjax.solvers import base
+
+        base._COMPILED.clear()
+        assert cli.main([command, scene, "--out", str(tmp_path / "warm")]) == 0
+    finally:
+        runtime._PROGRAM_DIR[0] = before
+        runtime._LOADED.clear()
+    off = json.loads((tmp_path / "off" / name).read_text())
+    for run in ("cold", "warm"):
+        assert json.loads((tmp_path / run / name).read_text()) == off, run

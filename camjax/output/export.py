@@ -137,14 +137,15 @@ def write_design_files(folder: str | Path, curves: DesignCurves, dpi: int = 100,
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     say = progress or (lambda phase: None)
-    say("figures")
-    if workers is not None:
+    if workers is not None:  # they draw while the CSV is written here; "figures": waiting for them
         workers.draw(folder, curves, dpi, banner, title)
         say("files")
         csv = write_profile_csv(folder / "profile.csv", curves)
+        say("figures")
         *paths, dxf = workers.wait()
         paths += [csv, dxf]
     else:
+        say("figures")
         paths = write_figures(folder, curves, dpi, banner, title)
         say("files")
         paths += [write_profile_csv(folder / "profile.csv", curves),
