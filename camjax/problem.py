@@ -480,25 +480,45 @@ def polish(problem: Problem, weights: Weights, design: Design) -> Design:
     r1 = jnp.clip(r0 + POLISH_START_STEP * (hi - lo), lo, hi)
     r1 = jnp.where(r1 == r0, jnp.clip(r0 - POLISH_START_STEP * (hi - lo), lo, hi), r1)
     points = jnp.stack([lo, hi, r0, r1])
-    slopes = jax.vmap(slope)(points)  # one traced copy of the refinement
-    g_lo, g_hi, g0, g1 = slopes
-    a = jnp.max(jnp.where(slopes < 0, points, lo))
-    b = jnp.min(jnp.where(slopes >= 0, points, hi))
+    starts = points.shape[0]
 
-    def step(_, state):
+    def secant(state):
         a, b, x0, g0, x1, g1, best, g_best = state
         # secant through the last two iterates; bisection when it leaves the bracket (whose ends
         # count as inside: a converged iterate is an end, and the secant then stays on it)
         x = x1 - g1 * safe_divide(x1 - x0, g1 - g0)
-        x = jnp.where((x >= a) & (x <= b), x, 0.5 * (a + b))
-        gx = slope(x)
+        return jnp.where((x >= a) & (x <= b), x, 0.5 * (a + b))
+
+    def after_secant(state, x, gx):
+        a, b, x0, g0, x1, g1, best, g_best = state
         a, b = jnp.where(gx < 0, x, a), jnp.where(gx < 0, b, x)
         closer = jnp.abs(gx) < jnp.abs(g_best)
         return a, b, x1, g1, x, gx, jnp.where(closer, x, best), jnp.where(closer, gx, g_best)
 
-    start_best = jnp.where(jnp.abs(g1) < jnp.abs(g0), r1, r0)
-    state = (a, b, r0, g0, r1, g1, start_best, jnp.minimum(jnp.abs(g0), jnp.abs(g1)))
-    x = jax.lax.fori_loop(0, POLISH_STEPS, step, state)[6]  # the point of smallest |g'| seen
+    def after_starts(slopes):
+        g0, g1 = slopes[2], slopes[3]
+        a = jnp.max(jnp.where(slopes < 0, points, lo))
+        b = jnp.min(jnp.where(slopes >= 0, points, hi))
+        start_best = jnp.where(jnp.abs(g1) < jnp.abs(g0), r1, r0)
+        return a, b, r0, g0, r1, g1, start_best, jnp.minimum(jnp.abs(g0), jnp.abs(g1))
+
+    def step(i, carry):
+        # the first ``starts`` passes take the start points' slopes, the rest are secant steps:
+        # one loop body, so the refinement behind the slope is traced (and compiled) once
+        slopes, state = carry
+        starting = i < starts
+        x = jnp.where(starting, points[jnp.minimum(i, starts - 1)], secant(state))
+        gx = slope(x)
+        slopes = jnp.where(starting & (jnp.arange(starts) == i), gx, slopes)
+        state = jax.tree.map(lambda s, t: jnp.where(starting, s, t), after_starts(slopes),
+                             after_secant(state, x, gx))
+        return slopes, state
+
+    zero = jnp.zeros_like(lo)
+    carry = (jnp.zeros_like(points), (zero,) * 8)
+    slopes, state = jax.lax.fori_loop(0, starts + POLISH_STEPS, step, carry)
+    g_lo, g_hi = slopes[0], slopes[1]
+    x = state[6]  # the point of smallest |g'| seen
     radius = jnp.where(g_lo >= 0, lo, jnp.where(g_hi <= 0, hi, x))
     return Design(jax.lax.stop_gradient(radius), width)
 
