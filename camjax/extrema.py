@@ -76,25 +76,26 @@ def segment_sample_ranges(bounds_deg, samples: int) -> tuple[tuple[int, int], ..
     return tuple(out)
 
 
-def _slope_and_curvature(fn: SegmentFunction, segment: int, theta_deg, params):
-    """f'(theta) and f''(theta) (per deg, per deg^2) by forward-mode AD through the closed form."""
+def _value_slope_curvature(fn: SegmentFunction, segment: int, theta_deg, params):
+    """f(theta), f'(theta) and f''(theta) (per deg, per deg^2) by forward-mode AD through the closed form."""
     ones = jnp.ones_like(theta_deg)
 
-    def slope(t):
-        return jax.jvp(lambda u: fn(segment, u, params), (t,), (ones,))[1]
+    def value_and_slope(t):
+        return jax.jvp(lambda u: fn(segment, u, params), (t,), (ones,))
 
-    return jax.jvp(slope, (theta_deg,), (ones,))
+    (f, g), (_, h) = jax.jvp(value_and_slope, (theta_deg,), (ones,))
+    return f, g, h
 
 
-def _brackets(fn, segment, bounds, sample_range, grid_values, candidates, params):
-    """Sub-grid of one segment ([start] + its samples + [end]) and the brackets of its best local maxima.
+def _brackets(ends, bounds, sample_range, grid_values, k):
+    """Sub-grid of one segment ([start] + its samples + [end]) and the brackets of its ``k`` best
+    local maxima, from ``ends`` (2,), the segment's one-sided limits at its start and end.
 
     Returns (a, c, b), each of shape (k,): bracket ends and the sample in between (deg).
     """
     (lo, hi), (i0, i1) = bounds, sample_range
     values = grid_values[i0:i1]
     dtype = values.dtype
-    ends = fn(segment, jnp.asarray([lo, hi], dtype), params)  # one-sided limits from inside
     # the grid's own angle expression (program.sample_angles_deg), so samples match bitwise
     samples = jnp.arange(i0, i1, dtype=dtype) * (360.0 / grid_values.shape[0])
     angles = jnp.concatenate([jnp.asarray([lo], dtype), samples, jnp.asarray([hi], dtype)])
@@ -103,38 +104,25 @@ def _brackets(fn, segment, bounds, sample_range, grid_values, candidates, params
     left = jnp.concatenate([jnp.full((1,), -jnp.inf, dtype), vals[:-1]])
     right = jnp.concatenate([vals[1:], jnp.full((1,), -jnp.inf, dtype)])
     local = (vals >= left) & (vals >= right)
-    k = min(candidates, m)
     # rank local maxima first, by value; the rest (masked to -inf) only fill the k slots
     _, idx = jax.lax.top_k(jnp.where(local, vals, -jnp.inf), k)
     return angles[jnp.maximum(idx - 1, 0)], angles[idx], angles[jnp.minimum(idx + 1, m - 1)]
 
 
-def _newton_step(fn, segment, params, state):
-    """One safeguarded Newton step on f' = 0 inside [a, b] (f'(a) > 0 > f'(b) while bracketed)."""
-    a, b, x, bracketed = state
-    g, h = _slope_and_curvature(fn, segment, x, params)
-    rising = g > 0
-    a = jnp.where(bracketed & rising, x, a)
-    b = jnp.where(bracketed & ~rising, x, b)
-    newton = x - safe_divide(g, h)
-    # Newton only towards a maximum (h < 0) and inside the shrunk bracket, else bisect; the ends
-    # count as inside: once converged, a Newton step lands on x, which is now an end
-    take = (h < 0) & (newton >= a) & (newton <= b)
-    step = jnp.where(take, newton, 0.5 * (a + b))
-    x = jnp.where(bracketed & (g != 0), step, x)
-    return a, b, x, bracketed
+def _scan_angles(a0, b0, points):
+    """``points`` + 1 equally spaced angles over each bracket [a0, b0] (shape (k,)): shape (k, points + 1)."""
+    frac = jnp.linspace(0.0, 1.0, points + 1, dtype=a0.dtype)
+    return a0[:, None] + (b0 - a0)[:, None] * frac
 
 
-def _sub_bracket(fn, segment, a0, b0, params, points):
-    """Split [a0, b0] (shape (k,)) into ``points`` steps; the step where f' turns from + to - with
-    the largest f at its ends (shape (k,) each: a, b, bracketed, and the best point seen).
+def _sub_bracket(t, f, g):
+    """From f and f' at the scan angles ``t`` (shape (k, points + 1) each): the step where f' turns
+    from + to - with the largest f at its ends (shape (k,) each: a, b, bracketed, and the best
+    point seen).
 
     Two samples' bracket can hold a peak and a trough (f' + - + at its ends and middle: a
     cycloid's s'' between a joint and x = 1/2): the ends' slopes alone would miss the peak.
     """
-    frac = jnp.linspace(0.0, 1.0, points + 1, dtype=a0.dtype)
-    t = a0[:, None] + (b0 - a0)[:, None] * frac
-    f, g = jax.jvp(lambda u: fn(segment, u, params), (t,), (jnp.ones_like(t),))
     f = jnp.where(jnp.isnan(f), -jnp.inf, f)
     turns = (g[:, :-1] > 0) & (g[:, 1:] < 0)
     height = jnp.where(turns, jnp.maximum(f[:, :-1], f[:, 1:]), -jnp.inf)
@@ -144,15 +132,82 @@ def _sub_bracket(fn, segment, a0, b0, params, points):
     return t[rows, m], t[rows, m + 1], jnp.any(turns, axis=1), best
 
 
-def _refine_segment(fn, segment, a0, c, b0, params, iterations, points):
-    """Best of (the sample c, the scan's best point, the refined root) over the brackets: angle, deg."""
-    a, b, bracketed, best = _sub_bracket(fn, segment, a0, b0, params, points)
-    state = (a, b, 0.5 * (a + b), bracketed)
-    _, _, x, _ = jax.lax.fori_loop(0, iterations, lambda _, s: _newton_step(fn, segment, params, s), state)
-    angles = jnp.concatenate([c, best, x])
-    values = fn(segment, angles, params)
-    i = jnp.argmax(jnp.where(jnp.isnan(values), -jnp.inf, values))
-    return angles[i]
+def _newton_step(a, b, x, bracketed, g, h):
+    """One safeguarded Newton step on f' = 0 inside [a, b] (f'(a) > 0 > f'(b) while bracketed),
+    from g = f'(x) and h = f''(x): the new (a, b, x)."""
+    rising = g > 0
+    a = jnp.where(bracketed & rising, x, a)
+    b = jnp.where(bracketed & ~rising, x, b)
+    newton = x - safe_divide(g, h)
+    # Newton only towards a maximum (h < 0) and inside the shrunk bracket, else bisect; the ends
+    # count as inside: once converged, a Newton step lands on x, which is now an end
+    take = (h < 0) & (newton >= a) & (newton <= b)
+    step = jnp.where(take, newton, 0.5 * (a + b))
+    return a, b, jnp.where(bracketed & (g != 0), step, x)
+
+
+class _Search(NamedTuple):
+    """State of one segment's refinement (shape (k,) each but ``angle``, shape ())."""
+
+    a0: jax.Array  # the candidates' two-sample brackets and the sample between (deg)
+    c: jax.Array
+    b0: jax.Array
+    a: jax.Array  # the scanned sub-brackets, shrunk by the Newton steps (deg)
+    b: jax.Array
+    x: jax.Array  # the Newton iterate (deg)
+    bracketed: jax.Array  # bool: the scan found f' turning from + to -
+    best: jax.Array  # the scan's best point (deg)
+    angle: jax.Array  # the result: best of (c, best, x) over the candidates (deg)
+
+
+def _refine_segment(fn, segment, bounds, sample_range, grid_values, params, candidates, iterations, points):
+    """The angle of the segment's max (deg, shape ()): best of (the sample, the scan's best point,
+    the refined root) over its ``candidates`` brackets.
+
+    One loop whose every pass evaluates f, f', f'' at one vector of angles, so ``fn`` is traced
+    once here however many stages the search has. Pass 0: the segment's one-sided end values,
+    which pick the brackets; pass 1: the scan of each bracket; then ``iterations`` Newton steps;
+    the last pass: f at the three finalists of each candidate.
+    """
+    lo, hi = bounds
+    i0, i1 = sample_range
+    dtype = grid_values.dtype
+    k = min(candidates, i1 - i0 + 2)
+    width = max(2, k * (points + 1), 3 * k)
+    scan, final = 1, 2 + iterations  # pass numbers; 0 is the ends, those between are Newton steps
+
+    def pad(t):  # unused lanes hold the segment's start: f stays finite there
+        t = jnp.ravel(t)
+        return jnp.concatenate([t, jnp.full((width - t.shape[0],), lo, dtype)])
+
+    def body(i, s: _Search) -> _Search:
+        scanned = _scan_angles(s.a0, s.b0, points)
+        finalists = jnp.concatenate([s.c, s.best, s.x])
+        t = jnp.where(i == 0, pad(jnp.asarray([lo, hi], dtype)),
+                      jnp.where(i == scan, pad(scanned), jnp.where(i < final, pad(s.x), pad(finalists))))
+        f, g, h = _value_slope_curvature(fn, segment, t, params)
+        a0, c, b0 = _brackets(f[:2], bounds, sample_range, grid_values, k)
+        cut = k * (points + 1)
+        sa, sb, sbracketed, sbest = _sub_bracket(scanned, f[:cut].reshape(k, -1), g[:cut].reshape(k, -1))
+        na, nb, nx = _newton_step(s.a, s.b, s.x, s.bracketed, g[:k], h[:k])
+        values = f[:3 * k]
+        angle = finalists[jnp.argmax(jnp.where(jnp.isnan(values), -jnp.inf, values))]
+        first, scanning, newton = i == 0, i == scan, (i > scan) & (i < final)
+
+        def pick(when, new, old):
+            return jnp.where(when, new, old)
+
+        return _Search(
+            pick(first, a0, s.a0), pick(first, c, s.c), pick(first, b0, s.b0),
+            pick(scanning, sa, pick(newton, na, s.a)), pick(scanning, sb, pick(newton, nb, s.b)),
+            pick(scanning, 0.5 * (sa + sb), pick(newton, nx, s.x)),
+            pick(scanning, sbracketed, s.bracketed), pick(scanning, sbest, s.best),
+            pick(i == final, angle, s.angle))
+
+    start = jnp.full((k,), lo, dtype)
+    state = _Search(start, start, start, start, start, start, jnp.zeros((k,), bool), start,
+                    jnp.asarray(lo, dtype))
+    return jax.lax.fori_loop(0, final + 1, body, state).angle
 
 
 def refine_max(fn: SegmentFunction, params: Any, bounds_deg, grid_values: jax.Array, *,
@@ -186,8 +241,8 @@ def refine_max(fn: SegmentFunction, params: Any, bounds_deg, grid_values: jax.Ar
         if constant[j]:
             best = jnp.asarray(bounds[0], grid_values.dtype)
         else:
-            a0, c, b0 = _brackets(fn, j, bounds, sample_range, grid_values, candidates, frozen)
-            best = jax.lax.stop_gradient(_refine_segment(fn, j, a0, c, b0, frozen, iterations, SCAN_POINTS))
+            best = jax.lax.stop_gradient(_refine_segment(fn, j, bounds, sample_range, grid_values, frozen,
+                                                         candidates, iterations, SCAN_POINTS))
         angles.append(best)
         values.append(fn(j, best, params))  # envelope theorem: live params, frozen angle
     angles, values = jnp.stack(angles), jnp.stack(values)
