@@ -87,32 +87,54 @@ def _value_slope_curvature(fn: SegmentFunction, segment: int, theta_deg, params)
     return f, g, h
 
 
-def _brackets(ends, bounds, sample_range, grid_values, k):
-    """Sub-grid of one segment ([start] + its samples + [end]) and the brackets of its ``k`` best
-    local maxima, from ``ends`` (2,), the segment's one-sided limits at its start and end.
+def _brackets(ends, angles, samples, m, k):
+    """Brackets of the ``k`` best local maxima on one segment's sub-grid ([start] + its samples +
+    [end], padded to a common length).
+
+    Args:
+      ends: (2,) the segment's one-sided limits at its start and end.
+      angles: (M,) the sub-grid's angles (deg); M >= m, the padding repeats the start.
+      samples: (M,) the grid's values at its samples, -inf at the two ends and in the padding.
+      m: the sub-grid's own length (its samples + 2), shape ().
+      k: static number of brackets.
 
     Returns (a, c, b), each of shape (k,): bracket ends and the sample in between (deg).
     """
-    (lo, hi), (i0, i1) = bounds, sample_range
-    values = grid_values[i0:i1]
-    dtype = values.dtype
-    # the grid's own angle expression (program.sample_angles_deg), so samples match bitwise
-    samples = jnp.arange(i0, i1, dtype=dtype) * (360.0 / grid_values.shape[0])
-    angles = jnp.concatenate([jnp.asarray([lo], dtype), samples, jnp.asarray([hi], dtype)])
-    vals = jnp.concatenate([ends[:1], values, ends[1:]])
-    m = vals.shape[0]
+    position = jnp.arange(angles.shape[0])
+    vals = jnp.where(position == 0, ends[0], jnp.where(position == m - 1, ends[1], samples))
+    dtype = vals.dtype
     left = jnp.concatenate([jnp.full((1,), -jnp.inf, dtype), vals[:-1]])
     right = jnp.concatenate([vals[1:], jnp.full((1,), -jnp.inf, dtype)])
     local = (vals >= left) & (vals >= right)
-    # rank local maxima first, by value; the rest (masked to -inf) only fill the k slots
+    # rank local maxima first, by value; the rest (masked to -inf) only fill the k slots, lower
+    # positions first (top_k's order on ties), so the padding comes after every real point
     _, idx = jax.lax.top_k(jnp.where(local, vals, -jnp.inf), k)
     return angles[jnp.maximum(idx - 1, 0)], angles[idx], angles[jnp.minimum(idx + 1, m - 1)]
 
 
+def _sub_grids(bounds_deg, ranges, grid_values):
+    """The sub-grids of :func:`_brackets` for the given segments, padded to a common length M:
+    angles (S, M), samples (S, M) and lengths m (S,)."""
+    n, dtype = grid_values.shape[0], grid_values.dtype
+    size = max(i1 - i0 + 2 for i0, i1 in ranges)
+    angles, samples = [], []
+    for (lo, hi), (i0, i1) in zip(bounds_deg, ranges, strict=True):
+        pad = size - (i1 - i0 + 2)
+        # the grid's own angle expression (program.sample_angles_deg), so samples match bitwise
+        at = jnp.arange(i0, i1, dtype=dtype) * (360.0 / n)
+        angles.append(jnp.concatenate([jnp.asarray([lo], dtype), at, jnp.asarray([hi], dtype),
+                                       jnp.full((pad,), lo, dtype)]))
+        samples.append(jnp.concatenate([jnp.full((1,), -jnp.inf, dtype), grid_values[i0:i1],
+                                        jnp.full((pad + 1,), -jnp.inf, dtype)]))
+    lengths = jnp.asarray([i1 - i0 + 2 for i0, i1 in ranges])
+    return jnp.stack(angles), jnp.stack(samples), lengths
+
+
 def _scan_angles(a0, b0, points):
-    """``points`` + 1 equally spaced angles over each bracket [a0, b0] (shape (k,)): shape (k, points + 1)."""
+    """``points`` + 1 equally spaced angles over each bracket [a0, b0] (shape (..., k)): shape
+    (..., k, points + 1)."""
     frac = jnp.linspace(0.0, 1.0, points + 1, dtype=a0.dtype)
-    return a0[:, None] + (b0 - a0)[:, None] * frac
+    return a0[..., None] + (b0 - a0)[..., None] * frac
 
 
 def _sub_bracket(t, f, g):
@@ -146,8 +168,13 @@ def _newton_step(a, b, x, bracketed, g, h):
     return a, b, jnp.where(bracketed & (g != 0), step, x)
 
 
+def _finalist(angles, values, valid):
+    """The angle of the largest value (NaN and invalid entries lose), shape ()."""
+    return angles[jnp.argmax(jnp.where(valid & ~jnp.isnan(values), values, -jnp.inf))]
+
+
 class _Search(NamedTuple):
-    """State of one segment's refinement (shape (k,) each but ``angle``, shape ())."""
+    """State of the segments' refinement (shape (S, k) each but ``angle``, shape (S,))."""
 
     a0: jax.Array  # the candidates' two-sample brackets and the sample between (deg)
     c: jax.Array
@@ -160,38 +187,44 @@ class _Search(NamedTuple):
     angle: jax.Array  # the result: best of (c, best, x) over the candidates (deg)
 
 
-def _refine_segment(fn, segment, bounds, sample_range, grid_values, params, candidates, iterations, points):
-    """The angle of the segment's max (deg, shape ()): best of (the sample, the scan's best point,
-    the refined root) over its ``candidates`` brackets.
+def _refine_segments(fn, segments, bounds_deg, ranges, grid_values, params, candidates, iterations, points):
+    """The angle of the max on each of ``segments`` (deg, shape (S,)): best of (the sample, the
+    scan's best point, the refined root) over each segment's ``candidates`` brackets.
 
-    One loop whose every pass evaluates f, f', f'' at one vector of angles, so ``fn`` is traced
-    once here however many stages the search has. Pass 0: the segment's one-sided end values,
-    which pick the brackets; pass 1: the scan of each bracket; then ``iterations`` Newton steps;
-    the last pass: f at the three finalists of each candidate.
+    One loop over all the segments, whose every pass evaluates f, f', f'' of each segment at one
+    vector of angles, so each segment's closed form is traced once and the search around it
+    once for all. Pass 0: the segments' one-sided end values, which pick the brackets; pass 1:
+    the scan of each bracket; then ``iterations`` Newton steps; the last pass: f at the three
+    finalists of each candidate.
     """
-    lo, hi = bounds
-    i0, i1 = sample_range
     dtype = grid_values.dtype
-    k = min(candidates, i1 - i0 + 2)
+    bounds = [bounds_deg[j] for j in segments]
+    angles, samples, lengths = _sub_grids(bounds, [ranges[j] for j in segments], grid_values)
+    count, k = len(segments), min(candidates, angles.shape[1])
+    # a segment with fewer points than k brackets: its extra slots (in the padding) do not count
+    valid = jnp.tile(jnp.arange(k)[None, :] < lengths[:, None], (1, 3))
     width = max(2, k * (points + 1), 3 * k)
     scan, final = 1, 2 + iterations  # pass numbers; 0 is the ends, those between are Newton steps
+    starts = jnp.asarray([lo for lo, _ in bounds], dtype)[:, None]
+    ends = jnp.asarray(bounds, dtype)
 
     def pad(t):  # unused lanes hold the segment's start: f stays finite there
-        t = jnp.ravel(t)
-        return jnp.concatenate([t, jnp.full((width - t.shape[0],), lo, dtype)])
+        t = t.reshape(count, -1)
+        return jnp.concatenate([t, jnp.broadcast_to(starts, (count, width - t.shape[1]))], axis=1)
 
     def body(i, s: _Search) -> _Search:
         scanned = _scan_angles(s.a0, s.b0, points)
-        finalists = jnp.concatenate([s.c, s.best, s.x])
-        t = jnp.where(i == 0, pad(jnp.asarray([lo, hi], dtype)),
+        finalists = jnp.concatenate([s.c, s.best, s.x], axis=1)
+        t = jnp.where(i == 0, pad(ends),
                       jnp.where(i == scan, pad(scanned), jnp.where(i < final, pad(s.x), pad(finalists))))
-        f, g, h = _value_slope_curvature(fn, segment, t, params)
-        a0, c, b0 = _brackets(f[:2], bounds, sample_range, grid_values, k)
+        f, g, h = (jnp.stack(v) for v in zip(*(_value_slope_curvature(fn, j, t[r], params)
+                                                for r, j in enumerate(segments)), strict=True))
+        a0, c, b0 = jax.vmap(_brackets, (0, 0, 0, 0, None))(f[:, :2], angles, samples, lengths, k)
         cut = k * (points + 1)
-        sa, sb, sbracketed, sbest = _sub_bracket(scanned, f[:cut].reshape(k, -1), g[:cut].reshape(k, -1))
-        na, nb, nx = _newton_step(s.a, s.b, s.x, s.bracketed, g[:k], h[:k])
-        values = f[:3 * k]
-        angle = finalists[jnp.argmax(jnp.where(jnp.isnan(values), -jnp.inf, values))]
+        sa, sb, sbracketed, sbest = jax.vmap(_sub_bracket)(scanned, f[:, :cut].reshape(count, k, -1),
+                                                          g[:, :cut].reshape(count, k, -1))
+        na, nb, nx = _newton_step(s.a, s.b, s.x, s.bracketed, g[:, :k], h[:, :k])
+        angle = jax.vmap(_finalist)(finalists, f[:, :3 * k], valid)
         first, scanning, newton = i == 0, i == scan, (i > scan) & (i < final)
 
         def pick(when, new, old):
@@ -204,9 +237,9 @@ def _refine_segment(fn, segment, bounds, sample_range, grid_values, params, cand
             pick(scanning, sbracketed, s.bracketed), pick(scanning, sbest, s.best),
             pick(i == final, angle, s.angle))
 
-    start = jnp.full((k,), lo, dtype)
-    state = _Search(start, start, start, start, start, start, jnp.zeros((k,), bool), start,
-                    jnp.asarray(lo, dtype))
+    start = jnp.broadcast_to(starts, (count, k))
+    state = _Search(start, start, start, start, start, start, jnp.zeros((count, k), bool), start,
+                    starts[:, 0])
     return jax.lax.fori_loop(0, final + 1, body, state).angle
 
 
@@ -235,14 +268,14 @@ def refine_max(fn: SegmentFunction, params: Any, bounds_deg, grid_values: jax.Ar
     frozen = jax.lax.stop_gradient(params)
     n = grid_values.shape[0]
     ranges = segment_sample_ranges(bounds_deg, n)
-    angles, values = [], []
     constant = constant or (False,) * len(bounds_deg)
-    for j, (bounds, sample_range) in enumerate(zip(bounds_deg, ranges, strict=True)):
-        if constant[j]:
-            best = jnp.asarray(bounds[0], grid_values.dtype)
-        else:
-            best = jax.lax.stop_gradient(_refine_segment(fn, j, bounds, sample_range, grid_values, frozen,
+    active = [j for j in range(len(bounds_deg)) if not constant[j]]
+    if active:
+        refined = jax.lax.stop_gradient(_refine_segments(fn, active, bounds_deg, ranges, grid_values, frozen,
                                                          candidates, iterations, SCAN_POINTS))
+    angles, values = [], []
+    for j, (lo, _) in enumerate(bounds_deg):
+        best = jnp.asarray(lo, grid_values.dtype) if constant[j] else refined[active.index(j)]
         angles.append(best)
         values.append(fn(j, best, params))  # envelope theorem: live params, frozen angle
     angles, values = jnp.stack(angles), jnp.stack(values)
