@@ -174,28 +174,32 @@ def _finalist(angles, values, valid):
 
 
 class _Search(NamedTuple):
-    """State of the segments' refinement (shape (S, k) each but ``angle``, shape (S,))."""
+    """State of the segments' refinement (S segments, k candidates each)."""
 
-    a0: jax.Array  # the candidates' two-sample brackets and the sample between (deg)
+    a0: jax.Array  # (S, k) the candidates' two-sample brackets and the sample between (deg)
     c: jax.Array
     b0: jax.Array
-    a: jax.Array  # the scanned sub-brackets, shrunk by the Newton steps (deg)
+    f: jax.Array  # (S, k, points + 1) f and f' at the scan's angles, filled a column per pass
+    g: jax.Array
+    a: jax.Array  # (S, k) the scanned sub-brackets, shrunk by the Newton steps (deg)
     b: jax.Array
-    x: jax.Array  # the Newton iterate (deg)
-    bracketed: jax.Array  # bool: the scan found f' turning from + to -
-    best: jax.Array  # the scan's best point (deg)
-    angle: jax.Array  # the result: best of (c, best, x) over the candidates (deg)
+    x: jax.Array  # (S, k) the Newton iterate (deg)
+    bracketed: jax.Array  # (S, k) bool: the scan found f' turning from + to -
+    best: jax.Array  # (S, k) the scan's best point (deg)
+    finals: jax.Array  # (S, 3, k) f at (c, best, x), filled a row per pass
+    angle: jax.Array  # (S,) the result: best of (c, best, x) over the candidates (deg)
 
 
 def _refine_segments(fn, segments, bounds_deg, ranges, grid_values, params, candidates, iterations, points):
     """The angle of the max on each of ``segments`` (deg, shape (S,)): best of (the sample, the
     scan's best point, the refined root) over each segment's ``candidates`` brackets.
 
-    One loop over all the segments, whose every pass evaluates f, f', f'' of each segment at one
-    vector of angles, so each segment's closed form is traced once and the search around it
-    once for all. Pass 0: the segments' one-sided end values, which pick the brackets; pass 1:
-    the scan of each bracket; then ``iterations`` Newton steps; the last pass: f at the three
-    finalists of each candidate.
+    One loop over all the segments, whose every pass evaluates f, f', f'' of each segment at k
+    angles, so each segment's closed form is traced once and the search around it once for
+    all; what a pass does with them is switched on its number (only that stage runs). Pass 0:
+    the segments' one-sided end values, which pick the brackets; the next ``points`` + 1: the
+    scan of the brackets, a column of angles each; then ``iterations`` Newton steps; the last
+    three: f at the candidates' samples, the scan's best points and the Newton iterates.
     """
     dtype = grid_values.dtype
     bounds = [bounds_deg[j] for j in segments]
@@ -203,44 +207,51 @@ def _refine_segments(fn, segments, bounds_deg, ranges, grid_values, params, cand
     count, k = len(segments), min(candidates, angles.shape[1])
     # a segment with fewer points than k brackets: its extra slots (in the padding) do not count
     valid = jnp.tile(jnp.arange(k)[None, :] < lengths[:, None], (1, 3))
-    width = max(2, k * (points + 1), 3 * k)
-    scan, final = 1, 2 + iterations  # pass numbers; 0 is the ends, those between are Newton steps
+    width = max(2, k)
+    first_newton = 2 + points
+    first_final = first_newton + iterations
     starts = jnp.asarray([lo for lo, _ in bounds], dtype)[:, None]
     ends = jnp.asarray(bounds, dtype)
+    frac = jnp.linspace(0.0, 1.0, points + 1, dtype=dtype)  # as _scan_angles has it
 
     def pad(t):  # unused lanes hold the segment's start: f stays finite there
-        t = t.reshape(count, -1)
         return jnp.concatenate([t, jnp.broadcast_to(starts, (count, width - t.shape[1]))], axis=1)
 
     def body(i, s: _Search) -> _Search:
-        scanned = _scan_angles(s.a0, s.b0, points)
-        finalists = jnp.concatenate([s.c, s.best, s.x], axis=1)
-        t = jnp.where(i == 0, pad(ends),
-                      jnp.where(i == scan, pad(scanned), jnp.where(i < final, pad(s.x), pad(finalists))))
+        stage = (i >= 1).astype(int) + (i >= first_newton) + (i >= first_final)
+        column, row = jnp.clip(i - 1, 0, points), jnp.clip(i - first_final, 0, 2)
+        finalists = jnp.stack([s.c, s.best, s.x], axis=1)
+        t = jax.lax.switch(stage, [lambda: pad(ends), lambda: pad(s.a0 + (s.b0 - s.a0) * frac[column]),
+                                   lambda: pad(s.x), lambda: pad(finalists[:, row])])
         f, g, h = (jnp.stack(v) for v in zip(*(_value_slope_curvature(fn, j, t[r], params)
                                                 for r, j in enumerate(segments)), strict=True))
-        a0, c, b0 = jax.vmap(_brackets, (0, 0, 0, 0, None))(f[:, :2], angles, samples, lengths, k)
-        cut = k * (points + 1)
-        sa, sb, sbracketed, sbest = jax.vmap(_sub_bracket)(scanned, f[:, :cut].reshape(count, k, -1),
-                                                          g[:, :cut].reshape(count, k, -1))
-        na, nb, nx = _newton_step(s.a, s.b, s.x, s.bracketed, g[:, :k], h[:, :k])
-        angle = jax.vmap(_finalist)(finalists, f[:, :3 * k], valid)
-        first, scanning, newton = i == 0, i == scan, (i > scan) & (i < final)
+        f_ends, f, g, h = f[:, :2], f[:, :k], g[:, :k], h[:, :k]
 
-        def pick(when, new, old):
-            return jnp.where(when, new, old)
+        def after_ends():
+            a0, c, b0 = jax.vmap(_brackets, (0, 0, 0, 0, None))(f_ends, angles, samples, lengths, k)
+            return s._replace(a0=a0, c=c, b0=b0)
 
-        return _Search(
-            pick(first, a0, s.a0), pick(first, c, s.c), pick(first, b0, s.b0),
-            pick(scanning, sa, pick(newton, na, s.a)), pick(scanning, sb, pick(newton, nb, s.b)),
-            pick(scanning, 0.5 * (sa + sb), pick(newton, nx, s.x)),
-            pick(scanning, sbracketed, s.bracketed), pick(scanning, sbest, s.best),
-            pick(i == final, angle, s.angle))
+        def after_scan():
+            fs, gs = s.f.at[:, :, column].set(f), s.g.at[:, :, column].set(g)
+            a, b, bracketed, best = jax.vmap(_sub_bracket)(_scan_angles(s.a0, s.b0, points), fs, gs)
+            return s._replace(f=fs, g=gs, a=a, b=b, x=0.5 * (a + b), bracketed=bracketed, best=best)
+
+        def after_newton():
+            a, b, x = _newton_step(s.a, s.b, s.x, s.bracketed, g, h)
+            return s._replace(a=a, b=b, x=x)
+
+        def after_final():
+            finals = s.finals.at[:, row].set(f)
+            angle = jax.vmap(_finalist)(finalists.reshape(count, -1), finals.reshape(count, -1), valid)
+            return s._replace(finals=finals, angle=angle)
+
+        return jax.lax.switch(stage, [after_ends, after_scan, after_newton, after_final])
 
     start = jnp.broadcast_to(starts, (count, k))
-    state = _Search(start, start, start, start, start, start, jnp.zeros((count, k), bool), start,
-                    starts[:, 0])
-    return jax.lax.fori_loop(0, final + 1, body, state).angle
+    scan = jnp.zeros((count, k, points + 1), dtype)
+    state = _Search(start, start, start, scan, scan, start, start, start, jnp.zeros((count, k), bool), start,
+                    jnp.zeros((count, 3, k), dtype), starts[:, 0])
+    return jax.lax.fori_loop(0, first_final + 3, body, state).angle
 
 
 def refine_max(fn: SegmentFunction, params: Any, bounds_deg, grid_values: jax.Array, *,
