@@ -246,6 +246,33 @@ def test_degenerate_segments_keep_the_grid_value(law):
         assert np.all(np.isfinite(np.asarray(g)))
 
 
+def test_more_candidates_than_a_short_segment_has_points():
+    """Segments of very different sample counts (one holds a single sample) refined together, with
+    more candidates than the short one's sub-grid has points: each segment's max is the dense
+    brute-force max of its closed form, and its gradient is the envelope theorem's."""
+    bounds = ((0.0, 7.0), (7.0, 200.0), (200.0, 360.0))
+
+    def fn(segment, theta_deg, amplitude):  # a few peaks per segment, a different law on each
+        return amplitude * jnp.sin(theta_deg * (segment + 1) * math.pi / 50) + 0.01 * theta_deg
+
+    samples = 36  # 10-deg grid: segment 0 holds only the sample at 0 (sub-grid of 3 points)
+    theta = np.arange(samples) * (360.0 / samples)
+    grid = jnp.concatenate([fn(j, jnp.asarray(theta[(theta >= lo) & (theta < hi)]), 1.0)
+                            for j, (lo, hi) in enumerate(bounds)])
+    e = extrema.refine_max(fn, 1.0, bounds, grid, candidates=8)
+    dense = [np.asarray(fn(j, jnp.linspace(lo, hi, 200_001), 1.0)) for j, (lo, hi) in enumerate(bounds)]
+    # the dense grid (step <= 1e-3 deg) misses a smooth max by f'' h^2 / 8 < 0.04 * 1e-6 / 8 = 5e-9
+    best = max(d.max() for d in dense)
+    assert float(e.value) == pytest.approx(best, abs=1e-8)
+    assert float(e.value) >= best - 1e-12  # never below a value the function takes
+    # the value at the reported angle (on the segment that holds it), and d/d(amplitude) = the
+    # sine there (envelope theorem: the angle does not move the value to first order)
+    j = next(j for j, (lo, hi) in enumerate(bounds) if lo <= float(e.angle_deg) <= hi)
+    assert float(fn(j, e.angle_deg, 1.0)) == pytest.approx(float(e.value), abs=1e-12)
+    slope = jax.grad(lambda a: extrema.refine_max(fn, a, bounds, grid, candidates=8).value)(1.0)
+    assert float(slope) == pytest.approx(math.sin(float(e.angle_deg) * (j + 1) * math.pi / 50), abs=1e-12)
+
+
 # ------------------------------------------------------------------ gradients, batching
 
 
