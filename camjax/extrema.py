@@ -282,7 +282,9 @@ def refine_max(fn: SegmentFunction, params: Any, bounds_deg, grid_values: jax.Ar
     constant = constant or (False,) * len(bounds_deg)
     active = [j for j in range(len(bounds_deg)) if not constant[j]]
     if active:
-        refined = jax.lax.stop_gradient(_refine_segments(fn, active, bounds_deg, ranges, grid_values, frozen,
+        # the grid values only locate the candidates: nothing in the search is differentiated
+        refined = jax.lax.stop_gradient(_refine_segments(fn, active, bounds_deg, ranges,
+                                                         jax.lax.stop_gradient(grid_values), frozen,
                                                          candidates, iterations, SCAN_POINTS))
     angles, values = [], []
     for j, (lo, _) in enumerate(bounds_deg):
