@@ -247,10 +247,16 @@ def _refine_segments(fn, segments, bounds_deg, ranges, grid_values, params, cand
 
         return jax.lax.switch(stage, [after_ends, after_scan, after_newton, after_final])
 
-    start = jnp.broadcast_to(starts, (count, k))
-    scan = jnp.zeros((count, k, points + 1), dtype)
-    state = _Search(start, start, start, scan, scan, start, start, start, jnp.zeros((count, k), bool), start,
-                    jnp.zeros((count, 3, k), dtype), starts[:, 0])
+    # the initial values are never read (each stage writes what the next reads); they are
+    # selected on a test of the grid values so that under vmap they are batched like the values
+    # the passes write, and the loop body is batched once (not again once the carry turns out
+    # batched)
+    batched = jnp.isnan(samples[:, :1]) | True
+    start = jnp.where(batched, starts, 0.0) * jnp.ones((1, k), dtype)
+    scan = jnp.where(batched[:, :, None], jnp.zeros((count, k, points + 1), dtype), 0.0)
+    finals = jnp.where(batched[:, :, None], jnp.zeros((count, 3, k), dtype), 0.0)
+    state = _Search(start, start, start, scan, scan, start, start, start, start > starts, start, finals,
+                    start[:, 0])
     return jax.lax.fori_loop(0, first_final + 3, body, state).angle
 
 
