@@ -337,7 +337,7 @@ def _refined_extremes(model: SceneModel, consts: CurveConstants, grid: jax.Array
     """Max and min of every named curve, refined off the grid ``grid`` (Q, N), in one program.
 
     One refinement per (curve, sense): the function refined is w . curves with w = +-e_q, so a
-    single vmapped :func:`camjax.extrema.refine_max` covers them all.
+    single :func:`camjax.extrema.refine_max`, mapped over the rows w, covers them all.
     """
     count = len(names)
 
@@ -349,8 +349,10 @@ def _refined_extremes(model: SceneModel, consts: CurveConstants, grid: jax.Array
     bounds = program.segment_bounds_deg(model.program)
     weights = jnp.concatenate([jnp.eye(count, dtype=grid.dtype), -jnp.eye(count, dtype=grid.dtype)])
     dwells = extrema_mod.dwells(model.program)  # every curve here is a function of the motion
-    e = jax.vmap(lambda w: extrema_mod.refine_max(fn, (model, consts, base_radius_mm, w), bounds, w @ grid,
-                                                  constant=dwells))(weights)
+    # one row at a time (lax.map, not vmap): the refinement is traced once and not batched again,
+    # which costs far more time than the rows' sequential run saves
+    e = jax.lax.map(lambda w: extrema_mod.refine_max(fn, (model, consts, base_radius_mm, w), bounds, w @ grid,
+                                                     constant=dwells), weights)
     return e.value[:count], e.angle_deg[:count], -e.value[count:], e.angle_deg[count:]
 
 

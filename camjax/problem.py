@@ -199,8 +199,9 @@ def _exact_maxima(model, sigma_max_MPa, grid):
     eye = jnp.eye(3, dtype=grid.dtype)
     rows = jnp.concatenate([eye, -eye[2:]])
     bounds, dwells = segment_bounds_deg(model.program), extrema.dwells(model.program)
-    return jax.vmap(lambda w: extrema.refine_max(fn, (model, sigma_max_MPa, w), bounds, w @ grid,
-                                                 constant=dwells))(rows)
+    # mapped, not vmapped: traced once and not batched again (see evaluate._refined_extremes)
+    return jax.lax.map(lambda w: extrema.refine_max(fn, (model, sigma_max_MPa, w), bounds, w @ grid,
+                                                    constant=dwells), rows)
 
 
 def _exact_extrema(arrays, sigma_max_MPa) -> ExactExtrema:
