@@ -523,11 +523,12 @@ def _setup_dynamics(p: argparse.ArgumentParser):
 
         rendered: dict[str, bytes] = {}
 
-        def figures(steady):  # runs while the time-domain analyses finish in a second thread
+        def figures(partial):  # runs while the time-domain analyses finish in other threads
             from camjax.output.plots_dynamics import render_dynamics_figures  # matplotlib: ~0.5 s
 
-            progress("figures")
-            rendered.update(render_dynamics_figures(steady.curves, steady.summary, args.dpi))
+            if not rendered:
+                progress("figures")
+            rendered.update(render_dynamics_figures(partial.curves, partial.summary, args.dpi, skip=rendered))
 
         report = runtime.interruptible(scene_dynamics, scene, progress, figures)
         if report.settling is not None and not report.settling.settled:

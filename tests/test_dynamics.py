@@ -692,3 +692,29 @@ def test_the_design_path_does_not_even_import_the_dynamics_models(tmp_path):
     run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert run.returncode == 0, run.stderr
     assert run.stdout.strip().endswith("NOT LOADED")
+
+
+def test_meanwhile_sees_each_thread_but_the_last_as_it_finishes():
+    """scene_dynamics calls ``meanwhile`` with this thread's analyses, then once per finished
+    thread but the last (two threads here: time domain and jump): each report holds what the one
+    before held and at least one more analysis, and the return value holds everything."""
+    text = builtin_scene_text("thesis-bench")
+    text = text[: text.index("\n[dynamics]\n")] + """
+[dynamics]
+follower = "oscillating"
+I3 = 0.357
+c3 = 0.205
+k23 = 3050.0
+spring_rate = 300.0
+spring_preload = 0.5
+samples = 128
+harmonics = 20
+steps_per_cycle = 64
+transient_tolerance = 0.01
+compute = ["compensation", "time_domain", "jump"]
+"""
+    seen = []
+    final = d.scene_dynamics(parse_scene(text, "bench"), meanwhile=lambda r: seen.append(set(r.summary)))
+    assert len(seen) == 2  # after this thread's compensation, then after the first thread finished
+    assert seen[0] == BASE_KEYS | {"compensated", "settling"}  # settling is known before the runs
+    assert seen[0] < seen[1] < set(final.summary) == BASE_KEYS | {"compensated", "time_domain", "settling", "jump"}

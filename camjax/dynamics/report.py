@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from concurrent.futures import Future, ThreadPoolExecutor
+from concurrent.futures import Future, ThreadPoolExecutor, as_completed
 from dataclasses import dataclass
 
 import jax
@@ -596,9 +596,10 @@ def scene_dynamics(scene, progress: Callable[[str], None] | None = None,
 
     The long XLA loops (the time-domain runs, the jump search) run in threads of their own.
     ``progress``, when given, is called with one line as each analysis starts. ``meanwhile``,
-    when given, is called with the report of the analyses done in this thread (compensation,
-    robustness, shaping; the others still None) while the threads finish: work that needs only
-    those (figures) overlaps the long loops.
+    when given, is called with the report of the analyses done so far while the threads finish:
+    first with those of this thread (compensation, robustness, shaping; the others still None),
+    then again as each thread but the last finishes, so that work needing only those (figures)
+    overlaps the long loops.
     Raises ValueError if the scene has no [dynamics] section.
     """
     spec = scene.dynamics
@@ -635,6 +636,8 @@ def scene_dynamics(scene, progress: Callable[[str], None] | None = None,
 
     if meanwhile is not None:
         meanwhile(report())
-    for thread in threads:
+    for k, thread in enumerate(as_completed(threads)):
         parts.update(thread.result())
+        if meanwhile is not None and k < len(threads) - 1:
+            meanwhile(report())
     return report()
