@@ -191,9 +191,8 @@ def test_drawing_workers_do_not_import_jax():
 
     from camjax.output import drawing
 
-    code = drawing._BOOT.replace("from camjax.output.drawing import serve; serve()",
-                                 "import camjax.output.plots, camjax.output.export, camjax.output.drawing; "
-                                 "print('jax' in sys.modules)")
+    code = drawing.ENTER_PACKAGE + ("import camjax.output.plots, camjax.output.export, camjax.output.drawing; "
+                                    "print('jax' in sys.modules)")
     out = subprocess.run([sys.executable, "-c", code, str(drawing.PACKAGE_DIR)], capture_output=True,
                          text=True, check=True)
     assert out.stdout.strip() == "False"

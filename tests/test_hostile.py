@@ -565,8 +565,8 @@ def test_a_failed_drawing_process_leaves_the_folder_as_it_was(place, monkeypatch
     from camjax.output import drawing
 
     before = snapshot(place / "out")
-    boot = drawing._BOOT.replace("serve()", "import camjax.output.plots as p; "
-                                 "p.svaj_figure = p.profile_figure = lambda *a: 1 / 0; serve()")
+    boot = drawing._BOOT.replace("serve(", "import camjax.output.plots as p; "
+                                 "p.svaj_figure = p.profile_figure = lambda *a: 1 / 0; serve(")
     monkeypatch.setattr(drawing, "_BOOT", boot)  # both workers fail: ZeroDivisionError
     rc = cli.main(["design", "--dpi", "10", "--out", str(place / "out")])
     err = capsys.readouterr().err.strip().splitlines()

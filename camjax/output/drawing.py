@@ -21,9 +21,10 @@ import sys
 import types
 from pathlib import Path
 
-# A worker: the camjax package as a bare namespace (its __init__ imports JAX), then serve().
-_BOOT = ("import sys, types; package = types.ModuleType('camjax'); package.__path__ = [sys.argv[1]]; "
-         "sys.modules['camjax'] = package; from camjax.output.drawing import serve; serve()")
+# A worker: the camjax package as a bare namespace (its __init__ imports JAX), then serve(k, n).
+ENTER_PACKAGE = ("import sys, types; package = types.ModuleType('camjax'); package.__path__ = [sys.argv[1]]; "
+                 "sys.modules['camjax'] = package; ")
+_BOOT = ENTER_PACKAGE + "from camjax.output.drawing import serve; serve(int(sys.argv[2]), int(sys.argv[3]))"
 PACKAGE_DIR = Path(__file__).resolve().parent.parent
 DXF_NAME = "profile.dxf"  # written after the figures, as camjax.output.export.write_design_files does
 
@@ -42,25 +43,26 @@ class DrawingWorkers:
     def __init__(self, count: int = 2):
         self._procs: list[subprocess.Popen] = []
         try:
-            for _ in range(count):
+            for k in range(count):
                 self._procs.append(subprocess.Popen(
-                    [sys.executable, "-c", _BOOT, str(PACKAGE_DIR)], stdin=subprocess.PIPE,
-                    stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, start_new_session=True))
+                    [sys.executable, "-c", _BOOT, str(PACKAGE_DIR), str(k), str(count)],
+                    stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
+                    start_new_session=True))
         except OSError:
             self.close()
             raise
 
     def draw(self, folder: str | Path, curves, dpi: int = 100, banner: str | None = None,
              title: str = "") -> None:
-        """Send the job: worker k of n writes files k, k + n, ... of (the figures, profile.dxf)
-        of the curves into ``folder`` (``curves``: :class:`camjax.evaluate.DesignCurves`; the
+        """Send the job: worker k of n draws figures k, k + n, ... and the last one also writes
+        profile.dxf, of the curves into ``folder`` (``curves``: :class:`camjax.evaluate.DesignCurves`; the
         rest as :func:`camjax.output.export.write_figures`)."""
         fields = {k: _plain(v) for k, v in curves._asdict().items()}
-        for k, proc in enumerate(self._procs):
-            job = {"folder": str(folder), "curves": fields, "dpi": dpi, "banner": banner, "title": title,
-                   "share": (k, len(self._procs))}
+        job = pickle.dumps({"folder": str(folder), "curves": fields, "dpi": dpi, "banner": banner,
+                            "title": title})
+        for proc in self._procs:
             try:
-                proc.stdin.write(pickle.dumps(job))
+                proc.stdin.write(job)
                 proc.stdin.close()
             except OSError:  # the worker is gone: wait() says why
                 pass
@@ -111,10 +113,14 @@ def _plain(value):
     return np.asarray(value)
 
 
-def serve() -> None:
-    """A worker's main: import matplotlib and ezdxf, read one job from stdin, write its share,
-    reply on stdout (pickled ``{"written": [(index, path), ...]}`` or ``{"error": "one line"}``)."""
-    import ezdxf  # noqa: F401  (both imported before the job arrives)
+def serve(k: int = 0, n: int = 1) -> None:
+    """Worker ``k`` of ``n``: import matplotlib (and ezdxf, the last worker, which writes the
+    DXF), read one job from stdin, draw figures k, k + n, ..., reply on stdout (pickled
+    ``{"written": [(index, path), ...]}`` or ``{"error": "one line"}``; the DXF's index follows
+    the figures')."""
+    writes_dxf = k == n - 1
+    if writes_dxf:
+        import ezdxf  # noqa: F401  (imported before the job arrives, as matplotlib)
     from matplotlib.backends import backend_agg  # noqa: F401
 
     from camjax.output import export, plots
@@ -123,21 +129,19 @@ def serve() -> None:
     try:
         job = pickle.loads(sys.stdin.buffer.read())
         curves = types.SimpleNamespace(**job["curves"])
-        k, n = job["share"]
         folder = Path(job["folder"])
-        tasks = list(plots.figure_builders(curves).items()) + [(DXF_NAME, export.write_profile_dxf)]
+        figures = list(plots.figure_builders(curves).items())
         written = []
-        for i, (name, build) in enumerate(tasks):
+        for i, (name, build) in enumerate(figures):
             if i % n != k:
                 continue
-            if name == DXF_NAME:
-                build(folder / name, curves)
-            else:
-                fig = build(curves, job["title"])
-                if job["banner"]:
-                    plots.stamp_banner(fig, job["banner"])
-                fig.savefig(folder / name, dpi=job["dpi"])
+            fig = build(curves, job["title"])
+            if job["banner"]:
+                plots.stamp_banner(fig, job["banner"])
+            fig.savefig(folder / name, dpi=job["dpi"])
             written.append((i, str(folder / name)))
+        if writes_dxf:
+            written.append((len(figures), str(export.write_profile_dxf(folder / DXF_NAME, curves))))
         reply = {"written": written}
     except BaseException as exc:  # reported to the caller as one line
         reply = {"error": f"{type(exc).__name__}: {exc}"[:300]}
