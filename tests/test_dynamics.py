@@ -555,6 +555,20 @@ def test_oscillating_lift_beyond_pi_is_refused():
         parse_scene(text)
 
 
+def bench_with(dynamics: str) -> str:
+    """The thesis-bench scene with ``dynamics`` (a [dynamics] section's text) for its own."""
+    text = builtin_scene_text("thesis-bench")
+    return text[: text.index("\n[dynamics]\n")] + dynamics
+
+
+BENCH_TRAIN = """
+[dynamics]
+follower = "oscillating"
+I3 = 0.357
+c3 = 0.205
+k23 = 3050.0
+"""  # the bench's follower train; a test adds the rest of its [dynamics] section
+
 SMALL_BENCH = """
 [dynamics]
 follower = "oscillating"
@@ -580,8 +594,7 @@ damping_factors = [0.5, 1.0, 2.0]
 @pytest.mark.slow
 def test_cli_dynamics_writes_json_and_figures(tmp_path):
     """The bench with a shorter settling; grid sizes match the tests above so kernels are reused."""
-    text = builtin_scene_text("thesis-bench")
-    text = text[: text.index("\n[dynamics]\n")] + SMALL_BENCH
+    text = bench_with(SMALL_BENCH)
     path = tmp_path / "bench.toml"
     path.write_text(text)
     out = tmp_path / "out"
@@ -604,20 +617,13 @@ def test_cli_dynamics_writes_json_and_figures(tmp_path):
 def test_cli_dynamics_warns_when_max_cycles_stops_the_transient(tmp_path, capsys):
     """max_cycles = 3 on the bench (it needs 120 cycles for a tolerance of 1e-5): one warning
     line on stderr, dynamics.json says settled = false with the residual e^{-zeta wn 3 T}."""
-    text = builtin_scene_text("thesis-bench")
-    text = text[: text.index("\n[dynamics]\n")] + """
-[dynamics]
-follower = "oscillating"
-I3 = 0.357
-c3 = 0.205
-k23 = 3050.0
-samples = 128
+    text = bench_with(BENCH_TRAIN + """samples = 128
 harmonics = 20
 steps_per_cycle = 64
 transient_tolerance = 1e-5
 max_cycles = 3
 compute = ["time_domain"]
-"""
+""")
     path = tmp_path / "bench.toml"
     path.write_text(text)
     assert camjax.cli.main(["dynamics", str(path), "--out", str(tmp_path / "out"), "--dpi", "30"]) == 0
@@ -654,8 +660,7 @@ BASE_KEYS = {"scene", "follower", "units", "cam_speed_hz", "natural_frequency_hz
 ])
 def test_each_compute_entry_runs_alone_and_writes_only_its_keys(entry, keys):
     """compute = [entry]: the report holds that analysis (and what it needs), nothing else."""
-    text = builtin_scene_text("thesis-bench")
-    text = text[: text.index("\n[dynamics]\n")] + f"""
+    text = bench_with(f"""
 [dynamics]
 follower = "oscillating"
 I3 = 0.357
@@ -673,7 +678,7 @@ steps_per_cycle = 64
 transient_tolerance = 0.01
 shaping_steps = 5
 compute = ["{entry}"]
-"""
+""")
     report = d.scene_dynamics(parse_scene(text, "bench"))
     assert set(report.summary) == BASE_KEYS | keys
 
@@ -698,21 +703,14 @@ def test_meanwhile_sees_each_thread_but_the_last_as_it_finishes():
     """scene_dynamics calls ``meanwhile`` with this thread's analyses, then once per finished
     thread but the last (two threads here: time domain and jump): each report holds what the one
     before held and at least one more analysis, and the return value holds everything."""
-    text = builtin_scene_text("thesis-bench")
-    text = text[: text.index("\n[dynamics]\n")] + """
-[dynamics]
-follower = "oscillating"
-I3 = 0.357
-c3 = 0.205
-k23 = 3050.0
-spring_rate = 300.0
+    text = bench_with(BENCH_TRAIN + """spring_rate = 300.0
 spring_preload = 0.5
 samples = 128
 harmonics = 20
 steps_per_cycle = 64
 transient_tolerance = 0.01
 compute = ["compensation", "time_domain", "jump"]
-"""
+""")
     seen = []
     final = d.scene_dynamics(parse_scene(text, "bench"), meanwhile=lambda r: seen.append(set(r.summary)))
     assert len(seen) == 2  # after this thread's compensation, then after the first thread finished
