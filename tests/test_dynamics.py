@@ -569,19 +569,15 @@ c3 = 0.205
 k23 = 3050.0
 """  # the bench's follower train; a test adds the rest of its [dynamics] section
 
-SMALL_BENCH = """
-[dynamics]
-follower = "oscillating"
-I3 = 0.357
-c3 = 0.205
-k23 = 3050.0
-I2 = 0.126
+BENCH_DRIVE = BENCH_TRAIN + """I2 = 0.126
 I1 = 2.1
 k01 = 3000.0
 c01 = 10.0
 spring_rate = 300.0
 spring_preload = 0.5
-steps_per_cycle = 360
+"""  # and its drive and spring
+
+SMALL_BENCH = BENCH_DRIVE + """steps_per_cycle = 360
 transient_tolerance = 1e-5
 shaping_steps = 100
 compute = ["compensation", "robustness", "time_domain", "drive", "nonlinear", "jump", "shaping"]
@@ -660,19 +656,7 @@ BASE_KEYS = {"scene", "follower", "units", "cam_speed_hz", "natural_frequency_hz
 ])
 def test_each_compute_entry_runs_alone_and_writes_only_its_keys(entry, keys):
     """compute = [entry]: the report holds that analysis (and what it needs), nothing else."""
-    text = bench_with(f"""
-[dynamics]
-follower = "oscillating"
-I3 = 0.357
-c3 = 0.205
-k23 = 3050.0
-I2 = 0.126
-I1 = 2.1
-k01 = 3000.0
-c01 = 10.0
-spring_rate = 300.0
-spring_preload = 0.5
-samples = 128
+    text = bench_with(BENCH_DRIVE + f"""samples = 128
 harmonics = 20
 steps_per_cycle = 64
 transient_tolerance = 0.01
