@@ -109,7 +109,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--out", type=Path, help="also write the JSON here")
     parser.add_argument("commands", nargs="*", default=list(COMMANDS), help=f"of {', '.join(COMMANDS)}")
     args = parser.parse_args(argv)
-    result = {"cpu_count": os.cpu_count(), "load_average_1min": os.getloadavg()[0]}
+    commit = subprocess.run(["git", "rev-parse", "HEAD"], cwd=ROOT, capture_output=True,
+                            text=True).stdout.strip()
+    result = {"date_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()), "git_commit": commit or None,
+              "cpu_count": os.cpu_count(), "load_average_1min": os.getloadavg()[0]}
     result.update(import_jax(args.runs))
     for name in args.commands:
         result.update(COMMANDS[name](args.runs, result))

@@ -62,11 +62,13 @@ def _g(v, digits: int = 3) -> str:
 def lookup(data, path: str):
     """``data`` followed along a dotted path; integer parts index lists. A key that itself holds
     dots (``cli.design_s``) is taken whole where the rest of the path names it."""
-    if isinstance(data, dict) and path in data:
-        return data[path]
-    head, _, rest = path.partition(".")
-    value = data[int(head)] if isinstance(data, list) else data[head]
-    return lookup(value, rest) if rest else value
+    parts = path.split(".")
+    if isinstance(data, list):
+        value, used = data[int(parts[0])], 1
+    else:  # the longest leading run of parts that is a key
+        used = next((i for i in range(len(parts), 0, -1) if ".".join(parts[:i]) in data), 1)
+        value = data[".".join(parts[:used])]
+    return lookup(value, ".".join(parts[used:])) if used < len(parts) else value
 
 
 # ------------------------------------------------------------------------------------ benchmark
