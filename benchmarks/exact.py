@@ -32,6 +32,7 @@ from camjax.solvers.sweep import sweep
 H, OMEGA, N_NORM, SIGMA_MAX = 5.0, 240 * 2 * math.pi / 60, 65.0, 1230.0
 
 
+# Its own closed forms (as tests/reference.py has them): no benchmark imports from tests/.
 def _reference_curves(theta_deg):
     """NumPy q = s + s'', force F and stress coefficient C of the default scene (SPEC 4, 5)."""
     th = np.asarray(theta_deg, dtype=float)

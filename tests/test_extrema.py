@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from reference import reference_force
 from scipy.optimize import minimize_scalar
 
 from camjax import contact, extrema, loads
@@ -46,23 +47,6 @@ def force(kin, _=None):
 def stress(kin, base_radius_mm):
     c = contact.stress_coefficient(force(kin), 10.0, STEEL, BRONZE)
     return contact.stress_from_coefficient(c, rho(kin, base_radius_mm))
-
-
-def numpy_force(theta_deg):
-    """Independent NumPy force of the reference case (SPEC 4 and 5), N, at angles in deg."""
-    th = np.asarray(theta_deg, dtype=float)
-    s, v, a = (np.zeros_like(th) for _ in range(3))
-    b1, b2 = math.radians(80), math.radians(60)
-    m = (th >= 100) & (th < 180)
-    x = (th[m] - 100) / 80
-    s[m], v[m], a[m] = (H * (x - np.sin(2 * np.pi * x) / (2 * np.pi)), H * (1 - np.cos(2 * np.pi * x)) / b1,
-                        H * 2 * np.pi * np.sin(2 * np.pi * x) / b1**2)
-    s[(th >= 180) & (th < 300)] = H
-    m = th >= 300
-    x = (th[m] - 300) / 60
-    s[m], v[m], a[m] = (H * (1 - (x - np.sin(2 * np.pi * x) / (2 * np.pi))), -H * (1 - np.cos(2 * np.pi * x)) / b2,
-                        -H * 2 * np.pi * np.sin(2 * np.pi * x) / b2**2)
-    return 1e-3 * (a * OMEGA**2 + 0.345 * v * OMEGA + 3004.0 * (s + 13.0)) + 9.81
 
 
 def dense_reference_max(f, samples=1_000_000):
@@ -115,7 +99,7 @@ def test_cycloidal_peak_acceleration_closed_form():
 
 
 def test_peak_force_against_dense_scipy_reference():
-    ref, ref_angle = dense_reference_max(numpy_force)
+    ref, ref_angle = dense_reference_max(reference_force)
     prog = ref_program()
     kin = evaluate(prog, 360)
     e = extrema.max_of(prog, force, force(kin))
