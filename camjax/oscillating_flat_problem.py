@@ -29,12 +29,17 @@ from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
-import numpy as np
 
-from camjax import geometry
-from camjax.contact import HERTZ_FACTOR, compliance, stress_from_coefficient
-from camjax.numerics import RHO_FLOOR_MM, capped_divide, floor_positive, positive_part, safe_sqrt
-from camjax.problem import FEASIBILITY_RTOL_STRESS, FEASIBILITY_TOL_MM, Weights
+from camjax import family, geometry
+from camjax.contact import stress_from_coefficient
+from camjax.family import FEASIBILITY_RTOL_STRESS, FEASIBILITY_TOL_MM, all_within, weighted_objective
+
+# re-exported: this family's protocol functions, written once for every family
+from camjax.family import bounds as bounds
+from camjax.family import bounds_violation as bounds_violation
+from camjax.numerics import RHO_FLOOR_MM, capped_divide, finite_float, floor_positive, positive_part
+from camjax.oscillating_problem import moment_coefficient
+from camjax.problem import Weights
 
 CONSTRAINT_NAMES = ("reach", "swing", "curvature", "stress", "bounds")
 VARIABLES = ("base_radius_mm", "pivot_distance_mm", "face_offset_mm")
@@ -100,7 +105,6 @@ class Evaluation(NamedTuple):
 def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=None) -> Problem:
     """Problem of an oscillating flat-face scene with a [design] section (Python: reads the scene)."""
     from camjax.evaluate import scene_arrays
-    from camjax.loads import rocker_torque
 
     if scene.design is None:
         raise ValueError("scene has no [design] section: nothing to optimize")
@@ -111,13 +115,9 @@ def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=
     d, f, kin = scene.design, scene.follower, arrays.kin
     as_ = lambda v: jnp.asarray(v, kin.s.dtype)  # noqa: E731
     box = [d.base_radius_mm, d.pivot_distance_mm, d.face_offset_mm]
-    coeff = jnp.zeros_like(kin.s)
-    if f.train is not None and scene.contact is not None:
-        c = scene.contact
-        moment = rocker_torque(f.train, kin, arrays.cam_speed_rad_s)
-        coeff = HERTZ_FACTOR * safe_sqrt(moment / (c.cam_width_mm * compliance(c.cam, c.follower)))
     return Problem(
-        theta_deg=as_(arrays.theta_deg), s_rad=kin.s, ds=kin.ds, d2s=kin.d2s, moment_coefficient=as_(coeff),
+        theta_deg=as_(arrays.theta_deg), s_rad=kin.s, ds=kin.ds, d2s=kin.d2s,
+        moment_coefficient=as_(moment_coefficient(scene, arrays)),
         lower=Design(*(as_(b[0]) for b in box)), upper=Design(*(as_(b[1]) for b in box)),
         sigma_max_MPa=as_(d.sigma_max_MPa if d.sigma_max_MPa is not None else 1.0),
         size_norm_mm=as_(d.base_radius_mm[1]), min_curvature_radius_mm=as_(f.min_curvature_radius_mm),
@@ -127,11 +127,7 @@ def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=
 
 def per_angle(problem: Problem) -> Problem:
     """The n pointwise problems: every grid leaf (n,) -> (n, 1), every scalar leaf -> (n,)."""
-    n = problem.theta_deg.shape[-1]
-    grid = {"theta_deg", "s_rad", "ds", "d2s", "moment_coefficient"}
-    return Problem(**{
-        name: (value[:, None] if name in grid else jax.tree.map(lambda x: jnp.broadcast_to(x, (n,)), value))
-        for name, value in problem._asdict().items()})
+    return family.per_angle(problem, {"theta_deg", "s_rad", "ds", "d2s", "moment_coefficient"})
 
 
 class _Geometry(NamedTuple):
@@ -170,8 +166,8 @@ def size_term(problem: Problem, design: Design) -> jax.Array:
 
 def objective(problem: Problem, weights: Weights, design: Design) -> jax.Array:
     """F = alpha R_b / R_b,max + gamma max_theta sigma / sigma_max (shape ())."""
-    return (weights.alpha * size_term(problem, design)
-            + weights.gamma * peak_stress(problem, design) / problem.sigma_max_MPa)
+    return weighted_objective(weights, size_term(problem, design), peak_stress(problem, design),
+                              problem.sigma_max_MPa)
 
 
 def constraints(problem: Problem, design: Design) -> Constraints:
@@ -192,21 +188,9 @@ def constraint_maxima(problem: Problem, design: Design) -> Constraints:
     return jax.tree.map(jnp.max, constraints(problem, design))
 
 
-def bounds(problem: Problem) -> tuple[Design, Design]:
-    """(lower, upper) box bounds of the design, mm."""
-    return problem.lower, problem.upper
-
-
 def size_norm(problem: Problem) -> jax.Array:
     """R_b,max (mm), shape ()."""
     return problem.size_norm_mm
-
-
-def bounds_violation(problem: Problem, design: Design) -> jax.Array:
-    """Largest distance (mm) of any design variable outside its box; 0 inside."""
-    below = jax.tree.map(lambda x, lo: positive_part(lo - x), design, problem.lower)
-    above = jax.tree.map(lambda x, hi: positive_part(x - hi), design, problem.upper)
-    return jnp.max(jnp.stack(jax.tree.leaves(below) + jax.tree.leaves(above)))
 
 
 def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
@@ -219,9 +203,7 @@ def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
                   curvature=positive_part(c.curvature),
                   stress=positive_part(sigma[i] - problem.sigma_max_MPa),
                   bounds=bounds_violation(problem, design))
-    feasible = ((v.reach <= FEASIBILITY_TOL_MM) & (v.swing <= FEASIBILITY_TOL_MM)
-                & (v.curvature <= FEASIBILITY_TOL_MM) & (v.bounds <= FEASIBILITY_TOL_MM)
-                & (v.stress <= FEASIBILITY_RTOL_STRESS * problem.sigma_max_MPa))
+    feasible = all_within(v, _tolerances(problem.sigma_max_MPa))
     return Evaluation(
         objective=objective(problem, weights, design), size_mm=design.base_radius_mm,
         stress_max_MPa=sigma[i], stress_max_deg=problem.theta_deg[i], rho_min_mm=g.rho[j],
@@ -232,49 +214,44 @@ def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
 
 def condense_pointwise(problem: Problem, per_angle_design: Design) -> tuple[Design, dict]:
     """The whole-cam design of a pointwise solve: the design of the angle with the largest R_b."""
-    i = jnp.argmax(per_angle_design.base_radius_mm)
-    design = jax.tree.map(lambda x: x[i], per_angle_design)
-    return design, {"base_radius_deg": problem.theta_deg[i], "theta_deg": problem.theta_deg}
+    return family.condense_at_largest(problem, per_angle_design, per_angle_design.base_radius_mm,
+                                      "base_radius_deg")
+
+
+def _tolerances(sigma_max_MPa) -> dict:
+    """Each constraint's feasibility tolerance (mm; the stress's in MPa)."""
+    return {**{name: FEASIBILITY_TOL_MM for name in CONSTRAINT_NAMES},
+            "stress": FEASIBILITY_RTOL_STRESS * sigma_max_MPa}
 
 
 def violated_constraints(problem: Problem, v: Violation) -> list[str]:
     """Names of the violated constraints (Python; needs concrete values)."""
-    tol = {name: FEASIBILITY_TOL_MM for name in CONSTRAINT_NAMES}
-    tol["stress"] = FEASIBILITY_RTOL_STRESS * float(problem.sigma_max_MPa)
-    return [name for name in CONSTRAINT_NAMES if float(getattr(v, name)) > tol[name]]
+    return family.violated(CONSTRAINT_NAMES, v, _tolerances(float(problem.sigma_max_MPa)))
 
 
-def _f(x) -> float:
-    v = float(np.asarray(x))
-    if not np.isfinite(v):
-        raise ValueError(f"non-finite value {v} in a design result")
-    return v
+_f = finite_float
 
 
 def solution_json(problem: Problem, solution) -> dict:
     """The oscillating flat-face keys of result.json's design block, for one Solution."""
     d, ev, v = solution.design, solution.evaluation, solution.violation
     out = {
-        **{name: _f(getattr(d, name)) for name in VARIABLES},
+        **family.design_json(d, VARIABLES),
         "size_mm": _f(d.base_radius_mm),
         "constraint_violation": {f"{name}_{'MPa' if name == 'stress' else 'mm'}": _f(getattr(v, name))
                                  for name in CONSTRAINT_NAMES},
         "stress_max_MPa": _f(ev.stress_max_MPa), "stress_max_deg": _f(ev.stress_max_deg),
         "rho_min_mm": _f(ev.rho_min_mm), "rho_min_deg": _f(ev.rho_min_deg),
         "face_length_mm": _f(ev.face_length_mm), "sigma_max_MPa": _f(problem.sigma_max_MPa),
-        **{f"{name[:-3]}_bounds_mm": [_f(getattr(problem.lower, name)), _f(getattr(problem.upper, name))]
-           for name in VARIABLES},
+        **family.bounds_json(problem, VARIABLES),
     }
     if solution.mode == "pointwise":
         out["base_radius_deg"] = _f(solution.extras["base_radius_deg"])
-        out["pointwise"] = {"theta_deg": np.asarray(solution.extras["theta_deg"], float).tolist(),
-                            **{name: np.asarray(getattr(solution.pointwise, name), float).tolist()
-                               for name in VARIABLES}}
+        out["pointwise"] = family.pointwise_json(solution, VARIABLES)
     return out
 
 
 def record(solution) -> dict:
     """The oscillating flat-face keys of a pareto.json row: the design, size R_b and peak stress."""
-    d, ev = solution.design, solution.evaluation
-    return {**{name: _f(getattr(d, name)) for name in VARIABLES}, "size_mm": _f(d.base_radius_mm),
-            "stress_max_MPa": _f(ev.stress_max_MPa), "stress_max_deg": _f(ev.stress_max_deg)}
+    d = solution.design
+    return family.record_json(family.design_json(d, VARIABLES), d.base_radius_mm, solution.evaluation)

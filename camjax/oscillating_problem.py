@@ -35,13 +35,23 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from camjax import geometry
+from camjax import family, geometry
 from camjax.contact import HERTZ_FACTOR, compliance, roller_stress
-from camjax.numerics import COS_FLOOR, RHO_FLOOR_MM, floor_positive, positive_part, safe_sqrt
-from camjax.problem import FEASIBILITY_RTOL_STRESS, FEASIBILITY_TOL_MM, Weights
+from camjax.family import (
+    FEASIBILITY_RTOL_STRESS,
+    FEASIBILITY_TOL_MM,
+    FEASIBILITY_TOL_RAD,
+    all_within,
+    weighted_objective,
+)
+
+# re-exported: this family's protocol functions, written once for every family
+from camjax.family import bounds as bounds
+from camjax.family import bounds_violation as bounds_violation
+from camjax.numerics import COS_FLOOR, RHO_FLOOR_MM, finite_float, floor_positive, positive_part, safe_sqrt
+from camjax.problem import Weights
 
 CONSTRAINT_NAMES = ("reach", "pressure_angle", "undercut", "stress", "bounds")
-FEASIBILITY_TOL_RAD = 1e-7  # as the translating roller's (camjax.roller_problem)
 VARIABLES = ("base_radius_mm", "roller_radius_mm", "pivot_distance_mm", "arm_length_mm")
 
 
@@ -110,7 +120,6 @@ class Evaluation(NamedTuple):
 def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=None) -> Problem:
     """Problem of an oscillating-roller scene with a [design] section (Python: reads the scene)."""
     from camjax.evaluate import scene_arrays
-    from camjax.loads import rocker_torque
 
     if scene.design is None:
         raise ValueError("scene has no [design] section: nothing to optimize")
@@ -122,13 +131,9 @@ def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=
     dt = kin.s.dtype
     as_ = lambda v: jnp.asarray(v, dt)  # noqa: E731
     box = [d.base_radius_mm, d.roller_radius_mm, d.pivot_distance_mm, d.arm_length_mm]
-    coeff = jnp.zeros_like(kin.s)
-    if f.train is not None and scene.contact is not None:
-        c = scene.contact
-        moment = rocker_torque(f.train, kin, arrays.cam_speed_rad_s)
-        coeff = HERTZ_FACTOR * safe_sqrt(moment / (c.cam_width_mm * compliance(c.cam, c.follower)))
     return Problem(
-        theta_deg=as_(arrays.theta_deg), s_rad=kin.s, ds=kin.ds, d2s=kin.d2s, moment_coefficient=as_(coeff),
+        theta_deg=as_(arrays.theta_deg), s_rad=kin.s, ds=kin.ds, d2s=kin.d2s,
+        moment_coefficient=as_(moment_coefficient(scene, arrays)),
         lower=Design(*(as_(b[0]) for b in box)), upper=Design(*(as_(b[1]) for b in box)),
         sigma_max_MPa=as_(d.sigma_max_MPa if d.sigma_max_MPa is not None else 1.0),
         size_norm_mm=as_(d.base_radius_mm[1] + d.roller_radius_mm[1]),
@@ -138,13 +143,25 @@ def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=
     )
 
 
+def moment_coefficient(scene, arrays) -> jax.Array:
+    """C_M = 0.564 sqrt(M / (w K)) per angle, shape (n,), of a rocker scene: M (N m) the torque about
+    the pivot (:func:`camjax.loads.rocker_torque`), w the cam width (mm), K the compliance (1/MPa);
+    zeros without a follower train or [contact]. Divided by the root of the lever arm of the contact
+    force (m) it is the Hertz coefficient C (MPa mm^0.5); both oscillating families use it.
+    """
+    from camjax.loads import rocker_torque
+
+    kin = arrays.kin
+    if scene.follower.train is None or scene.contact is None:
+        return jnp.zeros_like(kin.s)
+    c = scene.contact
+    moment = rocker_torque(scene.follower.train, kin, arrays.cam_speed_rad_s)
+    return HERTZ_FACTOR * safe_sqrt(moment / (c.cam_width_mm * compliance(c.cam, c.follower)))
+
+
 def per_angle(problem: Problem) -> Problem:
     """The n pointwise problems: every grid leaf (n,) -> (n, 1), every scalar leaf -> (n,)."""
-    n = problem.theta_deg.shape[-1]
-    grid = {"theta_deg", "s_rad", "ds", "d2s", "moment_coefficient"}
-    return Problem(**{
-        name: (value[:, None] if name in grid else jax.tree.map(lambda x: jnp.broadcast_to(x, (n,)), value))
-        for name, value in problem._asdict().items()})
+    return family.per_angle(problem, {"theta_deg", "s_rad", "ds", "d2s", "moment_coefficient"})
 
 
 # ---------------------------------------------------------------------------- physics
@@ -210,8 +227,8 @@ def size_term(problem: Problem, design: Design) -> jax.Array:
 
 def objective(problem: Problem, weights: Weights, design: Design) -> jax.Array:
     """F = alpha (R_b + R_f) / N + gamma max_theta sigma / sigma_max (dimensionless, shape ())."""
-    return (weights.alpha * size_term(problem, design)
-            + weights.gamma * peak_stress(problem, design) / problem.sigma_max_MPa)
+    return weighted_objective(weights, size_term(problem, design), peak_stress(problem, design),
+                              problem.sigma_max_MPa)
 
 
 def constraints(problem: Problem, design: Design) -> Constraints:
@@ -234,21 +251,9 @@ def constraint_maxima(problem: Problem, design: Design) -> Constraints:
     return jax.tree.map(jnp.max, constraints(problem, design))
 
 
-def bounds(problem: Problem) -> tuple[Design, Design]:
-    """(lower, upper) box bounds of the design, mm."""
-    return problem.lower, problem.upper
-
-
 def size_norm(problem: Problem) -> jax.Array:
     """N = R_b,max + R_f,max (mm), shape ()."""
     return problem.size_norm_mm
-
-
-def bounds_violation(problem: Problem, design: Design) -> jax.Array:
-    """Largest distance (mm) of any design variable outside its box; 0 inside."""
-    below = jax.tree.map(lambda x, lo: positive_part(lo - x), design, problem.lower)
-    above = jax.tree.map(lambda x, hi: positive_part(x - hi), design, problem.upper)
-    return jnp.max(jnp.stack(jax.tree.leaves(below) + jax.tree.leaves(above)))
 
 
 def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
@@ -265,9 +270,7 @@ def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
         stress=positive_part(sigma[i] - problem.sigma_max_MPa),
         bounds=bounds_violation(problem, design),
     )
-    feasible = ((v.reach <= FEASIBILITY_TOL_MM) & (v.pressure_angle <= FEASIBILITY_TOL_RAD)
-                & (v.undercut <= FEASIBILITY_TOL_MM) & (v.bounds <= FEASIBILITY_TOL_MM)
-                & (v.stress <= FEASIBILITY_RTOL_STRESS * problem.sigma_max_MPa))
+    feasible = all_within(v, _tolerances(problem.sigma_max_MPa))
     return Evaluation(
         objective=objective(problem, weights, design),
         size_mm=design.base_radius_mm + design.roller_radius_mm,
@@ -279,31 +282,29 @@ def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
 
 def condense_pointwise(problem: Problem, per_angle_design: Design) -> tuple[Design, dict]:
     """The whole-cam design of a pointwise solve: the design of the angle with the largest R_b + R_f."""
-    i = jnp.argmax(per_angle_design.base_radius_mm + per_angle_design.roller_radius_mm)
-    design = jax.tree.map(lambda x: x[i], per_angle_design)
-    return design, {"prime_radius_deg": problem.theta_deg[i], "theta_deg": problem.theta_deg}
+    size = per_angle_design.base_radius_mm + per_angle_design.roller_radius_mm
+    return family.condense_at_largest(problem, per_angle_design, size, "prime_radius_deg")
+
+
+def _tolerances(sigma_max_MPa) -> dict:
+    """Each constraint's feasibility tolerance (mm, rad; the stress's in MPa)."""
+    return {"reach": FEASIBILITY_TOL_MM, "pressure_angle": FEASIBILITY_TOL_RAD,
+            "undercut": FEASIBILITY_TOL_MM, "bounds": FEASIBILITY_TOL_MM,
+            "stress": FEASIBILITY_RTOL_STRESS * sigma_max_MPa}
 
 
 def violated_constraints(problem: Problem, v: Violation) -> list[str]:
     """Names of the violated constraints (Python; needs concrete values)."""
-    tol = {"reach": FEASIBILITY_TOL_MM, "pressure_angle": FEASIBILITY_TOL_RAD, "undercut": FEASIBILITY_TOL_MM,
-           "bounds": FEASIBILITY_TOL_MM, "stress": FEASIBILITY_RTOL_STRESS * float(problem.sigma_max_MPa)}
-    return [name for name in CONSTRAINT_NAMES if float(getattr(v, name)) > tol[name]]
+    return family.violated(CONSTRAINT_NAMES, v, _tolerances(float(problem.sigma_max_MPa)))
 
 
 # ------------------------------------------------------------------------------- output
 
-
-def _f(x) -> float:
-    v = float(np.asarray(x))
-    if not np.isfinite(v):
-        raise ValueError(f"non-finite value {v} in a design result")
-    return v
+_f = finite_float
 
 
 def _design_keys(d: Design) -> dict:
-    return {**{name: _f(getattr(d, name)) for name in VARIABLES},
-            "prime_radius_mm": _f(d.base_radius_mm + d.roller_radius_mm)}
+    return {**family.design_json(d, VARIABLES), "prime_radius_mm": _f(d.base_radius_mm + d.roller_radius_mm)}
 
 
 def solution_json(problem: Problem, solution) -> dict:
@@ -323,19 +324,15 @@ def solution_json(problem: Problem, solution) -> dict:
         "max_pressure_angle_deg": _f(np.degrees(np.arctan(problem.tan_max_pressure_angle))),
         "cam_rho_min_mm": _f(ev.cam_rho_min_mm),
         "sigma_max_MPa": _f(problem.sigma_max_MPa),
-        **{f"{name[:-3]}_bounds_mm": [_f(getattr(problem.lower, name)), _f(getattr(problem.upper, name))]
-           for name in VARIABLES},
+        **family.bounds_json(problem, VARIABLES),
     }
     if solution.mode == "pointwise":
         out["prime_radius_deg"] = _f(solution.extras["prime_radius_deg"])
-        out["pointwise"] = {"theta_deg": np.asarray(solution.extras["theta_deg"], float).tolist(),
-                            **{name: np.asarray(getattr(solution.pointwise, name), float).tolist()
-                               for name in VARIABLES}}
+        out["pointwise"] = family.pointwise_json(solution, VARIABLES)
     return out
 
 
 def record(solution) -> dict:
     """The oscillating-roller keys of a pareto.json row: the design, size R_b + R_f and peak stress."""
-    d, ev = solution.design, solution.evaluation
-    return {**_design_keys(d), "size_mm": _f(d.base_radius_mm + d.roller_radius_mm),
-            "stress_max_MPa": _f(ev.stress_max_MPa), "stress_max_deg": _f(ev.stress_max_deg)}
+    d = solution.design
+    return family.record_json(_design_keys(d), d.base_radius_mm + d.roller_radius_mm, solution.evaluation)

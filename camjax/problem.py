@@ -45,11 +45,18 @@ import numpy as np
 from camjax import runtime
 from camjax.contact import stress_from_coefficient
 from camjax.extrema import ITERATIONS
-from camjax.numerics import RHO_FLOOR_MM, finite_float, max_over_angles, positive_part, safe_divide, safe_sqrt
+from camjax.family import (
+    FEASIBILITY_RTOL_STRESS,
+    FEASIBILITY_TOL_MM,
+    all_within,
+    bounds_violation,
+    violated,
+    weighted_objective,
+)
 
-# A design is feasible when every violation is below these (mm; MPa relative to sigma_max).
-FEASIBILITY_TOL_MM = 1e-6
-FEASIBILITY_RTOL_STRESS = 1e-6
+# re-exported: this family's protocol function, written once for every family
+from camjax.family import bounds as bounds
+from camjax.numerics import RHO_FLOOR_MM, finite_float, max_over_angles, positive_part, safe_divide, safe_sqrt
 
 CONSTRAINT_NAMES = ("curvature", "stress", "face_width", "bounds")
 
@@ -198,9 +205,9 @@ def _exact_maxima(model, sigma_max_MPa, grid):
 
     eye = jnp.eye(3, dtype=grid.dtype)
     rows = jnp.concatenate([eye, -eye[2:]])
-    bounds, dwells = segment_bounds_deg(model.program), extrema.dwells(model.program)
+    segments, dwells = segment_bounds_deg(model.program), extrema.dwells(model.program)
     # mapped, not vmapped: traced once and not batched again (see evaluate._refined_extremes)
-    return jax.lax.map(lambda w: extrema.refine_max(fn, (model, sigma_max_MPa, w), bounds, w @ grid,
+    return jax.lax.map(lambda w: extrema.refine_max(fn, (model, sigma_max_MPa, w), segments, w @ grid,
                                                     constant=dwells), rows)
 
 
@@ -282,7 +289,7 @@ def size_term(problem: Problem, design: Design) -> jax.Array:
 def objective(problem: Problem, weights: Weights, design: Design) -> jax.Array:
     """F = alpha (R_b + L) / N + gamma max_theta sigma / sigma_max (dimensionless, shape ()), true max."""
     peak = peak_stress(problem, design)
-    return weights.alpha * size_term(problem, design) + weights.gamma * peak / problem.sigma_max_MPa
+    return weighted_objective(weights, size_term(problem, design), peak, problem.sigma_max_MPa)
 
 
 def constraints(problem: Problem, design: Design) -> Constraints:
@@ -322,13 +329,6 @@ def stress_need_max(problem: Problem) -> jax.Array:
     return problem.exact.stress_need_mm
 
 
-def bounds_violation(problem: Problem, design: Design) -> jax.Array:
-    """Largest distance (mm) of any design variable outside its box; 0 inside."""
-    below = jax.tree.map(lambda x, lo: positive_part(lo - x), design, problem.lower)
-    above = jax.tree.map(lambda x, hi: positive_part(x - hi), design, problem.upper)
-    return jnp.max(jnp.stack(jax.tree.leaves(below) + jax.tree.leaves(above)))
-
-
 def violation(problem: Problem, design: Design, peak_stress_MPa: jax.Array | None = None) -> Violation:
     """Worst violation of each constraint in physical units (mm, MPa); zeros when feasible.
 
@@ -349,11 +349,15 @@ def violation(problem: Problem, design: Design, peak_stress_MPa: jax.Array | Non
     )
 
 
+def _tolerances(sigma_max_MPa) -> dict:
+    """Each constraint's feasibility tolerance (mm; the stress's in MPa)."""
+    return {"curvature": FEASIBILITY_TOL_MM, "face_width": FEASIBILITY_TOL_MM, "bounds": FEASIBILITY_TOL_MM,
+            "stress": FEASIBILITY_RTOL_STRESS * sigma_max_MPa}
+
+
 def is_feasible(problem: Problem, v: Violation) -> jax.Array:
     """All violations within the tolerances (FEASIBILITY_TOL_MM; stress relative to sigma_max)."""
-    return ((v.curvature <= FEASIBILITY_TOL_MM) & (v.face_width <= FEASIBILITY_TOL_MM)
-            & (v.bounds <= FEASIBILITY_TOL_MM)
-            & (v.stress <= FEASIBILITY_RTOL_STRESS * problem.sigma_max_MPa))
+    return all_within(v, _tolerances(problem.sigma_max_MPa))
 
 
 def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
@@ -368,7 +372,7 @@ def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
         f = objective(problem, weights, design)
     else:
         peak, peak_deg = exact_peak_stress(problem, design)
-        f = weights.alpha * size_term(problem, design) + weights.gamma * peak / problem.sigma_max_MPa
+        f = weighted_objective(weights, size_term(problem, design), peak, problem.sigma_max_MPa)
     v = violation(problem, design, peak)
     return Evaluation(
         objective=f,
@@ -383,9 +387,7 @@ def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
 
 def violated_constraints(problem: Problem, v: Violation) -> list[str]:
     """Names of the violated constraints (Python; needs concrete values)."""
-    tol = {"curvature": FEASIBILITY_TOL_MM, "face_width": FEASIBILITY_TOL_MM, "bounds": FEASIBILITY_TOL_MM,
-           "stress": FEASIBILITY_RTOL_STRESS * float(problem.sigma_max_MPa)}
-    return [name for name in CONSTRAINT_NAMES if float(getattr(v, name)) > tol[name]]
+    return violated(CONSTRAINT_NAMES, v, _tolerances(float(problem.sigma_max_MPa)))
 
 
 # ------------------------------------------------------------------------- references
@@ -608,11 +610,6 @@ def global_optimum(problem: Problem, weights: Weights, bisections: int = 200) ->
 
 
 # ------------------------------------------------------------------- family protocol
-
-
-def bounds(problem: Problem) -> tuple[Design, Design]:
-    """(lower, upper) box bounds of the design, mm."""
-    return problem.lower, problem.upper
 
 
 def size_norm(problem: Problem) -> jax.Array:

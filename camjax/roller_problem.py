@@ -41,15 +41,18 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from camjax import geometry
+from camjax import family, geometry
 from camjax.contact import roller_stress
-from camjax.numerics import COS_FLOOR, RHO_FLOOR_MM, floor_positive, positive_part, safe_sqrt
-from camjax.problem import FEASIBILITY_RTOL_STRESS, FEASIBILITY_TOL_MM, Weights
+from camjax.family import FEASIBILITY_RTOL_STRESS, FEASIBILITY_TOL_MM, all_within, weighted_objective
+
+# re-exported: this family's protocol functions and tolerance, written once for every family
+from camjax.family import FEASIBILITY_TOL_RAD as FEASIBILITY_TOL_RAD
+from camjax.family import bounds as bounds
+from camjax.family import bounds_violation as bounds_violation
+from camjax.numerics import COS_FLOOR, RHO_FLOOR_MM, finite_float, floor_positive, positive_part, safe_sqrt
+from camjax.problem import Weights
 
 CONSTRAINT_NAMES = ("pressure_angle", "undercut", "stress", "bounds")
-# A design is feasible when |phi| exceeds the limit by at most this (rad): the pressure-angle
-# constraint is met to FEASIBILITY_TOL_MM in mm, which is ~1e-8 rad at R_p ~ 50 mm.
-FEASIBILITY_TOL_RAD = 1e-7
 VARIABLES = ("base_radius_mm", "roller_radius_mm", "offset_mm")
 
 
@@ -150,11 +153,7 @@ def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=
 
 def per_angle(problem: Problem) -> Problem:
     """The n pointwise problems: every grid leaf (n,) -> (n, 1), every scalar leaf -> (n,)."""
-    n = problem.theta_deg.shape[-1]
-    grid = {"theta_deg", "s_mm", "ds_mm", "d2s_mm", "stress_coefficient"}
-    return Problem(**{
-        name: (value[:, None] if name in grid else jax.tree.map(lambda x: jnp.broadcast_to(x, (n,)), value))
-        for name, value in problem._asdict().items()})
+    return family.per_angle(problem, {"theta_deg", "s_mm", "ds_mm", "d2s_mm", "stress_coefficient"})
 
 
 # ---------------------------------------------------------------------------- physics
@@ -220,8 +219,8 @@ def size_term(problem: Problem, design: Design) -> jax.Array:
 
 def objective(problem: Problem, weights: Weights, design: Design) -> jax.Array:
     """F = alpha (R_b + R_f) / N + gamma max_theta sigma / sigma_max (dimensionless, shape ())."""
-    return (weights.alpha * size_term(problem, design)
-            + weights.gamma * peak_stress(problem, design) / problem.sigma_max_MPa)
+    return weighted_objective(weights, size_term(problem, design), peak_stress(problem, design),
+                              problem.sigma_max_MPa)
 
 
 def constraints(problem: Problem, design: Design) -> Constraints:
@@ -244,11 +243,6 @@ def constraint_maxima(problem: Problem, design: Design) -> Constraints:
     angle instead of once per constraint.
     """
     return Constraints(*jnp.max(jnp.stack(constraints(problem, design)), axis=-1))
-
-
-def bounds(problem: Problem) -> tuple[Design, Design]:
-    """(lower, upper) box bounds of the design, mm."""
-    return problem.lower, problem.upper
 
 
 def size_norm(problem: Problem) -> jax.Array:
@@ -336,13 +330,6 @@ def min_prime_radius_for_pressure_angle(problem: Problem, offset_mm: jax.Array) 
     return safe_sqrt(offset_mm**2 + positive_part(d_min) ** 2)  # 0 (finite gradient) at e = 0 = d_min
 
 
-def bounds_violation(problem: Problem, design: Design) -> jax.Array:
-    """Largest distance (mm) of any design variable outside its box; 0 inside."""
-    below = jax.tree.map(lambda x, lo: positive_part(lo - x), design, problem.lower)
-    above = jax.tree.map(lambda x, hi: positive_part(x - hi), design, problem.upper)
-    return jnp.max(jnp.stack(jax.tree.leaves(below) + jax.tree.leaves(above)))
-
-
 def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
     """Objective, peak stress and pressure angle (and their angles), violations and feasibility."""
     x = _terms(problem, design)
@@ -358,9 +345,7 @@ def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
         stress=positive_part(sigma[i] - problem.sigma_max_MPa),
         bounds=bounds_violation(problem, design),
     )
-    feasible = ((v.pressure_angle <= FEASIBILITY_TOL_RAD) & (v.undercut <= FEASIBILITY_TOL_MM)
-                & (v.bounds <= FEASIBILITY_TOL_MM)
-                & (v.stress <= FEASIBILITY_RTOL_STRESS * problem.sigma_max_MPa))
+    feasible = all_within(v, _tolerances(problem.sigma_max_MPa))
     return Evaluation(
         objective=objective(problem, weights, design),
         size_mm=design.base_radius_mm + design.roller_radius_mm,
@@ -378,31 +363,28 @@ def condense_pointwise(problem: Problem, per_angle_design: Design) -> tuple[Desi
     whole grid (its violations, if any, are reported, not hidden). Extras: the critical angle
     (``prime_radius_deg``) and the grid.
     """
-    i = jnp.argmax(per_angle_design.base_radius_mm + per_angle_design.roller_radius_mm)
-    design = jax.tree.map(lambda x: x[i], per_angle_design)
-    return design, {"prime_radius_deg": problem.theta_deg[i], "theta_deg": problem.theta_deg}
+    size = per_angle_design.base_radius_mm + per_angle_design.roller_radius_mm
+    return family.condense_at_largest(problem, per_angle_design, size, "prime_radius_deg")
+
+
+def _tolerances(sigma_max_MPa) -> dict:
+    """Each constraint's feasibility tolerance (rad, mm; the stress's in MPa)."""
+    return {"pressure_angle": FEASIBILITY_TOL_RAD, "undercut": FEASIBILITY_TOL_MM,
+            "bounds": FEASIBILITY_TOL_MM, "stress": FEASIBILITY_RTOL_STRESS * sigma_max_MPa}
 
 
 def violated_constraints(problem: Problem, v: Violation) -> list[str]:
     """Names of the violated constraints (Python; needs concrete values)."""
-    tol = {"pressure_angle": FEASIBILITY_TOL_RAD, "undercut": FEASIBILITY_TOL_MM,
-           "bounds": FEASIBILITY_TOL_MM, "stress": FEASIBILITY_RTOL_STRESS * float(problem.sigma_max_MPa)}
-    return [name for name in CONSTRAINT_NAMES if float(getattr(v, name)) > tol[name]]
+    return family.violated(CONSTRAINT_NAMES, v, _tolerances(float(problem.sigma_max_MPa)))
 
 
 # ------------------------------------------------------------------------------- output
 
-
-def _f(x) -> float:
-    v = float(np.asarray(x))
-    if not np.isfinite(v):
-        raise ValueError(f"non-finite value {v} in a design result")
-    return v
+_f = finite_float
 
 
 def _design_keys(d: Design) -> dict:
-    return {"base_radius_mm": _f(d.base_radius_mm), "roller_radius_mm": _f(d.roller_radius_mm),
-            "offset_mm": _f(d.offset_mm), "prime_radius_mm": _f(d.base_radius_mm + d.roller_radius_mm)}
+    return {**family.design_json(d, VARIABLES), "prime_radius_mm": _f(d.base_radius_mm + d.roller_radius_mm)}
 
 
 def solution_json(problem: Problem, solution) -> dict:
@@ -421,19 +403,15 @@ def solution_json(problem: Problem, solution) -> dict:
         "max_pressure_angle_deg": _f(problem.max_pressure_angle_deg),
         "cam_rho_min_mm": _f(ev.cam_rho_min_mm),
         "sigma_max_MPa": _f(problem.sigma_max_MPa),
-        **{f"{name[:-3]}_bounds_mm": [_f(getattr(problem.lower, name)), _f(getattr(problem.upper, name))]
-           for name in VARIABLES},
+        **family.bounds_json(problem, VARIABLES),
     }
     if solution.mode == "pointwise":
         out["prime_radius_deg"] = _f(solution.extras["prime_radius_deg"])
-        out["pointwise"] = {"theta_deg": np.asarray(solution.extras["theta_deg"], float).tolist(),
-                            **{name: np.asarray(getattr(solution.pointwise, name), float).tolist()
-                               for name in VARIABLES}}
+        out["pointwise"] = family.pointwise_json(solution, VARIABLES)
     return out
 
 
 def record(solution) -> dict:
     """The roller keys of a pareto.json row: the design, size R_b + R_f and peak stress."""
-    d, ev = solution.design, solution.evaluation
-    return {**_design_keys(d), "size_mm": _f(d.base_radius_mm + d.roller_radius_mm),
-            "stress_max_MPa": _f(ev.stress_max_MPa), "stress_max_deg": _f(ev.stress_max_deg)}
+    d = solution.design
+    return family.record_json(_design_keys(d), d.base_radius_mm + d.roller_radius_mm, solution.evaluation)

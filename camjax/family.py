@@ -1,0 +1,110 @@
+"""What every problem family of :mod:`camjax.solvers.base` shares, written once.
+
+The families (:mod:`camjax.problem`, :mod:`camjax.roller_problem`, :mod:`camjax.oscillating_problem`,
+:mod:`camjax.oscillating_flat_problem`) differ in their design variables, physics and constraints.
+The pieces here reach a problem only through the fields every family's ``Problem`` has:
+``theta_deg`` (n,), the box ``lower`` / ``upper`` (``Design`` pytrees, mm) and ``sigma_max_MPa``;
+a design only as a pytree of named variables (mm), a violation only through its field names.
+"""
+
+from __future__ import annotations
+
+import functools
+import operator
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from camjax.numerics import finite_float, positive_part
+
+# A design is feasible when every violation is below these (mm; MPa relative to sigma_max).
+FEASIBILITY_TOL_MM = 1e-6
+FEASIBILITY_RTOL_STRESS = 1e-6
+# ... and |phi| exceeds its limit by at most this (rad): the pressure-angle constraint is met to
+# FEASIBILITY_TOL_MM in mm, which is ~1e-8 rad at R_p ~ 50 mm.
+FEASIBILITY_TOL_RAD = 1e-7
+
+# ------------------------------------------------------------------------------ protocol
+
+
+def per_angle(problem, grid_fields):
+    """The n pointwise problems: every leaf named in ``grid_fields`` (n,) -> (n, 1), every other
+    leaf (scalars, the box) -> (n,).
+
+    ``jax.vmap(f)(per_angle(p, ...), ...)`` solves the problem at each angle separately.
+    """
+    n = problem.theta_deg.shape[-1]
+    scalar = lambda x: jnp.broadcast_to(x, (n,))  # noqa: E731
+    return type(problem)(**{name: (value[:, None] if name in grid_fields else jax.tree.map(scalar, value))
+                            for name, value in problem._asdict().items()})
+
+
+def bounds(problem):
+    """(lower, upper) box bounds of the design, mm."""
+    return problem.lower, problem.upper
+
+
+def bounds_violation(problem, design) -> jax.Array:
+    """Largest distance (mm) of any design variable outside its box; 0 inside."""
+    below = jax.tree.map(lambda x, lo: positive_part(lo - x), design, problem.lower)
+    above = jax.tree.map(lambda x, hi: positive_part(x - hi), design, problem.upper)
+    return jnp.max(jnp.stack(jax.tree.leaves(below) + jax.tree.leaves(above)))
+
+
+def weighted_objective(weights, size_term, peak_stress_MPa, sigma_max_MPa) -> jax.Array:
+    """F = alpha size_term + gamma peak_stress / sigma_max (dimensionless), ``weights`` a
+    :class:`camjax.problem.Weights`.
+
+    The order a family computes the two terms in is part of its exact result: it fixes the order
+    in which the gradient's contributions to a shared variable add up (float addition does not
+    associate), so a family keeps the order it was written with.
+    """
+    return weights.alpha * size_term + weights.gamma * peak_stress_MPa / sigma_max_MPa
+
+
+def condense_at_largest(problem, per_angle_design, size_mm, angle_key: str):
+    """The whole-cam design of a pointwise solve: the design of the angle where ``size_mm`` (n,)
+    is largest (the first on ties); extras: that angle under ``angle_key`` and the grid."""
+    i = jnp.argmax(size_mm)
+    design = jax.tree.map(lambda x: x[i], per_angle_design)
+    return design, {angle_key: problem.theta_deg[i], "theta_deg": problem.theta_deg}
+
+
+def all_within(violation, tolerances: dict) -> jax.Array:
+    """Whether every violation named in ``tolerances`` is within its tolerance (bool, traceable)."""
+    within = (getattr(violation, name) <= tol for name, tol in tolerances.items())
+    return functools.reduce(operator.and_, within)
+
+
+def violated(names, violation, tolerances: dict) -> list[str]:
+    """The names (in the order of ``names``) whose violation exceeds its tolerance (Python)."""
+    return [name for name in names if float(getattr(violation, name)) > tolerances[name]]
+
+
+# -------------------------------------------------------------------------------- output
+
+
+def design_json(design, variables) -> dict:
+    """Each design variable's value (mm), in the order of ``variables``."""
+    return {name: finite_float(getattr(design, name)) for name in variables}
+
+
+def bounds_json(problem, variables) -> dict:
+    """result.json's ``<variable>_bounds_mm``: [low, high] of each design variable (``..._mm`` name)."""
+    return {f"{name[:-3]}_bounds_mm": [finite_float(getattr(problem.lower, name)),
+                                       finite_float(getattr(problem.upper, name))]
+            for name in variables}
+
+
+def pointwise_json(solution, variables) -> dict:
+    """result.json's ``pointwise`` block: the grid and every variable's per-angle optimum (lists)."""
+    return {"theta_deg": np.asarray(solution.extras["theta_deg"], float).tolist(),
+            **{name: np.asarray(getattr(solution.pointwise, name), float).tolist() for name in variables}}
+
+
+def record_json(design_keys: dict, size_mm, evaluation) -> dict:
+    """A pareto.json row's family keys: the design's, its size (mm) and the peak stress and its angle."""
+    return {**design_keys, "size_mm": finite_float(size_mm),
+            "stress_max_MPa": finite_float(evaluation.stress_max_MPa),
+            "stress_max_deg": finite_float(evaluation.stress_max_deg)}

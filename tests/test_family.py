@@ -1,0 +1,108 @@
+"""The pieces every problem family shares (camjax.family), on a small stand-in family whose values are
+known by construction: box distances by hand, per-angle slices against the grid, tolerances."""
+
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from camjax import family
+from camjax.numerics import NonFiniteError
+from camjax.problem import Weights
+
+
+class Design(NamedTuple):
+    a_mm: jax.Array
+    b_mm: jax.Array
+
+
+class Problem(NamedTuple):
+    theta_deg: jax.Array
+    q_mm: jax.Array
+    lower: Design
+    upper: Design
+    sigma_max_MPa: jax.Array
+
+
+class Violation(NamedTuple):
+    curvature: jax.Array
+    stress: jax.Array
+
+
+def _problem(n=6):
+    theta = jnp.arange(n) * (360.0 / n)
+    return Problem(theta, jnp.sin(jnp.deg2rad(theta)), Design(jnp.asarray(10.0), jnp.asarray(2.0)),
+                   Design(jnp.asarray(20.0), jnp.asarray(2.0)), jnp.asarray(500.0))
+
+
+@pytest.mark.parametrize("design, distance", [((15.0, 2.0), 0.0), ((7.5, 2.0), 2.5), ((15.0, 2.25), 0.25),
+                                              ((23.0, 1.0), 3.0)])
+def test_bounds_violation_is_the_largest_distance_outside_the_box(design, distance):
+    # the box is [10, 20] x [2, 2]: the distances are read off by hand; exact in binary
+    v = jax.jit(family.bounds_violation)(_problem(), Design(*map(jnp.asarray, design)))
+    assert float(v) == distance
+
+
+def test_bounds_violation_gradient_is_finite_inside_and_outside():
+    for a in (15.0, 5.0, 25.0):
+        g = jax.grad(lambda x: family.bounds_violation(_problem(), Design(x, jnp.asarray(2.0))))(a)
+        assert np.isfinite(float(g))
+
+
+def test_per_angle_gives_one_angle_each_and_broadcasts_the_rest():
+    p = _problem(6)
+    per = family.per_angle(p, {"theta_deg", "q_mm"})
+    assert per.theta_deg.shape == (6, 1) and per.q_mm.shape == (6, 1)
+    assert per.lower.a_mm.shape == (6,) and per.sigma_max_MPa.shape == (6,)
+    for k in range(6):
+        one = jax.tree.map(lambda x, k=k: x[k], per)
+        assert float(one.theta_deg[0]) == float(p.theta_deg[k]) and float(one.q_mm[0]) == float(p.q_mm[k])
+        assert float(one.upper.a_mm) == 20.0
+
+
+def test_weighted_objective_and_bounds():
+    w = Weights(jnp.asarray(0.5), jnp.asarray(2.0))
+    # 0.5 * 0.25 + 2 * 250 / 500 = 1.125, exact in binary
+    assert float(family.weighted_objective(w, 0.25, 250.0, 500.0)) == 1.125
+    lo, hi = family.bounds(_problem())
+    assert (float(lo.a_mm), float(hi.a_mm)) == (10.0, 20.0)
+
+
+def test_condense_at_largest_takes_the_design_of_the_largest_size():
+    p = _problem(6)
+    per = Design(jnp.array([1.0, 4.0, 3.0, 4.0, 0.0, 2.0]), jnp.arange(6.0))
+    design, extras = family.condense_at_largest(p, per, per.a_mm + 0.0, "a_deg")
+    assert (float(design.a_mm), float(design.b_mm)) == (4.0, 1.0)  # the first of the tie
+    assert float(extras["a_deg"]) == 60.0 and extras["theta_deg"] is p.theta_deg
+
+
+def test_tolerances_decide_feasibility_and_the_names_of_violations():
+    tol = {"curvature": 1e-6, "stress": 1e-6 * 500.0}
+    assert bool(family.all_within(Violation(jnp.asarray(1e-6), jnp.asarray(5e-4)), tol))
+    assert not bool(family.all_within(Violation(jnp.asarray(2e-6), jnp.asarray(0.0)), tol))
+    assert family.violated(("curvature", "stress"), Violation(2e-6, 6e-4), tol) == ["curvature", "stress"]
+    assert family.violated(("curvature", "stress"), Violation(0.0, 6e-4), tol) == ["stress"]
+
+
+def test_json_helpers_name_every_variable_and_refuse_non_finite_values():
+    p = _problem(3)
+    assert family.design_json(Design(1.5, 2.5), ("a_mm", "b_mm")) == {"a_mm": 1.5, "b_mm": 2.5}
+    assert family.bounds_json(p, ("a_mm",)) == {"a_bounds_mm": [10.0, 20.0]}
+
+    class Solution(NamedTuple):
+        extras: dict
+        pointwise: Design
+
+    s = Solution({"theta_deg": p.theta_deg}, Design(jnp.array([1.0, 2.0, 3.0]), jnp.zeros(3)))
+    assert family.pointwise_json(s, ("a_mm",)) == {"theta_deg": [0.0, 120.0, 240.0], "a_mm": [1.0, 2.0, 3.0]}
+
+    class Evaluation(NamedTuple):
+        stress_max_MPa: float
+        stress_max_deg: float
+
+    row = family.record_json({"a_mm": 1.0}, 3.0, Evaluation(400.0, 90.0))
+    assert row == {"a_mm": 1.0, "size_mm": 3.0, "stress_max_MPa": 400.0, "stress_max_deg": 90.0}
+    with pytest.raises(NonFiniteError, match="non-finite value nan"):
+        family.record_json({}, float("nan"), Evaluation(400.0, 90.0))
