@@ -103,6 +103,29 @@ def pointwise_json(solution, variables) -> dict:
             **{name: np.asarray(getattr(solution.pointwise, name), float).tolist() for name in variables}}
 
 
+def solution_keys(problem, solution, variables, *, design_keys: dict, size_mm, violation: dict, figures: dict,
+                  pointwise_angles=()) -> dict:
+    """A family's keys of result.json's design block, in the order every family writes them.
+
+    ``design_keys``, then ``size_mm``, ``constraint_violation`` (the ``violation`` dict), the
+    evaluation ``figures``, ``sigma_max_MPa`` and each variable's bounds; for a pointwise
+    ``solution`` also the extras named in ``pointwise_angles`` (deg) and the ``pointwise`` block.
+    Every number is checked finite (:func:`camjax.numerics.finite_float`).
+    """
+    out = {
+        **design_keys,
+        "size_mm": finite_float(size_mm),
+        "constraint_violation": {name: finite_float(v) for name, v in violation.items()},
+        **{name: finite_float(v) for name, v in figures.items()},
+        "sigma_max_MPa": finite_float(problem.sigma_max_MPa),
+        **bounds_json(problem, variables),
+    }
+    if solution.mode == "pointwise":
+        out.update({name: finite_float(solution.extras[name]) for name in pointwise_angles})
+        out["pointwise"] = pointwise_json(solution, variables)
+    return out
+
+
 def record_json(design_keys: dict, size_mm, evaluation) -> dict:
     """A pareto.json row's family keys: the design's, its size (mm) and the peak stress and its angle."""
     return {**design_keys, "size_mm": finite_float(size_mm),

@@ -235,20 +235,14 @@ _f = finite_float
 def solution_json(problem: Problem, solution) -> dict:
     """The oscillating flat-face keys of result.json's design block, for one Solution."""
     d, ev, v = solution.design, solution.evaluation, solution.violation
-    out = {
-        **family.design_json(d, VARIABLES),
-        "size_mm": _f(d.base_radius_mm),
-        "constraint_violation": {f"{name}_{'MPa' if name == 'stress' else 'mm'}": _f(getattr(v, name))
-                                 for name in CONSTRAINT_NAMES},
-        "stress_max_MPa": _f(ev.stress_max_MPa), "stress_max_deg": _f(ev.stress_max_deg),
-        "rho_min_mm": _f(ev.rho_min_mm), "rho_min_deg": _f(ev.rho_min_deg),
-        "face_length_mm": _f(ev.face_length_mm), "sigma_max_MPa": _f(problem.sigma_max_MPa),
-        **family.bounds_json(problem, VARIABLES),
-    }
-    if solution.mode == "pointwise":
-        out["base_radius_deg"] = _f(solution.extras["base_radius_deg"])
-        out["pointwise"] = family.pointwise_json(solution, VARIABLES)
-    return out
+    violation = {f"{name}_{'MPa' if name == 'stress' else 'mm'}": getattr(v, name)
+                 for name in CONSTRAINT_NAMES}
+    figures = {"stress_max_MPa": ev.stress_max_MPa, "stress_max_deg": ev.stress_max_deg,
+               "rho_min_mm": ev.rho_min_mm, "rho_min_deg": ev.rho_min_deg,
+               "face_length_mm": ev.face_length_mm}
+    return family.solution_keys(problem, solution, VARIABLES, design_keys=family.design_json(d, VARIABLES),
+                                size_mm=d.base_radius_mm, violation=violation, figures=figures,
+                                pointwise_angles=("base_radius_deg",))
 
 
 def record(solution) -> dict:

@@ -50,6 +50,7 @@ from camjax.family import bounds as bounds
 from camjax.family import bounds_violation as bounds_violation
 from camjax.numerics import COS_FLOOR, RHO_FLOOR_MM, finite_float, floor_positive, positive_part, safe_sqrt
 from camjax.problem import Weights
+from camjax.roller_problem import roller_figures
 
 CONSTRAINT_NAMES = ("reach", "pressure_angle", "undercut", "stress", "bounds")
 VARIABLES = ("base_radius_mm", "roller_radius_mm", "pivot_distance_mm", "arm_length_mm")
@@ -309,27 +310,14 @@ def _design_keys(d: Design) -> dict:
 
 def solution_json(problem: Problem, solution) -> dict:
     """The oscillating-roller keys of result.json's design block, for one Solution."""
-    d, ev, v = solution.design, solution.evaluation, solution.violation
-    out = {
-        **_design_keys(d),
-        "size_mm": _f(d.base_radius_mm + d.roller_radius_mm),
-        "constraint_violation": {"reach_mm": _f(v.reach),
-                                 "pressure_angle_deg": _f(np.degrees(v.pressure_angle)),
-                                 "undercut_mm": _f(v.undercut), "stress_MPa": _f(v.stress),
-                                 "bounds_mm": _f(v.bounds)},
-        "stress_max_MPa": _f(ev.stress_max_MPa),
-        "stress_max_deg": _f(ev.stress_max_deg),
-        "pressure_angle_max_deg": _f(ev.pressure_angle_max_deg),
-        "pressure_angle_max_at_deg": _f(ev.pressure_angle_max_at_deg),
-        "max_pressure_angle_deg": _f(np.degrees(np.arctan(problem.tan_max_pressure_angle))),
-        "cam_rho_min_mm": _f(ev.cam_rho_min_mm),
-        "sigma_max_MPa": _f(problem.sigma_max_MPa),
-        **family.bounds_json(problem, VARIABLES),
-    }
-    if solution.mode == "pointwise":
-        out["prime_radius_deg"] = _f(solution.extras["prime_radius_deg"])
-        out["pointwise"] = family.pointwise_json(solution, VARIABLES)
-    return out
+    d, v = solution.design, solution.violation
+    limit_deg = np.degrees(np.arctan(problem.tan_max_pressure_angle))
+    return family.solution_keys(
+        problem, solution, VARIABLES, design_keys=_design_keys(d),
+        size_mm=d.base_radius_mm + d.roller_radius_mm,
+        violation={"reach_mm": v.reach, "pressure_angle_deg": np.degrees(v.pressure_angle),
+                   "undercut_mm": v.undercut, "stress_MPa": v.stress, "bounds_mm": v.bounds},
+        figures=roller_figures(solution.evaluation, limit_deg), pointwise_angles=("prime_radius_deg",))
 
 
 def record(solution) -> dict:

@@ -389,26 +389,25 @@ def _design_keys(d: Design) -> dict:
 
 def solution_json(problem: Problem, solution) -> dict:
     """The roller keys of result.json's design block, for one :class:`camjax.solvers.base.Solution`."""
-    d, ev, v = solution.design, solution.evaluation, solution.violation
-    out = {
-        **_design_keys(d),
-        "size_mm": _f(d.base_radius_mm + d.roller_radius_mm),
-        "constraint_violation": {"pressure_angle_deg": _f(np.degrees(v.pressure_angle)),
-                                 "undercut_mm": _f(v.undercut), "stress_MPa": _f(v.stress),
-                                 "bounds_mm": _f(v.bounds)},
-        "stress_max_MPa": _f(ev.stress_max_MPa),
-        "stress_max_deg": _f(ev.stress_max_deg),
-        "pressure_angle_max_deg": _f(ev.pressure_angle_max_deg),
-        "pressure_angle_max_at_deg": _f(ev.pressure_angle_max_at_deg),
-        "max_pressure_angle_deg": _f(problem.max_pressure_angle_deg),
-        "cam_rho_min_mm": _f(ev.cam_rho_min_mm),
-        "sigma_max_MPa": _f(problem.sigma_max_MPa),
-        **family.bounds_json(problem, VARIABLES),
-    }
-    if solution.mode == "pointwise":
-        out["prime_radius_deg"] = _f(solution.extras["prime_radius_deg"])
-        out["pointwise"] = family.pointwise_json(solution, VARIABLES)
-    return out
+    d, v = solution.design, solution.violation
+    return family.solution_keys(
+        problem, solution, VARIABLES, design_keys=_design_keys(d),
+        size_mm=d.base_radius_mm + d.roller_radius_mm,
+        violation={"pressure_angle_deg": np.degrees(v.pressure_angle), "undercut_mm": v.undercut,
+                   "stress_MPa": v.stress, "bounds_mm": v.bounds},
+        figures=roller_figures(solution.evaluation, problem.max_pressure_angle_deg),
+        pointwise_angles=("prime_radius_deg",))
+
+
+def roller_figures(evaluation, max_pressure_angle_deg) -> dict:
+    """result.json's figures of a roller on a cam (either roller family's :class:`Evaluation`): peak
+    stress (MPa) and pressure angle (deg), their angles (deg), the limit (deg), the smallest convex
+    cam radius (mm)."""
+    ev = evaluation
+    return {"stress_max_MPa": ev.stress_max_MPa, "stress_max_deg": ev.stress_max_deg,
+            "pressure_angle_max_deg": ev.pressure_angle_max_deg,
+            "pressure_angle_max_at_deg": ev.pressure_angle_max_at_deg,
+            "max_pressure_angle_deg": max_pressure_angle_deg, "cam_rho_min_mm": ev.cam_rho_min_mm}
 
 
 def record(solution) -> dict:

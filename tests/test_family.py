@@ -106,3 +106,23 @@ def test_json_helpers_name_every_variable_and_refuse_non_finite_values():
     assert row == {"a_mm": 1.0, "size_mm": 3.0, "stress_max_MPa": 400.0, "stress_max_deg": 90.0}
     with pytest.raises(NonFiniteError, match="non-finite value nan"):
         family.record_json({}, float("nan"), Evaluation(400.0, 90.0))
+
+
+def test_solution_keys_keep_the_order_every_family_writes_and_add_the_pointwise_block():
+    p = _problem(3)
+
+    class Solution(NamedTuple):
+        mode: str
+        extras: dict
+        pointwise: Design
+
+    s = Solution("pointwise", {"theta_deg": p.theta_deg, "a_deg": 120.0},
+                 Design(jnp.array([1.0, 2.0, 3.0]), jnp.zeros(3)))
+    out = family.solution_keys(p, s, ("a_mm",), design_keys={"a_mm": 3.0}, size_mm=3.0,
+                               violation={"curvature_mm": 0.0}, figures={"stress_max_MPa": 400.0},
+                               pointwise_angles=("a_deg",))
+    assert list(out) == ["a_mm", "size_mm", "constraint_violation", "stress_max_MPa", "sigma_max_MPa",
+                         "a_bounds_mm", "a_deg", "pointwise"]
+    assert out["sigma_max_MPa"] == 500.0 and out["a_deg"] == 120.0 and out["pointwise"]["a_mm"] == [1.0, 2.0, 3.0]
+    assert "pointwise" not in family.solution_keys(p, s._replace(mode="global"), ("a_mm",), design_keys={},
+                                                   size_mm=3.0, violation={}, figures={})
