@@ -9,6 +9,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
+from outline import max_over_outline, turn
 
 from camjax import geometry
 from camjax.laws import get_law
@@ -140,7 +141,7 @@ def riding_arm_angles(d, l, rf, rp, rotation, theta_deg, dense=7200, iters=90):
         kin = motion_at(PROGRAM, tau_deg)
         x, y = geometry.oscillating_roller_profile(d, l, rf, rp, kin, rotation)
         a = sigma_of(rotation) * th
-        xf, yf = jnp.cos(a) * x - jnp.sin(a) * y, jnp.sin(a) * x + jnp.cos(a) * y
+        xf, yf = turn(x, y, a)
         r = jnp.hypot(xf - d, yf)
         beta = jnp.arctan2(yf, xf - d)
         c = (l**2 + r**2 - rf**2) / (2 * l * r)
@@ -148,17 +149,7 @@ def riding_arm_angles(d, l, rf, rp, rotation, theta_deg, dense=7200, iters=90):
         psi = math.pi - beta + jnp.arccos(jnp.where(ok, c, 0.0))
         return jnp.where(ok, jnp.mod(psi + math.pi, 2 * math.pi) - math.pi, -jnp.inf)  # in (-pi, pi]
 
-    th = jnp.deg2rad(jnp.asarray(theta_deg))
-    grid = jnp.arange(dense) * (360.0 / dense)
-    k = jnp.argmax(jax.vmap(lambda t: arm(grid, t))(th), axis=1)
-    lo, hi = grid[k] - 360.0 / dense, grid[k] + 360.0 / dense
-    g = (math.sqrt(5) - 1) / 2
-    h = jax.jit(jax.vmap(arm))
-    for _ in range(iters):
-        a, b = hi - g * (hi - lo), lo + g * (hi - lo)
-        up = h(a, th) < h(b, th)
-        lo, hi = jnp.where(up, a, lo), jnp.where(up, hi, b)
-    return h(0.5 * (lo + hi), th)
+    return max_over_outline(arm, theta_deg, dense, iters)
 
 
 @pytest.mark.slow
@@ -191,22 +182,12 @@ def riding_face_angles(d, f, rb, rotation, theta_deg, dense=7200, iters=90):
         kin = motion_at(PROGRAM, tau_deg)
         x, y = geometry.oscillating_flat_profile(d, f, rb, kin, rotation)
         a = sigma_of(rotation) * th
-        xf, yf = jnp.cos(a) * x - jnp.sin(a) * y, jnp.sin(a) * x + jnp.cos(a) * y
+        xf, yf = turn(x, y, a)
         r, beta = jnp.hypot(xf - d, yf), jnp.arctan2(yf, xf - d)
         psi = math.pi + jnp.arcsin(f / r) - beta
         return jnp.mod(psi + math.pi, 2 * math.pi) - math.pi  # in (-pi, pi]
 
-    th = jnp.deg2rad(jnp.asarray(theta_deg))
-    grid = jnp.arange(dense) * (360.0 / dense)
-    k = jnp.argmax(jax.vmap(lambda t: face(grid, t))(th), axis=1)
-    lo, hi = grid[k] - 360.0 / dense, grid[k] + 360.0 / dense
-    g = (math.sqrt(5) - 1) / 2
-    h = jax.jit(jax.vmap(face))
-    for _ in range(iters):
-        a, b = hi - g * (hi - lo), lo + g * (hi - lo)
-        up = h(a, th) < h(b, th)
-        lo, hi = jnp.where(up, a, lo), jnp.where(up, hi, b)
-    return h(0.5 * (lo + hi), th)
+    return max_over_outline(face, theta_deg, dense, iters)
 
 
 @pytest.mark.slow

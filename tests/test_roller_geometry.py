@@ -8,6 +8,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
+from outline import max_over_outline, turn
 
 from camjax import contact, geometry, loads
 from camjax.laws import get_law
@@ -143,21 +144,11 @@ def riding_heights(rb, rf, e, rotation, theta_deg, dense=7200, iters=90):
         kin = motion_at(PROGRAM, tau_deg)
         x, y = geometry.roller_profile(rb, rf, e, kin, rotation)
         a = th if rotation == "ccw" else -th  # follower frame = cam frame turned by the cam angle
-        xf, yf = jnp.cos(a) * x - jnp.sin(a) * y, jnp.sin(a) * x + jnp.cos(a) * y
+        xf, yf = turn(x, y, a)
         gap = rf**2 - (xf - e) ** 2
         return jnp.where(gap >= 0, yf + jnp.sqrt(jnp.where(gap >= 0, gap, 0.0)), -jnp.inf)
 
-    th = jnp.deg2rad(jnp.asarray(theta_deg))
-    grid = jnp.arange(dense) * (360.0 / dense)
-    k = jnp.argmax(jax.vmap(lambda t: height(grid, t))(th), axis=1)
-    lo, hi = grid[k] - 360.0 / dense, grid[k] + 360.0 / dense
-    g = (math.sqrt(5) - 1) / 2
-    h = jax.jit(jax.vmap(height))
-    for _ in range(iters):
-        a, b = hi - g * (hi - lo), lo + g * (hi - lo)
-        up = h(a, th) < h(b, th)
-        lo, hi = jnp.where(up, a, lo), jnp.where(up, hi, b)
-    return h(0.5 * (lo + hi), th)
+    return max_over_outline(height, theta_deg, dense, iters)
 
 
 @pytest.mark.slow
