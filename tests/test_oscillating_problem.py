@@ -8,6 +8,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
+from test_rocker import ROLLER_SCENE
 
 from camjax import geometry
 from camjax import oscillating_problem as OP
@@ -16,32 +17,22 @@ from camjax.problem import Weights
 from camjax.scene import SceneError, parse_scene
 from camjax.solvers.base import problem_from_scene, solve
 
-SCENE = """
-[motion]
-rpm = 300.0
-samples = 180
-rotation = "ROT"
-segments = [
-  { kind = "rise",   angle_deg = 120, law = "cycloidal", lift_deg = 20.0 },
-  { kind = "dwell",  angle_deg = 60 },
-  { kind = "return", angle_deg = 100, law = "poly_3_4_5", lift_deg = 20.0 },
-  { kind = "dwell",  angle_deg = 80 },
-]
 
-[follower]
-type = "oscillating_roller"
-pivot_distance_mm = 80.0
-arm_length_mm = 60.0
-roller_radius_mm = 8.0
-inertia_kg_m2 = 0.002
-spring_N_m_per_rad = 20.0
-preload_rad = 0.3
+def edited(text, *replacements):
+    """``text`` with each (old, new) replaced; each old must occur exactly once."""
+    for old, new in replacements:
+        assert text.count(old) == 1, old
+        text = text.replace(old, new)
+    return text
 
-[contact]
-cam_width_mm = 8.0
-cam = { E_MPa = 2.1e5, poisson = 0.3 }
-follower = { E_MPa = 2.1e5, poisson = 0.3 }
 
+# test_rocker's rocker on a coarser grid, with an asymmetric pair of laws (so that the rotation
+# matters), no damping, and a [design] section (DESIGN: more bounds)
+SCENE = edited(
+    ROLLER_SCENE, ("samples = 360", "samples = 180"), ("damping_N_m_s_per_rad = 0.01\n", ""),
+    ('{ kind = "return", angle_deg = 120, law = "cycloidal", lift_deg = 20.0 },\n  { kind = "dwell",  angle_deg = 60 },',
+     '{ kind = "return", angle_deg = 100, law = "poly_3_4_5", lift_deg = 20.0 },\n  { kind = "dwell",  angle_deg = 80 },'),
+) + """
 [design]
 base_radius_mm = [5.0, 60.0]
 DESIGN
@@ -92,30 +83,38 @@ def test_free_pivot_distance_beats_every_point_of_a_dense_scan():
     assert float(sol.design.base_radius_mm) >= best - 0.5
 
 
-def test_objective_and_constraints_gradients_match_finite_differences():
-    scene = parse_scene(SCENE.replace("ROT", "cw").replace("gamma = 0.0", "gamma = 1.0").replace(
-        "DESIGN", "roller_radius_mm = [4.0, 12.0]\npivot_distance_mm = [60.0, 100.0]\narm_length_mm = [40.0, 80.0]"))
+def assert_gradients(family, scene, x0, far_points, sums):
+    """jacfwd of the objective, of the constraints named in ``sums`` (summed over the angles) and of
+    the reach (the same at every angle) at ``x0`` against central differences; finite values and
+    gradients at each of ``far_points`` (designs where the geometry breaks down)."""
     problem = problem_from_scene(scene)
     w = Weights(jnp.asarray(1.0), jnp.asarray(1.0))
 
     def f(x):
-        design = OP.Design(*x)
-        c = OP.constraints(problem, design)
-        return jnp.stack([OP.objective(problem, w, design), jnp.sum(c.pressure_angle), jnp.sum(c.undercut),
-                          jnp.sum(c.stress), c.reach[0]])
+        design = family.Design(*x)
+        c = family.constraints(problem, design)
+        return jnp.stack([family.objective(problem, w, design), *(jnp.sum(getattr(c, name)) for name in sums),
+                          c.reach[0]])
 
-    x0 = jnp.asarray([35.0, 8.0, 80.0, 60.0])
+    x0 = jnp.asarray(x0)
     jac = jax.jit(jax.jacfwd(f))(x0)
-    for j in range(4):
-        step = jnp.zeros(4).at[j].set(1e-6)
+    for j in range(x0.size):
+        step = jnp.zeros(x0.size).at[j].set(1e-6)
         fd = (f(x0 + step) - f(x0 - step)) / 2e-6
-        # central differences, h = 1e-6 mm: truncation ~h^2 |f'''|, round-off ~eps |f| / h <= 1e-7 for the
-        # sums over 180 angles (|f| <= 1e3); the objective's max keeps its argmax near x0
+        # central differences, h = 1e-6 mm: truncation ~h^2 |f'''|, round-off ~eps |f| / h <= 1e-6 for
+        # the sums over 180 angles (|f| <= 1e3); the objective's max keeps its argmax near x0
         np.testing.assert_allclose(jac[:, j], fd, rtol=1e-6, atol=1e-6)
-    # finite everywhere, also where the geometry cannot close or the roller undercuts
-    for x in ([1.0, 30.0, 60.0, 80.0], [5.0, 4.0, 100.0, 40.0], [60.0, 12.0, 60.0, 40.0]):
+    for x in far_points:
         g = jax.grad(lambda x: jnp.sum(f(x)))(jnp.asarray(x))
         assert np.all(np.isfinite(np.asarray(g))) and np.all(np.isfinite(np.asarray(f(jnp.asarray(x)))))
+
+
+def test_objective_and_constraints_gradients_match_finite_differences():
+    scene = parse_scene(SCENE.replace("ROT", "cw").replace("gamma = 0.0", "gamma = 1.0").replace(
+        "DESIGN", "roller_radius_mm = [4.0, 12.0]\npivot_distance_mm = [60.0, 100.0]\narm_length_mm = [40.0, 80.0]"))
+    # finite everywhere, also where the geometry cannot close or the roller undercuts
+    far = ([1.0, 30.0, 60.0, 80.0], [5.0, 4.0, 100.0, 40.0], [60.0, 12.0, 60.0, 40.0])
+    assert_gradients(OP, scene, [35.0, 8.0, 80.0, 60.0], far, ("pressure_angle", "undercut", "stress"))
 
 
 def test_bounds_in_which_no_design_closes_are_refused():
@@ -178,26 +177,9 @@ def test_flat_face_gradients_match_finite_differences_and_stay_finite():
 
     scene = parse_scene(FLAT.replace("ROT", "ccw").replace("gamma = 0.0", "gamma = 1.0").replace(
         "DESIGN", "pivot_distance_mm = [120.0, 200.0]\nface_offset_mm = [-10.0, 20.0]"))
-    problem = problem_from_scene(scene)
-    w = Weights(jnp.asarray(1.0), jnp.asarray(1.0))
-
-    def f(x):
-        design = FP.Design(*x)
-        c = FP.constraints(problem, design)
-        return jnp.stack([FP.objective(problem, w, design), jnp.sum(c.curvature), jnp.sum(c.stress),
-                          jnp.sum(c.swing), c.reach[0]])
-
-    x0 = jnp.asarray([95.0, 150.0, 10.0])
-    jac = jax.jit(jax.jacfwd(f))(x0)
-    for j in range(3):
-        step = jnp.zeros(3).at[j].set(1e-6)
-        fd = (f(x0 + step) - f(x0 - step)) / 2e-6
-        # central differences, h = 1e-6 mm: round-off ~eps |f| / h <= 1e-6 for sums over 180 angles
-        np.testing.assert_allclose(jac[:, j], fd, rtol=1e-6, atol=1e-6)
     # past the pivot (R_b + f > d), a face that never touches, a face swung past 90 deg
-    for x in ([200.0, 120.0, 20.0], [1.0, 150.0, -10.0], [140.0, 150.0, 5.0]):
-        g = jax.grad(lambda x: jnp.sum(f(x)))(jnp.asarray(x))
-        assert np.all(np.isfinite(np.asarray(g))) and np.all(np.isfinite(np.asarray(f(jnp.asarray(x)))))
+    far = ([200.0, 120.0, 20.0], [1.0, 150.0, -10.0], [140.0, 150.0, 5.0])
+    assert_gradients(FP, scene, [95.0, 150.0, 10.0], far, ("curvature", "stress", "swing"))
     # pointwise mode condenses to the whole-cam smallest radius (size only, R_b free)
     scene = parse_scene(FLAT.replace("ROT", "ccw").replace("DESIGN", "").replace(
         "sigma_max_MPa = 2000.0", "sigma_max_MPa = 1e6"))
