@@ -43,9 +43,11 @@ flat-face one is :mod:`camjax.problem`). It provides:
   pointwise design taken as a continuous max over the angle.
 
 Weights (:class:`camjax.problem.Weights`: alpha for size, gamma for stress) are shared by every
-family. Starts come from the bounds (the gradient solver: the centre of the box; the GA: uniform
-in it), so a family needs no initial design; the solvers map every variable to the unit box, so
-a family needs no scaling of its variables either.
+family, and so are the pieces of the protocol that do not depend on a family's physics (the box,
+the per-angle split, the feasibility tolerances, the result keys: :mod:`camjax.family`). Starts
+come from the bounds (the gradient solver: the centre of the box; the GA: uniform in it), so a
+family needs no initial design; the solvers map every variable to the unit box, so a family needs
+no scaling of its variables either.
 """
 
 from __future__ import annotations
