@@ -35,7 +35,7 @@ one with the largest prime radius (with R_f and e fixed: the largest R_b, SPEC 5
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import jax
 import jax.numpy as jnp
@@ -80,6 +80,9 @@ class Problem(NamedTuple):
     max_pressure_angle_deg: jax.Array  # () phi_max, deg (as the scene gives it)
     min_curvature_radius_mm: jax.Array  # () smallest convex cam-surface radius allowed
     rotation_sign: jax.Array  # () +1 ccw, -1 cw (geometry.pitch): e~ = sign e
+    # the motion program (as arrays) behind the grid when extrema are exact: :func:`polish`
+    # raises the prime circle to the pressure-angle limit between the samples; None: the grid's
+    program: Any = None
 
 
 class Constraints(NamedTuple):
@@ -116,7 +119,8 @@ class Evaluation(NamedTuple):
 # ------------------------------------------------------------------------------ building
 
 
-def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=None) -> Problem:
+def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=None,
+                       extrema: str | None = None) -> Problem:
     """Problem of a roller scene with a [design] section (Python, not traceable: it reads the scene).
 
     Args:
@@ -124,6 +128,9 @@ def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=
       arrays: its :class:`camjax.evaluate.SceneArrays` if already computed (else computed here).
       samples: grid size override (ignored when ``arrays`` is given).
       dtype: floating dtype of the arrays (default float64).
+      extrema: "exact" or "grid" (ignored when ``arrays`` is given: theirs applies); default the
+        scene's ``[motion] extrema``. Exact: the solvers' designs are polished so that the
+        pressure angle meets its limit between the samples too (:func:`polish`).
     """
     from camjax.evaluate import scene_arrays
 
@@ -132,7 +139,7 @@ def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=
     if scene.follower.type != "roller":
         raise ValueError(f"follower.type: {scene.follower.type!r} is not a roller follower")
     if arrays is None:
-        arrays = scene_arrays(scene, samples=samples, dtype=dtype)
+        arrays = scene_arrays(scene, samples=samples, dtype=dtype, extrema=extrema)
     d, f, kin = scene.design, scene.follower, arrays.kin
     dt = kin.s.dtype
     as_ = lambda v: jnp.asarray(v, dt)  # noqa: E731
@@ -148,12 +155,15 @@ def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=
         max_pressure_angle_deg=as_(f.max_pressure_angle_deg),
         min_curvature_radius_mm=as_(f.min_curvature_radius_mm),
         rotation_sign=as_(geometry.rotation_sign(scene.motion.rotation)),
+        program=None if arrays.model is None else arrays.model.program,
     )
 
 
 def per_angle(problem: Problem) -> Problem:
-    """The n pointwise problems: every grid leaf (n,) -> (n, 1), every scalar leaf -> (n,)."""
-    return family.per_angle(problem, {"theta_deg", "s_mm", "ds_mm", "d2s_mm", "stress_coefficient"})
+    """The n pointwise problems: every grid leaf (n,) -> (n, 1), every scalar leaf -> (n,); one
+    angle's problem has no program (its sample is all there is)."""
+    return family.per_angle(problem._replace(program=None),
+                            {"theta_deg", "s_mm", "ds_mm", "d2s_mm", "stress_coefficient"})
 
 
 # ---------------------------------------------------------------------------- physics
@@ -328,6 +338,44 @@ def min_prime_radius_for_pressure_angle(problem: Problem, offset_mm: jax.Array) 
     e = jnp.expand_dims(problem.rotation_sign * offset_mm, -1)  # (..., 1) against the grid (n,)
     d_min = jnp.max(jnp.abs(problem.ds_mm - e) / problem.tan_max_pressure_angle - problem.s_mm, axis=-1)
     return safe_sqrt(offset_mm**2 + positive_part(d_min) ** 2)  # 0 (finite gradient) at e = 0 = d_min
+
+
+def exact_min_prime_radius_for_pressure_angle(problem: Problem, offset_mm: jax.Array) -> jax.Array:
+    """:func:`min_prime_radius_for_pressure_angle` with the max over the angle refined off the grid
+    (:func:`camjax.extrema.max_of` on the problem's program; needs ``problem.program``)."""
+    from camjax import extrema
+
+    e = problem.rotation_sign * offset_mm
+
+    def need(kin, params):  # the d at which |phi| = phi_max at this angle, mm
+        e_tilde, tan_limit = params
+        return jnp.abs(kin.ds - e_tilde) / tan_limit - kin.s
+
+    params = (e, problem.tan_max_pressure_angle)
+    grid = jnp.abs(problem.ds_mm - e) / problem.tan_max_pressure_angle - problem.s_mm
+    d_min = extrema.max_of(problem.program, need, grid, params).value
+    return safe_sqrt(offset_mm**2 + positive_part(d_min) ** 2)
+
+
+def polish(problem: Problem, weights: Weights, design: Design) -> Design:
+    """The solver's design with its prime circle raised, where it is short, to the smallest that
+    keeps the pressure angle within its limit at every angle, not only at the samples.
+
+    The solvers floor R_p at the closed-form limit over the samples (:func:`from_unit`); between
+    two samples |phi| can pass the limit by ~1e-6 relative. With ``problem.program`` the max
+    over the angle is refined (:func:`exact_min_prime_radius_for_pressure_angle`) and R_b (when
+    free) grows by the difference, at most to its upper bound; R_f and e stay. A larger R_p only
+    relaxes the undercut; the objective changes by the same ~1e-6. Without a program the design
+    is returned unchanged. Traceable and vmappable.
+    """
+    if problem.program is None:
+        return design
+    floor = exact_min_prime_radius_for_pressure_angle(problem, design.offset_mm)
+    raised = jnp.minimum(jnp.maximum(design.base_radius_mm, floor - design.roller_radius_mm),
+                         problem.upper.base_radius_mm)
+    free = problem.upper.base_radius_mm > problem.lower.base_radius_mm
+    radius = jnp.where(free, raised, design.base_radius_mm)
+    return design._replace(base_radius_mm=jax.lax.stop_gradient(radius))
 
 
 def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:

@@ -24,7 +24,8 @@ def scene():
 
 @pytest.fixture(scope="module")
 def size_only(scene):
-    return R.problem_from_scene(scene)  # the built-in roller scene has gamma = 0
+    # the built-in roller scene has gamma = 0; on the grid: the references here scan the samples
+    return R.problem_from_scene(scene, extrema="grid")
 
 
 def dense_scan_prime_radius(scene, zooms=3, grid=(41, 11, 41)):
@@ -96,7 +97,7 @@ def test_gradient_finds_the_optimal_offset(scene, size_only):
     assert float(sol.offset_mm) == pytest.approx(exact_e, abs=1e-5)
     # and the offset pays: against e = 0 the prime circle shrinks by 29 % (the issue's example)
     centred = R.problem_from_scene(dataclasses.replace(scene, design=dataclasses.replace(
-        scene.design, offset_mm=(0.0, 0.0))))
+        scene.design, offset_mm=(0.0, 0.0))), extrema="grid")
     rp0 = float(solve(centred, (1.0, 0.0), solver="gradient").size_mm)
     assert 1 - rp / rp0 == pytest.approx(0.29, abs=0.01)
 
@@ -107,7 +108,7 @@ def test_gradient_finds_the_optimal_offset(scene, size_only):
 def test_every_solver_and_mode_solves_the_roller_problem(scene, solver, mode):
     # R_f and e fixed: then the pointwise design (largest R_b over the angles) is the global one
     fixed = dataclasses.replace(scene.design, roller_radius_mm=(5.0, 5.0), offset_mm=(1.0, 1.0), gamma=0.0)
-    problem = R.problem_from_scene(dataclasses.replace(scene, design=fixed))
+    problem = R.problem_from_scene(dataclasses.replace(scene, design=fixed), extrema="grid")
     sol = solve(problem, (1.0, 0.0), mode=mode, solver=solver)
     f = scene.follower
     ref = geometry.roller_min_prime_radius(camjax.scene_arrays(scene).kin, 5.0, 1.0,
@@ -126,10 +127,54 @@ def test_every_solver_and_mode_solves_the_roller_problem(scene, solver, mode):
 @pytest.mark.slow
 @pytest.mark.parametrize("weights", [(1.0, 1.0), (0.5, 1.0), (1.0, 0.1)])
 def test_gradient_matches_scipy_slsqp_with_stress(scene, weights):
-    problem = R.problem_from_scene(dataclasses.replace(scene, design=dataclasses.replace(scene.design, gamma=1.0)))
+    problem = R.problem_from_scene(dataclasses.replace(scene, design=dataclasses.replace(scene.design, gamma=1.0)),
+                                   extrema="grid")
     ours = solve(problem, weights, solver="gradient")
     ref = scipy_roller.slsqp(problem, *weights)
     assert ref.success and ref.max_violation < 1e-9
     # both converge to the same KKT point; SLSQP's finite-difference Jacobians limit it to ~1e-8
     assert float(ours.objective) == pytest.approx(ref.objective, rel=1e-7)
     assert bool(ours.feasible)
+
+
+def _dense_max_pressure_angle_deg(scene, design, samples: int = 720_001) -> float:
+    """max |phi| (deg) of a roller design over a dense grid, from the harmonic law in NumPy:
+    s = L (1 - cos(pi x)) / 2 on a rise (mirrored on a return), x = (theta - start) / beta, and
+    tan phi = (s' - e) / (d + s) with d = sqrt(R_p^2 - e^2) (ccw)."""
+    theta = np.linspace(0.0, 360.0, samples)
+    s, ds = np.zeros_like(theta), np.zeros_like(theta)
+    start, level = 0.0, 0.0
+    prog = scene.motion.program
+    for kind, width, law, lift in zip(prog.kinds, prog.angles_deg, prog.laws, np.asarray(prog.lifts),
+                                      strict=True):
+        inside = (theta >= start) & (theta <= start + width)
+        if kind != "dwell":
+            assert law.name == "harmonic"
+            x = (theta[inside] - start) / width
+            sign = 1.0 if kind == "rise" else -1.0
+            s[inside] = level + sign * lift * (1 - np.cos(np.pi * x)) / 2
+            ds[inside] = sign * lift * np.pi / math.radians(width) * np.sin(np.pi * x) / 2
+            level += sign * lift
+        else:
+            s[inside] = level
+        start += width
+    rp = float(design.base_radius_mm + design.roller_radius_mm)
+    e = float(design.offset_mm)
+    phi = np.arctan2(ds - e, math.sqrt(rp * rp - e * e) + s)
+    return float(np.degrees(np.max(np.abs(phi))))
+
+
+def test_exact_extrema_keep_the_pressure_angle_between_the_samples(scene):
+    """Solved on the 1 deg grid, the prime circle sits on the limit at the samples and passes it
+    between them (the dense NumPy scan finds |phi| above 30 deg); with exact extrema (the scene's
+    default) the polish raises R_b until the dense max is the limit itself, to 1e-6 deg (the
+    dense grid's own error at a smooth max is ~1e-9 deg), at an R_b larger by less than 1e-4 mm."""
+    limit = scene.follower.max_pressure_angle_deg
+    grid = solve(R.problem_from_scene(scene, extrema="grid"), (1.0, 0.0), solver="gradient")
+    exact = solve(R.problem_from_scene(scene), (1.0, 0.0), solver="gradient")
+    assert _dense_max_pressure_angle_deg(scene, grid.design) > limit + 1e-5
+    assert _dense_max_pressure_angle_deg(scene, exact.design) == pytest.approx(limit, abs=1e-6)
+    assert bool(exact.feasible)
+    assert 0 < float(exact.base_radius_mm - grid.base_radius_mm) < 1e-4
+    assert float(exact.offset_mm) == float(grid.offset_mm)
+    assert float(exact.roller_radius_mm) == float(grid.roller_radius_mm)

@@ -15,6 +15,7 @@ import numpy as np
 
 from camjax import geometry, loads
 from camjax.evaluate import DesignCurves, Extremes, SceneArrays, curve_extremes, curve_names
+from camjax.family import FEASIBILITY_TOL_RAD
 from camjax.program import joints
 from camjax.scene import DesignSpec, FollowerSpec, Scene
 
@@ -306,7 +307,9 @@ def evaluated_block(curves: DesignCurves, extremes: dict[str, Extremes]) -> dict
             "pressure_angle_deg": {"max": deg(phi.max), "max_deg": phi.max_deg, "min": deg(phi.min),
                                    "min_deg": phi.min_deg, "max_abs": deg(worst[0]), "max_abs_deg": worst[1]},
             "pressure_angle_limit_deg": curves.pressure_angle_limit_deg,
-            "pressure_angle_ok": bool(deg(worst[0]) <= curves.pressure_angle_limit_deg),
+            # within the solvers' tolerance, as pipeline.geometry_violations judges it
+            "pressure_angle_ok": bool(deg(worst[0]) <= curves.pressure_angle_limit_deg
+                                      + math.degrees(FEASIBILITY_TOL_RAD)),
             "pitch_rho_mm": {"min_abs": rho.min, "min_abs_deg": rho.min_deg,
                              "concave": bool(np.any(curves.pitch_rho_mm < 0))},
             "undercut_margin_mm": {"min": margin.min, "min_deg": margin.min_deg},
