@@ -116,14 +116,15 @@ def quiet_startup_interrupts() -> None:
 # few host-level entry points decorated with :func:`program_cache`; a warm process deserializes
 # it instead of tracing, and the compilation cache then supplies the executable.
 _PROGRAM_DIR: list = [None]  # folder of the program cache; None: off (the library default)
-_LOADED: dict = {}  # key -> jitted caller of a deserialized program (this process)
+_LOADED: dict = {}  # key -> (compiled program, output treedef), loaded or exported in this process
 _UNEXPORTABLE: set = set()  # qualified names whose export failed here: called directly from then on
 PROGRAM_SUFFIX = ".jaxprog"
 
 
 def use_program_cache(folder: str | os.PathLike | None) -> None:
     """Keep the exported programs of :func:`program_cache` entry points in ``folder`` (created if
-    missing; OSError if it cannot be); None switches the program cache off."""
+    missing; OSError if it cannot be); None switches the program cache off. The folder is trusted
+    as the compilation cache's is: its files are unpickled and run."""
     if folder is not None:
         os.makedirs(folder, exist_ok=True)
     _PROGRAM_DIR[0] = None if folder is None else Path(folder)
