@@ -1,6 +1,6 @@
 """Tables and figures of the documentation, generated from the JSON that camjax's own commands write.
 
-Six sources, all committed (:data:`SOURCES`):
+Seven sources, all committed (:data:`SOURCES`):
 
 - ``bench``, ``benchmarks/results/full.json``: ``python benchmarks/run.py --out
   benchmarks/results/full.json``;
@@ -13,7 +13,9 @@ Six sources, all committed (:data:`SOURCES`):
 - ``roller``, ``benchmarks/results/roller.json``: ``python -m benchmarks.roller --out
   benchmarks/results/roller.json``;
 - ``cli``, ``benchmarks/results/cli_timing.json``: ``python benchmarks/cli_timing.py --runs 5 --out
-  benchmarks/results/cli_timing.json``.
+  benchmarks/results/cli_timing.json``;
+- ``exact``, ``benchmarks/results/exact.json``: ``python -m benchmarks.exact --out
+  benchmarks/results/exact.json``.
 
 A page asks for a table with a line ``{{ table: NAME }}`` (NAME one of :data:`TABLES`) and for a
 single figure with ``{{ SOURCE: dotted.path[*factor][:format] }}``, e.g.
@@ -42,6 +44,7 @@ SOURCES = {
     "dynamics": ROOT / "docs" / "data" / "thesis-bench" / "dynamics.json",
     "roller": ROOT / "benchmarks" / "results" / "roller.json",
     "cli": ROOT / "benchmarks" / "results" / "cli_timing.json",
+    "exact": ROOT / "benchmarks" / "results" / "exact.json",
 }
 
 
