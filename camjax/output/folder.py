@@ -192,6 +192,16 @@ def swap_in(staging: Path, out: Path) -> None:
         shutil.rmtree(old, ignore_errors=True)
 
 
+def _fresh_staging(out: Path) -> Path:
+    """An empty staging folder beside ``out`` for this process, stale ones of dead runs removed."""
+    clean_stale(out)
+    staging = _leftover_name(out, STAGING, os.getpid())
+    if staging.exists():
+        shutil.rmtree(staging)
+    staging.mkdir()
+    return staging
+
+
 @contextlib.contextmanager
 def replaced_folder(out: str | Path) -> Iterator[Path]:
     """Yield an empty staging folder; replace ``out`` with it when the block succeeds.
@@ -200,11 +210,7 @@ def replaced_folder(out: str | Path) -> Iterator[Path]:
     """
     out = Path(os.path.abspath(out))
     out.parent.mkdir(parents=True, exist_ok=True)
-    clean_stale(out)
-    staging = _leftover_name(out, STAGING, os.getpid())
-    if staging.exists():
-        shutil.rmtree(staging)
-    staging.mkdir()
+    staging = _fresh_staging(out)
     try:
         yield staging
         swap_in(staging, out)
@@ -221,11 +227,7 @@ def merged_files(out: str | Path) -> Iterator[Path]:
     """
     out = Path(os.path.abspath(out))
     out.mkdir(parents=True, exist_ok=True)
-    clean_stale(out)
-    staging = _leftover_name(out, STAGING, os.getpid())
-    if staging.exists():
-        shutil.rmtree(staging)
-    staging.mkdir()
+    staging = _fresh_staging(out)
     try:
         yield staging
         with _signals_blocked():
