@@ -135,11 +135,8 @@ def serve(k: int = 0, n: int = 1) -> None:
         for i, (name, build) in enumerate(figures):
             if i % n != k:
                 continue
-            fig = build(curves, job["title"])
-            if job["banner"]:
-                plots.stamp_banner(fig, job["banner"])
-            fig.savefig(folder / name, dpi=job["dpi"])
-            written.append((i, str(folder / name)))
+            path = export.save_figure(build(curves, job["title"]), folder / name, job["dpi"], job["banner"])
+            written.append((i, str(path)))
         if writes_dxf:
             written.append((len(figures), str(export.write_profile_dxf(folder / DXF_NAME, curves))))
         reply = {"written": written}

@@ -97,16 +97,20 @@ def write_figures(folder: Path, curves: DesignCurves, dpi: int = 100, banner: st
     ``banner``: text of a red banner stamped on every figure (the constraints the geometry breaks);
     ``title``: the run's title block (:func:`camjax.output.titles.title_block`).
     """
-    from camjax.output.plots import design_figures, stamp_banner  # matplotlib only when drawing
+    from camjax.output.plots import design_figures  # matplotlib only when drawing
 
-    out = []
-    for name, fig in design_figures(curves, title).items():
-        if banner:
-            stamp_banner(fig, banner)
-        path = folder / name
-        fig.savefig(path, dpi=dpi)
-        out.append(path)
-    return out
+    figures = design_figures(curves, title)
+    return [save_figure(fig, folder / name, dpi, banner) for name, fig in figures.items()]
+
+
+def save_figure(fig, path: Path, dpi: int = 100, banner: str | None = None) -> Path:
+    """Write one figure as PNG, first stamped with ``banner`` in red when given; the path."""
+    if banner:
+        from camjax.output.plots import stamp_banner
+
+        stamp_banner(fig, banner)
+    fig.savefig(path, dpi=dpi)
+    return path
 
 
 def write_animation(path: Path, curves: DesignCurves, title: str = "", banner: str | None = None) -> Path:

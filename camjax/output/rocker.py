@@ -17,7 +17,7 @@ from matplotlib.figure import Figure
 
 from camjax.evaluate import SceneArrays
 from camjax.geometry.pitch import to_cam_frame
-from camjax.output.export import CSV_FORMAT, write_profile_dxf
+from camjax.output.export import CSV_FORMAT, save_figure, write_profile_dxf
 from camjax.output.plots import _cycle_axis  # reads only segment_starts_deg
 from camjax.output.report import extrema, feasibility_block, header_block, negative_ranges_deg
 from camjax.rocker import RockerCurves, RockerRun
@@ -165,18 +165,11 @@ def write_rocker_files(folder: str | Path, curves: RockerCurves, dpi: int = 100,
     and drawn in red on the animation; ``title``: the animation's title block; ``progress(phase)``
     (optional) is told "figures", "files" and "animation" as each starts.
     """
-    from camjax.output.plots import stamp_banner
-
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     say = progress or (lambda phase: None)
     say("figures")
-    out = []
-    for name, fig in rocker_figures(curves).items():
-        if banner:
-            stamp_banner(fig, banner)
-        fig.savefig(folder / name, dpi=dpi)
-        out.append(folder / name)
+    out = [save_figure(fig, folder / name, dpi, banner) for name, fig in rocker_figures(curves).items()]
     say("files")
     # the DXF writer reads only the outline (profile_x_mm, profile_y_mm)
     out += [write_rocker_profile_csv(folder / "profile.csv", curves),
