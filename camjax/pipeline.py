@@ -39,6 +39,7 @@ from camjax.evaluate import (
     evaluate_design,
     scene_arrays,
 )
+from camjax.family import FEASIBILITY_RTOL_STRESS, FEASIBILITY_TOL_MM, FEASIBILITY_TOL_RAD
 from camjax.scene import Scene
 
 DRAWING_MARGIN_MM = 1.0  # without a [design], draw at the smallest admissible R_b + this, rounded up
@@ -203,6 +204,37 @@ class GeometryViolation(NamedTuple):
     message: str
 
 
+def _curvature(rho: float, deg: float, rho_min_mm: float) -> list[GeometryViolation]:
+    """A radius of curvature below the allowed one (geometry_violations and rocker_violations share
+    these four checks, their tolerances the solvers')."""
+    if rho >= rho_min_mm - FEASIBILITY_TOL_MM:
+        return []
+    why = "the profile crosses itself" if rho < 0 else "the flat face cannot follow it"
+    return [GeometryViolation("curvature", f"min radius of curvature {rho:.4g} mm at {deg:g} deg < "
+                              f"{rho_min_mm:g} mm: {why}")]
+
+
+def _stress(sigma: float, deg: float, sigma_max_MPa: float) -> list[GeometryViolation]:
+    if sigma <= sigma_max_MPa * (1.0 + FEASIBILITY_RTOL_STRESS):
+        return []
+    return [GeometryViolation("stress", f"peak contact stress {sigma:.4g} MPa at {deg:g} deg > sigma_max "
+                              f"{sigma_max_MPa:g} MPa")]
+
+
+def _pressure_angle(phi: float, deg: float, limit_deg: float) -> list[GeometryViolation]:
+    if phi <= limit_deg + math.degrees(FEASIBILITY_TOL_RAD):
+        return []
+    return [GeometryViolation("pressure_angle", f"|pressure angle| {phi:.4g} deg at {deg:g} deg > "
+                              f"{limit_deg:g} deg")]
+
+
+def _undercut(margin: float, deg: float) -> list[GeometryViolation]:
+    if margin >= -FEASIBILITY_TOL_MM:
+        return []
+    return [GeometryViolation("undercut", f"undercut margin {margin:.4g} mm at {deg:g} deg <= 0: the roller "
+                              "undercuts the cam")]
+
+
 def geometry_violations(curves: DesignCurves, rho_min_mm: float = 0.0,
                         extremes: dict[str, Extremes] | None = None) -> list[GeometryViolation]:
     """Constraints broken by the geometry at the evaluated base radius (empty: usable geometry).
@@ -210,7 +242,7 @@ def geometry_violations(curves: DesignCurves, rho_min_mm: float = 0.0,
     Flat face: rho < ``rho_min_mm`` (the profile cannot be followed; below 0 it crosses itself),
     peak stress > sigma_max (with a [design]), face narrower than 2 max|s'|. Roller: |pressure
     angle| > the limit, undercut. With loads: contact force < 0 (the follower leaves the cam).
-    Tolerances are the solvers' (:data:`camjax.problem.FEASIBILITY_TOL_MM`, relative 1e-6 on the
+    Tolerances are the solvers' (:data:`camjax.family.FEASIBILITY_TOL_MM`, relative 1e-6 on the
     stress), so a design the solver calls feasible is not flagged here.
 
     ``extremes`` (:func:`camjax.evaluate.curve_extremes` at the curves' design): rho, stress, face
@@ -218,9 +250,6 @@ def geometry_violations(curves: DesignCurves, rho_min_mm: float = 0.0,
     them); the roller's pressure angle and undercut stay on the samples, as the roller design
     problem constrains them.
     """
-    from camjax.problem import FEASIBILITY_RTOL_STRESS, FEASIBILITY_TOL_MM
-    from camjax.roller_problem import FEASIBILITY_TOL_RAD
-
     t, out, ex = curves.theta_deg, [], extremes or {}
 
     def at(values, pick, name=None, sense="min"):
@@ -234,17 +263,9 @@ def geometry_violations(curves: DesignCurves, rho_min_mm: float = 0.0,
         rho, deg = at(curves.rho_mm, np.argmin)
         if "q" in ex:  # rho = R_b + q
             rho, deg = curves.base_radius_mm + ex["q"].min, ex["q"].min_deg
-        if rho < rho_min_mm - FEASIBILITY_TOL_MM:
-            why = "the profile crosses itself" if rho < 0 else "the flat face cannot follow it"
-            out.append(GeometryViolation(
-                "curvature", f"min radius of curvature {rho:.4g} mm at {deg:g} deg < {rho_min_mm:g} mm: "
-                f"{why}"))
+        out += _curvature(rho, deg, rho_min_mm)
     if curves.stress_MPa is not None and curves.sigma_max_MPa is not None:
-        sigma, deg = at(curves.stress_MPa, np.argmax, "stress", "max")
-        if sigma > curves.sigma_max_MPa * (1.0 + FEASIBILITY_RTOL_STRESS):
-            out.append(GeometryViolation(
-                "stress", f"peak contact stress {sigma:.4g} MPa at {deg:g} deg > sigma_max "
-                f"{curves.sigma_max_MPa:g} MPa"))
+        out += _stress(*at(curves.stress_MPa, np.argmax, "stress", "max"), curves.sigma_max_MPa)
     if curves.face_width_mm is not None:
         need = 2.0 * (max(ex["ds"].max, -ex["ds"].min) if "ds" in ex else float(np.max(np.abs(curves.ds_mm))))
         if curves.face_width_mm < need - FEASIBILITY_TOL_MM:
@@ -252,17 +273,10 @@ def geometry_violations(curves: DesignCurves, rho_min_mm: float = 0.0,
                 "face_width", f"face width {curves.face_width_mm:.4g} mm < 2 max|s'| = {need:.4g} mm: "
                 "the contact runs off the face"))
     if curves.pressure_angle_deg is not None:
-        phi, deg = at(np.abs(curves.pressure_angle_deg), np.argmax)
-        if phi > curves.pressure_angle_limit_deg + math.degrees(FEASIBILITY_TOL_RAD):
-            out.append(GeometryViolation(
-                "pressure_angle", f"|pressure angle| {phi:.4g} deg at {deg:g} deg > "
-                f"{curves.pressure_angle_limit_deg:g} deg"))
+        phi = at(np.abs(curves.pressure_angle_deg), np.argmax)
+        out += _pressure_angle(*phi, curves.pressure_angle_limit_deg)
     if curves.undercut_margin_mm is not None:
-        margin, deg = at(curves.undercut_margin_mm, np.argmin)
-        if margin < -FEASIBILITY_TOL_MM:
-            out.append(GeometryViolation(
-                "undercut", f"undercut margin {margin:.4g} mm at {deg:g} deg <= 0: the roller undercuts "
-                "the cam"))
+        out += _undercut(*at(curves.undercut_margin_mm, np.argmin))
     if curves.force_N is not None:
         force, deg = at(curves.force_N, np.argmin, "force")
         if force < 0:
@@ -281,9 +295,6 @@ def rocker_violations(curves, scene: Scene) -> list[GeometryViolation]:
     contact force < 0; with a [design]: peak stress > sigma_max. Tolerances as
     :func:`geometry_violations`.
     """
-    from camjax.problem import FEASIBILITY_RTOL_STRESS, FEASIBILITY_TOL_MM
-    from camjax.roller_problem import FEASIBILITY_TOL_RAD
-
     f, t, out = scene.follower, curves.theta_deg, []
 
     def at(values, pick):
@@ -291,29 +302,12 @@ def rocker_violations(curves, scene: Scene) -> list[GeometryViolation]:
         return float(values[i]), float(t[i])
 
     if curves.undercut_margin_mm is not None:
-        phi, deg = at(np.abs(curves.pressure_angle_deg), np.argmax)
-        if phi > f.max_pressure_angle_deg + math.degrees(FEASIBILITY_TOL_RAD):
-            out.append(GeometryViolation(
-                "pressure_angle", f"|pressure angle| {phi:.4g} deg at {deg:g} deg > "
-                f"{f.max_pressure_angle_deg:g} deg"))
-        margin, deg = at(curves.undercut_margin_mm, np.argmin)
-        if margin < -FEASIBILITY_TOL_MM:
-            out.append(GeometryViolation(
-                "undercut", f"undercut margin {margin:.4g} mm at {deg:g} deg <= 0: the roller undercuts "
-                "the cam"))
+        out += _pressure_angle(*at(np.abs(curves.pressure_angle_deg), np.argmax), f.max_pressure_angle_deg)
+        out += _undercut(*at(curves.undercut_margin_mm, np.argmin))
     else:
-        rho, deg = at(curves.rho_mm, np.argmin)
-        if rho < f.min_curvature_radius_mm - FEASIBILITY_TOL_MM:
-            why = "the profile crosses itself" if rho < 0 else "the flat face cannot follow it"
-            out.append(GeometryViolation(
-                "curvature", f"min radius of curvature {rho:.4g} mm at {deg:g} deg < "
-                f"{f.min_curvature_radius_mm:g} mm: {why}"))
+        out += _curvature(*at(curves.rho_mm, np.argmin), f.min_curvature_radius_mm)
     if curves.stress_MPa is not None and scene.design is not None and scene.design.sigma_max_MPa:
-        sigma, deg = at(curves.stress_MPa, np.argmax)
-        if sigma > scene.design.sigma_max_MPa * (1.0 + FEASIBILITY_RTOL_STRESS):
-            out.append(GeometryViolation(
-                "stress", f"peak contact stress {sigma:.4g} MPa at {deg:g} deg > sigma_max "
-                f"{scene.design.sigma_max_MPa:g} MPa"))
+        out += _stress(*at(curves.stress_MPa, np.argmax), scene.design.sigma_max_MPa)
     if curves.contact_force_N is not None:
         force, deg = at(curves.contact_force_N, np.argmin)
         if force < 0:
