@@ -234,13 +234,13 @@ def _setup_design(p: argparse.ArgumentParser):
 def _drawing_workers(stack):
     """Started :class:`camjax.output.drawing.DrawingWorkers` (closed with ``stack``), or None
     where processes cannot be started or $CAMJAX_DRAWING_PROCESSES is 0 (the figures and the DXF
-    are then drawn in this one). $CAMJAX_DRAWING_PROCESSES: how many (default 2)."""
-    from camjax.output.drawing import DrawingWorkers
+    are then drawn in this one). $CAMJAX_DRAWING_PROCESSES: how many."""
+    from camjax.output.drawing import DEFAULT_PROCESSES, MAX_PROCESSES, DrawingWorkers
 
-    text = os.environ.get("CAMJAX_DRAWING_PROCESSES", "2")
-    if not (text.isdigit() and int(text) <= 16):
-        raise UsageError(f"CAMJAX_DRAWING_PROCESSES = {quote(text)}: not a count (allowed: 0 to 16; 0 "
-                         "draws in the command's own process)")
+    text = os.environ.get("CAMJAX_DRAWING_PROCESSES", str(DEFAULT_PROCESSES))
+    if not (text.isdigit() and int(text) <= MAX_PROCESSES):
+        raise UsageError(f"CAMJAX_DRAWING_PROCESSES = {quote(text)}: not a count (allowed: 0 to "
+                         f"{MAX_PROCESSES}; 0 draws in the command's own process)")
     if int(text) == 0:
         return None
     try:

@@ -26,6 +26,8 @@ ENTER_PACKAGE = ("import sys, types; package = types.ModuleType('camjax'); packa
                  "sys.modules['camjax'] = package; ")
 _BOOT = ENTER_PACKAGE + "from camjax.output.drawing import serve; serve(int(sys.argv[2]), int(sys.argv[3]))"
 PACKAGE_DIR = Path(__file__).resolve().parent.parent
+DEFAULT_PROCESSES = 2  # on 2 cores: two figures drawn at a time once the computation is done
+MAX_PROCESSES = 16
 DXF_NAME = "profile.dxf"  # written after the figures, as camjax.output.export.write_design_files does
 
 
@@ -40,7 +42,7 @@ class DrawingWorkers:
     Use as a context manager; :meth:`draw` once, then :meth:`wait` for the written paths.
     """
 
-    def __init__(self, count: int = 2):
+    def __init__(self, count: int = DEFAULT_PROCESSES):
         self._procs: list[subprocess.Popen] = []
         try:
             for k in range(count):
