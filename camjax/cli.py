@@ -523,12 +523,12 @@ def _setup_dynamics(p: argparse.ArgumentParser):
 
         rendered: dict[str, bytes] = {}
 
-        def figures(partial):  # runs while the time-domain analyses finish in other threads
+        def figures(so_far):  # runs while the time-domain analyses finish in other threads
             from camjax.output.plots_dynamics import render_dynamics_figures  # matplotlib: ~0.5 s
 
             if not rendered:
                 progress("figures")
-            rendered.update(render_dynamics_figures(partial.curves, partial.summary, args.dpi, skip=rendered))
+            rendered.update(render_dynamics_figures(so_far.curves, so_far.summary, args.dpi, skip=rendered))
 
         report = runtime.interruptible(scene_dynamics, scene, progress, figures)
         if report.settling is not None and not report.settling.settled:
