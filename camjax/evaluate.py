@@ -304,7 +304,8 @@ def _curve(name: str, p: PointValues, consts: CurveConstants, base_radius_mm) ->
         offset = geometry.flat_contact_offset(p.kin)
         return getattr(loads.guide_reactions(consts.guide, p.force_N, offset), name)
     if name == PRESSURE_NEED:
-        return jnp.abs(p.kin.ds - consts.offset_mm) / consts.tan_pressure_limit - p.kin.s
+        return geometry.roller_pressure_angle_need(p.kin.ds, p.kin.s, consts.offset_mm,
+                                                   consts.tan_pressure_limit)
     if name in ROLLER_CURVES:
         g = geometry.roller_geometry(base_radius_mm, consts.roller_radius_mm, consts.offset_mm, p.kin,
                                      "ccw", consts.min_curvature_radius_mm)

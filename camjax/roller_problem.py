@@ -336,7 +336,8 @@ def min_prime_radius_for_pressure_angle(problem: Problem, offset_mm: jax.Array) 
     and R_p = sqrt(e^2 + d^2) (as :func:`camjax.geometry.roller_min_prime_radius_for_pressure_angle`).
     """
     e = jnp.expand_dims(problem.rotation_sign * offset_mm, -1)  # (..., 1) against the grid (n,)
-    d_min = jnp.max(jnp.abs(problem.ds_mm - e) / problem.tan_max_pressure_angle - problem.s_mm, axis=-1)
+    need = geometry.roller_pressure_angle_need(problem.ds_mm, problem.s_mm, e, problem.tan_max_pressure_angle)
+    d_min = jnp.max(need, axis=-1)
     return safe_sqrt(offset_mm**2 + positive_part(d_min) ** 2)  # 0 (finite gradient) at e = 0 = d_min
 
 
@@ -345,14 +346,11 @@ def exact_min_prime_radius_for_pressure_angle(problem: Problem, offset_mm: jax.A
     (:func:`camjax.extrema.max_of` on the problem's program; needs ``problem.program``)."""
     from camjax import extrema
 
-    e = problem.rotation_sign * offset_mm
-
     def need(kin, params):  # the d at which |phi| = phi_max at this angle, mm
-        e_tilde, tan_limit = params
-        return jnp.abs(kin.ds - e_tilde) / tan_limit - kin.s
+        return geometry.roller_pressure_angle_need(kin.ds, kin.s, *params)
 
-    params = (e, problem.tan_max_pressure_angle)
-    grid = jnp.abs(problem.ds_mm - e) / problem.tan_max_pressure_angle - problem.s_mm
+    params = (problem.rotation_sign * offset_mm, problem.tan_max_pressure_angle)
+    grid = geometry.roller_pressure_angle_need(problem.ds_mm, problem.s_mm, *params)
     d_min = extrema.max_of(problem.program, need, grid, params).value
     return safe_sqrt(offset_mm**2 + positive_part(d_min) ** 2)
 

@@ -70,6 +70,7 @@ from camjax.geometry.roller import (
     roller_pitch_curve,
     roller_pitch_height,
     roller_pressure_angle,
+    roller_pressure_angle_need,
     roller_profile,
     roller_reach_constraint,
     roller_undercut_constraint,
@@ -92,7 +93,8 @@ __all__ = [
     "pressure_angle", "prime_radius", "radius_of_curvature", "roller_equivalent_radius", "roller_geometry",
     "roller_min_prime_radius", "roller_min_prime_radius_for_pressure_angle",
     "roller_min_prime_radius_for_undercut", "roller_pitch_curvature", "roller_pitch_curve",
-    "roller_pitch_height", "roller_pressure_angle", "roller_profile", "roller_reach_constraint",
+    "roller_pitch_height", "roller_pressure_angle", "roller_pressure_angle_need", "roller_profile",
+    "roller_reach_constraint",
     "roller_undercut_constraint", "roller_undercut_margin", "rotation_sign",
     "swing_face_radius_of_curvature", "swing_pitch_curvature", "to_cam_frame", "to_follower_frame",
 ]

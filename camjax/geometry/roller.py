@@ -132,6 +132,13 @@ def roller_reach_constraint(base_radius_mm, roller_radius_mm, offset_mm) -> jax.
     return jnp.abs(offset_mm) - (base_radius_mm + roller_radius_mm)
 
 
+def roller_pressure_angle_need(ds, s, signed_offset_mm, tan_max_pressure_angle) -> jax.Array:
+    """The d = sqrt(R_p^2 - e^2) (mm) at which |phi| reaches its limit at each angle:
+    |s' - e~| / tan(phi_max) - s, elementwise (e~ = the offset times the rotation sign,
+    :func:`camjax.geometry.pitch.rotation_sign`). Its max over the angle is the smallest d."""
+    return jnp.abs(ds - signed_offset_mm) / tan_max_pressure_angle - s
+
+
 def roller_min_prime_radius_for_pressure_angle(kin: Kinematics, offset_mm, max_pressure_angle_rad,
                                                rotation: str = DEFAULT_ROTATION) -> jax.Array:
     """Smallest R_p (mm) with |phi| <= the limit at every sample, in closed form.
@@ -142,7 +149,7 @@ def roller_min_prime_radius_for_pressure_angle(kin: Kinematics, offset_mm, max_p
     depend on R_f for a given R_p.
     """
     e = rotation_sign(rotation) * offset_mm
-    d_min = jnp.max(jnp.abs(kin.ds - e) / jnp.tan(max_pressure_angle_rad) - kin.s)
+    d_min = jnp.max(roller_pressure_angle_need(kin.ds, kin.s, e, jnp.tan(max_pressure_angle_rad)))
     return jnp.sqrt(offset_mm**2 + jnp.maximum(d_min, 0.0) ** 2)
 
 
@@ -217,6 +224,7 @@ __all__ = [
     "ROLLER_MAX_PRESSURE_ANGLE_DEG", "ROLLER_MIN_CURVATURE_RADIUS_MM", "RollerGeometry", "RollerSizing",
     "prime_radius", "roller_equivalent_radius", "roller_geometry", "roller_min_prime_radius",
     "roller_min_prime_radius_for_pressure_angle", "roller_pitch_curvature", "roller_pitch_curve",
+    "roller_pressure_angle_need",
     "roller_pitch_height", "roller_pressure_angle", "roller_profile", "roller_reach_constraint",
     "roller_undercut_constraint", "roller_undercut_margin",
 ]
