@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
+from typing import Any, NamedTuple
 
 
 def use_compilation_cache(folder: str | os.PathLike) -> None:
@@ -115,19 +116,50 @@ def quiet_startup_interrupts() -> None:
 # program cache keeps the traced program itself (``jax.export``, serialized StableHLO) for the
 # few host-level entry points decorated with :func:`program_cache`; a warm process deserializes
 # it instead of tracing, and the compilation cache then supplies the executable.
+#
+# A saved program is right only if its key holds everything its trace can depend on. Under
+# ``jax.jit`` the dynamic arguments are abstract values, so a trace depends on exactly:
+#   1. the code: camjax's source (a digest of every file) and the versions of jax, jaxlib, optax
+#      and numpy;
+#   2. the static arguments, by value;
+#   3. the dynamic arguments' tree structure (with every node's auxiliary data), shapes, dtypes,
+#      weak types and PRNG key implementations;
+#   4. the process's JAX configuration (x64, dtype promotion, precision, PRNG, ...) and devices.
+# The key is a digest of all four. A trace that read anything else (an environment variable, a
+# mutable module global, a closed-over value that is not an argument) would be a leak: the
+# verify mode (CAMJAX_PROGRAM_CACHE_VERIFY=1; the test matrix runs in it) traces every call
+# anyway and compares its StableHLO with the saved program's, so a leak fails loudly.
+PROGRAM_FORMAT = 2  # layout of a saved program's file; another layout is exported again
 _PROGRAM_DIR: list = [None]  # folder of the program cache; None: off (the library default)
-_LOADED: dict = {}  # key -> (compiled program, output treedef), loaded or exported in this process
+_VERIFY: list = [False]  # trace every call and compare with the saved program (tests)
+_LOADED: dict = {}  # key -> _Entry, loaded or exported in this process
 _UNEXPORTABLE: set = set()  # qualified names whose export failed here: called directly from then on
 PROGRAM_SUFFIX = ".jaxprog"
+# JAX options that cannot change a trace (where compiled code is kept, what is logged or dumped):
+# left out of the key so that the command line and a test that configure them differently share
+# programs. Every other option is in the key.
+_CONFIG_NOT_TRACED = ("jax_compilation_cache_", "jax_persistent_cache_", "jax_enable_compilation_cache",
+                      "jax_raise_persistent_cache_errors", "jax_log_compiles", "jax_logging_level",
+                      "jax_explain_cache_misses", "jax_debug_log_modules", "jax_dump_ir_")
 
 
-def use_program_cache(folder: str | os.PathLike | None) -> None:
+class StaleProgramError(RuntimeError):
+    """In verify mode: a saved program differs from what tracing gives now (a key that misses a
+    trace-time input; a bug in camjax, never the user's)."""
+
+
+def use_program_cache(folder: str | os.PathLike | None, *, verify: bool | None = None) -> None:
     """Keep the exported programs of :func:`program_cache` entry points in ``folder`` (created if
     missing; OSError if it cannot be); None switches the program cache off. The folder is trusted
-    as the compilation cache's is: its files are unpickled and run."""
+    as the compilation cache's is: its files are unpickled and run.
+
+    ``verify``: trace every call anyway and raise :class:`StaleProgramError` when the saved
+    program's StableHLO differs from the fresh trace's (default: $CAMJAX_PROGRAM_CACHE_VERIFY=1).
+    """
     if folder is not None:
         os.makedirs(folder, exist_ok=True)
     _PROGRAM_DIR[0] = None if folder is None else Path(folder)
+    _VERIFY[0] = os.environ.get("CAMJAX_PROGRAM_CACHE_VERIFY") == "1" if verify is None else bool(verify)
     _LOADED.clear()
 
 
@@ -149,33 +181,60 @@ def enable_program_cache() -> None:
         return
 
 
-_SOURCE_DIGEST: list = []
+_TRACE_CONTEXT: list = []
 
 
 def _source_digest() -> str:
     """Digest of every camjax source file: any change of the code invalidates every program."""
-    if not _SOURCE_DIGEST:
-        import hashlib
+    import hashlib
 
-        h = hashlib.sha256()
-        root = Path(__file__).resolve().parent
-        for path in sorted(root.rglob("*.py")):
-            h.update(str(path.relative_to(root)).encode())
-            h.update(path.read_bytes())
-        _SOURCE_DIGEST.append(h.hexdigest())
-    return _SOURCE_DIGEST[0]
+    h = hashlib.sha256()
+    root = Path(__file__).resolve().parent
+    for path in sorted(root.rglob("*.py")):
+        h.update(str(path.relative_to(root)).encode())
+        h.update(b"\0")
+        h.update(path.read_bytes())
+        h.update(b"\0")
+    return h.hexdigest()
+
+
+def trace_context() -> str:
+    """Items 1 and 4 of the key (see the comment above :data:`PROGRAM_FORMAT`): camjax's source,
+    the versions of the libraries a trace runs, the JAX configuration and the devices, as text.
+
+    The configuration is read at every call (a test or a user may change it between calls); the
+    source digest and the versions once per process.
+    """
+    import jax
+
+    if not _TRACE_CONTEXT:
+        from importlib import metadata
+
+        versions = []
+        for dist in ("jax", "jaxlib", "optax", "numpy"):
+            try:
+                versions.append(f"{dist}=={metadata.version(dist)}")
+            except metadata.PackageNotFoundError:
+                versions.append(f"{dist} missing")
+        _TRACE_CONTEXT.append(f"format {PROGRAM_FORMAT}\nsource {_source_digest()}\n" + "\n".join(versions))
+    config = sorted((k, repr(v)) for k, v in jax.config.values.items()
+                    if not k.startswith(_CONFIG_NOT_TRACED))
+    devices = [(d.platform, d.device_kind) for d in jax.devices()]
+    return f"{_TRACE_CONTEXT[0]}\nconfig {config!r}\ndevices {devices!r}"
 
 
 def program_cache(fn=None, *, static_argnames: tuple[str, ...] = ()):
     """Decorate a host-level entry point so that a fresh process can skip tracing it.
 
     ``fn`` must be a pure function of its arguments (arrays and pytrees of arrays; the names in
-    ``static_argnames`` are hashable Python values it may branch on) and of camjax's own code,
-    traceable by ``jax.jit``. With the program cache on (:func:`enable_program_cache`) and
-    concrete arguments, the call runs the program exported for the arguments' structure, shapes,
-    dtypes and static values, exporting and saving it on the first call; otherwise (cache off,
-    called under a trace, or arguments the cache cannot key) it is ``jax.jit(fn)``. The results
-    are the same either way: the exported program is ``fn``'s own jaxpr.
+    ``static_argnames`` are hashable, picklable Python values it may branch on) and of camjax's
+    own code, traceable by ``jax.jit``: it may read no other Python state (a module global that
+    changes, an environment variable) while it traces. With the program cache on
+    (:func:`enable_program_cache`) and concrete arguments, the call runs the program exported
+    for the key of these arguments (the comment above :data:`PROGRAM_FORMAT` lists what it
+    holds), exporting and saving it on the first call; otherwise (cache off, called under a trace,
+    or arguments the cache cannot key) it is ``jax.jit(fn)``. The results are the same either way:
+    the exported program is ``fn``'s own jaxpr.
 
     The wrapper's ``load(*args, **kwargs)`` returns a callable of the same arguments, compiled for
     these (when the program cache is on) but not run: to time loading apart from running.
@@ -191,25 +250,31 @@ def program_cache(fn=None, *, static_argnames: tuple[str, ...] = ()):
     signature = inspect.signature(fn)
     name = f"{fn.__module__}.{fn.__qualname__}"
 
-    def load(*args, **kwargs):
-        folder = _PROGRAM_DIR[0]
-        if folder is None or name in _UNEXPORTABLE:
-            return jitted
+    def split(args, kwargs):
         bound = signature.bind(*args, **kwargs)
         bound.apply_defaults()
         static = {k: v for k, v in bound.arguments.items() if k in static_argnames}
         dynamic = {k: v for k, v in bound.arguments.items() if k not in static_argnames}
+        return static, dynamic
+
+    def load(*args, **kwargs):
+        folder = _PROGRAM_DIR[0]
+        if folder is None or name in _UNEXPORTABLE:
+            return jitted
+        static, dynamic = split(args, kwargs)
         try:
-            caller, treedef = _program(folder, name, fn, static, dynamic)
+            entry = _program(folder, name, fn, static, dynamic)
         except _NotCacheable:
             return jitted
 
-        def run(*args, **kwargs):  # arguments of the structure, shapes and static values given to load
-            bound = signature.bind(*args, **kwargs)
-            bound.apply_defaults()
-            dynamic = {k: v for k, v in bound.arguments.items() if k not in static_argnames}
+        def run(*args, **kwargs):  # new values of the dynamic arguments given to load
+            given = signature.bind_partial(*args, **kwargs).arguments
+            again, dynamic = split(args, {**kwargs, **{k: v for k, v in static.items() if k not in given}})
+            if again != static:
+                raise ValueError(f"{name}: a loaded program runs with the static arguments it was "
+                                 f"loaded for ({static!r}), not {again!r}")
             leaves = [jax.random.key_data(x) if _is_key(x) else x for x in jax.tree.leaves(dynamic)]
-            return jax.tree.unflatten(treedef, caller(*leaves))
+            return jax.tree.unflatten(entry.out_tree, entry.compiled(*leaves))
 
         return run
 
@@ -226,10 +291,124 @@ class _NotCacheable(Exception):
     """The arguments cannot key a program (traced, or structure that does not pickle)."""
 
 
+class _Entry(NamedTuple):
+    compiled: Any  # the compiled flat program: leaves -> output leaves
+    out_tree: Any  # the output's tree structure
+    module_sha256: str  # digest of the program's StableHLO text (verify mode compares it)
+
+
 def _is_key(x) -> bool:
     import jax
 
     return hasattr(x, "dtype") and jax.dtypes.issubdtype(x.dtype, jax.dtypes.prng_key)
+
+
+def program_cache_on() -> bool:
+    """Whether :func:`program_cache` entry points run exported programs (see
+    :func:`enable_program_cache`)."""
+    return _PROGRAM_DIR[0] is not None
+
+
+def module_text(exported) -> str:
+    """An exported program's StableHLO text without its source locations.
+
+    Locations name the Python frames that created each operation (the call stack of the trace),
+    which differ between two traces of the same program; what the program computes does not. Lines
+    defining locations (``#loc...``) and every ``loc(...)`` annotation are dropped.
+    """
+    return "\n".join(_without_loc(line) for line in exported.mlir_module().splitlines()
+                     if not line.startswith("#loc"))
+
+
+def _without_loc(line: str) -> str:
+    """``line`` with each ``loc(...)`` annotation (balanced parentheses, quoted strings) removed."""
+    out, i = [], 0
+    while (j := line.find("loc(", i)) >= 0:
+        if j > 0 and (line[j - 1].isalnum() or line[j - 1] in "_.#"):  # part of another word
+            out.append(line[i:j + 4])
+            i = j + 4
+            continue
+        out.append(line[i:j].rstrip(" "))
+        depth, k, quoted = 0, j + 3, False
+        while k < len(line):
+            c = line[k]
+            if quoted:
+                if c == "\\":
+                    k += 1
+                elif c == '"':
+                    quoted = False
+            elif c == '"':
+                quoted = True
+            elif c == "(":
+                depth += 1
+            elif c == ")":
+                depth -= 1
+                if depth == 0:
+                    break
+            k += 1
+        i = k + 1
+    out.append(line[i:])
+    return "".join(out)
+
+
+def _sha256(data: bytes | str) -> str:
+    import hashlib
+
+    return hashlib.sha256(data.encode() if isinstance(data, str) else data).hexdigest()
+
+
+def program_key(name: str, static: dict, dynamic: dict) -> str:
+    """The key of entry point ``name`` called with these static and dynamic arguments (hex).
+
+    Raises :class:`_NotCacheable` for traced arguments or ones that do not pickle (an auxiliary
+    value of the tree structure or a static value that pickle cannot write has no reliable key).
+    """
+    import pickle
+
+    import jax
+
+    leaves, in_tree = jax.tree.flatten(dynamic)
+    if any(isinstance(x, jax.core.Tracer) for x in leaves):
+        raise _NotCacheable
+    specs = []
+    for x in leaves:
+        impl = str(jax.random.key_impl(x)) if _is_key(x) else None
+        data = jax.random.key_data(x) if impl is not None else x
+        weak = getattr(data, "weak_type", isinstance(data, (bool, int, float, complex)))
+        specs.append((jax.numpy.shape(data), str(jax.numpy.result_type(data)), weak, impl))
+    try:
+        arguments = pickle.dumps((sorted(static.items()), in_tree, specs), protocol=4)
+    except Exception as exc:  # noqa: BLE001  (any pickling failure: no reliable key)
+        raise _NotCacheable from exc
+    return _sha256(b"\0".join([name.encode(), trace_context().encode(), arguments]))
+
+
+def _export(name: str, fn, static: dict, dynamic: dict):
+    """(exported program, output tree structure) of ``fn`` traced for these arguments."""
+    import jax
+
+    leaves, in_tree = jax.tree.flatten(dynamic)
+    impls = [jax.random.key_impl(x) if _is_key(x) else None for x in leaves]
+    arrays = [jax.random.key_data(x) if k is not None else x for x, k in zip(leaves, impls, strict=True)]
+    specs = [jax.ShapeDtypeStruct(jax.numpy.shape(x), jax.numpy.result_type(x),
+                                  weak_type=getattr(x, "weak_type", isinstance(x, (int, float, complex))))
+             for x in arrays]
+    out_tree: list = []
+
+    def flat(*flat_arrays):
+        values = [jax.random.wrap_key_data(x, impl=k) if k is not None else x
+                  for x, k in zip(flat_arrays, impls, strict=True)]
+        out = fn(**jax.tree.unflatten(in_tree, values), **static)
+        out_leaves, tree = jax.tree.flatten(out)
+        out_tree.append(tree)
+        return out_leaves
+
+    try:
+        exported = jax.export.export(jax.jit(flat))(*specs)
+    except Exception as exc:  # noqa: BLE001  (not exportable, e.g. a host callback: trace it every time)
+        _UNEXPORTABLE.add(name)
+        raise _NotCacheable from exc
+    return exported, out_tree[0], arrays
 
 
 def _compile(exported, arrays):
@@ -239,72 +418,74 @@ def _compile(exported, arrays):
     return jax.jit(exported.call).lower(*arrays).compile()
 
 
-def program_cache_on() -> bool:
-    """Whether :func:`program_cache` entry points run exported programs (see
-    :func:`enable_program_cache`)."""
-    return _PROGRAM_DIR[0] is not None
-
-
-def _program(folder: Path, name: str, fn, static: dict, dynamic: dict):
-    """(compiled flat program, output treedef) for these arguments: from this
-    process, else from ``folder``, else exported now and saved there."""
-    import hashlib
+def _read(path: Path, key: str):
+    """(exported program, output skeleton, module digest) saved at ``path`` for ``key``, or None
+    when the file is missing, unreadable, truncated, of another format or key, or corrupted."""
     import pickle
 
     import jax
 
-    leaves, in_tree = jax.tree.flatten(dynamic)
-    if any(isinstance(x, jax.core.Tracer) for x in leaves):
-        raise _NotCacheable
-    keys = [jax.random.key_impl(x) if _is_key(x) else None for x in leaves]
-    arrays = [jax.random.key_data(x) if k is not None else x for x, k in zip(leaves, keys, strict=True)]
-    specs = [jax.ShapeDtypeStruct(jax.numpy.shape(x), jax.numpy.result_type(x),
-                                  weak_type=getattr(x, "weak_type", isinstance(x, (int, float, complex))))
-             for x in arrays]
     try:
-        fingerprint = pickle.dumps((in_tree, static, [str(k) for k in keys],
-                                    [(s.shape, str(s.dtype), s.weak_type) for s in specs]))
-    except Exception as exc:  # an aux value that does not pickle cannot be keyed reliably
-        raise _NotCacheable from exc
-    platform = jax.devices()[0].platform
-    digest = hashlib.sha256(b"\0".join([
-        name.encode(), _source_digest().encode(), jax.__version__.encode(), platform.encode(),
-        str(jax.config.jax_enable_x64).encode(), fingerprint])).hexdigest()[:40]
-    if digest in _LOADED:
-        return _LOADED[digest]
-    path = folder / f"{name}-{digest}{PROGRAM_SUFFIX}"
-    entry = None
-    if path.exists():
-        try:
-            saved = pickle.loads(path.read_bytes())
-            exported = jax.export.deserialize(bytearray(saved["program"]))
-            entry = (_compile(exported, arrays), jax.tree.structure(saved["outputs"]))
-        except Exception:  # unreadable or from another JAX: export it again
-            entry = None
-    if entry is None:
-        out_tree: list = []
+        saved = pickle.loads(path.read_bytes())
+        if not (isinstance(saved, dict) and saved.get("format") == PROGRAM_FORMAT and saved.get("key") == key
+                and _sha256(saved["program"]) == saved["program_sha256"]):
+            return None
+        exported = jax.export.deserialize(bytearray(saved["program"]))
+        return exported, saved["outputs"], saved["module_sha256"]
+    except Exception:  # noqa: BLE001  (any damage: export it again)
+        return None
 
-        def flat(*flat_arrays):
-            values = [jax.random.wrap_key_data(x, impl=k) if k is not None else x
-                      for x, k in zip(flat_arrays, keys, strict=True)]
-            out = fn(**jax.tree.unflatten(in_tree, values), **static)
-            out_leaves, tree = jax.tree.flatten(out)
-            out_tree.append(tree)
-            return out_leaves
 
+def _write(path: Path, key: str, exported, out_tree) -> str:
+    """Save the program for ``key`` (atomically: a reader sees the old file or the whole new one;
+    two writers each replace the file whole); returns its module digest. A read-only or full
+    folder leaves the cache as it was (the program still runs)."""
+    import pickle
+
+    import jax
+
+    module = _sha256(module_text(exported))
+    program = bytes(exported.serialize())
+    skeleton = jax.tree.unflatten(out_tree, [0] * out_tree.num_leaves)
+    blob = pickle.dumps({"format": PROGRAM_FORMAT, "key": key, "program": program,
+                         "program_sha256": _sha256(program), "module_sha256": module, "outputs": skeleton})
+    tmp = path.with_name(f"{path.name}.{os.getpid()}.{id(blob)}.tmp")
+    try:
+        tmp.write_bytes(blob)
+        os.replace(tmp, path)
+    except OSError:
         try:
-            exported = jax.export.export(jax.jit(flat))(*specs)
-            skeleton = jax.tree.unflatten(out_tree[0], [0] * out_tree[0].num_leaves)
-            blob = pickle.dumps({"program": bytes(exported.serialize()), "outputs": skeleton})
-        except Exception as exc:  # not exportable (e.g. a host callback): trace it every time
-            _UNEXPORTABLE.add(name)
-            raise _NotCacheable from exc
-        entry = (_compile(exported, arrays), out_tree[0])
-        try:
-            tmp = path.with_suffix(f".{os.getpid()}.tmp")
-            tmp.write_bytes(blob)
-            os.replace(tmp, path)
+            tmp.unlink(missing_ok=True)
         except OSError:
-            pass  # a read-only cache: the program still runs
-    _LOADED[digest] = entry
+            pass
+    return module
+
+
+def _program(folder: Path, name: str, fn, static: dict, dynamic: dict) -> _Entry:
+    """The compiled program for these arguments: from this process, else from ``folder``, else
+    exported now and saved there. In verify mode every call is traced again and compared."""
+    import jax
+
+    key = program_key(name, static, dynamic)
+    entry = _LOADED.get(key)
+    if entry is None:
+        path = folder / f"{name}-{key[:40]}{PROGRAM_SUFFIX}"
+        saved = _read(path, key)
+        if saved is not None:
+            exported, skeleton, module = saved
+            arrays = [jax.random.key_data(x) if _is_key(x) else x for x in jax.tree.leaves(dynamic)]
+            entry = _Entry(_compile(exported, arrays), jax.tree.structure(skeleton), module)
+        else:
+            exported, out_tree, arrays = _export(name, fn, static, dynamic)
+            module = _write(path, key, exported, out_tree)
+            entry = _Entry(_compile(exported, arrays), out_tree, module)
+            _LOADED[key] = entry
+            return entry  # traced just now: nothing to verify
+        _LOADED[key] = entry
+    if _VERIFY[0]:
+        exported, _, _ = _export(name, fn, static, dynamic)
+        if _sha256(module_text(exported)) != entry.module_sha256:
+            raise StaleProgramError(
+                f"{name}: the saved program for key {key[:12]} differs from a fresh trace; its key "
+                "misses something the trace reads (see camjax.runtime.program_key)")
     return entry

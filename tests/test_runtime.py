@@ -4,6 +4,9 @@ References are the same function run through plain ``jax.jit`` (the cache only s
 results must agree to the last bit) and finite differences for gradients through the wrapper.
 """
 
+import dataclasses
+from functools import partial
+from pathlib import Path
 from typing import NamedTuple
 
 import jax
@@ -154,3 +157,142 @@ def test_cli_with_saved_programs_writes_what_it_writes_without(command, scene, n
     off = json.loads((tmp_path / "off" / name).read_text())
     for run in ("cold", "warm"):
         assert json.loads((tmp_path / run / name).read_text()) == off, run
+
+
+# ------------------------------------------------------------------ what the key must hold
+
+LEAK = {"power": 2}  # a module global read while tracing: what an entry point must never do
+
+
+def _leaky(pair: Pair):
+    return jnp.sum(pair.a ** LEAK["power"])
+
+
+leaky = runtime.program_cache(_leaky)
+
+
+def test_verify_mode_catches_a_trace_that_reads_state_outside_its_key(tmp_path, monkeypatch):
+    """The verify mode is what proves the key complete: it must fail on a program whose trace reads
+    something the key does not hold (here a module global changed between two calls)."""
+    runtime.use_program_cache(tmp_path, verify=True)
+    try:
+        pair = _args()[0]
+        assert float(leaky(pair)) == pytest.approx(float(jnp.sum(pair.a ** 2)), rel=1e-15)
+        monkeypatch.setitem(LEAK, "power", 3)
+        runtime._LOADED.clear()  # as a fresh process: the saved program is read back
+        with pytest.raises(runtime.StaleProgramError, match="_leaky"):
+            leaky(pair)
+        runtime.use_program_cache(tmp_path, verify=False)  # without verify: the stale answer
+        assert float(leaky(pair)) == pytest.approx(float(jnp.sum(pair.a ** 2)), rel=1e-15)
+    finally:
+        runtime.use_program_cache(None)
+
+
+def test_the_key_holds_static_values_structure_shapes_dtypes_and_jax_options():
+    half = jnp.asarray(0.5, jnp.float64)  # not weak-typed (a Python float is)
+    static, dynamic = {"power": 2}, {"pair": Pair(jnp.zeros(7), half)}
+    key = runtime.program_key("m", static, dynamic)
+    assert runtime.program_key("m", dict(static), {"pair": Pair(jnp.ones(7), 2 * half)}) == key  # values: no
+    other = [
+        runtime.program_key("n", static, dynamic),
+        runtime.program_key("m", {"power": 3}, dynamic),
+        runtime.program_key("m", static, {"pair": Pair(jnp.ones(8), half)}),
+        runtime.program_key("m", static, {"pair": Pair(jnp.ones(7, jnp.float32), half)}),
+        runtime.program_key("m", static, {"pair": (jnp.ones(7), half)}),  # another tree
+        runtime.program_key("m", static, {"pair": Pair(jnp.ones(7), 0.5)}),  # weak type
+    ]
+    assert len({key, *other}) == 1 + len(other)
+    before = jax.config.jax_numpy_rank_promotion
+    try:
+        jax.config.update("jax_numpy_rank_promotion", "warn")  # an option a trace can read
+        assert runtime.program_key("m", static, dynamic) != key
+    finally:
+        jax.config.update("jax_numpy_rank_promotion", before)
+    assert runtime.program_key("m", static, dynamic) == key
+
+
+@partial(jax.tree_util.register_dataclass, data_fields=["x"], meta_fields=["mode"])
+@dataclasses.dataclass(frozen=True)
+class Tagged:
+    """A pytree with auxiliary data (as a problem family's static fields would be)."""
+
+    x: jax.Array
+    mode: str
+
+
+def test_pytree_auxiliary_data_is_in_the_key():
+    keys = {runtime.program_key("m", {}, {"t": Tagged(jnp.ones(3), mode)}) for mode in ("global", "pointwise")}
+    assert len(keys) == 2
+
+
+@pytest.mark.parametrize("damage", ["corrupted", "truncated", "another key", "empty"])
+def test_a_damaged_saved_program_is_exported_again(cache, damage):
+    model(*_args())
+    (path,) = cache.glob(f"*{runtime.PROGRAM_SUFFIX}")
+    blob = path.read_bytes()
+    if damage == "corrupted":  # one byte flipped in the middle of the program
+        i = len(blob) // 2
+        path.write_bytes(blob[:i] + bytes([blob[i] ^ 0xFF]) + blob[i + 1:])
+    elif damage == "truncated":
+        path.write_bytes(blob[: len(blob) // 3])
+    elif damage == "another key":  # a whole, valid program saved under this file's name
+        model(*_args(), power=3)
+        (other,) = set(cache.glob(f"*{runtime.PROGRAM_SUFFIX}")) - {path}
+        path.write_bytes(other.read_bytes())
+    else:
+        path.write_bytes(b"")
+    runtime._LOADED.clear()
+    _same(model(*_args()), _model(*_args()))
+    runtime._LOADED.clear()  # and the file now holds the right program again
+    _same(model(*_args()), _model(*_args()))
+
+
+def test_a_read_only_cache_folder_runs_and_writes_nothing(tmp_path):
+    import os
+    import stat
+
+    folder = tmp_path / "programs"
+    folder.mkdir()
+    folder.chmod(stat.S_IRUSR | stat.S_IXUSR)
+    if os.access(folder, os.W_OK):  # root writes to any mode: take a folder of a read-only file system
+        folder.chmod(stat.S_IRWXU)
+        folder = Path("/proc/self")
+    before = sorted(os.listdir(folder))
+    try:
+        runtime.use_program_cache(folder)
+        _same(model(*_args()), _model(*_args()))
+        assert runtime._LOADED  # it ran a program of its own, in memory
+        assert not [name for name in os.listdir(folder) if name not in before]
+    finally:
+        runtime.use_program_cache(None)
+        if folder != Path("/proc/self"):
+            folder.chmod(stat.S_IRWXU)
+
+
+@pytest.mark.slow
+def test_two_processes_writing_one_cache_at_once_agree(tmp_path):
+    """Two fresh processes export the same programs into one folder at the same moment: both
+    finish, both write the traced results, and a third reads what they left."""
+    import subprocess
+    import sys
+
+    code = ("import sys, json, numpy as np, jax.numpy as jnp; from camjax import runtime; "
+            "import tests.test_runtime as t; runtime.use_program_cache(sys.argv[1], verify=True); "
+            "out = t.model(*t._args(), power=int(sys.argv[2])); "
+            "print(json.dumps(float(out['sum'])))")
+    root = str(__import__("pathlib").Path(__file__).resolve().parents[1])
+    env = {**__import__("os").environ, "PYTHONPATH": root, "CAMJAX_COMPILATION_CACHE": "0"}
+    procs = [subprocess.Popen([sys.executable, "-c", code, str(tmp_path), str(p)], cwd=root, env=env,
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+             for p in (2, 2, 3, 3)]
+    outs = [p.communicate(timeout=300) for p in procs]
+    for p, (_, err) in zip(procs, outs, strict=True):
+        assert p.returncode == 0, err
+    expected = {2: float(_model(*_args(), 2)["sum"]), 3: float(_model(*_args(), 3)["sum"])}
+    got = [float(out) for out, _ in outs]
+    assert got == [expected[2], expected[2], expected[3], expected[3]]
+    assert len(list(tmp_path.glob(f"*{runtime.PROGRAM_SUFFIX}"))) == 2
+    assert not list(tmp_path.glob("*.tmp"))  # no half-written file left behind
+    third = subprocess.run([sys.executable, "-c", code, str(tmp_path), "3"], cwd=root, env=env,
+                           capture_output=True, text=True, timeout=300)
+    assert third.returncode == 0 and float(third.stdout) == expected[3], third.stderr
