@@ -1,5 +1,8 @@
 """Compare two result JSON files key by key: ``python validation/compare_results.py OLD.json NEW.json``.
 
+``--dirs OLD_DIR NEW_DIR`` compares every ``*.json`` of two folders (as written by
+``validation/snapshot.py``), file by file; a file in only one of them is a difference.
+
 Exit 0 when every key path holds the same value in both files, 1 otherwise (each differing path
 listed, one a line). Floats are compared exactly unless ``--rtol`` is given; ``--ignore KEY``
 (repeatable) skips a key path, written dotted with list indices in brackets (``design.seconds``,
@@ -65,7 +68,10 @@ def main(argv: list[str] | None = None) -> int:
                    help="relative tolerance for numbers (default 0: exact)")
     p.add_argument("--ignore", action="append", default=[], metavar="KEY",
                    help="key path or bare key name to skip (repeatable)")
+    p.add_argument("--dirs", action="store_true", help="OLD and NEW are folders: compare every *.json")
     args = p.parse_args(argv)
+    if args.dirs:
+        return _compare_dirs(args)
     with open(args.old) as f_old, open(args.new) as f_new:
         old, new = json.load(f_old), json.load(f_new)
     diff = differences(old, new, args.rtol, frozenset(args.ignore))
@@ -78,6 +84,26 @@ def main(argv: list[str] | None = None) -> int:
           + (f" (rtol {args.rtol:g})" if args.rtol else " (exact)")
           + (f", ignoring {', '.join(args.ignore)}" if args.ignore else ""))
     return 0
+
+
+def _compare_dirs(args) -> int:
+    from pathlib import Path
+
+    old_dir, new_dir = Path(args.old), Path(args.new)
+    old_files = {p.name for p in old_dir.glob("*.json")}
+    new_files = {p.name for p in new_dir.glob("*.json")}
+    bad = [f"{name}: only in {'OLD' if name in old_files else 'NEW'}"
+           for name in sorted(old_files ^ new_files)]
+    for name in sorted(old_files & new_files):
+        old = json.loads((old_dir / name).read_text())
+        new = json.loads((new_dir / name).read_text())
+        bad += [f"{name}: {line}" for line in differences(old, new, args.rtol, frozenset(args.ignore))]
+    for line in bad:
+        print(line)
+    same = len(old_files & new_files)
+    print(f"{same} file(s) compared, {len(bad)} difference(s)"
+          + (f" (rtol {args.rtol:g})" if args.rtol else " (exact)"))
+    return 1 if bad else 0
 
 
 if __name__ == "__main__":
