@@ -117,3 +117,23 @@ def test_script_exit_status(compare, tmp_path, capsys):
     assert compare.main([str(old), str(new)]) == 1
     assert "a: 1.0 != 2.0" in capsys.readouterr().out
     assert compare.main([str(old), str(new), "--ignore", "a"]) == 0
+
+
+def test_folders_compare_file_by_file(compare, tmp_path, capsys):
+    import json
+
+    old, new = tmp_path / "old", tmp_path / "new"
+    old.mkdir()
+    new.mkdir()
+    for folder in (old, new):
+        (folder / "same.json").write_text(json.dumps(OLD))
+    (old / "moved.json").write_text(json.dumps(OLD))
+    (new / "moved.json").write_text(json.dumps({**OLD, "flag": False}))
+    (old / "gone.json").write_text("{}")
+    assert compare.main([str(old), str(new), "--dirs"]) == 1
+    out = capsys.readouterr().out
+    assert "moved.json: flag: True != False" in out and "gone.json: only in OLD" in out
+    assert "same.json" not in out
+    (old / "gone.json").unlink()
+    (new / "moved.json").write_text(json.dumps(OLD))
+    assert compare.main([str(old), str(new), "--dirs"]) == 0
