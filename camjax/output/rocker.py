@@ -19,7 +19,13 @@ from camjax.evaluate import SceneArrays
 from camjax.geometry.pitch import to_cam_frame
 from camjax.output.export import CSV_FORMAT, save_figure, write_profile_dxf
 from camjax.output.plots import _cycle_axis  # reads only segment_starts_deg
-from camjax.output.report import extrema, feasibility_block, header_block, negative_ranges_deg
+from camjax.output.report import (
+    extrema,
+    feasibility_block,
+    follower_scene_block,
+    header_block,
+    negative_ranges_deg,
+)
 from camjax.rocker import RockerCurves, RockerRun
 from camjax.scene import Scene
 
@@ -31,7 +37,10 @@ def _f(x) -> float:
 
 
 def rocker_profile_table(curves: RockerCurves) -> tuple[list[str], np.ndarray]:
-    """Column names and an (N, k) table: angle, outline X/Y, arm swing and angle, curvature, phi."""
+    """Column names and an (N, k) table: angle, outline X/Y, arm swing and angle, curvature, phi,
+    pitch curve (roller) or contact point on the face (flat), then (appended, in this order) s''
+    (rad/rad^2), the arm's angular velocity, acceleration and jerk (SI), the pitch curve's radius
+    of curvature (roller) and with loads the pivot torque, contact force, cam torque and stress."""
     c = curves
     names = ["theta_deg", "x_mm", "y_mm", "swing_deg", "arm_angle_deg", "ds_rad_per_rad", "rho_mm",
              "pressure_angle_deg"]
@@ -43,6 +52,16 @@ def rocker_profile_table(curves: RockerCurves) -> tuple[list[str], np.ndarray]:
     if c.contact_distance_mm is not None:
         names.append("contact_on_face_mm")
         cols.append(c.contact_distance_mm)
+    # appended after the columns above: every curve whose extrema result.json reports
+    names += ["d2s_rad_per_rad2", "angular_velocity_rad_s", "angular_accel_rad_s2", "angular_jerk_rad_s3"]
+    cols += [c.d2s, c.angular_velocity_rad_s, c.angular_accel_rad_s2, c.angular_jerk_rad_s3]
+    optional = (("pitch_rho_mm", c.pitch_rho_mm), ("pivot_torque_Nm", c.pivot_torque_Nm),
+                ("contact_force_N", c.contact_force_N), ("torque_Nm", c.torque_Nm),
+                ("stress_MPa", c.stress_MPa))
+    for name, values in optional:
+        if values is not None:
+            names.append(name)
+            cols.append(values)
     return names, np.column_stack(cols)
 
 
@@ -207,7 +226,9 @@ def rocker_report(scene: Scene, arrays: SceneArrays, run: RockerRun,
     t = c.theta_deg
     phi = c.pressure_angle_deg
     i = int(np.argmax(np.abs(phi)))
-    follower = {"type": f.type, "pivot_distance_mm": f.pivot_distance_mm, "rotation": c.rotation}
+    # the dimensions the drawn cam was computed with (a [design]'s where it solved them), not the
+    # scene's [follower] table: those stay visible under follower_scene
+    follower = {"type": f.type, "pivot_distance_mm": c.pivot_distance_mm, "rotation": c.rotation}
     if c.arm_length_mm is not None:
         follower.update(arm_length_mm=c.arm_length_mm, roller_radius_mm=c.roller_radius_mm,
                         max_pressure_angle_deg=f.max_pressure_angle_deg)
@@ -284,6 +305,6 @@ def rocker_report(scene: Scene, arrays: SceneArrays, run: RockerRun,
         out["stress_MPa"] = {"max": _f(c.stress_MPa[k]), "max_deg": _f(t[k])}
     if design is not None:
         out["design"] = design
+        out["follower_scene"] = follower_scene_block(f)
     return out
-
 
