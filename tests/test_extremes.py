@@ -236,3 +236,21 @@ def test_rocker_optimization_cases_pass_on_a_rocker_design_scene():
     assert {c.group for c in cases} == {"rocker optimization", "determinism"} and len(cases) == 10
     failed = [c for c in cases if not c.passed]
     assert not failed, "\n".join(f"{c.name}: {c.value} vs {c.reference}" for c in failed)
+
+
+def test_a_translating_roller_skips_the_flat_face_groups_by_name(tmp_path, monkeypatch, capsys):
+    # the flat face's geometry, precision and optimization cases mean nothing on a roller (and the
+    # optimization group exited 1 with a ValueError): they are skipped with the follower type named
+    from camjax import cli
+
+    scene = camjax.load_scene("roller")
+    skipped = {s["group"]: s["reason"] for s in extremes.skipped_groups(scene)}
+    assert sorted(skipped) == ["geometry and stress", "optimization", "precision"]
+    assert all("follower.type = 'roller'" in r for r in skipped.values())
+    seen = []
+    monkeypatch.setattr(extremes, "GROUPS", tuple(g._replace(run=lambda sc, name=g.name: seen.append(name) or [])
+                                                  for g in extremes.GROUPS))
+    assert cli.main(["check-extremes", "roller", "--out", str(tmp_path / "x")]) == 0
+    assert seen == ["laws", "polynomials", "programs", "speed"]
+    err = capsys.readouterr().err
+    assert "skipping optimization: has no cases for follower.type = 'roller'" in err

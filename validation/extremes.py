@@ -812,6 +812,12 @@ class Group(NamedTuple):
     name: str
     needs: frozenset[str]
     run: Callable[[Scene], list[Case]]
+    followers: frozenset[str] | None = None  # the follower types it has cases for (None: any)
+
+
+# a translating roller has no geometry, precision or optimization cases here (its geometry and
+# design problem are tested in tests/test_roller_*.py); the flat face's would be meaningless on it
+_NOT_ROLLER = frozenset({"flat", "oscillating_roller", "oscillating_flat"})
 
 
 # What each model means in a scene file, for the line that says why a group was skipped.
@@ -825,10 +831,10 @@ GROUPS: tuple[Group, ...] = (
     Group("laws", frozenset(), lambda scene: law_cases()),
     Group("polynomials", frozenset(), lambda scene: polynomial_cases()),
     Group("programs", frozenset(), lambda scene: program_cases()),
-    Group("geometry and stress", frozenset({"loads", "contact"}), geometry_cases),
+    Group("geometry and stress", frozenset({"loads", "contact"}), geometry_cases, _NOT_ROLLER),
     Group("speed", frozenset({"loads"}), speed_cases),
-    Group("precision", frozenset({"loads", "contact"}), precision_cases),
-    Group("optimization", frozenset({"loads", "contact", "design"}), optimization_cases),
+    Group("precision", frozenset({"loads", "contact"}), precision_cases, _NOT_ROLLER),
+    Group("optimization", frozenset({"loads", "contact", "design"}), optimization_cases, _NOT_ROLLER),
 )
 
 
@@ -836,17 +842,22 @@ def _missing(scene: Scene, group: Group) -> list[str]:
     return [m for m in _MODEL_SOURCE if m in group.needs and m not in scene.needs()]
 
 
+def _skip_reason(scene: Scene, group: Group) -> str | None:
+    """Why :func:`run_matrix` leaves ``group`` out on ``scene`` (None: it runs)."""
+    if group.followers is not None and scene.follower.type not in group.followers:
+        return (f"has no cases for follower.type = {scene.follower.type!r} of scene {scene.name!r} "
+                f"(only {', '.join(repr(t) for t in sorted(group.followers))})")
+    missing = _missing(scene, group)
+    if missing:
+        wants = [_MODEL_SOURCE[m] for m in missing]
+        wants = " and ".join([", ".join(wants[:-1]), wants[-1]] if len(wants) > 1 else wants)
+        return f"needs {wants}, not declared by scene {scene.name!r}"
+    return None
+
+
 def skipped_groups(scene: Scene) -> list[dict[str, str]]:
     """The groups :func:`run_matrix` skips on ``scene``: ``{"group": name, "reason": sentence}``."""
-    out = []
-    for group in GROUPS:
-        missing = _missing(scene, group)
-        if missing:
-            wants = [_MODEL_SOURCE[m] for m in missing]
-            wants = " and ".join([", ".join(wants[:-1]), wants[-1]] if len(wants) > 1 else wants)
-            out.append({"group": group.name,
-                        "reason": f"needs {wants}, not declared by scene {scene.name!r}"})
-    return out
+    return [{"group": g.name, "reason": why} for g in GROUPS if (why := _skip_reason(scene, g)) is not None]
 
 
 def run_matrix(
@@ -856,10 +867,11 @@ def run_matrix(
 ) -> list[Case]:
     """Run every group of the matrix that ``scene`` supports (default: the embedded reference scene).
 
-    Groups needing a model the scene lacks are left out (see :func:`skipped_groups`).
+    Groups needing a model the scene lacks, or without cases for its follower type, are left out
+    (see :func:`skipped_groups`).
     """
     scene = scene or load_scene()
-    groups = [g for g in GROUPS if not _missing(scene, g)]
+    groups = [g for g in GROUPS if _skip_reason(scene, g) is None]
     groups += [Group(fn.__name__, frozenset(), fn) for fn in extra_groups]
     cases: list[Case] = []
     for group in groups:
