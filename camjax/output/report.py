@@ -375,7 +375,8 @@ def header_block(scene: Scene, arrays: SceneArrays, extremes: dict[str, Extremes
 
 
 def build_report(scene: Scene, run: DesignRun) -> dict[str, Any]:
-    """The report of a scene's design run as a plain, JSON-ready dict."""
+    """The report of a scene's design run as a plain, JSON-ready dict (with a [design] of a roller,
+    ``follower_scene`` keeps the [follower]'s R_f and offset beside the design's in ``roller``)."""
     arrays = run.arrays
     extremes = run.extremes
     if extremes is None:  # a run built without them: the samples' own

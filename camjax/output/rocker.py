@@ -254,7 +254,9 @@ def rocker_report(scene: Scene, arrays: SceneArrays, run: RockerRun,
     The common header (:func:`camjax.output.report.header_block`) with the motion in rad (swing
     in deg, angular velocity ... in SI), the smallest admissible cam and its binding limit, the
     evaluated cam (pressure angle, curvature, undercut or face length), loads about the pivot and
-    the contact stress; with a solved [design], its block (``design``: the solver's keys).
+    the contact stress; with a solved [design], its block (``design``: the solver's keys) and the
+    scene's own [follower] dimensions (``follower_scene``): ``oscillating_follower`` gives those
+    the drawn cam was computed with.
     """
     sizing, c, f = run.sizing, run.curves, scene.follower
     t = c.theta_deg
