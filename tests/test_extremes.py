@@ -200,3 +200,57 @@ def test_check_extremes_without_the_validation_folder_is_one_line(tmp_path, monk
     assert rc == 2 and len(err.strip().splitlines()) == 1
     assert "validation" in err and "source checkout" in err and "Traceback" not in err
     assert not (tmp_path / "x").exists()
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("follower", ["oscillating_roller", "oscillating_flat"])
+def test_check_extremes_runs_the_matrix_for_an_oscillating_follower(tmp_path, capsys, follower):
+    # the real matrix on a rocker scene with loads and [contact]: the rocker's own geometry, speed
+    # and precision cases run (no flat-face formula on a rocker), every case passes, nothing crashes
+    # (before: exit 1, a TypeError from the flat face's stress coefficient, None for a rocker)
+    from test_rocker import FLAT_SCENE, ROLLER_SCENE
+
+    from camjax import cli
+
+    scene = tmp_path / "rocker.toml"
+    scene.write_text((ROLLER_SCENE if follower == "oscillating_roller" else FLAT_SCENE).replace("ROT", "cw"))
+    rc = cli.main(["check-extremes", str(scene), "--out", str(tmp_path / "x")])
+    err = capsys.readouterr().err
+    assert rc == 0, err
+    data = json.loads((tmp_path / "x" / "extremes.json").read_text())
+    groups = {c["group"] for c in data["cases"]}
+    assert {"laws", "polynomials", "programs", "rocker geometry", "stress", "rocker speed",
+            "rocker precision"} <= groups
+    assert "geometry" not in groups and "speed" not in groups  # the translating groups' cases
+    assert data["summary"]["failed"] == 0 and data["summary"]["cases"] == len(data["cases"]) > 150
+    assert [s["group"] for s in data["skipped"]] == ["optimization"]  # the scene has no [design]
+
+
+@pytest.mark.slow
+def test_rocker_optimization_cases_pass_on_a_rocker_design_scene():
+    # the optimization group on an oscillating roller's [design]: the size-only optimum against the
+    # independent sizing, extreme weights finite, sigma_max = 1 MPa named, collapsed bounds exact
+    from test_oscillating_problem import SCENE
+
+    cases = extremes.optimization_cases(camjax.parse_scene(SCENE.replace("ROT", "cw").replace("DESIGN", "")))
+    assert {c.group for c in cases} == {"rocker optimization", "determinism"} and len(cases) == 10
+    failed = [c for c in cases if not c.passed]
+    assert not failed, "\n".join(f"{c.name}: {c.value} vs {c.reference}" for c in failed)
+
+
+def test_a_translating_roller_skips_the_flat_face_groups_by_name(tmp_path, monkeypatch, capsys):
+    # the flat face's geometry, precision and optimization cases mean nothing on a roller (and the
+    # optimization group exited 1 with a ValueError): they are skipped with the follower type named
+    from camjax import cli
+
+    scene = camjax.load_scene("roller")
+    skipped = {s["group"]: s["reason"] for s in extremes.skipped_groups(scene)}
+    assert sorted(skipped) == ["geometry and stress", "optimization", "precision"]
+    assert all("follower.type = 'roller'" in r for r in skipped.values())
+    seen = []
+    monkeypatch.setattr(extremes, "GROUPS", tuple(g._replace(run=lambda sc, name=g.name: seen.append(name) or [])
+                                                  for g in extremes.GROUPS))
+    assert cli.main(["check-extremes", "roller", "--out", str(tmp_path / "x")]) == 0
+    assert seen == ["laws", "polynomials", "programs", "speed"]
+    err = capsys.readouterr().err
+    assert "skipping optimization: has no cases for follower.type = 'roller'" in err

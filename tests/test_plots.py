@@ -93,3 +93,42 @@ def test_infeasible_design_draws_without_valid_stress_where_rho_is_negative(defa
     assert any("EXCEEDED" in t.get_text() for t in ax.texts)
     legend = [t.get_text() for t in figs["profile.png"].legends[0].get_texts()]
     assert "ρ < 0: the face cannot follow the outline" in legend
+
+
+def _drawn_boxes(fig):
+    """Render ``fig`` (Agg) and return its renderer."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    canvas = FigureCanvasAgg(fig)
+    canvas.draw()
+    return canvas.get_renderer()
+
+
+@pytest.mark.parametrize("rpm", ["240.0", "10.0"])
+def test_loads_labels_stay_inside_their_axes_wherever_the_minimum_falls(default_scene, rpm):
+    # at 10 rpm the inertia is negligible and the force is least on the first dwell, at theta = 0:
+    # the contact-margin label must open into the axes there (it ran off the left edge, and the
+    # layout squeezed the axes to make room for it)
+    import dataclasses
+
+    from camjax.scene import builtin_scene_text, parse_scene
+
+    scene = dataclasses.replace(parse_scene(builtin_scene_text("default").replace("rpm = 240.0", f"rpm = {rpm}")),
+                                design=None)
+    run = pipeline.analyse(scene)
+    if rpm == "10.0":
+        assert run.data["loads"]["contact"]["min_force_deg"] == 0.0
+    fig = plots.loads_figure(run.curves, titles.title_block(run.data))
+    renderer = _drawn_boxes(fig)
+    ax = fig.axes[0]
+    box = ax.get_window_extent(renderer)
+    # the axes keep most of the figure's width (a label outside them would have taken it)
+    assert box.width >= 0.75 * fig.bbox.width
+    legends = [lg.get_window_extent(renderer) for lg in fig.legends + ax.get_children()
+               if type(lg).__name__ == "Legend"]
+    for text in ax.texts:
+        t = text.get_window_extent(renderer)
+        assert box.x0 - 1 <= t.x0 and t.x1 <= box.x1 + 1 and box.y0 - 1 <= t.y0 and t.y1 <= box.y1 + 1, \
+            text.get_text()
+        for lg in legends:  # no label hidden under the legend
+            assert not t.overlaps(lg), text.get_text()

@@ -254,3 +254,119 @@ def test_design_refuses_a_rocker_no_cam_can_carry(tmp_path, capsys):
     assert rc == 2 and not out.exists()
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "follower.pivot_distance_mm" in err[0]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("follower", ["oscillating_roller", "oscillating_flat"])
+def test_reported_follower_dimensions_are_the_designs_and_the_scenes_stay_visible(tmp_path, follower):
+    # a [design] that frees the pivot (and the arm or the face offset) solves other dimensions
+    # than the scene's [follower]: the report must give the ones the drawn cam was computed with
+    # (the design's) and keep the scene's under follower_scene
+    from camjax.scene import parse_scene
+
+    if follower == "oscillating_roller":
+        text = ROLLER_SCENE.replace("pivot_distance_mm = 80.0", "pivot_distance_mm = 100.0")
+        design = "pivot_distance_mm = [65.0, 110.0]\narm_length_mm = [40.0, 80.0]\n"
+        scene_dims = {"pivot_distance_mm": 100.0, "arm_length_mm": 60.0, "roller_radius_mm": 8.0}
+    else:
+        text = FLAT_SCENE.replace("face_offset_mm = 10.0", "face_offset_mm = 5.0")
+        design = "pivot_distance_mm = [120.0, 180.0]\nface_offset_mm = [0.0, 20.0]\n"
+        scene_dims = {"pivot_distance_mm": 150.0, "face_offset_mm": 5.0}
+    text = text.replace("ROT", "ccw").replace("samples = 360", "samples = 180") + (
+        "\n[design]\nbase_radius_mm = [5.0, 130.0]\n" + design + "sigma_max_MPa = 2000.0\nalpha = 1.0\n"
+        "gamma = 0.0\n")
+    assert parse_scene(text).follower.pivot_distance_mm == scene_dims["pivot_distance_mm"]
+    rc, out = _design(tmp_path, text)
+    assert rc == 0
+    data = json.loads((out / "result.json").read_text())
+    solved, reported = data["design"], data["oscillating_follower"]
+    assert data["evaluated_at"]["source"] == "design"
+    for key in scene_dims:
+        # the solver moved every free dimension off the scene's value (else this test proves nothing)
+        if key != "roller_radius_mm":
+            assert abs(solved[key] - scene_dims[key]) > 1e-3, key
+        assert reported[key] == solved[key], key
+        assert data["follower_scene"][key] == scene_dims[key], key
+
+
+# --------------------------------------------------------------------------------- figures
+
+
+@pytest.fixture(scope="module")
+def rocker_report():
+    from camjax.pipeline import analyse
+
+    return analyse(parse_scene(ROLLER_SCENE.replace("ROT", "cw"), "rocker"))
+
+
+def test_rocker_figures_carry_the_title_block_with_the_pivot_and_arm(rocker_report):
+    from camjax.output.rocker import rocker_figures
+    from camjax.output.titles import title_block
+
+    data = rocker_report.data
+    title = title_block(data)
+    lines = title.splitlines()
+    assert len(lines) == 3 and "scene rocker" in lines[0] and "clockwise" in lines[0]
+    assert "oscillating_roller follower" in lines[0]
+    assert lines[1] == "rise 120° cycloidal 20° · dwell 60° · return 120° cycloidal 20° · dwell 60°"
+    f = data["oscillating_follower"]
+    assert f"R_b = {data['evaluated_at']['base_radius_mm']:.3f} mm" in lines[2]
+    assert f"d = {f['pivot_distance_mm']:g} mm, l = {f['arm_length_mm']:g} mm, R_f = 8 mm" in lines[2]
+    figures = rocker_figures(rocker_report.curves, title)
+    assert set(figures) == {"svaj.png", "profile.png", "geometry.png", "loads.png"}
+    for name, fig in figures.items():
+        assert fig._suptitle is not None and title in fig._suptitle.get_text(), name
+
+
+def _spiky_curves():
+    # the cam of a solved design (pivot 78.49 mm, arm 67.75 mm): its pitch curve has inflections,
+    # where the cam-surface radius rho_c = rho_pitch - R_f runs off to +-infinity between samples
+    import dataclasses
+
+    from camjax.evaluate import scene_arrays
+    from camjax.rocker import evaluate_rocker
+
+    scene = parse_scene(ROLLER_SCENE.replace("ROT", "ccw").replace("samples = 360", "samples = 180").replace(
+        '{ kind = "return", angle_deg = 120, law = "cycloidal", lift_deg = 20.0 },\n  { kind = "dwell",  angle_deg = 60 },',
+        '{ kind = "return", angle_deg = 100, law = "poly_3_4_5", lift_deg = 20.0 },\n  { kind = "dwell",  angle_deg = 80 },'))
+    scene = dataclasses.replace(scene, follower=dataclasses.replace(
+        scene.follower, pivot_distance_mm=78.48648745161735, arm_length_mm=67.74966987155759))
+    a = scene_arrays(scene)
+    return evaluate_rocker(scene, a.kin, a.cam_speed_rad_s, 24.66442332838182)
+
+
+def test_rho_panel_is_clipped_to_the_cams_size_and_marks_what_it_clips():
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    from camjax.output.rocker import geometry_figure
+
+    c = _spiky_curves()
+    limit = 4.0 * float(np.max(np.hypot(c.profile_x_mm, c.profile_y_mm)))  # 4 x the cam's largest radius
+    over, under = c.rho_mm > limit, c.rho_mm < -limit
+    assert over.any()  # the spike the panel used to scale itself to (7874 mm here, R_max = 48 mm)
+    fig = geometry_figure(c, "title")
+    FigureCanvasAgg(fig).draw()
+    ax = fig.axes[1]
+    low, high = ax.get_ylim()
+    assert -limit <= low and high <= limit  # the axis spans at most +-4 R_max
+    assert low <= float(np.min(c.rho_mm[~under])) and float(np.max(c.rho_mm[~over])) <= high
+    # every clipped run carries a marker on the edge it leaves by; the largest value is written
+    edge = [ln for ln in ax.get_lines() if ln.get_marker() in ("^", "v")]
+    ups = sum(len(ln.get_xdata()) for ln in edge if ln.get_marker() == "^")
+    runs = np.count_nonzero(np.diff(np.concatenate([[0], over.astype(int), [0]])) == 1)
+    assert ups == runs
+    texts = " ".join(t.get_text() for t in ax.texts)
+    assert f"{float(np.max(c.rho_mm)):.4g} mm" in texts and "clipped" in ax.get_title(loc="right")
+    # no dot calls an in-range value the maximum while larger ones run off the top
+    assert not any(t.get_text().startswith(f"{float(np.max(c.rho_mm[~over])):.4g} @") for t in ax.texts)
+
+
+def test_rho_panel_keeps_its_whole_range_when_nothing_is_clipped(rocker_report):
+    from camjax.output.rocker import geometry_figure
+
+    c = rocker_report.curves
+    assert np.max(np.abs(c.rho_mm)) < 4.0 * float(np.max(np.hypot(c.profile_x_mm, c.profile_y_mm)))
+    ax = geometry_figure(c, "title").axes[1]
+    low, high = ax.get_ylim()
+    assert low <= float(np.min(c.rho_mm)) and float(np.max(c.rho_mm)) <= high
+    assert "clipped" not in ax.get_title(loc="right")

@@ -3,7 +3,9 @@
 Each :class:`Case` records a computed value, an independent float64 reference (closed form,
 NumPy, or a float64 run of the same quantity for the precision table), the error, the tolerance
 with its reason, and pass/fail. ``camjax check-extremes`` runs :func:`run_matrix` and writes it.
-A group that needs a model the scene does not declare (loads, [contact], [design]) is skipped;
+An oscillating follower runs its own geometry, speed, precision and optimization cases (the
+rocker_* functions: its sizing, pivot and arm; no flat-face formula). A group that needs a model
+the scene does not declare (loads, [contact], [design]) is skipped;
 :func:`skipped_groups` says which and why.
 
 This module lives beside the package, not in it: it is a test framework, shipped with the source
@@ -255,10 +257,12 @@ def program_cases(sample_counts: Iterable[int] = (1, 2, 7, 360, 36_000, 360_000)
 
 
 def geometry_cases(scene: Scene) -> list[Case]:
-    """Base radius 1e-3x..10x the minimum, rho -> 0+, rho <= 0, gradients everywhere."""
+    """Base radius 1e-3x..10x the minimum, rho -> 0+, rho <= 0, gradients everywhere (an
+    oscillating follower: :func:`rocker_geometry_cases`)."""
+    if scene.follower.oscillating:
+        return rocker_geometry_cases(scene)
     out = []
     arrays = scene_arrays(scene)
-    c = scene.contact
     rb_min = float(geometry.flat_min_base_radius(arrays.kin)[0])
 
     def peak_stress(rb):
@@ -280,6 +284,14 @@ def geometry_cases(scene: Scene) -> list[Case]:
                 grad,
             )
         )
+    return out + stress_cases(scene)
+
+
+def stress_cases(scene: Scene) -> list[Case]:
+    """Hertz line stress of the scene's [contact] in closed form down to rho = 1e-12 mm, and its
+    saturation at rho <= 0 (any follower type: the materials and the width only)."""
+    out = []
+    c = scene.contact
     # sigma ~ rho^-1/2 down to rho = 1e-12 mm
     k = contact.compliance(c.cam, c.follower)
     for rho in (1.0, 1e-3, 1e-6, 1e-9, 1e-12):
@@ -313,7 +325,10 @@ def geometry_cases(scene: Scene) -> list[Case]:
 
 
 def speed_cases(scene: Scene) -> list[Case]:
-    """Cam speeds 0 .. 20 000 rpm: forces and torques finite, contact loss reported."""
+    """Cam speeds 0 .. 20 000 rpm: forces and torques finite, contact loss reported (an
+    oscillating follower: :func:`rocker_speed_cases`)."""
+    if scene.follower.oscillating:
+        return rocker_speed_cases(scene)
     out = []
     arrays = scene_arrays(scene)
     train = scene.follower.train
@@ -369,7 +384,10 @@ def _report_figures(scene: Scene, dtype, base_radius_mm: float) -> dict[str, flo
 
 
 def precision_cases(scene: Scene, base_radii: Iterable[float] = (28.4,), rtol32: float = 1e-5) -> list[Case]:
-    """Every reference-report figure in float32 vs float64; near rho -> 0 float32 must warn."""
+    """Every reference-report figure in float32 vs float64; near rho -> 0 float32 must warn (an
+    oscillating follower: :func:`rocker_precision_cases`, at its own drawing radius)."""
+    if scene.follower.oscillating:
+        return rocker_precision_cases(scene, rtol32)
     out = []
     for rb in base_radii:
         f64 = _report_figures(scene, jnp.float64, rb)
@@ -419,7 +437,10 @@ def precision_cases(scene: Scene, base_radii: Iterable[float] = (28.4,), rtol32:
 
 def optimization_cases(scene: Scene) -> list[Case]:
     """Weights 0 and 1e-6..1e6, unreachable sigma_max, collapsed bounds, tiny populations, one
-    weighting, one angle, and GA determinism; references from the exact global optimum."""
+    weighting, one angle, and GA determinism; references from the exact global optimum (an
+    oscillating follower: :func:`rocker_optimization_cases`)."""
+    if scene.follower.oscillating:
+        return rocker_optimization_cases(scene)
     from camjax import problem as pb
     from camjax.solvers import ga, sweep
 
@@ -546,6 +567,242 @@ def optimization_cases(scene: Scene) -> list[Case]:
     return out
 
 
+# --------------------------------------------------------------------- oscillating followers
+
+_EPS32 = float(np.finfo(np.float32).eps)
+
+
+def _rocker_base(scene: Scene):
+    """(arrays, sizing, drawing radius) of a rocker scene: the radius `camjax design` draws at."""
+    from camjax.rocker import rocker_drawing_radius, rocker_sizing
+
+    arrays = scene_arrays(scene)
+    sizing = rocker_sizing(scene, arrays.kin)
+    radius, _ = rocker_drawing_radius(scene, arrays.kin, sizing)
+    return arrays, sizing, radius
+
+
+def _rocker_curves(scene: Scene, kin, w, base_radius_mm):
+    """{name: array} of a rocker at one base radius, composed from camjax.geometry, loads and
+    contact as :func:`camjax.rocker.evaluate_rocker` composes them, but kept in JAX so that it can
+    be differentiated in the base radius and the cam speed (loads and [contact] required)."""
+    f, c, rot = scene.follower, scene.contact, scene.motion.rotation
+    d = f.pivot_distance_mm
+    moment = loads.rocker_torque(f.train, kin, w)
+    if f.type == "oscillating_roller":
+        rf, arm = f.roller_radius_mm, f.arm_length_mm
+        g = geometry.oscillating_roller_geometry(d, arm, rf, base_radius_mm + rf, kin, rot,
+                                                 f.min_curvature_radius_mm)
+        phi = g.pressure_angle
+        force = loads.rocker_roller_contact_force(moment, arm, phi)
+        coeff = contact.stress_coefficient(moment / (arm * 1e-3), c.cam_width_mm, c.cam, c.follower)
+        stress = contact.roller_stress(coeff, phi, geometry.roller_equivalent_radius(g.pitch_curvature, rf))
+        limit = g.undercut_margin  # <= 0: undercut
+    else:
+        g = geometry.oscillating_flat_geometry(d, f.face_offset_mm, base_radius_mm, kin, rot)
+        phi = g.pressure_angle
+        force = loads.rocker_flat_contact_force(moment, g.contact_distance)
+        stress = contact.hertz_line_stress(force, g.radius_of_curvature, c.cam_width_mm, c.cam, c.follower)
+        limit = g.radius_of_curvature - f.min_curvature_radius_mm  # < 0: the face cannot follow
+    return {"moment": moment, "force": force, "cam_torque": loads.rocker_cam_torque(moment, kin.ds),
+            "pressure_angle": phi, "stress": stress, "limit": limit, "arm_angle": g.arm_angle}
+
+
+def rocker_geometry_cases(scene: Scene) -> list[Case]:
+    """An oscillating follower at base radii 1e-3x..10x its smallest admissible one: every radius
+    is either refused by name (the geometry cannot close) or gives finite stress, pressure angle
+    and curvature with finite gradients; at the smallest radius its binding limit holds with
+    equality; at the drawing radius the pitch points (roller) or contact points (flat face) lie
+    where the pivot, arm and face put them; the Hertz closed forms of :func:`stress_cases`."""
+    from camjax.geometry.pitch import to_cam_frame
+    from camjax.rocker import closure_problem
+
+    out = []
+    f, rot = scene.follower, scene.motion.rotation
+    arrays, sizing, drawn = _rocker_base(scene)
+    kin, w = arrays.kin, arrays.cam_speed_rad_s
+
+    def peaks(rb):
+        c = _rocker_curves(scene, kin, w, rb)
+        return jnp.stack([jnp.max(c["stress"]), jnp.max(jnp.abs(c["pressure_angle"])), jnp.min(c["limit"])])
+
+    value_and_jac = jax.jit(lambda rb: (peaks(rb), jax.jacfwd(peaks)(rb)))
+    for factor in (1e-3, 0.1, 0.5, 0.99, 1.0, 1.0 + 1e-12, 1.01, 2.0, 10.0):
+        rb = sizing.min_base_radius_mm * factor
+        name = f"R_b = {factor:.13g} x min ({rb:.6g} mm)"
+        why = closure_problem(scene, kin, rb)
+        if why is not None:  # refused with a sentence (exit 2 in the CLI), never NaN
+            out.append(Case("rocker geometry", f"{name}: refused ({why})", 0.0, 0.0, 0.0, 0.0, bool(why),
+                            "a radius at which the geometry cannot close is refused by name"))
+            continue
+        val, jac = value_and_jac(rb)
+        state = "feasible" if float(val[2]) >= 0 and (
+            f.type != "oscillating_roller" or float(val[1]) <= math.radians(f.max_pressure_angle_deg) + 1e-12
+        ) else "infeasible (reported)"
+        out.append(_finite_case("rocker geometry", f"{name}: sigma, |phi|, curvature and d/dR_b finite; "
+                                f"{state}", val, jac))
+    # the sizing's binding limit at its own radius: bisection in the arm angle to float64 resolution
+    c = _rocker_curves(scene, kin, w, sizing.min_base_radius_mm)
+    if sizing.binding == "pressure_angle":
+        value = math.degrees(float(jnp.max(jnp.abs(c["pressure_angle"]))))
+        ref, what, unit = f.max_pressure_angle_deg, "max |phi|", "deg"
+    else:
+        value, ref, what, unit = float(jnp.min(c["limit"])), 0.0, "min curvature margin", "mm"
+    out.append(_case("rocker geometry", f"smallest admissible R_b = {sizing.min_base_radius_mm:.6g} mm "
+                     f"({sizing.binding} binds): {what} vs its limit", value, ref, 1e-9,
+                     note=f"bisection to float64 resolution; 1e-9 {unit} leaves round-off of the geometry"))
+    # positions at the drawing radius: independent of the curvature and pressure-angle formulas
+    theta = np.asarray(kin.theta)
+    px, py = (np.asarray(v) for v in to_cam_frame(f.pivot_distance_mm, 0.0, theta, rot))  # the pivot
+    psi = np.asarray(_rocker_curves(scene, kin, w, drawn)["arm_angle"])
+    if f.type == "oscillating_roller":
+        x, y = (np.asarray(v) for v in geometry.oscillating_roller_pitch_curve(
+            f.pivot_distance_mm, f.arm_length_mm, drawn + f.roller_radius_mm, kin, rot))
+        err = float(np.max(np.abs(np.hypot(x - px, y - py) - f.arm_length_mm)))
+        name = f"R_b = {drawn:g} mm: pitch points at the arm length from the pivot"
+    else:
+        x, y = (np.asarray(v) for v in geometry.oscillating_flat_profile(
+            f.pivot_distance_mm, f.face_offset_mm, drawn, kin, rot))
+        # the face normal (sin psi, cos psi) in the fixed frame, turned into the cam frame with the pivot
+        tip = to_cam_frame(f.pivot_distance_mm + np.sin(psi), np.cos(psi), theta, rot)
+        mx, my = (np.asarray(v) - q for v, q in zip(tip, (px, py), strict=True))
+        err = float(np.max(np.abs((x - px) * mx + (y - py) * my + f.face_offset_mm)))
+        name = f"R_b = {drawn:g} mm: contact points on the face line, f from the pivot"
+    scale = f.pivot_distance_mm + f.arm_length_mm
+    out.append(_case("rocker geometry", name, err, 0.0, 1e-12 * scale,
+                     note="distances from positions; round-off of a few operations on lengths of d + l"))
+    return out + stress_cases(scene)
+
+
+def rocker_speed_cases(scene: Scene) -> list[Case]:
+    """An oscillating follower at cam speeds 0 .. 20 000 rpm, drawn at its drawing radius: the
+    torque about the pivot, contact force, cam torque and their speed gradients finite, contact
+    loss (M < 0) reported; at 0 rpm the torque is the spring's, k (s + x0), at every sample."""
+    out = []
+    arrays, _, drawn = _rocker_base(scene)
+    kin = arrays.kin
+    train = scene.follower.train
+
+    def peak(w):
+        c = _rocker_curves(scene, kin, w, drawn)
+        return jnp.max(c["moment"]) + jnp.max(c["force"]) + jnp.max(c["cam_torque"])
+
+    value_and_grad = jax.jit(jax.value_and_grad(peak))
+    for rpm in (0.0, 1.0, 240.0, 2000.0, 20_000.0):
+        w = program.rpm_to_rad_s(rpm)
+        val, grad = value_and_grad(jnp.asarray(w))
+        lost = float(jnp.min(loads.rocker_torque(train, kin, w))) < 0
+        state = "contact LOST (reported)" if lost else "contact kept"
+        out.append(_finite_case("rocker speed", f"{rpm:g} rpm: torque, force, cam torque and gradient "
+                                f"finite; {state}", val, grad))
+    moment = np.asarray(loads.rocker_torque(train, kin, 0.0))
+    static = train.spring_N_m_per_rad * (np.asarray(kin.s) + train.preload_rad)
+    scale = float(np.max(np.abs(static))) or 1.0
+    out.append(_case("rocker speed", "0 rpm: torque about the pivot = k (s + x0) at every sample",
+                     float(np.max(np.abs(moment - static))) / scale, 0.0, 1e-14,
+                     note="relative to the largest static torque; the inertia and damping terms vanish"))
+    return out
+
+
+def rocker_precision_cases(scene: Scene, rtol32: float = 1e-5) -> list[Case]:
+    """An oscillating follower's report figures in float32 vs float64 at its drawing radius, and
+    the smallest admissible base radius found in each.
+
+    Sums of a few terms are held to ``rtol32``; a radius of curvature is a difference of lengths of
+    size up to d + l, so its float32 error is a few eps d / |rho| relative (tolerance 32 eps32
+    (d + l) / |rho|, at least ``rtol32``), and the stress (sigma ~ rho^-1/2) half of that.
+    """
+    from camjax.rocker import evaluate_rocker, rocker_sizing
+
+    out = []
+    f = scene.follower
+    a64, sizing, drawn = _rocker_base(scene)
+    a32 = scene_arrays(scene, dtype=jnp.float32)
+    c64 = evaluate_rocker(scene, a64.kin, a64.cam_speed_rad_s, drawn)
+    c32 = evaluate_rocker(scene, a32.kin, a32.cam_speed_rad_s, np.float32(drawn))
+    length = f.pivot_distance_mm + f.arm_length_mm
+    rho_tol = max(rtol32, 32 * _EPS32 * length / max(float(np.min(np.abs(c64.rho_mm))), 1e-300))
+    figures = [("swing_deg", "swing (deg)", rtol32),
+               ("angular_velocity_rad_s", "angular velocity (rad/s)", rtol32),
+               ("angular_accel_rad_s2", "angular accel (rad/s^2)", rtol32),
+               ("angular_jerk_rad_s3", "angular jerk (rad/s^3)", rtol32),
+               ("pressure_angle_deg", "pressure angle (deg)", rtol32),
+               ("pivot_torque_Nm", "torque about the pivot (N m)", rtol32),
+               ("contact_force_N", "contact force (N)", rtol32), ("torque_Nm", "cam torque (N m)", rtol32),
+               ("stress_MPa", f"stress at R_b = {drawn:g} (MPa)", max(rtol32, 0.5 * rho_tol))]
+    for field, label, tol in figures:
+        v64, v32 = getattr(c64, field), getattr(c32, field)
+        for pick, word in ((np.max, "max"), (np.min, "min")):
+            ref = float(pick(v64))
+            if ref == 0.0:  # e.g. the swing's dwell at 0: both exact
+                out.append(_case("rocker precision", f"float32 {label} {word}", float(pick(v32)), ref, 0.0))
+                continue
+            out.append(_case("rocker precision", f"float32 {label} {word}", float(pick(v32)), ref, tol,
+                             relative=True, note="float32 eps = 1.2e-7; figures are sums of a few terms"))
+    out.append(_case("rocker precision", f"float32 rho min at R_b = {drawn:g} (mm)",
+                     float(np.min(c32.rho_mm)), float(np.min(c64.rho_mm)), rho_tol, relative=True,
+                     note="a difference of lengths up to d + l: 32 eps32 (d + l) / |rho| relative"))
+    rb32 = rocker_sizing(scene, a32.kin).min_base_radius_mm
+    out.append(_case("rocker precision", "float32 min base radius (mm)", rb32, sizing.min_base_radius_mm,
+                     max(rtol32, 32 * _EPS32 * length / sizing.min_base_radius_mm), relative=True,
+                     note="bisection on float32 geometry: a few eps32 (d + l) absolute"))
+    return out
+
+
+def rocker_optimization_cases(scene: Scene) -> list[Case]:
+    """An oscillating follower's [design] problem on the solver interface: the size-only optimum
+    with the pivot and arm (or face) fixed at the scene's against the independent sizing
+    (bisection in the arm angle), weights 0 and 1e-6..1e6 finite, an unreachable sigma_max named,
+    bounds collapsed to one closing design returned exactly, GA determinism."""
+    from camjax.solvers.base import problem_from_scene, solve
+
+    out = []
+    f = scene.follower
+    _, sizing, drawn = _rocker_base(scene)
+    problem = problem_from_scene(scene)
+    design_type = type(problem.lower)
+    dt = problem.sigma_max_MPa.dtype
+    at_scene = {k: getattr(f, k) for k in design_type._fields if k != "base_radius_mm"}
+
+    def box(low: dict, high: dict):
+        lo = design_type(**{k: jnp.asarray(low[k], dt) for k in design_type._fields})
+        hi = design_type(**{k: jnp.asarray(high[k], dt) for k in design_type._fields})
+        return problem._replace(lower=lo, upper=hi)
+
+    rb_lo = min(float(problem.lower.base_radius_mm), 0.5 * sizing.min_base_radius_mm)
+    rb_hi = max(float(problem.upper.base_radius_mm), 2.0 * sizing.min_base_radius_mm)
+    fixed = box({**at_scene, "base_radius_mm": rb_lo}, {**at_scene, "base_radius_mm": rb_hi})
+    loose = fixed._replace(sigma_max_MPa=jnp.asarray(1e12, dt))  # stress never binds
+    res = solve(loose, (1.0, 0.0))
+    out.append(_case("rocker optimization", "size only, pivot and arm (or face) fixed at the scene's: R_b vs "
+                     "the sizing", float(res.base_radius_mm), sizing.min_base_radius_mm, 1e-5,
+                     note="the same admissible set's boundary: bisection to float64 resolution, the solver "
+                          "to its feasibility tolerance (1e-7 rad in phi ~ 1e-5 mm)"))
+    for alpha, gamma in [(0.0, 1.0), (1e-6, 1.0), (1.0, 1e-6), (1e6, 1.0), (1.0, 1e6), (1.0, 1.0)]:
+        res = solve(problem, (alpha, gamma))
+        out.append(_finite_case("rocker optimization", f"alpha = {alpha:g}, gamma = {gamma:g}: result finite",
+                                res.objective, res.design, res.violation))
+    tight = problem._replace(sigma_max_MPa=jnp.asarray(1.0, dt))
+    res = solve(tight, (1.0, 1.0))
+    names = res.violated(tight)
+    ok = (not bool(res.feasible)) and "stress" in names
+    out.append(Case("rocker optimization", f"sigma_max = 1 MPa: infeasible, violated {names}",
+                    float(res.feasible), 0.0, float(res.feasible), 0.0, ok,
+                    "feasible flag 0 and the stress constraint named"))
+    point = {**at_scene, "base_radius_mm": drawn}  # the drawing radius closes (camjax.rocker)
+    res = solve(box(point, point), (1.0, 1.0))
+    err = max(abs(float(getattr(res.design, k)) - v) for k, v in point.items())
+    out.append(_case("rocker optimization", f"bounds collapsed to the scene's design at R_b = {drawn:g} mm",
+                     err, 0.0, 0.0, note="the only admissible point, exactly"))
+    a, b = (solve(problem, (1.0, 1.0), solver="ga", seed=7) for _ in range(2))
+    same = all(np.array_equal(np.asarray(x), np.asarray(y))
+               for x, y in zip(jax.tree_util.tree_leaves((a.design, a.objective, a.violation)),
+                               jax.tree_util.tree_leaves((b.design, b.objective, b.violation)), strict=True))
+    out.append(Case("determinism", "rocker GA seed 7 twice: bitwise identical results", float(not same), 0.0,
+                    float(not same), 0.0, same, "design, objective and violation compared with array_equal"))
+    return out
+
+
 # ----------------------------------------------------------------------------------- runner
 
 
@@ -555,6 +812,12 @@ class Group(NamedTuple):
     name: str
     needs: frozenset[str]
     run: Callable[[Scene], list[Case]]
+    followers: frozenset[str] | None = None  # the follower types it has cases for (None: any)
+
+
+# a translating roller has no geometry, precision or optimization cases here (its geometry and
+# design problem are tested in tests/test_roller_*.py); the flat face's would be meaningless on it
+_NOT_ROLLER = frozenset({"flat", "oscillating_roller", "oscillating_flat"})
 
 
 # What each model means in a scene file, for the line that says why a group was skipped.
@@ -568,10 +831,10 @@ GROUPS: tuple[Group, ...] = (
     Group("laws", frozenset(), lambda scene: law_cases()),
     Group("polynomials", frozenset(), lambda scene: polynomial_cases()),
     Group("programs", frozenset(), lambda scene: program_cases()),
-    Group("geometry and stress", frozenset({"loads", "contact"}), geometry_cases),
+    Group("geometry and stress", frozenset({"loads", "contact"}), geometry_cases, _NOT_ROLLER),
     Group("speed", frozenset({"loads"}), speed_cases),
-    Group("precision", frozenset({"loads", "contact"}), precision_cases),
-    Group("optimization", frozenset({"loads", "contact", "design"}), optimization_cases),
+    Group("precision", frozenset({"loads", "contact"}), precision_cases, _NOT_ROLLER),
+    Group("optimization", frozenset({"loads", "contact", "design"}), optimization_cases, _NOT_ROLLER),
 )
 
 
@@ -579,17 +842,22 @@ def _missing(scene: Scene, group: Group) -> list[str]:
     return [m for m in _MODEL_SOURCE if m in group.needs and m not in scene.needs()]
 
 
+def _skip_reason(scene: Scene, group: Group) -> str | None:
+    """Why :func:`run_matrix` leaves ``group`` out on ``scene`` (None: it runs)."""
+    if group.followers is not None and scene.follower.type not in group.followers:
+        return (f"has no cases for follower.type = {scene.follower.type!r} of scene {scene.name!r} "
+                f"(only {', '.join(repr(t) for t in sorted(group.followers))})")
+    missing = _missing(scene, group)
+    if missing:
+        wants = [_MODEL_SOURCE[m] for m in missing]
+        wants = " and ".join([", ".join(wants[:-1]), wants[-1]] if len(wants) > 1 else wants)
+        return f"needs {wants}, not declared by scene {scene.name!r}"
+    return None
+
+
 def skipped_groups(scene: Scene) -> list[dict[str, str]]:
     """The groups :func:`run_matrix` skips on ``scene``: ``{"group": name, "reason": sentence}``."""
-    out = []
-    for group in GROUPS:
-        missing = _missing(scene, group)
-        if missing:
-            wants = [_MODEL_SOURCE[m] for m in missing]
-            wants = " and ".join([", ".join(wants[:-1]), wants[-1]] if len(wants) > 1 else wants)
-            out.append({"group": group.name,
-                        "reason": f"needs {wants}, not declared by scene {scene.name!r}"})
-    return out
+    return [{"group": g.name, "reason": why} for g in GROUPS if (why := _skip_reason(scene, g)) is not None]
 
 
 def run_matrix(
@@ -599,10 +867,11 @@ def run_matrix(
 ) -> list[Case]:
     """Run every group of the matrix that ``scene`` supports (default: the embedded reference scene).
 
-    Groups needing a model the scene lacks are left out (see :func:`skipped_groups`).
+    Groups needing a model the scene lacks, or without cases for its follower type, are left out
+    (see :func:`skipped_groups`).
     """
     scene = scene or load_scene()
-    groups = [g for g in GROUPS if not _missing(scene, g)]
+    groups = [g for g in GROUPS if _skip_reason(scene, g) is None]
     groups += [Group(fn.__name__, frozenset(), fn) for fn in extra_groups]
     cases: list[Case] = []
     for group in groups:

@@ -20,7 +20,13 @@ CSV_FORMAT = "%.12f"  # 1e-12 mm: far below any machining tolerance, round-trips
 
 
 def profile_table(curves: DesignCurves) -> tuple[list[str], np.ndarray]:
-    """Column names and an (N, k) table: angle, outline X/Y, follower motion, curvature."""
+    """Column names and an (N, k) table: angle, outline X/Y, follower motion, curvature, then
+    every curve whose extrema result.json reports (so that each can be checked against samples).
+
+    The first columns keep their order (angle, outline, s, s', rho or pitch curve and pressure
+    angle); the later ones were appended after them: s'' (mm/rad^2), v, a, j (SI), the roller's
+    pitch-curve radius of curvature, and with the models the force, cam torque and stress.
+    """
     names = ["theta_deg", "x_mm", "y_mm", "s_mm", "ds_mm_per_rad"]
     cols = [curves.theta_deg, curves.profile_x_mm, curves.profile_y_mm, curves.s_mm, curves.ds_mm]
     if curves.rho_mm is not None:
@@ -29,6 +35,14 @@ def profile_table(curves: DesignCurves) -> tuple[list[str], np.ndarray]:
     if curves.pitch_x_mm is not None:
         names += ["pitch_x_mm", "pitch_y_mm", "pressure_angle_deg"]
         cols += [curves.pitch_x_mm, curves.pitch_y_mm, curves.pressure_angle_deg]
+    names += ["d2s_mm_per_rad2", "velocity_m_s", "accel_m_s2", "jerk_m_s3"]
+    cols += [curves.d2s_mm, curves.velocity_m_s, curves.accel_m_s2, curves.jerk_m_s3]
+    optional = (("pitch_rho_mm", curves.pitch_rho_mm), ("force_N", curves.force_N),
+                ("torque_Nm", curves.torque_Nm), ("stress_MPa", curves.stress_MPa))
+    for name, values in optional:
+        if values is not None:
+            names.append(name)
+            cols.append(values)
     return names, np.column_stack(cols)
 
 

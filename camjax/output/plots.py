@@ -55,9 +55,13 @@ def _cycle_axis(ax, curves: DesignCurves, label: bool = True) -> None:
         ax.set_xlabel("cam angle θ (deg)")
 
 
-def _mark_extremes(ax, theta, values, fmt: str) -> None:
-    """Dots and labels at the max and min of a curve (labels kept inside the axes)."""
-    for i in {int(np.argmax(values)), int(np.argmin(values))}:
+def _mark_extremes(ax, theta, values, fmt: str, which=("max", "min")) -> None:
+    """Dots and labels at the max and min (``which``) of a curve (labels kept inside the axes;
+    NaN samples are passed over)."""
+    if np.all(np.isnan(values)):
+        return
+    picks = {"max": np.nanargmax, "min": np.nanargmin}
+    for i in {int(picks[w](values)) for w in which}:
         ax.plot(theta[i], values[i], "o", color="C3", markersize=3)
         right = theta[i] > 250  # label to the left near the right edge
         ax.annotate(fmt.format(values[i], theta[i]), (theta[i], values[i]), fontsize=7,
@@ -70,6 +74,62 @@ def _runs(mask) -> list[tuple[int, int]]:
     m = np.concatenate([[False], np.asarray(mask, bool), [False]])
     edges = np.flatnonzero(np.diff(m.astype(int)))
     return [(int(a), int(b) - 1) for a, b in zip(edges[::2], edges[1::2], strict=True)]
+
+
+RHO_AXIS_CAM_RADII = 4.0  # a radius-of-curvature axis spans at most +- this many largest cam radii
+
+
+def rho_axis_limit_mm(profile_x_mm, profile_y_mm) -> float:
+    """The largest |rho| (mm) a radius-of-curvature panel shows: 4 times the cam's largest radius.
+
+    Near an inflection of the outline (or of a roller's pitch curve) rho runs off to +-infinity
+    between samples; an autoscaled axis then spans spikes of 1e4 mm with the rest of the curve
+    flat on zero. What the panel is read for lies at small |rho|: the curvature and undercut
+    limits, and the contact stress, which grows as rho shrinks. A bound that scales with the cam
+    (not a percentile of the samples, which could cut off a narrow dip to the smallest rho, the
+    value that matters) keeps every rho of the order of the cam's own radii, the dwells' R_b
+    among them; a stretch beyond it is flatter than a circle four times the size of the whole cam,
+    nearly straight at the scale of the drawing, and is marked as leaving the axis
+    (:func:`clip_axis`) with its extreme value written.
+    """
+    return RHO_AXIS_CAM_RADII * float(np.max(np.hypot(profile_x_mm, profile_y_mm)))
+
+
+def clip_axis(ax, theta, values, limit: float, unit: str = "mm") -> np.ndarray:
+    """Hold ``ax``'s y axis within +-``limit`` where ``values`` leave that band, and mark the cut.
+
+    Each run of samples beyond the band gets a red triangle on the edge it leaves by (up above,
+    down below) at its most extreme sample; the most extreme value on each side is written beside
+    its triangle, and a note in the panel states the clip. Returns the mask of clipped samples;
+    where none is clipped the axis is left alone (all False).
+    """
+    t, v = np.asarray(theta), np.asarray(values)
+    over, under = v > limit, v < -limit
+    cut = over | under
+    if not cut.any():
+        return cut
+    inside = v[~cut]
+    lo, hi = (float(inside.min()), float(inside.max())) if inside.size else (-limit, limit)
+    pad = 0.08 * max(hi - lo, 1e-9 * limit)
+    top = limit if over.any() else min(hi + pad, limit)
+    bottom = -limit if under.any() else max(lo - pad, -limit)
+    ax.set_ylim(bottom, top)
+    for mask, edge, marker, sign in ((over, top, "^", 1.0), (under, bottom, "v", -1.0)):
+        runs = _runs(mask)
+        if not runs:
+            continue
+        peaks = [a + int(np.argmax(sign * v[a:b + 1])) for a, b in runs]
+        ax.plot(t[peaks], np.full(len(peaks), edge), marker, color="C3", markersize=5, linestyle="none",
+                clip_on=False, zorder=5)
+        k = max(peaks, key=lambda i: sign * v[i])
+        right = t[k] > 250  # label to the left near the right edge
+        ax.annotate(f"{v[k]:.4g} {unit} @ {t[k]:g}°", (t[k], edge), fontsize=7, color="C3",
+                    xytext=(-7 if right else 7, -4 * sign), textcoords="offset points",
+                    ha="right" if right else "left", va="top" if sign > 0 else "bottom")
+    # above the panel, right: clear of the curve and of the edge labels
+    ax.set_title(f"axis clipped at ±{limit:.4g} {unit} (4 × the cam's largest radius); ▲▼: runs beyond it",
+                 loc="right", fontsize=6.5, color="C3", pad=3)
+    return cut
 
 
 # ---------------------------------------------------------------------------- figures
@@ -256,16 +316,21 @@ def loads_figure(curves: DesignCurves, title: str = "") -> Figure:
     ax_f.plot(t[i], force[i], "o", color="C3", markersize=4)
     verdict = "the follower stays on the cam" if force[i] > 0 else "the follower leaves the cam"
     ax_f.axhline(force[i], color="C3", linewidth=0.7, linestyle="--", label="contact margin (min F)")
+    # the label opens towards the middle of the cycle, so that it stays inside the axes wherever
+    # the minimum falls (at 0 deg a label to the left would leave them and squeeze the layout)
+    left = t[i] < 180.0
     ax_f.annotate(f"contact margin: min F = {force[i]:.4g} N at {t[i]:g}° ({verdict})",
-                  (t[i], force[i]), fontsize=7, xytext=(-8, -12), textcoords="offset points",
-                  ha="right", va="top", bbox={"boxstyle": "round,pad=0.2", "fc": "white", "ec": "0.7"})
+                  (t[i], force[i]), fontsize=7, xytext=(8 if left else -8, -12), textcoords="offset points",
+                  ha="left" if left else "right", va="top",
+                  bbox={"boxstyle": "round,pad=0.2", "fc": "white", "ec": "0.7"})
     j = int(np.argmax(force))
     ax_f.plot(t[j], force[j], "o", color="C3", markersize=3)
     ax_f.annotate(f"max F = {force[j]:.4g} N @ {t[j]:g}°", (t[j], force[j]), fontsize=7, xytext=(4, 2),
                   textcoords="offset points", ha="right" if t[j] > 250 else "left")
     ax_f.set_ylabel("force (N)")
     ax_f.margins(y=0.15)
-    ax_f.legend(fontsize=7, loc="upper left", ncols=3)
+    # below the figure, clear of the curves and their labels
+    fig.legend(*ax_f.get_legend_handles_labels(), fontsize=7, loc="outside lower center", ncols=4)
     _cycle_axis(ax_f, curves, label=False)
     ax_t.plot(*closed(t, curves.torque_Nm), color="C1", linewidth=1.2)
     ax_t.axhline(0.0, color="0.3", linewidth=0.6)
@@ -322,10 +387,13 @@ def stress_figure(curves: DesignCurves, title: str = "") -> Figure:
     ax_s.set_ylabel("σ (MPa)")
     ax_s.legend(fontsize=7, loc="upper right")
     _cycle_axis(ax_s, curves, label=False)
+    cut = np.zeros(t.shape, bool)
     if curves.rho_mm is not None:  # flat face: the profile's radius of curvature
         lower, name, what = curves.rho_mm, "ρ (mm)", "radius of curvature"
-        j = int(np.argmin(lower))
-        label = f"smallest {lower[j]:.4g} mm @ {t[j]:g}°"
+        limit = rho_axis_limit_mm(curves.profile_x_mm, curves.profile_y_mm)
+        cut = clip_axis(ax_r, t, lower, limit)
+        j = int(np.argmin(lower))  # below the axis: clip_axis has written it at the edge
+        label = f"smallest {lower[j]:.4g} mm @ {t[j]:g}°" if lower[j] >= -limit else None
     else:  # roller: the pressure angle that tilts the normal force F / cos φ
         lower, name, what = curves.pressure_angle_deg, "φ (°)", "pressure angle"
         limit = curves.pressure_angle_limit_deg
@@ -336,15 +404,17 @@ def stress_figure(curves: DesignCurves, title: str = "") -> Figure:
         label = f"max |φ| {abs(lower[j]):.4g}° @ {t[j]:g}°"
     ax_r.plot(*closed(t, lower), color="C2", linewidth=1.2)
     ax_r.axhline(0.0, color="0.3", linewidth=0.6)
-    ax_r.plot(t[j], lower[j], "o", color="k", markersize=3)
-    ax_r.annotate(label, (t[j], lower[j]), fontsize=7, xytext=(-6, 4), textcoords="offset points",
-                  ha="right")
+    if label is not None:
+        ax_r.plot(t[j], lower[j], "o", color="k", markersize=3)
+        ax_r.annotate(label, (t[j], lower[j]), fontsize=7, xytext=(-6 if t[j] > 180 else 6, 4),
+                      textcoords="offset points", ha="right" if t[j] > 180 else "left")  # inside the axes
     if curves.rho_mm is not None and (lower < 0).any():
         ax_r.fill_between(t, 0, 1, where=lower < 0, transform=ax_r.get_xaxis_transform(), color="C3",
                           alpha=0.2, label="ρ < 0: the face cannot follow")
         ax_r.legend(fontsize=7, loc="upper left")
     ax_r.set_ylabel(name)
-    ax_r.margins(y=0.15)
+    if not cut.any():  # a clipped axis keeps its stated bounds
+        ax_r.margins(y=0.15)
     _cycle_axis(ax_r, curves)
     _title(fig, title, f"Contact stress and {what} at R_b = {curves.base_radius_mm:.3f} mm")
     return fig

@@ -318,6 +318,25 @@ def evaluated_block(curves: DesignCurves, extremes: dict[str, Extremes]) -> dict
     return out
 
 
+# the [follower] keys a [design] can replace, per follower type (a flat face's width is a
+# [design] variable only)
+SCENE_DIMENSIONS = {
+    "roller": ("roller_radius_mm", "offset_mm"),
+    "oscillating_roller": ("pivot_distance_mm", "arm_length_mm", "roller_radius_mm"),
+    "oscillating_flat": ("pivot_distance_mm", "face_offset_mm"),
+}
+
+
+def follower_scene_block(follower: FollowerSpec) -> dict[str, float]:
+    """The [follower] table's dimensions (mm) as the scene wrote them.
+
+    Written as ``follower_scene`` beside a solved [design], whose dimensions the cam is computed
+    with (``roller`` or ``oscillating_follower`` report those): the scene's stay visible under
+    their own name where the two differ. Empty for a flat face (its [follower] has none).
+    """
+    return {k: getattr(follower, k) for k in SCENE_DIMENSIONS.get(follower.type, ())}
+
+
 def feasibility_block(violations) -> dict[str, Any]:
     """Whether the written geometry is usable, and each broken constraint as {constraint, message}."""
     return {"feasible": not violations,
@@ -356,7 +375,8 @@ def header_block(scene: Scene, arrays: SceneArrays, extremes: dict[str, Extremes
 
 
 def build_report(scene: Scene, run: DesignRun) -> dict[str, Any]:
-    """The report of a scene's design run as a plain, JSON-ready dict."""
+    """The report of a scene's design run as a plain, JSON-ready dict (with a [design] of a roller,
+    ``follower_scene`` keeps the [follower]'s R_f and offset beside the design's in ``roller``)."""
     arrays = run.arrays
     extremes = run.extremes
     if extremes is None:  # a run built without them: the samples' own
@@ -372,6 +392,8 @@ def build_report(scene: Scene, run: DesignRun) -> dict[str, Any]:
     data.update(face_width_block(scene, extremes))
     if run.design is not None:
         data["design"] = design_block(scene.design, run.design)
+        if scene.follower.type in SCENE_DIMENSIONS:
+            data["follower_scene"] = follower_scene_block(scene.follower)
     data["evaluated_at"] = {"base_radius_mm": run.base_radius_mm,
                             "face_width_mm": run.curves.face_width_mm,
                             "source": run.base_radius_source,

@@ -18,8 +18,21 @@ from matplotlib.figure import Figure
 from camjax.evaluate import SceneArrays
 from camjax.geometry.pitch import to_cam_frame
 from camjax.output.export import CSV_FORMAT, save_figure, write_profile_dxf
-from camjax.output.plots import _cycle_axis  # reads only segment_starts_deg
-from camjax.output.report import extrema, feasibility_block, header_block, negative_ranges_deg
+from camjax.output.plots import (  # _cycle_axis reads only segment_starts_deg
+    _cycle_axis,
+    _mark_extremes,
+    _title,
+    clip_axis,
+    closed,
+    rho_axis_limit_mm,
+)
+from camjax.output.report import (
+    extrema,
+    feasibility_block,
+    follower_scene_block,
+    header_block,
+    negative_ranges_deg,
+)
 from camjax.rocker import RockerCurves, RockerRun
 from camjax.scene import Scene
 
@@ -31,7 +44,10 @@ def _f(x) -> float:
 
 
 def rocker_profile_table(curves: RockerCurves) -> tuple[list[str], np.ndarray]:
-    """Column names and an (N, k) table: angle, outline X/Y, arm swing and angle, curvature, phi."""
+    """Column names and an (N, k) table: angle, outline X/Y, arm swing and angle, curvature, phi,
+    pitch curve (roller) or contact point on the face (flat), then (appended, in this order) s''
+    (rad/rad^2), the arm's angular velocity, acceleration and jerk (SI), the pitch curve's radius
+    of curvature (roller) and with loads the pivot torque, contact force, cam torque and stress."""
     c = curves
     names = ["theta_deg", "x_mm", "y_mm", "swing_deg", "arm_angle_deg", "ds_rad_per_rad", "rho_mm",
              "pressure_angle_deg"]
@@ -43,6 +59,16 @@ def rocker_profile_table(curves: RockerCurves) -> tuple[list[str], np.ndarray]:
     if c.contact_distance_mm is not None:
         names.append("contact_on_face_mm")
         cols.append(c.contact_distance_mm)
+    # appended after the columns above: every curve whose extrema result.json reports
+    names += ["d2s_rad_per_rad2", "angular_velocity_rad_s", "angular_accel_rad_s2", "angular_jerk_rad_s3"]
+    cols += [c.d2s, c.angular_velocity_rad_s, c.angular_accel_rad_s2, c.angular_jerk_rad_s3]
+    optional = (("pitch_rho_mm", c.pitch_rho_mm), ("pivot_torque_Nm", c.pivot_torque_Nm),
+                ("contact_force_N", c.contact_force_N), ("torque_Nm", c.torque_Nm),
+                ("stress_MPa", c.stress_MPa))
+    for name, values in optional:
+        if values is not None:
+            names.append(name)
+            cols.append(values)
     return names, np.column_stack(cols)
 
 
@@ -52,48 +78,70 @@ def write_rocker_profile_csv(path: Path, curves: RockerCurves) -> Path:
     return path
 
 
-def _rows_figure(curves: RockerCurves, rows, title: str) -> Figure:
-    fig = Figure(figsize=(7.0, 1.6 * len(rows) + 0.8), layout="constrained")
+def _rows_figure(curves: RockerCurves, rows, what: str, title: str = "") -> Figure:
+    """One panel per row (values, axis label, clip): the closed cycle, its extremes marked; a row
+    with a clip (mm) holds its axis within +-clip and marks what runs beyond
+    (:func:`camjax.output.plots.clip_axis`). ``what`` and the run's ``title`` block head the figure."""
+    fig = Figure(figsize=(7.0, 1.6 * len(rows) + 1.2), layout="constrained")
     axes = np.atleast_1d(fig.subplots(len(rows), 1, sharex=True))
     t = curves.theta_deg
-    for k, (ax, (values, name)) in enumerate(zip(axes, rows, strict=True)):
-        ax.plot(t, values, color=f"C{k}", linewidth=1.2)
+    for k, (ax, (values, name, clip)) in enumerate(zip(axes, rows, strict=True)):
+        ax.plot(*closed(t, values), color=f"C{k}", linewidth=1.2)
         ax.axhline(0.0, color="0.3", linewidth=0.5)
-        for i in {int(np.argmax(values)), int(np.argmin(values))}:
-            ax.plot(t[i], values[i], "o", color="C3", markersize=3)
-            ax.annotate(f"{values[i]:.4g} @ {t[i]:g}°", (t[i], values[i]), fontsize=7, xytext=(4, 0),
-                        textcoords="offset points", va="center")
+        cut = clip_axis(ax, t, values, clip) if clip is not None else np.zeros(t.shape, bool)
+        which = ["max", "min"]
+        if clip is not None:
+            # an extreme beyond the clip is written at its edge (clip_axis), and the smallest |rho|,
+            # the radius the limits and the stress are judged on, gets a mark of its own
+            i = int(np.argmin(np.abs(values)))
+            which = [w for w, beyond in (("max", values > clip), ("min", values < -clip)) if not beyond.any()]
+            if "min" in which and int(np.argmin(values)) == i:
+                which.remove("min")
+        _mark_extremes(ax, t, np.where(cut, np.nan, values), "{:.4g} @ {:g}°", which)
+        if clip is not None:
+            ax.plot(t[i], values[i], "s", color="C2", markersize=4, zorder=4)
+            right = t[i] > 250
+            ax.annotate(f"smallest |ρ| {abs(values[i]):.4g} mm @ {t[i]:g}°", (t[i], values[i]), fontsize=7,
+                        xytext=(-5 if right else 5, 5), textcoords="offset points", va="bottom",
+                        ha="right" if right else "left")
+        if not cut.any():  # a clipped axis keeps its stated bounds
+            ax.margins(y=0.12)
         ax.set_ylabel(name)
         _cycle_axis(ax, curves, label=k == len(rows) - 1)
-    axes[0].set_title(title, fontsize=10)
+    _title(fig, title, what)
     return fig
 
 
-def svaj_figure(curves: RockerCurves) -> Figure:
+def svaj_figure(curves: RockerCurves, title: str = "") -> Figure:
     """Arm swing (deg), angular velocity, acceleration and jerk over the cycle."""
     c = curves
-    return _rows_figure(c, [(c.swing_deg, "swing (deg)"), (c.angular_velocity_rad_s, "ω (rad/s)"),
-                            (c.angular_accel_rad_s2, "α (rad/s²)"), (c.angular_jerk_rad_s3, "jerk (rad/s³)")],
-                        "Arm motion (dotted: segment joints)")
+    return _rows_figure(c, [(c.swing_deg, "swing (deg)", None), (c.angular_velocity_rad_s, "ω (rad/s)", None),
+                            (c.angular_accel_rad_s2, "α (rad/s²)", None),
+                            (c.angular_jerk_rad_s3, "jerk (rad/s³)", None)],
+                        "Arm motion over one cycle (dotted: segment joints; dots: extremes)", title)
 
 
-def geometry_figure(curves: RockerCurves) -> Figure:
-    """Pressure angle (deg) and the cam surface's radius of curvature (mm)."""
+def geometry_figure(curves: RockerCurves, title: str = "") -> Figure:
+    """Pressure angle (deg) and the cam surface's radius of curvature (mm), the latter's axis held
+    within 4 times the cam's largest radius (:func:`camjax.output.plots.rho_axis_limit_mm`)."""
     c = curves
-    return _rows_figure(c, [(c.pressure_angle_deg, "φ (deg)"), (c.rho_mm, "ρ cam (mm)")],
-                        f"Pressure angle and curvature at R_b = {c.base_radius_mm:.3f} mm")
+    clip = rho_axis_limit_mm(c.profile_x_mm, c.profile_y_mm)
+    return _rows_figure(c, [(c.pressure_angle_deg, "φ (deg)", None), (c.rho_mm, "ρ cam (mm)", clip)],
+                        f"Pressure angle and curvature at R_b = {c.base_radius_mm:.3f} mm", title)
 
 
-def loads_figure(curves: RockerCurves) -> Figure:
+def loads_figure(curves: RockerCurves, title: str = "") -> Figure:
     """Torque about the pivot, contact force, cam torque and (with [contact]) the Hertz stress."""
     c = curves
-    rows = [(c.pivot_torque_Nm, "M pivot (N·m)"), (c.contact_force_N, "P (N)"), (c.torque_Nm, "T cam (N·m)")]
+    rows = [(c.pivot_torque_Nm, "M pivot (N·m)", None), (c.contact_force_N, "P (N)", None),
+            (c.torque_Nm, "T cam (N·m)", None)]
     if c.stress_MPa is not None:
-        rows.append((c.stress_MPa, "σ (MPa)"))
-    return _rows_figure(c, rows, "Loads (M < 0: the spring cannot hold the arm on the cam)")
+        rows.append((c.stress_MPa, "σ (MPa)", None))
+    return _rows_figure(c, rows, "Loads about the pivot (M < 0: the spring cannot hold the arm on the cam)",
+                        title)
 
 
-def profile_figure(curves: RockerCurves) -> Figure:
+def profile_figure(curves: RockerCurves, title: str = "") -> Figure:
     """Cam outline (mm) with base circle, pivot, arm and roller (or face) at one cam angle."""
     c = curves
     fig = Figure(figsize=(6.4, 6.8), layout="constrained")
@@ -141,17 +189,20 @@ def profile_figure(curves: RockerCurves) -> Figure:
     ax.grid(True, alpha=0.3)
     ax.set_xlabel("X (mm)")
     ax.set_ylabel("Y (mm)")
-    ax.set_title(f"Cam profile, {c.follower_type.replace('_', ' ')} follower ({c.rotation})", fontsize=10)
+    _title(fig, title, f"Cam profile in cam coordinates, {c.follower_type.replace('_', ' ')} follower "
+                       f"({c.rotation}): pivot, arm and {'roller' if c.pitch_x_mm is not None else 'face'} "
+                       "at one cam angle")
     fig.legend(fontsize=7, loc="outside lower center", ncols=2)
     return fig
 
 
-def rocker_figures(curves: RockerCurves) -> dict[str, Figure]:
-    """{file name: figure}: motion, profile, pressure angle/curvature and (with loads) loads."""
-    out = {"svaj.png": svaj_figure(curves), "profile.png": profile_figure(curves),
-           "geometry.png": geometry_figure(curves)}
+def rocker_figures(curves: RockerCurves, title: str = "") -> dict[str, Figure]:
+    """{file name: figure}: motion, profile, pressure angle/curvature and (with loads) loads, each
+    headed by the run's ``title`` block (:func:`camjax.output.titles.title_block`)."""
+    out = {"svaj.png": svaj_figure(curves, title), "profile.png": profile_figure(curves, title),
+           "geometry.png": geometry_figure(curves, title)}
     if curves.pivot_torque_Nm is not None:
-        out["loads.png"] = loads_figure(curves)
+        out["loads.png"] = loads_figure(curves, title)
     return out
 
 
@@ -162,14 +213,16 @@ def write_rocker_files(folder: str | Path, curves: RockerCurves, dpi: int = 100,
     (created if needed); the written paths.
 
     ``banner``: text of a red banner stamped on every figure (the constraints the geometry breaks)
-    and drawn in red on the animation; ``title``: the animation's title block; ``progress(phase)``
+    and drawn in red on the animation; ``title``: the run's title block on every figure and the
+    animation; ``progress(phase)``
     (optional) is told "figures", "files" and "animation" as each starts.
     """
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     say = progress or (lambda phase: None)
     say("figures")
-    out = [save_figure(fig, folder / name, dpi, banner) for name, fig in rocker_figures(curves).items()]
+    figures = rocker_figures(curves, title)
+    out = [save_figure(fig, folder / name, dpi, banner) for name, fig in figures.items()]
     say("files")
     # the DXF writer reads only the outline (profile_x_mm, profile_y_mm)
     out += [write_rocker_profile_csv(folder / "profile.csv", curves),
@@ -201,13 +254,17 @@ def rocker_report(scene: Scene, arrays: SceneArrays, run: RockerRun,
     The common header (:func:`camjax.output.report.header_block`) with the motion in rad (swing
     in deg, angular velocity ... in SI), the smallest admissible cam and its binding limit, the
     evaluated cam (pressure angle, curvature, undercut or face length), loads about the pivot and
-    the contact stress; with a solved [design], its block (``design``: the solver's keys).
+    the contact stress; with a solved [design], its block (``design``: the solver's keys) and the
+    scene's own [follower] dimensions (``follower_scene``): ``oscillating_follower`` gives those
+    the drawn cam was computed with.
     """
     sizing, c, f = run.sizing, run.curves, scene.follower
     t = c.theta_deg
     phi = c.pressure_angle_deg
     i = int(np.argmax(np.abs(phi)))
-    follower = {"type": f.type, "pivot_distance_mm": f.pivot_distance_mm, "rotation": c.rotation}
+    # the dimensions the drawn cam was computed with (a [design]'s where it solved them), not the
+    # scene's [follower] table: those stay visible under follower_scene
+    follower = {"type": f.type, "pivot_distance_mm": c.pivot_distance_mm, "rotation": c.rotation}
     if c.arm_length_mm is not None:
         follower.update(arm_length_mm=c.arm_length_mm, roller_radius_mm=c.roller_radius_mm,
                         max_pressure_angle_deg=f.max_pressure_angle_deg)
@@ -284,6 +341,6 @@ def rocker_report(scene: Scene, arrays: SceneArrays, run: RockerRun,
         out["stress_MPa"] = {"max": _f(c.stress_MPa[k]), "max_deg": _f(t[k])}
     if design is not None:
         out["design"] = design
+        out["follower_scene"] = follower_scene_block(f)
     return out
-
 

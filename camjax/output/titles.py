@@ -13,7 +13,8 @@ TURNS = {"ccw": "counter-clockwise", "cw": "clockwise"}  # scene motion.rotation
 
 def title_block(data: Mapping) -> str:
     """Three lines naming a run, from a design report's dict: scene, speed, rotation and follower;
-    the segments' laws and lifts; the radii the figures are drawn at."""
+    the segments' laws and lifts; the radii the figures are drawn at (and a rocker's pivot
+    distance d with its arm l and roller R_f, or its face offset f)."""
     segments = []
     for seg in data.get("segments", []):
         text = f"{seg['kind']} {seg['angle_deg']:g}°"
@@ -33,6 +34,14 @@ def title_block(data: Mapping) -> str:
     roller = data.get("roller")
     if roller:
         radii.append(f"R_f = {roller['roller_radius_mm']:g} mm, e = {roller['offset_mm']:g} mm")
+    rocker = data.get("oscillating_follower")  # the dimensions the cam was computed with
+    if rocker:
+        dims = [f"d = {rocker['pivot_distance_mm']:g} mm"]
+        if "arm_length_mm" in rocker:
+            dims += [f"l = {rocker['arm_length_mm']:g} mm", f"R_f = {rocker['roller_radius_mm']:g} mm"]
+        else:
+            dims.append(f"f = {rocker['face_offset_mm']:g} mm")
+        radii.append(", ".join(dims))
     design = data.get("design")
     tail = f" ({at['source']})" if "source" in at else ""
     if design is not None and at.get("source") == "design":
