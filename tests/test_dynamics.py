@@ -375,6 +375,66 @@ def test_translating_follower_takes_its_spring_from_follower_and_jumps_at_a_root
     assert round(float(d.natural_frequency_rad_s(plant)) / float(js.speed_rad_s)) == 21
 
 
+JUMP_SMALL = """I2 = 0.126
+samples = 128
+harmonics = 20
+compute = ["jump"]
+"""  # the bench cam has 9 harmonics: 20 of 128 samples hold it exactly
+
+
+def _jump_summary(closure: str) -> dict:
+    """dynamics.json's ``jump`` of the bench train with the force closure ``closure`` (TOML lines)."""
+    return d.scene_dynamics(parse_scene(bench_with(BENCH_TRAIN + closure + JUMP_SMALL), "bench")).summary["jump"]
+
+
+def _assert_jump_consistent(j: dict, cam_speed_hz: float) -> None:
+    """The jump report says one thing: a jump speed, or the reason it has none."""
+    lo, hi = j["search_range_hz"]
+    in_range = lo <= cam_speed_hz <= hi
+    assert j["cam_speed_in_range"] is in_range
+    status = j["jump_speed_status"]
+    assert status in ("found", "lost_at_lowest_speed", "holds_in_range")
+    assert (j["jump_speed_hz"] is not None) is (status == "found")
+    assert isinstance(j["note"], str) and j["note"]
+    if status == "found":
+        assert lo < j["jump_speed_hz"] <= hi
+    if in_range and j["contact_lost_at_cam_speed"]:  # lost at the cam speed: lost at or below it
+        assert status == "lost_at_lowest_speed" or j["jump_speed_hz"] <= cam_speed_hz
+    if in_range and status == "holds_in_range":
+        assert not j["contact_lost_at_cam_speed"]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("closure, status", [
+    # the bench spring: contact lost from the 5th harmonic's resonance at 2.9363 Hz (brentq, above)
+    ("spring_rate = 300.0\nspring_preload = 0.5\n", "found"),
+    # a spring pulling the follower off its cam (x0 = -1 rad, lift 0.48 rad): lost at every speed
+    ("spring_rate = 300.0\nspring_preload = -1.0\n", "lost_at_lowest_speed"),
+    # a weak spring, lost at the cam speed 2.96 Hz, scanned only over 0.1 .. 1 Hz where it holds
+    ("spring_rate = 100.0\nspring_preload = 0.5\njump_speed_range_hz = [0.1, 1.0]\n", "holds_in_range"),
+])
+def test_jump_report_gives_the_speed_or_the_reason_it_has_none(closure, status):
+    j = _jump_summary(closure)
+    _assert_jump_consistent(j, 2.96)
+    assert j["jump_speed_status"] == status
+    # independent facts of each case: the NumPy force from the thesis series on the same grid
+    ks, x0 = (float(line.split(" = ")[1]) for line in closure.splitlines()[:2])
+    phi = 2 * np.pi * np.arange(128) / 128
+    lo, hi = j["search_range_hz"]
+    at_cam = _fmin_numpy([2.96], phi, ks, x0, 0.126)[0]
+    assert j["contact_lost_at_cam_speed"] is bool(at_cam <= 0)
+    if status == "found":
+        assert j["jump_speed_hz"] == pytest.approx(2.9363, abs=1e-3)
+        assert not j["contact_lost_at_cam_speed"]  # the window closes again below 2.96 Hz
+    elif status == "lost_at_lowest_speed":
+        assert _fmin_numpy([lo], phi, ks, x0, 0.126)[0] <= 0 and at_cam <= 0
+        assert "lowest speed" in j["note"]
+    else:
+        # a 1 mHz scan of the range: contact holds throughout; it is lost at the cam speed
+        assert _fmin_numpy(np.arange(lo, hi + 5e-4, 1e-3), phi, ks, x0, 0.126).min() > 0 and at_cam <= 0
+        assert not j["cam_speed_in_range"] and "jump_speed_range_hz" in j["note"]
+
+
 # --------------------------------------------------------------- drive and nonlinear FF
 
 

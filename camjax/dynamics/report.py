@@ -285,12 +285,24 @@ class Nonlinear:
         return out
 
 
+JUMP_STATUSES = ("found", "lost_at_lowest_speed", "holds_in_range")
+"""``jump_speed_status``: contact held below ``jump_speed_hz`` and is lost there; contact already
+lost at the lowest speed scanned (no jump speed: no speed of the range keeps it); contact held at
+every speed scanned."""
+
+
 @dataclass(frozen=True)
 class Jump:
-    """Force closure: jump speed, contact margin at the cam speed, preload and rate needed."""
+    """Force closure: jump speed, contact margin at the cam speed, preload and rate needed.
+
+    ``jump_speed_hz`` is the lowest speed of ``search_range_hz`` at which contact is lost, or None
+    with ``status`` saying why (:data:`JUMP_STATUSES`); :meth:`note` says it in a sentence.
+    """
 
     search_range_hz: tuple[float, float]
-    jump_speed_hz: float | None  # None: contact holds over the whole range
+    jump_speed_hz: float | None  # None unless status == "found"
+    status: str  # one of JUMP_STATUSES
+    cam_speed_hz: float
     min_contact_force: float  # N or N m, at the cam speed
     min_spring_preload: float  # m or rad
     min_spring_rate: float | None  # None: no rate helps (the spring is slack somewhere)
@@ -298,10 +310,41 @@ class Jump:
     min_force: np.ndarray  # (S,) min contact force at each speed
     contact_force: np.ndarray  # (N,) contact force over the cycle at the cam speed
 
+    @property
+    def cam_speed_in_range(self) -> bool:
+        lo, hi = self.search_range_hz
+        return lo <= self.cam_speed_hz <= hi
+
+    @property
+    def contact_lost_at_cam_speed(self) -> bool:
+        return self.min_contact_force <= 0
+
+    def note(self) -> str:
+        """One sentence: where contact is lost in the scanned range, or why no speed is given."""
+        lo, hi = self.search_range_hz
+        scanned = f"{lo:.6g} .. {hi:.6g} Hz"
+        if self.status == "found":
+            text = (f"contact holds from {lo:.6g} Hz and is first lost at {self.jump_speed_hz:.6g} Hz "
+                    f"(scanned {scanned})")
+        elif self.status == "lost_at_lowest_speed":
+            text = (f"no jump speed: contact is already lost at the lowest speed scanned, {lo:.6g} Hz "
+                    f"(min contact force there {float(self.min_force[0]):.4g}; scanned {scanned}), so no "
+                    "speed of the range keeps it: a stronger spring_rate or spring_preload, or a lower "
+                    "jump_speed_range_hz")
+        else:
+            text = f"no jump speed: contact holds at every speed scanned, {scanned}"
+        state = "lost" if self.contact_lost_at_cam_speed else "holds"
+        if self.cam_speed_in_range:
+            return f"{text}; at the cam speed {self.cam_speed_hz:.6g} Hz contact {state}"
+        return (f"{text}; the cam speed {self.cam_speed_hz:.6g} Hz lies outside jump_speed_range_hz, "
+                f"and there contact {state}")
+
     def to_json(self) -> dict:
         return {"search_range_hz": list(self.search_range_hz), "jump_speed_hz": self.jump_speed_hz,
+                "jump_speed_status": self.status, "note": self.note(),
+                "cam_speed_in_range": self.cam_speed_in_range,
                 "min_contact_force": self.min_contact_force,
-                "contact_lost_at_cam_speed": self.min_contact_force <= 0,
+                "contact_lost_at_cam_speed": self.contact_lost_at_cam_speed,
                 "min_spring_preload": self.min_spring_preload,
                 # inf (no rate helps) is written as null
                 "min_spring_rate": self.min_spring_rate}
@@ -436,20 +479,23 @@ def jump(ctx: Context) -> Jump:
     spec, plant, omega, phi, cam = ctx.spec, ctx.plant, ctx.omega, ctx.phi, ctx.cam
     closure = closure_of(spec)
     lo_hz, hi_hz = spec.jump_speed_range_hz or (0.05 * spec.cam_speed_hz, 10 * spec.cam_speed_hz)
-    js = jump_speed(cam, plant, closure, phi, TWO_PI * lo_hz, TWO_PI * hi_hz)
+    # the cam speed is scanned too: contact lost there is then found at or below it
+    js = jump_speed(cam, plant, closure, phi, TWO_PI * lo_hz, TWO_PI * hi_hz,
+                    include_rad_s=jnp.asarray([omega]))
     force = contact_force(cam, plant, closure, omega, phi)
     # plot grid: even steps plus every resonant speed and a close look around the jump
     res_hz = _f(natural_frequency_rad_s(plant)) / TWO_PI / np.arange(1, spec.harmonics + 1)
     speeds = [np.linspace(lo_hz, hi_hz, 400), res_hz * 0.999, res_hz, res_hz * 1.001]
     found = bool(js.found)
+    status = "found" if found else "lost_at_lowest_speed" if bool(js.lost_at_low) else "holds_in_range"
     if found:
         j_hz = _f(js.speed_rad_s) / TWO_PI
         speeds.append(np.linspace(0.98 * j_hz, 1.02 * j_hz, 81))
     speeds = np.unique(np.clip(np.concatenate(speeds), lo_hz, hi_hz))
     fmins = np.asarray(jax.vmap(lambda w: min_contact_force(cam, plant, closure, w, phi))(
         jnp.asarray(speeds) * TWO_PI))
-    return Jump((lo_hz, hi_hz), _f(js.speed_rad_s) / TWO_PI if found else None, _f(jnp.min(force)),
-                _f(min_preload(cam, plant, closure, omega, phi)),
+    return Jump((lo_hz, hi_hz), _f(js.speed_rad_s) / TWO_PI if found else None, status, spec.cam_speed_hz,
+                _f(jnp.min(force)), _f(min_preload(cam, plant, closure, omega, phi)),
                 _finite_or_none(min_spring_rate(cam, plant, closure, omega, phi)),
                 speeds, fmins, np.asarray(force))
 
