@@ -19,6 +19,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from camjax import program as prog
+from camjax.dynamics.budget import tracked
 from camjax.dynamics.compensation import (
     compensate_linear,
     compensate_nonlinear,
@@ -616,7 +617,7 @@ def _start(fn, *args) -> Future:
 
 
 def _time_domain_runs(ctx: Context, settle: Settling, train: bool, with_drive: bool,
-                      say: Callable[[str], None]) -> dict:
+                      say: Callable[[str], None], tracker=None) -> dict:
     """The time-domain entries (time_domain, nonlinear, drive) in their order of dependence."""
     runs = f"{settle.cycles} cycles x {ctx.spec.steps_per_cycle} RK4 steps"
     parts: dict = {}
@@ -624,20 +625,27 @@ def _time_domain_runs(ctx: Context, settle: Settling, train: bool, with_drive: b
     if with_drive and "nonlinear" in ctx.spec.compute:
         # the nonlinear compensation runs beside the train and the first two drive runs
         say(f"nonlinear ({runs})")
-        nl = _start(nonlinear, ctx, settle)
+        nl = _start(tracked, tracker, "nonlinear", nonlinear, ctx, settle)
     if train:
         say(f"time_domain ({runs})")
-        parts["time_domain"] = time_domain(ctx, settle)
+        parts["time_domain"] = tracked(tracker, "time_domain", time_domain, ctx, settle)
     if with_drive:
         say(f"drive ({runs} per cam)")
-        parts["drive"] = drive(ctx, settle, None if nl is None else lambda: nl.result().cam)
+        parts["drive"] = tracked(tracker, "drive", drive, ctx, settle,
+                                 None if nl is None else lambda: nl.result().cam)
     if nl is not None:
         parts["nonlinear"] = nl.result()
     return parts
 
 
+def _context_and_nominal(scene) -> tuple[Context, Nominal]:
+    ctx = context(scene)
+    return ctx, nominal(ctx)
+
+
 def scene_dynamics(scene, progress: Callable[[str], None] | None = None,
-                   meanwhile: Callable[[DynamicsReport], None] | None = None) -> DynamicsReport:
+                   meanwhile: Callable[[DynamicsReport], None] | None = None,
+                   tracker=None) -> DynamicsReport:
     """Run every analysis the scene's [dynamics] section lists. Not traceable (a report).
 
     The long XLA loops (the time-domain runs, the jump search) run in threads of their own.
@@ -645,7 +653,9 @@ def scene_dynamics(scene, progress: Callable[[str], None] | None = None,
     when given, is called with the report of the analyses done so far while the threads finish:
     first with those of this thread (compensation, robustness, shaping; the others still None),
     then again as each thread but the last finishes, so that work needing only those (figures)
-    overlaps the long loops.
+    overlaps the long loops. ``tracker``, when given (a
+    :class:`~camjax.dynamics.budget.WorkProgress`), is told as each analysis of
+    :func:`~camjax.dynamics.budget.estimate_work` starts and finishes (from any thread).
     Raises ValueError if the scene has no [dynamics] section.
     """
     spec = scene.dynamics
@@ -653,8 +663,7 @@ def scene_dynamics(scene, progress: Callable[[str], None] | None = None,
         raise ValueError("scene has no [dynamics] section")
     say = progress or (lambda _line: None)
     compute = spec.compute
-    ctx = context(scene)
-    nom = nominal(ctx)
+    ctx, nom = tracked(tracker, "nominal", _context_and_nominal, scene)
     parts: dict = {}
     threads: list[Future] = []
     needs_drive = spec.has_drive and ("drive" in compute or "nonlinear" in compute)
@@ -662,19 +671,20 @@ def scene_dynamics(scene, progress: Callable[[str], None] | None = None,
         settle = settling(ctx.plant, ctx.omega, spec.transient_tolerance, spec.max_cycles)
         parts.update(settling=settle, max_cycles=spec.max_cycles,
                      transient_tolerance=spec.transient_tolerance)
-        threads.append(_start(_time_domain_runs, ctx, settle, "time_domain" in compute, needs_drive, say))
+        threads.append(_start(_time_domain_runs, ctx, settle, "time_domain" in compute, needs_drive, say,
+                              tracker))
     if "jump" in compute:
         say("jump")
-        threads.append(_start(lambda: {"jump": jump(ctx)}))
+        threads.append(_start(lambda: {"jump": tracked(tracker, "jump", jump, ctx)}))
     if "compensation" in compute or "robustness" in compute:
         say("compensation")
-        parts["compensation"] = compensation(ctx, nom)
+        parts["compensation"] = tracked(tracker, "compensation", compensation, ctx, nom)
     if "robustness" in compute:
         say("robustness")
-        parts["robustness"] = robustness(ctx)
+        parts["robustness"] = tracked(tracker, "robustness", robustness, ctx)
     if "shaping" in compute:
         say(f"shaping ({spec.shaping_steps} L-BFGS steps)")
-        parts["shaping"] = shaping(ctx)
+        parts["shaping"] = tracked(tracker, "shaping", shaping, ctx)
 
     def report() -> DynamicsReport:
         return DynamicsReport(scene.name, spec.follower, spec.cam_speed_hz, spec.samples, spec.harmonics,
