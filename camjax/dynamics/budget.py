@@ -8,10 +8,11 @@ exactly as the run takes them), least-squares sizes and L-BFGS iterations -- and
 into seconds with the per-unit costs of :data:`COSTS`.
 
 The costs were measured on the development machine (2 shared x86-64 cores, CPU, float64) by
-``python -m camjax.dynamics.budget``, which times each kernel at two sizes and prints the
-constants (:func:`calibrate`); the compile of a new shape (seconds, on the first run only) and the
-figures (about a second) are not counted. A faster machine finishes sooner than estimated; the
-progress bar's ETA follows the pace actually measured.
+``python -m camjax.dynamics.budget``, which times each kernel warm at two sizes and prints the
+per-unit costs (:func:`calibrate`); :data:`COSTS` holds them rounded up (the drive's vary about 2x
+between repeats on a shared machine, the largest was taken). The compile of a new shape
+(seconds, on the first run only) and the figures (about a second) are not counted. A faster
+machine finishes sooner than estimated; the progress bar's ETA follows the pace measured.
 
 :data:`BUDGET_S` is the budget: beyond it :func:`refusal` returns the one line ``camjax
 dynamics`` refuses with (exit 2, nothing written) unless ``--force`` is given. None of this is
@@ -28,21 +29,23 @@ from dataclasses import dataclass
 
 BUDGET_S = 120.0
 """Estimated seconds of work beyond which ``camjax dynamics`` refuses a scene without --force.
-The thesis-bench scene estimates at a few seconds; the largest values the scene accepts
-(``steps_per_cycle = 100000`` with ``max_cycles = 100000``) at days."""
+thesis-bench estimates at 4 s; with its train undamped (``c3 = 0``: every run takes
+``max_cycles``) and the largest values a scene accepts, ``steps_per_cycle = 100000`` and
+``max_cycles = 100000``, at 13 min for ``time_domain`` alone and 2.8 days for everything."""
 
 TWO_PI = 2.0 * math.pi
 
 SMALL_HARMONICS = 32
-"""Below this many harmonics (+1) a drive step's cam evaluation is one small single-threaded
-kernel; above it XLA's CPU runtime splits it over threads and a step costs more (measured)."""
+"""Up to this many coefficients (harmonics + 1) a drive step's cam evaluation is one small
+single-threaded kernel; above it XLA's CPU runtime splits it over threads and a step costs
+several times more (measured: 7 us per step at 21 coefficients, 36 us at 41)."""
 
 
 @dataclass(frozen=True)
 class Costs:
     """Seconds per unit of work (see the module docstring for how they were measured)."""
 
-    table_ns: float = 100.0  # per entry of a samples x (harmonics + 1) cos/sin evaluation (f, f', f'')
+    table_ns: float = 110.0  # per entry of a samples x (harmonics + 1) cos/sin evaluation (f, f', f'')
     batch_ns: float = 0.3  # per entry and batched element over a table (robustness, jump scan)
     train_step_ns: float = 40.0  # one RK4 step of the follower train (time_domain)
     drive_step_us: tuple[float, float, float, float] = (1.0, 0.3, 28.0, 0.4)
