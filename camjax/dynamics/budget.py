@@ -8,11 +8,12 @@ exactly as the run takes them), least-squares sizes and L-BFGS iterations -- and
 into seconds with the per-unit costs of :data:`COSTS`.
 
 The costs were measured on the development machine (2 shared x86-64 cores, CPU, float64) by
-``python -m camjax.dynamics.budget``, which times each kernel warm at two sizes and prints the
-per-unit costs (:func:`calibrate`); :data:`COSTS` holds them rounded up (the drive's vary about 2x
-between repeats on a shared machine, the largest was taken). The compile of a new shape
-(seconds, on the first run only) and the figures (about a second) are not counted. A faster
-machine finishes sooner than estimated; the progress bar's ETA follows the pace measured.
+:func:`calibrate` (``python -c "from camjax.dynamics.budget import calibrate; print(calibrate())"``),
+which times each kernel warm at two sizes; :data:`COSTS` holds the largest of repeated
+measurements, rounded up (they vary by up to 2x between repeats on a shared machine). The
+compile of a new shape (seconds, on the first run only) and the figures (about a second) are not
+counted. A faster machine finishes sooner than estimated; the progress bar's ETA follows the pace
+measured.
 
 :data:`BUDGET_S` is the budget: beyond it :func:`refusal` returns the one line ``camjax
 dynamics`` refuses with (exit 2, nothing written) unless ``--force`` is given. None of this is
@@ -408,7 +409,3 @@ def calibrate(repeats: int = 3) -> Costs:  # pragma: no cover - a measurement, r
     b = (per_large - per_small) / ((9 + q) * (60 - 15))
     shaping_us = (per_small - b * (9 + q) * 16, b)
     return Costs(table_ns, batch_ns, train_ns, drive_us, nl_us, lstsq_ns, shaping_us)
-
-
-if __name__ == "__main__":  # pragma: no cover
-    print(calibrate())
