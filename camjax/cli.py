@@ -504,9 +504,13 @@ def _setup_dynamics(p: argparse.ArgumentParser):
                    "(e.g. thesis-bench)")
     p.add_argument("--out", required=True, metavar="DIR", help=OUT_HELP)
     p.add_argument("--dpi", type=int, default=100, help="resolution of the PNG figures (default 100)")
+    p.add_argument("--force", action="store_true",
+                   help="run even when the estimated work exceeds the budget (without it such a scene is "
+                   "refused, exit 2, naming the [dynamics] fields that drive the cost)")
 
     def run(args) -> int:
         from camjax.dynamics import scene_dynamics
+        from camjax.dynamics.budget import WorkProgress, estimate_work, refusal
         from camjax.scene import load_scene
 
         out = check_output_dir(args.out)
@@ -516,8 +520,16 @@ def _setup_dynamics(p: argparse.ArgumentParser):
             raise UsageError(f"scene '{scene.name}' has no [dynamics] section: nothing to compute "
                              "(allowed: a scene with [dynamics], e.g. thesis-bench)")
         runtime.enable_caches()
+        work = estimate_work(scene)  # counts (and the cam's FFT when a drive runs): no analysis yet
+        if (refused := refusal(scene, work, args.force)) is not None:
+            raise UsageError(refused)
+        # a bar with an ETA on a terminal (or with CAMJAX_PROGRESS=1); a piped stderr gets none
+        bar = WorkProgress(work) if sys.stderr.isatty() or os.environ.get("CAMJAX_PROGRESS") == "1" else None
 
         def progress(line: str) -> None:  # one write per line: two threads report
+            if bar is not None:
+                bar.write(f"camjax dynamics: {line}")
+                return
             sys.stderr.write(f"camjax dynamics: {line}\n")
             sys.stderr.flush()
 
@@ -530,7 +542,11 @@ def _setup_dynamics(p: argparse.ArgumentParser):
                 progress("figures")
             rendered.update(render_dynamics_figures(so_far.curves, so_far.summary, args.dpi, skip=rendered))
 
-        report = runtime.interruptible(scene_dynamics, scene, progress, figures)
+        try:
+            report = runtime.interruptible(scene_dynamics, scene, progress, figures, tracker=bar)
+        finally:
+            if bar is not None:
+                bar.close()
         if report.settling is not None and not report.settling.settled:
             st = report.settling
             needs = (f"needs {st.cycles_needed} cycles" if st.cycles_needed is not None

@@ -22,6 +22,7 @@ from hypothesis import strategies as st
 import camjax
 import camjax.cli
 from camjax import dynamics as d
+from camjax.dynamics import budget
 from camjax.laws import THESIS_NOMINAL
 from camjax.scene import DynamicsSpec, SceneError, builtin_scene_text, parse_scene
 
@@ -375,6 +376,65 @@ def test_translating_follower_takes_its_spring_from_follower_and_jumps_at_a_root
     assert round(float(d.natural_frequency_rad_s(plant)) / float(js.speed_rad_s)) == 21
 
 
+JUMP_SMALL = """I2 = 0.126
+samples = 128
+harmonics = 20
+compute = ["jump"]
+"""  # the bench cam has 9 harmonics: 20 of 128 samples hold it exactly
+
+
+def _jump_summary(closure: str) -> dict:
+    """dynamics.json's ``jump`` of the bench train with the force closure ``closure`` (TOML lines)."""
+    return d.scene_dynamics(parse_scene(bench_with(BENCH_TRAIN + closure + JUMP_SMALL), "bench")).summary["jump"]
+
+
+def _assert_jump_consistent(j: dict, cam_speed_hz: float) -> None:
+    """The jump report says one thing: a jump speed, or the reason it has none."""
+    lo, hi = j["search_range_hz"]
+    in_range = lo <= cam_speed_hz <= hi
+    assert j["cam_speed_in_range"] is in_range
+    status = j["jump_speed_status"]
+    assert status in ("found", "lost_at_lowest_speed", "holds_in_range")
+    assert (j["jump_speed_hz"] is not None) is (status == "found")
+    assert isinstance(j["note"], str) and j["note"]
+    if status == "found":
+        assert lo < j["jump_speed_hz"] <= hi
+    if in_range and j["contact_lost_at_cam_speed"]:  # lost at the cam speed: lost at or below it
+        assert status == "lost_at_lowest_speed" or j["jump_speed_hz"] <= cam_speed_hz
+    if in_range and status == "holds_in_range":
+        assert not j["contact_lost_at_cam_speed"]
+
+
+@pytest.mark.parametrize("closure, status", [
+    # the bench spring: contact lost from the 5th harmonic's resonance at 2.9363 Hz (brentq, above)
+    ("spring_rate = 300.0\nspring_preload = 0.5\n", "found"),
+    # a spring pulling the follower off its cam (x0 = -1 rad, lift 0.48 rad): lost at every speed
+    ("spring_rate = 300.0\nspring_preload = -1.0\n", "lost_at_lowest_speed"),
+    # a weak spring, lost at the cam speed 2.96 Hz, scanned only over 0.1 .. 1 Hz where it holds
+    ("spring_rate = 100.0\nspring_preload = 0.5\njump_speed_range_hz = [0.1, 1.0]\n", "holds_in_range"),
+])
+def test_jump_report_gives_the_speed_or_the_reason_it_has_none(closure, status):
+    j = _jump_summary(closure)
+    _assert_jump_consistent(j, 2.96)
+    assert j["jump_speed_status"] == status
+    # independent facts of each case: the NumPy force from the thesis series on the same grid
+    ks, x0 = (float(line.split(" = ")[1]) for line in closure.splitlines()[:2])
+    phi = 2 * np.pi * np.arange(128) / 128
+    lo, hi = j["search_range_hz"]
+    at_cam = _fmin_numpy([2.96], phi, ks, x0, 0.126)[0]
+    assert j["contact_lost_at_cam_speed"] is bool(at_cam <= 0)
+    if status == "found":
+        assert j["jump_speed_hz"] == pytest.approx(2.9363, abs=1e-3)
+        assert not j["contact_lost_at_cam_speed"]  # the window closes again below 2.96 Hz
+    elif status == "lost_at_lowest_speed":
+        assert _fmin_numpy([lo], phi, ks, x0, 0.126)[0] <= 0 and at_cam <= 0
+        assert "lowest speed" in j["note"]
+    else:
+        # a 1 mHz scan of the range: contact holds throughout; it is lost at the cam speed
+        assert _fmin_numpy(np.arange(lo, hi + 5e-4, 1e-3), phi, ks, x0, 0.126).min() > 0 and at_cam <= 0
+        assert not j["cam_speed_in_range"] and "jump_speed_range_hz" in j["note"]
+
+
 # --------------------------------------------------------------- drive and nonlinear FF
 
 
@@ -700,3 +760,133 @@ compute = ["compensation", "time_domain", "jump"]
     assert len(seen) == 2  # after this thread's compensation, then after the first thread finished
     assert seen[0] == BASE_KEYS | {"compensated", "settling"}  # settling is known before the runs
     assert seen[0] < seen[1] < set(final.summary) == BASE_KEYS | {"compensated", "time_domain", "settling", "jump"}
+
+
+# ------------------------------------------------------------ work estimate and budget
+
+# unit costs: one "second" per RK4 step of the train, nothing else, so the estimate is a count
+COUNT_TRAIN_STEPS = budget.Costs(table_ns=0.0, batch_ns=0.0, train_step_ns=1e9, drive_step_us=(0, 0, 0, 0),
+                                 nonlinear_step_us=(0, 0, 0, 0), lstsq_ns=0.0, shaping_step_us=(0, 0))
+# and one "second" per batched table entry
+COUNT_BATCHED = budget.Costs(table_ns=0.0, batch_ns=1e9, train_step_ns=0.0, drive_step_us=(0, 0, 0, 0),
+                             nonlinear_step_us=(0, 0, 0, 0), lstsq_ns=0.0, shaping_step_us=(0, 0))
+
+
+@pytest.mark.parametrize("steps_per_cycle, max_cycles", [(64, 3), (128, 3), (64, 100_000), (1000, 50)])
+def test_work_estimate_counts_the_rk4_steps_the_fields_ask_for(steps_per_cycle, max_cycles):
+    """time_domain runs 2 x cycles x steps_per_cycle RK4 steps; cycles = min(max_cycles, the cycles
+    e^{-zeta wn t} needs to fall below transient_tolerance), counted here in closed form."""
+    text = bench_with(BENCH_TRAIN + f"""steps_per_cycle = {steps_per_cycle}
+max_cycles = {max_cycles}
+transient_tolerance = 1e-5
+compute = ["time_domain"]
+""")
+    scene = parse_scene(text, "bench")
+    decay = 0.205 / (2 * 0.357)  # zeta wn = c3 / (2 I3)
+    cycles = min(max_cycles, math.ceil(math.log(1e5) / (decay / 2.96)) + 1)
+    work = budget.estimate_work(scene, COUNT_TRAIN_STEPS)
+    # 1e9 ns x 1e-9 s/ns per step: exact up to a rounding of the product (1e-15)
+    assert work.piece("time_domain").seconds == pytest.approx(2 * cycles * steps_per_cycle, rel=1e-12)
+    assert work.seconds == pytest.approx(2 * cycles * steps_per_cycle, rel=1e-12)
+    why = "max_cycles" if cycles == max_cycles else "transient_tolerance"
+    assert work.piece("time_domain").fields == ("steps_per_cycle", why)
+
+
+def test_work_estimate_grows_with_the_grids_as_the_fields_say():
+    """robustness: (2 A B C + B C) plants (compensated and nominal over the grid, and the B C
+    ratios) batched over the samples x (harmonics + 1) table; every grid analysis is linear in
+    samples (a table per sample)."""
+    base = BENCH_TRAIN + """spring_rate = 300.0
+spring_preload = 0.5
+samples = {n}
+harmonics = 20
+damping_factors = [0.5, 1.0]
+speed_factors = [0.9, 1.0, 1.1]
+wn_factors = [{kappa}]
+compute = ["robustness", "jump", "compensation"]
+"""
+    for n, kappa, (a, b, c) in ((128, "1.0", (2, 3, 1)), (256, "0.9, 1.0, 1.1, 1.2", (2, 3, 4))):
+        scene = parse_scene(bench_with(base.format(n=n, kappa=kappa)), "bench")
+        rob = budget.estimate_work(scene, COUNT_BATCHED).piece("robustness")
+        assert rob.seconds == pytest.approx((2 * a * b * c + b * c) * n * 21, rel=1e-12)
+        assert {"damping_factors", "speed_factors", "wn_factors", "samples"} <= set(rob.fields)
+    small, large = (budget.estimate_work(parse_scene(bench_with(base.format(n=n, kappa="1.0")), "bench"))
+                    for n in (128, 1024))
+    for name in ("nominal", "compensation", "jump", "robustness"):
+        assert large.piece(name).seconds == pytest.approx(8 * small.piece(name).seconds, rel=1e-12)
+
+
+def test_the_bench_and_small_scenes_are_under_the_budget(bench):
+    for scene in (bench, parse_scene(bench_with(SMALL_BENCH), "bench")):
+        work = budget.estimate_work(scene)
+        assert 0 < work.seconds < budget.BUDGET_S
+        assert budget.refusal(scene, work) is None
+        assert {p.name for p in work.pieces} == {"nominal", *scene.dynamics.compute}
+
+
+OVER_BUDGET = BENCH_TRAIN.replace("c3 = 0.205", "c3 = 0.0") + """steps_per_cycle = 100000
+max_cycles = 100000
+compute = ["time_domain"]
+"""  # undamped: the transient never decays, every run takes max_cycles
+
+
+def test_cli_dynamics_refuses_a_scene_over_the_budget_naming_the_fields(tmp_path, capsys):
+    path = tmp_path / "big.toml"
+    path.write_text(bench_with(OVER_BUDGET))
+    out = tmp_path / "out"
+    assert camjax.cli.main(["dynamics", str(path), "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1
+    assert "dynamics.steps_per_cycle = 100000" in err and "dynamics.max_cycles = 100000" in err
+    assert "2e+10 RK4 steps" in err  # 2 runs x 1e5 cycles x 1e5 steps
+    assert "budget" in err and "--force" in err
+    assert not out.exists()
+    scene = parse_scene(bench_with(OVER_BUDGET), "big")
+    work = budget.estimate_work(scene)
+    assert work.seconds > budget.BUDGET_S and budget.refusal(scene, work) is not None
+    assert budget.refusal(scene, work, force=True) is None  # --force: the run goes ahead
+
+
+def test_force_runs_a_scene_over_the_budget_and_a_terminal_gets_a_progress_bar(tmp_path, capsys, monkeypatch):
+    """A budget of 1 ns puts a small scene over it: refused without --force (nothing written),
+    run with it. With CAMJAX_PROGRESS=1 (as on a terminal) stderr gets the bar and its ETA; piped,
+    none."""
+    monkeypatch.setattr(budget, "BUDGET_S", 1e-9)
+    path = tmp_path / "small.toml"
+    path.write_text(bench_with(BENCH_TRAIN + 'samples = 128\nharmonics = 20\ncompute = ["compensation"]\n'))
+    out = tmp_path / "out"
+    assert camjax.cli.main(["dynamics", str(path), "--out", str(out), "--dpi", "30"]) == 2
+    err = capsys.readouterr().err
+    assert "dynamics.samples = 128" in err and "dynamics.harmonics = 20" in err and not out.exists()
+    monkeypatch.setenv("CAMJAX_PROGRESS", "1")
+    assert camjax.cli.main(["dynamics", str(path), "--out", str(out), "--dpi", "30", "--force"]) == 0
+    assert "ETA" in capsys.readouterr().err and (out / "dynamics.json").exists()
+    monkeypatch.delenv("CAMJAX_PROGRESS")
+    assert camjax.cli.main(["dynamics", str(path), "--out", str(out), "--dpi", "30", "--force"]) == 0
+    err = capsys.readouterr().err
+    assert "ETA" not in err and "%|" not in err
+
+
+def test_work_progress_credits_running_and_finished_analyses():
+    import io
+    import time
+
+    work = budget.WorkEstimate((budget.Piece("nominal", 2.0, "", ()), budget.Piece("jump", 6.0, "", ())))
+    stream = io.StringIO()
+    bar = budget.WorkProgress(work, file=stream, interval_s=60.0)
+    try:
+        assert bar.credited() == 0.0
+        bar.start("nominal")
+        t0 = time.monotonic()
+        assert bar.credited(t0 + 1.0) == pytest.approx(1.0, abs=0.1)  # running: its time so far
+        assert bar.credited(t0 + 100.0) == pytest.approx(0.95 * 2.0)  # never past 95 % of its estimate
+        bar.finish("nominal")
+        assert bar.credited(t0 + 100.0) == pytest.approx(2.0)
+        bar.start("jump")
+        bar.finish("jump")
+        assert bar.credited() == pytest.approx(8.0)
+        bar.write("camjax dynamics: a line")
+    finally:
+        bar.close()
+    text = stream.getvalue()
+    assert "ETA" in text and "camjax dynamics: a line" in text

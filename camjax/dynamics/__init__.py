@@ -18,6 +18,8 @@ Models, each a pure JAX function of one design (batch with ``vmap``):
 - :mod:`~camjax.dynamics.shaping`: gradient-based law shaping through the model.
 - :mod:`~camjax.dynamics.report`: one function per [dynamics] ``compute`` entry and the typed
   :class:`DynamicsReport` that :func:`scene_dynamics` returns.
+- :mod:`~camjax.dynamics.budget`: the work a scene asks for, estimated before it runs, the
+  budget ``camjax dynamics`` refuses beyond (without ``--force``) and its progress bar.
 
 Units: SI inside. The generalized coordinate is the follower displacement in m (translating
 follower: I in kg, c in N s/m, k in N/m, forces in N) or the follower angle in rad (oscillating

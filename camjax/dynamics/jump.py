@@ -49,21 +49,30 @@ def min_contact_force(cam, plant, closure, cam_speed_rad_s, phi) -> jax.Array:
 
 
 class JumpSpeed(NamedTuple):
-    """Lowest cam speed at which contact is lost."""
+    """Lowest cam speed at which contact is lost, or why there is none.
 
-    speed_rad_s: jax.Array  # NaN when contact holds over the whole search range
+    Exactly one holds: ``found`` (contact holds at the low end and is lost at ``speed_rad_s``),
+    ``lost_at_low`` (already lost at the lowest speed scanned: no speed of the range keeps it
+    below), or neither (contact holds at every speed scanned).
+    """
+
+    speed_rad_s: jax.Array  # NaN unless found
     found: jax.Array  # bool
+    lost_at_low: jax.Array  # bool: min F <= 0 already at speed_low_rad_s
 
 
 @runtime.program_cache(static_argnames=("n_grid", "n_bisect"))
 def jump_speed(cam: CamHarmonics, plant: Plant, closure: ForceClosure, phi: jax.Array,
-               speed_low_rad_s, speed_high_rad_s, n_grid: int = 256, n_bisect: int = 60) -> JumpSpeed:
+               speed_low_rad_s, speed_high_rad_s, n_grid: int = 256, n_bisect: int = 60,
+               include_rad_s=None) -> JumpSpeed:
     """Lowest speed in [low, high] where min_phi F = 0 (contact just lost).
 
     The minimum force is not monotone in speed (resonances), so a grid of ``n_grid`` speeds plus
-    the resonant speeds omega_n / n finds the first sign change and ``n_bisect`` bisections
-    refine it (to a relative width 2^-60 of the grid step).
-    Contact must hold at ``speed_low_rad_s``; otherwise found = False.
+    the resonant speeds omega_n / n plus ``include_rad_s`` (None or an array of speeds, those
+    outside [low, high] clipped to it: e.g. the cam speed, so that contact lost there is found
+    at or below it) finds the first sign change and ``n_bisect`` bisections refine it (to a
+    relative width 2^-60 of the grid step).
+    Contact must hold at ``speed_low_rad_s``; otherwise found = False and lost_at_low = True.
     """
     def fmin(w):
         return min_contact_force(cam, plant, closure, w, phi)
@@ -72,8 +81,10 @@ def jump_speed(cam: CamHarmonics, plant: Plant, closure: ForceClosure, phi: jax.
     # narrower than the grid spacing, and it always contains its resonance
     wn = natural_frequency_rad_s(plant)
     resonant = wn / jnp.arange(1, cam.cos.shape[-1], dtype=phi.dtype)
-    grid = jnp.sort(jnp.clip(jnp.concatenate([jnp.linspace(speed_low_rad_s, speed_high_rad_s, n_grid),
-                                              resonant]), speed_low_rad_s, speed_high_rad_s))
+    parts = [jnp.linspace(speed_low_rad_s, speed_high_rad_s, n_grid), resonant]
+    if include_rad_s is not None:
+        parts.append(jnp.ravel(jnp.asarray(include_rad_s, dtype=phi.dtype)))
+    grid = jnp.sort(jnp.clip(jnp.concatenate(parts), speed_low_rad_s, speed_high_rad_s))
     values = jax.vmap(fmin)(grid)
     negative = values <= 0
     first = jnp.argmax(negative)
@@ -88,7 +99,7 @@ def jump_speed(cam: CamHarmonics, plant: Plant, closure: ForceClosure, phi: jax.
         return jnp.where(neg, a, mid), jnp.where(neg, mid, b)
 
     lo, hi = jax.lax.fori_loop(0, n_bisect, bisect, (lo, hi))
-    return JumpSpeed(jnp.where(found, 0.5 * (lo + hi), jnp.nan), found)
+    return JumpSpeed(jnp.where(found, 0.5 * (lo + hi), jnp.nan), found, negative[0])
 
 
 @jax.jit

@@ -19,6 +19,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from camjax import program as prog
+from camjax.dynamics.budget import tracked
 from camjax.dynamics.compensation import (
     compensate_linear,
     compensate_nonlinear,
@@ -285,12 +286,24 @@ class Nonlinear:
         return out
 
 
+JUMP_STATUSES = ("found", "lost_at_lowest_speed", "holds_in_range")
+"""``jump_speed_status``: contact held below ``jump_speed_hz`` and is lost there; contact already
+lost at the lowest speed scanned (no jump speed: no speed of the range keeps it); contact held at
+every speed scanned."""
+
+
 @dataclass(frozen=True)
 class Jump:
-    """Force closure: jump speed, contact margin at the cam speed, preload and rate needed."""
+    """Force closure: jump speed, contact margin at the cam speed, preload and rate needed.
+
+    ``jump_speed_hz`` is the lowest speed of ``search_range_hz`` at which contact is lost, or None
+    with ``status`` saying why (:data:`JUMP_STATUSES`); :meth:`note` says it in a sentence.
+    """
 
     search_range_hz: tuple[float, float]
-    jump_speed_hz: float | None  # None: contact holds over the whole range
+    jump_speed_hz: float | None  # None unless status == "found"
+    status: str  # one of JUMP_STATUSES
+    cam_speed_hz: float
     min_contact_force: float  # N or N m, at the cam speed
     min_spring_preload: float  # m or rad
     min_spring_rate: float | None  # None: no rate helps (the spring is slack somewhere)
@@ -298,10 +311,41 @@ class Jump:
     min_force: np.ndarray  # (S,) min contact force at each speed
     contact_force: np.ndarray  # (N,) contact force over the cycle at the cam speed
 
+    @property
+    def cam_speed_in_range(self) -> bool:
+        lo, hi = self.search_range_hz
+        return lo <= self.cam_speed_hz <= hi
+
+    @property
+    def contact_lost_at_cam_speed(self) -> bool:
+        return self.min_contact_force <= 0
+
+    def note(self) -> str:
+        """One sentence: where contact is lost in the scanned range, or why no speed is given."""
+        lo, hi = self.search_range_hz
+        scanned = f"{lo:.6g} .. {hi:.6g} Hz"
+        if self.status == "found":
+            text = (f"contact holds from {lo:.6g} Hz and is first lost at {self.jump_speed_hz:.6g} Hz "
+                    f"(scanned {scanned})")
+        elif self.status == "lost_at_lowest_speed":
+            text = (f"no jump speed: contact is already lost at the lowest speed scanned, {lo:.6g} Hz "
+                    f"(min contact force there {float(self.min_force[0]):.4g}; scanned {scanned}), so no "
+                    "speed of the range keeps it: a stronger spring_rate or spring_preload, or a lower "
+                    "jump_speed_range_hz")
+        else:
+            text = f"no jump speed: contact holds at every speed scanned, {scanned}"
+        state = "lost" if self.contact_lost_at_cam_speed else "holds"
+        if self.cam_speed_in_range:
+            return f"{text}; at the cam speed {self.cam_speed_hz:.6g} Hz contact {state}"
+        return (f"{text}; the cam speed {self.cam_speed_hz:.6g} Hz lies outside jump_speed_range_hz, "
+                f"and there contact {state}")
+
     def to_json(self) -> dict:
         return {"search_range_hz": list(self.search_range_hz), "jump_speed_hz": self.jump_speed_hz,
+                "jump_speed_status": self.status, "note": self.note(),
+                "cam_speed_in_range": self.cam_speed_in_range,
                 "min_contact_force": self.min_contact_force,
-                "contact_lost_at_cam_speed": self.min_contact_force <= 0,
+                "contact_lost_at_cam_speed": self.contact_lost_at_cam_speed,
                 "min_spring_preload": self.min_spring_preload,
                 # inf (no rate helps) is written as null
                 "min_spring_rate": self.min_spring_rate}
@@ -436,20 +480,23 @@ def jump(ctx: Context) -> Jump:
     spec, plant, omega, phi, cam = ctx.spec, ctx.plant, ctx.omega, ctx.phi, ctx.cam
     closure = closure_of(spec)
     lo_hz, hi_hz = spec.jump_speed_range_hz or (0.05 * spec.cam_speed_hz, 10 * spec.cam_speed_hz)
-    js = jump_speed(cam, plant, closure, phi, TWO_PI * lo_hz, TWO_PI * hi_hz)
+    # the cam speed is scanned too: contact lost there is then found at or below it
+    js = jump_speed(cam, plant, closure, phi, TWO_PI * lo_hz, TWO_PI * hi_hz,
+                    include_rad_s=jnp.asarray([omega]))
     force = contact_force(cam, plant, closure, omega, phi)
     # plot grid: even steps plus every resonant speed and a close look around the jump
     res_hz = _f(natural_frequency_rad_s(plant)) / TWO_PI / np.arange(1, spec.harmonics + 1)
     speeds = [np.linspace(lo_hz, hi_hz, 400), res_hz * 0.999, res_hz, res_hz * 1.001]
     found = bool(js.found)
+    status = "found" if found else "lost_at_lowest_speed" if bool(js.lost_at_low) else "holds_in_range"
     if found:
         j_hz = _f(js.speed_rad_s) / TWO_PI
         speeds.append(np.linspace(0.98 * j_hz, 1.02 * j_hz, 81))
     speeds = np.unique(np.clip(np.concatenate(speeds), lo_hz, hi_hz))
     fmins = np.asarray(jax.vmap(lambda w: min_contact_force(cam, plant, closure, w, phi))(
         jnp.asarray(speeds) * TWO_PI))
-    return Jump((lo_hz, hi_hz), _f(js.speed_rad_s) / TWO_PI if found else None, _f(jnp.min(force)),
-                _f(min_preload(cam, plant, closure, omega, phi)),
+    return Jump((lo_hz, hi_hz), _f(js.speed_rad_s) / TWO_PI if found else None, status, spec.cam_speed_hz,
+                _f(jnp.min(force)), _f(min_preload(cam, plant, closure, omega, phi)),
                 _finite_or_none(min_spring_rate(cam, plant, closure, omega, phi)),
                 speeds, fmins, np.asarray(force))
 
@@ -570,7 +617,7 @@ def _start(fn, *args) -> Future:
 
 
 def _time_domain_runs(ctx: Context, settle: Settling, train: bool, with_drive: bool,
-                      say: Callable[[str], None]) -> dict:
+                      say: Callable[[str], None], tracker=None) -> dict:
     """The time-domain entries (time_domain, nonlinear, drive) in their order of dependence."""
     runs = f"{settle.cycles} cycles x {ctx.spec.steps_per_cycle} RK4 steps"
     parts: dict = {}
@@ -578,20 +625,27 @@ def _time_domain_runs(ctx: Context, settle: Settling, train: bool, with_drive: b
     if with_drive and "nonlinear" in ctx.spec.compute:
         # the nonlinear compensation runs beside the train and the first two drive runs
         say(f"nonlinear ({runs})")
-        nl = _start(nonlinear, ctx, settle)
+        nl = _start(tracked, tracker, "nonlinear", nonlinear, ctx, settle)
     if train:
         say(f"time_domain ({runs})")
-        parts["time_domain"] = time_domain(ctx, settle)
+        parts["time_domain"] = tracked(tracker, "time_domain", time_domain, ctx, settle)
     if with_drive:
         say(f"drive ({runs} per cam)")
-        parts["drive"] = drive(ctx, settle, None if nl is None else lambda: nl.result().cam)
+        parts["drive"] = tracked(tracker, "drive", drive, ctx, settle,
+                                 None if nl is None else lambda: nl.result().cam)
     if nl is not None:
         parts["nonlinear"] = nl.result()
     return parts
 
 
+def _context_and_nominal(scene) -> tuple[Context, Nominal]:
+    ctx = context(scene)
+    return ctx, nominal(ctx)
+
+
 def scene_dynamics(scene, progress: Callable[[str], None] | None = None,
-                   meanwhile: Callable[[DynamicsReport], None] | None = None) -> DynamicsReport:
+                   meanwhile: Callable[[DynamicsReport], None] | None = None,
+                   tracker=None) -> DynamicsReport:
     """Run every analysis the scene's [dynamics] section lists. Not traceable (a report).
 
     The long XLA loops (the time-domain runs, the jump search) run in threads of their own.
@@ -599,7 +653,9 @@ def scene_dynamics(scene, progress: Callable[[str], None] | None = None,
     when given, is called with the report of the analyses done so far while the threads finish:
     first with those of this thread (compensation, robustness, shaping; the others still None),
     then again as each thread but the last finishes, so that work needing only those (figures)
-    overlaps the long loops.
+    overlaps the long loops. ``tracker``, when given (a
+    :class:`~camjax.dynamics.budget.WorkProgress`), is told as each analysis of
+    :func:`~camjax.dynamics.budget.estimate_work` starts and finishes (from any thread).
     Raises ValueError if the scene has no [dynamics] section.
     """
     spec = scene.dynamics
@@ -607,8 +663,7 @@ def scene_dynamics(scene, progress: Callable[[str], None] | None = None,
         raise ValueError("scene has no [dynamics] section")
     say = progress or (lambda _line: None)
     compute = spec.compute
-    ctx = context(scene)
-    nom = nominal(ctx)
+    ctx, nom = tracked(tracker, "nominal", _context_and_nominal, scene)
     parts: dict = {}
     threads: list[Future] = []
     needs_drive = spec.has_drive and ("drive" in compute or "nonlinear" in compute)
@@ -616,19 +671,20 @@ def scene_dynamics(scene, progress: Callable[[str], None] | None = None,
         settle = settling(ctx.plant, ctx.omega, spec.transient_tolerance, spec.max_cycles)
         parts.update(settling=settle, max_cycles=spec.max_cycles,
                      transient_tolerance=spec.transient_tolerance)
-        threads.append(_start(_time_domain_runs, ctx, settle, "time_domain" in compute, needs_drive, say))
+        threads.append(_start(_time_domain_runs, ctx, settle, "time_domain" in compute, needs_drive, say,
+                              tracker))
     if "jump" in compute:
         say("jump")
-        threads.append(_start(lambda: {"jump": jump(ctx)}))
+        threads.append(_start(lambda: {"jump": tracked(tracker, "jump", jump, ctx)}))
     if "compensation" in compute or "robustness" in compute:
         say("compensation")
-        parts["compensation"] = compensation(ctx, nom)
+        parts["compensation"] = tracked(tracker, "compensation", compensation, ctx, nom)
     if "robustness" in compute:
         say("robustness")
-        parts["robustness"] = robustness(ctx)
+        parts["robustness"] = tracked(tracker, "robustness", robustness, ctx)
     if "shaping" in compute:
         say(f"shaping ({spec.shaping_steps} L-BFGS steps)")
-        parts["shaping"] = shaping(ctx)
+        parts["shaping"] = tracked(tracker, "shaping", shaping, ctx)
 
     def report() -> DynamicsReport:
         return DynamicsReport(scene.name, spec.follower, spec.cam_speed_hz, spec.samples, spec.harmonics,

@@ -135,6 +135,10 @@ def jump_figure(curves: dict, summary: dict) -> Figure:
     if j is not None:
         ax.axvline(j, color="C3", linestyle="--", label=f"contact lost from {j:.4g} Hz")
         ax.legend(fontsize=8)
+    elif summary["jump"].get("jump_speed_status") == "lost_at_lowest_speed":
+        ax.set_title("no jump speed: contact already lost at the lowest speed scanned", fontsize=9)
+    else:
+        ax.set_title("no jump speed: contact holds at every speed scanned", fontsize=9)
     ax.axvline(summary["cam_speed_hz"], color="0.5", linestyle=":")
     # resonances reach far below zero: a symmetric log scale keeps the sign change readable
     fmin = curves["jump_fmin"]
