@@ -22,6 +22,7 @@ CLI hands blocks to ``camjax.scaleout`` instead when asked). Nothing here draws 
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from typing import Any, NamedTuple
 
 import jax
@@ -347,11 +348,14 @@ def run_design(scene: Scene, arrays: SceneArrays | None = None, *,
     """
     if arrays is None:
         arrays = scene_arrays(scene, dtype=dtype)
-    minimum = min_base_radius(scene, arrays)
     design = solve_design(scene, arrays)
-    radius, source = drawing_base_radius(design, minimum.radius_mm, base_radius_mm)
     result = design.result if design is not None else {}
     rf, e = result.get("roller_radius_mm"), result.get("offset_mm")
+    # the smallest cam for the follower the cam is drawn with: a roller design's R_f and offset
+    sized = scene if rf is None else replace(scene, follower=replace(scene.follower, roller_radius_mm=rf,
+                                                                        offset_mm=e))
+    minimum = min_base_radius(sized, arrays)
+    radius, source = drawing_base_radius(design, minimum.radius_mm, base_radius_mm)
     extremes = curve_extremes(scene, arrays, curve_names(scene, arrays), radius,
                               roller_radius_mm=rf, offset_mm=e)
     width = result.get("face_width_mm")

@@ -46,6 +46,30 @@ def test_min_prime_radius_of_the_harmonic_rise_and_its_rule():
     json.dumps(data, allow_nan=False)
 
 
+def test_min_base_radius_is_the_smallest_cam_for_the_designs_roller_and_offset():
+    """With a [design] that moves R_f and the offset, the report's smallest cam is sized for the
+    follower the cam is drawn with (the design's), not the [follower] table's, and says so."""
+    data = pipeline.design_report(camjax.load_scene("roller"))
+    rf, e = data["design"]["roller_radius_mm"], data["design"]["offset_mm"]
+    assert (rf, e) != (5.0, 0.0) and data["follower_scene"] == {"roller_radius_mm": 5.0, "offset_mm": 0.0}
+    # independent sizing on a dense grid (harmonic rise 8 mm / 90 deg, return over 180 deg): the
+    # pressure-angle need f = |s' - e| / tan 30 - s (ccw), R_p = hypot(e, max f); the undercut
+    # does not bind for this scene (checked by the binding name). 2e6 samples: the grid max is
+    # below the continuous one by ~max|f''| (dtheta/2)^2 / 2 < 1e-10 mm
+    theta = np.linspace(0.0, 2.0 * np.pi, 2_000_001)
+    rise, ret = np.radians(90.0), np.radians(180.0)
+    t2 = theta - np.radians(135.0)
+    s = np.where(theta <= rise, 4.0 * (1 - np.cos(np.pi * theta / rise)),
+                 np.where((t2 >= 0) & (t2 <= ret), 4.0 * (1 + np.cos(np.pi * t2 / ret)), 0.0))
+    ds = np.where(theta <= rise, 4.0 * np.pi / rise * np.sin(np.pi * theta / rise),
+                  np.where((t2 >= 0) & (t2 <= ret), -4.0 * np.pi / ret * np.sin(np.pi * t2 / ret), 0.0))
+    need = np.max(np.abs(ds - e) / np.tan(np.radians(30.0)) - s)
+    assert data["min_base_radius_binding"] == "pressure_angle"
+    assert data["min_prime_radius_mm"] == pytest.approx(math.hypot(e, need), abs=1e-8)
+    assert data["min_base_radius_mm"] == pytest.approx(math.hypot(e, need) - rf, abs=1e-8)
+    assert f"R_f = {rf:g} mm, offset {e:g} mm" in data["min_base_radius_rule"]
+
+
 def test_undercut_binds_for_a_large_roller():
     text = _variant("roller_radius_mm = 5.0 ", "roller_radius_mm = 12.0 ")
     scene = dataclasses.replace(parse_scene(text, "big-roller"), design=None)

@@ -9,6 +9,7 @@ written as strict JSON. Nothing here solves, draws or writes files (the pipeline
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -387,7 +388,11 @@ def build_report(scene: Scene, run: DesignRun) -> dict[str, Any]:
     block = loads_block(scene, arrays, extremes)
     if block is not None:
         data["loads"] = block
-    data.update(min_base_radius_block(scene.follower, run.min_base_radius,
+    follower = scene.follower  # sized with the R_f and offset the cam is drawn with
+    if run.curves.roller_radius_mm is not None:
+        follower = replace(follower, roller_radius_mm=run.curves.roller_radius_mm,
+                           offset_mm=run.curves.offset_mm)
+    data.update(min_base_radius_block(follower, run.min_base_radius,
                                       run.extremes is not None and arrays.model is not None))
     data.update(face_width_block(scene, extremes))
     if run.design is not None:
