@@ -193,8 +193,10 @@ def test_check_extremes_runs_on_a_scene_without_contact(tmp_path):
 def test_check_extremes_without_the_validation_folder_is_one_line(tmp_path, monkeypatch, capsys):
     # an installed wheel has camjax/ but no validation/ beside it
     from camjax import cli
+    from camjax.cli import check_extremes
 
-    monkeypatch.setattr(cli, "__file__", str(tmp_path / "site-packages" / "camjax" / "cli.py"))
+    monkeypatch.setattr(check_extremes, "__file__",
+                        str(tmp_path / "site-packages" / "camjax" / "cli" / "check_extremes.py"))
     rc = cli.main(["check-extremes", "--out", str(tmp_path / "x")])
     err = capsys.readouterr().err
     assert rc == 2 and len(err.strip().splitlines()) == 1

@@ -391,7 +391,7 @@ def test_rpm_1e6_runs_with_finite_results(tmp_path, capsys, monkeypatch):
 
 def _start(args: list[str], tmp_path: Path) -> subprocess.Popen:
     # this checkout's camjax, whatever the working folder
-    root = str(Path(cli.__file__).resolve().parents[1])
+    root = str(Path(cli.__file__).resolve().parents[2])
     path = os.pathsep.join([root, *filter(None, [os.environ.get("PYTHONPATH")])])
     env = {**os.environ, "CAMJAX_COMPILATION_CACHE": "0", "PYTHONUNBUFFERED": "1", "PYTHONPATH": path}
     return subprocess.Popen([sys.executable, "-m", "camjax.cli", *args], stdout=subprocess.PIPE,
