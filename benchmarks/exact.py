@@ -25,7 +25,7 @@ from scipy.optimize import brentq, minimize_scalar
 import camjax
 from benchmarks.harness import environment, time_python
 from camjax import pipeline
-from camjax import problem as P
+from camjax.followers.flat import problem as P
 from camjax.solvers.base import solve
 from camjax.solvers.sweep import sweep
 

@@ -3,7 +3,7 @@
 camjax: :func:`camjax.solvers.gradient.solve_pointwise` (one jitted call, ``vmap`` over the
 angles). SciPy: SLSQP looping over the angles from the box centre (``ftol`` 1e-12, analytic
 gradients). Both are checked against the closed-form per-angle optimum
-(:func:`camjax.problem.pointwise_optimum`) and against each other.
+(:func:`camjax.followers.flat.problem.pointwise_optimum`) and against each other.
 """
 
 from __future__ import annotations
@@ -12,14 +12,15 @@ import numpy as np
 
 from benchmarks import baselines
 from benchmarks.harness import compile_for, profile_thunks, time_jit, time_python
-from camjax import problem as P
+from camjax.family import weights_of
+from camjax.followers.flat import problem as P
 from camjax.solvers import gradient
 
 
 def run(scene, quick: bool) -> dict:
     """Benchmark 1 (alpha = gamma = 1, N = 360, float64)."""
     problem = P.problem_from_scene(scene, extrema="grid")
-    weights = P.weights_of(1.0, 1.0)
+    weights = weights_of(1.0, 1.0)
     loop = baselines.pointwise_slsqp(problem, 1.0, 1.0)
     # Interleave the two (rounds of: camjax median of 10 calls, one SciPy loop) so that a change
     # of load on a shared machine hits both sides of the ratio alike; speedup = ratio of medians.

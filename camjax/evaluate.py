@@ -17,9 +17,12 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from camjax import contact, geometry, loads, program, runtime
+from camjax import contact, loads, program, runtime
 from camjax import extrema as extrema_mod
 from camjax.contact import Material
+from camjax.followers import _pitch as pitch
+from camjax.followers.flat import geometry as flat_geo
+from camjax.followers.roller import geometry as roller_geo
 from camjax.loads import FollowerTrain, Guide
 from camjax.program import Kinematics, MotionProgram, TimeKinematics
 from camjax.scene import Scene
@@ -163,7 +166,7 @@ class DesignCurves(NamedTuple):
     pitch_rho_mm: np.ndarray | None
     undercut_margin_mm: np.ndarray | None  # roller: rho_c - min radius on convex parts (float max on concave)
     pressure_angle_limit_deg: float | None = None  # roller: follower.max_pressure_angle_deg
-    rotation: str = "ccw"  # the cam's turning direction (camjax.geometry.pitch)
+    rotation: str = "ccw"  # the cam's turning direction (camjax.followers._pitch)
     force_parts_N: dict[str, np.ndarray] | None = None  # {"inertia", "damping", "spring", "gravity"}
 
 
@@ -176,18 +179,18 @@ def _geometry_curves(f, rot: str, arrays: SceneArrays, base_radius_mm, rf, e):
     kin = arrays.kin
     rho = stress = width = pitch_x = pitch_y = phi = pitch_rho = margin = None
     if f.type == "flat":
-        x, y = geometry.flat_profile(base_radius_mm, kin, rot)
-        rho = geometry.flat_radius_of_curvature(base_radius_mm, kin)
+        x, y = flat_geo.flat_profile(base_radius_mm, kin, rot)
+        rho = flat_geo.flat_radius_of_curvature(base_radius_mm, kin)
         if arrays.stress_coefficient is not None:
             stress = contact.stress_from_coefficient(arrays.stress_coefficient, rho)
-        width = geometry.flat_face_width(kin, symmetric=True)
+        width = flat_geo.flat_face_width(kin, symmetric=True)
     else:
-        x, y = geometry.roller_profile(base_radius_mm, rf, e, kin, rot)
-        pitch_x, pitch_y = geometry.roller_pitch_curve(base_radius_mm, rf, e, kin, rot)
-        g = geometry.roller_geometry(base_radius_mm, rf, e, kin, rot, f.min_curvature_radius_mm)
+        x, y = roller_geo.roller_profile(base_radius_mm, rf, e, kin, rot)
+        pitch_x, pitch_y = roller_geo.roller_pitch_curve(base_radius_mm, rf, e, kin, rot)
+        g = roller_geo.roller_geometry(base_radius_mm, rf, e, kin, rot, f.min_curvature_radius_mm)
         phi, pitch_rho, margin = jnp.rad2deg(g.pressure_angle), g.pitch_radius_of_curvature, g.undercut_margin
         if arrays.stress_coefficient is not None:
-            rho_eq = geometry.roller_equivalent_radius(g.pitch_curvature, rf)
+            rho_eq = roller_geo.roller_equivalent_radius(g.pitch_curvature, rf)
             stress = contact.roller_stress(arrays.stress_coefficient, g.pressure_angle, rho_eq)
     return x, y, rho, stress, width, pitch_x, pitch_y, phi, pitch_rho, margin
 
@@ -238,10 +241,10 @@ LOAD_CURVES = ("force", "torque")  # N, N m
 GUIDE_CURVES = ("cam_force", "reaction_1", "reaction_2", "gamma")  # N, N, N, mm (GuideReactions)
 # translating roller at the base radius: pressure angle (rad), |pitch-curve rho| (mm), undercut
 # margin rho_c - rho_min on convex parts (mm; the largest float on concave ones, as
-# camjax.geometry.roller_undercut_margin)
+# camjax.followers.roller.geometry.roller_undercut_margin)
 ROLLER_CURVES = ("pressure_angle", "pitch_rho_abs", "undercut_margin")
 # the roller's pressure-angle sizing: |s' - e~| / tan(limit) - s (mm), whose max is the smallest
-# d = sqrt(R_p^2 - e^2) (camjax.geometry.roller_min_prime_radius_for_pressure_angle)
+# d = sqrt(R_p^2 - e^2) (camjax.followers.roller.geometry.roller_min_prime_radius_for_pressure_angle)
 PRESSURE_NEED = "pressure_angle_need"
 
 
@@ -249,7 +252,7 @@ class CurveConstants(NamedTuple):
     """Scene constants the curves need besides the motion (a pytree; None where not declared).
 
     The roller's offset is stored times the rotation sign (a cw cam is the mirror image of the
-    ccw one with e -> -e), so the curves are the ccw formulas of :mod:`camjax.geometry.pitch`
+    ccw one with e -> -e), so the curves are the ccw formulas of :mod:`camjax.followers._pitch`
     with the pressure angle's sign restored by ``rotation_sign``.
     """
 
@@ -268,7 +271,7 @@ def curve_constants(scene: Scene, roller_radius_mm: float | None = None,
     f = scene.follower
     if f.type != "roller":
         return CurveConstants(scene.guide, None, None, None, None, None)
-    sign = geometry.rotation_sign(scene.motion.rotation)
+    sign = pitch.rotation_sign(scene.motion.rotation)
     rf = f.roller_radius_mm if roller_radius_mm is None else roller_radius_mm
     e = f.offset_mm if offset_mm is None else offset_mm
     return CurveConstants(scene.guide, float(rf), sign * float(e), sign, f.min_curvature_radius_mm,
@@ -295,19 +298,19 @@ def _curve(name: str, p: PointValues, consts: CurveConstants, base_radius_mm) ->
     if name == "q":  # s + s'' (mm): the flat face's rho = R_b + q
         return p.kin.s + p.kin.d2s
     if name == "stress" and consts.roller_radius_mm is not None:  # roller contact stress, MPa
-        g = geometry.roller_geometry(base_radius_mm, consts.roller_radius_mm, consts.offset_mm, p.kin)
-        rho_eq = geometry.roller_equivalent_radius(g.pitch_curvature, consts.roller_radius_mm)
+        g = roller_geo.roller_geometry(base_radius_mm, consts.roller_radius_mm, consts.offset_mm, p.kin)
+        rho_eq = roller_geo.roller_equivalent_radius(g.pitch_curvature, consts.roller_radius_mm)
         return contact.roller_stress(p.stress_coefficient, g.pressure_angle, rho_eq)  # even in phi
     if name == "stress":  # flat-face contact stress at base_radius_mm, MPa
         return contact.stress_from_coefficient(p.stress_coefficient, base_radius_mm + p.kin.s + p.kin.d2s)
     if name in GUIDE_CURVES:
-        offset = geometry.flat_contact_offset(p.kin)
+        offset = flat_geo.flat_contact_offset(p.kin)
         return getattr(loads.guide_reactions(consts.guide, p.force_N, offset), name)
     if name == PRESSURE_NEED:
-        return geometry.roller_pressure_angle_need(p.kin.ds, p.kin.s, consts.offset_mm,
+        return roller_geo.roller_pressure_angle_need(p.kin.ds, p.kin.s, consts.offset_mm,
                                                    consts.tan_pressure_limit)
     if name in ROLLER_CURVES:
-        g = geometry.roller_geometry(base_radius_mm, consts.roller_radius_mm, consts.offset_mm, p.kin,
+        g = roller_geo.roller_geometry(base_radius_mm, consts.roller_radius_mm, consts.offset_mm, p.kin,
                                      "ccw", consts.min_curvature_radius_mm)
         return {"pressure_angle": consts.rotation_sign * g.pressure_angle,
                 "undercut_margin": g.undercut_margin,

@@ -29,7 +29,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from camjax import contact, geometry
+from camjax import contact
 from camjax.evaluate import (
     PRESSURE_NEED,
     DesignCurves,
@@ -41,6 +41,8 @@ from camjax.evaluate import (
     scene_arrays,
 )
 from camjax.family import FEASIBILITY_RTOL_STRESS, FEASIBILITY_TOL_MM, FEASIBILITY_TOL_RAD
+from camjax.followers.flat import geometry as flat_geo
+from camjax.followers.roller import geometry as roller_geo
 from camjax.scene import Scene
 
 DRAWING_MARGIN_MM = 1.0  # without a [design], draw at the smallest admissible R_b + this, rounded up
@@ -70,7 +72,7 @@ def min_base_radius(scene: Scene, arrays: SceneArrays) -> MinBaseRadius:
     (``[motion] extrema``). Roller: the smallest prime circle with
     |phi| <= follower.max_pressure_angle_deg and no undercut (convex cam-surface radius >=
     follower.min_curvature_radius_mm) at the follower's R_f and offset
-    (:func:`camjax.geometry.roller_min_prime_radius`: closed form for the pressure angle, its max
+    (:func:`camjax.followers.roller.geometry.roller_min_prime_radius`: closed form for the pressure angle, its max
     over the angle refined off the grid with exact extrema; bisection on the samples for the
     undercut), minus R_f; the angle is where the binding limit is reached.
     """
@@ -81,10 +83,10 @@ def min_base_radius(scene: Scene, arrays: SceneArrays) -> MinBaseRadius:
         return MinBaseRadius(-q.min, q.min_deg, "curvature")
     f = scene.follower
     if f.type == "flat":
-        r, i = jax.jit(geometry.flat_min_base_radius)(arrays.kin)
+        r, i = jax.jit(flat_geo.flat_min_base_radius)(arrays.kin)
         # + 0.0: -0.0 (s = s'' = 0 somewhere, e.g. uniform laws) reads as 0
         return MinBaseRadius(_f(r) + 0.0, _f(t[int(i)]), "curvature")
-    sizing = geometry.roller_min_prime_radius(arrays.kin, f.roller_radius_mm, f.offset_mm,
+    sizing = roller_geo.roller_min_prime_radius(arrays.kin, f.roller_radius_mm, f.offset_mm,
                                               math.radians(f.max_pressure_angle_deg),
                                               f.min_curvature_radius_mm, scene.motion.rotation)
     rp = _f(sizing.prime_radius_mm)
@@ -138,7 +140,7 @@ def solve_design(scene: Scene, arrays: SceneArrays) -> DesignSolution | None:
     if scene.follower.type == "roller":
         return _roller_design_solution(scene, arrays, out)
     if problem.exact is not None:  # every figure refined off the grid
-        from camjax import problem as P
+        from camjax.followers.flat import problem as P
 
         e = problem.exact
         curvature = float(problem.rho_min_mm - e.q_min_mm)
@@ -162,9 +164,9 @@ def solve_design(scene: Scene, arrays: SceneArrays) -> DesignSolution | None:
 def _design_needs(problem, stress_coefficient, kin, base_radius_mm):
     """Peak stress at the design, per-angle stress need and R_b need, the face width need (one
     compiled call)."""
-    from camjax import problem as P
+    from camjax.followers.flat import problem as P
 
-    rho = geometry.flat_radius_of_curvature(base_radius_mm, kin)
+    rho = flat_geo.flat_radius_of_curvature(base_radius_mm, kin)
     sigma_peak = jnp.max(contact.stress_from_coefficient(stress_coefficient, rho))
     need = P.rho_need(problem) - problem.q_mm  # max over angles: P.required_base_radius
     return sigma_peak, P.stress_rho_need(problem), need, P.required_face_width(problem)
@@ -176,7 +178,7 @@ def _roller_design_solution(scene: Scene, arrays: SceneArrays, out: dict) -> Des
     f, t = scene.follower, np.asarray(arrays.theta_deg)
     rf, e = out["roller_radius_mm"], out["offset_mm"]
     curves = evaluate_design(scene, arrays, out["base_radius_mm"], roller_radius_mm=rf, offset_mm=e)
-    sizing = geometry.roller_min_prime_radius(arrays.kin, rf, e, math.radians(f.max_pressure_angle_deg),
+    sizing = roller_geo.roller_min_prime_radius(arrays.kin, rf, e, math.radians(f.max_pressure_angle_deg),
                                               f.min_curvature_radius_mm, scene.motion.rotation)
     peak_stress = None if curves.stress_MPa is None else _f(np.max(curves.stress_MPa))
     return DesignSolution(out, peak_stress, _f(sizing.prime_radius_mm) - rf, _f(t[int(sizing.index)]),

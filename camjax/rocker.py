@@ -1,6 +1,6 @@
 """A scene with an oscillating (rocker) follower: sizing, curves at one design, and its report block.
 
-Data flows as for translating followers (:mod:`camjax.geometry.oscillating` for the maths):
+Data flows as for translating followers (:mod:`camjax.followers.oscillating_roller.geometry` for the maths):
 
 1. :func:`rocker_sizing` finds the smallest admissible cam with the scene's pivot and arm (or
    face): roller -- the smallest prime radius with |phi| <= ``max_pressure_angle_deg`` and no
@@ -26,7 +26,10 @@ from typing import NamedTuple
 import jax.numpy as jnp
 import numpy as np
 
-from camjax import contact, geometry, loads
+from camjax import contact, loads
+from camjax.followers.oscillating_flat import geometry as rocker_flat_geo
+from camjax.followers.oscillating_roller import geometry as rocker_roller_geo
+from camjax.followers.roller import geometry as roller_geo
 from camjax.program import Kinematics
 from camjax.scene import SceneError
 
@@ -66,7 +69,7 @@ class RockerCurves(NamedTuple):
     prime_radius_mm: float | None  # roller
     arm_start_angle_deg: float  # psi0, from the line of centres
     arm_angle_deg: np.ndarray  # psi = psi0 + s
-    profile_x_mm: np.ndarray  # cam outline, cam coordinates (camjax.geometry.pitch convention)
+    profile_x_mm: np.ndarray  # cam outline, cam coordinates (camjax.followers._pitch convention)
     profile_y_mm: np.ndarray
     pitch_x_mm: np.ndarray | None  # roller: pitch curve
     pitch_y_mm: np.ndarray | None
@@ -94,7 +97,7 @@ def rocker_sizing(scene, kin: Kinematics) -> RockerSizing:
     f, rotation = scene.follower, scene.motion.rotation
     t = np.degrees(np.asarray(kin.theta))
     if f.type == "oscillating_roller":
-        s = geometry.oscillating_roller_min_prime_radius(
+        s = rocker_roller_geo.oscillating_roller_min_prime_radius(
             kin, f.pivot_distance_mm, f.arm_length_mm, f.roller_radius_mm,
             math.radians(f.max_pressure_angle_deg), f.min_curvature_radius_mm, rotation)
         if not bool(s.found):
@@ -104,7 +107,7 @@ def rocker_sizing(scene, kin: Kinematics) -> RockerSizing:
                                "a longer arm, another pivot distance or a larger max_pressure_angle_deg")
         binding = "undercut" if bool(s.undercut_binds) else "pressure_angle"
         return RockerSizing(_f(s.base_radius_mm), _f(s.prime_radius_mm), _f(t[int(s.index)]), binding)
-    s = geometry.oscillating_flat_min_base_radius(kin, f.pivot_distance_mm, f.face_offset_mm,
+    s = rocker_flat_geo.oscillating_flat_min_base_radius(kin, f.pivot_distance_mm, f.face_offset_mm,
                                                   f.min_curvature_radius_mm, rotation)
     if not bool(s.found):
         raise SceneError("follower.pivot_distance_mm", f.pivot_distance_mm,
@@ -176,18 +179,18 @@ def evaluate_rocker(scene, kin: Kinematics, cam_speed_rad_s, base_radius_mm: flo
     if f.type == "oscillating_roller":
         rf, l = f.roller_radius_mm, f.arm_length_mm
         rp = base_radius_mm + rf
-        g = geometry.oscillating_roller_geometry(d, l, rf, rp, kin, rotation, f.min_curvature_radius_mm)
-        x, y = geometry.oscillating_roller_profile(d, l, rf, rp, kin, rotation)
-        pitch_x, pitch_y = geometry.oscillating_roller_pitch_curve(d, l, rp, kin, rotation)
+        g = rocker_roller_geo.oscillating_roller_geometry(d, l, rf, rp, kin, rotation, f.min_curvature_radius_mm)
+        x, y = rocker_roller_geo.oscillating_roller_profile(d, l, rf, rp, kin, rotation)
+        pitch_x, pitch_y = rocker_roller_geo.oscillating_roller_pitch_curve(d, l, rp, kin, rotation)
         psi, phi, rho = g.arm_angle, g.pressure_angle, g.cam_radius_of_curvature
         pitch_rho, margin = g.pitch_radius_of_curvature, g.undercut_margin
-        psi0 = geometry.arm_start_angle(rp, d, l)
+        psi0 = rocker_roller_geo.arm_start_angle(rp, d, l)
     else:
         rp, l = None, None
-        g = geometry.oscillating_flat_geometry(d, f.face_offset_mm, base_radius_mm, kin, rotation)
-        x, y = geometry.oscillating_flat_profile(d, f.face_offset_mm, base_radius_mm, kin, rotation)
+        g = rocker_flat_geo.oscillating_flat_geometry(d, f.face_offset_mm, base_radius_mm, kin, rotation)
+        x, y = rocker_flat_geo.oscillating_flat_profile(d, f.face_offset_mm, base_radius_mm, kin, rotation)
         psi, phi, rho, xi = g.arm_angle, g.pressure_angle, g.radius_of_curvature, g.contact_distance
-        psi0 = geometry.face_start_angle(base_radius_mm, d, f.face_offset_mm)
+        psi0 = rocker_flat_geo.face_start_angle(base_radius_mm, d, f.face_offset_mm)
     moment = force = torque = stress = None
     if f.train is not None:
         moment = loads.rocker_torque(f.train, kin, w)
@@ -201,7 +204,7 @@ def evaluate_rocker(scene, kin: Kinematics, cam_speed_rad_s, base_radius_mm: flo
             if f.type == "oscillating_roller":
                 # the force along the roller's path, M / l, is the roller formula's "axial" force
                 coeff = contact.stress_coefficient(moment / (l * 1e-3), c.cam_width_mm, c.cam, c.follower)
-                rho_eq = geometry.roller_equivalent_radius(g.pitch_curvature, f.roller_radius_mm)
+                rho_eq = roller_geo.roller_equivalent_radius(g.pitch_curvature, f.roller_radius_mm)
                 stress = contact.roller_stress(coeff, phi, rho_eq)
             else:
                 stress = contact.hertz_line_stress(force, rho, c.cam_width_mm, c.cam, c.follower)

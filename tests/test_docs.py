@@ -104,7 +104,7 @@ def _documented_modules() -> list[str]:
 
 def test_every_public_module_has_an_api_page_in_the_nav():
     modules = _documented_modules()
-    assert "camjax.problem" in modules and "camjax" in modules  # the walk finds the package
+    assert "camjax.followers.flat.problem" in modules and "camjax" in modules  # the walk finds the package
     nav = (ROOT / "mkdocs.yml").read_text()
     for name in modules:
         page = ROOT / "docs" / "api" / f"{name}.md"

@@ -9,8 +9,8 @@ from scipy.optimize import brentq, minimize_scalar
 
 import camjax
 from camjax import pipeline
-from camjax import problem as P
 from camjax.evaluate import scene_arrays
+from camjax.followers.flat import problem as P
 from camjax.scene import builtin_scene_text, parse_scene
 from camjax.solvers.base import solve
 

@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 import camjax
-from camjax import contact, geometry, loads
+from camjax import contact, loads
+from camjax.followers.flat import geometry as flat_geo
 from camjax.numerics import RHO_FLOOR_MM
 
 
@@ -79,7 +80,7 @@ def test_gradients_finite_for_any_base_radius_lift_speed_spring(default_scene):
         motion = camjax.program.time_kinematics(kin, w)
         train = sc.follower.train._replace(spring_N_per_m=k)
         f = loads.kinetostatic_force(train, motion)
-        rho = geometry.flat_radius_of_curvature(rb, kin)
+        rho = flat_geo.flat_radius_of_curvature(rb, kin)
         sigma = contact.hertz_line_stress(f, rho, c.cam_width_mm, c.cam, c.follower)
         torque = loads.cam_torque(f, kin.ds)
         return jnp.max(sigma) + jnp.max(torque)

@@ -8,7 +8,10 @@ import math
 import numpy as np
 import pytest
 
-from camjax import cli, contact, geometry, loads
+from camjax import cli, contact, loads
+from camjax.followers.oscillating_flat import geometry as rocker_flat_geo
+from camjax.followers.oscillating_roller import geometry as rocker_roller_geo
+from camjax.followers.roller import geometry as roller_geo
 from camjax.laws import get_law
 from camjax.loads import RockerTrain
 from camjax.program import MotionProgram, Segment, evaluate
@@ -51,7 +54,7 @@ def test_roller_contact_force_and_cam_torque_from_the_moments_of_the_contact_for
     flip = np.sign(nx * cx + ny * cy)
     nx, ny = nx * flip, ny * flip
     m = np.asarray(loads.rocker_torque(TRAIN, kin, OMEGA))
-    phi = geometry.oscillating_roller_pressure_angle(d, l, psi0, kin, rotation)
+    phi = rocker_roller_geo.oscillating_roller_pressure_angle(d, l, psi0, kin, rotation)
     p = np.asarray(loads.rocker_roller_contact_force(m, l, phi))
     # P n at the roller centre turns the arm towards larger psi (clockwise) by M: the lever relation
     moment = -((cx - d) * p * ny - cy * p * nx) * 1e-3
@@ -69,9 +72,9 @@ def test_flat_contact_force_and_cam_torque_from_the_moments_of_the_contact_force
     kin = evaluate(PROGRAM, 720)
     th = np.asarray(kin.theta)
     d, f, rb = 120.0, 10.0, 95.0
-    g = geometry.oscillating_flat_geometry(d, f, rb, kin, rotation)
+    g = rocker_flat_geo.oscillating_flat_geometry(d, f, rb, kin, rotation)
     psi = np.asarray(g.arm_angle)
-    x, y = geometry.oscillating_flat_profile(d, f, rb, kin, rotation)
+    x, y = rocker_flat_geo.oscillating_flat_profile(d, f, rb, kin, rotation)
     xf, yf = _turn(np.asarray(x), np.asarray(y), sigma * th)  # contact point, fixed frame
     mx, my = np.sin(psi), np.cos(psi)  # face normal, away from the cam
     m = np.asarray(loads.rocker_torque(TRAIN, kin, OMEGA))
@@ -96,10 +99,10 @@ def test_hertz_stress_on_a_dwell_in_closed_form():
     k = (1 - 0.3**2) / 2.1e5 + (1 - 0.26**2) / 1.15e5
     p = 6.0 / (l * 1e-3 * cos_phi)
     ref = 0.564 * math.sqrt(p / 8.0 * (1 / (rp - rf) + 1 / rf) / k)
-    g = geometry.oscillating_roller_geometry(d, l, rf, rp, kin)
+    g = rocker_roller_geo.oscillating_roller_geometry(d, l, rf, rp, kin)
     np.testing.assert_allclose(loads.rocker_roller_contact_force(m, l, g.pressure_angle), p, rtol=1e-13)
     coeff = contact.stress_coefficient(m / (l * 1e-3), 8.0, cam, fol)
-    sigma = contact.roller_stress(coeff, g.pressure_angle, geometry.roller_equivalent_radius(g.pitch_curvature, rf))
+    sigma = contact.roller_stress(coeff, g.pressure_angle, roller_geo.roller_equivalent_radius(g.pitch_curvature, rf))
     np.testing.assert_allclose(sigma, ref, rtol=1e-12)
 
 

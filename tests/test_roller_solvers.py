@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 import camjax
-from camjax import geometry
-from camjax import roller_problem as R
+from camjax.followers.roller import geometry as roller_geo
+from camjax.followers.roller import problem as R
 from camjax.solvers import scipy_roller
 from camjax.solvers.base import solve
 from camjax.solvers.registry import MODES, SOLVERS
@@ -39,7 +39,7 @@ def dense_scan_prime_radius(scene, zooms=3, grid=(41, 11, 41)):
     lim = math.radians(f.max_pressure_angle_deg)
 
     def cost(rb, rf, e):
-        g = geometry.roller_geometry(rb, rf, e, kin, scene.motion.rotation, f.min_curvature_radius_mm)
+        g = roller_geo.roller_geometry(rb, rf, e, kin, scene.motion.rotation, f.min_curvature_radius_mm)
         ok = (jnp.max(jnp.abs(g.pressure_angle)) <= lim) & (jnp.min(g.undercut_margin) >= 0)
         return jnp.where(ok, rb + rf, jnp.inf)
 
@@ -65,7 +65,7 @@ def exact_offset_scan(scene):
     rf = d.roller_radius_mm[0]  # with gamma = 0 the smallest roller is best: undercut only gets easier
 
     def rp(e):
-        return geometry.roller_min_prime_radius(kin, rf, e, math.radians(f.max_pressure_angle_deg),
+        return roller_geo.roller_min_prime_radius(kin, rf, e, math.radians(f.max_pressure_angle_deg),
                                                 f.min_curvature_radius_mm, scene.motion.rotation).prime_radius_mm
 
     rp = jax.jit(jax.vmap(rp))
@@ -111,7 +111,7 @@ def test_every_solver_and_mode_solves_the_roller_problem(scene, solver, mode):
     problem = R.problem_from_scene(dataclasses.replace(scene, design=fixed), extrema="grid")
     sol = solve(problem, (1.0, 0.0), mode=mode, solver=solver)
     f = scene.follower
-    ref = geometry.roller_min_prime_radius(camjax.scene_arrays(scene).kin, 5.0, 1.0,
+    ref = roller_geo.roller_min_prime_radius(camjax.scene_arrays(scene).kin, 5.0, 1.0,
                                            math.radians(f.max_pressure_angle_deg), f.min_curvature_radius_mm)
     # gradient and hybrid to the feasibility tolerance; the GA (200 generations, decaying
     # mutation) to 1e-3 mm (measured ~1e-5)

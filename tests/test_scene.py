@@ -145,10 +145,10 @@ ROLLER_FOLLOWER = ('type = "flat"', 'type = "roller"\nroller_radius_mm = 6.0')
 
 
 def test_limits_and_rotation_are_scene_data():
-    from camjax.geometry import FLAT_MIN_CURVATURE_RADIUS_MM
+    from camjax.followers.flat.geometry import FLAT_MIN_CURVATURE_RADIUS_MM
 
     flat = parse_scene(BASE)
-    assert flat.motion.rotation == "ccw"  # the convention of camjax.geometry.pitch
+    assert flat.motion.rotation == "ccw"  # the convention of camjax.followers._pitch
     assert flat.follower.min_curvature_radius_mm == FLAT_MIN_CURVATURE_RADIUS_MM
     roller = parse_scene(BASE.replace(*ROLLER_FOLLOWER))
     assert roller.follower.max_pressure_angle_deg == 30.0

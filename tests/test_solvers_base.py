@@ -9,7 +9,8 @@ import jax
 import numpy as np
 import pytest
 
-from camjax import problem as P
+from camjax.family import weights_of
+from camjax.followers.flat import problem as P
 from camjax.solvers import base, ga, registry
 from camjax.solvers.base import Solution, solve
 
@@ -34,7 +35,7 @@ def test_every_solver_returns_a_solution_near_the_exact_global_optimum(problem, 
     settings = base.Settings.of_solvers(ga=SMALL_GA)
     sol = solve(problem, (1.0, 1.0), solver=solver, settings=settings)
     assert isinstance(sol, Solution) and sol.mode == "global" and sol.solver == solver
-    exact = P.global_optimum(problem, P.weights_of(1.0, 1.0))  # bisection, independent of the solvers
+    exact = P.global_optimum(problem, weights_of(1.0, 1.0))  # bisection, independent of the solvers
     # the gradient-polished solvers reach the bisection's optimum to their stopping rule (1e-6 mm
     # measured ~1e-9); the short GA run gets within 0.5 mm of it (its mutation scale at the end)
     tol = 0.5 if solver == "ga" else 1e-6
@@ -48,7 +49,7 @@ def test_every_solver_returns_a_solution_near_the_exact_global_optimum(problem, 
 
 @pytest.mark.parametrize("solver", registry.SOLVERS)
 def test_every_solver_in_pointwise_mode_matches_the_closed_form(coarse, solver):
-    w = P.weights_of(1.0, 1.0)
+    w = weights_of(1.0, 1.0)
     sol = solve(coarse, (1.0, 1.0), mode="pointwise", solver=solver,
                 settings=base.Settings.of_solvers(ga=SMALL_GA))
     closed = P.pointwise_optimum(coarse, w)  # closed form per angle (SPEC 5)
@@ -69,7 +70,7 @@ def test_unreachable_bounds_give_status_infeasible(problem, solver):
 
 
 def test_solve_batch_is_traceable_and_vmapped(problem):
-    w = P.weights_of([1.0, 10.0], [1.0, 1.0])
+    w = weights_of([1.0, 10.0], [1.0, 1.0])
     sol = base.solve_batch(problem, w, base.weighting_keys(0, 2))
     assert sol.batch_size == 2 and sol.status.dtype == np.int32
     # a larger alpha / gamma gives a smaller cam (SPEC 7's trade)

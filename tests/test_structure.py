@@ -13,10 +13,10 @@ PACKAGE = ROOT / "camjax"
 
 # module (dotted prefix) -> modules it must not import: the stages after it in the chain
 LATER = {
-    "camjax.evaluate": ("camjax.problem", "camjax.solvers", "camjax.pipeline", "camjax.output",
+    "camjax.evaluate": ("camjax.followers.flat.problem", "camjax.solvers", "camjax.pipeline", "camjax.output",
                         "camjax.cli"),
-    "camjax.rocker": ("camjax.problem", "camjax.solvers", "camjax.pipeline", "camjax.output", "camjax.cli"),
-    "camjax.output": ("camjax.problem", "camjax.solvers", "camjax.pipeline", "camjax.cli",
+    "camjax.rocker": ("camjax.followers.flat.problem", "camjax.solvers", "camjax.pipeline", "camjax.output", "camjax.cli"),
+    "camjax.output": ("camjax.followers.flat.problem", "camjax.solvers", "camjax.pipeline", "camjax.cli",
                       "camjax.scaleout"),
     "camjax.pipeline": ("camjax.cli", "camjax.scaleout"),
     "camjax.runtime": ("camjax.",),  # set-up only: must load before anything it could configure

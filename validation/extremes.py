@@ -25,8 +25,12 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from camjax import contact, geometry, loads, program
+from camjax import contact, loads, program
 from camjax.evaluate import scene_arrays
+from camjax.followers.flat import geometry as flat_geo
+from camjax.followers.oscillating_flat import geometry as rocker_flat_geo
+from camjax.followers.oscillating_roller import geometry as rocker_roller_geo
+from camjax.followers.roller import geometry as roller_geo
 from camjax.laws import LAWS, boundary_condition_number, polynomial_coefficients, polynomial_law
 from camjax.numerics import RHO_FLOOR_MM, STRESS_RTOL, precision_warning
 from camjax.program import MotionProgram, Segment
@@ -263,17 +267,17 @@ def geometry_cases(scene: Scene) -> list[Case]:
         return rocker_geometry_cases(scene)
     out = []
     arrays = scene_arrays(scene)
-    rb_min = float(geometry.flat_min_base_radius(arrays.kin)[0])
+    rb_min = float(flat_geo.flat_min_base_radius(arrays.kin)[0])
 
     def peak_stress(rb):
-        rho = geometry.flat_radius_of_curvature(rb, arrays.kin)
+        rho = flat_geo.flat_radius_of_curvature(rb, arrays.kin)
         return jnp.max(contact.stress_from_coefficient(arrays.stress_coefficient, rho))
 
     vg = jax.jit(jax.value_and_grad(peak_stress))
     for factor in (1e-3, 0.1, 0.5, 0.99, 1.0, 1.0 + 1e-12, 1.01, 2.0, 10.0):
         rb = rb_min * factor
         val, grad = vg(rb)
-        rho_min = float(jnp.min(geometry.flat_radius_of_curvature(rb, arrays.kin)))
+        rho_min = float(jnp.min(flat_geo.flat_radius_of_curvature(rb, arrays.kin)))
         feasible = rho_min > 0
         out.append(
             _finite_case(
@@ -361,7 +365,7 @@ def speed_cases(scene: Scene) -> list[Case]:
 def _report_figures(scene: Scene, dtype, base_radius_mm: float) -> dict[str, float]:
     a = scene_arrays(scene, dtype=dtype)
     rb = jnp.asarray(base_radius_mm, dtype)
-    rho = geometry.flat_radius_of_curvature(rb, a.kin)
+    rho = flat_geo.flat_radius_of_curvature(rb, a.kin)
     figs = {
         "velocity max (m/s)": jnp.max(a.motion.velocity),
         "velocity min (m/s)": jnp.min(a.motion.velocity),
@@ -373,8 +377,8 @@ def _report_figures(scene: Scene, dtype, base_radius_mm: float) -> dict[str, flo
         "force min (N)": jnp.min(a.force_N),
         "torque max (N m)": jnp.max(a.torque_Nm),
         "torque min (N m)": jnp.min(a.torque_Nm),
-        "min base radius (mm)": geometry.flat_min_base_radius(a.kin)[0],
-        "min face width (mm)": geometry.flat_face_width(a.kin),
+        "min base radius (mm)": flat_geo.flat_min_base_radius(a.kin)[0],
+        "min face width (mm)": flat_geo.flat_face_width(a.kin),
         f"rho min at R_b = {base_radius_mm:g} (mm)": jnp.min(rho),
         f"stress max at R_b = {base_radius_mm:g} (MPa)": jnp.max(
             contact.stress_from_coefficient(a.stress_coefficient, rho)
@@ -406,13 +410,13 @@ def precision_cases(scene: Scene, base_radii: Iterable[float] = (28.4,), rtol32:
             )
     # near the curvature limit float32 loses accuracy: the guard must say so
     a64, a32 = scene_arrays(scene), scene_arrays(scene, dtype=jnp.float32)
-    rb_min = float(geometry.flat_min_base_radius(a64.kin)[0])
+    rb_min = float(flat_geo.flat_min_base_radius(a64.kin)[0])
     for gap in (1e-1, 1e-2, 1e-3):
         rb = rb_min + gap
         s64 = contact.stress_from_coefficient(
-            a64.stress_coefficient, geometry.flat_radius_of_curvature(rb, a64.kin)
+            a64.stress_coefficient, flat_geo.flat_radius_of_curvature(rb, a64.kin)
         )
-        rho32 = geometry.flat_radius_of_curvature(jnp.float32(rb), a32.kin)
+        rho32 = flat_geo.flat_radius_of_curvature(jnp.float32(rb), a32.kin)
         s32 = contact.stress_from_coefficient(a32.stress_coefficient, rho32)
         err = abs(float(jnp.max(s32)) - float(jnp.max(s64))) / float(jnp.max(s64))
         warned = precision_warning(jnp.float32(rb), a32.kin.s, a32.kin.d2s, rho32, jnp.float32) is not None
@@ -441,7 +445,7 @@ def optimization_cases(scene: Scene) -> list[Case]:
     oscillating follower: :func:`rocker_optimization_cases`)."""
     if scene.follower.oscillating:
         return rocker_optimization_cases(scene)
-    from camjax import problem as pb
+    from camjax.followers.flat import problem as pb
     from camjax.solvers import ga, sweep
 
     out = []
@@ -591,15 +595,15 @@ def _rocker_curves(scene: Scene, kin, w, base_radius_mm):
     moment = loads.rocker_torque(f.train, kin, w)
     if f.type == "oscillating_roller":
         rf, arm = f.roller_radius_mm, f.arm_length_mm
-        g = geometry.oscillating_roller_geometry(d, arm, rf, base_radius_mm + rf, kin, rot,
+        g = rocker_roller_geo.oscillating_roller_geometry(d, arm, rf, base_radius_mm + rf, kin, rot,
                                                  f.min_curvature_radius_mm)
         phi = g.pressure_angle
         force = loads.rocker_roller_contact_force(moment, arm, phi)
         coeff = contact.stress_coefficient(moment / (arm * 1e-3), c.cam_width_mm, c.cam, c.follower)
-        stress = contact.roller_stress(coeff, phi, geometry.roller_equivalent_radius(g.pitch_curvature, rf))
+        stress = contact.roller_stress(coeff, phi, roller_geo.roller_equivalent_radius(g.pitch_curvature, rf))
         limit = g.undercut_margin  # <= 0: undercut
     else:
-        g = geometry.oscillating_flat_geometry(d, f.face_offset_mm, base_radius_mm, kin, rot)
+        g = rocker_flat_geo.oscillating_flat_geometry(d, f.face_offset_mm, base_radius_mm, kin, rot)
         phi = g.pressure_angle
         force = loads.rocker_flat_contact_force(moment, g.contact_distance)
         stress = contact.hertz_line_stress(force, g.radius_of_curvature, c.cam_width_mm, c.cam, c.follower)
@@ -614,7 +618,7 @@ def rocker_geometry_cases(scene: Scene) -> list[Case]:
     and curvature with finite gradients; at the smallest radius its binding limit holds with
     equality; at the drawing radius the pitch points (roller) or contact points (flat face) lie
     where the pivot, arm and face put them; the Hertz closed forms of :func:`stress_cases`."""
-    from camjax.geometry.pitch import to_cam_frame
+    from camjax.followers._pitch import to_cam_frame
     from camjax.rocker import closure_problem
 
     out = []
@@ -656,12 +660,12 @@ def rocker_geometry_cases(scene: Scene) -> list[Case]:
     px, py = (np.asarray(v) for v in to_cam_frame(f.pivot_distance_mm, 0.0, theta, rot))  # the pivot
     psi = np.asarray(_rocker_curves(scene, kin, w, drawn)["arm_angle"])
     if f.type == "oscillating_roller":
-        x, y = (np.asarray(v) for v in geometry.oscillating_roller_pitch_curve(
+        x, y = (np.asarray(v) for v in rocker_roller_geo.oscillating_roller_pitch_curve(
             f.pivot_distance_mm, f.arm_length_mm, drawn + f.roller_radius_mm, kin, rot))
         err = float(np.max(np.abs(np.hypot(x - px, y - py) - f.arm_length_mm)))
         name = f"R_b = {drawn:g} mm: pitch points at the arm length from the pivot"
     else:
-        x, y = (np.asarray(v) for v in geometry.oscillating_flat_profile(
+        x, y = (np.asarray(v) for v in rocker_flat_geo.oscillating_flat_profile(
             f.pivot_distance_mm, f.face_offset_mm, drawn, kin, rot))
         # the face normal (sin psi, cos psi) in the fixed frame, turned into the cam frame with the pivot
         tip = to_cam_frame(f.pivot_distance_mm + np.sin(psi), np.cos(psi), theta, rot)

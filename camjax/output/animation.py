@@ -8,7 +8,7 @@ point at cam angle theta lies at polar angle theta clockwise from +Y. In the fix
 coordinates drawn here the follower slides along +Y and the cam turns counter-clockwise: a cam
 point P is drawn at R(theta) P, R the rotation by +theta (a clockwise cam: R(-theta) P).
 
-Oscillating (rocker) followers are drawn in the fixed frame of :mod:`camjax.geometry.oscillating`
+Oscillating (rocker) followers are drawn in the fixed frame of :mod:`camjax.followers.oscillating_roller.geometry`
 (the same rotation of the outline): the pivot at (d, 0), the arm at psi = psi0 + s from the line
 of centres; the roller centre, the face line and their start angles come from that module.
 
@@ -27,7 +27,7 @@ import numpy as np
 
 FOLLOWER_TYPES = ("flat", "roller", "oscillating_roller", "oscillating_flat")
 OSCILLATING_TYPES = ("oscillating_roller", "oscillating_flat")
-# violations smaller than the solvers' feasibility tolerances (camjax.problem.FEASIBILITY_TOL_MM
+# violations smaller than the solvers' feasibility tolerances (camjax.followers.flat.problem.FEASIBILITY_TOL_MM
 # and its relative one) are not drawn as such: an optimum sits on its active limits
 LENGTH_TOL_MM = 1e-6
 ANGLE_RTOL = 1e-6
@@ -170,9 +170,9 @@ def frame_poses(m: Mechanism, frames: int) -> FramePoses:
 
 def _rocker_points(m: Mechanism, psi) -> tuple[np.ndarray, np.ndarray]:
     """The rocker's moving reference point at arm angles psi (rad), fixed frame, mm: the roller
-    centre (:func:`camjax.geometry.oscillating.roller_centre`) or the foot of the pivot on the face,
-    A - f m with m = (sin psi, cos psi) the face normal (:mod:`camjax.geometry.oscillating`)."""
-    from camjax.geometry.oscillating import roller_centre
+    centre (:func:`camjax.followers.oscillating_roller.geometry.roller_centre`) or the foot of the pivot on the face,
+    A - f m with m = (sin psi, cos psi) the face normal (:mod:`camjax.followers.oscillating_roller.geometry`)."""
+    from camjax.followers.oscillating_roller.geometry import roller_centre
 
     d = m.pivot_distance_mm
     if m.follower_type == "oscillating_roller":

@@ -14,9 +14,10 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from camjax import geometry, loads
+from camjax import loads
 from camjax.evaluate import DesignCurves, Extremes, SceneArrays, curve_extremes, curve_names
 from camjax.family import FEASIBILITY_TOL_RAD
+from camjax.followers.flat import geometry as flat_geo
 from camjax.program import joints
 from camjax.scene import DesignSpec, FollowerSpec, Scene
 
@@ -172,7 +173,7 @@ def guide_block(scene: Scene, arrays: SceneArrays, extremes: dict[str, Extremes]
     else:
         # a in Chen's frame, whose friction directions turn with the cam: a cw cam is the mirror
         # image of the ccw one (face, friction and all), so a = s' for either rotation
-        offset = geometry.flat_contact_offset(arrays.kin)
+        offset = flat_geo.flat_contact_offset(arrays.kin)
         r = loads.guide_reactions(guide, arrays.force_N, offset)
         reactions = {"cam_force_N": extrema(r.cam_force, t), "reaction_1_N": extrema(r.reaction_1, t),
                      "reaction_2_N": extrema(r.reaction_2, t)}
@@ -222,7 +223,7 @@ def min_base_radius_block(follower: FollowerSpec, minimum: MinBaseRadius,
 def face_width_block(scene: Scene, extremes: dict[str, Extremes]) -> dict[str, Any]:
     """Minimum flat-face width (mm): symmetric 2 max|s'| and asymmetric max s' - min s'.
 
-    The contact offset is s' (:func:`camjax.geometry.flat_contact_offset`), so both come from
+    The contact offset is s' (:func:`camjax.followers.flat.geometry.flat_contact_offset`), so both come from
     the extremes of s'.
     """
     if scene.follower.type != "flat":

@@ -2,7 +2,7 @@
 motion.gif (:mod:`camjax.output.animation`).
 
 The same files as a translating follower's (:mod:`camjax.export`): the outline in cam coordinates
-(convention of :mod:`camjax.geometry.pitch`), one DXF polyline, and figures built without pyplot.
+(convention of :mod:`camjax.followers._pitch`), one DXF polyline, and figures built without pyplot.
 profile.png draws the pivot, the arm and the roller (or the face) at the angle of the largest
 pressure angle (roller) or of the contact's furthest reach along the face (flat face).
 """
@@ -16,7 +16,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from camjax.evaluate import SceneArrays
-from camjax.geometry.pitch import to_cam_frame
+from camjax.followers._pitch import to_cam_frame
 from camjax.output.export import CSV_FORMAT, save_figure, write_profile_dxf
 from camjax.output.plots import (  # _cycle_axis reads only segment_starts_deg
     _cycle_axis,

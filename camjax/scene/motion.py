@@ -6,7 +6,7 @@ import math
 
 from camjax.errors import MISSING, SceneError
 from camjax.extrema import EXTREMA_MODES
-from camjax.geometry import ROTATIONS
+from camjax.followers._pitch import ROTATIONS
 from camjax.laws import FOURIER_PRESETS, LAWS, FourierSeries, fourier_law, get_law, polynomial_law
 from camjax.program import KINDS, MotionProgram, Segment
 from camjax.scene.reader import DEFAULT, TableReader, build

@@ -7,7 +7,8 @@ from typing import Any
 
 from camjax.contact import Material
 from camjax.errors import MISSING, SceneError
-from camjax.geometry import OSCILLATING_FLAT_MIN_CURVATURE_RADIUS_MM, ROLLER_MIN_CURVATURE_RADIUS_MM
+from camjax.followers.oscillating_flat.geometry import OSCILLATING_FLAT_MIN_CURVATURE_RADIUS_MM
+from camjax.followers.roller.geometry import ROLLER_MIN_CURVATURE_RADIUS_MM
 from camjax.loads import FollowerTrain, Guide, RockerTrain
 from camjax.scene.reader import DEFAULT, TableReader, build, fixed_or_free, number_list
 from camjax.scene.spec import (

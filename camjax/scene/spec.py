@@ -9,7 +9,9 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from camjax.contact import Material
-from camjax.geometry import DEFAULT_ROTATION, FLAT_MIN_CURVATURE_RADIUS_MM, ROLLER_MAX_PRESSURE_ANGLE_DEG
+from camjax.followers._pitch import DEFAULT_ROTATION
+from camjax.followers.flat.geometry import FLAT_MIN_CURVATURE_RADIUS_MM
+from camjax.followers.roller.geometry import ROLLER_MAX_PRESSURE_ANGLE_DEG
 from camjax.loads import FollowerTrain, Guide, RockerTrain
 from camjax.program import MotionProgram
 
@@ -32,7 +34,7 @@ class MotionSpec:
     program: MotionProgram = field(compare=False)
     segments: tuple[dict, ...]  # as written in the scene, for reports
     samples: int = 360  # cam-angle grid size N
-    rotation: str = DEFAULT_ROTATION  # "ccw" or "cw": camjax.geometry.pitch (cw = mirror image)
+    rotation: str = DEFAULT_ROTATION  # "ccw" or "cw": camjax.followers._pitch (cw = mirror image)
     extrema: str = "exact"  # "exact": max/min over the angle refined off the grid; "grid": samples
 
 
@@ -46,7 +48,7 @@ class FollowerSpec:
 
     Translating followers ("flat", "roller") move their lifts in mm and carry a
     :class:`camjax.loads.FollowerTrain`; oscillating ones ("oscillating_roller", "oscillating_flat";
-    :mod:`camjax.geometry.oscillating`) swing an arm through the lifts in rad (``lift_deg`` in the
+    :mod:`camjax.followers.oscillating_roller.geometry`) swing an arm through the lifts in rad (``lift_deg`` in the
     scene) and carry a :class:`camjax.loads.RockerTrain` about the pivot.
     """
 
@@ -79,13 +81,13 @@ class ContactSpec:
 
 @dataclass(frozen=True)
 class DesignSpec:
-    """[design]: the optimal-design problem (SPEC 5; roller: camjax.roller_problem).
+    """[design]: the optimal-design problem (SPEC 5; roller: camjax.followers.roller.problem).
 
     Every design variable is a (low, high) pair in mm; low == high fixes it (the scene may write
     a fixed variable as a number). Flat face: base_radius_mm and face_width_mm; roller:
     base_radius_mm, roller_radius_mm and offset_mm; oscillating roller
-    (:mod:`camjax.oscillating_problem`): base_radius_mm, roller_radius_mm, pivot_distance_mm and
-    arm_length_mm; oscillating flat face (:mod:`camjax.oscillating_flat_problem`): base_radius_mm,
+    (:mod:`camjax.followers.oscillating_roller.problem`): base_radius_mm, roller_radius_mm, pivot_distance_mm and
+    arm_length_mm; oscillating flat face (:mod:`camjax.followers.oscillating_flat.problem`): base_radius_mm,
     pivot_distance_mm and face_offset_mm (the variables of the other types are None).
     """
 

@@ -16,7 +16,7 @@ Solver protocol (a module named in :data:`camjax.solvers.registry.SOLVER_MODULES
   (:func:`family_of`) and treat the design as a pytree (``jax.tree.map``).
 
 Problem-family protocol (a module named in :data:`camjax.solvers.registry.FAMILY_MODULES`; the
-flat-face one is :mod:`camjax.problem`). It provides:
+flat-face one is :mod:`camjax.followers.flat.problem`). It provides:
 
 - ``Problem``: the problem's pytree type (NamedTuple of arrays, the key :func:`family_of`
   dispatches on); ``Design``: the design pytree of named variables (mm);
@@ -42,7 +42,7 @@ flat-face one is :mod:`camjax.problem`). It provides:
   and ``polish_pointwise(problem, weights, design, extras) -> (Design, dict)``: the condensed
   pointwise design taken as a continuous max over the angle.
 
-Weights (:class:`camjax.problem.Weights`: alpha for size, gamma for stress) are shared by every
+Weights (:class:`camjax.followers.flat.Weights`: alpha for size, gamma for stress) are shared by every
 family, and so are the pieces of the protocol that do not depend on a family's physics (the box,
 the per-angle split, the feasibility tolerances, the result keys: :mod:`camjax.family`). Starts
 come from the bounds (the gradient solver: the centre of the box; the GA: uniform in it), so a
@@ -64,8 +64,8 @@ import jax.numpy as jnp
 import numpy as np
 
 from camjax import runtime
+from camjax.family import Weights, weights_of
 from camjax.numerics import finite_float
-from camjax.problem import Weights, weights_of
 from camjax.solvers.registry import (
     CONVERGED,
     FAMILY_MODULES,
@@ -349,7 +349,7 @@ def solve(problem, weights: Weights | tuple[float, float] = (1.0, 1.0), *, mode:
           solver: str = "gradient", seed: int = 0, settings: Settings = DEFAULT_SETTINGS) -> Solution:
     """Solve one weighting; returns a single :class:`Solution` with its :class:`Timings`.
 
-    ``weights``: a scalar :class:`~camjax.problem.Weights` or an (alpha, gamma) pair. A Python
+    ``weights``: a scalar :class:`~camjax.followers.flat.Weights` or an (alpha, gamma) pair. A Python
     entry point (it checks the weights on concrete values and times compile and run); trace
     :func:`solve_one` or :func:`solve_batch` instead.
     """

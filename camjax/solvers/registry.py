@@ -27,10 +27,10 @@ SOLVERS = tuple(SOLVER_MODULES)
 # problem family name -> module implementing the family protocol (its ``Problem`` type is the key
 # the solvers dispatch on)
 FAMILY_MODULES = {
-    "flat_face": "camjax.problem",
-    "roller": "camjax.roller_problem",
-    "oscillating_roller": "camjax.oscillating_problem",
-    "oscillating_flat": "camjax.oscillating_flat_problem",
+    "flat_face": "camjax.followers.flat.problem",
+    "roller": "camjax.followers.roller.problem",
+    "oscillating_roller": "camjax.followers.oscillating_roller.problem",
+    "oscillating_flat": "camjax.followers.oscillating_flat.problem",
 }
 # scene follower.type -> the problem family its [design] section builds (the family module's
 # ``problem_from_scene(scene, arrays=None, *, samples=None, dtype=None)``)

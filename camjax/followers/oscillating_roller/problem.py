@@ -1,7 +1,7 @@
 """The oscillating roller follower's optimal-design problem: a problem family of :mod:`camjax.solvers.base`.
 
 Design variables (:class:`Design`, mm): base radius R_b, roller radius R_f, pivot distance d and
-arm length l of a rocker with a roller (:mod:`camjax.geometry.oscillating`); each is free between
+arm length l of a rocker with a roller (:mod:`camjax.followers.oscillating_roller.geometry`); each is free between
 its bounds or fixed (lower == upper). The prime radius is R_p = R_b + R_f and the arm starts at
 psi0 with cos psi0 = (d^2 + l^2 - R_p^2) / (2 d l).
 
@@ -35,12 +35,13 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from camjax import family, geometry
+from camjax import family
 from camjax.contact import HERTZ_FACTOR, compliance, roller_stress
 from camjax.family import (
     FEASIBILITY_RTOL_STRESS,
     FEASIBILITY_TOL_MM,
     FEASIBILITY_TOL_RAD,
+    Weights,
     all_within,
     weighted_objective,
 )
@@ -48,9 +49,11 @@ from camjax.family import (
 # re-exported: this family's protocol functions, written once for every family
 from camjax.family import bounds as bounds
 from camjax.family import bounds_violation as bounds_violation
+from camjax.followers import _pitch as pitch
+from camjax.followers.oscillating_roller import geometry as rocker_roller_geo
+from camjax.followers.roller import geometry as roller_geo
+from camjax.followers.roller.problem import roller_figures
 from camjax.numerics import COS_FLOOR, RHO_FLOOR_MM, finite_float, floor_positive, positive_part, safe_sqrt
-from camjax.problem import Weights
-from camjax.roller_problem import roller_figures
 
 CONSTRAINT_NAMES = ("reach", "pressure_angle", "undercut", "stress", "bounds")
 VARIABLES = ("base_radius_mm", "roller_radius_mm", "pivot_distance_mm", "arm_length_mm")
@@ -140,7 +143,7 @@ def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=
         size_norm_mm=as_(d.base_radius_mm[1] + d.roller_radius_mm[1]),
         tan_max_pressure_angle=as_(np.tan(np.radians(f.max_pressure_angle_deg))),
         min_curvature_radius_mm=as_(f.min_curvature_radius_mm),
-        rotation_sign=as_(geometry.rotation_sign(scene.motion.rotation)),
+        rotation_sign=as_(pitch.rotation_sign(scene.motion.rotation)),
     )
 
 
@@ -183,10 +186,10 @@ def _geometry(problem: Problem, design: Design) -> _Geometry:
     """
     d, l = design.pivot_distance_mm, design.arm_length_mm
     rp = design.base_radius_mm + design.roller_radius_mm
-    psi = geometry.arm_start_angle(rp, d, l) + problem.s_rad
+    psi = rocker_roller_geo.arm_start_angle(rp, d, l) + problem.s_rad
     q = 1.0 + problem.rotation_sign * problem.ds
-    kappa = geometry.swing_pitch_curvature(d, l, psi, q, problem.d2s)
-    reach = geometry.oscillating_roller_reach_constraint(rp, d, l)
+    kappa = rocker_roller_geo.swing_pitch_curvature(d, l, psi, q, problem.d2s)
+    reach = rocker_roller_geo.oscillating_roller_reach_constraint(rp, d, l)
     return _Geometry(l * q - d * jnp.cos(psi), d * jnp.sin(psi), kappa, reach)
 
 
@@ -196,7 +199,7 @@ def _cos_phi(g: _Geometry) -> jax.Array:
 
 
 def pressure_angle(problem: Problem, design: Design) -> jax.Array:
-    """phi (rad) per angle, as :func:`camjax.geometry.oscillating_roller_pressure_angle`."""
+    """phi (rad) per angle, as :func:`camjax.followers.oscillating_roller.geometry.oscillating_roller_pressure_angle`."""
     g = _geometry(problem, design)
     return jnp.arctan2(g.along, g.across)
 
@@ -209,14 +212,14 @@ def _axial_coefficient(problem: Problem, design: Design) -> jax.Array:
 def stress(problem: Problem, design: Design) -> jax.Array:
     """Hertz contact stress sigma(theta) (MPa), shape (n,); finite (saturated) at an undercut."""
     g = _geometry(problem, design)
-    rho_eq = geometry.roller_equivalent_radius(g.kappa, design.roller_radius_mm)
+    rho_eq = roller_geo.roller_equivalent_radius(g.kappa, design.roller_radius_mm)
     return roller_stress(_axial_coefficient(problem, design), jnp.arctan2(g.along, g.across), rho_eq)
 
 
 def peak_stress(problem: Problem, design: Design) -> jax.Array:
     """max_theta sigma (MPa), shape ()."""
     g = _geometry(problem, design)
-    rho_eq = geometry.roller_equivalent_radius(g.kappa, design.roller_radius_mm)
+    rho_eq = roller_geo.roller_equivalent_radius(g.kappa, design.roller_radius_mm)
     ratio = _axial_coefficient(problem, design) ** 2 / (_cos_phi(g) * floor_positive(rho_eq, RHO_FLOOR_MM))
     return safe_sqrt(jnp.max(ratio))
 
@@ -236,12 +239,12 @@ def constraints(problem: Problem, design: Design) -> Constraints:
     """Every angle's constraints as g <= 0 (mm), shape (n,) each; finite for every design."""
     g = _geometry(problem, design)
     reach_r = design.roller_radius_mm + problem.min_curvature_radius_mm
-    rho_eq = geometry.roller_equivalent_radius(g.kappa, design.roller_radius_mm)
+    rho_eq = roller_geo.roller_equivalent_radius(g.kappa, design.roller_radius_mm)
     need = _axial_coefficient(problem, design) ** 2 / (problem.sigma_max_MPa**2 * _cos_phi(g))
     return Constraints(
         reach=jnp.broadcast_to(g.reach, g.kappa.shape),
         pressure_angle=jnp.abs(g.along) - problem.tan_max_pressure_angle * g.across,
-        undercut=reach_r * geometry.roller_undercut_constraint(g.kappa, design.roller_radius_mm,
+        undercut=reach_r * roller_geo.roller_undercut_constraint(g.kappa, design.roller_radius_mm,
                                                                problem.min_curvature_radius_mm),
         stress=need - rho_eq,
     )
@@ -263,7 +266,7 @@ def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
     sigma = stress(problem, design)
     phi = jnp.abs(jnp.arctan2(g.along, g.across))
     i, j = jnp.argmax(sigma), jnp.argmax(phi)
-    rho_c_min = jnp.min(geometry.roller_undercut_margin(g.kappa, design.roller_radius_mm, 0.0))
+    rho_c_min = jnp.min(roller_geo.roller_undercut_margin(g.kappa, design.roller_radius_mm, 0.0))
     v = Violation(
         reach=positive_part(g.reach),
         pressure_angle=positive_part(phi[j] - jnp.arctan(problem.tan_max_pressure_angle)),

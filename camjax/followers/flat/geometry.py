@@ -3,7 +3,7 @@
 All lengths in mm, derivatives with respect to cam angle per radian. Every function is
 elementwise over the angle grid and differentiable in the base radius, including trial radii far
 below the feasible minimum (the curvature then comes out negative: a finite, penalty-ready
-quantity). Frames and rotation: :mod:`camjax.geometry.pitch`.
+quantity). Frames and rotation: :mod:`camjax.followers._pitch`.
 """
 
 from __future__ import annotations
@@ -11,7 +11,7 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
-from camjax.geometry.pitch import DEFAULT_ROTATION, rotation_sign, to_cam_frame
+from camjax.followers._pitch import DEFAULT_ROTATION, rotation_sign, to_cam_frame
 from camjax.program import Kinematics
 
 # Default smallest admissible radius of curvature (mm) of a flat-face cam: the strict "rho > 0"

@@ -48,6 +48,7 @@ from camjax.extrema import ITERATIONS
 from camjax.family import (
     FEASIBILITY_RTOL_STRESS,
     FEASIBILITY_TOL_MM,
+    Weights,
     all_within,
     bounds_violation,
     violated,
@@ -66,13 +67,6 @@ class Design(NamedTuple):
 
     base_radius_mm: jax.Array  # R_b, mm
     face_width_mm: jax.Array  # L, mm
-
-
-class Weights(NamedTuple):
-    """Objective weights (dimensionless, >= 0, not both 0); scalars or a batch."""
-
-    alpha: jax.Array  # size
-    gamma: jax.Array  # stress
 
 
 class Problem(NamedTuple):
@@ -219,12 +213,6 @@ def _exact_extrema(arrays, sigma_max_MPa) -> ExactExtrema:
     e, at = _exact_maxima(arrays.model, sigma_max_MPa, grid)
     width = 2.0 * jnp.maximum(jnp.maximum(e[2], e[3]), 0.0)
     return ExactExtrema(arrays.model, -e[0], e[1], width, at[0], at[1], jnp.where(e[2] >= e[3], at[2], at[3]))
-
-
-def weights_of(alpha, gamma, dtype=None) -> Weights:
-    """Weights as arrays (any matching shapes); alpha, gamma >= 0, not both 0."""
-    dtype = dtype or jnp.result_type(float)
-    return Weights(jnp.asarray(alpha, dtype), jnp.asarray(gamma, dtype))
 
 
 def per_angle(problem: Problem) -> Problem:

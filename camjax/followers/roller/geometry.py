@@ -9,7 +9,7 @@ curve is convex the roller undercuts the cam unless rho_c >= the smallest radius
 
 All lengths in mm, angles in rad; every function is elementwise over the angle grid and
 jit/vmap/grad-safe in R_b, R_f and e, for infeasible trial designs too (|e| >= R_p, undercut).
-Frames and rotation: :mod:`camjax.geometry.pitch`.
+Frames and rotation: :mod:`camjax.followers._pitch`.
 """
 
 from __future__ import annotations
@@ -19,8 +19,8 @@ from typing import NamedTuple
 import jax
 import jax.numpy as jnp
 
-from camjax.geometry import pitch
-from camjax.geometry.pitch import DEFAULT_ROTATION, rotation_sign
+from camjax.followers import _pitch as pitch
+from camjax.followers._pitch import DEFAULT_ROTATION, rotation_sign
 from camjax.program import Kinematics
 
 # Defaults of the scene keys follower.max_pressure_angle_deg and min_curvature_radius_mm.
@@ -135,7 +135,7 @@ def roller_reach_constraint(base_radius_mm, roller_radius_mm, offset_mm) -> jax.
 def roller_pressure_angle_need(ds, s, signed_offset_mm, tan_max_pressure_angle) -> jax.Array:
     """The d = sqrt(R_p^2 - e^2) (mm) at which |phi| reaches its limit at each angle:
     |s' - e~| / tan(phi_max) - s, elementwise (e~ = the offset times the rotation sign,
-    :func:`camjax.geometry.pitch.rotation_sign`). Its max over the angle is the smallest d."""
+    :func:`camjax.followers._pitch.rotation_sign`). Its max over the angle is the smallest d."""
     return jnp.abs(ds - signed_offset_mm) / tan_max_pressure_angle - s
 
 

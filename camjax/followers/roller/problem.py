@@ -15,7 +15,7 @@ stress term and no stress constraint. Constraints, one value per angle, ``g <= 0
 - pressure_angle: |s' - e~| - tan(phi_max) (d + s) <= 0, which is |phi| <= phi_max written
   without the arctan (d = sqrt(R_p^2 - e^2), e~ = e for ccw, -e for cw; finite everywhere);
 - undercut: (R_f + rho_min) (kappa_pitch (R_f + rho_min) - 1) <= 0, i.e. rho_c >= rho_min where
-  the pitch curve is convex (:func:`camjax.geometry.roller_undercut_constraint` times a length;
+  the pitch curve is convex (:func:`camjax.followers.roller.geometry.roller_undercut_constraint` times a length;
   concave parts satisfy it for every roller, as they must);
 - stress: C^2 / (sigma_max^2 cos phi) - rho_eq <= 0, which is sigma <= sigma_max written on the
   equivalent radius so that it stays finite at and beyond an undercut (rho_eq <= 0 there);
@@ -28,7 +28,7 @@ meets the pressure-angle limit at the design's offset, so that the optimum's fla
 (R_b + R_f = const) and its curved valley along the pressure-angle limit lie along the axes.
 
 Everything that does not depend on the design (s, s', s'', C) is computed once per scene by
-:func:`problem_from_scene`. Modes are those of :mod:`camjax.problem`: :func:`per_angle` gives the
+:func:`problem_from_scene`. Modes are those of :mod:`camjax.followers.flat.problem`: :func:`per_angle` gives the
 n one-angle problems; a pointwise solve is condensed into the design of its critical angle, the
 one with the largest prime radius (with R_f and e fixed: the largest R_b, SPEC 5's rule).
 """
@@ -41,16 +41,17 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from camjax import family, geometry
+from camjax import family
 from camjax.contact import roller_stress
-from camjax.family import FEASIBILITY_RTOL_STRESS, FEASIBILITY_TOL_MM, all_within, weighted_objective
+from camjax.family import FEASIBILITY_RTOL_STRESS, FEASIBILITY_TOL_MM, Weights, all_within, weighted_objective
 
 # re-exported: this family's protocol functions and tolerance, written once for every family
 from camjax.family import FEASIBILITY_TOL_RAD as FEASIBILITY_TOL_RAD
 from camjax.family import bounds as bounds
 from camjax.family import bounds_violation as bounds_violation
+from camjax.followers import _pitch as pitch
+from camjax.followers.roller import geometry as roller_geo
 from camjax.numerics import COS_FLOOR, RHO_FLOOR_MM, finite_float, floor_positive, positive_part, safe_sqrt
-from camjax.problem import Weights
 
 CONSTRAINT_NAMES = ("pressure_angle", "undercut", "stress", "bounds")
 VARIABLES = ("base_radius_mm", "roller_radius_mm", "offset_mm")
@@ -154,7 +155,7 @@ def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=
         tan_max_pressure_angle=as_(np.tan(np.radians(f.max_pressure_angle_deg))),
         max_pressure_angle_deg=as_(f.max_pressure_angle_deg),
         min_curvature_radius_mm=as_(f.min_curvature_radius_mm),
-        rotation_sign=as_(geometry.rotation_sign(scene.motion.rotation)),
+        rotation_sign=as_(pitch.rotation_sign(scene.motion.rotation)),
         program=None if arrays.model is None else arrays.model.program,
     )
 
@@ -195,16 +196,16 @@ def _terms(problem: Problem, design: Design) -> _Terms:
     """
     e = problem.rotation_sign * design.offset_mm
     kin = _Kin(problem.theta_deg, problem.s_mm, problem.ds_mm, problem.d2s_mm)
-    w = geometry.roller_pitch_height(design.base_radius_mm, design.roller_radius_mm, e, kin)
+    w = roller_geo.roller_pitch_height(design.base_radius_mm, design.roller_radius_mm, e, kin)
     u = kin.ds - e
     r = jnp.sqrt(w**2 + u**2)
-    kappa = geometry.pitch_curvature(w, kin.ds, kin.d2s, e)
+    kappa = pitch.pitch_curvature(w, kin.ds, kin.d2s, e)
     return _Terms(w, u, r / jnp.maximum(w, COS_FLOOR * r), kappa,
-                  geometry.roller_equivalent_radius(kappa, design.roller_radius_mm))
+                  roller_geo.roller_equivalent_radius(kappa, design.roller_radius_mm))
 
 
 def pressure_angle(problem: Problem, design: Design) -> jax.Array:
-    """phi (rad) per angle, signed as :func:`camjax.geometry.pressure_angle`."""
+    """phi (rad) per angle, signed as :func:`camjax.followers._pitch.pressure_angle`."""
     x = _terms(problem, design)
     return problem.rotation_sign * jnp.arctan2(x.u, x.w)
 
@@ -240,7 +241,7 @@ def constraints(problem: Problem, design: Design) -> Constraints:
     need = problem.stress_coefficient**2 * x.inv_cos / problem.sigma_max_MPa**2
     return Constraints(
         pressure_angle=jnp.abs(x.u) - problem.tan_max_pressure_angle * x.w,
-        undercut=reach * geometry.roller_undercut_constraint(x.kappa, design.roller_radius_mm,
+        undercut=reach * roller_geo.roller_undercut_constraint(x.kappa, design.roller_radius_mm,
                                                              problem.min_curvature_radius_mm),
         stress=need - x.rho_eq,
     )
@@ -333,10 +334,10 @@ def min_prime_radius_for_pressure_angle(problem: Problem, offset_mm: jax.Array) 
     """Smallest R_p (mm) with |phi| <= the limit at every angle for offset e, in closed form.
 
     |s' - e~| <= tan(phi_max) (d + s) at every angle  <=>  d >= max(|s' - e~| / tan(phi_max) - s),
-    and R_p = sqrt(e^2 + d^2) (as :func:`camjax.geometry.roller_min_prime_radius_for_pressure_angle`).
+    and R_p = sqrt(e^2 + d^2) (as :func:`camjax.followers.roller.geometry.roller_min_prime_radius_for_pressure_angle`).
     """
     e = jnp.expand_dims(problem.rotation_sign * offset_mm, -1)  # (..., 1) against the grid (n,)
-    need = geometry.roller_pressure_angle_need(problem.ds_mm, problem.s_mm, e, problem.tan_max_pressure_angle)
+    need = roller_geo.roller_pressure_angle_need(problem.ds_mm, problem.s_mm, e, problem.tan_max_pressure_angle)
     d_min = jnp.max(need, axis=-1)
     return safe_sqrt(offset_mm**2 + positive_part(d_min) ** 2)  # 0 (finite gradient) at e = 0 = d_min
 
@@ -347,10 +348,10 @@ def exact_min_prime_radius_for_pressure_angle(problem: Problem, offset_mm: jax.A
     from camjax import extrema
 
     def need(kin, params):  # the d at which |phi| = phi_max at this angle, mm
-        return geometry.roller_pressure_angle_need(kin.ds, kin.s, *params)
+        return roller_geo.roller_pressure_angle_need(kin.ds, kin.s, *params)
 
     params = (problem.rotation_sign * offset_mm, problem.tan_max_pressure_angle)
-    grid = geometry.roller_pressure_angle_need(problem.ds_mm, problem.s_mm, *params)
+    grid = roller_geo.roller_pressure_angle_need(problem.ds_mm, problem.s_mm, *params)
     d_min = extrema.max_of(problem.program, need, grid, params).value
     return safe_sqrt(offset_mm**2 + positive_part(d_min) ** 2)
 
@@ -383,7 +384,7 @@ def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
     sigma = stress(problem, design)
     phi = jnp.abs(jnp.arctan2(x.u, x.w))
     i, j = jnp.argmax(sigma), jnp.argmax(phi)
-    margin = geometry.roller_undercut_margin(kappa, design.roller_radius_mm, 0.0)  # rho_c, convex parts
+    margin = roller_geo.roller_undercut_margin(kappa, design.roller_radius_mm, 0.0)  # rho_c, convex parts
     rho_c_min = jnp.min(margin)
     v = Violation(
         pressure_angle=positive_part(phi[j] - jnp.deg2rad(problem.max_pressure_angle_deg)),

@@ -1,7 +1,7 @@
 """The oscillating flat face's optimal-design problem: a problem family of :mod:`camjax.solvers.base`.
 
 Design variables (:class:`Design`, mm): base radius R_b, pivot distance d and face offset f of a
-rocker with a flat face (:mod:`camjax.geometry.oscillating`); each is free between its bounds or
+rocker with a flat face (:mod:`camjax.followers.oscillating_roller.geometry`); each is free between its bounds or
 fixed (lower == upper). The face starts at psi0 with sin psi0 = (R_b + f) / d.
 
 Objective, weights alpha (size) and gamma (stress):
@@ -30,16 +30,17 @@ from typing import NamedTuple
 import jax
 import jax.numpy as jnp
 
-from camjax import family, geometry
+from camjax import family
 from camjax.contact import stress_from_coefficient
-from camjax.family import FEASIBILITY_RTOL_STRESS, FEASIBILITY_TOL_MM, all_within, weighted_objective
+from camjax.family import FEASIBILITY_RTOL_STRESS, FEASIBILITY_TOL_MM, Weights, all_within, weighted_objective
 
 # re-exported: this family's protocol functions, written once for every family
 from camjax.family import bounds as bounds
 from camjax.family import bounds_violation as bounds_violation
+from camjax.followers import _pitch as pitch
+from camjax.followers.oscillating_flat import geometry as rocker_flat_geo
+from camjax.followers.oscillating_roller.problem import moment_coefficient
 from camjax.numerics import RHO_FLOOR_MM, capped_divide, finite_float, floor_positive, positive_part
-from camjax.oscillating_problem import moment_coefficient
-from camjax.problem import Weights
 
 CONSTRAINT_NAMES = ("reach", "swing", "curvature", "stress", "bounds")
 VARIABLES = ("base_radius_mm", "pivot_distance_mm", "face_offset_mm")
@@ -121,7 +122,7 @@ def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=
         lower=Design(*(as_(b[0]) for b in box)), upper=Design(*(as_(b[1]) for b in box)),
         sigma_max_MPa=as_(d.sigma_max_MPa if d.sigma_max_MPa is not None else 1.0),
         size_norm_mm=as_(d.base_radius_mm[1]), min_curvature_radius_mm=as_(f.min_curvature_radius_mm),
-        rotation_sign=as_(geometry.rotation_sign(scene.motion.rotation)),
+        rotation_sign=as_(pitch.rotation_sign(scene.motion.rotation)),
     )
 
 
@@ -138,11 +139,11 @@ class _Geometry(NamedTuple):
 
 
 def _geometry(problem: Problem, design: Design) -> _Geometry:
-    """The closed forms of camjax.geometry.oscillating with the rotation as data (Q = 1 + sigma s')."""
+    """The closed forms of camjax.followers.oscillating_roller.geometry with the rotation as data (Q = 1 + sigma s')."""
     d, f = design.pivot_distance_mm, design.face_offset_mm
-    psi = geometry.face_start_angle(design.base_radius_mm, d, f) + problem.s_rad
+    psi = rocker_flat_geo.face_start_angle(design.base_radius_mm, d, f) + problem.s_rad
     q = 1.0 + problem.rotation_sign * problem.ds
-    rho = geometry.swing_face_radius_of_curvature(d, f, psi, q, problem.ds, problem.d2s)
+    rho = rocker_flat_geo.swing_face_radius_of_curvature(d, f, psi, q, problem.ds, problem.d2s)
     reach = jnp.maximum(design.base_radius_mm + f - d, -(design.base_radius_mm + f))
     return _Geometry(psi, rho, capped_divide(d * jnp.cos(psi), q), reach)
 

@@ -1,0 +1,2 @@
+"""Follower types as plug-ins: one folder per type, one contract they all fill in.
+"""
