@@ -29,11 +29,10 @@ from camjax import (  # noqa: E402
     output,
     pipeline,
     program,
-    rocker,
     runtime,
 )
 from camjax.contact import Material, hertz_line_stress  # noqa: E402
-from camjax.evaluate import DesignCurves, SceneArrays, evaluate_design, scene_arrays  # noqa: E402
+from camjax.evaluate import SceneArrays, scene_arrays  # noqa: E402
 from camjax.family import Weights  # noqa: E402
 from camjax.laws import (  # noqa: E402
     LAWS,
@@ -47,7 +46,8 @@ from camjax.laws import (  # noqa: E402
 )
 from camjax.loads import FollowerTrain, Guide, RockerTrain  # noqa: E402
 from camjax.output import report  # noqa: E402
-from camjax.pipeline import DesignRun, Report, analyse, design_report, run_design  # noqa: E402
+from camjax.output.report import Report, analyse, design_report  # noqa: E402
+from camjax.pipeline import run_design  # noqa: E402
 from camjax.program import Kinematics, MotionProgram, Segment, joints  # noqa: E402
 from camjax.scene import Scene, SceneError, load_scene, parse_scene  # noqa: E402
 
@@ -58,9 +58,8 @@ __all__ = [
     "Material", "MotionProgram", "Scene", "SceneArrays", "SceneError", "Segment", "contact",
     "fourier_law", "get_law", "hertz_line_stress", "joints", "laws", "load_scene",
     "loads", "numerics", "parse_scene", "polynomial_law", "program", "scene_arrays",
-    "stepped_law", "design_report", "report", "DesignCurves", "DesignRun", "Report", "analyse",
-    "evaluate_design", "run_design", "evaluate", "output", "pipeline", "runtime",
-    "Weights", "family", "followers", "problem_from_scene", "solvers", "rocker", "RockerTrain",
+    "stepped_law", "design_report", "report", "Report", "analyse", "run_design", "evaluate", "output",
+    "pipeline", "runtime", "Weights", "family", "followers", "problem_from_scene", "solvers", "RockerTrain",
 ]
 
 

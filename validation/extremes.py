@@ -25,7 +25,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from camjax import contact, loads, program
+from camjax import contact, followers, loads, program
 from camjax.evaluate import scene_arrays
 from camjax.followers.flat import geometry as flat_geo
 from camjax.followers.oscillating_flat import geometry as rocker_flat_geo
@@ -263,7 +263,7 @@ def program_cases(sample_counts: Iterable[int] = (1, 2, 7, 360, 36_000, 360_000)
 def geometry_cases(scene: Scene) -> list[Case]:
     """Base radius 1e-3x..10x the minimum, rho -> 0+, rho <= 0, gradients everywhere (an
     oscillating follower: :func:`rocker_geometry_cases`)."""
-    if scene.follower.oscillating:
+    if followers.of(scene).rocking:
         return rocker_geometry_cases(scene)
     out = []
     arrays = scene_arrays(scene)
@@ -331,7 +331,7 @@ def stress_cases(scene: Scene) -> list[Case]:
 def speed_cases(scene: Scene) -> list[Case]:
     """Cam speeds 0 .. 20 000 rpm: forces and torques finite, contact loss reported (an
     oscillating follower: :func:`rocker_speed_cases`)."""
-    if scene.follower.oscillating:
+    if followers.of(scene).rocking:
         return rocker_speed_cases(scene)
     out = []
     arrays = scene_arrays(scene)
@@ -390,7 +390,7 @@ def _report_figures(scene: Scene, dtype, base_radius_mm: float) -> dict[str, flo
 def precision_cases(scene: Scene, base_radii: Iterable[float] = (28.4,), rtol32: float = 1e-5) -> list[Case]:
     """Every reference-report figure in float32 vs float64; near rho -> 0 float32 must warn (an
     oscillating follower: :func:`rocker_precision_cases`, at its own drawing radius)."""
-    if scene.follower.oscillating:
+    if followers.of(scene).rocking:
         return rocker_precision_cases(scene, rtol32)
     out = []
     for rb in base_radii:
@@ -443,7 +443,7 @@ def optimization_cases(scene: Scene) -> list[Case]:
     """Weights 0 and 1e-6..1e6, unreachable sigma_max, collapsed bounds, tiny populations, one
     weighting, one angle, and GA determinism; references from the exact global optimum (an
     oscillating follower: :func:`rocker_optimization_cases`)."""
-    if scene.follower.oscillating:
+    if followers.of(scene).rocking:
         return rocker_optimization_cases(scene)
     from camjax.followers.flat import problem as pb
     from camjax.solvers import ga, sweep
@@ -578,17 +578,16 @@ _EPS32 = float(np.finfo(np.float32).eps)
 
 def _rocker_base(scene: Scene):
     """(arrays, sizing, drawing radius) of a rocker scene: the radius `camjax design` draws at."""
-    from camjax.rocker import rocker_drawing_radius, rocker_sizing
-
+    follower = followers.of(scene)
     arrays = scene_arrays(scene)
-    sizing = rocker_sizing(scene, arrays.kin)
-    radius, _ = rocker_drawing_radius(scene, arrays.kin, sizing)
+    sizing = follower.sizing(scene, arrays.kin)
+    radius, _ = follower.drawing_radius(scene, arrays.kin, sizing)
     return arrays, sizing, radius
 
 
 def _rocker_curves(scene: Scene, kin, w, base_radius_mm):
     """{name: array} of a rocker at one base radius, composed from camjax.geometry, loads and
-    contact as :func:`camjax.rocker.evaluate_rocker` composes them, but kept in JAX so that it can
+    contact as :meth:`camjax.followers._rocking.RockingFollower.evaluate` composes them, but kept in JAX so that it can
     be differentiated in the base radius and the cam speed (loads and [contact] required)."""
     f, c, rot = scene.follower, scene.contact, scene.motion.rotation
     d = f.pivot_distance_mm
@@ -619,7 +618,7 @@ def rocker_geometry_cases(scene: Scene) -> list[Case]:
     equality; at the drawing radius the pitch points (roller) or contact points (flat face) lie
     where the pivot, arm and face put them; the Hertz closed forms of :func:`stress_cases`."""
     from camjax.followers._pitch import to_cam_frame
-    from camjax.rocker import closure_problem
+    closure_problem = followers.of(scene).closure_problem
 
     out = []
     f, rot = scene.follower, scene.motion.rotation
@@ -716,7 +715,7 @@ def rocker_precision_cases(scene: Scene, rtol32: float = 1e-5) -> list[Case]:
     size up to d + l, so its float32 error is a few eps d / |rho| relative (tolerance 32 eps32
     (d + l) / |rho|, at least ``rtol32``), and the stress (sigma ~ rho^-1/2) half of that.
     """
-    from camjax.rocker import evaluate_rocker, rocker_sizing
+    evaluate_rocker, rocker_sizing = followers.of(scene).evaluate, followers.of(scene).sizing
 
     out = []
     f = scene.follower
@@ -793,7 +792,7 @@ def rocker_optimization_cases(scene: Scene) -> list[Case]:
     out.append(Case("rocker optimization", f"sigma_max = 1 MPa: infeasible, violated {names}",
                     float(res.feasible), 0.0, float(res.feasible), 0.0, ok,
                     "feasible flag 0 and the stress constraint named"))
-    point = {**at_scene, "base_radius_mm": drawn}  # the drawing radius closes (camjax.rocker)
+    point = {**at_scene, "base_radius_mm": drawn}  # the drawing radius closes (camjax.followers._rocking)
     res = solve(box(point, point), (1.0, 1.0))
     err = max(abs(float(getattr(res.design, k)) - v) for k, v in point.items())
     out.append(_case("rocker optimization", f"bounds collapsed to the scene's design at R_b = {drawn:g} mm",

@@ -44,7 +44,8 @@ def _setup_design(p: argparse.ArgumentParser):
     add_design_options(p)
 
     def run(args) -> int:
-        from camjax.pipeline import analyse
+        from camjax import followers
+        from camjax.output.report import analyse
         from camjax.scene import load_scene
 
         out = check_output_dir(args.out)
@@ -55,10 +56,11 @@ def _setup_design(p: argparse.ArgumentParser):
         check_dpi(args.dpi)
         scene = apply_design_options(apply_samples(load_scene(args.scene), args), args)
         rad_lifts = scene.dynamics is not None and scene.dynamics.follower == "oscillating"
-        if rad_lifts and not scene.follower.oscillating:
+        if rad_lifts and not followers.of(scene).rocking:
+            rocking = " or ".join(repr(f.name) for f in followers.all_followers() if f.rocking)
             raise UsageError(f"scene {scene.name}: dynamics.follower = 'oscillating' (motion in rad); the "
                              "geometry of this scene's follower.type is for lifts in mm "
-                             f"(allowed: follower.type = 'oscillating_roller' or 'oscillating_flat' with "
+                             f"(allowed: follower.type = {rocking} with "
                              f"lift_deg, or `camjax dynamics {args.scene or scene.name}`)")
         runtime.enable_caches()
 
@@ -74,8 +76,8 @@ def _setup_design(p: argparse.ArgumentParser):
         progress("computing")
         with ExitStack() as stack:
             # the drawing processes import matplotlib and ezdxf while JAX computes; without them
-            # (an oscillating follower) or for an animation they load in a second thread here
-            workers = None if scene.follower.oscillating else _drawing_workers(stack)
+            # or for an animation they load in a second thread here
+            workers = _drawing_workers(stack)
             preload = None
             if workers is None or args.animate:
                 preload = threading.Thread(target=_import_drawing_modules, daemon=True)
@@ -108,6 +110,7 @@ def _drawing_workers(stack):
 
 def _write_design(args, out, scene, result, workers, progress) -> int:
     """Check, write and report a computed design run (``camjax design``'s second half)."""
+    from camjax import followers
     from camjax.output.animation import UndrawableGeometry, check_drawable
     from camjax.output.export import write_design_files
     from camjax.output.titles import title_block
@@ -129,25 +132,12 @@ def _write_design(args, out, scene, result, workers, progress) -> int:
         names = ["result.json"] + [p.name for p in written]
     print(f"scene {d['scene']}: min base radius {d['min_base_radius_mm']:.4f} mm at "
           f"{d['min_base_radius_deg']:g} deg")
+    follower = followers.of(scene)
     if "design" in d:
         g = d["design"]
-        if "face_width_mm" in g:
-            sizes = f"L = {g['face_width_mm']:.4f} mm"
-        elif "arm_length_mm" in g:
-            sizes = (f"R_f = {g['roller_radius_mm']:.4f} mm, pivot {g['pivot_distance_mm']:.4f} mm, "
-                     f"arm {g['arm_length_mm']:.4f} mm, R_p = {g['prime_radius_mm']:.4f} mm")
-        elif "face_offset_mm" in g:
-            sizes = (f"pivot {g['pivot_distance_mm']:.4f} mm, face offset {g['face_offset_mm']:.4f} mm, "
-                     f"face {g['face_length_mm']:.4f} mm")
-        else:
-            sizes = (f"R_f = {g['roller_radius_mm']:.4f} mm, offset {g['offset_mm']:.4f} mm, "
-                     f"R_p = {g['prime_radius_mm']:.4f} mm")
-        print(f"design ({g['solver']}): R_b = {g['base_radius_mm']:.4f} mm, {sizes}, "
+        print(f"design ({g['solver']}): R_b = {g['base_radius_mm']:.4f} mm, {follower.summary(g)}, "
               f"objective {g['objective']:.5f}, feasible {g['feasible']}")
-    width = f", L = {at['face_width_mm']:.4f} mm" if at.get("face_width_mm") is not None else ""
-    if "roller" in d:
-        roller = d["roller"]
-        width = f", R_f = {roller['roller_radius_mm']:.4f} mm, offset {roller['offset_mm']:.4f} mm"
+    width = follower.drawn_summary(d)
     state = f"INFEASIBLE ({', '.join(broken)})" if broken else "feasible"
     print(f"files drawn at R_b = {at['base_radius_mm']:.4f} mm{width} ({at['source']}): {state}")
     print(f"wrote {', '.join(names)} to {args.out}")

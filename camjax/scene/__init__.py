@@ -17,17 +17,9 @@ from pathlib import Path
 from camjax.errors import MISSING, QUOTE_CHARS, SceneError, cut, quote
 from camjax.scene.motion import check_resolution, parse_motion, samples_needed
 from camjax.scene.reader import TableReader
-from camjax.scene.sections import (
-    parse_contact,
-    parse_design,
-    parse_dynamics,
-    parse_follower,
-    parse_guide,
-)
+from camjax.scene.sections import parse_contact, parse_design, parse_dynamics, parse_guide
 from camjax.scene.spec import (
     DYNAMICS_COMPUTE,
-    FOLLOWER_TYPES,
-    OSCILLATING_TYPES,
     RPM_MAX,
     SAMPLES_MAX,
     SAMPLES_PER_SEGMENT,
@@ -40,7 +32,7 @@ from camjax.scene.spec import (
 )
 
 __all__ = [
-    "BUILTIN_SCENES", "DYNAMICS_COMPUTE", "FOLLOWER_TYPES", "OSCILLATING_TYPES", "QUOTE_CHARS", "RPM_MAX",
+    "BUILTIN_SCENES", "DYNAMICS_COMPUTE", "QUOTE_CHARS", "RPM_MAX",
     "SAMPLES_MAX", "SAMPLES_PER_SEGMENT", "ContactSpec", "DesignSpec", "DynamicsSpec", "FollowerSpec",
     "MotionSpec", "Scene", "SceneError", "builtin_scene_text", "cut", "decode_scene", "load_scene",
     "parse_scene", "quote", "samples_needed", "scene_from_dict", "with_design", "with_samples",
@@ -53,6 +45,8 @@ SECTIONS = ("motion", "follower", "contact", "design", "guide", "dynamics")
 
 def scene_from_dict(data: dict, name: str = "scene", source: str | None = None) -> Scene:
     """Validate a parsed TOML document. Raises :class:`SceneError`."""
+    from camjax import followers
+
     top = TableReader(data, "", source)
     top.check_keys(SECTIONS)
     if "motion" not in data:
@@ -60,24 +54,34 @@ def scene_from_dict(data: dict, name: str = "scene", source: str | None = None) 
     if "follower" not in data:
         raise SceneError("follower", MISSING, "section [follower] is required", source=source)
     ftype = data["follower"].get("type") if isinstance(data["follower"], dict) else None
-    motion = parse_motion(top.sub("motion"), oscillating=ftype in OSCILLATING_TYPES)
-    follower = parse_follower(top.sub("follower"))
+    follower = followers.get(ftype) if isinstance(ftype, str) and ftype in followers.names() else None
+    motion = parse_motion(top.sub("motion"), oscillating=follower is not None and follower.rocking)
+    table = top.sub("follower")
+    if follower is None:
+        table.choice("type", followers.names())  # required, one of the registered types: raises
+    spec = follower.parse(table)
     contact = parse_contact(top.sub("contact")) if "contact" in data else None
-    if contact is not None and follower.train is None:
+    if contact is not None and not follower.takes_contact:
+        raise SceneError("contact", MISSING, f"contact stress is not defined for a {follower.title} "
+                         "follower (a point contact of zero radius: the Hertz stress is unbounded); remove "
+                         "the [contact] section", source=source)
+    if contact is not None and spec.train is None:
         raise SceneError("contact", MISSING,
                          "contact stress needs the follower force: give follower.mass_kg and/or "
                          "follower.spring_N_per_m", source=source)
-    if "design" in data and contact is None and follower.type == "flat":
+    if "design" in data and contact is None and follower.design_needs_contact:
         raise SceneError("design", MISSING, "the objective needs the contact stress: add a "
                          "[contact] section", source=source)
-    design = parse_design(top.sub("design"), follower, contact is not None) if "design" in data else None
+    design = (parse_design(top.sub("design"), follower, spec, contact is not None) if "design" in data
+              else None)
     guide = parse_guide(top.sub("guide")) if "guide" in data else None
-    if guide is not None and (follower.train is None or follower.type != "flat"):
-        raise SceneError("guide", MISSING, "guide reactions need a flat-face follower with loads "
+    if guide is not None and (spec.train is None or not follower.takes_guide):
+        kinds = " or ".join(f.title for f in followers.all_followers() if f.takes_guide)
+        raise SceneError("guide", MISSING, f"guide reactions need a {kinds} follower with loads "
                          "(follower.mass_kg and/or spring_N_per_m)", source=source)
-    dynamics = (parse_dynamics(top.sub("dynamics"), motion, follower) if "dynamics" in data
+    dynamics = (parse_dynamics(top.sub("dynamics"), motion, spec, follower.rocking) if "dynamics" in data
                 else None)
-    return Scene(name, motion, follower, contact, design, guide, dynamics)
+    return Scene(name, motion, spec, contact, design, guide, dynamics)
 
 
 def with_design(scene: Scene, **overrides) -> Scene:
@@ -86,12 +90,16 @@ def with_design(scene: Scene, **overrides) -> Scene:
     Raises :class:`SceneError` naming ``design.<key>`` (and nothing is changed) when a value is
     not allowed, e.g. ``alpha = gamma = 0``.
     """
+    from camjax import followers
+
     if scene.design is None:
         raise SceneError("design", MISSING, "the scene has no [design] section to override")
-    table = {f.name: getattr(scene.design, f.name) for f in fields(DesignSpec)}
-    table = {k: list(v) if isinstance(v, tuple) else v for k, v in table.items() if v is not None}
-    design = parse_design(TableReader({**table, **overrides}, "design", None), scene.follower,
-                           scene.contact is not None)
+    d = scene.design
+    table = {name: list(bounds) for name, bounds in d.variables}
+    table.update({f.name: getattr(d, f.name) for f in fields(DesignSpec) if f.name != "variables"})
+    table = {k: v for k, v in table.items() if v is not None}
+    design = parse_design(TableReader({**table, **overrides}, "design", None), followers.of(scene),
+                          scene.follower, scene.contact is not None)
     return replace(scene, design=design)
 
 

@@ -10,8 +10,6 @@ from dataclasses import dataclass, field
 
 from camjax.contact import Material
 from camjax.followers._pitch import DEFAULT_ROTATION
-from camjax.followers.flat.geometry import FLAT_MIN_CURVATURE_RADIUS_MM
-from camjax.followers.roller.geometry import ROLLER_MAX_PRESSURE_ANGLE_DEG
 from camjax.loads import FollowerTrain, Guide, RockerTrain
 from camjax.program import MotionProgram
 
@@ -21,9 +19,6 @@ SAMPLES_MAX = 1_000_000  # cam-angle grid: measured to run (design, CSV, DXF) in
 # the cycloidal law, the simplest smooth rise) sampled 8 times shows its peak within
 # 1 - cos(pi / 8) = 8 % and its sign changes; fewer samples cannot resolve the segment's shape.
 SAMPLES_PER_SEGMENT = 8
-
-
-
 
 
 @dataclass(frozen=True)
@@ -38,36 +33,19 @@ class MotionSpec:
     extrema: str = "exact"  # "exact": max/min over the angle refined off the grid; "grid": samples
 
 
-FOLLOWER_TYPES = ("flat", "roller", "oscillating_roller", "oscillating_flat")
-OSCILLATING_TYPES = ("oscillating_roller", "oscillating_flat")
-
-
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class FollowerSpec:
-    """[follower]: geometry and, when mass/spring (inertia/spring) is given, the lumped train for loads.
+    """[follower]: what every follower type's section holds; each type's own dataclass (in its
+    folder, :mod:`camjax.followers`) adds its dimensions and limits.
 
-    Translating followers ("flat", "roller") move their lifts in mm and carry a
-    :class:`camjax.loads.FollowerTrain`; oscillating ones ("oscillating_roller", "oscillating_flat";
-    :mod:`camjax.followers.oscillating_roller.geometry`) swing an arm through the lifts in rad (``lift_deg`` in the
-    scene) and carry a :class:`camjax.loads.RockerTrain` about the pivot.
+    A translating follower (its follower's ``rocking`` is False) moves its lifts in mm and carries a
+    :class:`camjax.loads.FollowerTrain`; a rocking one swings an arm through the lifts in rad
+    (``lift_deg`` in the scene) and carries a :class:`camjax.loads.RockerTrain` about the pivot.
     """
 
-    type: str  # one of FOLLOWER_TYPES
-    train: FollowerTrain | RockerTrain | None = None
-    roller_radius_mm: float = 0.0
-    offset_mm: float = 0.0
-    # roller: |pressure angle| limit, deg (unused for a flat face, whose pressure angle is 0)
-    max_pressure_angle_deg: float = ROLLER_MAX_PRESSURE_ANGLE_DEG
-    # flat: the margin of rho >= rho_min; roller: smallest convex cam-surface radius (0 = no undercut)
-    min_curvature_radius_mm: float = FLAT_MIN_CURVATURE_RADIUS_MM
-    pivot_distance_mm: float = 0.0  # oscillating: cam centre to pivot, d
-    arm_length_mm: float = 0.0  # oscillating roller: pivot to roller centre, l
-    face_offset_mm: float = 0.0  # oscillating flat face: distance of the face line from the pivot, f
-
-    @property
-    def oscillating(self) -> bool:
-        """True for a rocker follower: lifts in rad, loads about the pivot."""
-        return self.type in OSCILLATING_TYPES
+    type: str  # the registered follower type (camjax.followers.names())
+    train: FollowerTrain | RockerTrain | None = None  # loads: None when the scene gives no mass/spring
+    min_curvature_radius_mm: float = 0.0  # smallest admissible radius of curvature of the cam surface
 
 
 @dataclass(frozen=True)
@@ -81,29 +59,24 @@ class ContactSpec:
 
 @dataclass(frozen=True)
 class DesignSpec:
-    """[design]: the optimal-design problem (SPEC 5; roller: camjax.followers.roller.problem).
+    """[design]: the optimal-design problem (SPEC 5) of any follower type.
 
-    Every design variable is a (low, high) pair in mm; low == high fixes it (the scene may write
-    a fixed variable as a number). Flat face: base_radius_mm and face_width_mm; roller:
-    base_radius_mm, roller_radius_mm and offset_mm; oscillating roller
-    (:mod:`camjax.followers.oscillating_roller.problem`): base_radius_mm, roller_radius_mm, pivot_distance_mm and
-    arm_length_mm; oscillating flat face (:mod:`camjax.followers.oscillating_flat.problem`): base_radius_mm,
-    pivot_distance_mm and face_offset_mm (the variables of the other types are None).
+    ``variables`` holds the follower's design variables (its ``variables``, in that order) as
+    (low, high) bounds in mm; low == high fixes one (the scene may write a fixed variable as a
+    number). :meth:`bounds` reads one.
     """
 
-    base_radius_mm: tuple[float, float]  # bounds [low, high]
-    face_width_mm: tuple[float, float] | None  # bounds [low, high]; flat face only
-    sigma_max_MPa: float | None  # None only for a roller without [contact] (no stress)
+    variables: tuple[tuple[str, tuple[float, float]], ...]  # (name, (low, high)), mm
+    sigma_max_MPa: float | None  # None only without [contact] (no stress)
     mode: str = "global"  # or "pointwise"
     alpha: float = 1.0  # weight of the size term
     gamma: float = 1.0  # weight of the stress term
     solver: str = "gradient"
     seed: int = 0
-    roller_radius_mm: tuple[float, float] | None = None  # roller and oscillating roller
-    offset_mm: tuple[float, float] | None = None  # roller only
-    pivot_distance_mm: tuple[float, float] | None = None  # oscillating followers
-    arm_length_mm: tuple[float, float] | None = None  # oscillating roller only
-    face_offset_mm: tuple[float, float] | None = None  # oscillating flat face only
+
+    def bounds(self, name: str) -> tuple[float, float]:
+        """(low, high) of design variable ``name`` (mm); KeyError for one this follower lacks."""
+        return dict(self.variables)[name]
 
 
 DYNAMICS_COMPUTE = ("compensation", "robustness", "time_domain", "drive", "nonlinear", "jump",

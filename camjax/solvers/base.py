@@ -15,7 +15,7 @@ Solver protocol (a module named in :data:`camjax.solvers.registry.SOLVER_MODULES
   ``init`` an optional start design. It must reach the problem only through its family module
   (:func:`family_of`) and treat the design as a pytree (``jax.tree.map``).
 
-Problem-family protocol (a module named in :data:`camjax.solvers.registry.FAMILY_MODULES`; the
+Problem-family protocol (a follower folder's ``problem.py``, :mod:`camjax.followers`; the
 flat-face one is :mod:`camjax.followers.flat.problem`). It provides:
 
 - ``Problem``: the problem's pytree type (NamedTuple of arrays, the key :func:`family_of`
@@ -68,8 +68,6 @@ from camjax.family import Weights, weights_of
 from camjax.numerics import finite_float
 from camjax.solvers.registry import (
     CONVERGED,
-    FAMILY_MODULES,
-    FOLLOWER_FAMILIES,
     INFEASIBLE,
     MAX_STEPS,
     MODES,
@@ -93,29 +91,30 @@ _FAMILIES: dict[type, Any] = {}
 
 
 def family_of(problem):
-    """The family module of a problem, found by its type (Python, at trace time)."""
-    if not _FAMILIES:
-        for path in FAMILY_MODULES.values():
-            module = importlib.import_module(path)
-            _FAMILIES[module.Problem] = module
-    try:
-        return _FAMILIES[type(problem)]
-    except KeyError:
-        raise TypeError(f"problem: {type(problem).__name__} is not a registered problem family "
-                        f"({', '.join(FAMILY_MODULES)})") from None
+    """The family module of a problem, found by its type among the registered followers' problem
+    modules (Python, at trace time)."""
+    from camjax import followers
+
+    family = _FAMILIES.get(type(problem))
+    if family is None:
+        modules = [f.problem_module() for f in followers.all_followers()]
+        _FAMILIES.update({module.Problem: module for module in modules})
+        family = _FAMILIES.get(type(problem))
+    if family is None:
+        raise TypeError(f"problem: {type(problem).__name__} is not the problem of a registered follower "
+                        f"({', '.join(followers.names())})")
+    return family
 
 
 def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=None):
-    """The design problem of a scene's [design] section, built by its follower type's family module.
+    """The design problem of a scene's [design] section, built by its follower type's problem module.
 
     (Python, not traceable.) ``arrays``: the scene's :class:`camjax.evaluate.SceneArrays` if
     already computed; ``samples``, ``dtype``: grid size and floating dtype otherwise.
     """
-    family = FOLLOWER_FAMILIES.get(scene.follower.type)
-    if family is None:
-        raise ValueError(f"follower.type: {scene.follower.type!r} has no design problem "
-                         f"(allowed: {', '.join(FOLLOWER_FAMILIES)})")
-    module = importlib.import_module(FAMILY_MODULES[family])
+    from camjax import followers
+
+    module = followers.of(scene).problem_module()
     return module.problem_from_scene(scene, arrays, samples=samples, dtype=dtype)
 
 

@@ -7,12 +7,13 @@ costs nothing.
 
 Adding a solver: write a module with ``DEFAULT_SETTINGS`` and
 ``run_one(problem, weights, key, settings, init=None) -> camjax.solvers.base.Raw`` (see
-:mod:`camjax.solvers.base`) and add ``name: "module.path"`` to :data:`SOLVER_MODULES`. Adding a
-follower type: write a problem-family module (the protocol is in :mod:`camjax.solvers.base`) and
-add ``name: "module.path"`` to :data:`FAMILY_MODULES`.
+:mod:`camjax.solvers.base`) and add ``name: "module.path"`` to :data:`SOLVER_MODULES`. A follower
+type's problem family is its folder's ``problem.py`` (:mod:`camjax.followers`), found there.
 """
 
 from __future__ import annotations
+
+from camjax.results import Status
 
 MODES = ("global", "pointwise")
 
@@ -24,24 +25,9 @@ SOLVER_MODULES = {
 }
 SOLVERS = tuple(SOLVER_MODULES)
 
-# problem family name -> module implementing the family protocol (its ``Problem`` type is the key
-# the solvers dispatch on)
-FAMILY_MODULES = {
-    "flat_face": "camjax.followers.flat.problem",
-    "roller": "camjax.followers.roller.problem",
-    "oscillating_roller": "camjax.followers.oscillating_roller.problem",
-    "oscillating_flat": "camjax.followers.oscillating_flat.problem",
-}
-# scene follower.type -> the problem family its [design] section builds (the family module's
-# ``problem_from_scene(scene, arrays=None, *, samples=None, dtype=None)``)
-FOLLOWER_FAMILIES = {"flat": "flat_face", "roller": "roller", "oscillating_roller": "oscillating_roller",
-                     "oscillating_flat": "oscillating_flat"}
-
-# Solution.status codes (int32 in the traced result) and their names
-CONVERGED = 0  # the solver's stopping rule was met and the design is feasible
-MAX_STEPS = 1  # feasible, but the step / generation budget ran out first (the GA's only stopping rule)
-INFEASIBLE = 2  # the design violates a constraint beyond the feasibility tolerances
-STATUS_NAMES = ("converged", "max_steps", "infeasible")
+# Solution.status codes (int32 in the traced result); their names and messages: camjax.results.Status
+CONVERGED, MAX_STEPS, INFEASIBLE = (int(s) for s in Status)
+STATUS_NAMES = tuple(s.name.lower() for s in Status)
 
 
 def check_choice(field: str, value, allowed) -> None:
@@ -64,4 +50,4 @@ def check_weights(alphas, gammas) -> None:
 
 def status_name(code) -> str:
     """Name of a status code ("converged", "max_steps", "infeasible")."""
-    return STATUS_NAMES[int(code)]
+    return Status.name_of(code)

@@ -171,10 +171,10 @@ def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=
         q_mm=kin.s + kin.d2s,
         ds_mm=kin.ds,
         stress_coefficient=as_(arrays.stress_coefficient),
-        lower=Design(as_(d.base_radius_mm[0]), as_(d.face_width_mm[0])),
-        upper=Design(as_(d.base_radius_mm[1]), as_(d.face_width_mm[1])),
+        lower=Design(as_(d.bounds("base_radius_mm")[0]), as_(d.bounds("face_width_mm")[0])),
+        upper=Design(as_(d.bounds("base_radius_mm")[1]), as_(d.bounds("face_width_mm")[1])),
         sigma_max_MPa=as_(d.sigma_max_MPa),
-        size_norm_mm=as_(d.base_radius_mm[1] + d.face_width_mm[1]),
+        size_norm_mm=as_(d.bounds("base_radius_mm")[1] + d.bounds("face_width_mm")[1]),
         rho_min_mm=as_(scene.follower.min_curvature_radius_mm if rho_min_mm is None else rho_min_mm),
         exact=None if arrays.model is None else _exact_extrema(arrays, as_(d.sigma_max_MPa)),
     )

@@ -134,13 +134,13 @@ def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=
     d, f, kin = scene.design, scene.follower, arrays.kin
     dt = kin.s.dtype
     as_ = lambda v: jnp.asarray(v, dt)  # noqa: E731
-    box = [d.base_radius_mm, d.roller_radius_mm, d.pivot_distance_mm, d.arm_length_mm]
+    box = [d.bounds("base_radius_mm"), d.bounds("roller_radius_mm"), d.bounds("pivot_distance_mm"), d.bounds("arm_length_mm")]
     return Problem(
         theta_deg=as_(arrays.theta_deg), s_rad=kin.s, ds=kin.ds, d2s=kin.d2s,
         moment_coefficient=as_(moment_coefficient(scene, arrays)),
         lower=Design(*(as_(b[0]) for b in box)), upper=Design(*(as_(b[1]) for b in box)),
         sigma_max_MPa=as_(d.sigma_max_MPa if d.sigma_max_MPa is not None else 1.0),
-        size_norm_mm=as_(d.base_radius_mm[1] + d.roller_radius_mm[1]),
+        size_norm_mm=as_(d.bounds("base_radius_mm")[1] + d.bounds("roller_radius_mm")[1]),
         tan_max_pressure_angle=as_(np.tan(np.radians(f.max_pressure_angle_deg))),
         min_curvature_radius_mm=as_(f.min_curvature_radius_mm),
         rotation_sign=as_(pitch.rotation_sign(scene.motion.rotation)),
