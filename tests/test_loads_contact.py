@@ -108,9 +108,9 @@ def test_force_parts_of_the_reference_case_add_up(default_scene, default_arrays)
         reference_motion,
     )
 
-    from camjax.evaluate import evaluate_design
+    from camjax import followers
 
-    curves = evaluate_design(default_scene, default_arrays, 30.0)
+    curves = followers.of(default_scene).curves(default_scene, default_arrays, 30.0)
     parts = curves.force_parts_N
     assert list(parts) == ["inertia", "damping", "spring", "gravity"]
     # each term from the closed-form cycloids (NumPy), SI; 1e-9 N: float64 rounding of ~60 N

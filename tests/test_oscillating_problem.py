@@ -151,7 +151,7 @@ FLAT = (SCENE.replace('type = "oscillating_roller"', 'type = "oscillating_flat"'
 
 @pytest.mark.parametrize("rotation", ["ccw", "cw"])
 def test_flat_face_smallest_cam_is_the_sizing_and_the_stress_limit_binds_as_the_curves_say(rotation):
-    from camjax.rocker import evaluate_rocker
+    from camjax import followers
 
     loose = parse_scene(FLAT.replace("ROT", rotation).replace("DESIGN", "").replace(
         "sigma_max_MPa = 2000.0", "sigma_max_MPa = 1e6"))
@@ -169,7 +169,7 @@ def test_flat_face_smallest_cam_is_the_sizing_and_the_stress_limit_binds_as_the_
     sol = solve(problem_from_scene(tight), (1.0, 0.0), mode="global", solver="gradient")
     assert bool(sol.evaluation.feasible)
     assert float(sol.design.base_radius_mm) > float(sizing.base_radius_mm) + 0.01
-    curves = evaluate_rocker(tight, arrays.kin, arrays.cam_speed_rad_s, float(sol.design.base_radius_mm))
+    curves = followers.of(tight).evaluate(tight, arrays.kin, arrays.cam_speed_rad_s, float(sol.design.base_radius_mm))
     assert float(np.max(curves.stress_MPa)) == pytest.approx(1000.0, rel=1e-6)
 
 

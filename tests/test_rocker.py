@@ -8,6 +8,7 @@ import math
 import numpy as np
 import pytest
 
+from camjax import followers
 from camjax import cli, contact, loads
 from camjax.followers.oscillating_flat import geometry as rocker_flat_geo
 from camjax.followers.oscillating_roller import geometry as rocker_roller_geo
@@ -143,7 +144,7 @@ FLAT_SCENE = ROLLER_SCENE.replace('type = "oscillating_roller"', 'type = "oscill
 
 def test_oscillating_scene_reads_lift_deg_as_rad():
     scene = parse_scene(ROLLER_SCENE.replace("ROT", "ccw"))
-    assert scene.follower.oscillating and scene.follower.arm_length_mm == 60.0
+    assert followers.of(scene).rocking and scene.follower.arm_length_mm == 60.0
     np.testing.assert_allclose(np.asarray(scene.motion.program.lifts), [LIFT, 0.0, LIFT, 0.0], rtol=1e-15)
     assert scene.follower.train == TRAIN
     flat = parse_scene(FLAT_SCENE.replace("ROT", "cw"))
@@ -297,13 +298,13 @@ def test_reported_follower_dimensions_are_the_designs_and_the_scenes_stay_visibl
 
 @pytest.fixture(scope="module")
 def rocker_report():
-    from camjax.pipeline import analyse
+    from camjax.output.report import analyse
 
     return analyse(parse_scene(ROLLER_SCENE.replace("ROT", "cw"), "rocker"))
 
 
 def test_rocker_figures_carry_the_title_block_with_the_pivot_and_arm(rocker_report):
-    from camjax.output.rocker import rocker_figures
+    from camjax.followers import drawing
     from camjax.output.titles import title_block
 
     data = rocker_report.data
@@ -315,7 +316,8 @@ def test_rocker_figures_carry_the_title_block_with_the_pivot_and_arm(rocker_repo
     f = data["oscillating_follower"]
     assert f"R_b = {data['evaluated_at']['base_radius_mm']:.3f} mm" in lines[2]
     assert f"d = {f['pivot_distance_mm']:g} mm, l = {f['arm_length_mm']:g} mm, R_f = 8 mm" in lines[2]
-    figures = rocker_figures(rocker_report.curves, title)
+    curves = rocker_report.curves
+    figures = {name: build(curves, title) for name, build in drawing(curves.follower_type).figure_builders(curves).items()}
     assert set(figures) == {"svaj.png", "profile.png", "geometry.png", "loads.png"}
     for name, fig in figures.items():
         assert fig._suptitle is not None and title in fig._suptitle.get_text(), name
@@ -327,7 +329,7 @@ def _spiky_curves():
     import dataclasses
 
     from camjax.evaluate import scene_arrays
-    from camjax.rocker import evaluate_rocker
+    from camjax import followers
 
     scene = parse_scene(ROLLER_SCENE.replace("ROT", "ccw").replace("samples = 360", "samples = 180").replace(
         '{ kind = "return", angle_deg = 120, law = "cycloidal", lift_deg = 20.0 },\n  { kind = "dwell",  angle_deg = 60 },',
@@ -335,13 +337,13 @@ def _spiky_curves():
     scene = dataclasses.replace(scene, follower=dataclasses.replace(
         scene.follower, pivot_distance_mm=78.48648745161735, arm_length_mm=67.74966987155759))
     a = scene_arrays(scene)
-    return evaluate_rocker(scene, a.kin, a.cam_speed_rad_s, 24.66442332838182)
+    return followers.of(scene).evaluate(scene, a.kin, a.cam_speed_rad_s, 24.66442332838182)
 
 
 def test_rho_panel_is_clipped_to_the_cams_size_and_marks_what_it_clips():
     from matplotlib.backends.backend_agg import FigureCanvasAgg
 
-    from camjax.output.rocker import geometry_figure
+    from camjax.followers._rocking_drawing import geometry_figure
 
     c = _spiky_curves()
     limit = 4.0 * float(np.max(np.hypot(c.profile_x_mm, c.profile_y_mm)))  # 4 x the cam's largest radius
@@ -365,7 +367,7 @@ def test_rho_panel_is_clipped_to_the_cams_size_and_marks_what_it_clips():
 
 
 def test_rho_panel_keeps_its_whole_range_when_nothing_is_clipped(rocker_report):
-    from camjax.output.rocker import geometry_figure
+    from camjax.followers._rocking_drawing import geometry_figure
 
     c = rocker_report.curves
     assert np.max(np.abs(c.rho_mm)) < 4.0 * float(np.max(np.hypot(c.profile_x_mm, c.profile_y_mm)))

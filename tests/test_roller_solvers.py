@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 import camjax
+from camjax.scene import with_design
 from camjax.followers.roller import geometry as roller_geo
 from camjax.followers.roller import problem as R
 from camjax.solvers import scipy_roller
@@ -96,8 +97,7 @@ def test_gradient_finds_the_optimal_offset(scene, size_only):
     assert rp == pytest.approx(exact_rp, abs=1e-6)
     assert float(sol.offset_mm) == pytest.approx(exact_e, abs=1e-5)
     # and the offset pays: against e = 0 the prime circle shrinks by 29 % (the example)
-    centred = R.problem_from_scene(dataclasses.replace(scene, design=dataclasses.replace(
-        scene.design, offset_mm=(0.0, 0.0))), extrema="grid")
+    centred = R.problem_from_scene(with_design(scene, offset_mm=0.0), extrema="grid")
     rp0 = float(solve(centred, (1.0, 0.0), solver="gradient").size_mm)
     assert 1 - rp / rp0 == pytest.approx(0.29, abs=0.01)
 
@@ -107,7 +107,7 @@ def test_gradient_finds_the_optimal_offset(scene, size_only):
 @pytest.mark.parametrize("mode", MODES)
 def test_every_solver_and_mode_solves_the_roller_problem(scene, solver, mode):
     # R_f and e fixed: then the pointwise design (largest R_b over the angles) is the global one
-    fixed = dataclasses.replace(scene.design, roller_radius_mm=(5.0, 5.0), offset_mm=(1.0, 1.0), gamma=0.0)
+    fixed = with_design(scene, roller_radius_mm=5.0, offset_mm=1.0, gamma=0.0).design
     problem = R.problem_from_scene(dataclasses.replace(scene, design=fixed), extrema="grid")
     sol = solve(problem, (1.0, 0.0), mode=mode, solver=solver)
     f = scene.follower

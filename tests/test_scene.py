@@ -40,7 +40,7 @@ def test_default_scene_is_the_reference_case():
     assert sc.motion.program.angles_deg == (100.0, 80.0, 120.0, 60.0)
     assert sc.follower.train.spring_N_per_m == 3004.0
     assert sc.contact.cam.E_MPa == 2.1e5 and sc.contact.follower.poisson == 0.26
-    assert sc.design.base_radius_mm == (5.0, 40.0) and sc.design.sigma_max_MPa == 1230.0
+    assert sc.design.bounds("base_radius_mm") == (5.0, 40.0) and sc.design.sigma_max_MPa == 1230.0
     assert sc.needs() == {"kinematics", "geometry", "loads", "contact", "design"}
     assert "[design]" in builtin_scene_text("default")
 
