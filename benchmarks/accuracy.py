@@ -23,6 +23,7 @@ import jax.numpy as jnp
 from benchmarks.harness import time_jit
 from camjax import evaluate
 from camjax.family import weights_of
+from camjax.followers.flat import optimum
 from camjax.followers.flat import problem as P
 from camjax.solvers import ga, gradient
 
@@ -44,7 +45,7 @@ def design_figures(program, design, scene, samples: int, dtype) -> dict:
     problem = P.problem_from_scene(sc, arrays, extrema="grid")
     weights = weights_of(1.0, 1.0, dtype)
     need = -(problem.q_mm)
-    best = P.global_optimum(problem, weights)
+    best = optimum.global_optimum(problem, weights)
     d = jax.tree.map(lambda x: jnp.asarray(x, dtype), design)
     return {
         "min_base_radius_mm": jnp.max(need),
@@ -68,7 +69,7 @@ def _errors(values: dict, reference: dict) -> dict:
 def reference(scene) -> tuple[dict, P.Design]:
     """Float64, 36 000-sample figures and the reference optimum design."""
     problem = P.problem_from_scene(scene, samples=REFERENCE_SAMPLES, dtype=jnp.float64, extrema="grid")
-    best = P.global_optimum(problem, weights_of(1.0, 1.0))
+    best = optimum.global_optimum(problem, weights_of(1.0, 1.0))
     figures = design_figures(scene.motion.program, best, scene, REFERENCE_SAMPLES, jnp.float64)
     return {k: float(v) for k, v in figures.items()}, best
 
@@ -117,7 +118,7 @@ def solver_trade(scene, ref: dict, quick: bool, repeats: int) -> list[dict]:
     """Gradient iterations and GA population x generations on the default grid (global, alpha=gamma=1)."""
     problem = P.problem_from_scene(scene, samples=DEFAULT_SAMPLES, extrema="grid")
     weights = weights_of(1.0, 1.0)
-    exact_mm = float(P.global_optimum(problem, weights).base_radius_mm)
+    exact_mm = float(optimum.global_optimum(problem, weights).base_radius_mm)
     rows = []
     default_steps = gradient.DEFAULT_SETTINGS.max_steps
     steps = (20, default_steps) if quick else (10, 20, 40, 80, 160, 400, 1000, default_steps)

@@ -13,6 +13,7 @@ import numpy as np
 from benchmarks import baselines
 from benchmarks.harness import compile_for, profile_thunks, time_jit, time_python
 from camjax.family import weights_of
+from camjax.followers.flat import optimum
 from camjax.followers.flat import problem as P
 from camjax.solvers import gradient
 
@@ -34,7 +35,7 @@ def run(scene, quick: bool) -> dict:
         scipy_s.append(t_sp.median_s)
     t_jax = t_jax._replace(median_s=float(np.median(jax_s)), compile_s=compile_s)
     t_sp = t_sp._replace(median_s=float(np.median(scipy_s)))
-    exact = P.pointwise_optimum(problem, weights)
+    exact = optimum.pointwise_optimum(problem, weights)
     r_jax, l_jax = np.asarray(res.design.base_radius_mm), np.asarray(res.design.face_width_mm)
     r_ex, l_ex = np.asarray(exact.base_radius_mm), np.asarray(exact.face_width_mm)
     return {

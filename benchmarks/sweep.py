@@ -25,6 +25,7 @@ from benchmarks import baselines
 from benchmarks import fitness as fz
 from benchmarks.harness import time_jit, time_python
 from camjax.family import Weights, weights_of
+from camjax.followers.flat import optimum
 from camjax.followers.flat import problem as P
 from camjax.solvers import ga
 from camjax.solvers.sweep import solve_batch
@@ -112,7 +113,7 @@ def run(scene, quick: bool) -> dict:
     alpha, gamma = weightings(count)
     weights = weights_of(alpha, gamma)
     scan = jax.jit(dense_scan)(problem, weights)
-    exact = jax.vmap(P.global_optimum, in_axes=(None, 0))(problem, weights)
+    exact = jax.vmap(optimum.global_optimum, in_axes=(None, 0))(problem, weights)
     scan_vs_exact = _accuracy(problem, weights, exact, scan)
 
     jx = _camjax(problem, weights, repeats=3 if quick else 5)

@@ -9,6 +9,7 @@ from reference import reference_motion
 from test_report import ROLLER
 
 import camjax
+from camjax.followers._translating_drawing import mechanism as mechanism_from_curves
 from camjax.output.animation import (
     frame_indices,
     frame_poses,
@@ -16,7 +17,6 @@ from camjax.output.animation import (
     rotate,
     write_motion_gif,
 )
-from camjax.followers._translating_drawing import mechanism as mechanism_from_curves
 from camjax.scene import parse_scene
 
 

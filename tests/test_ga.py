@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from camjax.family import Weights, weights_of
+from camjax.followers.flat import optimum
 from camjax.followers.flat import problem as P
 from camjax.solvers import ga
 
@@ -21,7 +22,7 @@ def test_default_settings_match_closed_form_at_every_angle(problem):
     w = weights_of(jnp.array([a for a, _ in weightings]), jnp.array([g for _, g in weightings]))
     res = ga.solve(ga.weighting_keys(0, len(weightings)), problem, w, "pointwise")
     for i, (alpha, gamma) in enumerate(weightings):
-        ref = P.pointwise_optimum(problem, weights_of(alpha, gamma))
+        ref = optimum.pointwise_optimum(problem, weights_of(alpha, gamma))
         np.testing.assert_allclose(np.asarray(res.design.base_radius_mm[i]), np.asarray(ref.base_radius_mm),
                                    rtol=0, atol=0.05)
         np.testing.assert_allclose(np.asarray(res.design.face_width_mm[i]), np.asarray(ref.face_width_mm),
@@ -33,7 +34,7 @@ def test_global_mode_matches_exact_reference(problem):
     w = weights_of(jnp.array([1.0, 10.0, 1.0]), jnp.array([1.0, 1.0, 0.0]))
     res = ga.solve(ga.weighting_keys(3, 3), problem, w, "global")
     for i in range(3):
-        ref = P.global_optimum(problem, Weights(w.alpha[i], w.gamma[i]))
+        ref = optimum.global_optimum(problem, Weights(w.alpha[i], w.gamma[i]))
         assert float(res.design.base_radius_mm[i]) == pytest.approx(float(ref.base_radius_mm), abs=0.05)
         assert float(res.design.face_width_mm[i]) == pytest.approx(float(ref.face_width_mm), abs=0.05)
         assert bool(res.feasible[i])

@@ -9,6 +9,7 @@ from reference import numpy_reference_optimum
 
 import camjax
 from camjax.family import weights_of
+from camjax.followers.flat import optimum
 from camjax.followers.flat import problem as P
 from camjax.solvers import gradient as G
 
@@ -33,7 +34,7 @@ def pointwise_all(problem):
 @pytest.mark.parametrize("i", range(len(WEIGHTINGS)))
 def test_pointwise_matches_closed_form_at_every_angle(problem, pointwise_all, i):
     alpha, gamma = WEIGHTINGS[i]
-    ref = P.pointwise_optimum(problem, weights_of(alpha, gamma))
+    ref = optimum.pointwise_optimum(problem, weights_of(alpha, gamma))
     res = jax.tree.map(lambda x: x[i], pointwise_all)
     assert bool(np.all(res.converged)) and bool(np.all(res.feasible))
     np.testing.assert_allclose(np.asarray(res.design.base_radius_mm), np.asarray(ref.base_radius_mm),
@@ -48,7 +49,7 @@ def test_global_matches_exact_reference(problem):
     g = np.array([w[1] for w in WEIGHTINGS])
     res = G.solve_sweep(problem, weights_of(a, g), "global")
     for i, (alpha, gamma) in enumerate(WEIGHTINGS):
-        ref = P.global_optimum(problem, weights_of(alpha, gamma))
+        ref = optimum.global_optimum(problem, weights_of(alpha, gamma))
         assert float(res.design.base_radius_mm[i]) == pytest.approx(float(ref.base_radius_mm), abs=1e-6)
         assert float(res.design.face_width_mm[i]) == pytest.approx(float(ref.face_width_mm), abs=1e-6)
         assert bool(res.converged[i]) and bool(res.feasible[i])
@@ -79,7 +80,7 @@ def test_single_angle_grid(default_scene):
     prob = P.problem_from_scene(scene, extrema="grid")  # the problem at the one angle itself
     assert prob.q_mm.shape == (1,)
     w = weights_of(1.0, 1.0)
-    ref = P.pointwise_optimum(prob, w)
+    ref = optimum.pointwise_optimum(prob, w)
     for res in (G.solve_global(prob, w), G.solve_pointwise(prob, w)):
         assert np.asarray(res.design.base_radius_mm).ravel()[0] == pytest.approx(float(ref.base_radius_mm[0]),
                                                                                  abs=1e-6)
@@ -99,7 +100,7 @@ def test_plain_rprop_variant_agrees(problem):
     w = weights_of(1.0, 1.0)
     plain = G.solve_global(problem, w, settings=G.GradientSettings(secant=False))
     fast = G.solve_global(problem, w)
-    ref = P.global_optimum(problem, w)
+    ref = optimum.global_optimum(problem, w)
     assert float(plain.design.base_radius_mm) == pytest.approx(float(ref.base_radius_mm), abs=1e-6)
     assert bool(plain.converged) and int(plain.iterations) > int(fast.iterations)
 
@@ -139,7 +140,7 @@ def test_per_angle_multipliers_agree(problem):
     w = weights_of(10.0, 1.0)
     res = G.solve_global(problem, w, settings=G.GradientSettings(aggregate_constraints=False))
     assert res.multipliers.face_width.shape == problem.q_mm.shape
-    ref = P.global_optimum(problem, w)
+    ref = optimum.global_optimum(problem, w)
     assert float(res.design.base_radius_mm) == pytest.approx(float(ref.base_radius_mm), abs=1e-6)
     assert float(res.design.face_width_mm) == pytest.approx(float(ref.face_width_mm), abs=1e-6)
     assert bool(res.converged)

@@ -8,8 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from camjax import followers
-from camjax import cli, contact, loads
+from camjax import cli, contact, followers, loads
 from camjax.followers.oscillating_flat import geometry as rocker_flat_geo
 from camjax.followers.oscillating_roller import geometry as rocker_roller_geo
 from camjax.followers.roller import geometry as roller_geo
@@ -328,8 +327,8 @@ def _spiky_curves():
     # where the cam-surface radius rho_c = rho_pitch - R_f runs off to +-infinity between samples
     import dataclasses
 
-    from camjax.evaluate import scene_arrays
     from camjax import followers
+    from camjax.evaluate import scene_arrays
 
     scene = parse_scene(ROLLER_SCENE.replace("ROT", "ccw").replace("samples = 360", "samples = 180").replace(
         '{ kind = "return", angle_deg = 120, law = "cycloidal", lift_deg = 20.0 },\n  { kind = "dwell",  angle_deg = 60 },',

@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 
 import camjax
-from camjax.scene import with_design
 from camjax.followers.roller import geometry as roller_geo
 from camjax.followers.roller import problem as R
+from camjax.scene import with_design
 from camjax.solvers import scipy_roller
 from camjax.solvers.base import solve
 from camjax.solvers.registry import MODES, SOLVERS

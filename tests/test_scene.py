@@ -182,7 +182,7 @@ def test_bad_roller_limits_name_the_field(extra, field, words):
 
 
 def test_bad_flat_limits_and_rotation_name_the_field():
-    with pytest.raises(SceneError, match=r"follower.max_pressure_angle_deg = 30.*only for type = 'roller'"):
+    with pytest.raises(SceneError, match=r"follower.max_pressure_angle_deg = 30.*only for type = .*'roller', not type = 'flat'"):
         parse_scene(BASE.replace('type = "flat"', 'type = "flat"\nmax_pressure_angle_deg = 30'))
     with pytest.raises(SceneError, match=r"follower.min_curvature_radius_mm = 0.0: out of range \(allowed: > 0\)"):
         parse_scene(BASE.replace('type = "flat"', 'type = "flat"\nmin_curvature_radius_mm = 0.0'))

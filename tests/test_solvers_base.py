@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from camjax.family import weights_of
+from camjax.followers.flat import optimum
 from camjax.followers.flat import problem as P
 from camjax.solvers import base, ga, registry
 from camjax.solvers.base import Solution, solve
@@ -35,7 +36,7 @@ def test_every_solver_returns_a_solution_near_the_exact_global_optimum(problem, 
     settings = base.Settings.of_solvers(ga=SMALL_GA)
     sol = solve(problem, (1.0, 1.0), solver=solver, settings=settings)
     assert isinstance(sol, Solution) and sol.mode == "global" and sol.solver == solver
-    exact = P.global_optimum(problem, weights_of(1.0, 1.0))  # bisection, independent of the solvers
+    exact = optimum.global_optimum(problem, weights_of(1.0, 1.0))  # bisection, independent of the solvers
     # the gradient-polished solvers reach the bisection's optimum to their stopping rule (1e-6 mm
     # measured ~1e-9); the short GA run gets within 0.5 mm of it (its mutation scale at the end)
     tol = 0.5 if solver == "ga" else 1e-6
@@ -52,7 +53,7 @@ def test_every_solver_in_pointwise_mode_matches_the_closed_form(coarse, solver):
     w = weights_of(1.0, 1.0)
     sol = solve(coarse, (1.0, 1.0), mode="pointwise", solver=solver,
                 settings=base.Settings.of_solvers(ga=SMALL_GA))
-    closed = P.pointwise_optimum(coarse, w)  # closed form per angle (SPEC 5)
+    closed = optimum.pointwise_optimum(coarse, w)  # closed form per angle (SPEC 5)
     # the design is the largest R_b over the angles; tolerance as in the global test
     tol = 0.5 if solver == "ga" else 1e-6
     assert abs(float(sol.base_radius_mm) - float(np.max(closed.base_radius_mm))) < tol
@@ -91,7 +92,7 @@ def test_bad_choices_name_the_field():
         registry.check_choice("mode", "both", registry.MODES)
     with pytest.raises(ValueError, match="alpha, gamma: a weighting with alpha = gamma = 0"):
         registry.check_weights([0.0], [0.0])
-    with pytest.raises(TypeError, match="not a registered problem family"):
+    with pytest.raises(TypeError, match="not the problem of a registered follower"):
         base.family_of((1.0, 2.0))
 
 

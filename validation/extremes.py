@@ -445,6 +445,8 @@ def optimization_cases(scene: Scene) -> list[Case]:
     oscillating follower: :func:`rocker_optimization_cases`)."""
     if followers.of(scene).rocking:
         return rocker_optimization_cases(scene)
+    from camjax.family import weights_of
+    from camjax.followers.flat import optimum
     from camjax.followers.flat import problem as pb
     from camjax.solvers import ga, sweep
 
@@ -460,7 +462,7 @@ def optimization_cases(scene: Scene) -> list[Case]:
         (1.0, 1.0),
     ]:
         res = sweep.solve(prob, alpha, gamma)
-        ref = pb.global_optimum(prob, pb.weights_of(alpha, gamma))
+        ref = optimum.global_optimum(prob, weights_of(alpha, gamma))
         out.append(
             _case(
                 "optimization",
@@ -540,7 +542,7 @@ def optimization_cases(scene: Scene) -> list[Case]:
     )
     one = pb.problem_from_scene(scene, samples=1, extrema="grid")
     res = sweep.solve(one, 1.0, 1.0, mode="pointwise")
-    ref = pb.pointwise_optimum(one, pb.weights_of(1.0, 1.0))
+    ref = optimum.pointwise_optimum(one, weights_of(1.0, 1.0))
     out.append(
         _case(
             "optimization",

@@ -31,7 +31,7 @@ the projected-gradient norm ||pg||_inf <= ``gtol`` (or every moving variable's s
 ``max_steps``; an infeasible problem runs to the cap and is reported infeasible by name.
 
 When alpha = 0 the objective does not depend on the size; a tie-break 1e-9 (R_b + L)/N then
-picks the smallest such design, as :func:`camjax.followers.flat.problem.pointwise_optimum` does.
+picks the smallest such design, as :func:`camjax.followers.flat.optimum.pointwise_optimum` does.
 """
 
 from __future__ import annotations
