@@ -22,9 +22,7 @@ import jax
 import jax.numpy as jnp
 
 from camjax.numerics import capped_divide, safe_sqrt
-
-ROTATIONS = ("ccw", "cw")
-DEFAULT_ROTATION = "ccw"
+from camjax.scene.spec import DEFAULT_ROTATION, ROTATIONS  # the cam's turning directions ([motion] rotation)
 
 
 def rotation_sign(rotation: str) -> float:

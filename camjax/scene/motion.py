@@ -6,11 +6,10 @@ import math
 
 from camjax.errors import MISSING, SceneError
 from camjax.extrema import EXTREMA_MODES
-from camjax.followers._pitch import ROTATIONS
 from camjax.laws import FOURIER_PRESETS, LAWS, FourierSeries, fourier_law, get_law, polynomial_law
 from camjax.program import KINDS, MotionProgram, Segment
 from camjax.scene.reader import DEFAULT, TableReader, build
-from camjax.scene.spec import RPM_MAX, SAMPLES_MAX, SAMPLES_PER_SEGMENT, MotionSpec
+from camjax.scene.spec import ROTATIONS, RPM_MAX, SAMPLES_MAX, SAMPLES_PER_SEGMENT, MotionSpec
 
 
 def parse_law(seg: TableReader):

@@ -9,7 +9,6 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from camjax.contact import Material
-from camjax.followers._pitch import DEFAULT_ROTATION
 from camjax.loads import FollowerTrain, Guide, RockerTrain
 from camjax.program import MotionProgram
 
@@ -19,6 +18,8 @@ SAMPLES_MAX = 1_000_000  # cam-angle grid: measured to run (design, CSV, DXF) in
 # the cycloidal law, the simplest smooth rise) sampled 8 times shows its peak within
 # 1 - cos(pi / 8) = 8 % and its sign changes; fewer samples cannot resolve the segment's shape.
 SAMPLES_PER_SEGMENT = 8
+ROTATIONS = ("ccw", "cw")  # the cam turns counter-clockwise (the drawings' convention) or clockwise
+DEFAULT_ROTATION = "ccw"
 
 
 @dataclass(frozen=True)
