@@ -45,8 +45,8 @@ def dense_scan_prime_radius(scene, zooms=3, grid=(41, 11, 41)):
         return jnp.where(ok, rb + rf, jnp.inf)
 
     cost = jax.jit(jax.vmap(cost))
-    lo = np.array([d.base_radius_mm[0], d.roller_radius_mm[0], d.offset_mm[0]])
-    hi = np.array([d.base_radius_mm[1], d.roller_radius_mm[1], d.offset_mm[1]])
+    box = [d.bounds(name) for name in ("base_radius_mm", "roller_radius_mm", "offset_mm")]
+    lo, hi = np.array([b[0] for b in box]), np.array([b[1] for b in box])
     box_lo, box_hi = lo.copy(), hi.copy()
     for _ in range(zooms + 1):
         axes = [np.linspace(lo[i], hi[i], grid[i]) for i in range(3)]
@@ -63,14 +63,14 @@ def exact_offset_scan(scene):
     """min over e of the smallest admissible R_p(e) (closed form + bisection), golden-refined in e."""
     kin = camjax.scene_arrays(scene).kin
     f, d = scene.follower, scene.design
-    rf = d.roller_radius_mm[0]  # with gamma = 0 the smallest roller is best: undercut only gets easier
+    rf = d.bounds("roller_radius_mm")[0]  # with gamma = 0 the smallest roller is best: undercut only gets easier
 
     def rp(e):
         return roller_geo.roller_min_prime_radius(kin, rf, e, math.radians(f.max_pressure_angle_deg),
                                                 f.min_curvature_radius_mm, scene.motion.rotation).prime_radius_mm
 
     rp = jax.jit(jax.vmap(rp))
-    es = np.linspace(d.offset_mm[0], d.offset_mm[1], 801)
+    es = np.linspace(*d.bounds("offset_mm"), 801)
     k = int(np.argmin(np.asarray(rp(jnp.asarray(es)))))
     a, b = es[max(k - 1, 0)], es[min(k + 1, len(es) - 1)]
     g = (math.sqrt(5) - 1) / 2

@@ -12,6 +12,7 @@ import pytest
 from camjax.family import weights_of
 from camjax.followers.flat import optimum
 from camjax.followers.flat import problem as P
+from camjax.results import Status
 from camjax.solvers import base, ga, registry
 from camjax.solvers.base import Solution, solve
 
@@ -44,8 +45,8 @@ def test_every_solver_returns_a_solution_near_the_exact_global_optimum(problem, 
     assert abs(float(sol.design.face_width_mm - exact.face_width_mm)) < tol
     assert bool(sol.feasible)
     # the GA has no stopping rule but its budget: feasible -> max_steps; gradient -> converged
-    expected = registry.MAX_STEPS if solver == "ga" else registry.CONVERGED
-    assert int(sol.status) == expected and sol.to_json(problem)["status"] == registry.STATUS_NAMES[expected]
+    expected = Status.MAX_STEPS if solver == "ga" else Status.CONVERGED
+    assert int(sol.status) == expected and sol.to_json(problem)["status"] == expected.name.lower()
 
 
 @pytest.mark.parametrize("solver", registry.SOLVERS)
@@ -58,7 +59,7 @@ def test_every_solver_in_pointwise_mode_matches_the_closed_form(coarse, solver):
     tol = 0.5 if solver == "ga" else 1e-6
     assert abs(float(sol.base_radius_mm) - float(np.max(closed.base_radius_mm))) < tol
     assert sol.pointwise.base_radius_mm.shape == coarse.theta_deg.shape
-    assert int(sol.status) in (registry.CONVERGED, registry.MAX_STEPS)
+    assert int(sol.status) in (Status.CONVERGED, Status.MAX_STEPS)
 
 
 @pytest.mark.parametrize("solver", registry.SOLVERS)
@@ -66,7 +67,7 @@ def test_unreachable_bounds_give_status_infeasible(problem, solver):
     # R_b <= 20 mm while curvature and stress need >= 24.1 mm (the scene's min base radius)
     tight = P.with_bounds(problem, base_radius_mm=(5.0, 20.0))
     sol = solve(tight, (1.0, 1.0), solver=solver, settings=base.Settings.of_solvers(ga=SMALL_GA))
-    assert int(sol.status) == registry.INFEASIBLE and not bool(sol.feasible)
+    assert int(sol.status) == Status.INFEASIBLE and not bool(sol.feasible)
     assert sol.status_name == "infeasible" and "stress" in sol.violated(tight)
 
 

@@ -673,7 +673,7 @@ def rocker_geometry_cases(scene: Scene) -> list[Case]:
         mx, my = (np.asarray(v) - q for v, q in zip(tip, (px, py), strict=True))
         err = float(np.max(np.abs((x - px) * mx + (y - py) * my + f.face_offset_mm)))
         name = f"R_b = {drawn:g} mm: contact points on the face line, f from the pivot"
-    scale = f.pivot_distance_mm + f.arm_length_mm
+    scale = f.pivot_distance_mm + getattr(f, "arm_length_mm", 0.0)  # d + l (a face: d)
     out.append(_case("rocker geometry", name, err, 0.0, 1e-12 * scale,
                      note="distances from positions; round-off of a few operations on lengths of d + l"))
     return out + stress_cases(scene)
@@ -725,7 +725,7 @@ def rocker_precision_cases(scene: Scene, rtol32: float = 1e-5) -> list[Case]:
     a32 = scene_arrays(scene, dtype=jnp.float32)
     c64 = evaluate_rocker(scene, a64.kin, a64.cam_speed_rad_s, drawn)
     c32 = evaluate_rocker(scene, a32.kin, a32.cam_speed_rad_s, np.float32(drawn))
-    length = f.pivot_distance_mm + f.arm_length_mm
+    length = f.pivot_distance_mm + getattr(f, "arm_length_mm", 0.0)  # d + l (a face: d)
     rho_tol = max(rtol32, 32 * _EPS32 * length / max(float(np.min(np.abs(c64.rho_mm))), 1e-300))
     figures = [("swing_deg", "swing (deg)", rtol32),
                ("angular_velocity_rad_s", "angular velocity (rad/s)", rtol32),

@@ -66,21 +66,18 @@ import numpy as np
 from camjax import runtime
 from camjax.family import Weights, weights_of
 from camjax.numerics import finite_float
+from camjax.results import Status
 from camjax.solvers.registry import (
-    CONVERGED,
-    INFEASIBLE,
-    MAX_STEPS,
     MODES,
     SOLVER_MODULES,
     SOLVERS,
     check_choice,
     check_weights,
-    status_name,
 )
 
 __all__ = [
-    "CONVERGED", "INFEASIBLE", "MAX_STEPS", "Raw", "Settings", "Solution", "Timings", "family_of",
-    "in_mode", "problem_from_scene", "solve", "solve_batch", "solver_module", "status_name", "weighting_keys",
+    "Raw", "Settings", "Solution", "Timings", "family_of",
+    "in_mode", "problem_from_scene", "solve", "solve_batch", "solver_module", "weighting_keys",
 ]
 
 
@@ -186,7 +183,7 @@ class Solution:
     objective: jax.Array  # F of the design (true max over angles)
     violation: Any  # the family's Violation: worst violation per constraint
     feasible: jax.Array  # bool
-    status: jax.Array  # int32: CONVERGED, MAX_STEPS or INFEASIBLE
+    status: jax.Array  # int32: a camjax.results.Status code (CONVERGED, MAX_STEPS or INFEASIBLE)
     iterations: jax.Array  # int: steps, generations, or their sum (hybrid); max over angles (pointwise)
     converged: jax.Array | None  # bool (every angle), None for a fixed-budget solver
     evaluation: Any  # the family's Evaluation of ``design`` on the whole grid
@@ -217,7 +214,7 @@ class Solution:
     @property
     def status_name(self) -> str:
         """"converged", "max_steps" or "infeasible" (single result)."""
-        return status_name(self.status)
+        return Status.name_of(self.status)
 
     def violated(self, problem) -> list[str]:
         """Names of the violated constraints (single result)."""
@@ -270,7 +267,8 @@ def in_mode(run_one, mode: str):
 
 def _status(feasible, converged) -> jax.Array:
     done = jnp.asarray(False) if converged is None else converged
-    return jnp.where(~feasible, INFEASIBLE, jnp.where(done, CONVERGED, MAX_STEPS)).astype(jnp.int32)
+    return jnp.where(~feasible, int(Status.INFEASIBLE),
+                     jnp.where(done, int(Status.CONVERGED), int(Status.MAX_STEPS))).astype(jnp.int32)
 
 
 def _solution(problem, weights: Weights, raw: Raw, mode: str, solver: str) -> Solution:

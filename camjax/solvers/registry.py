@@ -13,8 +13,6 @@ type's problem family is its folder's ``problem.py`` (:mod:`camjax.followers`), 
 
 from __future__ import annotations
 
-from camjax.results import Status
-
 MODES = ("global", "pointwise")
 
 # solver name -> module providing DEFAULT_SETTINGS and run_one (imported on first use)
@@ -24,11 +22,6 @@ SOLVER_MODULES = {
     "hybrid": "camjax.solvers.hybrid",  # GA, then a gradient polish from its best design
 }
 SOLVERS = tuple(SOLVER_MODULES)
-
-# Solution.status codes (int32 in the traced result); their names and messages: camjax.results.Status
-CONVERGED, MAX_STEPS, INFEASIBLE = (int(s) for s in Status)
-STATUS_NAMES = tuple(s.name.lower() for s in Status)
-
 
 def check_choice(field: str, value, allowed) -> None:
     """Raise ValueError naming ``field`` when ``value`` is not one of ``allowed``."""
@@ -46,8 +39,3 @@ def check_weights(alphas, gammas) -> None:
         raise ValueError("alpha, gamma: weights must be >= 0")
     if any(a == 0 and g == 0 for a, g in pairs):
         raise ValueError("alpha, gamma: a weighting with alpha = gamma = 0 has nothing to minimize")
-
-
-def status_name(code) -> str:
-    """Name of a status code ("converged", "max_steps", "infeasible")."""
-    return Status.name_of(code)
