@@ -2,7 +2,7 @@
 
 Every configuration's figures are compared with a float64, 36 000-sample reference of the same
 figures: the smallest base radius with rho >= 0 (curvature only), the optimal base radius of the
-global problem (alpha = gamma = 1, exact by bisection: :func:`camjax.problem.global_optimum`),
+global problem (alpha = gamma = 1, exact by bisection: :func:`camjax.followers.flat.problem.global_optimum`),
 the peak cam force and the peak contact stress at the reference optimum design (so that it
 measures the grid, not a moved design). Time is the steady-state time of one jitted call that
 goes scene -> kinematics -> loads -> problem -> those figures.
@@ -22,7 +22,9 @@ import jax.numpy as jnp
 
 from benchmarks.harness import time_jit
 from camjax import evaluate
-from camjax import problem as P
+from camjax.family import weights_of
+from camjax.followers.flat import optimum
+from camjax.followers.flat import problem as P
 from camjax.solvers import ga, gradient
 
 SAMPLES = (90, 180, 360, 720, 3600, 36000)
@@ -41,9 +43,9 @@ def design_figures(program, design, scene, samples: int, dtype) -> dict:
     sc = _with_program(scene, program)
     arrays = evaluate.scene_arrays(sc, samples=samples, dtype=dtype)
     problem = P.problem_from_scene(sc, arrays, extrema="grid")
-    weights = P.weights_of(1.0, 1.0, dtype)
+    weights = weights_of(1.0, 1.0, dtype)
     need = -(problem.q_mm)
-    best = P.global_optimum(problem, weights)
+    best = optimum.global_optimum(problem, weights)
     d = jax.tree.map(lambda x: jnp.asarray(x, dtype), design)
     return {
         "min_base_radius_mm": jnp.max(need),
@@ -67,7 +69,7 @@ def _errors(values: dict, reference: dict) -> dict:
 def reference(scene) -> tuple[dict, P.Design]:
     """Float64, 36 000-sample figures and the reference optimum design."""
     problem = P.problem_from_scene(scene, samples=REFERENCE_SAMPLES, dtype=jnp.float64, extrema="grid")
-    best = P.global_optimum(problem, P.weights_of(1.0, 1.0))
+    best = optimum.global_optimum(problem, weights_of(1.0, 1.0))
     figures = design_figures(scene.motion.program, best, scene, REFERENCE_SAMPLES, jnp.float64)
     return {k: float(v) for k, v in figures.items()}, best
 
@@ -115,8 +117,8 @@ def _solver_row(knob: str, label: str, t, design, exact_mm: float, ref: dict, de
 def solver_trade(scene, ref: dict, quick: bool, repeats: int) -> list[dict]:
     """Gradient iterations and GA population x generations on the default grid (global, alpha=gamma=1)."""
     problem = P.problem_from_scene(scene, samples=DEFAULT_SAMPLES, extrema="grid")
-    weights = P.weights_of(1.0, 1.0)
-    exact_mm = float(P.global_optimum(problem, weights).base_radius_mm)
+    weights = weights_of(1.0, 1.0)
+    exact_mm = float(optimum.global_optimum(problem, weights).base_radius_mm)
     rows = []
     default_steps = gradient.DEFAULT_SETTINGS.max_steps
     steps = (20, default_steps) if quick else (10, 20, 40, 80, 160, 400, 1000, default_steps)

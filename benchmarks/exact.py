@@ -1,7 +1,7 @@
 """Benchmark: exact extrema (refined off the grid) against the grid's, in time and in accuracy.
 
 ``exact.time_ratio``: steady-state time of the exact path over the grid path (both warm, the
-same 360-sample grid) for the report (``pipeline.design_report``), the pointwise design (problem
+same 360-sample grid) for the report (``camjax.output.report.design_report``), the pointwise design (problem
 + solve) and a 100-weighting global sweep. ``exact.max_rel_error``: the exact path's largest
 relative error at 360 samples over four figures against independent references: the smallest
 flat-face base radius (closed form, cos 2 pi u = -1/35), the peak force, the peak stress at the
@@ -24,8 +24,8 @@ from scipy.optimize import brentq, minimize_scalar
 
 import camjax
 from benchmarks.harness import environment, time_python
-from camjax import pipeline
-from camjax import problem as P
+from camjax.followers.flat import problem as P
+from camjax.output.report import design_report
 from camjax.solvers.base import solve
 from camjax.solvers.sweep import sweep
 
@@ -89,7 +89,7 @@ def _with_extrema(scene, mode: str):
 
 def figures(scene) -> dict:
     """The four figures by camjax on the scene's grid, in the scene's extrema mode."""
-    report = pipeline.design_report(scene)
+    report = design_report(scene)
     return {"min_base_radius_mm": report["min_base_radius_mm"],
             "peak_force_N": report["loads"]["force_N"]["max"],
             "optimal_base_radius_mm": report["design"]["base_radius_mm"],
@@ -103,7 +103,7 @@ def run(scene, quick: bool = False) -> dict:
     for mode in ("grid", "exact"):
         sc = _with_extrema(scene, mode)
         paths = {
-            "report": lambda sc=sc: pipeline.design_report(sc),
+            "report": lambda sc=sc: design_report(sc),
             "pointwise": lambda sc=sc: solve(P.problem_from_scene(sc), (1.0, 1.0), mode="pointwise"),
             "sweep": lambda sc=sc: sweep(P.problem_from_scene(sc), alphas, 1.0 - alphas + 0.05,
                                          progress=False).records(),

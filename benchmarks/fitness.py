@@ -13,7 +13,7 @@ The fitness of a design (R_b, L) on an N-angle grid is the pair the GA ranks by
   square root per design. The constraints are linear in the design with unit slope, so
   max_theta g_i(theta) = a_i - x: the angle-dependent part a_i is computed once per scene
   (:class:`FusedScene`) and only the stress needs the (population, N) pass. (camjax's own
-  fitness, ``camjax.problem.peak_stress`` and ``constraint_maxima``, uses the same algorithm.)
+  fitness, ``camjax.followers.flat.problem.peak_stress`` and ``constraint_maxima``, uses the same algorithm.)
 * :func:`numpy_fitness` -- the same algorithm in vectorized NumPy, with in-place operations (the
   best plain NumPy we could write; ``fitness.numpy_ratio`` uses it).
 """
@@ -26,8 +26,9 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from camjax.family import Weights
+from camjax.followers.flat.problem import Design, Problem
 from camjax.numerics import RHO_FLOOR_MM
-from camjax.problem import Design, Problem, Weights
 
 
 class FusedScene(NamedTuple):

@@ -21,7 +21,8 @@ import numpy as np
 
 from benchmarks import fitness as fz
 from benchmarks.harness import time_jit
-from camjax import problem as P
+from camjax.family import weights_of
+from camjax.followers.flat import problem as P
 from camjax.solvers import gradient
 
 FD_STEP = 1e-6
@@ -81,7 +82,7 @@ def agreement(f, problem, weights, designs: P.Design) -> dict:
 def run(scene, quick: bool) -> dict:
     """Benchmark 5."""
     problem = P.problem_from_scene(scene, extrema="grid")
-    weights = P.weights_of(1.0, 1.0)
+    weights = weights_of(1.0, 1.0)
     one = P.Design(jnp.asarray(30.0), jnp.asarray(20.0))
     population = 10**3 if quick else 10**4
     designs = fz.random_designs(problem, population)

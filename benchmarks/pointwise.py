@@ -3,7 +3,7 @@
 camjax: :func:`camjax.solvers.gradient.solve_pointwise` (one jitted call, ``vmap`` over the
 angles). SciPy: SLSQP looping over the angles from the box centre (``ftol`` 1e-12, analytic
 gradients). Both are checked against the closed-form per-angle optimum
-(:func:`camjax.problem.pointwise_optimum`) and against each other.
+(:func:`camjax.followers.flat.problem.pointwise_optimum`) and against each other.
 """
 
 from __future__ import annotations
@@ -12,14 +12,16 @@ import numpy as np
 
 from benchmarks import baselines
 from benchmarks.harness import compile_for, profile_thunks, time_jit, time_python
-from camjax import problem as P
+from camjax.family import weights_of
+from camjax.followers.flat import optimum
+from camjax.followers.flat import problem as P
 from camjax.solvers import gradient
 
 
 def run(scene, quick: bool) -> dict:
     """Benchmark 1 (alpha = gamma = 1, N = 360, float64)."""
     problem = P.problem_from_scene(scene, extrema="grid")
-    weights = P.weights_of(1.0, 1.0)
+    weights = weights_of(1.0, 1.0)
     loop = baselines.pointwise_slsqp(problem, 1.0, 1.0)
     # Interleave the two (rounds of: camjax median of 10 calls, one SciPy loop) so that a change
     # of load on a shared machine hits both sides of the ratio alike; speedup = ratio of medians.
@@ -33,7 +35,7 @@ def run(scene, quick: bool) -> dict:
         scipy_s.append(t_sp.median_s)
     t_jax = t_jax._replace(median_s=float(np.median(jax_s)), compile_s=compile_s)
     t_sp = t_sp._replace(median_s=float(np.median(scipy_s)))
-    exact = P.pointwise_optimum(problem, weights)
+    exact = optimum.pointwise_optimum(problem, weights)
     r_jax, l_jax = np.asarray(res.design.base_radius_mm), np.asarray(res.design.face_width_mm)
     r_ex, l_ex = np.asarray(exact.base_radius_mm), np.asarray(exact.face_width_mm)
     return {

@@ -36,8 +36,8 @@ import numpy as np
 
 import camjax
 from benchmarks.harness import time_jit
-from camjax import roller_problem as R
-from camjax.problem import Weights, weights_of
+from camjax.family import Weights, weights_of
+from camjax.followers.roller import problem as R
 from camjax.solvers import scipy_roller
 from camjax.solvers.base import solve_batch, weighting_keys
 

@@ -22,7 +22,8 @@ from benchmarks.harness import (
     time_jit,
     time_python,
 )
-from camjax import problem as P
+from camjax.family import weights_of
+from camjax.followers.flat import problem as P
 
 FUSED_BLOCK = 2048  # designs per block of the fused kernel (see blocked())
 
@@ -106,7 +107,7 @@ def measure_samples(scene_obj, weights, sample_sizes, population: int, repeats: 
     fused = blocked(fz.fused_fitness)
     for n in sample_sizes:
         problem = P.problem_from_scene(scene_obj, samples=n, dtype=dtype, extrema="grid")
-        w = P.weights_of(float(weights.alpha), float(weights.gamma), dtype)
+        w = weights_of(float(weights.alpha), float(weights.gamma), dtype)
         designs = fz.random_designs(problem, population)
         t_lib, _ = time_jit(fz.library_fitness, problem, w, designs, repeats=repeats)
         t_fused, _ = time_jit(fused, fz.fused_scene(problem), w, designs, repeats=repeats)
@@ -207,7 +208,7 @@ def _exponent(rows, key_x, key_t, x_min) -> float | None:
 def run(scene_obj, quick: bool) -> dict:
     """Benchmark 4 and the fitness targets (``fitness.evaluations_per_s``, ``fitness.numpy_ratio``)."""
     problem = P.problem_from_scene(scene_obj, extrema="grid")
-    weights = P.weights_of(1.0, 1.0)
+    weights = weights_of(1.0, 1.0)
     pops = [10, 1000, 10**4] if quick else [10, 100, 1000, 10**4, 10**5, 10**6]
     by_pop = measure_population(
         problem, weights, pops, numpy_max_pop=10**4 if quick else 10**5, repeats=3 if quick else 5

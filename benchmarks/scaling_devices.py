@@ -40,7 +40,8 @@ def _device_child(devices: int, solver: str, mode: str, weightings: int, repeats
     import jax.numpy as jnp
 
     import camjax
-    from camjax.problem import Weights, problem_from_scene
+    from camjax.family import Weights
+    from camjax.followers.flat.problem import problem_from_scene
     from camjax.scaleout.sharding import spread_weightings
     from camjax.solvers import ga
     from camjax.solvers.sweep import solve_batch

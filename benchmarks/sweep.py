@@ -8,7 +8,7 @@ SciPy's hybrid).
 
 Accuracy is judged against a dense-scan optimum of every weighting (:func:`dense_scan`: a 2-D grid
 over the box, zoomed four times around the best feasible point, final spacing ~1e-6 mm),
-cross-checked with the exact bisection reference :func:`camjax.problem.global_optimum`. For each
+cross-checked with the exact bisection reference :func:`camjax.followers.flat.problem.global_optimum`. For each
 method: the worst relative objective gap (F - F_scan) / F_scan over weightings (negative = better
 than the scan), the worst |dR_b| and |dL|, and how many results are infeasible.
 """
@@ -24,7 +24,9 @@ import numpy as np
 from benchmarks import baselines
 from benchmarks import fitness as fz
 from benchmarks.harness import time_jit, time_python
-from camjax import problem as P
+from camjax.family import Weights, weights_of
+from camjax.followers.flat import optimum
+from camjax.followers.flat import problem as P
 from camjax.solvers import ga
 from camjax.solvers.sweep import solve_batch
 
@@ -39,7 +41,7 @@ def weightings(count: int) -> tuple[np.ndarray, np.ndarray]:
     return 1.0 / (1.0 + ratio), ratio / (1.0 + ratio)
 
 
-def dense_scan(problem, weights: P.Weights) -> P.Design:
+def dense_scan(problem, weights: Weights) -> P.Design:
     """Best feasible point of a G x G grid over the box, zoomed SCAN_ZOOMS times (+-2 cells)."""
     scene = fz.fused_scene(problem)
     g = SCAN_GRID
@@ -64,7 +66,7 @@ def dense_scan(problem, weights: P.Weights) -> P.Design:
     return jax.lax.map(one, weights)
 
 
-def _accuracy(problem, weights: P.Weights, designs: P.Design, scan: P.Design) -> dict:
+def _accuracy(problem, weights: Weights, designs: P.Design, scan: P.Design) -> dict:
     ev = jax.vmap(P.evaluate, in_axes=(None, 0, 0))(problem, weights, designs)
     ev_scan = jax.vmap(P.evaluate, in_axes=(None, 0, 0))(problem, weights, scan)
     gap = (np.asarray(ev.objective) - np.asarray(ev_scan.objective)) / np.abs(np.asarray(ev_scan.objective))
@@ -84,7 +86,7 @@ def _as_design(x: np.ndarray) -> P.Design:
     return P.Design(jnp.asarray(x[:, 0]), jnp.asarray(x[:, 1]))
 
 
-def _camjax(problem, weights: P.Weights, repeats: int) -> dict:
+def _camjax(problem, weights: Weights, repeats: int) -> dict:
     """The three camjax solvers, each over all weightings in one program (``sweep.solve_batch``)."""
     keys = ga.weighting_keys(0, weights.alpha.shape[0])
     out = {}
@@ -109,9 +111,9 @@ def run(scene, quick: bool) -> dict:
     count = 20 if quick else 100
     problem = P.problem_from_scene(scene, extrema="grid")
     alpha, gamma = weightings(count)
-    weights = P.weights_of(alpha, gamma)
+    weights = weights_of(alpha, gamma)
     scan = jax.jit(dense_scan)(problem, weights)
-    exact = jax.vmap(P.global_optimum, in_axes=(None, 0))(problem, weights)
+    exact = jax.vmap(optimum.global_optimum, in_axes=(None, 0))(problem, weights)
     scan_vs_exact = _accuracy(problem, weights, exact, scan)
 
     jx = _camjax(problem, weights, repeats=3 if quick else 5)
@@ -145,7 +147,7 @@ def run(scene, quick: bool) -> dict:
             **_accuracy(problem, weights, designs, scan),
         }
     for name, (subset, src, t, out) in scipy_runs.items():
-        sub_w = P.Weights(weights.alpha[subset], weights.gamma[subset])
+        sub_w = Weights(weights.alpha[subset], weights.gamma[subset])
         sub_scan = jax.tree.map(lambda v, subset=subset: v[subset], scan)
         methods[name] = {
             "time_s": t.median_s * count / len(subset),

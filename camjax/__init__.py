@@ -21,20 +21,19 @@ jax.config.update("jax_enable_x64", True)
 from camjax import (  # noqa: E402
     contact,
     evaluate,
-    geometry,
+    family,
+    followers,
     laws,
     loads,
     numerics,
     output,
     pipeline,
-    problem,
     program,
-    rocker,
-    roller_problem,
     runtime,
 )
 from camjax.contact import Material, hertz_line_stress  # noqa: E402
-from camjax.evaluate import DesignCurves, SceneArrays, evaluate_design, scene_arrays  # noqa: E402
+from camjax.evaluate import SceneArrays, scene_arrays  # noqa: E402
+from camjax.family import Weights  # noqa: E402
 from camjax.laws import (  # noqa: E402
     LAWS,
     FourierSeries,
@@ -47,8 +46,8 @@ from camjax.laws import (  # noqa: E402
 )
 from camjax.loads import FollowerTrain, Guide, RockerTrain  # noqa: E402
 from camjax.output import report  # noqa: E402
-from camjax.pipeline import DesignRun, Report, analyse, design_report, run_design  # noqa: E402
-from camjax.problem import Design, Problem, Weights, problem_from_scene  # noqa: E402
+from camjax.output.report import Report, analyse, design_report  # noqa: E402
+from camjax.pipeline import run_design  # noqa: E402
 from camjax.program import Kinematics, MotionProgram, Segment, joints  # noqa: E402
 from camjax.scene import Scene, SceneError, load_scene, parse_scene  # noqa: E402
 
@@ -57,12 +56,10 @@ __version__ = "0.1.0"
 __all__ = [
     "LAWS", "FollowerTrain", "FourierSeries", "Guide", "Kinematics", "Law", "LawValues",
     "Material", "MotionProgram", "Scene", "SceneArrays", "SceneError", "Segment", "contact",
-    "fourier_law", "geometry", "get_law", "hertz_line_stress", "joints", "laws", "load_scene",
+    "fourier_law", "get_law", "hertz_line_stress", "joints", "laws", "load_scene",
     "loads", "numerics", "parse_scene", "polynomial_law", "program", "scene_arrays",
-    "stepped_law", "design_report", "report", "DesignCurves", "DesignRun", "Report", "analyse",
-    "evaluate_design", "run_design", "evaluate", "output", "pipeline", "runtime",
-    "Design", "Problem", "Weights", "problem", "problem_from_scene", "roller_problem", "solvers",
-    "rocker", "RockerTrain",
+    "stepped_law", "design_report", "report", "Report", "analyse", "run_design", "evaluate", "output",
+    "pipeline", "runtime", "Weights", "family", "followers", "problem_from_scene", "solvers", "RockerTrain",
 ]
 
 
@@ -72,4 +69,8 @@ def __getattr__(name):
         import importlib
 
         return importlib.import_module(f"camjax.{name}")
+    if name == "problem_from_scene":  # the design problem of any follower type (camjax.solvers.base)
+        from camjax.solvers.base import problem_from_scene
+
+        return problem_from_scene
     raise AttributeError(f"module 'camjax' has no attribute {name!r}")

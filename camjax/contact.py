@@ -57,7 +57,7 @@ def roller_stress(coefficient, pressure_angle_rad, equivalent_radius_mm) -> jax.
 
     The normal force is P = F / cos phi (:func:`camjax.loads.normal_force`), so
     sigma = C sqrt(1 / cos phi) / sqrt(rho_eq), rho_eq = 1 / (1/rho_c + 1/R_f)
-    (:func:`camjax.geometry.roller_equivalent_radius`). C depends on the scene only, phi and
+    (:func:`camjax.followers.roller.geometry.roller_equivalent_radius`). C depends on the scene only, phi and
     rho_eq on the design. Finite for every trial design: cos phi is floored like
     :func:`camjax.loads.normal_force` and rho_eq like :func:`stress_from_coefficient` (an
     undercut saturates the stress; the undercut constraint carries the gradient there).

@@ -1,7 +1,7 @@
 """What every problem family of :mod:`camjax.solvers.base` shares, written once.
 
-The families (:mod:`camjax.problem`, :mod:`camjax.roller_problem`, :mod:`camjax.oscillating_problem`,
-:mod:`camjax.oscillating_flat_problem`) differ in their design variables, physics and constraints.
+The families (:mod:`camjax.followers.flat.problem`, :mod:`camjax.followers.roller.problem`, :mod:`camjax.followers.oscillating_roller.problem`,
+:mod:`camjax.followers.oscillating_flat.problem`) differ in their design variables, physics and constraints.
 The pieces here reach a problem only through the fields every family's ``Problem`` has:
 ``theta_deg`` (n,), the box ``lower`` / ``upper`` (``Design`` pytrees, mm) and ``sigma_max_MPa``;
 a design only as a pytree of named variables (mm), a violation only through its field names.
@@ -11,12 +11,33 @@ from __future__ import annotations
 
 import functools
 import operator
+from typing import Any, NamedTuple
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 
 from camjax.numerics import finite_float, positive_part
+
+# What the solvers see of a family (annotations): every family's own NamedTuple types, reached only
+# through the family module (camjax.solvers.base.family_of) and as pytrees.
+Problem = Any  # a family's Problem: the design-independent arrays on the angle grid
+Design = Any  # a family's Design: NamedTuple of named variables, mm
+Constraints = Any  # a family's Constraints: NamedTuple of (n,) arrays g <= 0, mm
+Violation = Any  # a family's Violation: NamedTuple of worst violations, mm / MPa
+
+
+class Weights(NamedTuple):
+    """Objective weights (dimensionless, >= 0, not both 0); scalars or a batch."""
+
+    alpha: jax.Array  # size
+    gamma: jax.Array  # stress
+
+
+def weights_of(alpha, gamma, dtype=None) -> Weights:
+    """Weights as arrays (any matching shapes); alpha, gamma >= 0, not both 0."""
+    dtype = dtype or jnp.result_type(float)
+    return Weights(jnp.asarray(alpha, dtype), jnp.asarray(gamma, dtype))
 
 # A design is feasible when every violation is below these (mm; MPa relative to sigma_max).
 FEASIBILITY_TOL_MM = 1e-6
@@ -54,7 +75,7 @@ def bounds_violation(problem, design) -> jax.Array:
 
 def weighted_objective(weights, size_term, peak_stress_MPa, sigma_max_MPa) -> jax.Array:
     """F = alpha size_term + gamma peak_stress / sigma_max (dimensionless), ``weights`` a
-    :class:`camjax.problem.Weights`.
+    :class:`camjax.followers.flat.Weights`.
 
     The order a family computes the two terms in is part of its exact result: it fixes the order
     in which the gradient's contributions to a shared variable add up (float addition does not

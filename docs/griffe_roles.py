@@ -1,6 +1,6 @@
 """Griffe extension for the API pages: Sphinx roles in docstrings rendered as code.
 
-The docstrings name other objects the Sphinx way (``:func:`solve```, ``:class:`~camjax.problem.Design```);
+The docstrings name other objects the Sphinx way (``:func:`solve```, ``:class:`~camjax.followers.flat.problem.Design```);
 Markdown has no such roles, so this rewrites them to code spans at build time (``solve``, ``Design``)
 without touching the source.
 """

@@ -15,7 +15,8 @@ jax.config.update("jax_num_cpu_devices", 4)
 import jax.numpy as jnp  # noqa: E402
 
 import camjax  # noqa: E402, F401  (x64)
-from camjax.problem import problem_from_scene, weights_of  # noqa: E402
+from camjax.family import weights_of  # noqa: E402
+from camjax.followers.flat.problem import problem_from_scene  # noqa: E402
 from camjax.scaleout import sharding  # noqa: E402
 from camjax.scaleout.blocks import BlockTask, SweepSpec, solve_block  # noqa: E402
 from camjax.scene import builtin_scene_text  # noqa: E402

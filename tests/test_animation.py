@@ -8,11 +8,11 @@ from PIL import Image
 from reference import reference_motion
 from test_report import ROLLER
 
-from camjax import pipeline
+import camjax
+from camjax.followers._translating_drawing import mechanism as mechanism_from_curves
 from camjax.output.animation import (
     frame_indices,
     frame_poses,
-    mechanism_from_curves,
     motion_frames,
     rotate,
     write_motion_gif,
@@ -22,14 +22,14 @@ from camjax.scene import parse_scene
 
 @pytest.fixture(scope="module")
 def flat_mechanism(default_scene, default_arrays):
-    curves = pipeline.analyse(default_scene, default_arrays).curves
+    curves = camjax.analyse(default_scene, default_arrays).curves
     return mechanism_from_curves(curves, "default")
 
 
 @pytest.fixture(scope="module")
 def roller_mechanism():
     scene = parse_scene(ROLLER, "roller")
-    curves = pipeline.analyse(scene, base_radius_mm=30.0).curves
+    curves = camjax.analyse(scene, base_radius_mm=30.0).curves
     return mechanism_from_curves(curves, "roller")
 
 
@@ -116,7 +116,7 @@ def test_gif_has_every_frame(flat_mechanism, tmp_path):
 
 
 def test_infeasible_outline_still_animates(default_scene, default_arrays, tmp_path):
-    curves = pipeline.analyse(default_scene, default_arrays, base_radius_mm=10.0).curves
+    curves = camjax.analyse(default_scene, default_arrays, base_radius_mm=10.0).curves
     bad = curves.rho_mm < 0
     assert bad.any()  # R_b = 10 mm is below the flat face's minimum (about 27 mm)
     m = mechanism_from_curves(curves, "default", violation="ρ < 0: the face cannot follow", bad=bad)
@@ -130,11 +130,11 @@ def test_infeasible_outline_still_animates(default_scene, default_arrays, tmp_pa
 
 
 def test_violation_samples_are_where_rho_is_negative(default_scene, default_arrays):
-    from camjax.output.animation import violation_samples
+    from camjax.followers._translating_drawing import violation_samples
 
-    ok = pipeline.analyse(default_scene, default_arrays).curves
+    ok = camjax.analyse(default_scene, default_arrays).curves
     assert not violation_samples(ok).any()
-    bad = pipeline.analyse(default_scene, default_arrays, base_radius_mm=10.0).curves
+    bad = camjax.analyse(default_scene, default_arrays, base_radius_mm=10.0).curves
     # independent: rho = R_b + s + s'' of the reference cycloids, negative late in the rise and in
     # the return
     s, _, d2s = reference_motion(bad.theta_deg)
@@ -167,7 +167,7 @@ def test_builtin_roller_touches_its_roller_for_either_rotation(rotation):
 
     scene = load_scene("roller")
     scene = dataclasses.replace(scene, motion=dataclasses.replace(scene.motion, rotation=rotation))
-    m = mechanism_from_curves(pipeline.analyse(scene).curves)
+    m = mechanism_from_curves(camjax.analyse(scene).curves)
     assert m.rotation == rotation
     p = frame_poses(m, 18)
     dx, dy = p.follower_x_mm - p.contact_x_mm, p.follower_y_mm - p.contact_y_mm

@@ -12,15 +12,11 @@ from reference import reference_motion
 from test_cli import break_outline
 from test_rocker import FLAT_SCENE, ROLLER_SCENE
 
-from camjax import cli, pipeline
-from camjax.output.animation import (
-    UndrawableGeometry,
-    frame_poses,
-    mechanism_from_rocker,
-    motion_frames,
-    rocker_violation_samples,
-    write_motion_gif,
-)
+import camjax
+from camjax import cli
+from camjax.followers._rocking_drawing import mechanism as mechanism_from_rocker
+from camjax.followers._rocking_drawing import violation_samples as rocker_violation_samples
+from camjax.output.animation import UndrawableGeometry, frame_poses, motion_frames, write_motion_gif
 from camjax.scene import parse_scene
 
 # the scenes' program (tests/test_rocker.py): cycloidal 20 deg rise over 0..120 deg, dwell, cycloidal
@@ -38,7 +34,7 @@ def _scene(kind, rotation):
 @functools.cache
 def _case(kind, rotation):
     """(curves, mechanism) of a rocker scene at its drawing radius (feasible)."""
-    curves = pipeline.analyse(_scene(kind, rotation)).curves
+    curves = camjax.analyse(_scene(kind, rotation)).curves
     assert not rocker_violation_samples(curves).any()
     return curves, mechanism_from_rocker(curves, kind)
 
@@ -180,7 +176,7 @@ def test_rocker_gif_has_every_frame(rocker, tmp_path):
 
 def test_infeasible_flat_rocker_animates_with_the_violation_in_red(tmp_path):
     # R_b = 30 mm is far below this face's smallest admissible base radius (about 81 mm)
-    curves = pipeline.analyse(_scene("oscillating_flat", "cw"), base_radius_mm=30.0).curves
+    curves = camjax.analyse(_scene("oscillating_flat", "cw"), base_radius_mm=30.0).curves
     bad = rocker_violation_samples(curves)
     assert bad.any()
     # independently, the sign of rho from the outline's points: the outline is the envelope of the
@@ -219,9 +215,9 @@ def test_undrawable_rocker_is_refused(rocker):
 
 
 def test_design_refuses_an_undrawable_rocker_in_one_line(tmp_path, capsys, monkeypatch):
-    from camjax import rocker
+    from camjax.followers._rocking import RockingFollower
 
-    break_outline(monkeypatch, rocker, "evaluate_rocker", "profile_y_mm", 11, float("inf"))
+    break_outline(monkeypatch, RockingFollower, "evaluate", "profile_y_mm", 11, float("inf"))
     path = tmp_path / "scene.toml"
     path.write_text(ROLLER_SCENE.replace("ROT", "ccw"))
     out = tmp_path / "out"
@@ -259,7 +255,7 @@ def test_design_animates_an_infeasible_rocker(tmp_path, capsys):
 def test_roller_rocker_past_its_pressure_angle_limit_is_drawn_red():
     """R_b = 14 mm on the roller scene: |phi| passes the scene's 30 deg limit on part of the turn
     (the CLI test above reports it); exactly those samples (and any undercut) are drawn red."""
-    curves = pipeline.analyse(_scene("oscillating_roller", "ccw"), base_radius_mm=14.0).curves
+    curves = camjax.analyse(_scene("oscillating_roller", "ccw"), base_radius_mm=14.0).curves
     assert curves.pressure_angle_limit_deg == 30.0  # the scene's follower.max_pressure_angle_deg default
     over = np.abs(curves.pressure_angle_deg) > 30.0 * (1 + 1e-6)
     assert 0 < over.sum() < over.size

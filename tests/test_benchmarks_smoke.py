@@ -13,13 +13,14 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # benchmarks/ is n
 
 from benchmarks import fitness as fz  # noqa: E402
 from benchmarks import harness, run, scaling  # noqa: E402
-from camjax import problem as P  # noqa: E402
+from camjax.family import weights_of
+from camjax.followers.flat import problem as P  # noqa: E402
 
 
 @pytest.mark.slow
 def test_fitness_implementations_agree():
     problem = P.problem_from_scene(camjax.load_scene(), samples=90, extrema="grid")
-    weights = P.weights_of(1.0, 1.0)
+    weights = weights_of(1.0, 1.0)
     designs = fz.random_designs(problem, 37)
     lib = fz.library_fitness(problem, weights, designs)
     fused = scaling.blocked(fz.fused_fitness, block=16)(fz.fused_scene(problem), weights, designs)

@@ -242,9 +242,9 @@ def break_outline(monkeypatch, module, function: str, field: str, index: int, va
 
 
 def test_design_refuses_an_undrawable_outline_in_one_line(tmp_path, capsys, monkeypatch):
-    from camjax import pipeline
+    from camjax.followers._translating import TranslatingFollower
 
-    break_outline(monkeypatch, pipeline, "evaluate_design", "profile_x_mm", 7, float("nan"))
+    break_outline(monkeypatch, TranslatingFollower, "curves", "profile_x_mm", 7, float("nan"))
     out = tmp_path / "out"
     assert cli.main(["design", "--out", str(out), "--dpi", "30", "--animate"]) == 2
     err = capsys.readouterr().err.strip().splitlines()

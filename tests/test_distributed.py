@@ -14,7 +14,7 @@ import pytest
 # get it through PYTHONPATH, so the fault-injecting block function unpickles by reference.
 from scaleout_helpers import crash_once
 
-from camjax.problem import problem_from_scene
+from camjax.followers.flat.problem import problem_from_scene
 from camjax.scaleout import (
     BlockStore,
     ManifestMismatch,

@@ -8,9 +8,8 @@ from reference import reference_force, reference_motion, stress_coefficient
 from scipy.optimize import brentq, minimize_scalar
 
 import camjax
-from camjax import pipeline
-from camjax import problem as P
 from camjax.evaluate import scene_arrays
+from camjax.followers.flat import problem as P
 from camjax.scene import builtin_scene_text, parse_scene
 from camjax.solvers.base import solve
 
@@ -29,7 +28,7 @@ def test_report_min_base_radius_is_the_closed_form():
     a = math.acos(1.0 / 35.0)
     u = (math.pi + a) / (2 * math.pi)
     need = -H * (u + math.sin(a) / (2 * math.pi) - 2 * math.pi / (math.pi / 3) ** 2 * math.sin(a))
-    report = pipeline.design_report(camjax.load_scene())
+    report = camjax.design_report(camjax.load_scene())
     assert report["extrema"] == "exact"
     assert report["min_base_radius_mm"] == pytest.approx(need, rel=1e-12)
     assert report["min_base_radius_deg"] == pytest.approx(300 + 60 * (1 - u), abs=1e-7)
@@ -41,7 +40,7 @@ def test_grid_switch_keeps_the_samples():
     text = builtin_scene_text("default").replace("samples = 360", 'samples = 360\nextrema = "grid"')
     scene = parse_scene(text)
     assert scene.motion.extrema == "grid"
-    report = pipeline.design_report(scene)
+    report = camjax.design_report(scene)
     q, _ = numpy_reference(np.arange(360.0))
     assert report["extrema"] == "grid"
     assert report["min_base_radius_mm"] == pytest.approx(-q.min(), rel=1e-12)  # 24.1021, a sample

@@ -9,7 +9,6 @@ from reference import reference_motion
 from test_report import ROLLER
 
 import camjax
-from camjax import pipeline
 from camjax.output import export
 from camjax.scene import parse_scene
 
@@ -18,7 +17,7 @@ FILES = {"svaj.png", "profile.png", "loads.png", "stress.png", "profile.csv", "p
 
 @pytest.fixture(scope="session")
 def default_report(default_scene, default_arrays):
-    return pipeline.analyse(default_scene, default_arrays)
+    return camjax.analyse(default_scene, default_arrays)
 
 
 @pytest.fixture(scope="session")
@@ -90,7 +89,7 @@ segments = [{ kind = "rise", angle_deg = 180, law = "cycloidal", lift_mm = 10 },
 [follower]
 type = "flat"
 """
-    r = pipeline.analyse(parse_scene(text, "bare"))
+    r = camjax.analyse(parse_scene(text, "bare"))
     names = {p.name for p in export.write_design_files(tmp_path, r.curves, dpi=30)}
     assert names == FILES - {"loads.png", "stress.png"}
 
@@ -100,7 +99,7 @@ def test_roller_outline_is_envelope_of_roller_circles():
     # taken here from finite differences of the pitch curve on a dense grid (independent).
     scene = parse_scene(ROLLER, "roller")
     arrays = camjax.scene_arrays(scene, samples=36000)
-    r = pipeline.analyse(scene, arrays, base_radius_mm=34.0)
+    r = camjax.analyse(scene, arrays, base_radius_mm=34.0)
     c = r.curves
     # periodic central differences (the curve is closed; np.gradient is one-sided at its ends)
     tx = np.roll(c.pitch_x_mm, -1) - np.roll(c.pitch_x_mm, 1)
@@ -149,7 +148,7 @@ def test_drawing_workers_write_the_in_process_files_byte_for_byte(default_scene,
     from camjax.output.drawing import DrawingWorkers
     from camjax.output.titles import title_block
 
-    run = pipeline.analyse(default_scene, default_arrays, base_radius_mm=10.0)
+    run = camjax.analyse(default_scene, default_arrays, base_radius_mm=10.0)
     title, banner = title_block(run.data), "INFEASIBLE GEOMETRY: test banner"
     (tmp_path / "here").mkdir()
     (tmp_path / "there").mkdir()

@@ -12,7 +12,8 @@ from hypothesis import strategies as st
 from reference import reference_motion
 
 import camjax
-from camjax import contact, geometry, loads, program
+from camjax import contact, loads, program
+from camjax.followers.flat import geometry as flat_geo
 from camjax.laws import LAWS
 from camjax.numerics import precision_warning
 from camjax.program import MotionProgram, Segment
@@ -66,7 +67,7 @@ def test_programs_match_numpy_for_any_angle_lift_grid(rise_deg, lift, n):
 def test_stress_force_and_gradients_finite_for_any_radius_and_speed(log_factor, rpm):
     sc = camjax.load_scene()
     arrays = camjax.scene_arrays(sc)
-    rb_min = float(geometry.flat_min_base_radius(arrays.kin)[0])
+    rb_min = float(flat_geo.flat_min_base_radius(arrays.kin)[0])
     rb = rb_min * 10.0**log_factor  # 1e-3 x .. 10 x the minimum
     c, train = sc.contact, sc.follower.train
 
@@ -74,7 +75,7 @@ def test_stress_force_and_gradients_finite_for_any_radius_and_speed(log_factor, 
         rb, w = params
         motion = program.time_kinematics(arrays.kin, w)
         f = loads.kinetostatic_force(train, motion)
-        rho = geometry.flat_radius_of_curvature(rb, arrays.kin)
+        rho = flat_geo.flat_radius_of_curvature(rb, arrays.kin)
         sigma = contact.hertz_line_stress(f, rho, c.cam_width_mm, c.cam, c.follower)
         return jnp.max(sigma) + jnp.max(loads.cam_torque(f, arrays.kin.ds)) - jnp.min(rho)
 
@@ -84,15 +85,15 @@ def test_stress_force_and_gradients_finite_for_any_radius_and_speed(log_factor, 
 
 def test_float32_warns_near_the_curvature_limit_and_not_far_from_it(default_scene):
     a32 = camjax.scene_arrays(default_scene, dtype=jnp.float32)
-    rb_min = float(geometry.flat_min_base_radius(a32.kin)[0])
-    far = geometry.flat_radius_of_curvature(jnp.float32(rb_min * 1.2), a32.kin)
-    near = geometry.flat_radius_of_curvature(jnp.float32(rb_min + 1e-3), a32.kin)
+    rb_min = float(flat_geo.flat_min_base_radius(a32.kin)[0])
+    far = flat_geo.flat_radius_of_curvature(jnp.float32(rb_min * 1.2), a32.kin)
+    near = flat_geo.flat_radius_of_curvature(jnp.float32(rb_min + 1e-3), a32.kin)
     assert precision_warning(rb_min * 1.2, a32.kin.s, a32.kin.d2s, far, jnp.float32) is None
     msg = precision_warning(rb_min + 1e-3, a32.kin.s, a32.kin.d2s, near, jnp.float32)
     assert msg is not None and "float64" in msg
     # float64 keeps its documented 1e-9 down to the same design
     a64 = camjax.scene_arrays(default_scene)
-    near64 = geometry.flat_radius_of_curvature(rb_min + 1e-3, a64.kin)
+    near64 = flat_geo.flat_radius_of_curvature(rb_min + 1e-3, a64.kin)
     assert precision_warning(rb_min + 1e-3, a64.kin.s, a64.kin.d2s, near64, jnp.float64) is None
 
 
@@ -193,8 +194,10 @@ def test_check_extremes_runs_on_a_scene_without_contact(tmp_path):
 def test_check_extremes_without_the_validation_folder_is_one_line(tmp_path, monkeypatch, capsys):
     # an installed wheel has camjax/ but no validation/ beside it
     from camjax import cli
+    from camjax.cli import check_extremes
 
-    monkeypatch.setattr(cli, "__file__", str(tmp_path / "site-packages" / "camjax" / "cli.py"))
+    monkeypatch.setattr(check_extremes, "__file__",
+                        str(tmp_path / "site-packages" / "camjax" / "cli" / "check_extremes.py"))
     rc = cli.main(["check-extremes", "--out", str(tmp_path / "x")])
     err = capsys.readouterr().err
     assert rc == 2 and len(err.strip().splitlines()) == 1

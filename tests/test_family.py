@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from camjax import family
+from camjax.family import Weights
 from camjax.numerics import NonFiniteError
-from camjax.problem import Weights
 
 
 class Design(NamedTuple):

@@ -5,7 +5,9 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from camjax import problem as P
+from camjax.family import Weights, weights_of
+from camjax.followers.flat import optimum
+from camjax.followers.flat import problem as P
 from camjax.solvers import ga
 
 
@@ -17,10 +19,10 @@ def problem(default_scene, default_arrays):
 def test_default_settings_match_closed_form_at_every_angle(problem):
     """The issue's claim, with the default settings: 0.05 mm at every angle, two weightings."""
     weightings = [(1.0, 1.0), (1.0, 10.0)]
-    w = P.weights_of(jnp.array([a for a, _ in weightings]), jnp.array([g for _, g in weightings]))
+    w = weights_of(jnp.array([a for a, _ in weightings]), jnp.array([g for _, g in weightings]))
     res = ga.solve(ga.weighting_keys(0, len(weightings)), problem, w, "pointwise")
     for i, (alpha, gamma) in enumerate(weightings):
-        ref = P.pointwise_optimum(problem, P.weights_of(alpha, gamma))
+        ref = optimum.pointwise_optimum(problem, weights_of(alpha, gamma))
         np.testing.assert_allclose(np.asarray(res.design.base_radius_mm[i]), np.asarray(ref.base_radius_mm),
                                    rtol=0, atol=0.05)
         np.testing.assert_allclose(np.asarray(res.design.face_width_mm[i]), np.asarray(ref.face_width_mm),
@@ -29,10 +31,10 @@ def test_default_settings_match_closed_form_at_every_angle(problem):
 
 
 def test_global_mode_matches_exact_reference(problem):
-    w = P.weights_of(jnp.array([1.0, 10.0, 1.0]), jnp.array([1.0, 1.0, 0.0]))
+    w = weights_of(jnp.array([1.0, 10.0, 1.0]), jnp.array([1.0, 1.0, 0.0]))
     res = ga.solve(ga.weighting_keys(3, 3), problem, w, "global")
     for i in range(3):
-        ref = P.global_optimum(problem, P.Weights(w.alpha[i], w.gamma[i]))
+        ref = optimum.global_optimum(problem, Weights(w.alpha[i], w.gamma[i]))
         assert float(res.design.base_radius_mm[i]) == pytest.approx(float(ref.base_radius_mm), abs=0.05)
         assert float(res.design.face_width_mm[i]) == pytest.approx(float(ref.face_width_mm), abs=0.05)
         assert bool(res.feasible[i])
@@ -44,7 +46,7 @@ SMALL = ga.GASettings(population=16, generations=30)
 
 
 def test_seeded_and_reproducible(problem):
-    w = P.weights_of(jnp.array([1.0, 2.0]), jnp.array([1.0, 1.0]))
+    w = weights_of(jnp.array([1.0, 2.0]), jnp.array([1.0, 1.0]))
     a = ga.solve(ga.weighting_keys(7, 2), problem, w, "global", SMALL)
     b = ga.solve(ga.weighting_keys(7, 2), problem, w, "global", SMALL)
     c = ga.solve(ga.weighting_keys(8, 2), problem, w, "global", SMALL)
@@ -52,7 +54,7 @@ def test_seeded_and_reproducible(problem):
     assert not np.array_equal(np.asarray(a.best_history), np.asarray(c.best_history))
     # a weighting's result depends on its own key only, not on its place in the batch
     keys = ga.weighting_keys(7, 2)
-    swapped = ga.solve(keys[::-1], problem, P.Weights(w.alpha[::-1], w.gamma[::-1]), "global", SMALL)
+    swapped = ga.solve(keys[::-1], problem, Weights(w.alpha[::-1], w.gamma[::-1]), "global", SMALL)
     np.testing.assert_array_equal(np.asarray(swapped.design.base_radius_mm)[::-1],
                                   np.asarray(a.design.base_radius_mm))
     np.testing.assert_array_equal(np.asarray(ga.weighting_keys(7, 1, offset=1)[0] == keys[1]), True)
@@ -60,7 +62,7 @@ def test_seeded_and_reproducible(problem):
 
 def test_population_layout_weightings_first(problem):
     """State arrays are (weightings, population, genes): the axes a device mesh would shard."""
-    w = P.weights_of(jnp.ones(3), jnp.ones(3))
+    w = weights_of(jnp.ones(3), jnp.ones(3))
     keys = ga.weighting_keys(0, 3)
     state = jax.jit(jax.vmap(lambda k, wi: ga.ga_init(k, problem, wi, SMALL)))(keys, w)
     assert state.genes.shape == (3, SMALL.population, 2)

@@ -8,13 +8,14 @@ import numpy as np
 import pytest
 from reference import reference_motion
 
-from camjax import geometry
+from camjax.followers.flat import geometry as flat_geo
+from camjax.followers.roller import geometry as roller_geo
 from camjax.laws import get_law
 from camjax.program import MotionProgram, Segment, evaluate
 
 
 def test_min_base_radius_reference_case(default_arrays):
-    rb, i = geometry.flat_min_base_radius(default_arrays.kin)
+    rb, i = flat_geo.flat_min_base_radius(default_arrays.kin)
     # SPEC 5: about 24 mm, critical at 315 deg. Exact on the 1 deg grid: the return's
     # -(s + s'') at 315 deg = -(h (1 - p(1/4)) - h 2 pi / beta^2) with p(1/4) = 1/4 - 1/(2 pi)
     h, beta = 5.0, math.radians(60)
@@ -33,7 +34,7 @@ def test_min_base_radius_dense_independent():
     kin = evaluate(MotionProgram.from_segments(
         [Segment("dwell", 100), Segment("rise", 80, get_law("cycloidal"), 5.0), Segment("dwell", 120),
          Segment("return", 60, get_law("cycloidal"), 5.0)]), 36_000)
-    sampled, _ = geometry.flat_min_base_radius(kin)
+    sampled, _ = flat_geo.flat_min_base_radius(kin)
     # grid 0.01 deg (dx = 1.7e-4 in x): a sampled maximum misses the true one by at most
     # max|f"| (dx/2)^2 / 2 ~ 1130 * 7e-9 / 2 = 4e-6 mm; and the sample never exceeds it
     assert dense - 5e-6 <= float(sampled) <= dense + 1e-12
@@ -42,16 +43,16 @@ def test_min_base_radius_dense_independent():
 def test_face_width(default_arrays):
     kin = default_arrays.kin
     # symmetric: 2 max |s'| = 2 * h * 2 / beta_return = 19.0986 mm (SPEC: about 19 mm at 330 deg)
-    assert float(geometry.flat_face_width(kin)) == pytest.approx(2 * 5.0 * 2 / math.radians(60), rel=1e-12)
-    asym = float(geometry.flat_face_width(kin, symmetric=False))
+    assert float(flat_geo.flat_face_width(kin)) == pytest.approx(2 * 5.0 * 2 / math.radians(60), rel=1e-12)
+    asym = float(flat_geo.flat_face_width(kin, symmetric=False))
     assert asym == pytest.approx(5.0 * 2 / math.radians(80) + 5.0 * 2 / math.radians(60), rel=1e-12)
-    np.testing.assert_array_equal(geometry.flat_contact_offset(kin), kin.ds)
+    np.testing.assert_array_equal(flat_geo.flat_contact_offset(kin), kin.ds)
 
 
 @pytest.mark.parametrize("rb", [24.2, 30.0, 80.0])
 def test_profile_touches_the_follower_face(default_arrays, rb):
     kin = default_arrays.kin
-    x, y = geometry.flat_profile(rb, kin)
+    x, y = flat_geo.flat_profile(rb, kin)
     normal = (jnp.sin(kin.theta), jnp.cos(kin.theta))
     dist = x * normal[0] + y * normal[1]
     np.testing.assert_allclose(dist, rb + kin.s, atol=1e-9)
@@ -67,12 +68,12 @@ def test_profile_curvature_matches_rho(default_arrays):
         [Segment("dwell", 100), Segment("rise", 80, get_law("cycloidal"), 5.0), Segment("dwell", 120),
          Segment("return", 60, get_law("cycloidal"), 5.0)])
     kin = evaluate(prog, 36_000)
-    x, y = (np.asarray(v) for v in geometry.flat_profile(rb, kin))
+    x, y = (np.asarray(v) for v in flat_geo.flat_profile(rb, kin))
     dt = 2 * np.pi / 36_000
     xd, yd = np.gradient(x, dt), np.gradient(y, dt)
     xdd, ydd = np.gradient(xd, dt), np.gradient(yd, dt)
     rho_fd = (xd**2 + yd**2) ** 1.5 / np.abs(xd * ydd - yd * xdd)
-    rho = np.asarray(geometry.flat_radius_of_curvature(rb, kin))
+    rho = np.asarray(flat_geo.flat_radius_of_curvature(rb, kin))
     inner = slice(10, -10)
     # O(dt^2) differencing, worst next to the joints where s''' jumps (measured 1.8e-4)
     np.testing.assert_allclose(rho_fd[inner], rho[inner], rtol=5e-4)
@@ -81,7 +82,7 @@ def test_profile_curvature_matches_rho(default_arrays):
 def test_roller_zero_offset_matches_spec_formula(default_arrays):
     kin = default_arrays.kin
     rb, rf = 30.0, 8.0
-    g = geometry.roller_geometry(rb, rf, 0.0, kin)
+    g = roller_geo.roller_geometry(rb, rf, 0.0, kin)
     rp = rb + rf
     w = rp + kin.s
     spec = (w**2 + kin.ds**2) ** 1.5 / (w**2 + 2 * kin.ds**2 - kin.d2s * w)
@@ -95,8 +96,8 @@ def test_roller_with_offset_against_pitch_curve_finite_differences():
                                         Segment("dwell", 60)])
     kin = evaluate(prog, 36_000)
     rb, rf, e = 25.0, 6.0, 4.0
-    g = geometry.roller_geometry(rb, rf, e, kin)
-    x, y = (np.asarray(v) for v in geometry.roller_pitch_curve(rb, rf, e, kin))
+    g = roller_geo.roller_geometry(rb, rf, e, kin)
+    x, y = (np.asarray(v) for v in roller_geo.roller_pitch_curve(rb, rf, e, kin))
     dt = 2 * np.pi / 36_000
     xd, yd = np.gradient(x, dt), np.gradient(y, dt)
     xdd, ydd = np.gradient(xd, dt), np.gradient(yd, dt)
@@ -116,8 +117,8 @@ def test_roller_profile_is_roller_radius_from_pitch_curve():
     prog = MotionProgram.from_segments([Segment("rise", 180, get_law("cycloidal"), 8.0),
                                         Segment("return", 180, get_law("cycloidal"), 8.0)])
     kin = evaluate(prog, 3600)
-    px, py = geometry.roller_pitch_curve(30.0, 5.0, 3.0, kin)
-    cx, cy = geometry.roller_profile(30.0, 5.0, 3.0, kin)
+    px, py = roller_geo.roller_pitch_curve(30.0, 5.0, 3.0, kin)
+    cx, cy = roller_geo.roller_profile(30.0, 5.0, 3.0, kin)
     np.testing.assert_allclose(np.hypot(px - cx, py - cy), 5.0, atol=1e-9)
 
 
@@ -125,8 +126,8 @@ def test_gradients_finite_far_below_feasible(default_arrays):
     kin = default_arrays.kin
 
     def f(rb):
-        rho = geometry.flat_radius_of_curvature(rb, kin)
-        g = geometry.roller_geometry(rb, 5.0, 2.0, kin)
+        rho = flat_geo.flat_radius_of_curvature(rb, kin)
+        g = roller_geo.roller_geometry(rb, 5.0, 2.0, kin)
         return jnp.sum(rho) + jnp.sum(g.pressure_angle) + jnp.sum(jnp.tanh(g.pitch_radius_of_curvature))
 
     for rb in [1e-3, 0.5, 5.0, 24.10211504108169, 40.0]:

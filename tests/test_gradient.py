@@ -8,7 +8,9 @@ import pytest
 from reference import numpy_reference_optimum
 
 import camjax
-from camjax import problem as P
+from camjax.family import weights_of
+from camjax.followers.flat import optimum
+from camjax.followers.flat import problem as P
 from camjax.solvers import gradient as G
 
 # Every weighting the issue names, extremes included.
@@ -26,13 +28,13 @@ def pointwise_all(problem):
     """Every weighting's pointwise solve, one compiled vmapped call."""
     a = np.array([w[0] for w in WEIGHTINGS])
     g = np.array([w[1] for w in WEIGHTINGS])
-    return G.solve_sweep(problem, P.weights_of(a, g), "pointwise")
+    return G.solve_sweep(problem, weights_of(a, g), "pointwise")
 
 
 @pytest.mark.parametrize("i", range(len(WEIGHTINGS)))
 def test_pointwise_matches_closed_form_at_every_angle(problem, pointwise_all, i):
     alpha, gamma = WEIGHTINGS[i]
-    ref = P.pointwise_optimum(problem, P.weights_of(alpha, gamma))
+    ref = optimum.pointwise_optimum(problem, weights_of(alpha, gamma))
     res = jax.tree.map(lambda x: x[i], pointwise_all)
     assert bool(np.all(res.converged)) and bool(np.all(res.feasible))
     np.testing.assert_allclose(np.asarray(res.design.base_radius_mm), np.asarray(ref.base_radius_mm),
@@ -45,27 +47,27 @@ def test_pointwise_matches_closed_form_at_every_angle(problem, pointwise_all, i)
 def test_global_matches_exact_reference(problem):
     a = np.array([w[0] for w in WEIGHTINGS])
     g = np.array([w[1] for w in WEIGHTINGS])
-    res = G.solve_sweep(problem, P.weights_of(a, g), "global")
+    res = G.solve_sweep(problem, weights_of(a, g), "global")
     for i, (alpha, gamma) in enumerate(WEIGHTINGS):
-        ref = P.global_optimum(problem, P.weights_of(alpha, gamma))
+        ref = optimum.global_optimum(problem, weights_of(alpha, gamma))
         assert float(res.design.base_radius_mm[i]) == pytest.approx(float(ref.base_radius_mm), abs=1e-6)
         assert float(res.design.face_width_mm[i]) == pytest.approx(float(ref.face_width_mm), abs=1e-6)
         assert bool(res.converged[i]) and bool(res.feasible[i])
         assert float(res.objective[i]) == pytest.approx(
-            float(P.objective(problem, P.weights_of(alpha, gamma), ref)), rel=1e-9)
+            float(P.objective(problem, weights_of(alpha, gamma), ref)), rel=1e-9)
 
 
 def test_no_recompilation_on_second_call(problem):
-    w = P.weights_of(2.0, 1.0)
+    w = weights_of(2.0, 1.0)
     G.solve_global(problem, w)
     before = G.solve_global._cache_size()
-    G.solve_global(problem, P.weights_of(3.0, 0.5))  # new values, same shapes: no retrace
+    G.solve_global(problem, weights_of(3.0, 0.5))  # new values, same shapes: no retrace
     assert G.solve_global._cache_size() == before
 
 
 def test_infeasible_bounds_reported_by_name_without_nan(problem):
     tight = P.with_bounds(problem, base_radius_mm=(5.0, 20.0), face_width_mm=(5.0, 10.0))
-    res = G.solve_global(tight, P.weights_of(1.0, 1.0))
+    res = G.solve_global(tight, weights_of(1.0, 1.0))
     assert not bool(res.feasible) and not bool(res.converged)
     assert all(np.all(np.isfinite(np.asarray(x))) for x in jax.tree.leaves(res))
     assert float(res.design.base_radius_mm) == pytest.approx(20.0)  # as close as the box allows
@@ -77,8 +79,8 @@ def test_single_angle_grid(default_scene):
     scene = dataclasses.replace(default_scene, motion=dataclasses.replace(default_scene.motion, samples=1))
     prob = P.problem_from_scene(scene, extrema="grid")  # the problem at the one angle itself
     assert prob.q_mm.shape == (1,)
-    w = P.weights_of(1.0, 1.0)
-    ref = P.pointwise_optimum(prob, w)
+    w = weights_of(1.0, 1.0)
+    ref = optimum.pointwise_optimum(prob, w)
     for res in (G.solve_global(prob, w), G.solve_pointwise(prob, w)):
         assert np.asarray(res.design.base_radius_mm).ravel()[0] == pytest.approx(float(ref.base_radius_mm[0]),
                                                                                  abs=1e-6)
@@ -88,17 +90,17 @@ def test_single_angle_grid(default_scene):
 def test_float32_problem_runs(default_scene):
     """float32 trades digits for speed: still close to the float64 closed form (1e-3 mm)."""
     prob = P.problem_from_scene(default_scene, camjax.scene_arrays(default_scene, dtype=np.float32))
-    res = G.solve_global(prob, P.weights_of(np.float32(1.0), np.float32(1.0)))
+    res = G.solve_global(prob, weights_of(np.float32(1.0), np.float32(1.0)))
     assert res.design.base_radius_mm.dtype == np.float32
     assert float(res.design.base_radius_mm) == pytest.approx(numpy_reference_optimum()[0], abs=1e-3)
 
 
 def test_plain_rprop_variant_agrees(problem):
     """secant=False is the plain iRprop- rule (camjax's own, not optax's): slower, same optimum."""
-    w = P.weights_of(1.0, 1.0)
+    w = weights_of(1.0, 1.0)
     plain = G.solve_global(problem, w, settings=G.GradientSettings(secant=False))
     fast = G.solve_global(problem, w)
-    ref = P.global_optimum(problem, w)
+    ref = optimum.global_optimum(problem, w)
     assert float(plain.design.base_radius_mm) == pytest.approx(float(ref.base_radius_mm), abs=1e-6)
     assert bool(plain.converged) and int(plain.iterations) > int(fast.iterations)
 
@@ -135,10 +137,10 @@ def test_transform_without_secant_is_irprop_minus():
 
 def test_per_angle_multipliers_agree(problem):
     """aggregate_constraints=False (one multiplier per angle and constraint): same optimum."""
-    w = P.weights_of(10.0, 1.0)
+    w = weights_of(10.0, 1.0)
     res = G.solve_global(problem, w, settings=G.GradientSettings(aggregate_constraints=False))
     assert res.multipliers.face_width.shape == problem.q_mm.shape
-    ref = P.global_optimum(problem, w)
+    ref = optimum.global_optimum(problem, w)
     assert float(res.design.base_radius_mm) == pytest.approx(float(ref.base_radius_mm), abs=1e-6)
     assert float(res.design.face_width_mm) == pytest.approx(float(ref.face_width_mm), abs=1e-6)
     assert bool(res.converged)

@@ -254,7 +254,7 @@ def test_an_unwritable_output_folder_is_refused_before_any_work(place, capsys, m
     monkeypatch.setattr(output_folder.os, "access",
                         lambda p, mode, **kw: False if Path(p) == target else real(p, mode, **kw))
     calls = []
-    monkeypatch.setattr("camjax.pipeline.analyse", lambda *a, **k: calls.append(a))
+    monkeypatch.setattr("camjax.output.report.analyse", lambda *a, **k: calls.append(a))
     before = snapshot(target)
     rc, _, err = run(["design", "--out", str(target)], capsys)
     assert rc == 2 and "--out" in err and "permission denied" in err and err.count("\n") == 1
@@ -277,7 +277,7 @@ def test_an_unexpected_error_is_one_line(place, capsys, monkeypatch):
     def broken(*args, **kwargs):
         raise ZeroDivisionError("x" * 10_000)
 
-    monkeypatch.setattr("camjax.pipeline.analyse", broken)
+    monkeypatch.setattr("camjax.output.report.analyse", broken)
     rc, _, err = run(["design", "--out", str(place / "out")], capsys)
     assert rc == 1 and err.count("\n") == 1 and "ZeroDivisionError" in err and len(err) < 600
 
@@ -391,7 +391,7 @@ def test_rpm_1e6_runs_with_finite_results(tmp_path, capsys, monkeypatch):
 
 def _start(args: list[str], tmp_path: Path) -> subprocess.Popen:
     # this checkout's camjax, whatever the working folder
-    root = str(Path(cli.__file__).resolve().parents[1])
+    root = str(Path(cli.__file__).resolve().parents[2])
     path = os.pathsep.join([root, *filter(None, [os.environ.get("PYTHONPATH")])])
     env = {**os.environ, "CAMJAX_COMPILATION_CACHE": "0", "PYTHONUNBUFFERED": "1", "PYTHONPATH": path}
     return subprocess.Popen([sys.executable, "-m", "camjax.cli", *args], stdout=subprocess.PIPE,
@@ -565,7 +565,7 @@ def test_a_failed_drawing_process_leaves_the_folder_as_it_was(place, monkeypatch
     from camjax.output import drawing
 
     before = snapshot(place / "out")
-    boot = drawing._BOOT.replace("serve(", "import camjax.output.plots as p; "
+    boot = drawing._BOOT.replace("serve(", "import camjax.followers._translating_drawing as p; "
                                  "p.svaj_figure = p.profile_figure = lambda *a: 1 / 0; serve(")
     monkeypatch.setattr(drawing, "_BOOT", boot)  # both workers fail: ZeroDivisionError
     rc = cli.main(["design", "--dpi", "10", "--out", str(place / "out")])

@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 import camjax
-from camjax import contact, geometry, loads
+from camjax import contact, loads
+from camjax.followers.flat import geometry as flat_geo
 from camjax.numerics import RHO_FLOOR_MM
 
 
@@ -79,7 +80,7 @@ def test_gradients_finite_for_any_base_radius_lift_speed_spring(default_scene):
         motion = camjax.program.time_kinematics(kin, w)
         train = sc.follower.train._replace(spring_N_per_m=k)
         f = loads.kinetostatic_force(train, motion)
-        rho = geometry.flat_radius_of_curvature(rb, kin)
+        rho = flat_geo.flat_radius_of_curvature(rb, kin)
         sigma = contact.hertz_line_stress(f, rho, c.cam_width_mm, c.cam, c.follower)
         torque = loads.cam_torque(f, kin.ds)
         return jnp.max(sigma) + jnp.max(torque)
@@ -107,9 +108,9 @@ def test_force_parts_of_the_reference_case_add_up(default_scene, default_arrays)
         reference_motion,
     )
 
-    from camjax.evaluate import evaluate_design
+    from camjax import followers
 
-    curves = evaluate_design(default_scene, default_arrays, 30.0)
+    curves = followers.of(default_scene).curves(default_scene, default_arrays, 30.0)
     parts = curves.force_parts_N
     assert list(parts) == ["inertia", "damping", "spring", "gravity"]
     # each term from the closed-form cycloids (NumPy), SI; 1e-9 N: float64 rounding of ~60 N

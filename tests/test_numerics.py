@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import camjax
-from camjax import problem as P
+from camjax.followers.flat import problem as P
 from camjax.numerics import max_over_angles, safe_divide, safe_sqrt
 
 

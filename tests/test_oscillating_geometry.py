@@ -11,7 +11,10 @@ import numpy as np
 import pytest
 from outline import max_over_outline, turn
 
-from camjax import geometry
+from camjax.followers.flat import geometry as flat_geo
+from camjax.followers.oscillating_flat import geometry as rocker_flat_geo
+from camjax.followers.oscillating_roller import geometry as rocker_roller_geo
+from camjax.followers.roller import geometry as roller_geo
 from camjax.laws import get_law
 from camjax.program import MotionProgram, Segment, evaluate, motion_at
 
@@ -76,8 +79,8 @@ def test_roller_pressure_angle_from_positions_only(rotation):
     along_path = tx * ay - ty * ax  # T . (l sin psi, l cos psi), the path direction
     along_arm = tx * ax + ty * ay
     phi_fd = np.arctan2(sigma_of(rotation) * along_path, np.abs(along_arm))
-    psi0 = geometry.arm_start_angle(rp, d, l)
-    phi = np.asarray(geometry.oscillating_roller_pressure_angle(d, l, psi0, kin, rotation))
+    psi0 = rocker_roller_geo.arm_start_angle(rp, d, l)
+    phi = np.asarray(rocker_roller_geo.oscillating_roller_pressure_angle(d, l, psi0, kin, rotation))
     # central differences at 0.01 deg: O(h^2) ~ 3e-9 relative in the tangent; measured 2.7e-8 rad
     np.testing.assert_allclose(phi, phi_fd, rtol=0, atol=1e-7)
     assert np.degrees(np.abs(phi).max()) > 30  # a steep cam: the check covers large angles
@@ -92,8 +95,8 @@ def test_roller_pitch_curvature_from_positions_only(rotation):
     # ccw cams trace their pitch curve clockwise: convex means a negative cross product there
     turn = -sigma_of(rotation)
     kappa_fd = turn * (d1(x) * d2(y) - d1(y) * d2(x)) / (d1(x) ** 2 + d1(y) ** 2) ** 1.5
-    psi0 = geometry.arm_start_angle(rp, d, l)
-    kappa = np.asarray(geometry.oscillating_roller_pitch_curvature(d, l, psi0, kin, rotation))
+    psi0 = rocker_roller_geo.arm_start_angle(rp, d, l)
+    kappa = np.asarray(rocker_roller_geo.oscillating_roller_pitch_curvature(d, l, psi0, kin, rotation))
     joint = near_joints(N_DENSE)
     # second differences: O(h^2) truncation + eps |P| / h^2 round-off ~ 1e-8 1/mm away from the
     # joints; across a joint s''' of the 3-4-5 jumps and the difference is O(h) off
@@ -101,7 +104,7 @@ def test_roller_pitch_curvature_from_positions_only(rotation):
     np.testing.assert_allclose(kappa_fd, kappa, rtol=0, atol=1e-5)
     if rotation == "cw":
         assert kappa.min() < 0 < kappa.max()  # concave stretches: both signs are tested
-    g = geometry.oscillating_roller_geometry(d, l, ROLLER["rf"], rp, kin, rotation)
+    g = rocker_roller_geo.oscillating_roller_geometry(d, l, ROLLER["rf"], rp, kin, rotation)
     np.testing.assert_allclose(g.pitch_radius_of_curvature * kappa, 1.0, rtol=1e-12)
     np.testing.assert_allclose(g.cam_radius_of_curvature, 1 / kappa - ROLLER["rf"], rtol=1e-12)
 
@@ -109,27 +112,27 @@ def test_roller_pitch_curvature_from_positions_only(rotation):
 def test_roller_prime_circle_and_dwell():
     d, l, rp, rf = ROLLER["d"], ROLLER["l"], ROLLER["rp"], ROLLER["rf"]
     kin = evaluate(PROGRAM, 360)
-    psi0 = geometry.arm_start_angle(rp, d, l)
-    x, y = geometry.oscillating_roller_pitch_curve(d, l, rp, kin)
+    psi0 = rocker_roller_geo.arm_start_angle(rp, d, l)
+    x, y = rocker_roller_geo.oscillating_roller_pitch_curve(d, l, rp, kin)
     r = np.hypot(x, y)
     np.testing.assert_allclose(r[0], rp, rtol=1e-14)  # s = 0 at theta = 0: on the prime circle
     dwell = np.asarray(kin.s) == 0.0
     np.testing.assert_allclose(r[dwell], rp, rtol=1e-14)
     # on a dwell the outline is the base circle R_p - R_f, and its curvature 1 / R_p
-    px, py = geometry.oscillating_roller_profile(d, l, rf, rp, kin)
+    px, py = rocker_roller_geo.oscillating_roller_profile(d, l, rf, rp, kin)
     np.testing.assert_allclose(np.hypot(px, py)[dwell], rp - rf, rtol=1e-13)
-    kappa = geometry.oscillating_roller_pitch_curvature(d, l, psi0, kin)
+    kappa = rocker_roller_geo.oscillating_roller_pitch_curvature(d, l, psi0, kin)
     np.testing.assert_allclose(np.asarray(kappa)[dwell], 1 / rp, rtol=1e-13)
     # a rise swings the roller away from the cam centre
     assert np.all(r[~dwell] > rp)
-    assert float(geometry.oscillating_roller_reach_constraint(rp, d, l)) < 0
-    assert float(geometry.oscillating_roller_reach_constraint(15.0, d, l)) > 0  # |d - l| = 20 > 15
+    assert float(rocker_roller_geo.oscillating_roller_reach_constraint(rp, d, l)) < 0
+    assert float(rocker_roller_geo.oscillating_roller_reach_constraint(15.0, d, l)) > 0  # |d - l| = 20 > 15
 
 
 def riding_arm_angles(d, l, rf, rp, rotation, theta_deg, dense=7200, iters=90):
     """Arm angle of a roller follower riding on the cam outline, from the outline only.
 
-    For each cam angle: turn the outline (geometry.oscillating_roller_profile at any parameter
+    For each cam angle: turn the outline (rocker_roller_geo.oscillating_roller_profile at any parameter
     tau) into the fixed frame; a point at distance r from the pivot and polar angle beta (seen from
     the pivot) touches the roller centred at A + l (-cos psi, sin psi) when the angle between the arm
     (polar angle pi - psi) and the point is acos((l^2 + r^2 - R_f^2) / (2 l r)); the roller leaves it
@@ -139,7 +142,7 @@ def riding_arm_angles(d, l, rf, rp, rotation, theta_deg, dense=7200, iters=90):
 
     def arm(tau_deg, th):
         kin = motion_at(PROGRAM, tau_deg)
-        x, y = geometry.oscillating_roller_profile(d, l, rf, rp, kin, rotation)
+        x, y = rocker_roller_geo.oscillating_roller_profile(d, l, rf, rp, kin, rotation)
         a = sigma_of(rotation) * th
         xf, yf = turn(x, y, a)
         r = jnp.hypot(xf - d, yf)
@@ -157,7 +160,7 @@ def riding_arm_angles(d, l, rf, rp, rotation, theta_deg, dense=7200, iters=90):
 def test_roller_follower_riding_on_exported_profile_reproduces_the_motion(rotation):
     d, l, rf, rp = 80.0, 60.0, 6.0, 45.0  # no undercut here (checked below): one contact point
     kin = evaluate(PROGRAM, 360)
-    g = geometry.oscillating_roller_geometry(d, l, rf, rp, kin, rotation)
+    g = rocker_roller_geo.oscillating_roller_geometry(d, l, rf, rp, kin, rotation)
     assert float(jnp.min(g.undercut_margin)) > 0
     theta_deg = np.arange(0.0, 360.0, 2.5)
     psi = riding_arm_angles(d, l, rf, rp, rotation, theta_deg)
@@ -170,7 +173,7 @@ def test_roller_follower_riding_on_exported_profile_reproduces_the_motion(rotati
 def riding_face_angles(d, f, rb, rotation, theta_deg, dense=7200, iters=90):
     """Arm angle of a flat face riding on the cam outline, from the outline only.
 
-    For each cam angle: turn the outline (geometry.oscillating_flat_profile at any parameter tau)
+    For each cam angle: turn the outline (rocker_flat_geo.oscillating_flat_profile at any parameter tau)
     into the fixed frame. With P - A = R (cos beta, sin beta) seen from the pivot, the face
     {X : m(psi) . (X - A) = -f}, m = (sin psi, cos psi), passes through P where
     R sin(psi + beta) = -f; it leaves P behind (R sin(psi + beta) decreasing) at
@@ -180,7 +183,7 @@ def riding_face_angles(d, f, rb, rotation, theta_deg, dense=7200, iters=90):
 
     def face(tau_deg, th):
         kin = motion_at(PROGRAM, tau_deg)
-        x, y = geometry.oscillating_flat_profile(d, f, rb, kin, rotation)
+        x, y = rocker_flat_geo.oscillating_flat_profile(d, f, rb, kin, rotation)
         a = sigma_of(rotation) * th
         xf, yf = turn(x, y, a)
         r, beta = jnp.hypot(xf - d, yf), jnp.arctan2(yf, xf - d)
@@ -195,7 +198,7 @@ def riding_face_angles(d, f, rb, rotation, theta_deg, dense=7200, iters=90):
 def test_flat_face_riding_on_exported_profile_reproduces_the_motion(rotation):
     d, f, rb = FLAT["d"], FLAT["f"], FLAT["rb"]
     kin = evaluate(PROGRAM, 360)
-    assert float(jnp.min(geometry.oscillating_flat_geometry(d, f, rb, kin, rotation).radius_of_curvature)) > 0
+    assert float(jnp.min(rocker_flat_geo.oscillating_flat_geometry(d, f, rb, kin, rotation).radius_of_curvature)) > 0
     theta_deg = np.arange(0.0, 360.0, 2.5)
     psi = riding_face_angles(d, f, rb, rotation, theta_deg)
     s = np.asarray(motion_at(PROGRAM, theta_deg).s)
@@ -220,13 +223,13 @@ def test_flat_outline_is_the_envelope_of_the_face_lines(rotation):
     m2x, m2y, p2 = np.roll(mx, -1), np.roll(my, -1), np.roll(p, -1)
     det = m1x * m2y - m1y * m2x
     ex, ey = (p1 * m2y - p2 * m1y) / det, (m1x * p2 - m2x * p1) / det
-    x, y = geometry.oscillating_flat_profile(d, f, rb, kin, rotation)
+    x, y = rocker_flat_geo.oscillating_flat_profile(d, f, rb, kin, rotation)
     # O(h^2 |X'''|): measured 1.7e-6 mm at h = 0.01 deg
     np.testing.assert_allclose(x, ex, rtol=0, atol=1e-5)
     np.testing.assert_allclose(y, ey, rtol=0, atol=1e-5)
     # radius of curvature from the outline's positions (checked against the envelope above) by
     # differences at 0.04 deg: differences of line intersections would amplify their round-off
-    g = geometry.oscillating_flat_geometry(d, f, rb, kin, rotation)
+    g = rocker_flat_geo.oscillating_flat_geometry(d, f, rb, kin, rotation)
     rho = np.asarray(g.radius_of_curvature)
     assert rho.min() > 1.0  # a convex cam, so that the positional curvature is well defined
     stride = 4
@@ -254,9 +257,9 @@ def test_flat_face_on_a_dwell_rests_on_the_base_circle():
     d, f, rb = FLAT["d"], FLAT["f"], FLAT["rb"]
     kin = evaluate(PROGRAM, 360)
     dwell = np.asarray(kin.s) == 0.0
-    x, y = geometry.oscillating_flat_profile(d, f, rb, kin)
+    x, y = rocker_flat_geo.oscillating_flat_profile(d, f, rb, kin)
     np.testing.assert_allclose(np.hypot(x, y)[dwell], rb, rtol=1e-14)
-    g = geometry.oscillating_flat_geometry(d, f, rb, kin)
+    g = rocker_flat_geo.oscillating_flat_geometry(d, f, rb, kin)
     np.testing.assert_allclose(np.asarray(g.radius_of_curvature)[dwell], rb, rtol=1e-13)
     # the contact is the foot of the cam centre on the face: d cos psi0 from the pivot's foot
     psi0 = math.asin((rb + f) / d)
@@ -272,13 +275,13 @@ def test_long_arm_roller_approaches_the_translating_roller(rotation):
                                            Segment("dwell", 80)])
     kin_mm = evaluate(prog_mm, 720)
     rb, rf, e = 30.0, 6.0, 4.0
-    phi_t = np.asarray(geometry.roller_pressure_angle(rb, rf, e, kin_mm, rotation))
-    kappa_t = np.asarray(geometry.roller_pitch_curvature(rb, rf, e, kin_mm, rotation))
+    phi_t = np.asarray(roller_geo.roller_pressure_angle(rb, rf, e, kin_mm, rotation))
+    kappa_t = np.asarray(roller_geo.roller_pitch_curvature(rb, rf, e, kin_mm, rotation))
     errors = []
     for l in (1e4, 1e5):
         kin = kin_mm._replace(s=kin_mm.s / l, ds=kin_mm.ds / l, d2s=kin_mm.d2s / l, d3s=kin_mm.d3s / l)
         d = l + e
-        g = geometry.oscillating_roller_geometry(d, l, rf, rb + rf, kin, rotation)
+        g = rocker_roller_geo.oscillating_roller_geometry(d, l, rf, rb + rf, kin, rotation)
         errors.append((np.abs(np.asarray(g.pressure_angle) - phi_t).max(),
                        np.abs(np.asarray(g.pitch_curvature) - kappa_t).max()))
     # the path tilts from the axis by psi ~ y / l <= 46 mm / l (4.6e-4 rad at l = 1e5), which bounds
@@ -295,13 +298,13 @@ def test_long_arm_flat_face_approaches_the_translating_flat_face():
                                            Segment("dwell", 80)])
     kin_mm = evaluate(prog_mm, 720)
     rb = 40.0
-    rho_t = np.asarray(geometry.flat_radius_of_curvature(rb, kin_mm))
+    rho_t = np.asarray(flat_geo.flat_radius_of_curvature(rb, kin_mm))
     for rotation in ("ccw", "cw"):
-        x_t = np.asarray(geometry.flat_contact_offset(kin_mm, rotation))
+        x_t = np.asarray(flat_geo.flat_contact_offset(kin_mm, rotation))
         errors = []
         for d in (1e4, 1e5):  # a face through the pivot (f = 0), nearly along the line of centres
             kin = kin_mm._replace(s=kin_mm.s / d, ds=kin_mm.ds / d, d2s=kin_mm.d2s / d, d3s=kin_mm.d3s / d)
-            g = geometry.oscillating_flat_geometry(d, 0.0, rb, kin, rotation)
+            g = rocker_flat_geo.oscillating_flat_geometry(d, 0.0, rb, kin, rotation)
             # the contact's offset from the cam centre's vertical is d - xi cos psi
             x = d - np.asarray(g.contact_distance) * np.cos(np.asarray(g.arm_angle))
             errors.append((np.abs(np.asarray(g.radius_of_curvature) - rho_t).max(), np.abs(x - x_t).max()))
@@ -318,13 +321,13 @@ def test_roller_min_prime_radius_against_a_dense_scan(rotation, rf, limit_deg):
     d, l = ROLLER["d"], ROLLER["l"]
     kin = evaluate(PROGRAM, 720)
     lim = math.radians(limit_deg)
-    sizing = geometry.oscillating_roller_min_prime_radius(kin, d, l, rf, lim, 0.0, rotation)
+    sizing = rocker_roller_geo.oscillating_roller_min_prime_radius(kin, d, l, rf, lim, 0.0, rotation)
     assert bool(sizing.found)
     rp = float(sizing.prime_radius_mm)
     assert float(sizing.base_radius_mm) == pytest.approx(rp - rf, abs=1e-12)
 
     def ok(r):  # judged through the geometry of a prime radius (arccos), not the search's psi0
-        g = geometry.oscillating_roller_geometry(d, l, rf, r, kin, rotation)
+        g = rocker_roller_geo.oscillating_roller_geometry(d, l, rf, r, kin, rotation)
         return (np.abs(np.asarray(g.pressure_angle)).max() <= lim + 1e-12
                 and np.asarray(g.undercut_margin).min() >= -1e-9)
 
@@ -340,19 +343,19 @@ def test_roller_min_prime_radius_against_a_dense_scan(rotation, rf, limit_deg):
 def test_flat_min_base_radius_against_a_dense_scan(rotation):
     d, f, rho_min = FLAT["d"], FLAT["f"], 1.0
     kin = evaluate(PROGRAM, 720)
-    sizing = geometry.oscillating_flat_min_base_radius(kin, d, f, rho_min, rotation)
+    sizing = rocker_flat_geo.oscillating_flat_min_base_radius(kin, d, f, rho_min, rotation)
     assert bool(sizing.found)
     rb = float(sizing.base_radius_mm)
 
     def ok(r):
-        return np.asarray(geometry.oscillating_flat_geometry(d, f, r, kin, rotation).radius_of_curvature).min() \
+        return np.asarray(rocker_flat_geo.oscillating_flat_geometry(d, f, r, kin, rotation).radius_of_curvature).min() \
             >= rho_min - 1e-9
 
     scan = np.arange(rb - 0.05, rb + 0.05, 1e-3)
     first = scan[np.argmax([ok(r) for r in scan])]
     assert not ok(scan[0]) and ok(scan[-1])
     assert first - 1e-3 <= rb <= first + 1e-9
-    xi = np.asarray(geometry.oscillating_flat_geometry(d, f, rb, kin, rotation).contact_distance)
+    xi = np.asarray(rocker_flat_geo.oscillating_flat_geometry(d, f, rb, kin, rotation).contact_distance)
     assert float(sizing.face_length_mm) == pytest.approx(xi.max() - xi.min(), abs=1e-9)
     assert float(sizing.face_min_mm) > 0  # the contact stays on the cam's side of the pivot
 
@@ -363,15 +366,15 @@ def test_gradients_match_finite_differences():
 
     def roller(x, rotation):
         d, l, rf, rp = x
-        g = geometry.oscillating_roller_geometry(d, l, rf, rp, kin, rotation)
+        g = rocker_roller_geo.oscillating_roller_geometry(d, l, rf, rp, kin, rotation)
         return jnp.stack([jnp.max(jnp.abs(g.pressure_angle)), jnp.sum(g.pitch_curvature),
-                          *(c[PICK] for c in geometry.oscillating_roller_profile(d, l, rf, rp, kin, rotation))])
+                          *(c[PICK] for c in rocker_roller_geo.oscillating_roller_profile(d, l, rf, rp, kin, rotation))])
 
     def flat(x, rotation):
         d, f, rb = x
-        g = geometry.oscillating_flat_geometry(d, f, rb, kin, rotation)
+        g = rocker_flat_geo.oscillating_flat_geometry(d, f, rb, kin, rotation)
         return jnp.stack([jnp.min(g.radius_of_curvature), jnp.max(g.contact_distance), jnp.sum(g.pressure_angle),
-                          *(c[PICK] for c in geometry.oscillating_flat_profile(d, f, rb, kin, rotation))])
+                          *(c[PICK] for c in rocker_flat_geo.oscillating_flat_profile(d, f, rb, kin, rotation))])
 
     for fn, x0 in ((roller, jnp.asarray([80.0, 60.0, 8.0, 35.0])), (flat, jnp.asarray([120.0, 10.0, 95.0]))):
         for rotation in ("ccw", "cw"):
@@ -392,10 +395,10 @@ def test_finite_for_infeasible_designs():
 
     def worst(x):
         d, l, rf, rp = x
-        g = geometry.oscillating_roller_geometry(d, l, rf, rp, kin)
-        px, py = geometry.oscillating_roller_profile(d, l, rf, rp, kin)
-        h = geometry.oscillating_flat_geometry(d, rf, rp, kin)
-        return (jnp.max(jnp.abs(g.pressure_angle)) + jnp.max(geometry.roller_undercut_constraint(
+        g = rocker_roller_geo.oscillating_roller_geometry(d, l, rf, rp, kin)
+        px, py = rocker_roller_geo.oscillating_roller_profile(d, l, rf, rp, kin)
+        h = rocker_flat_geo.oscillating_flat_geometry(d, rf, rp, kin)
+        return (jnp.max(jnp.abs(g.pressure_angle)) + jnp.max(roller_geo.roller_undercut_constraint(
             g.pitch_curvature, rf)) + jnp.sum(px + py) + jnp.min(h.radius_of_curvature)
             + jnp.max(h.contact_distance))
 

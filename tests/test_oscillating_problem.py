@@ -10,10 +10,11 @@ import numpy as np
 import pytest
 from test_rocker import ROLLER_SCENE
 
-from camjax import geometry
-from camjax import oscillating_problem as OP
 from camjax.evaluate import scene_arrays
-from camjax.problem import Weights
+from camjax.family import Weights
+from camjax.followers.oscillating_flat import geometry as rocker_flat_geo
+from camjax.followers.oscillating_roller import geometry as rocker_roller_geo
+from camjax.followers.oscillating_roller import problem as OP
 from camjax.scene import SceneError, parse_scene
 from camjax.solvers.base import problem_from_scene, solve
 
@@ -53,7 +54,7 @@ def test_smallest_cam_with_fixed_pivot_and_arm_is_the_sizing(rotation):
     sol = solve(problem, (1.0, 0.0), mode="global", solver="gradient")
     assert bool(sol.evaluation.feasible)
     kin = scene_arrays(scene).kin
-    sizing = geometry.oscillating_roller_min_prime_radius(kin, 80.0, 60.0, 8.0, math.radians(30.0), 0.0, rotation)
+    sizing = rocker_roller_geo.oscillating_roller_min_prime_radius(kin, 80.0, 60.0, 8.0, math.radians(30.0), 0.0, rotation)
     # both reach the boundary of the same admissible set: the sizing by bisection in the arm angle
     # (to float64 resolution), the solver to its feasibility tolerance (1e-7 rad in phi ~ 1e-5 mm)
     assert float(sol.design.base_radius_mm) == pytest.approx(float(sizing.base_radius_mm), abs=1e-5)
@@ -76,7 +77,7 @@ def test_free_pivot_distance_beats_every_point_of_a_dense_scan():
     assert bool(sol.evaluation.feasible)
     kin = scene_arrays(scene).kin
     # brute force: the independent sizing at every pivot distance on a 0.25 mm grid
-    best = min(float(geometry.oscillating_roller_min_prime_radius(kin, d, 60.0, 8.0, math.radians(30.0)).base_radius_mm)
+    best = min(float(rocker_roller_geo.oscillating_roller_min_prime_radius(kin, d, 60.0, 8.0, math.radians(30.0)).base_radius_mm)
                for d in np.arange(65.0, 110.0 + 1e-9, 0.25))
     # the optimum lies between grid points: it may only beat the scan's best, by little
     assert float(sol.design.base_radius_mm) <= best + 1e-4
@@ -150,7 +151,7 @@ FLAT = (SCENE.replace('type = "oscillating_roller"', 'type = "oscillating_flat"'
 
 @pytest.mark.parametrize("rotation", ["ccw", "cw"])
 def test_flat_face_smallest_cam_is_the_sizing_and_the_stress_limit_binds_as_the_curves_say(rotation):
-    from camjax.rocker import evaluate_rocker
+    from camjax import followers
 
     loose = parse_scene(FLAT.replace("ROT", rotation).replace("DESIGN", "").replace(
         "sigma_max_MPa = 2000.0", "sigma_max_MPa = 1e6"))
@@ -158,7 +159,7 @@ def test_flat_face_smallest_cam_is_the_sizing_and_the_stress_limit_binds_as_the_
     sol = solve(problem, (1.0, 0.0), mode="global", solver="gradient")
     assert bool(sol.evaluation.feasible)
     arrays = scene_arrays(loose)
-    sizing = geometry.oscillating_flat_min_base_radius(arrays.kin, 150.0, 10.0, 1e-3, rotation)
+    sizing = rocker_flat_geo.oscillating_flat_min_base_radius(arrays.kin, 150.0, 10.0, 1e-3, rotation)
     # the same boundary rho = rho_min, by bisection in the arm angle and by the solver (1e-6 mm)
     assert float(sol.design.base_radius_mm) == pytest.approx(float(sizing.base_radius_mm), abs=1e-5)
     # a tight allowed stress binds instead: the peak of the report's stress curve (P = M / xi and
@@ -168,12 +169,12 @@ def test_flat_face_smallest_cam_is_the_sizing_and_the_stress_limit_binds_as_the_
     sol = solve(problem_from_scene(tight), (1.0, 0.0), mode="global", solver="gradient")
     assert bool(sol.evaluation.feasible)
     assert float(sol.design.base_radius_mm) > float(sizing.base_radius_mm) + 0.01
-    curves = evaluate_rocker(tight, arrays.kin, arrays.cam_speed_rad_s, float(sol.design.base_radius_mm))
+    curves = followers.of(tight).evaluate(tight, arrays.kin, arrays.cam_speed_rad_s, float(sol.design.base_radius_mm))
     assert float(np.max(curves.stress_MPa)) == pytest.approx(1000.0, rel=1e-6)
 
 
 def test_flat_face_gradients_match_finite_differences_and_stay_finite():
-    from camjax import oscillating_flat_problem as FP
+    from camjax.followers.oscillating_flat import problem as FP
 
     scene = parse_scene(FLAT.replace("ROT", "ccw").replace("gamma = 0.0", "gamma = 1.0").replace(
         "DESIGN", "pivot_distance_mm = [120.0, 200.0]\nface_offset_mm = [-10.0, 20.0]"))

@@ -4,18 +4,26 @@ import numpy as np
 import pytest
 from reference import reference_motion
 
-from camjax import pipeline
-from camjax.output import plots, titles
+import camjax
+from camjax import followers
+from camjax.followers import _translating_drawing
+from camjax.output import titles
+
+
+def design_figures(curves, title=""):
+    """Every figure of a run's curves, drawn (the follower's figure builders)."""
+    builders = followers.drawing(curves.follower_type).figure_builders(curves)
+    return {name: build(curves, title) for name, build in builders.items()}
 
 
 @pytest.fixture(scope="module")
 def default_run(default_scene, default_arrays):
-    return pipeline.analyse(default_scene, default_arrays)
+    return camjax.analyse(default_scene, default_arrays)
 
 
 @pytest.fixture(scope="module")
 def figures(default_run):
-    return plots.design_figures(default_run.curves, titles.title_block(default_run.data))
+    return design_figures(default_run.curves, titles.title_block(default_run.data))
 
 
 def _curves(ax):
@@ -85,8 +93,8 @@ def test_profile_marks_angles_dimensions_and_smallest_rho(figures, default_run):
 
 
 def test_infeasible_design_draws_without_valid_stress_where_rho_is_negative(default_scene, default_arrays):
-    run = pipeline.analyse(default_scene, default_arrays, base_radius_mm=10.0)
-    figs = plots.design_figures(run.curves, titles.title_block(run.data))
+    run = camjax.analyse(default_scene, default_arrays, base_radius_mm=10.0)
+    figs = design_figures(run.curves, titles.title_block(run.data))
     ax = figs["stress.png"].axes[0]
     y = np.asarray(_curves(ax)[0].get_ydata())[:-1]
     np.testing.assert_array_equal(np.isnan(y), run.curves.rho_mm <= 0)
@@ -115,10 +123,10 @@ def test_loads_labels_stay_inside_their_axes_wherever_the_minimum_falls(default_
 
     scene = dataclasses.replace(parse_scene(builtin_scene_text("default").replace("rpm = 240.0", f"rpm = {rpm}")),
                                 design=None)
-    run = pipeline.analyse(scene)
+    run = camjax.analyse(scene)
     if rpm == "10.0":
         assert run.data["loads"]["contact"]["min_force_deg"] == 0.0
-    fig = plots.loads_figure(run.curves, titles.title_block(run.data))
+    fig = _translating_drawing.loads_figure(run.curves, titles.title_block(run.data))
     renderer = _drawn_boxes(fig)
     ax = fig.axes[0]
     box = ax.get_window_extent(renderer)

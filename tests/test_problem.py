@@ -13,7 +13,9 @@ from hypothesis import strategies as st
 from reference import numpy_reference_optimum
 
 import camjax
-from camjax import problem as P
+from camjax.family import weights_of
+from camjax.followers.flat import optimum
+from camjax.followers.flat import problem as P
 from camjax.solvers import gradient as G
 
 WEIGHTINGS = [(1.0, 1.0), (10.0, 1.0), (1.0, 10.0), (1.0, 0.0), (0.0, 1.0), (1e-6, 1.0), (1e6, 1.0)]
@@ -57,7 +59,7 @@ def test_closed_form_matches_scalar_minimization_at_every_angle(problem):
     smax, norm = float(problem.sigma_max_MPa), float(problem.size_norm_mm)
     lo, hi = float(problem.lower.base_radius_mm), float(problem.upper.base_radius_mm)
     for alpha, gamma in [(1.0, 1.0), (10.0, 1.0), (1.0, 10.0)]:
-        d = P.pointwise_optimum(problem, P.weights_of(alpha, gamma))
+        d = optimum.pointwise_optimum(problem, weights_of(alpha, gamma))
         r_cf = np.asarray(d.base_radius_mm)
         for k in range(0, a["q_mm"].size, 7):
             q, c = a["q_mm"][k], a["stress_coefficient"][k]
@@ -78,7 +80,7 @@ def test_closed_form_matches_scalar_minimization_at_every_angle(problem):
 def test_reference_case_reproduces_source_figures(problem):
     """SPEC 5: alpha = gamma = 1 -> R_b 28.3-28.4 mm at 315 deg, L 19.1 mm at 330 deg; ..."""
     def largest(alpha, gamma):
-        d = P.pointwise_optimum(problem, P.weights_of(alpha, gamma))
+        d = optimum.pointwise_optimum(problem, weights_of(alpha, gamma))
         i, j = int(jnp.argmax(d.base_radius_mm)), int(jnp.argmax(d.face_width_mm))
         return (float(d.base_radius_mm[i]), float(problem.theta_deg[i]), float(d.face_width_mm[j]),
                 float(problem.theta_deg[j]))
@@ -96,40 +98,40 @@ def test_reference_case_reproduces_source_figures(problem):
 
 @pytest.mark.parametrize("alpha,gamma", [(1.0, 1.0), (10.0, 1.0), (1.0, 10.0), (1.0, 0.0), (3.0, 0.7)])
 def test_global_optimum_matches_dense_scan(problem, alpha, gamma):
-    d = P.global_optimum(problem, P.weights_of(alpha, gamma))
+    d = optimum.global_optimum(problem, weights_of(alpha, gamma))
     scan = _dense_scan_global(problem, alpha, gamma)
     # the scan is refined to 1e-6 mm: its argmin is within a refine step or two of the true one
     assert float(d.base_radius_mm) == pytest.approx(scan, abs=2e-6)
-    solved = G.solve_global(problem, P.weights_of(alpha, gamma))  # the gradient solver, directly
+    solved = G.solve_global(problem, weights_of(alpha, gamma))  # the gradient solver, directly
     assert float(solved.design.base_radius_mm) == pytest.approx(scan, abs=2e-6)
     assert float(d.face_width_mm) == pytest.approx(2 * float(jnp.max(jnp.abs(problem.ds_mm))), abs=1e-12)
 
 
 def test_single_angle_global_equals_pointwise(problem):
     per = P.per_angle(problem)
-    w = P.weights_of(1.0, 1.0)
-    glob = jax.jit(jax.vmap(P.global_optimum, in_axes=(0, None)))(per, w)
-    pw = P.pointwise_optimum(problem, w)
+    w = weights_of(1.0, 1.0)
+    glob = jax.jit(jax.vmap(optimum.global_optimum, in_axes=(0, None)))(per, w)
+    pw = optimum.pointwise_optimum(problem, w)
     np.testing.assert_allclose(np.asarray(glob.base_radius_mm), np.asarray(pw.base_radius_mm), atol=1e-9)
     np.testing.assert_allclose(np.asarray(glob.face_width_mm), np.asarray(pw.face_width_mm), atol=1e-12)
 
 
 def test_infeasible_bounds_name_the_constraint(problem):
     tight = P.with_bounds(problem, base_radius_mm=(5.0, 20.0), face_width_mm=(5.0, 10.0))
-    w = P.weights_of(1.0, 1.0)
-    d = P.global_optimum(tight, w)
+    w = weights_of(1.0, 1.0)
+    d = optimum.global_optimum(tight, w)
     ev = P.evaluate(tight, w, d)
     assert not bool(ev.feasible)
     assert np.isfinite(float(ev.objective))
     assert P.violated_constraints(tight, ev.violation) == ["curvature", "stress", "face_width"]
     # a radius that gives rho > 0 but too much stress violates only the stress
     stress_only = P.with_bounds(problem, base_radius_mm=(5.0, 24.15))
-    ev = P.evaluate(stress_only, w, P.global_optimum(stress_only, w))
+    ev = P.evaluate(stress_only, w, optimum.global_optimum(stress_only, w))
     assert P.violated_constraints(stress_only, ev.violation) == ["stress"]
 
 
 def test_objective_gradient_matches_finite_differences(problem):
-    w = P.weights_of(1.0, 1.0)
+    w = weights_of(1.0, 1.0)
     x = P.Design(jnp.asarray(30.0), jnp.asarray(20.0))
     grad = jax.grad(lambda d: P.objective(problem, w, d))(x)
     h = 1e-6
@@ -144,7 +146,7 @@ def test_objective_gradient_matches_finite_differences(problem):
 @given(r=st.floats(-100.0, 100.0), length=st.floats(-10.0, 50.0), alpha=st.sampled_from([0.0, 1e-6, 1.0, 1e6]))
 def test_gradients_finite_for_any_design(problem, r, length, alpha):
     """Feasible or not (rho <= 0 included), the solver's function and gradient stay finite."""
-    val, grad, ev = _lagrangian_grad_eval(problem, P.weights_of(alpha, 1.0), jnp.asarray(r), jnp.asarray(length))
+    val, grad, ev = _lagrangian_grad_eval(problem, weights_of(alpha, 1.0), jnp.asarray(r), jnp.asarray(length))
     assert np.isfinite(float(val))
     assert all(np.isfinite(float(g)) for g in jax.tree.leaves(grad))
     assert all(np.isfinite(float(v)) for v in jax.tree.leaves(ev))

@@ -16,7 +16,7 @@ from reference import (
 )
 
 import camjax
-from camjax import pipeline, program
+from camjax import followers, program
 from camjax.output import report
 from camjax.scene import builtin_scene_text, parse_scene
 
@@ -39,7 +39,7 @@ def without_section(text, section):
 
 @pytest.fixture(scope="session")
 def default_report(default_scene, default_arrays):
-    return pipeline.analyse(default_scene, default_arrays)
+    return camjax.analyse(default_scene, default_arrays)
 
 
 @pytest.fixture(scope="session")
@@ -116,7 +116,7 @@ def test_min_base_radius_matches_dense_numpy(data):
     assert abs(data["min_base_radius_deg"] - dense[k]) <= 0.01
     # the 1-deg grid (extrema = "grid") keeps its sample, below the dense max by <= tol
     grid_scene = scene_with(("samples = 360", 'samples = 360\nextrema = "grid"'))
-    grid = pipeline.min_base_radius(grid_scene, camjax.scene_arrays(grid_scene))
+    grid = followers.of(grid_scene).min_base_radius(grid_scene, camjax.scene_arrays(grid_scene))
     assert grid.radius_mm <= need[k] + 1e-12 and need[k] - grid.radius_mm <= tol
     assert grid.angle_deg == 315.0
     assert abs(dense[k] - 315.0) <= 0.5
@@ -151,7 +151,7 @@ def test_design_is_the_optimum_of_an_independent_dense_scan(reference_1deg):
 
     The exact problem's optimum is checked in test_exact_design.py.
     """
-    data = pipeline.design_report(scene_with(("samples = 360", 'samples = 360\nextrema = "grid"')))
+    data = camjax.design_report(scene_with(("samples = 360", 'samples = 360\nextrema = "grid"')))
     d = data["design"]
     assert d["solver"] == "gradient" and d["mode"] == "global"
     assert d["feasible"] is True and d["violations"] == []
@@ -179,7 +179,7 @@ def test_design_beyond_bounds_is_reported_infeasible():
     # sigma_max = 300 MPa needs rho >= (C/300)^2 >~ 1.2 mm -> beyond R_b <= 25
     scene = scene_with(("sigma_max_MPa = 1230.0", "sigma_max_MPa = 300.0"),
                        ("base_radius_mm = [5.0, 40.0]", "base_radius_mm = [5.0, 25.0]"))
-    d = pipeline.design_report(scene)["design"]
+    d = camjax.design_report(scene)["design"]
     assert d["feasible"] is False
     assert d["base_radius_mm"] == 25.0
     assert d["required_base_radius_mm"] > 25.0
@@ -191,7 +191,7 @@ def test_design_beyond_bounds_is_reported_infeasible():
 def test_lower_bound_wins_when_larger():
     scene = scene_with(("base_radius_mm = [5.0, 40.0]", "base_radius_mm = [30.0, 40.0]"),
                        ("face_width_mm = [5.0, 25.0]", "face_width_mm = [22.0, 25.0]"))
-    d = pipeline.design_report(scene)["design"]
+    d = camjax.design_report(scene)["design"]
     assert (d["base_radius_mm"], d["face_width_mm"], d["feasible"]) == (30.0, 22.0, True)
 
 
@@ -203,7 +203,7 @@ def test_no_contact_means_no_stress_computed():
     scene = parse_scene(text, "nocontact")
     arrays = camjax.scene_arrays(scene)
     assert arrays.stress_coefficient is None  # nothing computed, not merely not reported
-    r = pipeline.analyse(scene, arrays)
+    r = camjax.analyse(scene, arrays)
     assert "contact" not in r.data["models"]
     for key in ("stress_MPa", "design"):
         assert key not in r.data
@@ -221,14 +221,14 @@ def test_no_mass_means_no_loads():
     scene = parse_scene(text, "kinematic")
     arrays = camjax.scene_arrays(scene)
     assert arrays.force_N is None and arrays.torque_Nm is None
-    data = pipeline.design_report(scene, arrays)
+    data = camjax.design_report(scene, arrays)
     assert "loads" not in data and "stress_MPa" not in data
     assert data["models"] == ["geometry", "kinematics"]
 
 
 def test_loss_of_contact_located():
     scene = scene_with(("spring_N_per_m = 3004.0", "spring_N_per_m = 100.0"))
-    data = pipeline.design_report(scene)
+    data = camjax.design_report(scene)
     grid = np.arange(360.0)
     force = reference_force(grid, spring_N_per_m=100.0)
     c = data["loads"]["contact"]
@@ -253,7 +253,7 @@ overhang_ratio = {xi}
 def test_guide_jamming_check_agrees_with_gamma(b, mu0, mu, xi):
     text = without_section(builtin_scene_text("default"), "design") + GUIDE.format(b=b, mu0=mu0, mu=mu,
                                                                                    xi=xi)
-    data = pipeline.design_report(parse_scene(text, "guide"))
+    data = camjax.design_report(parse_scene(text, "guide"))
     loads = data["loads"]
     _, ds, _ = reference_motion(np.arange(360.0))
     gamma = b + 2 * mu * ds - mu * mu0 * b * (1 + 2 * xi)  # Gamma in NumPy, a = s'
@@ -269,7 +269,7 @@ def test_guide_jamming_check_agrees_with_gamma(b, mu0, mu, xi):
 def test_frictionless_guide_never_jams_and_stays_valid_json():
     text = without_section(builtin_scene_text("default"), "design") + GUIDE.format(b=40, mu0=0.1, mu=0.0,
                                                                                    xi=0.5)
-    data = pipeline.design_report(parse_scene(text, "guide"))
+    data = camjax.design_report(parse_scene(text, "guide"))
     assert data["loads"]["jamming_limit_mm"] is None
     assert data["loads"]["jamming"]["jams"] is False
     json.dumps(data, allow_nan=False)
@@ -294,7 +294,7 @@ offset_mm = 3
 def test_roller_min_base_radius_puts_pressure_angle_on_limit():
     scene = parse_scene(ROLLER, "roller")
     arrays = camjax.scene_arrays(scene)
-    data = pipeline.design_report(scene, arrays)
+    data = camjax.design_report(scene, arrays)
     # exact extrema (the default) put the continuous max |phi| on the limit: check it on a
     # 1e-3 deg grid, which misses a smooth max by < phi'' dtheta^2 / 8 ~ 1e-10 deg
     kin = program.evaluate(scene.motion.program, 360_000)

@@ -8,7 +8,10 @@ import math
 import numpy as np
 import pytest
 
-from camjax import cli, contact, geometry, loads
+from camjax import cli, contact, followers, loads
+from camjax.followers.oscillating_flat import geometry as rocker_flat_geo
+from camjax.followers.oscillating_roller import geometry as rocker_roller_geo
+from camjax.followers.roller import geometry as roller_geo
 from camjax.laws import get_law
 from camjax.loads import RockerTrain
 from camjax.program import MotionProgram, Segment, evaluate
@@ -51,7 +54,7 @@ def test_roller_contact_force_and_cam_torque_from_the_moments_of_the_contact_for
     flip = np.sign(nx * cx + ny * cy)
     nx, ny = nx * flip, ny * flip
     m = np.asarray(loads.rocker_torque(TRAIN, kin, OMEGA))
-    phi = geometry.oscillating_roller_pressure_angle(d, l, psi0, kin, rotation)
+    phi = rocker_roller_geo.oscillating_roller_pressure_angle(d, l, psi0, kin, rotation)
     p = np.asarray(loads.rocker_roller_contact_force(m, l, phi))
     # P n at the roller centre turns the arm towards larger psi (clockwise) by M: the lever relation
     moment = -((cx - d) * p * ny - cy * p * nx) * 1e-3
@@ -69,9 +72,9 @@ def test_flat_contact_force_and_cam_torque_from_the_moments_of_the_contact_force
     kin = evaluate(PROGRAM, 720)
     th = np.asarray(kin.theta)
     d, f, rb = 120.0, 10.0, 95.0
-    g = geometry.oscillating_flat_geometry(d, f, rb, kin, rotation)
+    g = rocker_flat_geo.oscillating_flat_geometry(d, f, rb, kin, rotation)
     psi = np.asarray(g.arm_angle)
-    x, y = geometry.oscillating_flat_profile(d, f, rb, kin, rotation)
+    x, y = rocker_flat_geo.oscillating_flat_profile(d, f, rb, kin, rotation)
     xf, yf = _turn(np.asarray(x), np.asarray(y), sigma * th)  # contact point, fixed frame
     mx, my = np.sin(psi), np.cos(psi)  # face normal, away from the cam
     m = np.asarray(loads.rocker_torque(TRAIN, kin, OMEGA))
@@ -96,10 +99,10 @@ def test_hertz_stress_on_a_dwell_in_closed_form():
     k = (1 - 0.3**2) / 2.1e5 + (1 - 0.26**2) / 1.15e5
     p = 6.0 / (l * 1e-3 * cos_phi)
     ref = 0.564 * math.sqrt(p / 8.0 * (1 / (rp - rf) + 1 / rf) / k)
-    g = geometry.oscillating_roller_geometry(d, l, rf, rp, kin)
+    g = rocker_roller_geo.oscillating_roller_geometry(d, l, rf, rp, kin)
     np.testing.assert_allclose(loads.rocker_roller_contact_force(m, l, g.pressure_angle), p, rtol=1e-13)
     coeff = contact.stress_coefficient(m / (l * 1e-3), 8.0, cam, fol)
-    sigma = contact.roller_stress(coeff, g.pressure_angle, geometry.roller_equivalent_radius(g.pitch_curvature, rf))
+    sigma = contact.roller_stress(coeff, g.pressure_angle, roller_geo.roller_equivalent_radius(g.pitch_curvature, rf))
     np.testing.assert_allclose(sigma, ref, rtol=1e-12)
 
 
@@ -140,7 +143,7 @@ FLAT_SCENE = ROLLER_SCENE.replace('type = "oscillating_roller"', 'type = "oscill
 
 def test_oscillating_scene_reads_lift_deg_as_rad():
     scene = parse_scene(ROLLER_SCENE.replace("ROT", "ccw"))
-    assert scene.follower.oscillating and scene.follower.arm_length_mm == 60.0
+    assert followers.of(scene).rocking and scene.follower.arm_length_mm == 60.0
     np.testing.assert_allclose(np.asarray(scene.motion.program.lifts), [LIFT, 0.0, LIFT, 0.0], rtol=1e-15)
     assert scene.follower.train == TRAIN
     flat = parse_scene(FLAT_SCENE.replace("ROT", "cw"))
@@ -294,13 +297,13 @@ def test_reported_follower_dimensions_are_the_designs_and_the_scenes_stay_visibl
 
 @pytest.fixture(scope="module")
 def rocker_report():
-    from camjax.pipeline import analyse
+    from camjax.output.report import analyse
 
     return analyse(parse_scene(ROLLER_SCENE.replace("ROT", "cw"), "rocker"))
 
 
 def test_rocker_figures_carry_the_title_block_with_the_pivot_and_arm(rocker_report):
-    from camjax.output.rocker import rocker_figures
+    from camjax.followers import drawing
     from camjax.output.titles import title_block
 
     data = rocker_report.data
@@ -312,7 +315,8 @@ def test_rocker_figures_carry_the_title_block_with_the_pivot_and_arm(rocker_repo
     f = data["oscillating_follower"]
     assert f"R_b = {data['evaluated_at']['base_radius_mm']:.3f} mm" in lines[2]
     assert f"d = {f['pivot_distance_mm']:g} mm, l = {f['arm_length_mm']:g} mm, R_f = 8 mm" in lines[2]
-    figures = rocker_figures(rocker_report.curves, title)
+    curves = rocker_report.curves
+    figures = {name: build(curves, title) for name, build in drawing(curves.follower_type).figure_builders(curves).items()}
     assert set(figures) == {"svaj.png", "profile.png", "geometry.png", "loads.png"}
     for name, fig in figures.items():
         assert fig._suptitle is not None and title in fig._suptitle.get_text(), name
@@ -323,8 +327,8 @@ def _spiky_curves():
     # where the cam-surface radius rho_c = rho_pitch - R_f runs off to +-infinity between samples
     import dataclasses
 
+    from camjax import followers
     from camjax.evaluate import scene_arrays
-    from camjax.rocker import evaluate_rocker
 
     scene = parse_scene(ROLLER_SCENE.replace("ROT", "ccw").replace("samples = 360", "samples = 180").replace(
         '{ kind = "return", angle_deg = 120, law = "cycloidal", lift_deg = 20.0 },\n  { kind = "dwell",  angle_deg = 60 },',
@@ -332,13 +336,13 @@ def _spiky_curves():
     scene = dataclasses.replace(scene, follower=dataclasses.replace(
         scene.follower, pivot_distance_mm=78.48648745161735, arm_length_mm=67.74966987155759))
     a = scene_arrays(scene)
-    return evaluate_rocker(scene, a.kin, a.cam_speed_rad_s, 24.66442332838182)
+    return followers.of(scene).evaluate(scene, a.kin, a.cam_speed_rad_s, 24.66442332838182)
 
 
 def test_rho_panel_is_clipped_to_the_cams_size_and_marks_what_it_clips():
     from matplotlib.backends.backend_agg import FigureCanvasAgg
 
-    from camjax.output.rocker import geometry_figure
+    from camjax.followers._rocking_drawing import geometry_figure
 
     c = _spiky_curves()
     limit = 4.0 * float(np.max(np.hypot(c.profile_x_mm, c.profile_y_mm)))  # 4 x the cam's largest radius
@@ -362,7 +366,7 @@ def test_rho_panel_is_clipped_to_the_cams_size_and_marks_what_it_clips():
 
 
 def test_rho_panel_keeps_its_whole_range_when_nothing_is_clipped(rocker_report):
-    from camjax.output.rocker import geometry_figure
+    from camjax.followers._rocking_drawing import geometry_figure
 
     c = rocker_report.curves
     assert np.max(np.abs(c.rho_mm)) < 4.0 * float(np.max(np.hypot(c.profile_x_mm, c.profile_y_mm)))

@@ -10,7 +10,9 @@ import numpy as np
 import pytest
 from outline import max_over_outline, turn
 
-from camjax import contact, geometry, loads
+from camjax import contact, loads
+from camjax.followers.flat import geometry as flat_geo
+from camjax.followers.roller import geometry as roller_geo
 from camjax.laws import get_law
 from camjax.program import MotionProgram, Segment, evaluate, motion_at
 
@@ -42,10 +44,10 @@ def test_pressure_angle_from_positions_only(rotation, e):
     a = th if rotation == "ccw" else -th
     fx, fy = np.cos(a) * tx - np.sin(a) * ty, np.sin(a) * tx + np.cos(a) * ty
     phi_fd = np.arctan(fy / fx)
-    phi = geometry.roller_pressure_angle(rb, rf, e, kin, rotation)
+    phi = roller_geo.roller_pressure_angle(rb, rf, e, kin, rotation)
     # central differences at 0.01 deg: O(h^2) = 3e-9 relative in the tangent times |P'''|/|P'| ~ 10
     np.testing.assert_allclose(phi, phi_fd, rtol=0, atol=1e-7)
-    np.testing.assert_allclose(geometry.roller_geometry(rb, rf, e, kin, rotation).pressure_angle, phi_fd,
+    np.testing.assert_allclose(roller_geo.roller_geometry(rb, rf, e, kin, rotation).pressure_angle, phi_fd,
                                rtol=0, atol=1e-7)
 
 
@@ -62,7 +64,7 @@ def test_pitch_curvature_sign_and_size_from_positions(rotation, e):
     # curve clockwise (polar angle -theta), so convex means negative cross product there
     turn = -1.0 if rotation == "ccw" else 1.0
     kappa_fd = turn * (d1(x) * d2(y) - d1(y) * d2(x)) / (d1(x) ** 2 + d1(y) ** 2) ** 1.5
-    kappa = np.asarray(geometry.roller_pitch_curvature(rb, rf, e, kin, rotation))
+    kappa = np.asarray(roller_geo.roller_pitch_curvature(rb, rf, e, kin, rotation))
     # second differences: O(h^2) truncation plus eps |P| / h^2 round-off (measured 1.4e-8 1/mm)
     # away from the joints; on a joint s''' of
     # the 3-4-5 jumps and the difference across it is O(h) off (measured 1.6e-5 1/mm at R_p = 11)
@@ -72,7 +74,7 @@ def test_pitch_curvature_sign_and_size_from_positions(rotation, e):
     np.testing.assert_allclose(kappa_fd[~near_joint], kappa[~near_joint], rtol=0, atol=1e-7)
     np.testing.assert_allclose(kappa_fd, kappa, rtol=0, atol=5e-5)
     assert kappa.min() < 0 < kappa.max()  # this cam has concave stretches: both signs are tested
-    g = geometry.roller_geometry(rb, rf, e, kin, rotation)
+    g = roller_geo.roller_geometry(rb, rf, e, kin, rotation)
     np.testing.assert_allclose(g.pitch_radius_of_curvature * kappa, 1.0, rtol=1e-12)
     convex = kappa > 0
     np.testing.assert_allclose(g.cam_radius_of_curvature, 1 / kappa - rf, rtol=1e-12)
@@ -82,13 +84,13 @@ def test_pitch_curvature_sign_and_size_from_positions(rotation, e):
 
 def test_cw_cam_is_the_mirror_image_of_ccw_with_mirrored_offset():
     kin = evaluate(PROGRAM, 720)
-    for f in (geometry.roller_profile, geometry.roller_pitch_curve):
+    for f in (roller_geo.roller_profile, roller_geo.roller_pitch_curve):
         xc, yc = f(25.0, 6.0, 4.0, kin, "cw")
         xa, ya = f(25.0, 6.0, -4.0, kin, "ccw")
         np.testing.assert_allclose(xc, -xa, atol=1e-12)
         np.testing.assert_allclose(yc, ya, atol=1e-12)
-    xc, yc = geometry.flat_profile(30.0, kin, "cw")
-    xa, ya = geometry.flat_profile(30.0, kin, "ccw")
+    xc, yc = flat_geo.flat_profile(30.0, kin, "cw")
+    xa, ya = flat_geo.flat_profile(30.0, kin, "ccw")
     np.testing.assert_allclose(xc, -xa, atol=1e-12)
     np.testing.assert_allclose(yc, ya, atol=1e-12)
 
@@ -109,12 +111,12 @@ def test_pressure_angle_limited_prime_radius_of_harmonic_rise_closed_form(beta_d
     a_coef = math.pi * lift / (2 * beta)
     closed = math.sqrt(lift**2 / 4 + (a_coef / math.tan(lim)) ** 2) - lift / 2
     kin = evaluate(harmonic_rise(beta_deg, lift), 360_000)
-    rp = geometry.roller_min_prime_radius_for_pressure_angle(kin, 0.0, lim)
+    rp = roller_geo.roller_min_prime_radius_for_pressure_angle(kin, 0.0, lim)
     # the sampled max of a smooth function misses the true one by <= max|f''| (dtheta/2)^2 / 2
     # ~ 100 * 7.6e-11 / 2 mm: 1e-8 mm covers it
     assert float(rp) == pytest.approx(closed, abs=1e-8)
     # and at that radius the largest pressure angle sits on the limit
-    phi = geometry.roller_pressure_angle(float(rp), 0.0, 0.0, kin)
+    phi = roller_geo.roller_pressure_angle(float(rp), 0.0, 0.0, kin)
     assert float(jnp.max(jnp.abs(phi))) == pytest.approx(lim, abs=1e-12)
 
 
@@ -122,18 +124,18 @@ def test_pressure_angle_limited_prime_radius_of_harmonic_rise_closed_form(beta_d
 def test_min_prime_radius_for_pressure_angle_with_offset_puts_phi_on_the_limit(rotation, e):
     kin = evaluate(PROGRAM, 3600)
     lim = math.radians(30.0)
-    rp = float(geometry.roller_min_prime_radius_for_pressure_angle(kin, e, lim, rotation))
-    phi = geometry.roller_pressure_angle(rp, 0.0, e, kin, rotation)
+    rp = float(roller_geo.roller_min_prime_radius_for_pressure_angle(kin, e, lim, rotation))
+    phi = roller_geo.roller_pressure_angle(rp, 0.0, e, kin, rotation)
     assert float(jnp.max(jnp.abs(phi))) == pytest.approx(lim, abs=1e-12)
     # 1 um smaller breaks it (the root is a single monotone crossing in R_p)
-    phi = geometry.roller_pressure_angle(rp - 1e-3, 0.0, e, kin, rotation)
+    phi = roller_geo.roller_pressure_angle(rp - 1e-3, 0.0, e, kin, rotation)
     assert float(jnp.max(jnp.abs(phi))) > lim
 
 
 def riding_heights(rb, rf, e, rotation, theta_deg, dense=7200, iters=90):
     """Roller-centre height of a follower riding on the cam outline, from the outline only.
 
-    For each cam angle: turn the outline (points from geometry.roller_profile at any parameter
+    For each cam angle: turn the outline (points from roller_geo.roller_profile at any parameter
     tau) into the follower frame and find the lowest centre height on the axis x = e with no
     outline point inside the roller: max over tau of y + sqrt(R_f^2 - (x - e)^2). A dense grid
     over tau brackets the maximizer, golden-section refinement in tau finishes it (the height is
@@ -142,7 +144,7 @@ def riding_heights(rb, rf, e, rotation, theta_deg, dense=7200, iters=90):
 
     def height(tau_deg, th):
         kin = motion_at(PROGRAM, tau_deg)
-        x, y = geometry.roller_profile(rb, rf, e, kin, rotation)
+        x, y = roller_geo.roller_profile(rb, rf, e, kin, rotation)
         a = th if rotation == "ccw" else -th  # follower frame = cam frame turned by the cam angle
         xf, yf = turn(x, y, a)
         gap = rf**2 - (xf - e) ** 2
@@ -156,7 +158,7 @@ def riding_heights(rb, rf, e, rotation, theta_deg, dense=7200, iters=90):
 def test_follower_riding_on_exported_profile_reproduces_s(rotation, e):
     rb, rf = 25.0, 6.0  # no undercut here (checked below), so the roller touches one point
     kin_all = evaluate(PROGRAM, 360)
-    assert float(jnp.min(geometry.roller_geometry(rb, rf, e, kin_all, rotation).undercut_margin)) > 0
+    assert float(jnp.min(roller_geo.roller_geometry(rb, rf, e, kin_all, rotation).undercut_margin)) > 0
     theta_deg = np.arange(0.0, 360.0, 2.5)
     y = riding_heights(rb, rf, e, rotation, theta_deg)
     s = np.asarray(motion_at(PROGRAM, theta_deg).s)
@@ -173,15 +175,15 @@ def test_gradients_through_base_radius_roller_radius_offset_match_finite_differe
 
     def quantities(x, rotation):
         rb, rf, e = x
-        g = geometry.roller_geometry(rb, rf, e, kin, rotation)
-        rho_eq = geometry.roller_equivalent_radius(g.pitch_curvature, rf)
+        g = roller_geo.roller_geometry(rb, rf, e, kin, rotation)
+        rho_eq = roller_geo.roller_equivalent_radius(g.pitch_curvature, rf)
         sigma = contact.roller_stress(coeff, g.pressure_angle, rho_eq)
         return jnp.stack([
             jnp.max(jnp.abs(g.pressure_angle)),
-            jnp.max(geometry.roller_undercut_constraint(g.pitch_curvature, rf, 0.5)),
+            jnp.max(roller_geo.roller_undercut_constraint(g.pitch_curvature, rf, 0.5)),
             jnp.max(sigma),
             jnp.sum(g.pitch_curvature),
-            jnp.sum(jnp.stack(geometry.roller_profile(rb, rf, e, kin, rotation))),
+            jnp.sum(jnp.stack(roller_geo.roller_profile(rb, rf, e, kin, rotation))),
         ])
 
     x0 = jnp.asarray([25.0, 6.0, 4.0])
@@ -206,8 +208,8 @@ def test_roller_stress_closed_forms():
         assert float(sigma) == pytest.approx(ref, rel=1e-13)
     # a dwell: pitch circle R_p, cam circle R_b = R_p - R_f, two cylinders 1/R_b + 1/R_f
     kin = evaluate(MotionProgram.from_segments([Segment("dwell", 360)]), 8)
-    g = geometry.roller_geometry(20.0, 8.0, 0.0, kin)
-    rho_eq = geometry.roller_equivalent_radius(g.pitch_curvature, 8.0)
+    g = roller_geo.roller_geometry(20.0, 8.0, 0.0, kin)
+    rho_eq = roller_geo.roller_equivalent_radius(g.pitch_curvature, 8.0)
     sigma = contact.roller_stress(contact.stress_coefficient(50.0, 10.0, cam, fol), g.pressure_angle, rho_eq)
     np.testing.assert_allclose(sigma, 0.564 * math.sqrt(5.0 * (1 / 20.0 + 1 / 8.0) / k), rtol=1e-13)
     assert float(loads.normal_force(50.0, math.radians(60))) == pytest.approx(100.0, rel=1e-14)
@@ -219,11 +221,11 @@ def test_everything_finite_for_infeasible_designs():
 
     def worst(x):
         rb, rf, e = x
-        g = geometry.roller_geometry(rb, rf, e, kin)
-        rho_eq = geometry.roller_equivalent_radius(g.pitch_curvature, rf)
+        g = roller_geo.roller_geometry(rb, rf, e, kin)
+        rho_eq = roller_geo.roller_equivalent_radius(g.pitch_curvature, rf)
         sigma = contact.roller_stress(40.0, g.pressure_angle, rho_eq)
-        px, py = geometry.roller_profile(rb, rf, e, kin)
-        return (jnp.max(sigma) + jnp.max(geometry.roller_undercut_constraint(g.pitch_curvature, rf))
+        px, py = roller_geo.roller_profile(rb, rf, e, kin)
+        return (jnp.max(sigma) + jnp.max(roller_geo.roller_undercut_constraint(g.pitch_curvature, rf))
                 + jnp.max(jnp.abs(g.pressure_angle)) + jnp.sum(px + py)
                 + jnp.max(contact.roller_hertz_line_stress(40.0, g.pressure_angle, g.cam_radius_of_curvature,
                                                             rf, 10.0, cam, cam)))
@@ -239,13 +241,13 @@ def test_everything_finite_for_infeasible_designs():
                                                    ("ccw", -2.0, 30.0, 0.5)])
 def test_undercut_limited_prime_radius_against_a_dense_scan(rotation, e, rf, rho_min):
     kin = evaluate(PROGRAM, 720)
-    rp = float(geometry.roller_min_prime_radius_for_undercut(kin, rf, e, rho_min, rotation, lower_mm=abs(e)))
+    rp = float(roller_geo.roller_min_prime_radius_for_undercut(kin, rf, e, rho_min, rotation, lower_mm=abs(e)))
     # scan R_p in 1 um steps around it, judging undercut by the smallest convex cam radius
     # (a different formula: rho_c = 1/kappa - R_f on the convex samples)
     scan = np.arange(rp - 0.05, rp + 0.05, 1e-3)
 
     def ok(r):
-        k = np.asarray(geometry.roller_pitch_curvature(r - rf, rf, e, kin, rotation))
+        k = np.asarray(roller_geo.roller_pitch_curvature(r - rf, rf, e, kin, rotation))
         return np.all(1 / k[k > 0] - rf >= rho_min)
 
     first = scan[np.argmax([ok(r) for r in scan])]

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 import camjax
-from camjax import roller_problem as R
-from camjax.problem import Weights
+from camjax.family import Weights
+from camjax.followers.roller import problem as R
 from camjax.solvers import scipy_roller
 
 

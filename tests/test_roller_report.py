@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import camjax
-from camjax import cli, pipeline
+from camjax import cli, followers
 from camjax.scene import builtin_scene_text, parse_scene
 
 ROLLER = builtin_scene_text("roller")
@@ -23,7 +23,7 @@ def _variant(old, new, text=ROLLER):
 def test_min_prime_radius_of_the_harmonic_rise_and_its_rule():
     # rise 8 mm harmonic over 90 deg, e = 0, limit 30 deg (the return over 180 deg is gentler):
     # R_p = sqrt(h^2/4 + A^2 / tan^2 30) - h/2, A = pi h / (2 beta) (tests/test_roller_geometry.py)
-    data = pipeline.design_report(dataclasses.replace(camjax.load_scene("roller"), design=None))
+    data = camjax.design_report(dataclasses.replace(camjax.load_scene("roller"), design=None))
     a = math.pi * 8 / (2 * math.radians(90))
     closed = math.sqrt(16 + (a / math.tan(math.radians(30))) ** 2) - 4
     # R_p = max_theta f, f = |s'| / tan 30 - s, refined off the grid (exact extrema): the closed
@@ -40,7 +40,7 @@ def test_min_prime_radius_of_the_harmonic_rise_and_its_rule():
     # on the 1 deg samples (extrema = "grid") the max is below the continuous one by at most
     # max|f''| (dtheta/2)^2 / 2 = (8 * 4 / tan 30) * 7.6e-5 / 2 = 2.1e-3 mm, at the sample 37 deg
     grid_scene = dataclasses.replace(camjax.load_scene("roller"), design=None)
-    grid = pipeline.min_base_radius(grid_scene, camjax.scene_arrays(grid_scene, extrema="grid"))
+    grid = followers.of(grid_scene).min_base_radius(grid_scene, camjax.scene_arrays(grid_scene, extrema="grid"))
     assert closed - 2.1e-3 <= grid.prime_radius_mm <= closed + 1e-12
     assert grid.angle_deg == round(math.degrees(x) * 90 / 180)
     json.dumps(data, allow_nan=False)
@@ -49,7 +49,7 @@ def test_min_prime_radius_of_the_harmonic_rise_and_its_rule():
 def test_min_base_radius_is_the_smallest_cam_for_the_designs_roller_and_offset():
     """With a [design] that moves R_f and the offset, the report's smallest cam is sized for the
     follower the cam is drawn with (the design's), not the [follower] table's, and says so."""
-    data = pipeline.design_report(camjax.load_scene("roller"))
+    data = camjax.design_report(camjax.load_scene("roller"))
     rf, e = data["design"]["roller_radius_mm"], data["design"]["offset_mm"]
     assert (rf, e) != (5.0, 0.0) and data["follower_scene"] == {"roller_radius_mm": 5.0, "offset_mm": 0.0}
     # independent sizing on a dense grid (harmonic rise 8 mm / 90 deg, return over 180 deg): the
@@ -73,7 +73,7 @@ def test_min_base_radius_is_the_smallest_cam_for_the_designs_roller_and_offset()
 def test_undercut_binds_for_a_large_roller():
     text = _variant("roller_radius_mm = 5.0 ", "roller_radius_mm = 12.0 ")
     scene = dataclasses.replace(parse_scene(text, "big-roller"), design=None)
-    data = pipeline.design_report(scene)
+    data = camjax.design_report(scene)
     assert data["min_base_radius_binding"] == "undercut"
     assert "undercut" in data["min_base_radius_rule"] and f"{data['min_base_radius_deg']:g} deg" in \
         data["min_base_radius_rule"]
@@ -93,7 +93,7 @@ def test_roller_stress_curve_against_spec_formula_in_numpy():
     # offset fixed at 0 so SPEC 3's zero-offset formulas apply as printed
     text = _variant("offset_mm = [-4.0, 4.0]", "offset_mm = 0.0")
     scene = parse_scene(text, "roller-centred")
-    report = pipeline.analyse(scene)
+    report = camjax.analyse(scene)
     d, a = report.data["design"], report.arrays
     rb, rf = d["base_radius_mm"], d["roller_radius_mm"]
     assert d["offset_mm"] == 0.0 and d["prime_radius_mm"] == pytest.approx(rb + rf, rel=1e-15)
@@ -115,9 +115,9 @@ def test_roller_stress_curve_against_spec_formula_in_numpy():
 
 
 def test_cw_scene_mirrors_the_ccw_design():
-    ccw = pipeline.analyse(camjax.load_scene("roller"))
+    ccw = camjax.analyse(camjax.load_scene("roller"))
     text = _variant('rotation = "ccw"', 'rotation = "cw"')
-    cw = pipeline.analyse(parse_scene(text, "roller-cw"))
+    cw = camjax.analyse(parse_scene(text, "roller-cw"))
     a, b = ccw.data["design"], cw.data["design"]
     # the mirror image of the optimum is the optimum of the mirrored problem: e -> -e, same R_p
     assert b["prime_radius_mm"] == pytest.approx(a["prime_radius_mm"], abs=1e-6)

@@ -10,8 +10,9 @@ import numpy as np
 import pytest
 
 import camjax
-from camjax import geometry
-from camjax import roller_problem as R
+from camjax.followers.roller import geometry as roller_geo
+from camjax.followers.roller import problem as R
+from camjax.scene import with_design
 from camjax.solvers import scipy_roller
 from camjax.solvers.base import solve
 from camjax.solvers.registry import MODES, SOLVERS
@@ -39,13 +40,13 @@ def dense_scan_prime_radius(scene, zooms=3, grid=(41, 11, 41)):
     lim = math.radians(f.max_pressure_angle_deg)
 
     def cost(rb, rf, e):
-        g = geometry.roller_geometry(rb, rf, e, kin, scene.motion.rotation, f.min_curvature_radius_mm)
+        g = roller_geo.roller_geometry(rb, rf, e, kin, scene.motion.rotation, f.min_curvature_radius_mm)
         ok = (jnp.max(jnp.abs(g.pressure_angle)) <= lim) & (jnp.min(g.undercut_margin) >= 0)
         return jnp.where(ok, rb + rf, jnp.inf)
 
     cost = jax.jit(jax.vmap(cost))
-    lo = np.array([d.base_radius_mm[0], d.roller_radius_mm[0], d.offset_mm[0]])
-    hi = np.array([d.base_radius_mm[1], d.roller_radius_mm[1], d.offset_mm[1]])
+    box = [d.bounds(name) for name in ("base_radius_mm", "roller_radius_mm", "offset_mm")]
+    lo, hi = np.array([b[0] for b in box]), np.array([b[1] for b in box])
     box_lo, box_hi = lo.copy(), hi.copy()
     for _ in range(zooms + 1):
         axes = [np.linspace(lo[i], hi[i], grid[i]) for i in range(3)]
@@ -62,14 +63,14 @@ def exact_offset_scan(scene):
     """min over e of the smallest admissible R_p(e) (closed form + bisection), golden-refined in e."""
     kin = camjax.scene_arrays(scene).kin
     f, d = scene.follower, scene.design
-    rf = d.roller_radius_mm[0]  # with gamma = 0 the smallest roller is best: undercut only gets easier
+    rf = d.bounds("roller_radius_mm")[0]  # with gamma = 0 the smallest roller is best: undercut only gets easier
 
     def rp(e):
-        return geometry.roller_min_prime_radius(kin, rf, e, math.radians(f.max_pressure_angle_deg),
+        return roller_geo.roller_min_prime_radius(kin, rf, e, math.radians(f.max_pressure_angle_deg),
                                                 f.min_curvature_radius_mm, scene.motion.rotation).prime_radius_mm
 
     rp = jax.jit(jax.vmap(rp))
-    es = np.linspace(d.offset_mm[0], d.offset_mm[1], 801)
+    es = np.linspace(*d.bounds("offset_mm"), 801)
     k = int(np.argmin(np.asarray(rp(jnp.asarray(es)))))
     a, b = es[max(k - 1, 0)], es[min(k + 1, len(es) - 1)]
     g = (math.sqrt(5) - 1) / 2
@@ -96,8 +97,7 @@ def test_gradient_finds_the_optimal_offset(scene, size_only):
     assert rp == pytest.approx(exact_rp, abs=1e-6)
     assert float(sol.offset_mm) == pytest.approx(exact_e, abs=1e-5)
     # and the offset pays: against e = 0 the prime circle shrinks by 29 % (the issue's example)
-    centred = R.problem_from_scene(dataclasses.replace(scene, design=dataclasses.replace(
-        scene.design, offset_mm=(0.0, 0.0))), extrema="grid")
+    centred = R.problem_from_scene(with_design(scene, offset_mm=0.0), extrema="grid")
     rp0 = float(solve(centred, (1.0, 0.0), solver="gradient").size_mm)
     assert 1 - rp / rp0 == pytest.approx(0.29, abs=0.01)
 
@@ -107,11 +107,11 @@ def test_gradient_finds_the_optimal_offset(scene, size_only):
 @pytest.mark.parametrize("mode", MODES)
 def test_every_solver_and_mode_solves_the_roller_problem(scene, solver, mode):
     # R_f and e fixed: then the pointwise design (largest R_b over the angles) is the global one
-    fixed = dataclasses.replace(scene.design, roller_radius_mm=(5.0, 5.0), offset_mm=(1.0, 1.0), gamma=0.0)
+    fixed = with_design(scene, roller_radius_mm=5.0, offset_mm=1.0, gamma=0.0).design
     problem = R.problem_from_scene(dataclasses.replace(scene, design=fixed), extrema="grid")
     sol = solve(problem, (1.0, 0.0), mode=mode, solver=solver)
     f = scene.follower
-    ref = geometry.roller_min_prime_radius(camjax.scene_arrays(scene).kin, 5.0, 1.0,
+    ref = roller_geo.roller_min_prime_radius(camjax.scene_arrays(scene).kin, 5.0, 1.0,
                                            math.radians(f.max_pressure_angle_deg), f.min_curvature_radius_mm)
     # gradient and hybrid to the feasibility tolerance; the GA (200 generations, decaying
     # mutation) to 1e-3 mm (measured ~1e-5)

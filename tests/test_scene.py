@@ -40,7 +40,7 @@ def test_default_scene_is_the_reference_case():
     assert sc.motion.program.angles_deg == (100.0, 80.0, 120.0, 60.0)
     assert sc.follower.train.spring_N_per_m == 3004.0
     assert sc.contact.cam.E_MPa == 2.1e5 and sc.contact.follower.poisson == 0.26
-    assert sc.design.base_radius_mm == (5.0, 40.0) and sc.design.sigma_max_MPa == 1230.0
+    assert sc.design.bounds("base_radius_mm") == (5.0, 40.0) and sc.design.sigma_max_MPa == 1230.0
     assert sc.needs() == {"kinematics", "geometry", "loads", "contact", "design"}
     assert "[design]" in builtin_scene_text("default")
 
@@ -145,10 +145,10 @@ ROLLER_FOLLOWER = ('type = "flat"', 'type = "roller"\nroller_radius_mm = 6.0')
 
 
 def test_limits_and_rotation_are_scene_data():
-    from camjax.geometry import FLAT_MIN_CURVATURE_RADIUS_MM
+    from camjax.followers.flat.geometry import FLAT_MIN_CURVATURE_RADIUS_MM
 
     flat = parse_scene(BASE)
-    assert flat.motion.rotation == "ccw"  # the convention of camjax.geometry.pitch
+    assert flat.motion.rotation == "ccw"  # the convention of camjax.followers._pitch
     assert flat.follower.min_curvature_radius_mm == FLAT_MIN_CURVATURE_RADIUS_MM
     roller = parse_scene(BASE.replace(*ROLLER_FOLLOWER))
     assert roller.follower.max_pressure_angle_deg == 30.0
@@ -182,7 +182,7 @@ def test_bad_roller_limits_name_the_field(extra, field, words):
 
 
 def test_bad_flat_limits_and_rotation_name_the_field():
-    with pytest.raises(SceneError, match=r"follower.max_pressure_angle_deg = 30.*only for type = 'roller'"):
+    with pytest.raises(SceneError, match=r"follower.max_pressure_angle_deg = 30.*only for type = .*'roller', not type = 'flat'"):
         parse_scene(BASE.replace('type = "flat"', 'type = "flat"\nmax_pressure_angle_deg = 30'))
     with pytest.raises(SceneError, match=r"follower.min_curvature_radius_mm = 0.0: out of range \(allowed: > 0\)"):
         parse_scene(BASE.replace('type = "flat"', 'type = "flat"\nmin_curvature_radius_mm = 0.0'))

@@ -3,7 +3,9 @@
 import numpy as np
 import pytest
 
-from camjax import problem as P
+from camjax.family import weights_of
+from camjax.followers.flat import optimum
+from camjax.followers.flat import problem as P
 from camjax.solvers import gradient as G
 
 pytest.importorskip("scipy")
@@ -20,7 +22,7 @@ def problem(default_scene):
 def test_slsqp_pointwise_matches_closed_form(problem, alpha, gamma):
     angles = np.arange(0, 360, 9)
     res = SB.slsqp_pointwise(problem, alpha, gamma, angles)
-    ref = P.pointwise_optimum(problem, P.weights_of(alpha, gamma))
+    ref = optimum.pointwise_optimum(problem, weights_of(alpha, gamma))
     np.testing.assert_allclose(res.base_radius_mm, np.asarray(ref.base_radius_mm)[angles], atol=1e-5)
     np.testing.assert_allclose(res.face_width_mm, np.asarray(ref.face_width_mm)[angles], atol=1e-5)
 
@@ -28,7 +30,7 @@ def test_slsqp_pointwise_matches_closed_form(problem, alpha, gamma):
 @pytest.mark.slow
 @pytest.mark.parametrize("alpha,gamma", [(1.0, 1.0), (10.0, 1.0)])
 def test_global_gradient_agrees_with_slsqp_and_differential_evolution(problem, alpha, gamma):
-    ours = G.solve_global(problem, P.weights_of(alpha, gamma))
+    ours = G.solve_global(problem, weights_of(alpha, gamma))
     slsqp = SB.slsqp_global(problem, alpha, gamma)
     assert float(ours.design.base_radius_mm) == pytest.approx(float(slsqp.base_radius_mm), abs=1e-5)
     assert float(ours.design.face_width_mm) == pytest.approx(float(slsqp.face_width_mm), abs=1e-5)
@@ -41,6 +43,6 @@ def test_global_gradient_agrees_with_slsqp_and_differential_evolution(problem, a
 @pytest.mark.slow
 def test_differential_evolution_pointwise_at_the_binding_angles(problem):
     res = SB.differential_evolution_pointwise(problem, 1.0, 1.0, [315], seed=0, popsize=10)
-    ref = P.pointwise_optimum(problem, P.weights_of(1.0, 1.0))
+    ref = optimum.pointwise_optimum(problem, weights_of(1.0, 1.0))
     np.testing.assert_allclose(res.base_radius_mm, np.asarray(ref.base_radius_mm)[[315]], atol=1e-3)
     np.testing.assert_allclose(res.face_width_mm, np.asarray(ref.face_width_mm)[[315]], atol=1e-3)

@@ -9,7 +9,10 @@ import jax
 import numpy as np
 import pytest
 
-from camjax import problem as P
+from camjax.family import weights_of
+from camjax.followers.flat import optimum
+from camjax.followers.flat import problem as P
+from camjax.results import Status
 from camjax.solvers import base, ga, registry
 from camjax.solvers.base import Solution, solve
 
@@ -34,7 +37,7 @@ def test_every_solver_returns_a_solution_near_the_exact_global_optimum(problem, 
     settings = base.Settings.of_solvers(ga=SMALL_GA)
     sol = solve(problem, (1.0, 1.0), solver=solver, settings=settings)
     assert isinstance(sol, Solution) and sol.mode == "global" and sol.solver == solver
-    exact = P.global_optimum(problem, P.weights_of(1.0, 1.0))  # bisection, independent of the solvers
+    exact = optimum.global_optimum(problem, weights_of(1.0, 1.0))  # bisection, independent of the solvers
     # the gradient-polished solvers reach the bisection's optimum to their stopping rule (1e-6 mm
     # measured ~1e-9); the short GA run gets within 0.5 mm of it (its mutation scale at the end)
     tol = 0.5 if solver == "ga" else 1e-6
@@ -42,21 +45,21 @@ def test_every_solver_returns_a_solution_near_the_exact_global_optimum(problem, 
     assert abs(float(sol.design.face_width_mm - exact.face_width_mm)) < tol
     assert bool(sol.feasible)
     # the GA has no stopping rule but its budget: feasible -> max_steps; gradient -> converged
-    expected = registry.MAX_STEPS if solver == "ga" else registry.CONVERGED
-    assert int(sol.status) == expected and sol.to_json(problem)["status"] == registry.STATUS_NAMES[expected]
+    expected = Status.MAX_STEPS if solver == "ga" else Status.CONVERGED
+    assert int(sol.status) == expected and sol.to_json(problem)["status"] == expected.name.lower()
 
 
 @pytest.mark.parametrize("solver", registry.SOLVERS)
 def test_every_solver_in_pointwise_mode_matches_the_closed_form(coarse, solver):
-    w = P.weights_of(1.0, 1.0)
+    w = weights_of(1.0, 1.0)
     sol = solve(coarse, (1.0, 1.0), mode="pointwise", solver=solver,
                 settings=base.Settings.of_solvers(ga=SMALL_GA))
-    closed = P.pointwise_optimum(coarse, w)  # closed form per angle (SPEC 5)
+    closed = optimum.pointwise_optimum(coarse, w)  # closed form per angle (SPEC 5)
     # the design is the largest R_b over the angles; tolerance as in the global test
     tol = 0.5 if solver == "ga" else 1e-6
     assert abs(float(sol.base_radius_mm) - float(np.max(closed.base_radius_mm))) < tol
     assert sol.pointwise.base_radius_mm.shape == coarse.theta_deg.shape
-    assert int(sol.status) in (registry.CONVERGED, registry.MAX_STEPS)
+    assert int(sol.status) in (Status.CONVERGED, Status.MAX_STEPS)
 
 
 @pytest.mark.parametrize("solver", registry.SOLVERS)
@@ -64,12 +67,12 @@ def test_unreachable_bounds_give_status_infeasible(problem, solver):
     # R_b <= 20 mm while curvature and stress need >= 24.1 mm (the scene's min base radius)
     tight = P.with_bounds(problem, base_radius_mm=(5.0, 20.0))
     sol = solve(tight, (1.0, 1.0), solver=solver, settings=base.Settings.of_solvers(ga=SMALL_GA))
-    assert int(sol.status) == registry.INFEASIBLE and not bool(sol.feasible)
+    assert int(sol.status) == Status.INFEASIBLE and not bool(sol.feasible)
     assert sol.status_name == "infeasible" and "stress" in sol.violated(tight)
 
 
 def test_solve_batch_is_traceable_and_vmapped(problem):
-    w = P.weights_of([1.0, 10.0], [1.0, 1.0])
+    w = weights_of([1.0, 10.0], [1.0, 1.0])
     sol = base.solve_batch(problem, w, base.weighting_keys(0, 2))
     assert sol.batch_size == 2 and sol.status.dtype == np.int32
     # a larger alpha / gamma gives a smaller cam (SPEC 7's trade)
@@ -90,7 +93,7 @@ def test_bad_choices_name_the_field():
         registry.check_choice("mode", "both", registry.MODES)
     with pytest.raises(ValueError, match="alpha, gamma: a weighting with alpha = gamma = 0"):
         registry.check_weights([0.0], [0.0])
-    with pytest.raises(TypeError, match="not a registered problem family"):
+    with pytest.raises(TypeError, match="not the problem of a registered follower"):
         base.family_of((1.0, 2.0))
 
 

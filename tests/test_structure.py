@@ -12,15 +12,25 @@ ROOT = Path(__file__).resolve().parents[1]
 PACKAGE = ROOT / "camjax"
 
 # module (dotted prefix) -> modules it must not import: the stages after it in the chain
+# scene -> evaluate -> followers (geometry, problem, run) -> solvers -> pipeline -> output -> cli
+MODELS = ("camjax.errors", "camjax.results", "camjax.numerics", "camjax.extrema", "camjax.laws", "camjax.program",
+          "camjax.contact", "camjax.loads")
+ABOVE_MODELS = ("camjax.scene", "camjax.evaluate", "camjax.followers", "camjax.solvers", "camjax.pipeline",
+                "camjax.output", "camjax.cli", "camjax.scaleout", "camjax.dynamics")
 LATER = {
-    "camjax.evaluate": ("camjax.problem", "camjax.solvers", "camjax.pipeline", "camjax.output",
-                        "camjax.cli"),
-    "camjax.rocker": ("camjax.problem", "camjax.solvers", "camjax.pipeline", "camjax.output", "camjax.cli"),
-    "camjax.output": ("camjax.problem", "camjax.solvers", "camjax.pipeline", "camjax.cli",
-                      "camjax.scaleout"),
-    "camjax.pipeline": ("camjax.cli", "camjax.scaleout"),
+    **{model: ABOVE_MODELS for model in MODELS},
+    "camjax.scene": ("camjax.evaluate", "camjax.solvers.base", "camjax.pipeline", "camjax.output", "camjax.cli"),
+    "camjax.evaluate": ("camjax.solvers", "camjax.pipeline", "camjax.output", "camjax.cli"),
+    "camjax.followers": ("camjax.pipeline", "camjax.cli", "camjax.scaleout"),
+    "camjax.solvers": ("camjax.pipeline", "camjax.output", "camjax.cli"),
+    "camjax.pipeline": ("camjax.output", "camjax.cli", "camjax.scaleout"),
+    "camjax.output": ("camjax.cli", "camjax.scaleout"),
     "camjax.runtime": ("camjax.",),  # set-up only: must load before anything it could configure
 }
+# a follower folder's computing layers (and the families' shared maths) never reach the output layer;
+# its report.py and drawing.py (and the families' _*_report.py, _*_drawing.py) are that layer
+OUTPUT_LAYERS = ("report", "drawing", "_translating_report", "_translating_drawing", "_rocking_report",
+                 "_rocking_drawing")
 
 
 def _runtime_imports(path: Path) -> set[str]:
@@ -52,6 +62,8 @@ def test_no_module_reaches_back_up_the_chain(path):
     name = _module_name(path)
     forbidden = [bad for prefix, bads in LATER.items() if name == prefix or name.startswith(prefix + ".")
                  for bad in bads]
+    if name.startswith("camjax.followers.") and name.rsplit(".", 1)[-1] not in OUTPUT_LAYERS:
+        forbidden.append("camjax.output")
     wrong = sorted(m for m in _runtime_imports(path) for bad in forbidden
                    if m == bad.rstrip(".") or m.startswith(bad if bad.endswith(".") else bad + "."))
     assert not wrong, f"{name} imports {wrong}: a later stage of scene -> pipeline -> output -> cli"
@@ -137,3 +149,100 @@ def test_folders_compare_file_by_file(compare, tmp_path, capsys):
     (old / "gone.json").unlink()
     (new / "moved.json").write_text(json.dumps(OLD))
     assert compare.main([str(old), str(new), "--dirs"]) == 0
+
+
+# ------------------------------------------------------------------------------- the package
+
+
+def _module_imports(path: Path) -> set[str]:
+    """camjax modules a file imports when it is imported (its top level, not inside functions)."""
+    tree = ast.parse(path.read_text())
+    names = set()
+    for node in tree.body:
+        if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test):
+            continue
+        for sub in ast.walk(node) if isinstance(node, (ast.If, ast.Try)) else [node]:
+            if isinstance(sub, ast.Import):
+                names.update(a.name for a in sub.names)
+            elif isinstance(sub, ast.ImportFrom) and sub.module and sub.level == 0:
+                names.add(sub.module)
+                names.update(f"{sub.module}.{a.name}" for a in sub.names)
+    # "from camjax import x" imports the submodule x: the bare package name is not an edge of its own
+    return {n for n in names if n.startswith("camjax.")}
+
+
+def test_no_import_circle():
+    """The import graph of the package's modules (what each imports when it is imported) has no
+    cycle: every module can be imported on its own, and the layers stay one-way."""
+    modules = {_module_name(p): p for p in PACKAGE.rglob("*.py")}
+    # the root package (camjax/__init__.py) imports the public modules to re-export them: not a node
+    graph = {name: {m for m in _module_imports(path) if m in modules and m not in (name, "camjax")}
+             for name, path in modules.items() if name != "camjax"}
+    state: dict[str, int] = {}
+
+    def visit(node, stack):
+        state[node] = 1
+        for nxt in sorted(graph[node]):
+            if state.get(nxt) == 1:
+                cycle = stack[stack.index(nxt):] + [nxt]
+                raise AssertionError("import circle: " + " -> ".join(cycle))
+            if nxt not in state:
+                visit(nxt, stack + [nxt])
+        state[node] = 2
+
+    for name in sorted(graph):
+        if name not in state:
+            visit(name, [name])
+
+
+def test_the_circle_check_finds_a_circle(tmp_path):
+    a, b = tmp_path / "a.py", tmp_path / "b.py"
+    a.write_text("import camjax.b\n")
+    b.write_text("from camjax import a\n")
+    assert "camjax.b" in _module_imports(a) and "camjax.a" in _module_imports(b)
+
+
+def test_no_module_over_600_lines():
+    long = {str(p.relative_to(ROOT)): n for p in PACKAGE.rglob("*.py") if (n := len(p.read_text().splitlines())) > 600}
+    assert not long, f"modules over 600 lines: {long}"
+
+
+FOLLOWER_NAMES = {"flat", "roller", "oscillating_roller", "oscillating_flat", "knife_edge", "curved_face",
+                  "oscillating_curved_face"}
+
+
+def _type_name_comparisons(path: Path) -> list[str]:
+    """Comparisons (==, !=, in, not in) with a follower type's name as a string constant."""
+    tree = ast.parse(path.read_text())
+    out = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Compare):
+            for sub in ast.walk(node):
+                if isinstance(sub, ast.Constant) and sub.value in FOLLOWER_NAMES:
+                    out.append(f"{path.name}:{node.lineno}: {ast.unparse(node)}")
+    return out
+
+
+def test_no_code_outside_the_follower_folders_compares_a_follower_type_name():
+    """Everything outside camjax/followers reaches a follower through the registry and the contract."""
+    found = [hit for p in PACKAGE.rglob("*.py") if "followers" not in p.parts for hit in _type_name_comparisons(p)]
+    assert not found, "\n".join(found)
+
+
+def test_the_type_name_check_sees_a_comparison(tmp_path):
+    f = tmp_path / "m.py"
+    f.write_text("def g(scene):\n    return scene.follower.type == 'roller'\n")
+    assert len(_type_name_comparisons(f)) == 1
+
+
+def test_every_follower_folder_is_registered_and_complete():
+    """A folder of camjax/followers is a follower type: its follower.py registers an instance named
+    after it, and it has the five layers of the contract."""
+    from camjax import followers
+
+    folders = sorted(p.name for p in (PACKAGE / "followers").iterdir() if p.is_dir() and not p.name.startswith("_"))
+    assert list(followers.names()) == folders
+    for name in folders:
+        for layer in ("geometry", "problem", "follower", "report", "drawing"):
+            assert (PACKAGE / "followers" / name / f"{layer}.py").is_file(), (name, layer)
+        assert followers.get(name).name == name

@@ -6,7 +6,9 @@ import numpy as np
 import pytest
 from reference import numpy_reference_optimum
 
-from camjax import problem as P
+from camjax.family import weights_of
+from camjax.followers.flat import optimum
+from camjax.followers.flat import problem as P
 from camjax.solvers import sweep as S
 
 
@@ -98,7 +100,7 @@ def test_chunking_does_not_change_results(problem):
 
 def test_hybrid_polishes_the_ga(problem):
     res = S.solve(problem, 10.0, 1.0, solver="hybrid")
-    ref = P.global_optimum(problem, P.weights_of(10.0, 1.0))
+    ref = optimum.global_optimum(problem, weights_of(10.0, 1.0))
     assert float(res.base_radius_mm) == pytest.approx(float(ref.base_radius_mm), abs=1e-6)
     assert bool(res.converged) and int(res.iterations) > 200  # GA generations + gradient steps
 

@@ -25,8 +25,12 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from camjax import contact, geometry, loads, program
+from camjax import contact, followers, loads, program
 from camjax.evaluate import scene_arrays
+from camjax.followers.flat import geometry as flat_geo
+from camjax.followers.oscillating_flat import geometry as rocker_flat_geo
+from camjax.followers.oscillating_roller import geometry as rocker_roller_geo
+from camjax.followers.roller import geometry as roller_geo
 from camjax.laws import LAWS, boundary_condition_number, polynomial_coefficients, polynomial_law
 from camjax.numerics import RHO_FLOOR_MM, STRESS_RTOL, precision_warning
 from camjax.program import MotionProgram, Segment
@@ -259,21 +263,21 @@ def program_cases(sample_counts: Iterable[int] = (1, 2, 7, 360, 36_000, 360_000)
 def geometry_cases(scene: Scene) -> list[Case]:
     """Base radius 1e-3x..10x the minimum, rho -> 0+, rho <= 0, gradients everywhere (an
     oscillating follower: :func:`rocker_geometry_cases`)."""
-    if scene.follower.oscillating:
+    if followers.of(scene).rocking:
         return rocker_geometry_cases(scene)
     out = []
     arrays = scene_arrays(scene)
-    rb_min = float(geometry.flat_min_base_radius(arrays.kin)[0])
+    rb_min = float(flat_geo.flat_min_base_radius(arrays.kin)[0])
 
     def peak_stress(rb):
-        rho = geometry.flat_radius_of_curvature(rb, arrays.kin)
+        rho = flat_geo.flat_radius_of_curvature(rb, arrays.kin)
         return jnp.max(contact.stress_from_coefficient(arrays.stress_coefficient, rho))
 
     vg = jax.jit(jax.value_and_grad(peak_stress))
     for factor in (1e-3, 0.1, 0.5, 0.99, 1.0, 1.0 + 1e-12, 1.01, 2.0, 10.0):
         rb = rb_min * factor
         val, grad = vg(rb)
-        rho_min = float(jnp.min(geometry.flat_radius_of_curvature(rb, arrays.kin)))
+        rho_min = float(jnp.min(flat_geo.flat_radius_of_curvature(rb, arrays.kin)))
         feasible = rho_min > 0
         out.append(
             _finite_case(
@@ -327,7 +331,7 @@ def stress_cases(scene: Scene) -> list[Case]:
 def speed_cases(scene: Scene) -> list[Case]:
     """Cam speeds 0 .. 20 000 rpm: forces and torques finite, contact loss reported (an
     oscillating follower: :func:`rocker_speed_cases`)."""
-    if scene.follower.oscillating:
+    if followers.of(scene).rocking:
         return rocker_speed_cases(scene)
     out = []
     arrays = scene_arrays(scene)
@@ -361,7 +365,7 @@ def speed_cases(scene: Scene) -> list[Case]:
 def _report_figures(scene: Scene, dtype, base_radius_mm: float) -> dict[str, float]:
     a = scene_arrays(scene, dtype=dtype)
     rb = jnp.asarray(base_radius_mm, dtype)
-    rho = geometry.flat_radius_of_curvature(rb, a.kin)
+    rho = flat_geo.flat_radius_of_curvature(rb, a.kin)
     figs = {
         "velocity max (m/s)": jnp.max(a.motion.velocity),
         "velocity min (m/s)": jnp.min(a.motion.velocity),
@@ -373,8 +377,8 @@ def _report_figures(scene: Scene, dtype, base_radius_mm: float) -> dict[str, flo
         "force min (N)": jnp.min(a.force_N),
         "torque max (N m)": jnp.max(a.torque_Nm),
         "torque min (N m)": jnp.min(a.torque_Nm),
-        "min base radius (mm)": geometry.flat_min_base_radius(a.kin)[0],
-        "min face width (mm)": geometry.flat_face_width(a.kin),
+        "min base radius (mm)": flat_geo.flat_min_base_radius(a.kin)[0],
+        "min face width (mm)": flat_geo.flat_face_width(a.kin),
         f"rho min at R_b = {base_radius_mm:g} (mm)": jnp.min(rho),
         f"stress max at R_b = {base_radius_mm:g} (MPa)": jnp.max(
             contact.stress_from_coefficient(a.stress_coefficient, rho)
@@ -386,7 +390,7 @@ def _report_figures(scene: Scene, dtype, base_radius_mm: float) -> dict[str, flo
 def precision_cases(scene: Scene, base_radii: Iterable[float] = (28.4,), rtol32: float = 1e-5) -> list[Case]:
     """Every reference-report figure in float32 vs float64; near rho -> 0 float32 must warn (an
     oscillating follower: :func:`rocker_precision_cases`, at its own drawing radius)."""
-    if scene.follower.oscillating:
+    if followers.of(scene).rocking:
         return rocker_precision_cases(scene, rtol32)
     out = []
     for rb in base_radii:
@@ -406,13 +410,13 @@ def precision_cases(scene: Scene, base_radii: Iterable[float] = (28.4,), rtol32:
             )
     # near the curvature limit float32 loses accuracy: the guard must say so
     a64, a32 = scene_arrays(scene), scene_arrays(scene, dtype=jnp.float32)
-    rb_min = float(geometry.flat_min_base_radius(a64.kin)[0])
+    rb_min = float(flat_geo.flat_min_base_radius(a64.kin)[0])
     for gap in (1e-1, 1e-2, 1e-3):
         rb = rb_min + gap
         s64 = contact.stress_from_coefficient(
-            a64.stress_coefficient, geometry.flat_radius_of_curvature(rb, a64.kin)
+            a64.stress_coefficient, flat_geo.flat_radius_of_curvature(rb, a64.kin)
         )
-        rho32 = geometry.flat_radius_of_curvature(jnp.float32(rb), a32.kin)
+        rho32 = flat_geo.flat_radius_of_curvature(jnp.float32(rb), a32.kin)
         s32 = contact.stress_from_coefficient(a32.stress_coefficient, rho32)
         err = abs(float(jnp.max(s32)) - float(jnp.max(s64))) / float(jnp.max(s64))
         warned = precision_warning(jnp.float32(rb), a32.kin.s, a32.kin.d2s, rho32, jnp.float32) is not None
@@ -439,9 +443,11 @@ def optimization_cases(scene: Scene) -> list[Case]:
     """Weights 0 and 1e-6..1e6, unreachable sigma_max, collapsed bounds, tiny populations, one
     weighting, one angle, and GA determinism; references from the exact global optimum (an
     oscillating follower: :func:`rocker_optimization_cases`)."""
-    if scene.follower.oscillating:
+    if followers.of(scene).rocking:
         return rocker_optimization_cases(scene)
-    from camjax import problem as pb
+    from camjax.family import weights_of
+    from camjax.followers.flat import optimum
+    from camjax.followers.flat import problem as pb
     from camjax.solvers import ga, sweep
 
     out = []
@@ -456,7 +462,7 @@ def optimization_cases(scene: Scene) -> list[Case]:
         (1.0, 1.0),
     ]:
         res = sweep.solve(prob, alpha, gamma)
-        ref = pb.global_optimum(prob, pb.weights_of(alpha, gamma))
+        ref = optimum.global_optimum(prob, weights_of(alpha, gamma))
         out.append(
             _case(
                 "optimization",
@@ -536,7 +542,7 @@ def optimization_cases(scene: Scene) -> list[Case]:
     )
     one = pb.problem_from_scene(scene, samples=1, extrema="grid")
     res = sweep.solve(one, 1.0, 1.0, mode="pointwise")
-    ref = pb.pointwise_optimum(one, pb.weights_of(1.0, 1.0))
+    ref = optimum.pointwise_optimum(one, weights_of(1.0, 1.0))
     out.append(
         _case(
             "optimization",
@@ -574,32 +580,31 @@ _EPS32 = float(np.finfo(np.float32).eps)
 
 def _rocker_base(scene: Scene):
     """(arrays, sizing, drawing radius) of a rocker scene: the radius `camjax design` draws at."""
-    from camjax.rocker import rocker_drawing_radius, rocker_sizing
-
+    follower = followers.of(scene)
     arrays = scene_arrays(scene)
-    sizing = rocker_sizing(scene, arrays.kin)
-    radius, _ = rocker_drawing_radius(scene, arrays.kin, sizing)
+    sizing = follower.sizing(scene, arrays.kin)
+    radius, _ = follower.drawing_radius(scene, arrays.kin, sizing)
     return arrays, sizing, radius
 
 
 def _rocker_curves(scene: Scene, kin, w, base_radius_mm):
     """{name: array} of a rocker at one base radius, composed from camjax.geometry, loads and
-    contact as :func:`camjax.rocker.evaluate_rocker` composes them, but kept in JAX so that it can
+    contact as :meth:`camjax.followers._rocking.RockingFollower.evaluate` composes them, but kept in JAX so that it can
     be differentiated in the base radius and the cam speed (loads and [contact] required)."""
     f, c, rot = scene.follower, scene.contact, scene.motion.rotation
     d = f.pivot_distance_mm
     moment = loads.rocker_torque(f.train, kin, w)
     if f.type == "oscillating_roller":
         rf, arm = f.roller_radius_mm, f.arm_length_mm
-        g = geometry.oscillating_roller_geometry(d, arm, rf, base_radius_mm + rf, kin, rot,
+        g = rocker_roller_geo.oscillating_roller_geometry(d, arm, rf, base_radius_mm + rf, kin, rot,
                                                  f.min_curvature_radius_mm)
         phi = g.pressure_angle
         force = loads.rocker_roller_contact_force(moment, arm, phi)
         coeff = contact.stress_coefficient(moment / (arm * 1e-3), c.cam_width_mm, c.cam, c.follower)
-        stress = contact.roller_stress(coeff, phi, geometry.roller_equivalent_radius(g.pitch_curvature, rf))
+        stress = contact.roller_stress(coeff, phi, roller_geo.roller_equivalent_radius(g.pitch_curvature, rf))
         limit = g.undercut_margin  # <= 0: undercut
     else:
-        g = geometry.oscillating_flat_geometry(d, f.face_offset_mm, base_radius_mm, kin, rot)
+        g = rocker_flat_geo.oscillating_flat_geometry(d, f.face_offset_mm, base_radius_mm, kin, rot)
         phi = g.pressure_angle
         force = loads.rocker_flat_contact_force(moment, g.contact_distance)
         stress = contact.hertz_line_stress(force, g.radius_of_curvature, c.cam_width_mm, c.cam, c.follower)
@@ -614,8 +619,8 @@ def rocker_geometry_cases(scene: Scene) -> list[Case]:
     and curvature with finite gradients; at the smallest radius its binding limit holds with
     equality; at the drawing radius the pitch points (roller) or contact points (flat face) lie
     where the pivot, arm and face put them; the Hertz closed forms of :func:`stress_cases`."""
-    from camjax.geometry.pitch import to_cam_frame
-    from camjax.rocker import closure_problem
+    from camjax.followers._pitch import to_cam_frame
+    closure_problem = followers.of(scene).closure_problem
 
     out = []
     f, rot = scene.follower, scene.motion.rotation
@@ -656,19 +661,19 @@ def rocker_geometry_cases(scene: Scene) -> list[Case]:
     px, py = (np.asarray(v) for v in to_cam_frame(f.pivot_distance_mm, 0.0, theta, rot))  # the pivot
     psi = np.asarray(_rocker_curves(scene, kin, w, drawn)["arm_angle"])
     if f.type == "oscillating_roller":
-        x, y = (np.asarray(v) for v in geometry.oscillating_roller_pitch_curve(
+        x, y = (np.asarray(v) for v in rocker_roller_geo.oscillating_roller_pitch_curve(
             f.pivot_distance_mm, f.arm_length_mm, drawn + f.roller_radius_mm, kin, rot))
         err = float(np.max(np.abs(np.hypot(x - px, y - py) - f.arm_length_mm)))
         name = f"R_b = {drawn:g} mm: pitch points at the arm length from the pivot"
     else:
-        x, y = (np.asarray(v) for v in geometry.oscillating_flat_profile(
+        x, y = (np.asarray(v) for v in rocker_flat_geo.oscillating_flat_profile(
             f.pivot_distance_mm, f.face_offset_mm, drawn, kin, rot))
         # the face normal (sin psi, cos psi) in the fixed frame, turned into the cam frame with the pivot
         tip = to_cam_frame(f.pivot_distance_mm + np.sin(psi), np.cos(psi), theta, rot)
         mx, my = (np.asarray(v) - q for v, q in zip(tip, (px, py), strict=True))
         err = float(np.max(np.abs((x - px) * mx + (y - py) * my + f.face_offset_mm)))
         name = f"R_b = {drawn:g} mm: contact points on the face line, f from the pivot"
-    scale = f.pivot_distance_mm + f.arm_length_mm
+    scale = f.pivot_distance_mm + getattr(f, "arm_length_mm", 0.0)  # d + l (a face: d)
     out.append(_case("rocker geometry", name, err, 0.0, 1e-12 * scale,
                      note="distances from positions; round-off of a few operations on lengths of d + l"))
     return out + stress_cases(scene)
@@ -712,7 +717,7 @@ def rocker_precision_cases(scene: Scene, rtol32: float = 1e-5) -> list[Case]:
     size up to d + l, so its float32 error is a few eps d / |rho| relative (tolerance 32 eps32
     (d + l) / |rho|, at least ``rtol32``), and the stress (sigma ~ rho^-1/2) half of that.
     """
-    from camjax.rocker import evaluate_rocker, rocker_sizing
+    evaluate_rocker, rocker_sizing = followers.of(scene).evaluate, followers.of(scene).sizing
 
     out = []
     f = scene.follower
@@ -720,7 +725,7 @@ def rocker_precision_cases(scene: Scene, rtol32: float = 1e-5) -> list[Case]:
     a32 = scene_arrays(scene, dtype=jnp.float32)
     c64 = evaluate_rocker(scene, a64.kin, a64.cam_speed_rad_s, drawn)
     c32 = evaluate_rocker(scene, a32.kin, a32.cam_speed_rad_s, np.float32(drawn))
-    length = f.pivot_distance_mm + f.arm_length_mm
+    length = f.pivot_distance_mm + getattr(f, "arm_length_mm", 0.0)  # d + l (a face: d)
     rho_tol = max(rtol32, 32 * _EPS32 * length / max(float(np.min(np.abs(c64.rho_mm))), 1e-300))
     figures = [("swing_deg", "swing (deg)", rtol32),
                ("angular_velocity_rad_s", "angular velocity (rad/s)", rtol32),
@@ -789,7 +794,7 @@ def rocker_optimization_cases(scene: Scene) -> list[Case]:
     out.append(Case("rocker optimization", f"sigma_max = 1 MPa: infeasible, violated {names}",
                     float(res.feasible), 0.0, float(res.feasible), 0.0, ok,
                     "feasible flag 0 and the stress constraint named"))
-    point = {**at_scene, "base_radius_mm": drawn}  # the drawing radius closes (camjax.rocker)
+    point = {**at_scene, "base_radius_mm": drawn}  # the drawing radius closes (camjax.followers._rocking)
     res = solve(box(point, point), (1.0, 1.0))
     err = max(abs(float(getattr(res.design, k)) - v) for k, v in point.items())
     out.append(_case("rocker optimization", f"bounds collapsed to the scene's design at R_b = {drawn:g} mm",

@@ -34,6 +34,14 @@ from camjax.dynamics.compensation import (
     compensate_time,
     robustness_grid,
 )
+from camjax.dynamics.context import (
+    closure_of,
+    drive_of,
+    plant_of,
+    program_cam,
+    program_values,
+    shaping_constraints,
+)
 from camjax.dynamics.harmonics import (
     TWO_PI,
     CamHarmonics,
@@ -79,16 +87,7 @@ from camjax.dynamics.plant import (
     tracking_error_harmonics,
     transfer,
 )
-from camjax.dynamics.report import (
-    DynamicsReport,
-    closure_of,
-    drive_of,
-    plant_of,
-    program_cam,
-    program_values,
-    scene_dynamics,
-    shaping_constraints,
-)
+from camjax.dynamics.report import DynamicsReport, scene_dynamics
 from camjax.dynamics.shaping import ShapingResult, band_tracking_ms, shape_law
 
 __all__ = [

@@ -121,7 +121,7 @@ def _duration(seconds: float) -> str:
 
 def shaping_constraint_count(program) -> int:
     """How many (angle, level) pairs law shaping pins (as
-    :func:`camjax.dynamics.report.shaping_constraints` makes them), from the program alone."""
+    :func:`camjax.dynamics.context.shaping_constraints` makes them), from the program alone."""
     return sum(max(2, int(width // 5) + 1) if kind == "dwell" else 1
                for kind, width in zip(program.kinds, program.angles_deg, strict=True))
 
@@ -133,9 +133,9 @@ def estimate_work(scene, costs: Costs = COSTS) -> WorkEstimate:
     program's samples when a drive runs (the drive's step costs with the number of harmonics the
     cam really has, as the run trims them). Raises ValueError without a [dynamics] section.
     """
+    from camjax.dynamics.context import plant_of, program_cam
     from camjax.dynamics.harmonics import trim_harmonics
     from camjax.dynamics.integrate import settling
-    from camjax.dynamics.report import plant_of, program_cam
 
     spec = scene.dynamics
     if spec is None:
@@ -336,7 +336,7 @@ def calibrate(repeats: int = 3) -> Costs:  # pragma: no cover - a measurement, r
 
     import camjax
     from camjax import dynamics as d
-    from camjax.dynamics.report import drive_of
+    from camjax.dynamics.context import drive_of
 
     bench = camjax.load_scene("thesis-bench")
     plant = d.plant_of(bench.dynamics)

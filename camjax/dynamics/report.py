@@ -18,7 +18,6 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from camjax import program as prog
 from camjax.dynamics.budget import tracked
 from camjax.dynamics.compensation import (
     compensate_linear,
@@ -26,21 +25,28 @@ from camjax.dynamics.compensation import (
     compensate_time,
     robustness_grid,
 )
+from camjax.dynamics.context import (
+    Context,
+    as_float,
+    closure_of,
+    context,
+    drive_of,
+    finite_or_none,
+    program_values,
+    shaping_constraints,
+)
 from camjax.dynamics.harmonics import (
     TWO_PI,
     CamHarmonics,
-    CamValues,
     cam_grid,
     evaluate_cam,
-    harmonics_from_samples,
     max_abs,
     mean_square,
     pad_harmonics,
     trim_harmonics,
 )
-from camjax.dynamics.integrate import Drive, Settling, integrate_train, settling, simulate_drive
+from camjax.dynamics.integrate import Settling, integrate_train, settling, simulate_drive
 from camjax.dynamics.jump import (
-    ForceClosure,
     contact_force,
     jump_speed,
     min_contact_force,
@@ -48,7 +54,6 @@ from camjax.dynamics.jump import (
     min_spring_rate,
 )
 from camjax.dynamics.plant import (
-    Plant,
     damping_ratio,
     natural_frequency_rad_s,
     perturbed_plant,
@@ -57,329 +62,20 @@ from camjax.dynamics.plant import (
     tracking_error_harmonics,
     transfer,
 )
+from camjax.dynamics.results import *  # noqa: F401,F403  (re-exported: the typed results)
+from camjax.dynamics.results import (
+    Compensation,
+    DriveResult,
+    DriveRun,
+    Jump,
+    Nominal,
+    Nonlinear,
+    Robustness,
+    Shaping,
+    TimeDomain,
+    WnMisestimate,
+)
 from camjax.dynamics.shaping import band_tracking_ms, shape_law
-
-# ------------------------------------------------------------------------ scene -> models
-
-
-def plant_of(spec) -> Plant:
-    """The follower train of a :class:`~camjax.scene.DynamicsSpec`."""
-    return Plant(jnp.asarray(spec.I3), jnp.asarray(spec.c3), jnp.asarray(spec.k23))
-
-
-def drive_of(spec) -> Drive:
-    """The drive of a DynamicsSpec with drive flexibility (I1, k01, c01 given)."""
-    return Drive(jnp.asarray(spec.I1), jnp.asarray(spec.I2), jnp.asarray(spec.k01), jnp.asarray(spec.c01))
-
-
-def closure_of(spec) -> ForceClosure:
-    """The force closure of a DynamicsSpec with a spring."""
-    return ForceClosure(jnp.asarray(spec.I2), jnp.asarray(spec.spring_rate),
-                        jnp.asarray(spec.spring_preload), jnp.asarray(spec.follower_damping),
-                        jnp.asarray(spec.weight))
-
-
-def program_cam(scene, samples: int | None = None, n_harmonics: int | None = None) -> CamHarmonics:
-    """The scene's motion program as CamHarmonics in SI (m or rad), from the FFT of its samples."""
-    spec = scene.dynamics
-    n = spec.samples if samples is None else samples
-    kin = prog.evaluate(scene.motion.program, n)
-    return harmonics_from_samples(kin.s * spec.motion_scale, spec.harmonics if n_harmonics is None
-                                  else n_harmonics)
-
-
-def program_values(scene, angles_rad: jax.Array) -> CamValues:
-    """Exact program law (not its harmonics) at arbitrary cam angles, SI."""
-    kin = prog.motion_at(scene.motion.program, jnp.rad2deg(angles_rad))
-    k = scene.dynamics.motion_scale
-    return CamValues(kin.s * k, kin.ds * k, kin.d2s * k)
-
-
-def shaping_constraints(scene) -> tuple[np.ndarray, np.ndarray]:
-    """Cam angles (rad) and levels (SI) pinned by law shaping: every joint and dwell samples."""
-    p = scene.motion.program
-    angles = []
-    for kind, start, width in zip(p.kinds, p.start_deg, p.angles_deg, strict=True):
-        angles.extend(np.linspace(start, start + width, max(2, int(width // 5) + 1)) if kind == "dwell"
-                      else [start])
-    angles_deg = np.mod(np.asarray(angles), 360.0)
-    levels = np.asarray(prog.motion_at(p, angles_deg).s) * scene.dynamics.motion_scale
-    return np.deg2rad(angles_deg), levels
-
-
-def _f(x) -> float:
-    return float(np.asarray(x))
-
-
-def _finite_or_none(x) -> float | None:
-    v = _f(x)
-    return v if math.isfinite(v) else None
-
-
-def _coefficients(cam: CamHarmonics) -> dict:
-    return {"cos": np.asarray(cam.cos).tolist(), "sin": np.asarray(cam.sin).tolist()}
-
-
-@dataclass(frozen=True)
-class Context:
-    """What every analysis of one scene shares: models, the cam and its linear compensation."""
-
-    scene: object  # camjax.scene.Scene with a [dynamics] section
-    plant: Plant
-    omega: float  # cam speed Omega, rad/s
-    phi: jax.Array  # (N,) cam-angle grid, rad
-    cam: CamHarmonics  # the program's harmonics, SI
-    linear: CamHarmonics  # its linear compensation at Omega
-
-    @property
-    def spec(self):
-        return self.scene.dynamics
-
-
-def context(scene) -> Context:
-    """The shared models of a scene with a [dynamics] section."""
-    spec = scene.dynamics
-    plant = plant_of(spec)
-    omega = TWO_PI * spec.cam_speed_hz
-    cam = program_cam(scene)
-    return Context(scene, plant, omega, cam_grid(spec.samples), cam, compensate_linear(cam, plant, omega))
-
-
-# ------------------------------------------------------------------------ typed results
-
-
-@dataclass(frozen=True)
-class Nominal:
-    """The uncompensated cam: plant figures and the steady-state tracking error (always run)."""
-
-    natural_frequency_hz: float
-    damping_ratio: float
-    resonant_n: int  # harmonic of the cam nearest the resonance
-    resonant_ratio: float  # n Omega / omega_n
-    resonant_amplification: float  # |G(i n Omega)|
-    max_tracking_error: float  # motion units
-    rms_tracking_error: float
-    phi_deg: np.ndarray  # (N,) grid, deg
-    cam: np.ndarray  # (N,) theta2 on the grid
-    load: np.ndarray  # (N,) steady-state theta3 on the grid
-
-
-@dataclass(frozen=True)
-class WnMisestimate:
-    wn_estimate_factor: float
-    compensated_max_tracking_error: float
-    nominal_over_compensated: float
-
-
-@dataclass(frozen=True)
-class Compensation:
-    """Linear feedforward at the cam speed."""
-
-    max_tracking_error: float
-    rms_tracking_error: float
-    time_form_max_difference: float  # time form vs harmonic inverse, on the grid
-    max_cam_change: float  # max |compensated - nominal cam|
-    cam: CamHarmonics  # the compensated law, trailing negligible harmonics trimmed
-    wn_misestimate: tuple[WnMisestimate, ...]
-    curve: np.ndarray  # (N,) compensated cam on the grid
-
-    def to_json(self) -> dict:
-        return {"max_tracking_error": self.max_tracking_error,
-                "rms_tracking_error": self.rms_tracking_error,
-                "time_form_max_difference": self.time_form_max_difference,
-                "max_cam_change": self.max_cam_change,
-                "coefficients": _coefficients(self.cam),
-                "wn_misestimate": [vars(m).copy() for m in self.wn_misestimate]}
-
-
-@dataclass(frozen=True)
-class Robustness:
-    """Compensated vs nominal error over the (mu, lambda, kappa) grid of the scene."""
-
-    damping_factors: np.ndarray  # (A,) mu
-    speed_factors: np.ndarray  # (B,) lambda
-    wn_factors: np.ndarray  # (C,) kappa
-    compensated: np.ndarray  # (A, B, C) max tracking error of the compensated cam
-    nominal: np.ndarray  # (A, B, C) same for the nominal cam
-    ratios: np.ndarray  # (B C,) lambda / kappa
-    at_ratio: np.ndarray  # (B C,) compensated error at mu = 1, lambda / kappa, kappa = 1
-
-    def to_json(self) -> list:
-        mu, lam, kap = self.damping_factors, self.speed_factors, self.wn_factors
-        return [{"damping_factor": float(mu[i]), "speed_factor": float(lam[j]), "wn_factor": float(kap[k]),
-                 "max_tracking_error": float(self.compensated[i, j, k]),
-                 "nominal_max_tracking_error": float(self.nominal[i, j, k])}
-                for i in range(mu.size) for j in range(lam.size) for k in range(kap.size)]
-
-    def equivalence_json(self) -> dict:
-        """error(mu=1, lambda, kappa) vs error(mu=1, lambda/kappa, 1): speed and omega_n enter
-        the compensated error only through their ratio."""
-        mu, lam, kap, grid = self.damping_factors, self.speed_factors, self.wn_factors, self.compensated
-        i1 = int(np.argmin(np.abs(mu - 1.0)))
-        diff = np.abs(grid[i1].ravel() - self.at_ratio)
-        return {
-            "max_abs_difference": float(diff.max()),
-            "max_error_where_speed_equals_wn_factor": float(max(
-                [grid[i1, j, k] for j in range(lam.size) for k in range(kap.size)
-                 if abs(lam[j] - kap[k]) < 1e-12] or [0.0])),
-            "note": "error(mu=1, lambda, kappa) vs error(mu=1, lambda/kappa, 1)",
-        }
-
-
-@dataclass(frozen=True)
-class TimeDomain:
-    """RK4 from rest of the train under the exact program law, nominal and compensated."""
-
-    cycles: int
-    steps_per_cycle: int
-    transients_decayed_to: float
-    nominal_max_difference_vs_harmonic: float
-    nominal_max_tracking_error: float
-    compensated_max_tracking_error: float
-
-    def to_json(self) -> dict:
-        return {"method": "RK4, lax.scan, from rest", **vars(self)}
-
-
-@dataclass(frozen=True)
-class DriveRun:
-    """One cam on the flexible drive, last simulated revolution."""
-
-    max_speed_ripple: float  # max |theta1' - Omega| / Omega
-    max_tracking_error: float
-    max_cam_torque: float  # N m
-    speed_hz: np.ndarray  # (M,) cam speed, rev/s
-    load: np.ndarray  # (M,) theta3
-
-    def to_json(self) -> dict:
-        return {"max_speed_ripple": self.max_speed_ripple, "max_tracking_error": self.max_tracking_error,
-                "max_cam_torque": self.max_cam_torque}
-
-
-@dataclass(frozen=True)
-class DriveResult:
-    """Cams ("nominal", "linear", and "nonlinear" when computed) on the flexible drive."""
-
-    cycles: int
-    drive_natural_frequency_hz: float  # sqrt(k01 / I1) / 2 pi
-    runs: dict[str, DriveRun]
-    phi_deg: np.ndarray  # (M,) motor angle grid, deg
-    target: np.ndarray  # (M,) the nominal law on that grid
-
-    def to_json(self) -> dict:
-        return {"cycles": self.cycles, "drive_natural_frequency_hz": self.drive_natural_frequency_hz,
-                **{name: run.to_json() for name, run in self.runs.items()}}
-
-
-@dataclass(frozen=True)
-class Nonlinear:
-    """Nonlinear feedforward with drive flexibility, fitted to ``harmonics`` harmonics."""
-
-    fit_rms: float
-    harmonics: int
-    cam: CamHarmonics
-
-    def to_json(self, max_tracking_error: float | None = None) -> dict:
-        out = {"fit_rms": self.fit_rms, "harmonics": self.harmonics, "coefficients": _coefficients(self.cam)}
-        if max_tracking_error is not None:  # from the drive run of this cam
-            out["max_tracking_error"] = max_tracking_error
-        return out
-
-
-JUMP_STATUSES = ("found", "lost_at_lowest_speed", "holds_in_range")
-"""``jump_speed_status``: contact held below ``jump_speed_hz`` and is lost there; contact already
-lost at the lowest speed scanned (no jump speed: no speed of the range keeps it); contact held at
-every speed scanned."""
-
-
-@dataclass(frozen=True)
-class Jump:
-    """Force closure: jump speed, contact margin at the cam speed, preload and rate needed.
-
-    ``jump_speed_hz`` is the lowest speed of ``search_range_hz`` at which contact is lost, or None
-    with ``status`` saying why (:data:`JUMP_STATUSES`); :meth:`note` says it in a sentence.
-    """
-
-    search_range_hz: tuple[float, float]
-    jump_speed_hz: float | None  # None unless status == "found"
-    status: str  # one of JUMP_STATUSES
-    cam_speed_hz: float
-    min_contact_force: float  # N or N m, at the cam speed
-    min_spring_preload: float  # m or rad
-    min_spring_rate: float | None  # None: no rate helps (the spring is slack somewhere)
-    speeds_hz: np.ndarray  # (S,) plot grid
-    min_force: np.ndarray  # (S,) min contact force at each speed
-    contact_force: np.ndarray  # (N,) contact force over the cycle at the cam speed
-
-    @property
-    def cam_speed_in_range(self) -> bool:
-        lo, hi = self.search_range_hz
-        return lo <= self.cam_speed_hz <= hi
-
-    @property
-    def contact_lost_at_cam_speed(self) -> bool:
-        return self.min_contact_force <= 0
-
-    def note(self) -> str:
-        """One sentence: where contact is lost in the scanned range, or why no speed is given."""
-        lo, hi = self.search_range_hz
-        scanned = f"{lo:.6g} .. {hi:.6g} Hz"
-        if self.status == "found":
-            text = (f"contact holds from {lo:.6g} Hz and is first lost at {self.jump_speed_hz:.6g} Hz "
-                    f"(scanned {scanned})")
-        elif self.status == "lost_at_lowest_speed":
-            text = (f"no jump speed: contact is already lost at the lowest speed scanned, {lo:.6g} Hz "
-                    f"(min contact force there {float(self.min_force[0]):.4g}; scanned {scanned}), so no "
-                    "speed of the range keeps it: a stronger spring_rate or spring_preload, or a lower "
-                    "jump_speed_range_hz")
-        else:
-            text = f"no jump speed: contact holds at every speed scanned, {scanned}"
-        state = "lost" if self.contact_lost_at_cam_speed else "holds"
-        if self.cam_speed_in_range:
-            return f"{text}; at the cam speed {self.cam_speed_hz:.6g} Hz contact {state}"
-        return (f"{text}; the cam speed {self.cam_speed_hz:.6g} Hz lies outside jump_speed_range_hz, "
-                f"and there contact {state}")
-
-    def to_json(self) -> dict:
-        return {"search_range_hz": list(self.search_range_hz), "jump_speed_hz": self.jump_speed_hz,
-                "jump_speed_status": self.status, "note": self.note(),
-                "cam_speed_in_range": self.cam_speed_in_range,
-                "min_contact_force": self.min_contact_force,
-                "contact_lost_at_cam_speed": self.contact_lost_at_cam_speed,
-                "min_spring_preload": self.min_spring_preload,
-                # inf (no rate helps) is written as null
-                "min_spring_rate": self.min_spring_rate}
-
-
-@dataclass(frozen=True)
-class Shaping:
-    """Gradient-shaped law over the speed band."""
-
-    speed_band_hz: tuple[float, float]
-    harmonics: int
-    initial_band_rms_tracking_error: float
-    band_rms_tracking_error: float
-    max_tracking_error: float  # at the cam speed
-    constraint_max_violation: float
-    cam: CamHarmonics
-    curve: np.ndarray  # (N,) shaped law on the grid
-    load: np.ndarray  # (N,) its steady-state load
-
-    def to_json(self) -> dict:
-        return {"speed_band_hz": list(self.speed_band_hz), "harmonics": self.harmonics,
-                "initial_band_rms_tracking_error": self.initial_band_rms_tracking_error,
-                "band_rms_tracking_error": self.band_rms_tracking_error,
-                "max_tracking_error": self.max_tracking_error,
-                "constraint_max_violation": self.constraint_max_violation,
-                "coefficients": _coefficients(self.cam)}
-
-
-def settling_json(s: Settling, spec) -> dict:
-    """The ``settling`` entry of dynamics.json: did ``max_cycles`` cut the time-domain runs short?"""
-    return {"settled": s.settled, "cycles": s.cycles, "cycles_needed": s.cycles_needed,
-            "max_cycles": spec.max_cycles, "transient_tolerance": spec.transient_tolerance,
-            "residual_factor": s.residual_factor}
-
 
 # ------------------------------------------------------------------- one per compute entry
 
@@ -390,9 +86,9 @@ def nominal(ctx: Context) -> Nominal:
     err = tracking_error_harmonics(cam, cam, plant, omega)
     n_res, r_res = resonant_harmonic(plant, omega)
     return Nominal(
-        _f(natural_frequency_rad_s(plant)) / TWO_PI, _f(damping_ratio(plant)), n_res, r_res,
-        _f(jnp.abs(transfer(plant, n_res * omega))), _f(max_abs(err, phi)),
-        _f(jnp.sqrt(mean_square(err))), np.rad2deg(np.asarray(phi)),
+        as_float(natural_frequency_rad_s(plant)) / TWO_PI, as_float(damping_ratio(plant)), n_res, r_res,
+        as_float(jnp.abs(transfer(plant, n_res * omega))), as_float(max_abs(err, phi)),
+        as_float(jnp.sqrt(mean_square(err))), np.rad2deg(np.asarray(phi)),
         np.asarray(evaluate_cam(cam, phi).f),
         np.asarray(evaluate_cam(steady_state(cam, plant, omega), phi).f))
 
@@ -406,10 +102,10 @@ def compensation(ctx: Context, nom: Nominal) -> Compensation:
     mis = []
     for est in (0.9, 1.1):
         c_est = compensate_linear(cam, perturbed_plant(plant, 1.0, est), omega)
-        e = _f(max_abs(tracking_error_harmonics(c_est, cam, plant, omega), phi))
+        e = as_float(max_abs(tracking_error_harmonics(c_est, cam, plant, omega), phi))
         mis.append(WnMisestimate(est, e, nom.max_tracking_error / e))
     return Compensation(
-        _f(max_abs(comp_err, phi)), _f(jnp.sqrt(mean_square(comp_err))),
+        as_float(max_abs(comp_err, phi)), as_float(jnp.sqrt(mean_square(comp_err))),
         float(np.max(np.abs(np.asarray(comp_time) - comp_vals))),
         float(np.max(np.abs(comp_vals - nom.cam))),
         trim_harmonics(comp), tuple(mis), comp_vals)
@@ -437,10 +133,10 @@ def time_domain(ctx: Context, settle: Settling) -> TimeDomain:
     harm = evaluate_cam(steady_state(cam, plant, omega), grid_m).f
     load_c = integrate_train(plant, compensate_time(exact, plant, omega), omega, cycles).angle
     target = program_values(ctx.scene, grid_m).f
-    decay = _f(damping_ratio(plant) * natural_frequency_rad_s(plant))
+    decay = as_float(damping_ratio(plant) * natural_frequency_rad_s(plant))
     return TimeDomain(cycles, m, float(math.exp(-decay * cycles * TWO_PI / omega)),
-                      _f(jnp.max(jnp.abs(load - harm))), _f(jnp.max(jnp.abs(load - target))),
-                      _f(jnp.max(jnp.abs(load_c - target))))
+                      as_float(jnp.max(jnp.abs(load - harm))), as_float(jnp.max(jnp.abs(load - target))),
+                      as_float(jnp.max(jnp.abs(load_c - target))))
 
 
 def nonlinear(ctx: Context, settle: Settling) -> Nonlinear:
@@ -448,7 +144,7 @@ def nonlinear(ctx: Context, settle: Settling) -> Nonlinear:
     spec = ctx.spec
     nl = compensate_nonlinear(trim_harmonics(ctx.cam), drive_of(spec), ctx.plant, ctx.omega,
                               spec.harmonics, settle.cycles, spec.steps_per_cycle)
-    return Nonlinear(_f(nl.fit_rms), spec.harmonics, nl.cam)
+    return Nonlinear(as_float(nl.fit_rms), spec.harmonics, nl.cam)
 
 
 def drive(ctx: Context, settle: Settling,
@@ -468,8 +164,8 @@ def drive(ctx: Context, settle: Settling,
     runs = {}
     for name, get_cam in cams.items():
         r = simulate_drive(trim_harmonics(get_cam()), dr, plant, omega, settle.cycles, m)
-        runs[name] = DriveRun(_f(jnp.max(jnp.abs(r.cam_speed - omega)) / omega),
-                              _f(jnp.max(jnp.abs(r.load - target))), _f(jnp.max(jnp.abs(r.cam_torque))),
+        runs[name] = DriveRun(as_float(jnp.max(jnp.abs(r.cam_speed - omega)) / omega),
+                              as_float(jnp.max(jnp.abs(r.load - target))), as_float(jnp.max(jnp.abs(r.cam_torque))),
                               np.asarray(r.cam_speed) / TWO_PI, np.asarray(r.load))
     return DriveResult(settle.cycles, math.sqrt(spec.k01 / spec.I1) / TWO_PI, runs,
                        np.rad2deg(np.asarray(grid_m)), np.asarray(target))
@@ -485,19 +181,19 @@ def jump(ctx: Context) -> Jump:
                     include_rad_s=jnp.asarray([omega]))
     force = contact_force(cam, plant, closure, omega, phi)
     # plot grid: even steps plus every resonant speed and a close look around the jump
-    res_hz = _f(natural_frequency_rad_s(plant)) / TWO_PI / np.arange(1, spec.harmonics + 1)
+    res_hz = as_float(natural_frequency_rad_s(plant)) / TWO_PI / np.arange(1, spec.harmonics + 1)
     speeds = [np.linspace(lo_hz, hi_hz, 400), res_hz * 0.999, res_hz, res_hz * 1.001]
     found = bool(js.found)
     status = "found" if found else "lost_at_lowest_speed" if bool(js.lost_at_low) else "holds_in_range"
     if found:
-        j_hz = _f(js.speed_rad_s) / TWO_PI
+        j_hz = as_float(js.speed_rad_s) / TWO_PI
         speeds.append(np.linspace(0.98 * j_hz, 1.02 * j_hz, 81))
     speeds = np.unique(np.clip(np.concatenate(speeds), lo_hz, hi_hz))
     fmins = np.asarray(jax.vmap(lambda w: min_contact_force(cam, plant, closure, w, phi))(
         jnp.asarray(speeds) * TWO_PI))
-    return Jump((lo_hz, hi_hz), _f(js.speed_rad_s) / TWO_PI if found else None, status, spec.cam_speed_hz,
-                _f(jnp.min(force)), _f(min_preload(cam, plant, closure, omega, phi)),
-                _finite_or_none(min_spring_rate(cam, plant, closure, omega, phi)),
+    return Jump((lo_hz, hi_hz), as_float(js.speed_rad_s) / TWO_PI if found else None, status, spec.cam_speed_hz,
+                as_float(jnp.min(force)), as_float(min_preload(cam, plant, closure, omega, phi)),
+                finite_or_none(min_spring_rate(cam, plant, closure, omega, phi)),
                 speeds, fmins, np.asarray(force))
 
 
@@ -512,9 +208,9 @@ def shaping(ctx: Context) -> Shaping:
     shaped = pad_harmonics(res.cam, spec.harmonics)
     return Shaping(
         (spec.shaping_band[0] * spec.cam_speed_hz, spec.shaping_band[1] * spec.cam_speed_hz),
-        spec.shaping_harmonics, _f(jnp.sqrt(band_tracking_ms(cam0, plant, band))), _f(res.tracking_rms),
-        _f(max_abs(tracking_error_harmonics(shaped, shaped, plant, omega), phi)),
-        _f(res.constraint_max), res.cam, np.asarray(evaluate_cam(shaped, phi).f),
+        spec.shaping_harmonics, as_float(jnp.sqrt(band_tracking_ms(cam0, plant, band))), as_float(res.tracking_rms),
+        as_float(max_abs(tracking_error_harmonics(shaped, shaped, plant, omega), phi)),
+        as_float(res.constraint_max), res.cam, np.asarray(evaluate_cam(shaped, phi).f),
         np.asarray(evaluate_cam(steady_state(shaped, plant, omega), phi).f))
 
 

@@ -1,14 +1,16 @@
 """Animation of the mechanism: the cam turning, the follower moving, contact and pressure angle.
 
 Written against plain arrays (:class:`Mechanism`: the outline in cam coordinates, s(theta) and
-the follower's type and sizes), so that a new follower type needs only its pose in
-:func:`frame_poses` and its artist in :func:`motion_frames`. Conventions are those of
+the follower's type and sizes); each follower type's drawing module (:mod:`camjax.followers`)
+supplies its point in :func:`frame_poses` (``follower_points``) and its artists in
+:func:`motion_frames` (``artists``, a :class:`FollowerArtists`), and builds the Mechanism from its
+curves (``mechanism``). Conventions are those of
 :mod:`camjax.geometry`: in cam coordinates the follower axis is +Y at theta = 0 and the contact
 point at cam angle theta lies at polar angle theta clockwise from +Y. In the fixed (frame)
 coordinates drawn here the follower slides along +Y and the cam turns counter-clockwise: a cam
 point P is drawn at R(theta) P, R the rotation by +theta (a clockwise cam: R(-theta) P).
 
-Oscillating (rocker) followers are drawn in the fixed frame of :mod:`camjax.geometry.oscillating`
+Oscillating (rocker) followers are drawn in the fixed frame of :mod:`camjax.followers.oscillating_roller.geometry`
 (the same rotation of the outline): the pivot at (d, 0), the arm at psi = psi0 + s from the line
 of centres; the roller centre, the face line and their start angles come from that module.
 
@@ -25,9 +27,9 @@ from typing import NamedTuple
 
 import numpy as np
 
-FOLLOWER_TYPES = ("flat", "roller", "oscillating_roller", "oscillating_flat")
-OSCILLATING_TYPES = ("oscillating_roller", "oscillating_flat")
-# violations smaller than the solvers' feasibility tolerances (camjax.problem.FEASIBILITY_TOL_MM
+from camjax import followers
+
+# violations smaller than the solvers' feasibility tolerances (camjax.followers.flat.problem.FEASIBILITY_TOL_MM
 # and its relative one) are not drawn as such: an optimum sits on its active limits
 LENGTH_TOL_MM = 1e-6
 ANGLE_RTOL = 1e-6
@@ -87,7 +89,7 @@ class Mechanism(NamedTuple):
     @property
     def oscillating(self) -> bool:
         """True for a rocker: the arm swings about the pivot instead of sliding."""
-        return self.follower_type in OSCILLATING_TYPES
+        return self.swing_deg is not None
 
     def motion(self) -> tuple[np.ndarray, str]:
         """(N,) the follower's motion over the turn and its axis label: s in mm, or the swing in deg."""
@@ -146,9 +148,10 @@ def _turn(m: Mechanism) -> float:
 
 def frame_poses(m: Mechanism, frames: int) -> FramePoses:
     """Follower, contact point and pressure angle at ``frames`` evenly spread cam angles."""
-    if m.follower_type not in FOLLOWER_TYPES:
+    if m.follower_type not in followers.names():
         raise ValueError(f"follower_type: '{m.follower_type}' is not drawn; allowed: "
-                         f"{', '.join(FOLLOWER_TYPES)}")
+                         f"{', '.join(followers.names())}")
+    drawing = followers.drawing(m.follower_type)
     check_drawable(m)
     k = frame_indices(len(m.theta_deg), frames)
     th = np.deg2rad(np.asarray(m.theta_deg)[k])
@@ -156,29 +159,10 @@ def frame_poses(m: Mechanism, frames: int) -> FramePoses:
     phi = np.zeros(len(k)) if m.pressure_angle_deg is None else np.asarray(m.pressure_angle_deg)[k]
     if m.oscillating:
         psi_deg = m.arm_start_angle_deg + np.asarray(m.swing_deg)[k]
-        fx, fy = _rocker_points(m, np.deg2rad(psi_deg))
+        fx, fy = drawing.follower_points(m, np.deg2rad(psi_deg))
         return FramePoses(k, np.rad2deg(th), fx, fy, cx, cy, phi, psi_deg)
-    s = np.asarray(m.s_mm)[k]
-    if m.follower_type == "flat":
-        fx, fy = np.zeros_like(s), m.base_radius_mm + s  # the face's centre, on the axis
-    else:
-        rp = m.base_radius_mm + m.roller_radius_mm  # prime circle; the pitch point is at (e, d + s)
-        fx = np.full_like(s, m.offset_mm)
-        fy = np.sqrt(max(rp**2 - m.offset_mm**2, 0.0)) + s
+    fx, fy = drawing.follower_points(m, np.asarray(m.s_mm)[k])
     return FramePoses(k, np.rad2deg(th), fx, fy, cx, cy, phi)
-
-
-def _rocker_points(m: Mechanism, psi) -> tuple[np.ndarray, np.ndarray]:
-    """The rocker's moving reference point at arm angles psi (rad), fixed frame, mm: the roller
-    centre (:func:`camjax.geometry.oscillating.roller_centre`) or the foot of the pivot on the face,
-    A - f m with m = (sin psi, cos psi) the face normal (:mod:`camjax.geometry.oscillating`)."""
-    from camjax.geometry.oscillating import roller_centre
-
-    d = m.pivot_distance_mm
-    if m.follower_type == "oscillating_roller":
-        return tuple(np.asarray(v, dtype=float) for v in roller_centre(d, m.arm_length_mm, psi))
-    f = m.face_offset_mm
-    return d - f * np.sin(psi), -f * np.cos(psi)
 
 
 class MotionFrames(NamedTuple):
@@ -231,7 +215,7 @@ def motion_frames(m: Mechanism, frames: int = 72) -> MotionFrames:
                                  connectionstyle=f"arc3,rad={0.8 * turn}", arrowstyle="-|>",
                                  mutation_scale=12, color="0.25", linewidth=1.2))
     ax.text(0.0, -0.62 * m.base_radius_mm, "ω", ha="center", va="center", fontsize=9, color="0.25")
-    follower = (_rocker_artists if m.oscillating else _slider_artists)(ax, m, poses, r_max)
+    follower = followers.drawing(m.follower_type).artists(ax, m, poses, r_max)
     (contact,) = ax.plot([], [], "o", color="C3", markersize=5, label="contact point")
     (normal,) = ax.plot([], [], color="C3", linewidth=1.0, linestyle="--",
                         label="contact normal (force line)")
@@ -284,7 +268,7 @@ def motion_frames(m: Mechanism, frames: int = 72) -> MotionFrames:
     return MotionFrames(fig, update, poses, artists)
 
 
-class _FollowerArtists(NamedTuple):
+class FollowerArtists(NamedTuple):
     """A follower type's drawing: its artists, how frame i moves them, the axis limits."""
 
     artists: dict  # names a test reads back ("follower", "arm", ...)
@@ -293,137 +277,6 @@ class _FollowerArtists(NamedTuple):
     normal: object  # i -> (n_x, n_y), unit contact normal at frame i, from the cam towards the follower
     xlim: tuple[float, float]
     ylim: tuple[float, float]
-
-
-def _slider_artists(ax, m: Mechanism, poses: FramePoses, r_max: float) -> _FollowerArtists:
-    """A translating flat face or roller on its stem, sliding in a guide along +Y."""
-    from matplotlib.patches import Circle
-
-    flat = m.follower_type == "flat"
-    half = 0.5 * (m.face_width_mm if flat else 2.0 * m.roller_radius_mm)
-    stem = 0.5 * r_max + (0.0 if flat else m.roller_radius_mm)
-    top = float(np.max(poses.follower_y_mm)) + stem
-    reach = max(r_max, abs(m.offset_mm) + half) * 1.08
-    # guide of the follower stem: two fixed bars beside it
-    gx = (m.offset_mm if not flat else 0.0) + np.array([-1.0, 1.0]) * 0.12 * r_max
-    gy = top - 0.35 * stem
-    for xg in gx:
-        ax.plot([xg, xg], [gy, top], color="0.35", linewidth=2.5)
-    (stem_line,) = ax.plot([], [], color="C1", linewidth=2.0)
-    if flat:
-        (follower,) = ax.plot([], [], color="C1", linewidth=4.0, solid_capstyle="butt",
-                              label=f"flat face, L = {m.face_width_mm:.2f} mm")
-        roller = None
-    else:
-        roller = Circle((0.0, 0.0), m.roller_radius_mm, fill=False, color="C1", linewidth=2.0,
-                        label=f"roller, R_f = {m.roller_radius_mm:g} mm")
-        ax.add_patch(roller)
-        (follower,) = ax.plot([], [], "o", color="C1", markersize=3)  # roller centre
-
-    def update(i):
-        fx, fy = poses.follower_x_mm[i], poses.follower_y_mm[i]
-        if flat:
-            follower.set_data([fx - half, fx + half], [fy, fy])
-        else:
-            roller.center = (fx, fy)
-            follower.set_data([fx], [fy])
-        stem_line.set_data([fx, fx], [fy, fy + stem])
-        return (follower, stem_line) + (() if roller is None else (roller,))
-
-    def normal(i):
-        # the force line at phi from the follower axis; for a roller it runs through the roller's
-        # centre, (-sin phi, cos phi) with phi = atan((s' - e) / (d + s)) of camjax.geometry
-        phi = np.deg2rad(poses.pressure_angle_deg[i])
-        return -np.sin(phi), np.cos(phi)
-
-    moving = [stem_line, follower] + ([roller] if roller is not None else [])
-    return _FollowerArtists({"follower": roller if roller is not None else follower}, moving, update,
-                            normal, (-reach, reach), (-r_max * 1.08, top + 0.05 * r_max))
-
-
-def _rocker_artists(ax, m: Mechanism, poses: FramePoses, r_max: float) -> _FollowerArtists:
-    """An oscillating roller or flat face: the pivot, the arm swinging about it, the roller at the
-    arm's end (or the face at its offset), and the path of the follower point in contact."""
-    from matplotlib.patches import Circle
-
-    d = m.pivot_distance_mm
-    roller = m.follower_type == "oscillating_roller"
-    # the whole turn, for the fixed parts and the axis limits
-    every = frame_poses(m, len(m.theta_deg))
-    psi = np.deg2rad(every.arm_angle_deg)
-    ax.plot([d], [0.0], "o", color="k", markersize=7, markerfacecolor="w", zorder=4,
-            label=f"pivot, d = {d:g} mm")
-    if roller:
-        rf, arm = m.roller_radius_mm, m.arm_length_mm
-        arc = np.linspace(psi.min(), psi.max(), 60)
-        ax.plot(*_rocker_points(m, arc), color="0.45", linewidth=0.8, linestyle=":",
-                label="arc of the roller centre")
-        circle = Circle((0.0, 0.0), rf, fill=False, color="C1", linewidth=2.0,
-                        label=f"roller, R_f = {rf:g} mm")
-        ax.add_patch(circle)
-        (centre,) = ax.plot([], [], "o", color="C1", markersize=3)
-        (arm_line,) = ax.plot([], [], color="C1", linewidth=3.0, solid_capstyle="round",
-                              label=f"arm, l = {arm:g} mm")
-        xs = np.concatenate([every.follower_x_mm - rf, every.follower_x_mm + rf])
-        ys = np.concatenate([every.follower_y_mm - rf, every.follower_y_mm + rf])
-        face = None
-    else:
-        f = m.face_offset_mm
-        # the stretch of the face the contact sweeps, measured along u = (-cos psi, sin psi) from
-        # the pivot's foot (positive towards the cam centre), drawn with a margin and from the foot
-        u = np.stack([-np.cos(psi), np.sin(psi)])
-        xi = np.sum((np.stack([every.contact_x_mm, every.contact_y_mm])
-                     - np.stack([every.follower_x_mm, every.follower_y_mm])) * u, axis=0)
-        lo, hi = min(0.0, float(xi.min())), float(xi.max())
-        pad = 0.1 * (hi - lo) + 0.02 * r_max
-        span = np.array([lo - pad, hi + pad])
-        (face,) = ax.plot([], [], color="C1", linewidth=4.0, solid_capstyle="butt",
-                          label=f"flat face, offset f = {f:g} mm")
-        (arm_line,) = ax.plot([], [], color="C1", linewidth=2.0, label="arm (pivot to face)")
-        circle = centre = None
-        ends_x = every.follower_x_mm[:, None] + span[None, :] * u[0][:, None]
-        ends_y = every.follower_y_mm[:, None] + span[None, :] * u[1][:, None]
-        xs, ys = ends_x.ravel(), ends_y.ravel()
-    (path,) = ax.plot([], [], color="0.35", linewidth=1.0, linestyle=":",
-                      label="path of the " + ("roller centre" if roller else "face point in contact"))
-
-    def update(i):
-        fx, fy = poses.follower_x_mm[i], poses.follower_y_mm[i]
-        p = np.deg2rad(poses.arm_angle_deg[i])
-        arm_line.set_data([d, fx], [0.0, fy])
-        if roller:
-            circle.center = (fx, fy)
-            centre.set_data([fx], [fy])
-            ox, oy = fx, fy
-        else:
-            face.set_data(fx - span * np.cos(p), fy + span * np.sin(p))
-            ox, oy = poses.contact_x_mm[i], poses.contact_y_mm[i]
-        # the point turns about the pivot with the arm (clockwise as psi grows): its path is
-        # perpendicular to pivot -> point; phi is the angle between it and the force line
-        rx, ry = ox - d, oy
-        n = np.hypot(rx, ry)
-        reach = 0.45 * r_max - (m.roller_radius_mm if roller else 0.0)
-        path.set_data([ox, ox + reach * ry / n], [oy, oy - reach * rx / n])
-        return (arm_line, path) + ((circle, centre) if roller else (face,))
-
-    def normal(i):
-        if roller:  # from the contact point through the roller centre
-            nx = poses.follower_x_mm[i] - poses.contact_x_mm[i]
-            ny = poses.follower_y_mm[i] - poses.contact_y_mm[i]
-            n = np.hypot(nx, ny)
-            return nx / n, ny / n
-        p = np.deg2rad(poses.arm_angle_deg[i])
-        return np.sin(p), np.cos(p)  # the face normal m, away from the cam
-
-    moving = [arm_line, path] + ([circle, centre] if roller else [face])
-    xs = np.concatenate([xs, [d, -r_max, r_max]])
-    ys = np.concatenate([ys, [0.0, -r_max, r_max]])
-    pad = 0.06 * max(np.ptp(xs), np.ptp(ys))
-    artists = {"follower": circle if roller else face, "arm": arm_line, "path": path}
-    if not roller:
-        artists["face"] = face
-    return _FollowerArtists(artists, moving, update, normal, (xs.min() - pad, xs.max() + pad),
-                            (ys.min() - pad, ys.max() + pad))
 
 
 def motion_animation(m: Mechanism, frames: int = 72, interval_ms: int = 60):
@@ -483,69 +336,3 @@ def write_motion_gif(path: str | Path, m: Mechanism, frames: int = 72, fps: int 
             mf.update(i)
             writer.grab_frame()
     return path
-
-
-def mechanism_from_curves(curves, title: str = "", violation: str | None = None,
-                          bad=None) -> Mechanism:
-    """The :class:`Mechanism` of a design's :class:`camjax.evaluate.DesignCurves`."""
-    return Mechanism(
-        np.asarray(curves.theta_deg), np.asarray(curves.profile_x_mm), np.asarray(curves.profile_y_mm),
-        np.asarray(curves.s_mm), curves.follower_type, float(curves.base_radius_mm),
-        curves.face_width_mm, curves.roller_radius_mm, float(curves.offset_mm or 0.0),
-        None if curves.pressure_angle_deg is None else np.asarray(curves.pressure_angle_deg),
-        title, violation, bad, curves.rotation,
-    )
-
-
-def violation_samples(curves) -> np.ndarray:
-    """(N,) booleans: the samples where the outline breaks a constraint, to be drawn red.
-
-    The outline checks of :func:`camjax.pipeline.geometry_violations`, per sample: flat face
-    ρ < 0 (the outline crosses itself); roller undercut (margin < 0) and |pressure angle| over its
-    limit. Within the solvers' tolerances nothing is marked (an optimum sits on its limits).
-    """
-    bad = np.zeros(np.shape(curves.theta_deg), bool)
-    if curves.rho_mm is not None:
-        bad |= np.asarray(curves.rho_mm) < -LENGTH_TOL_MM
-    if curves.undercut_margin_mm is not None:
-        bad |= np.asarray(curves.undercut_margin_mm) < -LENGTH_TOL_MM
-    limit = curves.pressure_angle_limit_deg
-    if curves.pressure_angle_deg is not None and limit is not None:
-        bad |= np.abs(np.asarray(curves.pressure_angle_deg)) > limit * (1.0 + ANGLE_RTOL)
-    return bad
-
-
-def mechanism_from_rocker(curves, title: str = "", violation: str | None = None,
-                          bad=None) -> Mechanism:
-    """The :class:`Mechanism` of an oscillating follower's :class:`camjax.rocker.RockerCurves`."""
-    roller = curves.follower_type == "oscillating_roller"
-    return Mechanism(
-        np.asarray(curves.theta_deg), np.asarray(curves.profile_x_mm), np.asarray(curves.profile_y_mm),
-        None, curves.follower_type, float(curves.base_radius_mm),
-        roller_radius_mm=curves.roller_radius_mm if roller else None,
-        pressure_angle_deg=np.asarray(curves.pressure_angle_deg), title=title, violation=violation,
-        bad=bad, rotation=curves.rotation, pivot_distance_mm=float(curves.pivot_distance_mm),
-        arm_length_mm=curves.arm_length_mm if roller else None,
-        face_offset_mm=None if roller else curves.face_offset_mm,
-        arm_start_angle_deg=float(curves.arm_start_angle_deg), swing_deg=np.asarray(curves.swing_deg),
-    )
-
-
-def rocker_violation_samples(curves, max_pressure_angle_deg: float | None = None) -> np.ndarray:
-    """(N,) booleans: where a rocker's outline breaks a constraint, to be drawn red.
-
-    Roller: undercut (margin < 0, the margin holds the scene's smallest radius of curvature) and
-    |pressure angle| over its limit (deg; default the curves' ``pressure_angle_limit_deg``); flat
-    face: rho < 0 (the outline crosses itself), as :func:`violation_samples`. Within the solvers'
-    tolerances nothing is marked.
-    """
-    if max_pressure_angle_deg is None:
-        max_pressure_angle_deg = getattr(curves, "pressure_angle_limit_deg", None)
-    bad = np.zeros(np.shape(curves.theta_deg), bool)
-    if curves.undercut_margin_mm is not None:
-        bad |= np.asarray(curves.undercut_margin_mm) < -LENGTH_TOL_MM
-    else:
-        bad |= np.asarray(curves.rho_mm) < -LENGTH_TOL_MM
-    if max_pressure_angle_deg is not None and curves.undercut_margin_mm is not None:
-        bad |= np.abs(np.asarray(curves.pressure_angle_deg)) > max_pressure_angle_deg * (1.0 + ANGLE_RTOL)
-    return bad

@@ -5,7 +5,8 @@ when JAX's caches are warm, and importing matplotlib and ezdxf half of that agai
 :class:`DrawingWorkers` starts fresh Python processes that import NumPy, matplotlib and ezdxf (not
 JAX: they enter the camjax package without running its ``__init__``) while the caller computes;
 :meth:`DrawingWorkers.draw` then hands them the curves and each draws and writes its share of
-the figures of :func:`camjax.output.plots.figure_builders` and profile.dxf. The files are the
+the figures of the follower's ``figure_builders`` (:func:`camjax.followers.drawing`) and
+profile.dxf. The files are the
 ones :func:`camjax.output.export.write_figures` and
 :func:`camjax.output.export.write_profile_dxf` write in-process, byte for byte.
 
@@ -57,7 +58,7 @@ class DrawingWorkers:
     def draw(self, folder: str | Path, curves, dpi: int = 100, banner: str | None = None,
              title: str = "") -> None:
         """Send the job: worker k of n draws figures k, k + n, ... and the last one also writes
-        profile.dxf, of the curves into ``folder`` (``curves``: :class:`camjax.evaluate.DesignCurves`; the
+        profile.dxf, of the curves into ``folder`` (``curves``: a follower family's curves, e.g. :class:`camjax.followers._translating.DesignCurves`; the
         rest as :func:`camjax.output.export.write_figures`)."""
         fields = {k: _plain(v) for k, v in curves._asdict().items()}
         job = pickle.dumps({"folder": str(folder), "curves": fields, "dpi": dpi, "banner": banner,
@@ -70,7 +71,7 @@ class DrawingWorkers:
                 pass
 
     def wait(self) -> list[Path]:
-        """The written files: the figures in :func:`~camjax.output.plots.figure_builders` order,
+        """The written files: the figures in follower's ``figure_builders`` order,
         then profile.dxf; :class:`DrawingError` if a worker failed."""
         written: dict[int, Path] = {}
         for proc in self._procs:
@@ -125,14 +126,15 @@ def serve(k: int = 0, n: int = 1) -> None:
         import ezdxf  # noqa: F401  (imported before the job arrives, as matplotlib)
     from matplotlib.backends import backend_agg  # noqa: F401
 
-    from camjax.output import export, plots
+    from camjax import followers
+    from camjax.output import export
 
     reply: dict
     try:
         job = pickle.loads(sys.stdin.buffer.read())
         curves = types.SimpleNamespace(**job["curves"])
         folder = Path(job["folder"])
-        figures = list(plots.figure_builders(curves).items())
+        figures = list(followers.drawing(curves.follower_type).figure_builders(curves).items())
         written = []
         for i, (name, build) in enumerate(figures):
             if i % n != k:

@@ -1,64 +1,39 @@
-"""Files of a design: profile CSV, profile DXF (CAD), and the report's figures as PNG.
+"""Files of a design: profile CSV, profile DXF (CAD), the figures as PNG and the animation.
 
 Every writer takes a folder (the CLI passes a staging folder, so a failed job leaves nothing
-behind) and returns the paths it wrote. Coordinates are the cam outline in cam coordinates,
-mm, with the convention of :mod:`camjax.geometry` (follower axis along +Y at theta = 0,
-theta measured clockwise).
+behind) and returns the paths it wrote. Coordinates are the cam outline in cam coordinates, mm,
+with the convention of :mod:`camjax.followers._pitch` (follower axis along +Y at theta = 0, theta
+measured clockwise). What a follower draws and tabulates comes from its drawing module
+(:func:`camjax.followers.drawing`: ``figure_builders``, ``profile_table``, ``mechanism``), chosen
+by the curves' ``follower_type``. The module imports no JAX (the DXF is written in the drawing
+processes, :mod:`camjax.output.drawing`).
 """
 
 from __future__ import annotations
 
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import numpy as np
 
-if TYPE_CHECKING:  # imported without JAX: the DXF is written in worker processes (camjax.output.drawing)
-    from camjax.evaluate import DesignCurves
+from camjax import followers
 
 CSV_FORMAT = "%.12f"  # 1e-12 mm: far below any machining tolerance, round-trips the geometry
 
 
-def profile_table(curves: DesignCurves) -> tuple[list[str], np.ndarray]:
-    """Column names and an (N, k) table: angle, outline X/Y, follower motion, curvature, then
-    every curve whose extrema result.json reports (so that each can be checked against samples).
-
-    The first columns keep their order (angle, outline, s, s', rho or pitch curve and pressure
-    angle); the later ones were appended after them: s'' (mm/rad^2), v, a, j (SI), the roller's
-    pitch-curve radius of curvature, and with the models the force, cam torque and stress.
-    """
-    names = ["theta_deg", "x_mm", "y_mm", "s_mm", "ds_mm_per_rad"]
-    cols = [curves.theta_deg, curves.profile_x_mm, curves.profile_y_mm, curves.s_mm, curves.ds_mm]
-    if curves.rho_mm is not None:
-        names.append("rho_mm")
-        cols.append(curves.rho_mm)
-    if curves.pitch_x_mm is not None:
-        names += ["pitch_x_mm", "pitch_y_mm", "pressure_angle_deg"]
-        cols += [curves.pitch_x_mm, curves.pitch_y_mm, curves.pressure_angle_deg]
-    names += ["d2s_mm_per_rad2", "velocity_m_s", "accel_m_s2", "jerk_m_s3"]
-    cols += [curves.d2s_mm, curves.velocity_m_s, curves.accel_m_s2, curves.jerk_m_s3]
-    optional = (("pitch_rho_mm", curves.pitch_rho_mm), ("force_N", curves.force_N),
-                ("torque_Nm", curves.torque_Nm), ("stress_MPa", curves.stress_MPa))
-    for name, values in optional:
-        if values is not None:
-            names.append(name)
-            cols.append(values)
-    return names, np.column_stack(cols)
-
-
-def write_profile_csv(path: Path, curves: DesignCurves) -> Path:
-    """Profile table as CSV with one header line."""
-    names, table = profile_table(curves)
+def write_profile_csv(path: Path, curves) -> Path:
+    """The follower's profile table (its drawing module's ``profile_table``) as CSV with one header
+    line."""
+    names, table = followers.drawing(curves.follower_type).profile_table(curves)
     np.savetxt(path, table, delimiter=",", header=",".join(names), comments="", fmt=CSV_FORMAT)
     return path
 
 
-def centre_mark_half_mm(curves: DesignCurves) -> float:
+def centre_mark_half_mm(curves) -> float:
     """Half length of the centre-mark arms: a tenth of the largest radius, at least 1 mm."""
     return max(1.0, 0.1 * float(np.max(np.hypot(curves.profile_x_mm, curves.profile_y_mm))))
 
 
-def write_profile_dxf(path: Path, curves: DesignCurves) -> Path:
+def write_profile_dxf(path: Path, curves) -> Path:
     """Cam outline as one closed LWPOLYLINE on layer CAM_PROFILE, drawing units mm.
 
     One vertex per sample (the scene's ``samples``); raise ``samples`` for a finer polyline
@@ -104,17 +79,15 @@ def write_profile_dxf(path: Path, curves: DesignCurves) -> Path:
     return path
 
 
-def write_figures(folder: Path, curves: DesignCurves, dpi: int = 100, banner: str | None = None,
+def write_figures(folder: Path, curves, dpi: int = 100, banner: str | None = None,
                   title: str = "") -> list[Path]:
-    """PNG of every figure the scene declares (see :func:`camjax.output.plots.design_figures`).
+    """PNG of every figure the scene declares (the follower's ``figure_builders``).
 
     ``banner``: text of a red banner stamped on every figure (the constraints the geometry breaks);
     ``title``: the run's title block (:func:`camjax.output.titles.title_block`).
     """
-    from camjax.output.plots import design_figures  # matplotlib only when drawing
-
-    figures = design_figures(curves, title)
-    return [save_figure(fig, folder / name, dpi, banner) for name, fig in figures.items()]
+    builders = followers.drawing(curves.follower_type).figure_builders(curves)
+    return [save_figure(build(curves, title), folder / name, dpi, banner) for name, build in builders.items()]
 
 
 def save_figure(fig, path: Path, dpi: int = 100, banner: str | None = None) -> Path:
@@ -127,31 +100,23 @@ def save_figure(fig, path: Path, dpi: int = 100, banner: str | None = None) -> P
     return path
 
 
-def write_animation(path: Path, curves: DesignCurves, title: str = "", banner: str | None = None) -> Path:
+def write_animation(path: Path, curves, title: str = "", banner: str | None = None) -> Path:
     """motion.gif: one turn of the mechanism; ``banner`` (the broken constraints) above it in red
     and the outline where it breaks them drawn red."""
-    from camjax.output.animation import mechanism_from_curves, violation_samples, write_motion_gif
+    from camjax.output.animation import write_motion_gif
 
-    return write_motion_gif(path, mechanism_from_curves(curves, title, banner, violation_samples(curves)))
+    return write_motion_gif(path, followers.drawing(curves.follower_type).mechanism(curves, title, banner))
 
 
-def write_design_files(folder: str | Path, curves: DesignCurves, dpi: int = 100,
-                       banner: str | None = None, title: str = "", animate: bool = False,
-                       progress=None, workers=None) -> list[Path]:
+def write_design_files(folder: str | Path, curves, dpi: int = 100, banner: str | None = None,
+                       title: str = "", animate: bool = False, progress=None, workers=None) -> list[Path]:
     """Figures, profile.csv and profile.dxf (and motion.gif when ``animate``) into ``folder``
     (created if needed); the written paths. ``banner`` and ``title`` as in :func:`write_figures`;
-    ``progress(phase)`` (optional) is told "figures", "files" and "animation" as each starts. An
-    oscillating follower's files come from :mod:`camjax.output.rocker`.
+    ``progress(phase)`` (optional) is told "figures", "files" and "animation" as each starts.
 
     ``workers``: started :class:`camjax.output.drawing.DrawingWorkers` draw the figures and the
     DXF in their processes while this one writes the CSV (the same files as without them).
     """
-    from camjax.rocker import RockerCurves
-
-    if isinstance(curves, RockerCurves):  # an oscillating follower's files
-        from camjax.output.rocker import write_rocker_files
-
-        return write_rocker_files(folder, curves, dpi, banner, title, animate, progress)
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     say = progress or (lambda phase: None)

@@ -8,13 +8,16 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
+from camjax import followers
+
 TURNS = {"ccw": "counter-clockwise", "cw": "clockwise"}  # scene motion.rotation -> words
 
 
 def title_block(data: Mapping) -> str:
     """Three lines naming a run, from a design report's dict: scene, speed, rotation and follower;
-    the segments' laws and lifts; the radii the figures are drawn at (and a rocker's pivot
-    distance d with its arm l and roller R_f, or its face offset f)."""
+    the segments' laws and lifts; the radii the figures are drawn at and the follower's own
+    dimensions (its drawing module's ``title_dimensions``: a roller's R_f and offset, a rocker's
+    pivot distance d with its arm l and roller R_f, or its face offset f)."""
     segments = []
     for seg in data.get("segments", []):
         text = f"{seg['kind']} {seg['angle_deg']:g}°"
@@ -31,17 +34,8 @@ def title_block(data: Mapping) -> str:
         radii.append(f"R_b = {at['base_radius_mm']:.3f} mm")
     if at.get("face_width_mm") is not None:
         radii.append(f"L = {at['face_width_mm']:.3f} mm")
-    roller = data.get("roller")
-    if roller:
-        radii.append(f"R_f = {roller['roller_radius_mm']:g} mm, e = {roller['offset_mm']:g} mm")
-    rocker = data.get("oscillating_follower")  # the dimensions the cam was computed with
-    if rocker:
-        dims = [f"d = {rocker['pivot_distance_mm']:g} mm"]
-        if "arm_length_mm" in rocker:
-            dims += [f"l = {rocker['arm_length_mm']:g} mm", f"R_f = {rocker['roller_radius_mm']:g} mm"]
-        else:
-            dims.append(f"f = {rocker['face_offset_mm']:g} mm")
-        radii.append(", ".join(dims))
+    if data.get("follower_type") in followers.names():  # the follower's own dimensions, as drawn
+        radii += followers.drawing(data["follower_type"]).title_dimensions(data)
     design = data.get("design")
     tail = f" ({at['source']})" if "source" in at else ""
     if design is not None and at.get("source") == "design":

@@ -132,7 +132,7 @@ def solve_block(task: BlockTask) -> list[dict]:
     import numpy as np
 
     import camjax  # noqa: F401  (x64)
-    from camjax.problem import Weights
+    from camjax.family import Weights
     from camjax.solvers.base import Settings, solve_batch, weighting_keys
     from camjax.solvers.sweep import records_of
 

@@ -29,7 +29,7 @@ import jax.numpy as jnp
 from jax.sharding import AxisType, Mesh, NamedSharding
 from jax.sharding import PartitionSpec as PS
 
-from camjax.problem import Problem, Weights
+from camjax.family import Problem, Weights
 from camjax.solvers import ga, gradient
 from camjax.solvers.base import family_of
 from camjax.solvers.registry import MODES, check_choice

@@ -1,4 +1,4 @@
-"""Solvers of the optimal-design problems (:mod:`camjax.problem` and other registered families).
+"""Solvers of the optimal-design problems (every follower folder's ``problem.py``, :mod:`camjax.followers`).
 
 - :mod:`~camjax.solvers.registry`: the names of modes, solvers and problem families, and the one
   validator :func:`~camjax.solvers.registry.check_choice` (imports neither JAX nor NumPy);

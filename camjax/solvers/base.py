@@ -15,8 +15,8 @@ Solver protocol (a module named in :data:`camjax.solvers.registry.SOLVER_MODULES
   ``init`` an optional start design. It must reach the problem only through its family module
   (:func:`family_of`) and treat the design as a pytree (``jax.tree.map``).
 
-Problem-family protocol (a module named in :data:`camjax.solvers.registry.FAMILY_MODULES`; the
-flat-face one is :mod:`camjax.problem`). It provides:
+Problem-family protocol (a follower folder's ``problem.py``, :mod:`camjax.followers`; the
+flat-face one is :mod:`camjax.followers.flat.problem`). It provides:
 
 - ``Problem``: the problem's pytree type (NamedTuple of arrays, the key :func:`family_of`
   dispatches on); ``Design``: the design pytree of named variables (mm);
@@ -42,7 +42,7 @@ flat-face one is :mod:`camjax.problem`). It provides:
   and ``polish_pointwise(problem, weights, design, extras) -> (Design, dict)``: the condensed
   pointwise design taken as a continuous max over the angle.
 
-Weights (:class:`camjax.problem.Weights`: alpha for size, gamma for stress) are shared by every
+Weights (:class:`camjax.followers.flat.Weights`: alpha for size, gamma for stress) are shared by every
 family, and so are the pieces of the protocol that do not depend on a family's physics (the box,
 the per-angle split, the feasibility tolerances, the result keys: :mod:`camjax.family`). Starts
 come from the bounds (the gradient solver: the centre of the box; the GA: uniform in it), so a
@@ -64,25 +64,20 @@ import jax.numpy as jnp
 import numpy as np
 
 from camjax import runtime
+from camjax.family import Weights, weights_of
 from camjax.numerics import finite_float
-from camjax.problem import Weights, weights_of
+from camjax.results import Status
 from camjax.solvers.registry import (
-    CONVERGED,
-    FAMILY_MODULES,
-    FOLLOWER_FAMILIES,
-    INFEASIBLE,
-    MAX_STEPS,
     MODES,
     SOLVER_MODULES,
     SOLVERS,
     check_choice,
     check_weights,
-    status_name,
 )
 
 __all__ = [
-    "CONVERGED", "INFEASIBLE", "MAX_STEPS", "Raw", "Settings", "Solution", "Timings", "family_of",
-    "in_mode", "problem_from_scene", "solve", "solve_batch", "solver_module", "status_name", "weighting_keys",
+    "Raw", "Settings", "Solution", "Timings", "family_of",
+    "in_mode", "problem_from_scene", "solve", "solve_batch", "solver_module", "weighting_keys",
 ]
 
 
@@ -93,29 +88,30 @@ _FAMILIES: dict[type, Any] = {}
 
 
 def family_of(problem):
-    """The family module of a problem, found by its type (Python, at trace time)."""
-    if not _FAMILIES:
-        for path in FAMILY_MODULES.values():
-            module = importlib.import_module(path)
-            _FAMILIES[module.Problem] = module
-    try:
-        return _FAMILIES[type(problem)]
-    except KeyError:
-        raise TypeError(f"problem: {type(problem).__name__} is not a registered problem family "
-                        f"({', '.join(FAMILY_MODULES)})") from None
+    """The family module of a problem, found by its type among the registered followers' problem
+    modules (Python, at trace time)."""
+    from camjax import followers
+
+    family = _FAMILIES.get(type(problem))
+    if family is None:
+        modules = [f.problem_module() for f in followers.all_followers()]
+        _FAMILIES.update({module.Problem: module for module in modules})
+        family = _FAMILIES.get(type(problem))
+    if family is None:
+        raise TypeError(f"problem: {type(problem).__name__} is not the problem of a registered follower "
+                        f"({', '.join(followers.names())})")
+    return family
 
 
 def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=None):
-    """The design problem of a scene's [design] section, built by its follower type's family module.
+    """The design problem of a scene's [design] section, built by its follower type's problem module.
 
     (Python, not traceable.) ``arrays``: the scene's :class:`camjax.evaluate.SceneArrays` if
     already computed; ``samples``, ``dtype``: grid size and floating dtype otherwise.
     """
-    family = FOLLOWER_FAMILIES.get(scene.follower.type)
-    if family is None:
-        raise ValueError(f"follower.type: {scene.follower.type!r} has no design problem "
-                         f"(allowed: {', '.join(FOLLOWER_FAMILIES)})")
-    module = importlib.import_module(FAMILY_MODULES[family])
+    from camjax import followers
+
+    module = followers.of(scene).problem_module()
     return module.problem_from_scene(scene, arrays, samples=samples, dtype=dtype)
 
 
@@ -187,7 +183,7 @@ class Solution:
     objective: jax.Array  # F of the design (true max over angles)
     violation: Any  # the family's Violation: worst violation per constraint
     feasible: jax.Array  # bool
-    status: jax.Array  # int32: CONVERGED, MAX_STEPS or INFEASIBLE
+    status: jax.Array  # int32: a camjax.results.Status code (CONVERGED, MAX_STEPS or INFEASIBLE)
     iterations: jax.Array  # int: steps, generations, or their sum (hybrid); max over angles (pointwise)
     converged: jax.Array | None  # bool (every angle), None for a fixed-budget solver
     evaluation: Any  # the family's Evaluation of ``design`` on the whole grid
@@ -218,7 +214,7 @@ class Solution:
     @property
     def status_name(self) -> str:
         """"converged", "max_steps" or "infeasible" (single result)."""
-        return status_name(self.status)
+        return Status.name_of(self.status)
 
     def violated(self, problem) -> list[str]:
         """Names of the violated constraints (single result)."""
@@ -271,7 +267,8 @@ def in_mode(run_one, mode: str):
 
 def _status(feasible, converged) -> jax.Array:
     done = jnp.asarray(False) if converged is None else converged
-    return jnp.where(~feasible, INFEASIBLE, jnp.where(done, CONVERGED, MAX_STEPS)).astype(jnp.int32)
+    return jnp.where(~feasible, int(Status.INFEASIBLE),
+                     jnp.where(done, int(Status.CONVERGED), int(Status.MAX_STEPS))).astype(jnp.int32)
 
 
 def _solution(problem, weights: Weights, raw: Raw, mode: str, solver: str) -> Solution:
@@ -349,7 +346,7 @@ def solve(problem, weights: Weights | tuple[float, float] = (1.0, 1.0), *, mode:
           solver: str = "gradient", seed: int = 0, settings: Settings = DEFAULT_SETTINGS) -> Solution:
     """Solve one weighting; returns a single :class:`Solution` with its :class:`Timings`.
 
-    ``weights``: a scalar :class:`~camjax.problem.Weights` or an (alpha, gamma) pair. A Python
+    ``weights``: a scalar :class:`~camjax.followers.flat.Weights` or an (alpha, gamma) pair. A Python
     entry point (it checks the weights on concrete values and times compile and run); trace
     :func:`solve_one` or :func:`solve_batch` instead.
     """

@@ -39,7 +39,7 @@ from typing import NamedTuple
 import jax
 import jax.numpy as jnp
 
-from camjax.problem import Design, Problem, Violation, Weights
+from camjax.family import Design, Problem, Violation, Weights
 from camjax.solvers.base import Raw, family_of, in_mode
 from camjax.solvers.base import weighting_keys as weighting_keys
 from camjax.solvers.gradient import from_unit, problem_dtype, solver_objective, to_unit
@@ -129,7 +129,7 @@ def _gene_max(problem: Problem) -> jax.Array:
 def design_fitness(problem: Problem, weights: Weights, design: Design) -> tuple[jax.Array, jax.Array]:
     """(objective as minimized, total scaled violation) of one design; shape () each.
 
-    One pass over the angles (flat face: the peak stress, :func:`camjax.problem.peak_stress`);
+    One pass over the angles (flat face: the peak stress, :func:`camjax.followers.flat.problem.peak_stress`);
     the constraints' maxima over angles come from the family's ``constraint_maxima``.
     """
     family = family_of(problem)

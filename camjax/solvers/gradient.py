@@ -1,6 +1,6 @@
 """Gradient solver: augmented Lagrangian over a secant-accelerated Rprop (an optax transform), in one jit.
 
-The problem (:mod:`camjax.problem`) is solved for one weighting on its angle grid; batch it with
+The problem (:mod:`camjax.followers.flat.problem`) is solved for one weighting on its angle grid; batch it with
 ``vmap`` (weightings, pointwise angles, or both, see :func:`solve_pointwise`, :func:`solve_sweep`).
 
 Formulation. Each design variable is mapped to the unit box, u = (x - lo) / (hi - lo), so every
@@ -31,7 +31,7 @@ the projected-gradient norm ||pg||_inf <= ``gtol`` (or every moving variable's s
 ``max_steps``; an infeasible problem runs to the cap and is reported infeasible by name.
 
 When alpha = 0 the objective does not depend on the size; a tie-break 1e-9 (R_b + L)/N then
-picks the smallest such design, as :func:`camjax.problem.pointwise_optimum` does.
+picks the smallest such design, as :func:`camjax.followers.flat.optimum.pointwise_optimum` does.
 """
 
 from __future__ import annotations
@@ -44,7 +44,7 @@ import jax
 import jax.numpy as jnp
 import optax
 
-from camjax.problem import Constraints, Design, Problem, Violation, Weights
+from camjax.family import Constraints, Design, Problem, Violation, Weights
 from camjax.solvers.base import Raw, family_of, in_mode
 
 LAM_MAX = 1e12  # cap on the multipliers (an infeasible problem would let them grow without end)

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import jax
 
-from camjax.problem import Design, Weights
+from camjax.family import Design, Weights
 from camjax.solvers import ga, gradient
 from camjax.solvers.base import Raw
 

@@ -7,9 +7,8 @@ costs nothing.
 
 Adding a solver: write a module with ``DEFAULT_SETTINGS`` and
 ``run_one(problem, weights, key, settings, init=None) -> camjax.solvers.base.Raw`` (see
-:mod:`camjax.solvers.base`) and add ``name: "module.path"`` to :data:`SOLVER_MODULES`. Adding a
-follower type: write a problem-family module (the protocol is in :mod:`camjax.solvers.base`) and
-add ``name: "module.path"`` to :data:`FAMILY_MODULES`.
+:mod:`camjax.solvers.base`) and add ``name: "module.path"`` to :data:`SOLVER_MODULES`. A follower
+type's problem family is its folder's ``problem.py`` (:mod:`camjax.followers`), found there.
 """
 
 from __future__ import annotations
@@ -23,26 +22,6 @@ SOLVER_MODULES = {
     "hybrid": "camjax.solvers.hybrid",  # GA, then a gradient polish from its best design
 }
 SOLVERS = tuple(SOLVER_MODULES)
-
-# problem family name -> module implementing the family protocol (its ``Problem`` type is the key
-# the solvers dispatch on)
-FAMILY_MODULES = {
-    "flat_face": "camjax.problem",
-    "roller": "camjax.roller_problem",
-    "oscillating_roller": "camjax.oscillating_problem",
-    "oscillating_flat": "camjax.oscillating_flat_problem",
-}
-# scene follower.type -> the problem family its [design] section builds (the family module's
-# ``problem_from_scene(scene, arrays=None, *, samples=None, dtype=None)``)
-FOLLOWER_FAMILIES = {"flat": "flat_face", "roller": "roller", "oscillating_roller": "oscillating_roller",
-                     "oscillating_flat": "oscillating_flat"}
-
-# Solution.status codes (int32 in the traced result) and their names
-CONVERGED = 0  # the solver's stopping rule was met and the design is feasible
-MAX_STEPS = 1  # feasible, but the step / generation budget ran out first (the GA's only stopping rule)
-INFEASIBLE = 2  # the design violates a constraint beyond the feasibility tolerances
-STATUS_NAMES = ("converged", "max_steps", "infeasible")
-
 
 def check_choice(field: str, value, allowed) -> None:
     """Raise ValueError naming ``field`` when ``value`` is not one of ``allowed``."""
@@ -60,8 +39,3 @@ def check_weights(alphas, gammas) -> None:
         raise ValueError("alpha, gamma: weights must be >= 0")
     if any(a == 0 and g == 0 for a, g in pairs):
         raise ValueError("alpha, gamma: a weighting with alpha = gamma = 0 has nothing to minimize")
-
-
-def status_name(code) -> str:
-    """Name of a status code ("converged", "max_steps", "infeasible")."""
-    return STATUS_NAMES[int(code)]

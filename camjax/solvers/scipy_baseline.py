@@ -10,7 +10,7 @@ As the source did (MATLAB fmincon per angle, and a GA), in NumPy/SciPy with no J
   ``scipy.optimize.differential_evolution`` with the constraints as a ``NonlinearConstraint``
   (the GA-style competitor).
 
-Objective and constraints follow :mod:`camjax.problem` exactly (same normalization N, same
+Objective and constraints follow :mod:`camjax.followers.flat.problem` exactly (same normalization N, same
 rho_min margin, stress constraint as rho >= (C / sigma_max)^2), with analytic gradients for SLSQP.
 Not traceable (SciPy): call with concrete arrays. Requires scipy (an optional dependency).
 """
@@ -23,7 +23,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from camjax.problem import Problem
+from camjax.followers.flat.problem import Problem
 
 
 class BaselineResult(NamedTuple):

@@ -1,12 +1,12 @@
 """The roller design problem solved with ``scipy.optimize``: an independent check and a competitor.
 
 NumPy/SciPy with no JAX in the loop, written from SPEC 3 separately from
-:mod:`camjax.roller_problem` (same objective, normalization and constraints, so the optima agree):
+:mod:`camjax.followers.roller.problem` (same objective, normalization and constraints, so the optima agree):
 
 - :func:`slsqp`: SLSQP on one problem in epigraph form (variables R_b, R_f, e and t; minimize
   alpha (R_b + R_f)/N + gamma t / sigma_max with t >= sigma(theta) at every angle), Jacobians by
   SciPy's finite differences (what a user of SciPy would write for these curvature formulas);
-  with a one-angle problem (:func:`camjax.roller_problem.per_angle`) it is the pointwise solve;
+  with a one-angle problem (:func:`camjax.followers.roller.problem.per_angle`) it is the pointwise solve;
 - :func:`differential_evolution`: ``scipy.optimize.differential_evolution`` with the constraint
   maxima as one ``NonlinearConstraint`` (the GA-style competitor), polished by SciPy.
 
@@ -22,7 +22,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from camjax.roller_problem import Problem
+from camjax.followers.roller.problem import Problem
 
 
 class RollerBaselineResult(NamedTuple):

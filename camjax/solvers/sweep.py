@@ -16,7 +16,7 @@ from typing import Any
 import jax
 import numpy as np
 
-from camjax import problem as P
+from camjax.family import weights_of
 from camjax.solvers.base import Settings, Solution, family_of, solve_batch, weighting_keys
 from camjax.solvers.base import solve as solve_weights
 from camjax.solvers.registry import MODES, SOLVERS, check_choice, check_weights
@@ -119,7 +119,7 @@ def sweep(problem, alphas, gammas, *, mode: str = "global", solver: str = "gradi
     for c in tqdm(range(n_chunks), desc=f"sweep ({solver}, {mode})", unit="chunk", disable=not show):
         lo, hi = c * chunk, min((c + 1) * chunk, total)
         idx = np.minimum(np.arange(lo, lo + chunk), hi - 1)  # pad by repeating the last weighting
-        weights = P.weights_of(a[idx], g[idx], dtype)
+        weights = weights_of(a[idx], g[idx], dtype)
         res = solve_batch(problem, weights, keys_all[idx], mode, solver, settings)
         parts.append(jax.tree.map(lambda x, n=hi - lo: np.asarray(x)[:n], res))
     results = jax.tree.map(lambda *xs: np.concatenate(xs, axis=0), *parts)

@@ -1,0 +1,157 @@
+"""``camjax design``: a scene's design, its report, figures, profile CSV and DXF (and animation)."""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import threading
+from contextlib import ExitStack
+
+from camjax import runtime
+from camjax.cli.common import (
+    MAX_BASE_RADIUS_MM,
+    OUT_HELP,
+    STRICT_EXIT,
+    UsageError,
+    add_design_options,
+    add_samples_option,
+    apply_design_options,
+    apply_samples,
+    check_dpi,
+    command,
+)
+from camjax.output.files import write_json
+from camjax.output.folder import check_output_dir, replaced_folder
+from camjax.scene import quote
+
+
+@command("design", "report, plots, profile CSV and DXF (and an animation) of a scene's cam design")
+def _setup_design(p: argparse.ArgumentParser):
+    p.add_argument("scene", nargs="?", default=None,
+                   help="scene TOML file or built-in scene name (default: the embedded default scene)")
+    p.add_argument("--out", required=True, metavar="DIR", help=OUT_HELP)
+    p.add_argument("--base-radius", type=float, default=None, metavar="MM",
+                   help="evaluate and draw at this base radius instead of the design's")
+    p.add_argument("--dpi", type=int, default=100, help="resolution of the PNG figures (default 100)")
+    add_samples_option(p)
+    p.add_argument("--strict", action="store_true",
+                   help="exit with status 3 (after writing) when the geometry written breaks a "
+                   "constraint; without it such a run warns on stderr and exits 0")
+    p.add_argument("--animate", action="store_true",
+                   help="also write motion.gif: one turn of the cam with the follower, the contact "
+                        "point and the pressure angle (a broken constraint is named and drawn red)")
+    add_design_options(p)
+
+    def run(args) -> int:
+        from camjax import followers
+        from camjax.output.report import analyse
+        from camjax.scene import load_scene
+
+        out = check_output_dir(args.out)
+        r = args.base_radius
+        if r is not None and not (r == r and 0 < r <= MAX_BASE_RADIUS_MM):
+            raise UsageError(f"--base-radius = {r!r}: out of range (allowed: a number > 0 and "
+                             f"<= {MAX_BASE_RADIUS_MM:g}, mm)")
+        check_dpi(args.dpi)
+        scene = apply_design_options(apply_samples(load_scene(args.scene), args), args)
+        rad_lifts = scene.dynamics is not None and scene.dynamics.follower == "oscillating"
+        if rad_lifts and not followers.of(scene).rocking:
+            rocking = " or ".join(repr(f.name) for f in followers.all_followers() if f.rocking)
+            raise UsageError(f"scene {scene.name}: dynamics.follower = 'oscillating' (motion in rad); the "
+                             "geometry of this scene's follower.type is for lifts in mm "
+                             f"(allowed: follower.type = {rocking} with "
+                             f"lift_deg, or `camjax dynamics {args.scene or scene.name}`)")
+        runtime.enable_caches()
+
+        # a run takes seconds: on a terminal (or with CAMJAX_PROGRESS=1) say what it is doing;
+        # piped, stderr keeps its contract of one line on failure
+        show = sys.stderr.isatty() or os.environ.get("CAMJAX_PROGRESS") == "1"
+
+        def progress(phase: str) -> None:
+            if show:
+                sys.stderr.write(f"camjax design: {phase}\n")
+                sys.stderr.flush()
+
+        progress("computing")
+        with ExitStack() as stack:
+            # the drawing processes import matplotlib and ezdxf while JAX computes; without them
+            # or for an animation they load in a second thread here
+            workers = _drawing_workers(stack)
+            preload = None
+            if workers is None or args.animate:
+                preload = threading.Thread(target=_import_drawing_modules, daemon=True)
+                preload.start()
+            result = runtime.interruptible(analyse, scene, base_radius_mm=r)
+            if preload is not None:
+                preload.join()
+            return _write_design(args, out, scene, result, workers, progress)
+
+    return run
+
+
+def _drawing_workers(stack):
+    """Started :class:`camjax.output.drawing.DrawingWorkers` (closed with ``stack``), or None
+    where processes cannot be started or $CAMJAX_DRAWING_PROCESSES is 0 (the figures and the DXF
+    are then drawn in this one). $CAMJAX_DRAWING_PROCESSES: how many."""
+    from camjax.output.drawing import DEFAULT_PROCESSES, MAX_PROCESSES, DrawingWorkers
+
+    text = os.environ.get("CAMJAX_DRAWING_PROCESSES", str(DEFAULT_PROCESSES))
+    if not (text.isdigit() and int(text) <= MAX_PROCESSES):
+        raise UsageError(f"CAMJAX_DRAWING_PROCESSES = {quote(text)}: not a count (allowed: 0 to "
+                         f"{MAX_PROCESSES}; 0 draws in the command's own process)")
+    if int(text) == 0:
+        return None
+    try:
+        return stack.enter_context(DrawingWorkers(int(text)))
+    except OSError:
+        return None
+
+
+def _write_design(args, out, scene, result, workers, progress) -> int:
+    """Check, write and report a computed design run (``camjax design``'s second half)."""
+    from camjax import followers
+    from camjax.output.animation import UndrawableGeometry, check_drawable
+    from camjax.output.export import write_design_files
+    from camjax.output.titles import title_block
+
+    try:  # before anything is written: figures and animation need a finite outline
+        check_drawable(result.curves)
+    except UndrawableGeometry as exc:
+        raise UsageError(f"scene {scene.name} at R_b = {result.curves.base_radius_mm:g} mm: "
+                         f"{exc}") from None
+    d = result.data
+    at = d["evaluated_at"]
+    broken = [v["constraint"] for v in at["violations"]]
+    banner = (f"INFEASIBLE GEOMETRY at R_b = {at['base_radius_mm']:.4g} mm: "
+              f"{', '.join(broken)} violated" if broken else None)
+    with replaced_folder(out) as tmp:
+        write_json(tmp / "result.json", d)
+        written = write_design_files(tmp, result.curves, args.dpi, banner, title_block(d),
+                                     animate=args.animate, progress=progress, workers=workers)
+        names = ["result.json"] + [p.name for p in written]
+    print(f"scene {d['scene']}: min base radius {d['min_base_radius_mm']:.4f} mm at "
+          f"{d['min_base_radius_deg']:g} deg")
+    follower = followers.of(scene)
+    if "design" in d:
+        g = d["design"]
+        print(f"design ({g['solver']}): R_b = {g['base_radius_mm']:.4f} mm, {follower.summary(g)}, "
+              f"objective {g['objective']:.5f}, feasible {g['feasible']}")
+    width = follower.drawn_summary(d)
+    state = f"INFEASIBLE ({', '.join(broken)})" if broken else "feasible"
+    print(f"files drawn at R_b = {at['base_radius_mm']:.4f} mm{width} ({at['source']}): {state}")
+    print(f"wrote {', '.join(names)} to {args.out}")
+    for v in at["violations"]:
+        print(f"camjax design: warning: the geometry written breaks {v['constraint']}: {v['message']}",
+              file=sys.stderr)
+    return STRICT_EXIT if broken and args.strict else 0
+
+
+def _import_drawing_modules() -> None:
+    """Import what drawing and the DXF need (run in a thread beside the computation)."""
+    import ezdxf  # noqa: F401
+    import matplotlib.backends.backend_agg  # noqa: F401
+
+    import camjax.output.plots  # noqa: F401
+
+

@@ -1,0 +1,103 @@
+"""``camjax laws``: the motion laws' peak coefficients, joint classes against dwells and a chart."""
+
+from __future__ import annotations
+
+import argparse
+
+from camjax.cli.common import UsageError, check_dpi, command
+from camjax.output.files import write_json
+from camjax.output.folder import check_output_file, write_file_atomic
+
+
+@command("laws", "peak values, joint classes against dwells and an optional chart of every motion law")
+def _setup_laws(p: argparse.ArgumentParser):
+    p.formatter_class = argparse.RawDescriptionHelpFormatter
+    p.epilog = LAWS_COLUMNS
+    p.add_argument("--json", metavar="FILE", help="write the table as JSON instead of printing it")
+    p.add_argument("--plot", metavar="FILE.png",
+                   help="also draw normalized s, v, a, j of every law overlaid (one panel each)")
+    p.add_argument("--dpi", type=int, default=110, help="resolution of the --plot image (default 110)")
+
+    def run(args) -> int:
+        import jax.numpy as jnp
+
+        from camjax.laws import LAWS, summarize
+        from camjax.program import classify_jump
+
+        plot = check_output_file(args.plot, "--plot") if args.plot is not None else None
+        check_dpi(args.dpi)
+        if plot is not None:
+            from matplotlib.figure import Figure
+
+            kinds = Figure().canvas.get_supported_filetypes()
+            if plot.suffix.lstrip(".").lower() not in kinds:
+                raise UsageError(f"--plot = {args.plot!r}: unknown image type '{plot.suffix}' "
+                                 f"(allowed: {', '.join('.' + k for k in sorted(kinds))})")
+
+        def dwell_joints(law) -> tuple[str, str]:
+            # the law as a rise from a dwell and into a dwell: the jumps at the joints are its end
+            # values (a dwell has zero derivatives); normalized, so every scale is 1
+            v = law(jnp.asarray([0.0, 1.0]))
+            start = classify_jump([0.0, float(v.dp[0]), float(v.d2p[0]), float(v.d3p[0])], [1.0] * 4)
+            end = classify_jump([0.0, -float(v.dp[1]), -float(v.d2p[1]), -float(v.d3p[1])], [1.0] * 4)
+            return start, end
+
+        path = check_output_file(args.json, "--json") if args.json is not None else None
+        rows = []
+        for law in LAWS.values():
+            s = summarize(law)
+            start, end = dwell_joints(law)
+            rows.append({
+                "law": s.name,
+                "peak_velocity": s.peak_velocity,
+                "peak_accel_pos": s.peak_accel_pos,
+                "peak_accel_neg": s.peak_accel_neg,
+                "peak_jerk": s.peak_jerk,
+                "joint_after_dwell": start,
+                "joint_before_dwell": end,
+                "flcd_against_dwells": s.flcd_against_dwells,
+                "perturbation_against_dwells": s.perturbation_against_dwells,
+            })
+        if plot is not None:
+            import numpy as np
+
+            from camjax.output.plots import laws_figure
+
+            x = np.linspace(0.0, 1.0, 501)
+            # legend label: the name and its joint classes after / before a dwell
+            curves = {f"{r['law']} [{r['joint_after_dwell']} / {r['joint_before_dwell']}]":
+                      tuple(np.asarray(v) for v in LAWS[r["law"]](jnp.asarray(x))) for r in rows}
+            kind = plot.suffix.lstrip(".").lower()
+            write_file_atomic(plot, lambda tmp: laws_figure(x, curves).savefig(tmp, dpi=args.dpi,
+                                                                               format=kind))
+        if args.json:
+            write_file_atomic(path, lambda tmp: write_json(tmp, {"normalized": True, "laws": rows}))
+            print(f"wrote {args.json}" + (f", {args.plot}" if plot else ""))
+            return 0
+        head = (f"{'law':20s} {'max|v|':>7s} {'max a':>8s} {'min a':>8s} {'max|j|':>8s}  "
+                f"{'after dwell':12s} {'before dwell':12s} FLCD")
+        print(head)
+        print("-" * len(head))
+        for r in rows:
+            print(f"{r['law']:20s} {r['peak_velocity']:7.4f} {r['peak_accel_pos']:8.4f} "
+                  f"{r['peak_accel_neg']:8.4f} {r['peak_jerk']:8.3f}  {r['joint_after_dwell']:12s} "
+                  f"{r['joint_before_dwell']:12s} {'yes' if r['flcd_against_dwells'] else 'no'}")
+        print(LAWS_COLUMNS)
+        if plot is not None:
+            print(f"wrote {plot}")
+        return 0
+
+    return run
+
+
+LAWS_COLUMNS = """\
+columns (normalized law p(x): lift 1 over x in [0, 1]):
+  max|v|, max a, min a, max|j|   peaks of |p'|, p'', p'' (most negative) and |p'''|; scale to a
+                                 rise h over beta rad by h/beta, h/beta^2, h/beta^3
+  after dwell, before dwell      class of the joint when the law is a rise starting from / ending
+                                 at a dwell: ok (smooth), perturbation (jerk jumps; allowed),
+                                 jerk (acceleration jumps), shock (velocity jumps)
+  FLCD                           yes = velocity and acceleration continuous at both joints with
+                                 dwells (the law's class there is ok or perturbation)"""
+
+

@@ -1,0 +1,99 @@
+"""``camjax sweep``: every (alpha, gamma) pair of two lists solved; pareto.json and pareto.png."""
+
+from __future__ import annotations
+
+import argparse
+
+from camjax import runtime
+from camjax.cli.common import (
+    OUT_HELP,
+    UsageError,
+    add_design_options,
+    add_samples_option,
+    apply_design_options,
+    apply_samples,
+    check_dpi,
+    command,
+    parse_float_list,
+)
+from camjax.output.files import write_json
+from camjax.output.folder import check_output_dir, merged_files, replaced_folder
+
+
+@command("sweep", "solve every (alpha, gamma) pair of two lists: pareto.json and pareto.png")
+def _setup_sweep(p: argparse.ArgumentParser):
+    p.add_argument("scene", nargs="?", default=None,
+                   help="scene TOML file or built-in scene name (default: the embedded default scene)")
+    p.add_argument("--alpha", required=True, metavar="LIST",
+                   help="size weights, comma-separated, e.g. 0.1,1,10")
+    p.add_argument("--gamma", required=True, metavar="LIST", help="stress weights, comma-separated")
+    p.add_argument("--out", required=True, metavar="DIR", help=OUT_HELP)
+    add_design_options(p, weights=False)
+    p.add_argument("--chunk-size", type=int, default=128, metavar="W",
+                   help="weightings per compiled call (default 128; a progress bar when there are more)")
+    p.add_argument("--dpi", type=int, default=120, help="resolution of pareto.png (default 120)")
+    add_samples_option(p)
+    from camjax.scaleout import command as scaleout
+
+    scaleout.add_options(p)
+
+    def run(args) -> int:
+        import time
+
+        from camjax.pipeline import sweep_scene
+        from camjax.scene import load_scene
+        from camjax.solvers.sweep import plot_pareto
+
+        # a scale-out sweep keeps its blocks in --out between runs (--resume): merged, not replaced
+        out = check_output_dir(args.out, replace=not scaleout.requested(args))
+        alphas = parse_float_list("--alpha", args.alpha)
+        gammas = parse_float_list("--gamma", args.gamma)
+        for option, values in (("--alpha", alphas), ("--gamma", gammas)):
+            bad = [v for v in values if v < 0]
+            if bad:
+                raise UsageError(f"{option} = {','.join(f'{v:g}' for v in values)}: {bad[0]:g} is "
+                                 "negative (allowed: numbers >= 0)")
+        if 0.0 in alphas and 0.0 in gammas:
+            raise UsageError("--alpha/--gamma: the pair alpha = 0, gamma = 0 leaves nothing to "
+                             "minimize (drop 0 from one of the lists)")
+        if not 1 <= args.chunk_size <= 100_000:
+            raise UsageError(f"--chunk-size = {args.chunk_size}: out of range (allowed: 1..100000)")
+        check_dpi(args.dpi)
+        scene = apply_samples(load_scene(args.scene), args)
+        if scene.design is None:
+            raise UsageError(f"scene '{scene.name}' has no [design] section: a sweep needs its bounds "
+                             "and sigma_max_MPa")
+        # --alpha/--gamma are lists here: only mode, solver and seed override the scene
+        overrides = argparse.Namespace(mode=args.mode, solver=args.solver, seed=args.seed)
+        d = apply_design_options(scene, overrides).design
+        mode, solver, seed = d.mode, d.solver, d.seed
+        scaleout.check(args, UsageError)
+        runtime.enable_caches()
+        start = time.perf_counter()
+        if scaleout.requested(args):  # blocks on a backend, stored in --out as they finish
+            import jax
+
+            result = scaleout.run_sweep(args, scene, scaleout.scene_text(args.scene), alphas, gammas,
+                                        mode=mode, solver=solver, seed=seed, usage_error=UsageError,
+                                        cache_dir=jax.config.jax_compilation_cache_dir)
+        else:
+            result = runtime.interruptible(sweep_scene, scene, alphas, gammas, mode=mode, solver=solver,
+                                           seed=seed, chunk_size=args.chunk_size)
+        seconds = time.perf_counter() - start
+        data = {"scene": scene.name, "mode": mode, "solver": solver, "seed": seed,
+                "alphas": alphas, "gammas": gammas, "seconds": seconds, "records": result.records()}
+        with (merged_files(out) if scaleout.requested(args) else replaced_folder(out)) as tmp:
+            write_json(tmp / "pareto.json", data)
+            fig = plot_pareto(result)
+            fig.savefig(tmp / "pareto.png", dpi=args.dpi)
+        recs = data["records"]
+        feasible = sum(r["feasible"] for r in recs)
+        front = sum(r["pareto"] for r in recs)
+        print(f"sweep ({solver}, {mode}) of {len(recs)} weightings in {seconds:.2f} s: "
+              f"{feasible} feasible, {front} on the non-dominated front")
+        print(f"wrote pareto.json, pareto.png to {args.out}")
+        return 0
+
+    return run
+
+

@@ -1,0 +1,46 @@
+"""The constraint checks both follower families apply to an evaluated geometry, each one sentence.
+
+Tolerances are the solvers' (:data:`camjax.family.FEASIBILITY_TOL_MM`, relative 1e-6 on the
+stress, :data:`camjax.family.FEASIBILITY_TOL_RAD` on the pressure angle), so a design a solver
+calls feasible is not flagged here.
+"""
+
+from __future__ import annotations
+
+import math
+
+from camjax.family import FEASIBILITY_RTOL_STRESS, FEASIBILITY_TOL_MM, FEASIBILITY_TOL_RAD
+from camjax.results import GeometryViolation
+
+
+def curvature(rho: float, deg: float, rho_min_mm: float) -> list[GeometryViolation]:
+    """A radius of curvature (mm) at cam angle ``deg`` below the allowed one."""
+    if rho >= rho_min_mm - FEASIBILITY_TOL_MM:
+        return []
+    why = "the profile crosses itself" if rho < 0 else "the flat face cannot follow it"
+    return [GeometryViolation("curvature", f"min radius of curvature {rho:.4g} mm at {deg:g} deg < "
+                              f"{rho_min_mm:g} mm: {why}")]
+
+
+def stress(sigma: float, deg: float, sigma_max_MPa: float) -> list[GeometryViolation]:
+    """A peak contact stress (MPa) above the allowed one."""
+    if sigma <= sigma_max_MPa * (1.0 + FEASIBILITY_RTOL_STRESS):
+        return []
+    return [GeometryViolation("stress", f"peak contact stress {sigma:.4g} MPa at {deg:g} deg > sigma_max "
+                              f"{sigma_max_MPa:g} MPa")]
+
+
+def pressure_angle(phi: float, deg: float, limit_deg: float) -> list[GeometryViolation]:
+    """A largest |pressure angle| (deg) above its limit."""
+    if phi <= limit_deg + math.degrees(FEASIBILITY_TOL_RAD):
+        return []
+    return [GeometryViolation("pressure_angle", f"|pressure angle| {phi:.4g} deg at {deg:g} deg > "
+                              f"{limit_deg:g} deg")]
+
+
+def undercut(margin: float, deg: float) -> list[GeometryViolation]:
+    """A negative undercut margin (mm): the roller (or the curved face) undercuts the cam."""
+    if margin >= -FEASIBILITY_TOL_MM:
+        return []
+    return [GeometryViolation("undercut", f"undercut margin {margin:.4g} mm at {deg:g} deg <= 0: the roller "
+                              "undercuts the cam")]

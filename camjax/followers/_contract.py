@@ -1,0 +1,114 @@
+"""The follower contract: everything camjax knows of a follower type, behind one interface.
+
+A follower type is a folder ``camjax/followers/<name>/`` (the name is the scene's
+``follower.type``) with one module per layer, each importing only what its layer may:
+
+- ``geometry.py``: the pitch and contact geometry in closed form (pure JAX, one design, any grid);
+- ``problem.py``: the design problem the solvers run (the family protocol of
+  :mod:`camjax.solvers.base`);
+- ``follower.py``: ``FOLLOWER``, an instance of a :class:`Follower` subclass: its [follower] and
+  [design] keys and the design run (the smallest cam, the solved design, the curves);
+- ``report.py``: ``report(scene, run) -> dict``, its result.json;
+- ``drawing.py``: its figures, profile table and animation (NumPy and matplotlib only: it runs in
+  the drawing processes, which never import JAX).
+
+Everything outside a folder reaches a follower through this contract and the registry
+(:mod:`camjax.followers`), never by its name. Two families share most of the work:
+:class:`camjax.followers._translating.TranslatingFollower` (a follower sliding along its axis,
+lifts in mm) and :class:`camjax.followers._rocking.RockingFollower` (an arm swinging about a
+pivot, lifts in deg); a new follower subclasses one and fills in its hooks, and
+``tests/test_followers.py`` runs every registered follower through the same checks.
+"""
+
+from __future__ import annotations
+
+import abc
+import importlib
+from types import ModuleType
+from typing import TYPE_CHECKING, Any, ClassVar
+
+if TYPE_CHECKING:
+    from camjax.scene.reader import TableReader
+    from camjax.scene.spec import FollowerSpec
+
+
+class Follower(abc.ABC):
+    """One follower type. A subclass sets the class attributes and fills in the abstract methods;
+    ``FOLLOWER = TheFollower()`` in the folder's ``follower.py`` is what the registry loads.
+    Instances hold no state: every method is a function of its arguments.
+    """
+
+    name: ClassVar[str]  # the scene's follower.type: the folder's name
+    title: ClassVar[str]  # words for figures and messages, e.g. "roller"
+    rocking: ClassVar[bool]  # an arm swinging about a pivot (lifts in deg, loads about it)
+    keys: ClassVar[tuple[str, ...]]  # the [follower] table's keys besides ``type``
+    variables: ClassVar[tuple[str, ...]]  # design variables (mm), in result.json's order
+    design_needs_contact: ClassVar[bool] = False  # a [design] needs [contact] (its objective is the stress)
+    takes_contact: ClassVar[bool] = True  # a [contact] section (Hertz stress) is defined for it
+    takes_guide: ClassVar[bool] = False  # a [guide] section (stem reactions, SPEC 4) applies to it
+
+    # ----------------------------------------------------------------------------- scene
+
+    @abc.abstractmethod
+    def parse(self, r: TableReader) -> FollowerSpec:
+        """The [follower] table read and checked (SceneError naming the key)."""
+
+    @abc.abstractmethod
+    def design_bounds(self, r: TableReader, follower: FollowerSpec) -> dict[str, tuple[float, float]]:
+        """The [design] table's design variables as (low, high) bounds, mm (a fixed one as (v, v)),
+        in the order of :attr:`variables`; a box in which no design closes is a SceneError."""
+
+    def check_keys(self, r: TableReader) -> None:
+        """Refuse a [follower] key of another follower type (naming the types it belongs to) or of
+        none, then any key this type does not take."""
+        from camjax import followers
+
+        own = {"type", *self.keys}
+        for key in r.table:
+            if key in own:
+                continue
+            owners = [f.name for f in followers.all_followers() if key in f.keys]
+            if owners:
+                raise r.error(key, r.table[key], f"only for type = {' or '.join(map(repr, owners))}, not "
+                              f"type = {self.name!r}", ", ".join(self.keys))
+        r.check_keys(("type", *self.keys))
+
+    # ---------------------------------------------------------------------------- design
+
+    def problem_module(self) -> ModuleType:
+        """The folder's design problem (``problem.py``: the solvers' family protocol)."""
+        return self.module("problem")
+
+    @abc.abstractmethod
+    def run(self, scene, arrays=None, *, base_radius_mm: float | None = None, dtype=None):
+        """Every model the scene declares at its design: the smallest admissible cam, the solved
+        [design] (if any), the radius the cam is drawn at (``base_radius_mm`` overrides it), the
+        curves there and the constraints they break. The run's ``curves`` are what the drawing
+        module draws; :meth:`report` formats the whole run."""
+
+    # ---------------------------------------------------------------------------- output
+
+    def report(self, scene, run) -> dict[str, Any]:
+        """result.json of a run (the folder's ``report.py``)."""
+        return self.module("report").report(scene, run)
+
+    def drawing(self) -> ModuleType:
+        """The folder's ``drawing.py``: ``figure_builders(curves)``, ``profile_table(curves)``,
+        ``mechanism(curves, title, violation)``, ``title_dimensions(data)`` (no JAX)."""
+        return self.module("drawing")
+
+    @abc.abstractmethod
+    def summary(self, design: dict[str, Any]) -> str:
+        """The sizes of a solved design (result.json's ``design`` block) in one line, for the
+        command line, e.g. ``R_f = 5.0000 mm, offset 1.0000 mm, R_p = 30.0000 mm``."""
+
+    def drawn_summary(self, data: dict[str, Any]) -> str:
+        """What the command line adds after "files drawn at R_b = ..." from result.json ``data``
+        (e.g. ``, L = 19.0986 mm``); default nothing."""
+        return ""
+
+    # ---------------------------------------------------------------------------- folder
+
+    def module(self, layer: str) -> ModuleType:
+        """The folder's module of one layer: ``geometry``, ``problem``, ``report`` or ``drawing``."""
+        return importlib.import_module(f"camjax.followers.{self.name}.{layer}")

@@ -1,0 +1,280 @@
+"""The rocking family: an arm swinging about a pivot, lifts in deg (rad inside), loads about the pivot.
+
+:class:`RockingFollower` runs a scene's design for every rocking follower type, and each type (a
+folder of :mod:`camjax.followers`) fills in its hooks: its smallest admissible cam with the scene's
+pivot and arm (or face), the radii at which it closes, and its geometry and contact at one base
+radius. The run, step by step:
+
+1. the scene's [design] solved, if it has one; the cam is then sized and drawn with the design's
+   pivot, arm (or face) and roller;
+2. :meth:`RockingFollower.sizing` finds the smallest admissible cam (a SceneError when none exists);
+3. :meth:`RockingFollower.drawing_radius` picks the base radius the cam is drawn at (the option
+   ``--base-radius``, else the design's, else the smallest admissible + 1 mm rounded up) and checks
+   that the geometry closes there;
+4. :meth:`RockingFollower.evaluate` computes the curves there (:class:`RockerCurves`): outline,
+   pitch curve, pressure angle, curvature, the torque about the pivot, contact force, cam torque
+   and Hertz stress; :func:`rocker_violations` the constraints they break.
+
+Units: the motion program of a rocking follower is in rad (the scene's ``lift_deg``); the report
+gives angles in degrees, lengths in mm, loads in SI.
+"""
+
+from __future__ import annotations
+
+import abc
+import math
+from dataclasses import replace
+from typing import Any, NamedTuple
+
+import jax.numpy as jnp
+import numpy as np
+
+from camjax import loads
+from camjax.errors import SceneError
+from camjax.evaluate import SceneArrays, scene_arrays
+from camjax.followers import _checks
+from camjax.followers._contract import Follower
+from camjax.loads import RockerTrain
+from camjax.program import Kinematics
+from camjax.results import GeometryViolation
+from camjax.scene.reader import DEFAULT, TableReader, build
+
+DRAWING_MARGIN_MM = 1.0  # drawn at the smallest admissible base radius + this, rounded up
+TRAIN_KEYS = ("inertia_kg_m2", "spring_N_m_per_rad", "preload_rad", "damping_N_m_s_per_rad")
+
+
+def read_train(r: TableReader) -> RockerTrain | None:
+    """The train about the pivot of a rocking [follower] (None: no loads are modelled)."""
+    if r.has("inertia_kg_m2") or r.has("spring_N_m_per_rad"):
+        return build(RockerTrain, inertia_kg_m2=r.number("inertia_kg_m2", DEFAULT, low=0.0),
+                     spring_N_m_per_rad=r.number("spring_N_m_per_rad", DEFAULT, low=0.0),
+                     preload_rad=r.number("preload_rad", DEFAULT),
+                     damping_N_m_s_per_rad=r.number("damping_N_m_s_per_rad", DEFAULT, low=0.0))
+    for key in ("preload_rad", "damping_N_m_s_per_rad"):
+        if r.has(key):
+            raise r.error(key, r.table[key], "needs inertia_kg_m2 or spring_N_m_per_rad (loads are off)")
+    return None
+
+
+class RockerSizing(NamedTuple):
+    """Smallest admissible cam of a rocker follower (Python floats)."""
+
+    min_base_radius_mm: float  # R_b (roller: R_p - R_f)
+    min_prime_radius_mm: float | None  # roller only: R_p
+    angle_deg: float  # cam angle where the binding limit is reached
+    binding: str  # "pressure_angle", "undercut", "curvature" ("none": an infeasible design's own radius)
+
+
+class RockerGeometry(NamedTuple):
+    """A rocking follower's geometry at one base radius (per sample (N,) arrays, or scalars), and
+    the dimensions :class:`RockerCurves` reports (None where the type has none)."""
+
+    profile_x_mm: Any  # cam outline, cam coordinates
+    profile_y_mm: Any
+    arm_angle: Any  # psi, rad
+    arm_start_angle: Any  # psi0, rad
+    pressure_angle: Any  # rad
+    rho_mm: Any  # radius of curvature of the cam surface (convex > 0)
+    pitch_x_mm: Any = None  # roller: pitch curve
+    pitch_y_mm: Any = None
+    pitch_rho_mm: Any = None
+    pitch_curvature: Any = None  # 1/mm (the roller's contact stress)
+    undercut_margin_mm: Any = None
+    contact_distance_mm: Any = None  # flat face: contact point along the face from the pivot's foot
+    arm_length_mm: float | None = None
+    roller_radius_mm: float | None = None
+    face_offset_mm: float | None = None
+    prime_radius_mm: float | None = None
+    pressure_angle_limit_deg: float | None = None
+
+
+class RockerCurves(NamedTuple):
+    """Everything plots and export need at one rocker design (NumPy arrays of shape (N,), scalars).
+
+    Optional entries are None where the follower type or the scene does not have them.
+    """
+
+    theta_deg: np.ndarray  # cam angle, deg
+    swing_deg: np.ndarray  # s, the arm's swing from its start, deg
+    ds: np.ndarray  # s', rad/rad
+    d2s: np.ndarray  # s'', rad/rad^2
+    angular_velocity_rad_s: np.ndarray
+    angular_accel_rad_s2: np.ndarray
+    angular_jerk_rad_s3: np.ndarray
+    segment_starts_deg: tuple[float, ...]
+    follower_type: str  # the registered type (camjax.followers)
+    rotation: str  # "ccw" or "cw"
+    pivot_distance_mm: float
+    arm_length_mm: float | None  # roller
+    roller_radius_mm: float | None  # roller
+    face_offset_mm: float | None  # flat face
+    base_radius_mm: float
+    prime_radius_mm: float | None  # roller
+    arm_start_angle_deg: float  # psi0, from the line of centres
+    arm_angle_deg: np.ndarray  # psi = psi0 + s
+    profile_x_mm: np.ndarray  # cam outline, cam coordinates (camjax.followers._pitch convention)
+    profile_y_mm: np.ndarray
+    pitch_x_mm: np.ndarray | None  # roller: pitch curve
+    pitch_y_mm: np.ndarray | None
+    pressure_angle_deg: np.ndarray
+    rho_mm: np.ndarray  # radius of curvature of the cam surface (convex > 0)
+    pitch_rho_mm: np.ndarray | None  # roller
+    undercut_margin_mm: np.ndarray | None  # roller
+    contact_distance_mm: np.ndarray | None  # flat: contact point along the face from the pivot's foot
+    pivot_torque_Nm: np.ndarray | None  # torque the cam applies to the arm about the pivot
+    contact_force_N: np.ndarray | None  # normal contact force
+    torque_Nm: np.ndarray | None  # cam shaft torque
+    stress_MPa: np.ndarray | None  # Hertz contact stress
+    pressure_angle_limit_deg: float | None = None  # roller: follower.max_pressure_angle_deg
+
+
+class RockerRun(NamedTuple):
+    """A rocker scene's run: its arrays, sizing, solved design, drawing radius, curves and the
+    constraints the drawn geometry breaks."""
+
+    sizing: RockerSizing
+    base_radius_mm: float
+    base_radius_source: str
+    curves: RockerCurves
+    arrays: SceneArrays | None = None
+    design: dict[str, Any] | None = None  # the solver's JSON of the [design] (None without one)
+    violations: tuple[GeometryViolation, ...] = ()
+
+
+def _f(x) -> float:
+    return float(np.asarray(x))
+
+
+def rocker_violations(curves: RockerCurves, scene) -> list[GeometryViolation]:
+    """Constraints broken by a rocking follower's evaluated geometry (empty: usable geometry).
+
+    Whatever curves the follower has are judged: |pressure angle| > its limit and undercut (a
+    roller), cam-surface radius < ``follower.min_curvature_radius_mm`` (a face); with loads,
+    contact force < 0; with a [design], peak stress > sigma_max. Tolerances are the solvers'
+    (:mod:`camjax.followers._checks`).
+    """
+    t, out = curves.theta_deg, []
+
+    def at(values, pick):
+        i = int(pick(values))
+        return float(values[i]), float(t[i])
+
+    if curves.undercut_margin_mm is not None:
+        out += _checks.pressure_angle(*at(np.abs(curves.pressure_angle_deg), np.argmax),
+                                      curves.pressure_angle_limit_deg)
+        out += _checks.undercut(*at(curves.undercut_margin_mm, np.argmin))
+    else:
+        out += _checks.curvature(*at(curves.rho_mm, np.argmin), scene.follower.min_curvature_radius_mm)
+    if curves.stress_MPa is not None and scene.design is not None and scene.design.sigma_max_MPa:
+        out += _checks.stress(*at(curves.stress_MPa, np.argmax), scene.design.sigma_max_MPa)
+    if curves.contact_force_N is not None:
+        force, deg = at(curves.contact_force_N, np.argmin)
+        if force < 0:
+            out.append(GeometryViolation(
+                "contact", f"contact force {force:.4g} N at {deg:g} deg < 0: the follower leaves the cam"))
+    return out
+
+
+class RockingFollower(Follower):
+    """An arm swinging about a pivot: the run every such type shares, and its hooks."""
+
+    rocking = True
+
+    # ---- hooks: the follower's physics
+
+    @abc.abstractmethod
+    def sizing(self, scene, kin: Kinematics) -> RockerSizing:
+        """Smallest admissible cam of the scene's rocker (Python; SceneError when none exists)."""
+
+    @abc.abstractmethod
+    def closure_problem(self, scene, kin: Kinematics, base_radius_mm: float) -> str | None:
+        """Why the rocker cannot run on a cam of this base radius (mm), or None when it can."""
+
+    @abc.abstractmethod
+    def geometry(self, scene, kin: Kinematics, base_radius_mm: float) -> RockerGeometry:
+        """The geometry at one base radius with the scene's pivot and arm (or face)."""
+
+    @abc.abstractmethod
+    def contact(self, scene, moment, g: RockerGeometry) -> tuple[Any, Any]:
+        """(normal contact force (N), Hertz stress (MPa) or None without [contact]) from the torque
+        ``moment`` (N m) the cam applies about the pivot."""
+
+    # ---- the run
+
+    def drawing_radius(self, scene, kin: Kinematics, sizing: RockerSizing,
+                       override_mm: float | None = None) -> tuple[float, str]:
+        """Base radius (mm) the rocker cam is evaluated and drawn at, and where it comes from.
+
+        The option wins (and must close, else a SceneError naming ``--base-radius``); otherwise the
+        smallest admissible + 1 mm rounded up, or the smallest itself where that would not close.
+        """
+        if override_mm is not None:
+            why = self.closure_problem(scene, kin, float(override_mm))
+            if why is not None:
+                raise SceneError("--base-radius", float(override_mm), why)
+            return float(override_mm), "option --base-radius"
+        r = float(math.ceil(max(sizing.min_base_radius_mm, 0.0) + DRAWING_MARGIN_MM))
+        if self.closure_problem(scene, kin, r) is None:
+            return r, f"smallest admissible + {DRAWING_MARGIN_MM:g} mm, rounded up to whole mm"
+        return sizing.min_base_radius_mm, "smallest admissible"
+
+    def evaluate(self, scene, kin: Kinematics, cam_speed_rad_s, base_radius_mm: float) -> RockerCurves:
+        """Outline, pressure angle, curvature, loads and stress of the scene's rocker at one base radius."""
+        f, rotation, w = scene.follower, scene.motion.rotation, cam_speed_rad_s
+        g = self.geometry(scene, kin, base_radius_mm)
+        moment = force = torque = stress = None
+        if f.train is not None:
+            moment = loads.rocker_torque(f.train, kin, w)
+            torque = loads.rocker_cam_torque(moment, kin.ds)
+            force, stress = self.contact(scene, moment, g)
+        arr = lambda v: None if v is None else np.asarray(v)  # noqa: E731
+        return RockerCurves(
+            theta_deg=np.degrees(np.asarray(kin.theta)), swing_deg=np.degrees(np.asarray(kin.s)),
+            ds=np.asarray(kin.ds), d2s=np.asarray(kin.d2s),
+            angular_velocity_rad_s=np.asarray(kin.ds * w), angular_accel_rad_s2=np.asarray(kin.d2s * w**2),
+            angular_jerk_rad_s3=np.asarray(kin.d3s * w**3),
+            segment_starts_deg=scene.motion.program.start_deg, follower_type=self.name, rotation=rotation,
+            pivot_distance_mm=f.pivot_distance_mm, arm_length_mm=g.arm_length_mm,
+            roller_radius_mm=g.roller_radius_mm, face_offset_mm=g.face_offset_mm,
+            base_radius_mm=float(base_radius_mm), prime_radius_mm=g.prime_radius_mm,
+            arm_start_angle_deg=_f(jnp.degrees(g.arm_start_angle)),
+            arm_angle_deg=np.degrees(np.asarray(g.arm_angle)), profile_x_mm=np.asarray(g.profile_x_mm),
+            profile_y_mm=np.asarray(g.profile_y_mm), pitch_x_mm=arr(g.pitch_x_mm), pitch_y_mm=arr(g.pitch_y_mm),
+            pressure_angle_deg=np.degrees(np.asarray(g.pressure_angle)), rho_mm=np.asarray(g.rho_mm),
+            pitch_rho_mm=arr(g.pitch_rho_mm), undercut_margin_mm=arr(g.undercut_margin_mm),
+            contact_distance_mm=arr(g.contact_distance_mm), pivot_torque_Nm=arr(moment),
+            contact_force_N=arr(force), torque_Nm=arr(torque), stress_MPa=arr(stress),
+            pressure_angle_limit_deg=g.pressure_angle_limit_deg,
+        )
+
+    def run(self, scene, arrays: SceneArrays | None = None, *, base_radius_mm: float | None = None,
+            dtype=None) -> RockerRun:
+        """Design, sizing, drawing radius, curves and violations of a rocker scene (see the module
+        docstring; Python: may raise SceneError)."""
+        arrays = scene_arrays(scene, dtype=dtype) if arrays is None else arrays
+        design = None
+        if scene.design is not None:
+            from camjax.solvers.base import problem_from_scene, solve
+
+            d = scene.design
+            problem = problem_from_scene(scene, arrays)
+            design = solve(problem, (d.alpha, d.gamma), mode=d.mode, solver=d.solver, seed=d.seed).to_json(problem)
+        kin, w, drawn = arrays.kin, arrays.cam_speed_rad_s, scene
+        if design is not None:
+            # the cam is sized and drawn with the design's pivot, arm (or face) and roller
+            dims = {k: design[k] for k in self.variables if k != "base_radius_mm" and k in design}
+            drawn = replace(scene, follower=replace(scene.follower, **dims))
+            try:
+                sizing = self.sizing(drawn, kin)
+            except SceneError:  # an infeasible design: its own radius is all there is to report
+                sizing = RockerSizing(design["base_radius_mm"], design.get("prime_radius_mm"), 0.0, "none")
+            if base_radius_mm is None:
+                radius, source = design["base_radius_mm"], "design"
+            else:
+                radius, source = self.drawing_radius(drawn, kin, sizing, base_radius_mm)
+        else:
+            sizing = self.sizing(scene, kin)
+            radius, source = self.drawing_radius(scene, kin, sizing, base_radius_mm)
+        curves = self.evaluate(drawn, kin, w, radius)
+        return RockerRun(sizing, radius, source, curves, arrays, design,
+                         tuple(rocker_violations(curves, scene)))

@@ -1,0 +1,99 @@
+"""result.json of a translating follower's run: the assembly every such type shares.
+
+A translating follower's ``report.py`` calls :func:`report` with its own blocks (a module or any
+object with these functions):
+
+- ``min_base_radius_block(follower, minimum, exact) -> dict``: the smallest cam and its rule;
+- ``design_sentences(spec, solution, out) -> dict``: one sentence per constraint the design can
+  violate (the keys of the solver's ``violated``) besides stress and bounds;
+- ``evaluated_block(curves, extremes) -> dict``: its own figures at the evaluated design;
+- ``extra_blocks(scene, run, extremes, data) -> None``: anything else it adds to ``data``.
+
+Formatting only, as :mod:`camjax.output.report`, whose shared blocks this uses.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from camjax import followers
+from camjax.evaluate import curve_extremes, curve_names
+from camjax.output.report import feasibility_block, follower_scene_block, header_block, loads_block
+
+
+def design_block(spec, solution, sentences: dict[str, str]) -> dict[str, Any]:
+    """The solver's result with the report's additions.
+
+    Added to the solver's JSON: ``peak_stress_MPa`` (the design's peak stress computed exactly as
+    the report's stress curve; null without [contact]), the smallest admissible R_b (and, flat
+    face, L) (``required_*``) with the constraint that binds there, and ``violations`` as
+    readable sentences (``sentences``: the follower's own, besides stress and bounds).
+    """
+    out = dict(solution.result)
+    sigma_peak, required = solution.peak_stress_MPa, solution.required_base_radius_mm
+    rb_hi = spec.bounds("base_radius_mm")[1]
+    messages = {
+        "stress": f"peak stress {sigma_peak or 0.0:.6g} MPa > sigma_max {spec.sigma_max_MPa or 0.0:g} MPa",
+        "bounds": "a design variable is outside its bounds",
+        **sentences,
+    }
+    violations = [messages[name] for name in out["violated"]]
+    if required > rb_hi:
+        violations.insert(0, f"base radius needs {required:.6g} mm > upper bound {rb_hi:g} mm")
+    out.update({
+        "peak_stress_MPa": sigma_peak,
+        "violations": violations,
+        "required_base_radius_mm": required,
+        "required_base_radius_deg": solution.required_base_radius_deg,
+        "binding_constraint": solution.binding_constraint,
+    })
+    if solution.required_face_width_mm is not None:
+        out["required_face_width_mm"] = solution.required_face_width_mm
+    return out
+
+
+def evaluated_block(curves, extremes) -> dict[str, Any]:
+    """Curvature and stress at the evaluated design (rho = R_b + q, q = s + s''), where the follower
+    has them."""
+    out: dict[str, Any] = {}
+    if curves.rho_mm is not None:
+        q = extremes["q"]
+        out["rho_mm"] = {"min": curves.base_radius_mm + q.min, "min_deg": q.min_deg}
+    if curves.stress_MPa is not None:
+        e = extremes["stress"]
+        out["stress_MPa"] = {"max": e.max, "max_deg": e.max_deg}
+    return out
+
+
+def report(scene, run, blocks) -> dict[str, Any]:
+    """The report of a translating follower's design run as a plain, JSON-ready dict; ``blocks``:
+    the follower's own (see the module docstring)."""
+    follower = followers.of(scene)
+    arrays = run.arrays
+    drawn = follower.drawn_follower(scene, run.design.result if run.design is not None else {})
+    extremes = run.extremes
+    if extremes is None:  # a run built without them: the samples' own
+        extremes = curve_extremes(scene, arrays._replace(model=None), curve_names(scene, arrays),
+                                  run.base_radius_mm, follower=drawn)
+    data = header_block(scene, arrays if run.extremes is not None else arrays._replace(model=None), extremes)
+    block = loads_block(scene, arrays, extremes)
+    if block is not None:
+        data["loads"] = block
+    blocks.extra_blocks(scene, run, extremes, data)
+    # sized with the dimensions the cam is drawn with (a design's)
+    data.update(blocks.min_base_radius_block(drawn, run.min_base_radius,
+                                             run.extremes is not None and arrays.model is not None))
+    if run.design is not None:
+        out = run.design.result
+        sentences = blocks.design_sentences(scene.design, run.design, out)
+        data["design"] = design_block(scene.design, run.design, sentences)
+        own = follower_scene_block(follower, scene.follower)
+        if own:
+            data["follower_scene"] = own
+    data["evaluated_at"] = {"base_radius_mm": run.base_radius_mm,
+                            "face_width_mm": run.curves.face_width_mm,
+                            "source": run.base_radius_source,
+                            **feasibility_block(run.violations)}
+    data.update(evaluated_block(run.curves, extremes))
+    data.update(blocks.evaluated_block(run.curves, extremes))
+    return data

@@ -1,0 +1,227 @@
+"""The flat-face problem's optimum in closed form and its exact polish (SPEC 5).
+
+Pointwise, the best R_b at each angle has a closed form (the stress term against the size term,
+:func:`optimal_curvature_radius`, :func:`pointwise_optimum`); globally, the design needs are found by
+bisection on R_b (:func:`global_optimum`); L is the smallest admissible face width either way. These
+are the independent references the solvers are checked against. With exact extrema,
+:func:`polish` and :func:`polish_pointwise` move a solver's design (found on the sample grid) to
+the continuous optimum (the problem's protocol hooks of the same names call them).
+"""
+
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+
+from camjax.contact import stress_from_coefficient
+from camjax.family import (
+    Weights,
+)
+from camjax.followers.flat.problem import (
+    Design,
+    Problem,
+    exact_peak_stress,
+    face_width_need,
+    required_base_radius,
+    required_face_width,
+    rho_need,
+)
+from camjax.numerics import safe_divide
+
+POLISH_STEPS = 8
+POLISH_START_STEP = 1e-4
+# Newton steps of the peak refinements inside the polish: the scan leaves 1/8 of two samples,
+# which Newton closes in ~5; the final evaluation refines with the full ITERATIONS.
+POLISH_ITERATIONS = 8
+
+
+def polish(problem: Problem, weights: Weights, design: Design) -> Design:
+    """The exact optimum near a solver's design, when the problem carries :class:`ExactExtrema`.
+
+    L: the objective grows with L, so the optimum is the smallest feasible L, clip(2 max|s'|,
+    L_lo, L_hi), exact. R_b: g(R) = alpha R / N + gamma sigma_peak(R) / sigma_max is convex on
+    the feasible [R_need, R_hi] (as in :func:`global_optimum`); its derivative, by the envelope
+    theorem at the refined peak, is nondecreasing. A secant on g' safeguarded by bisection in
+    the bracket that the solver's R splits off [R_need, R_hi] converges to the minimizer; an
+    end is kept when g' does not change sign there. Without ``problem.exact`` the
+    design is returned unchanged. Traceable and vmappable (fixed step count).
+    """
+    if problem.exact is None:
+        return design
+    width = jnp.clip(required_face_width(problem), problem.lower.face_width_mm, problem.upper.face_width_mm)
+    lo = jnp.minimum(jnp.maximum(problem.lower.base_radius_mm, required_base_radius(problem)),
+                     problem.upper.base_radius_mm)
+    hi = problem.upper.base_radius_mm
+
+    def slope(r):
+        def peak(x):
+            return exact_peak_stress(problem, Design(x, width), POLISH_ITERATIONS).value
+
+        peak_slope = jax.grad(peak)(r)
+        return weights.alpha / problem.size_norm_mm + weights.gamma * peak_slope / problem.sigma_max_MPa
+
+    # the secant starts at the solver's R and a step beside it (the grid's optimum is ~1e-3
+    # relative off, so the iterates converge superlinearly from there); every point evaluated
+    # narrows the bracket [a, b] with g'(a) < 0 < g'(b)
+    r0 = jnp.clip(design.base_radius_mm, lo, hi)
+    r1 = jnp.clip(r0 + POLISH_START_STEP * (hi - lo), lo, hi)
+    r1 = jnp.where(r1 == r0, jnp.clip(r0 - POLISH_START_STEP * (hi - lo), lo, hi), r1)
+    points = jnp.stack([lo, hi, r0, r1])
+    starts = points.shape[0]
+
+    def secant(state):
+        a, b, x0, g0, x1, g1, best, g_best = state
+        # secant through the last two iterates; bisection when it leaves the bracket (whose ends
+        # count as inside: a converged iterate is an end, and the secant then stays on it)
+        x = x1 - g1 * safe_divide(x1 - x0, g1 - g0)
+        return jnp.where((x >= a) & (x <= b), x, 0.5 * (a + b))
+
+    def after_secant(state, x, gx):
+        a, b, x0, g0, x1, g1, best, g_best = state
+        a, b = jnp.where(gx < 0, x, a), jnp.where(gx < 0, b, x)
+        closer = jnp.abs(gx) < jnp.abs(g_best)
+        return a, b, x1, g1, x, gx, jnp.where(closer, x, best), jnp.where(closer, gx, g_best)
+
+    def after_starts(slopes):
+        g0, g1 = slopes[2], slopes[3]
+        a = jnp.max(jnp.where(slopes < 0, points, lo))
+        b = jnp.min(jnp.where(slopes >= 0, points, hi))
+        start_best = jnp.where(jnp.abs(g1) < jnp.abs(g0), r1, r0)
+        return a, b, r0, g0, r1, g1, start_best, jnp.minimum(jnp.abs(g0), jnp.abs(g1))
+
+    def step(i, carry):
+        # the first ``starts`` passes take the start points' slopes, the rest are secant steps:
+        # one loop body, so the refinement behind the slope is traced (and compiled) once
+        slopes, state = carry
+        starting = i < starts
+        x = jnp.where(starting, points[jnp.minimum(i, starts - 1)], secant(state))
+        gx = slope(x)
+        slopes = jnp.where(starting & (jnp.arange(starts) == i), gx, slopes)
+        state = jax.tree.map(lambda s, t: jnp.where(starting, s, t), after_starts(slopes),
+                             after_secant(state, x, gx))
+        return slopes, state
+
+    zero = jnp.zeros_like(lo)
+    carry = (jnp.zeros_like(points), (zero,) * 8)
+    slopes, state = jax.lax.fori_loop(0, starts + POLISH_STEPS, step, carry)
+    g_lo, g_hi = slopes[0], slopes[1]
+    x = state[6]  # the point of smallest |g'| seen
+    radius = jnp.where(g_lo >= 0, lo, jnp.where(g_hi <= 0, hi, x))
+    return Design(jax.lax.stop_gradient(radius), width)
+
+
+def optimal_curvature_radius(weights: Weights, coefficient, sigma_max_MPa, size_norm_mm) -> jax.Array:
+    """Unconstrained minimizer rho* of alpha rho / N + gamma C / (sigma_max sqrt(rho)), mm.
+
+    rho* = (gamma N C / (2 alpha sigma_max))^(2/3); +inf when alpha = 0 < gamma C (the stress
+    term alone wants an infinite cam), 0 when gamma C = 0 (the size term alone wants the smallest).
+    """
+    num = weights.gamma * size_norm_mm * coefficient
+    den = 2.0 * weights.alpha * sigma_max_MPa
+    ratio = safe_divide(num, den, fallback=jnp.inf)
+    ratio = jnp.where(num > 0, ratio, 0.0)
+    return jnp.where(jnp.isfinite(ratio), jnp.cbrt(jnp.where(jnp.isfinite(ratio), ratio, 0.0)) ** 2, jnp.inf)
+
+
+def pointwise_optimum(problem: Problem, weights: Weights) -> Design:
+    """Closed-form optimum of the problem at each angle separately, arrays of shape (n,).
+
+    Derivation. At one angle F(R, L) = alpha (R + L)/N + gamma C / (sigma_max sqrt(R + q)) is a
+    sum of a function of L and a function of R, and every constraint involves only one of them,
+    so the problem splits.
+
+    * L: minimize alpha L / N on [max(L_lo, 2|s'|), L_hi]: the lower end. (With alpha = 0 the
+      objective does not depend on L; we break the tie the same way, the smallest feasible L.)
+    * R: curvature and stress are both lower bounds on rho, so the feasible set is
+      [R_need, R_hi] with R_need = max(R_lo, -q + max(rho_min, (C/sigma_max)^2)). On rho > 0,
+      f(R) = alpha R / N + gamma C / (sigma_max sqrt(R + q)) is convex (linear + convex), with
+      f'(R) = alpha/N - gamma C / (2 sigma_max) rho^(-3/2) = 0 at
+      rho* = (gamma N C / (2 alpha sigma_max))^(2/3). A convex 1-D function is minimized on an
+      interval at its stationary point projected onto the interval:
+      R* = clip(-q + rho*, R_need, R_hi). alpha = 0 gives rho* = inf (R* = R_hi); gamma = 0 or
+      C = 0 gives rho* = 0 (R* = R_need).
+    * Infeasible angles (R_need > R_hi or 2|s'| > L_hi) get the closest bound, R_hi or L_hi; the
+      violation is reported by :func:`violation`, not hidden.
+
+    Per-angle: L* = clip(max(2|s'|, L_lo), -, L_hi); R* = min(max(-q + rho*, R_need), R_hi).
+    """
+    c = problem.stress_coefficient
+    rho_star = optimal_curvature_radius(weights, c, problem.sigma_max_MPa, problem.size_norm_mm)
+    r_need = jnp.maximum(problem.lower.base_radius_mm, rho_need(problem) - problem.q_mm)
+    r = jnp.minimum(jnp.maximum(rho_star - problem.q_mm, r_need), problem.upper.base_radius_mm)
+    l_need = jnp.maximum(problem.lower.face_width_mm, face_width_need(problem))
+    length = jnp.minimum(l_need, problem.upper.face_width_mm)
+    return Design(r, length)
+
+
+def global_optimum(problem: Problem, weights: Weights, bisections: int = 200) -> Design:
+    """Exact optimum of the global problem (one R_b, L), by bisection on a convex 1-D function.
+
+    A reference that uses the structure of this two-variable problem (it does not extend to new
+    design variables; the generic solvers do not rely on it). L splits off exactly as in
+    :func:`pointwise_optimum` with 2 max|s'|. For R, g(R) = alpha R / N + gamma max_theta
+    sigma_theta(R) / sigma_max is convex (a max of convex functions plus a linear one) on the
+    feasible interval [R_need, R_hi]; its right derivative
+    g'(R) = alpha/N - gamma C_k / (2 sigma_max rho_k^(3/2)), k = argmax_theta sigma_theta(R),
+    is nondecreasing, and bisection on its sign converges to the minimizer (a kink where two
+    angles share the max included). ``bisections`` halvings of [R_need, R_hi] (200: to the last
+    bit in float64). A problem with :class:`ExactExtrema` gets the continuous optimum
+    (:func:`polish` from the grid's). Returns scalars.
+    """
+    lo_r = jnp.maximum(problem.lower.base_radius_mm, required_base_radius(problem))
+    hi_r = problem.upper.base_radius_mm
+    lo_r = jnp.minimum(lo_r, hi_r)  # infeasible: R_hi, reported as such
+
+    def slope(r):
+        rho = r + problem.q_mm
+        sigma = stress_from_coefficient(problem.stress_coefficient, rho)
+        k = jnp.argmax(sigma)
+        rho_k = jnp.maximum(rho[k], problem.rho_min_mm)
+        dsigma = -0.5 * problem.stress_coefficient[k] * rho_k ** -1.5
+        return weights.alpha / problem.size_norm_mm + weights.gamma * dsigma / problem.sigma_max_MPa
+
+    def halve(_, bracket):
+        a, b = bracket
+        m = 0.5 * (a + b)
+        up = slope(m) >= 0
+        return jnp.where(up, a, m), jnp.where(up, m, b)
+
+    a, b = jax.lax.fori_loop(0, bisections, halve, (lo_r, hi_r))
+    r = jnp.where(slope(lo_r) >= 0, lo_r, jnp.where(slope(hi_r) < 0, hi_r, 0.5 * (a + b)))
+    l_need = jnp.maximum(problem.lower.face_width_mm, required_face_width(problem))
+    # with exact extrema the grid's optimum is the start of the polish to the continuous one
+    return polish(problem, weights, Design(r, jnp.minimum(l_need, problem.upper.face_width_mm)))
+
+
+def polish_pointwise(problem: Problem, weights: Weights, design: Design, extras: dict) -> tuple[Design, dict]:
+    """The condensed pointwise design as continuous maxima over the angle (with ``problem.exact``).
+
+    R_b: the largest per-angle optimum R*(theta) of :func:`pointwise_optimum`, a closed form in
+    q(theta), C(theta) and s'(theta), refined off the grid from the scene's closed forms (its
+    kinks, where a constraint takes over, are handled by the bisection fallback). L: the largest
+    per-angle width, clip(2 max|s'|, L_lo, L_hi), exact. Without ``problem.exact``: unchanged.
+    """
+    if problem.exact is None:
+        return design, extras
+    from camjax import extrema
+    from camjax.evaluate import model_at
+    from camjax.program import segment_bounds_deg
+
+    model, plain = problem.exact.model, problem._replace(exact=None)
+
+    def fn(segment, theta_deg, params):
+        m, pr, w = params
+        p = model_at(m, segment, theta_deg)
+        at = pr._replace(theta_deg=theta_deg, q_mm=p.kin.s + p.kin.d2s, ds_mm=p.kin.ds,
+                         stress_coefficient=p.stress_coefficient)
+        return pointwise_optimum(at, w).base_radius_mm
+
+    grid = pointwise_optimum(plain, weights).base_radius_mm
+    e = extrema.refine_max(fn, (model, plain, weights), segment_bounds_deg(model.program), grid,
+                           constant=extrema.dwells(model.program))
+    width = jnp.clip(problem.exact.face_width_need_mm, problem.lower.face_width_mm,
+                     problem.upper.face_width_mm)
+    extras = {**extras, "base_radius_deg": e.angle_deg, "face_width_deg": problem.exact.face_width_need_deg}
+    return Design(e.value, width), extras
+
+

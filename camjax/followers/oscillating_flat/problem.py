@@ -1,0 +1,252 @@
+"""The oscillating flat face's optimal-design problem: a problem family of :mod:`camjax.solvers.base`.
+
+Design variables (:class:`Design`, mm): base radius R_b, pivot distance d and face offset f of a
+rocker with a flat face (:mod:`camjax.followers.oscillating_roller.geometry`); each is free between its bounds or
+fixed (lower == upper). The face starts at psi0 with sin psi0 = (R_b + f) / d.
+
+Objective, weights alpha (size) and gamma (stress):
+
+    F = alpha R_b / R_b,max + gamma max_theta sigma(theta) / sigma_max,
+
+sigma the Hertz stress of the face on the cam, P = M / xi (M the torque about the pivot, xi the
+contact point's distance along the face): sigma = C_M / sqrt(xi rho) with C_M = 0.564 sqrt(M / (w K))
+computed once per scene (xi in m inside). Constraints, one value per angle, ``g <= 0`` in mm:
+
+- reach: (R_b + f) - d and -(R_b + f) (the face touches the base circle: 0 < sin psi0 < 1), the
+  larger of the two, the same at every angle;
+- swing: d (psi0 + s - pi/2) (the face keeps rising: psi < 90 deg, which also keeps xi > 0);
+- curvature: rho_min - rho (a flat face cannot follow a concave cam);
+- stress: C_M^2 / (sigma_max^2 xi) - rho, sigma <= sigma_max written on rho (finite where rho <= 0);
+- and the box bounds, which the solvers keep by projection.
+
+The face length the contact needs (max xi - min xi) is reported with the design.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+
+from camjax import family
+from camjax.contact import stress_from_coefficient
+from camjax.family import FEASIBILITY_RTOL_STRESS, FEASIBILITY_TOL_MM, Weights, all_within, weighted_objective
+
+# re-exported: this family's protocol functions, written once for every family
+from camjax.family import bounds as bounds
+from camjax.family import bounds_violation as bounds_violation
+from camjax.followers import _pitch as pitch
+from camjax.followers.oscillating_flat import geometry as rocker_flat_geo
+from camjax.followers.oscillating_roller.problem import moment_coefficient
+from camjax.numerics import RHO_FLOOR_MM, capped_divide, finite_float, floor_positive, positive_part
+
+CONSTRAINT_NAMES = ("reach", "swing", "curvature", "stress", "bounds")
+VARIABLES = ("base_radius_mm", "pivot_distance_mm", "face_offset_mm")
+
+
+class Design(NamedTuple):
+    """One oscillating flat-face design (scalars), or a batch of them."""
+
+    base_radius_mm: jax.Array  # R_b, mm
+    pivot_distance_mm: jax.Array  # d, mm
+    face_offset_mm: jax.Array  # f, mm
+
+
+class Problem(NamedTuple):
+    """Design-independent data of one oscillating flat-face design problem on n angles."""
+
+    theta_deg: jax.Array  # (n,) cam angle, degrees
+    s_rad: jax.Array  # (n,) arm swing s, rad
+    ds: jax.Array  # (n,) s', rad/rad
+    d2s: jax.Array  # (n,) s'', rad/rad^2
+    moment_coefficient: jax.Array  # (n,) C_M = 0.564 sqrt(M / (w K)) (0: no stress)
+    lower: Design
+    upper: Design
+    sigma_max_MPa: jax.Array  # ()
+    size_norm_mm: jax.Array  # () R_b,max
+    min_curvature_radius_mm: jax.Array  # ()
+    rotation_sign: jax.Array  # () +1 ccw, -1 cw
+
+
+class Constraints(NamedTuple):
+    """Constraint functions g <= 0, mm, one value per angle (shape (n,) each)."""
+
+    reach: jax.Array
+    swing: jax.Array
+    curvature: jax.Array
+    stress: jax.Array
+
+
+class Violation(NamedTuple):
+    """Worst violation of each constraint in physical units, 0 when satisfied (shape ())."""
+
+    reach: jax.Array  # mm
+    swing: jax.Array  # mm (d times the excess angle)
+    curvature: jax.Array  # mm: rho_min - min rho
+    stress: jax.Array  # MPa
+    bounds: jax.Array  # mm
+
+
+class Evaluation(NamedTuple):
+    """A design judged on the whole grid (shape () each)."""
+
+    objective: jax.Array
+    size_mm: jax.Array  # R_b
+    stress_max_MPa: jax.Array
+    stress_max_deg: jax.Array
+    rho_min_mm: jax.Array
+    rho_min_deg: jax.Array
+    face_length_mm: jax.Array  # max xi - min xi
+    violation: Violation
+    feasible: jax.Array
+
+
+def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=None) -> Problem:
+    """Problem of an oscillating flat-face scene with a [design] section (Python: reads the scene)."""
+    from camjax.evaluate import scene_arrays
+
+    if scene.design is None:
+        raise ValueError("scene has no [design] section: nothing to optimize")
+    if scene.follower.type != "oscillating_flat":
+        raise ValueError(f"follower.type: {scene.follower.type!r} is not an oscillating flat face")
+    if arrays is None:
+        arrays = scene_arrays(scene, samples=samples, dtype=dtype)
+    d, f, kin = scene.design, scene.follower, arrays.kin
+    as_ = lambda v: jnp.asarray(v, kin.s.dtype)  # noqa: E731
+    box = [d.bounds("base_radius_mm"), d.bounds("pivot_distance_mm"), d.bounds("face_offset_mm")]
+    return Problem(
+        theta_deg=as_(arrays.theta_deg), s_rad=kin.s, ds=kin.ds, d2s=kin.d2s,
+        moment_coefficient=as_(moment_coefficient(scene, arrays)),
+        lower=Design(*(as_(b[0]) for b in box)), upper=Design(*(as_(b[1]) for b in box)),
+        sigma_max_MPa=as_(d.sigma_max_MPa if d.sigma_max_MPa is not None else 1.0),
+        size_norm_mm=as_(d.bounds("base_radius_mm")[1]), min_curvature_radius_mm=as_(f.min_curvature_radius_mm),
+        rotation_sign=as_(pitch.rotation_sign(scene.motion.rotation)),
+    )
+
+
+def per_angle(problem: Problem) -> Problem:
+    """The n pointwise problems: every grid leaf (n,) -> (n, 1), every scalar leaf -> (n,)."""
+    return family.per_angle(problem, {"theta_deg", "s_rad", "ds", "d2s", "moment_coefficient"})
+
+
+class _Geometry(NamedTuple):
+    psi: jax.Array  # (n,) arm angle, rad
+    rho: jax.Array  # (n,) cam radius of curvature, mm
+    xi: jax.Array  # (n,) contact distance along the face, mm
+    reach: jax.Array  # () mm
+
+
+def _geometry(problem: Problem, design: Design) -> _Geometry:
+    """The closed forms of camjax.followers.oscillating_roller.geometry with the rotation as data (Q = 1 + sigma s')."""
+    d, f = design.pivot_distance_mm, design.face_offset_mm
+    psi = rocker_flat_geo.face_start_angle(design.base_radius_mm, d, f) + problem.s_rad
+    q = 1.0 + problem.rotation_sign * problem.ds
+    rho = rocker_flat_geo.swing_face_radius_of_curvature(d, f, psi, q, problem.ds, problem.d2s)
+    reach = jnp.maximum(design.base_radius_mm + f - d, -(design.base_radius_mm + f))
+    return _Geometry(psi, rho, capped_divide(d * jnp.cos(psi), q), reach)
+
+
+def stress(problem: Problem, design: Design) -> jax.Array:
+    """Hertz contact stress sigma(theta) (MPa), shape (n,); saturated where rho <= 0."""
+    g = _geometry(problem, design)
+    coeff = problem.moment_coefficient * jax.lax.rsqrt(floor_positive(g.xi * 1e-3, RHO_FLOOR_MM))
+    return stress_from_coefficient(coeff, g.rho)
+
+
+def peak_stress(problem: Problem, design: Design) -> jax.Array:
+    """max_theta sigma (MPa), shape ()."""
+    return jnp.max(stress(problem, design))
+
+
+def size_term(problem: Problem, design: Design) -> jax.Array:
+    """Normalized size R_b / R_b,max."""
+    return design.base_radius_mm / problem.size_norm_mm
+
+
+def objective(problem: Problem, weights: Weights, design: Design) -> jax.Array:
+    """F = alpha R_b / R_b,max + gamma max_theta sigma / sigma_max (shape ())."""
+    return weighted_objective(weights, size_term(problem, design), peak_stress(problem, design),
+                              problem.sigma_max_MPa)
+
+
+def constraints(problem: Problem, design: Design) -> Constraints:
+    """Every angle's constraints as g <= 0 (mm), shape (n,) each; finite for every design."""
+    g = _geometry(problem, design)
+    xi_m = floor_positive(g.xi * 1e-3, RHO_FLOOR_MM)
+    need = problem.moment_coefficient**2 / (problem.sigma_max_MPa**2 * xi_m)
+    return Constraints(
+        reach=jnp.broadcast_to(g.reach, g.rho.shape),
+        swing=design.pivot_distance_mm * (g.psi - 0.5 * math.pi),
+        curvature=problem.min_curvature_radius_mm - g.rho,
+        stress=need - g.rho,
+    )
+
+
+def constraint_maxima(problem: Problem, design: Design) -> Constraints:
+    """max_theta of each constraint, shape () each."""
+    return jax.tree.map(jnp.max, constraints(problem, design))
+
+
+def size_norm(problem: Problem) -> jax.Array:
+    """R_b,max (mm), shape ()."""
+    return problem.size_norm_mm
+
+
+def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
+    """Objective, peak stress, smallest curvature radius, face length, violations and feasibility."""
+    g = _geometry(problem, design)
+    sigma = stress(problem, design)
+    i, j = jnp.argmax(sigma), jnp.argmin(g.rho)
+    c = constraint_maxima(problem, design)
+    v = Violation(reach=positive_part(c.reach), swing=positive_part(c.swing),
+                  curvature=positive_part(c.curvature),
+                  stress=positive_part(sigma[i] - problem.sigma_max_MPa),
+                  bounds=bounds_violation(problem, design))
+    feasible = all_within(v, _tolerances(problem.sigma_max_MPa))
+    return Evaluation(
+        objective=objective(problem, weights, design), size_mm=design.base_radius_mm,
+        stress_max_MPa=sigma[i], stress_max_deg=problem.theta_deg[i], rho_min_mm=g.rho[j],
+        rho_min_deg=problem.theta_deg[j], face_length_mm=jnp.max(g.xi) - jnp.min(g.xi),
+        violation=v, feasible=feasible,
+    )
+
+
+def condense_pointwise(problem: Problem, per_angle_design: Design) -> tuple[Design, dict]:
+    """The whole-cam design of a pointwise solve: the design of the angle with the largest R_b."""
+    return family.condense_at_largest(problem, per_angle_design, per_angle_design.base_radius_mm,
+                                      "base_radius_deg")
+
+
+def _tolerances(sigma_max_MPa) -> dict:
+    """Each constraint's feasibility tolerance (mm; the stress's in MPa)."""
+    return {**{name: FEASIBILITY_TOL_MM for name in CONSTRAINT_NAMES},
+            "stress": FEASIBILITY_RTOL_STRESS * sigma_max_MPa}
+
+
+def violated_constraints(problem: Problem, v: Violation) -> list[str]:
+    """Names of the violated constraints (Python; needs concrete values)."""
+    return family.violated(CONSTRAINT_NAMES, v, _tolerances(float(problem.sigma_max_MPa)))
+
+
+_f = finite_float
+
+
+def solution_json(problem: Problem, solution) -> dict:
+    """The oscillating flat-face keys of result.json's design block, for one Solution."""
+    d, ev, v = solution.design, solution.evaluation, solution.violation
+    violation = {f"{name}_{'MPa' if name == 'stress' else 'mm'}": getattr(v, name)
+                 for name in CONSTRAINT_NAMES}
+    figures = {"stress_max_MPa": ev.stress_max_MPa, "stress_max_deg": ev.stress_max_deg,
+               "rho_min_mm": ev.rho_min_mm, "rho_min_deg": ev.rho_min_deg,
+               "face_length_mm": ev.face_length_mm}
+    return family.solution_keys(problem, solution, VARIABLES, design_keys=family.design_json(d, VARIABLES),
+                                size_mm=d.base_radius_mm, violation=violation, figures=figures,
+                                pointwise_angles=("base_radius_deg",))
+
+
+def record(solution) -> dict:
+    """The oscillating flat-face keys of a pareto.json row: the design, size R_b and peak stress."""
+    d = solution.design
+    return family.record_json(family.design_json(d, VARIABLES), d.base_radius_mm, solution.evaluation)

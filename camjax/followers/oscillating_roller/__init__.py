@@ -1,0 +1,1 @@
+"""oscillating_roller follower."""

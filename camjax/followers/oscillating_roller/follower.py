@@ -1,0 +1,152 @@
+"""The oscillating (rocker) roller follower (SPEC 3): a roller on an arm swinging about a pivot.
+
+The pivot sits at ``pivot_distance_mm`` d from the cam centre and the roller's centre at
+``arm_length_mm`` l from the pivot; the limits are the pressure angle and the undercut, as for the
+translating roller (:mod:`camjax.followers.oscillating_roller.geometry` for the closed forms).
+Design variables: R_b, R_f, d and l (:mod:`camjax.followers.oscillating_roller.problem`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from camjax import contact, loads
+from camjax.errors import SceneError
+from camjax.followers._rocking import TRAIN_KEYS, RockerGeometry, RockerSizing, RockingFollower, read_train
+from camjax.followers.oscillating_roller import geometry as rocker_roller_geo
+from camjax.followers.roller import geometry as roller_geo
+from camjax.followers.roller.geometry import ROLLER_MAX_PRESSURE_ANGLE_DEG, ROLLER_MIN_CURVATURE_RADIUS_MM
+from camjax.scene.reader import DEFAULT, build, fixed_or_free
+from camjax.scene.spec import FollowerSpec
+
+
+@dataclass(frozen=True, kw_only=True)
+class OscillatingRollerSpec(FollowerSpec):
+    """[follower] of a rocker with a roller: pivot, arm, roller and the two limits."""
+
+    type: str = "oscillating_roller"
+    pivot_distance_mm: float = 0.0  # d, cam centre to pivot (required by the scene)
+    arm_length_mm: float = 0.0  # l, pivot to roller centre (required)
+    roller_radius_mm: float = 0.0  # R_f (required)
+    max_pressure_angle_deg: float = ROLLER_MAX_PRESSURE_ANGLE_DEG
+    min_curvature_radius_mm: float = ROLLER_MIN_CURVATURE_RADIUS_MM  # as for a roller: 0 = just no undercut
+
+
+def _f(x) -> float:
+    return float(np.asarray(x))
+
+
+def check_rocker_closes(r, base, roller, pivot_distance_mm, arm_length_mm) -> None:
+    """Refuse bounds in which no design closes: |d - l| < R_p < d + l nowhere.
+
+    Designs of the box that do not close are left to the solver's reach constraint; a box with
+    none that does is a scene error naming pivot_distance_mm (the pivot cannot be placed).
+    """
+    (d0, d1), (l0, l1) = pivot_distance_mm, arm_length_mm
+    rp0, rp1 = base[0] + roller[0], base[1] + roller[1]
+    gap = max(d0 - l1, l0 - d1, 0.0)  # smallest |d - l| in the box
+    if rp1 <= gap or rp0 >= d1 + l1:
+        value = list(pivot_distance_mm) if d0 != d1 else d0
+        raise r.error("pivot_distance_mm", value,
+                      f"no design in the bounds closes: the prime radius R_b + R_f ({rp0:g}..{rp1:g} mm) "
+                      f"must lie between |d - l| (>= {gap:g} mm) and d + l (<= {d1 + l1:g} mm)",
+                      "a pivot distance closer to the arm length, or a larger base radius")
+
+
+class OscillatingRoller(RockingFollower):
+    name = "oscillating_roller"
+    title = "oscillating roller"
+    keys = ("pivot_distance_mm", "arm_length_mm", "roller_radius_mm", "max_pressure_angle_deg",
+            "min_curvature_radius_mm", *TRAIN_KEYS)
+    variables = ("base_radius_mm", "roller_radius_mm", "pivot_distance_mm", "arm_length_mm")
+
+    def parse(self, r) -> OscillatingRollerSpec:
+        """Whether the geometry closes for the prime (base) radius the cam gets is checked where that
+        radius is known (the design or the sizing); here d > 0, l > 0 and R_f > 0."""
+        self.check_keys(r)
+        train = read_train(r)
+        pivot = r.number("pivot_distance_mm", low=0.0, low_open=True)
+        limit = r.number("max_pressure_angle_deg", DEFAULT, low=0.0, low_open=True)
+        if limit is not DEFAULT and limit >= 90.0:
+            raise r.error("max_pressure_angle_deg", limit, "out of range", "> 0 and < 90")
+        return build(OscillatingRollerSpec, type=self.name, train=train, pivot_distance_mm=pivot,
+                     arm_length_mm=r.number("arm_length_mm", low=0.0, low_open=True),
+                     roller_radius_mm=r.number("roller_radius_mm", low=0.0, low_open=True),
+                     max_pressure_angle_deg=limit,
+                     min_curvature_radius_mm=r.number("min_curvature_radius_mm", DEFAULT, low=0.0))
+
+    def design_bounds(self, r, follower) -> dict[str, tuple[float, float]]:
+        base = fixed_or_free(r, "base_radius_mm")
+        roller = fixed_or_free(r, "roller_radius_mm", (follower.roller_radius_mm,) * 2)
+        variables = dict(
+            pivot_distance_mm=fixed_or_free(r, "pivot_distance_mm", (follower.pivot_distance_mm,) * 2),
+            arm_length_mm=fixed_or_free(r, "arm_length_mm", (follower.arm_length_mm,) * 2))
+        check_rocker_closes(r, base, roller, **variables)
+        return {"base_radius_mm": base, "roller_radius_mm": roller, **variables}
+
+    def sizing(self, scene, kin) -> RockerSizing:
+        f, rotation = scene.follower, scene.motion.rotation
+        t = np.degrees(np.asarray(kin.theta))
+        s = rocker_roller_geo.oscillating_roller_min_prime_radius(
+            kin, f.pivot_distance_mm, f.arm_length_mm, f.roller_radius_mm,
+            math.radians(f.max_pressure_angle_deg), f.min_curvature_radius_mm, rotation)
+        if not bool(s.found):
+            raise SceneError("follower.arm_length_mm", f.arm_length_mm,
+                             f"with pivot_distance_mm = {f.pivot_distance_mm:g} no prime radius keeps "
+                             f"|pressure angle| <= {f.max_pressure_angle_deg:g} deg without undercut",
+                             "a longer arm, another pivot distance or a larger max_pressure_angle_deg")
+        binding = "undercut" if bool(s.undercut_binds) else "pressure_angle"
+        return RockerSizing(_f(s.base_radius_mm), _f(s.prime_radius_mm), _f(t[int(s.index)]), binding)
+
+    def closure_problem(self, scene, kin, base_radius_mm) -> str | None:
+        """The prime radius R_p = R_b + R_f must lie strictly between |d - l| and d + l (the roller
+        reaches the prime circle) and the arm must stay off the line of centres while it swings
+        (psi0 + max s < pi)."""
+        f = scene.follower
+        swing = float(np.max(np.asarray(kin.s)))
+        if base_radius_mm <= 0:
+            return "the base radius must be > 0"
+        d, l, rp = f.pivot_distance_mm, f.arm_length_mm, base_radius_mm + f.roller_radius_mm
+        if not abs(d - l) < rp < d + l:
+            return (f"the roller cannot reach the prime circle R_p = {rp:g} mm: needs |d - l| = "
+                    f"{abs(d - l):g} < R_p < d + l = {d + l:g}")
+        psi0 = math.acos((d * d + l * l - rp * rp) / (2 * d * l))
+        if psi0 + swing >= math.pi:
+            return (f"the arm starts {math.degrees(psi0):g} deg from the line of centres and the lift "
+                    f"({math.degrees(swing):g} deg) swings it through that line")
+        return None
+
+    def geometry(self, scene, kin, base_radius_mm) -> RockerGeometry:
+        f, rotation = scene.follower, scene.motion.rotation
+        d, rf, l = f.pivot_distance_mm, f.roller_radius_mm, f.arm_length_mm
+        rp = base_radius_mm + rf
+        g = rocker_roller_geo.oscillating_roller_geometry(d, l, rf, rp, kin, rotation, f.min_curvature_radius_mm)
+        x, y = rocker_roller_geo.oscillating_roller_profile(d, l, rf, rp, kin, rotation)
+        pitch_x, pitch_y = rocker_roller_geo.oscillating_roller_pitch_curve(d, l, rp, kin, rotation)
+        return RockerGeometry(
+            x, y, g.arm_angle, rocker_roller_geo.arm_start_angle(rp, d, l), g.pressure_angle,
+            g.cam_radius_of_curvature, pitch_x, pitch_y, g.pitch_radius_of_curvature, g.pitch_curvature,
+            g.undercut_margin, arm_length_mm=l, roller_radius_mm=rf, prime_radius_mm=float(rp),
+            pressure_angle_limit_deg=float(f.max_pressure_angle_deg))
+
+    def contact(self, scene, moment, g):
+        f = scene.follower
+        force = loads.rocker_roller_contact_force(moment, g.arm_length_mm, g.pressure_angle)
+        stress = None
+        if scene.contact is not None:
+            c = scene.contact
+            # the force along the roller's path, M / l, is the roller formula's "axial" force
+            coeff = contact.stress_coefficient(moment / (g.arm_length_mm * 1e-3), c.cam_width_mm, c.cam, c.follower)
+            rho_eq = roller_geo.roller_equivalent_radius(g.pitch_curvature, f.roller_radius_mm)
+            stress = contact.roller_stress(coeff, g.pressure_angle, rho_eq)
+        return force, stress
+
+    def summary(self, design) -> str:
+        return (f"R_f = {design['roller_radius_mm']:.4f} mm, pivot {design['pivot_distance_mm']:.4f} mm, "
+                f"arm {design['arm_length_mm']:.4f} mm, R_p = {design['prime_radius_mm']:.4f} mm")
+
+
+FOLLOWER = OscillatingRoller()

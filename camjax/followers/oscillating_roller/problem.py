@@ -1,0 +1,329 @@
+"""The oscillating roller follower's optimal-design problem: a problem family of :mod:`camjax.solvers.base`.
+
+Design variables (:class:`Design`, mm): base radius R_b, roller radius R_f, pivot distance d and
+arm length l of a rocker with a roller (:mod:`camjax.followers.oscillating_roller.geometry`); each is free between
+its bounds or fixed (lower == upper). The prime radius is R_p = R_b + R_f and the arm starts at
+psi0 with cos psi0 = (d^2 + l^2 - R_p^2) / (2 d l).
+
+Objective, weights alpha (size) and gamma (stress), N = R_b,max + R_f,max:
+
+    F = alpha (R_b + R_f) / N + gamma max_theta sigma(theta) / sigma_max,
+
+with sigma the Hertz stress of the roller, P = M / (l cos phi) (M the torque about the pivot,
+:func:`camjax.loads.rocker_torque`): sigma = C_M sqrt(1 / (l cos phi rho_eq)) with
+C_M = 0.564 sqrt(M / (w K)) computed once per scene (l in m inside). Constraints, one value per
+angle, ``g <= 0`` in mm (:class:`Constraints`):
+
+- reach: max(|d - l| - R_p, R_p - (d + l)) (the roller reaches the prime circle), the same at
+  every angle;
+- pressure_angle: |l Q - d cos psi| - tan(phi_max) d sin psi <= 0, which is |phi| <= phi_max
+  without the arctan (Q = 1 + sigma s');
+- undercut: (R_f + rho_min) (kappa_pitch (R_f + rho_min) - 1) <= 0 (as the translating roller);
+- stress: C_M^2 / (sigma_max^2 l cos phi) - rho_eq <= 0, sigma <= sigma_max on the equivalent
+  radius (finite at and beyond an undercut);
+- and the box bounds, which the solvers keep by projection.
+
+Modes: :func:`per_angle` gives the n one-angle problems; a pointwise solve is condensed into the
+design of the angle with the largest R_b + R_f.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from camjax import family
+from camjax.contact import HERTZ_FACTOR, compliance, roller_stress
+from camjax.family import (
+    FEASIBILITY_RTOL_STRESS,
+    FEASIBILITY_TOL_MM,
+    FEASIBILITY_TOL_RAD,
+    Weights,
+    all_within,
+    weighted_objective,
+)
+
+# re-exported: this family's protocol functions, written once for every family
+from camjax.family import bounds as bounds
+from camjax.family import bounds_violation as bounds_violation
+from camjax.followers import _pitch as pitch
+from camjax.followers.oscillating_roller import geometry as rocker_roller_geo
+from camjax.followers.roller import geometry as roller_geo
+from camjax.followers.roller.problem import roller_figures
+from camjax.numerics import COS_FLOOR, RHO_FLOOR_MM, finite_float, floor_positive, positive_part, safe_sqrt
+
+CONSTRAINT_NAMES = ("reach", "pressure_angle", "undercut", "stress", "bounds")
+VARIABLES = ("base_radius_mm", "roller_radius_mm", "pivot_distance_mm", "arm_length_mm")
+
+
+class Design(NamedTuple):
+    """One oscillating-roller design (scalars), or a batch of them (arrays with leading axes)."""
+
+    base_radius_mm: jax.Array  # R_b, mm
+    roller_radius_mm: jax.Array  # R_f, mm
+    pivot_distance_mm: jax.Array  # d, mm
+    arm_length_mm: jax.Array  # l, mm
+
+
+class Problem(NamedTuple):
+    """Design-independent data of one oscillating-roller design problem on an angle grid of n samples."""
+
+    theta_deg: jax.Array  # (n,) cam angle, degrees
+    s_rad: jax.Array  # (n,) arm swing s, rad
+    ds: jax.Array  # (n,) s', rad/rad
+    d2s: jax.Array  # (n,) s'', rad/rad^2
+    moment_coefficient: jax.Array  # (n,) C_M = 0.564 sqrt(M / (w K)), MPa mm^0.5 m^0.5 (0: no stress)
+    lower: Design  # lower bounds, mm
+    upper: Design  # upper bounds, mm
+    sigma_max_MPa: jax.Array  # () allowable contact stress
+    size_norm_mm: jax.Array  # () N = R_b,max + R_f,max
+    tan_max_pressure_angle: jax.Array  # () tan(phi_max)
+    min_curvature_radius_mm: jax.Array  # () smallest convex cam-surface radius allowed
+    rotation_sign: jax.Array  # () +1 ccw, -1 cw
+
+
+class Constraints(NamedTuple):
+    """Constraint functions g <= 0, mm, one value per angle (shape (n,) each)."""
+
+    reach: jax.Array  # max(|d - l| - R_p, R_p - (d + l))
+    pressure_angle: jax.Array  # |l Q - d c| - tan(phi_max) d sn
+    undercut: jax.Array  # (R_f + rho_min) (kappa (R_f + rho_min) - 1)
+    stress: jax.Array  # C_M^2 / (sigma_max^2 l cos phi) - rho_eq
+
+
+class Violation(NamedTuple):
+    """Worst violation of each constraint in physical units, 0 when satisfied (shape ())."""
+
+    reach: jax.Array  # mm
+    pressure_angle: jax.Array  # rad: max |phi| - phi_max
+    undercut: jax.Array  # mm: rho_min - min rho_c over the convex parts
+    stress: jax.Array  # MPa: max sigma - sigma_max
+    bounds: jax.Array  # mm
+
+
+class Evaluation(NamedTuple):
+    """A design judged on the whole grid (true maxima; shape () each)."""
+
+    objective: jax.Array
+    size_mm: jax.Array  # R_b + R_f, the prime radius
+    stress_max_MPa: jax.Array
+    stress_max_deg: jax.Array
+    pressure_angle_max_deg: jax.Array
+    pressure_angle_max_at_deg: jax.Array
+    cam_rho_min_mm: jax.Array  # smallest convex cam-surface radius
+    violation: Violation
+    feasible: jax.Array  # bool
+
+
+# ------------------------------------------------------------------------------ building
+
+
+def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=None) -> Problem:
+    """Problem of an oscillating-roller scene with a [design] section (Python: reads the scene)."""
+    from camjax.evaluate import scene_arrays
+
+    if scene.design is None:
+        raise ValueError("scene has no [design] section: nothing to optimize")
+    if scene.follower.type != "oscillating_roller":
+        raise ValueError(f"follower.type: {scene.follower.type!r} is not an oscillating roller")
+    if arrays is None:
+        arrays = scene_arrays(scene, samples=samples, dtype=dtype)
+    d, f, kin = scene.design, scene.follower, arrays.kin
+    dt = kin.s.dtype
+    as_ = lambda v: jnp.asarray(v, dt)  # noqa: E731
+    box = [d.bounds("base_radius_mm"), d.bounds("roller_radius_mm"), d.bounds("pivot_distance_mm"), d.bounds("arm_length_mm")]
+    return Problem(
+        theta_deg=as_(arrays.theta_deg), s_rad=kin.s, ds=kin.ds, d2s=kin.d2s,
+        moment_coefficient=as_(moment_coefficient(scene, arrays)),
+        lower=Design(*(as_(b[0]) for b in box)), upper=Design(*(as_(b[1]) for b in box)),
+        sigma_max_MPa=as_(d.sigma_max_MPa if d.sigma_max_MPa is not None else 1.0),
+        size_norm_mm=as_(d.bounds("base_radius_mm")[1] + d.bounds("roller_radius_mm")[1]),
+        tan_max_pressure_angle=as_(np.tan(np.radians(f.max_pressure_angle_deg))),
+        min_curvature_radius_mm=as_(f.min_curvature_radius_mm),
+        rotation_sign=as_(pitch.rotation_sign(scene.motion.rotation)),
+    )
+
+
+def moment_coefficient(scene, arrays) -> jax.Array:
+    """C_M = 0.564 sqrt(M / (w K)) per angle, shape (n,), of a rocker scene: M (N m) the torque about
+    the pivot (:func:`camjax.loads.rocker_torque`), w the cam width (mm), K the compliance (1/MPa);
+    zeros without a follower train or [contact]. Divided by the root of the lever arm of the contact
+    force (m) it is the Hertz coefficient C (MPa mm^0.5); both oscillating families use it.
+    """
+    from camjax.loads import rocker_torque
+
+    kin = arrays.kin
+    if scene.follower.train is None or scene.contact is None:
+        return jnp.zeros_like(kin.s)
+    c = scene.contact
+    moment = rocker_torque(scene.follower.train, kin, arrays.cam_speed_rad_s)
+    return HERTZ_FACTOR * safe_sqrt(moment / (c.cam_width_mm * compliance(c.cam, c.follower)))
+
+
+def per_angle(problem: Problem) -> Problem:
+    """The n pointwise problems: every grid leaf (n,) -> (n, 1), every scalar leaf -> (n,)."""
+    return family.per_angle(problem, {"theta_deg", "s_rad", "ds", "d2s", "moment_coefficient"})
+
+
+# ---------------------------------------------------------------------------- physics
+
+
+class _Geometry(NamedTuple):
+    along: jax.Array  # l Q - d cos psi (mm): sin phi |T|
+    across: jax.Array  # d sin psi (mm): cos phi |T|
+    kappa: jax.Array  # pitch curvature, 1/mm
+    reach: jax.Array  # () closure, mm
+
+
+def _geometry(problem: Problem, design: Design) -> _Geometry:
+    """Pressure-angle legs, pitch curvature and closure of a design (formulas of geometry.oscillating).
+
+    The rotation enters through Q = 1 + sigma s' only; sigma is data here (a rotation string
+    is static in camjax.geometry), so the closed forms are called with Q.
+    """
+    d, l = design.pivot_distance_mm, design.arm_length_mm
+    rp = design.base_radius_mm + design.roller_radius_mm
+    psi = rocker_roller_geo.arm_start_angle(rp, d, l) + problem.s_rad
+    q = 1.0 + problem.rotation_sign * problem.ds
+    kappa = rocker_roller_geo.swing_pitch_curvature(d, l, psi, q, problem.d2s)
+    reach = rocker_roller_geo.oscillating_roller_reach_constraint(rp, d, l)
+    return _Geometry(l * q - d * jnp.cos(psi), d * jnp.sin(psi), kappa, reach)
+
+
+def _cos_phi(g: _Geometry) -> jax.Array:
+    norm = floor_positive(g.along**2 + g.across**2, RHO_FLOOR_MM**2)
+    return floor_positive(g.across * jax.lax.rsqrt(norm), COS_FLOOR)
+
+
+def pressure_angle(problem: Problem, design: Design) -> jax.Array:
+    """phi (rad) per angle, as :func:`camjax.followers.oscillating_roller.geometry.oscillating_roller_pressure_angle`."""
+    g = _geometry(problem, design)
+    return jnp.arctan2(g.along, g.across)
+
+
+def _axial_coefficient(problem: Problem, design: Design) -> jax.Array:
+    """C = C_M / sqrt(l in m): the coefficient of the force along the roller's path, M / l."""
+    return problem.moment_coefficient * jax.lax.rsqrt(design.arm_length_mm * 1e-3)
+
+
+def stress(problem: Problem, design: Design) -> jax.Array:
+    """Hertz contact stress sigma(theta) (MPa), shape (n,); finite (saturated) at an undercut."""
+    g = _geometry(problem, design)
+    rho_eq = roller_geo.roller_equivalent_radius(g.kappa, design.roller_radius_mm)
+    return roller_stress(_axial_coefficient(problem, design), jnp.arctan2(g.along, g.across), rho_eq)
+
+
+def peak_stress(problem: Problem, design: Design) -> jax.Array:
+    """max_theta sigma (MPa), shape ()."""
+    g = _geometry(problem, design)
+    rho_eq = roller_geo.roller_equivalent_radius(g.kappa, design.roller_radius_mm)
+    ratio = _axial_coefficient(problem, design) ** 2 / (_cos_phi(g) * floor_positive(rho_eq, RHO_FLOOR_MM))
+    return safe_sqrt(jnp.max(ratio))
+
+
+def size_term(problem: Problem, design: Design) -> jax.Array:
+    """Normalized size (R_b + R_f) / N (dimensionless)."""
+    return (design.base_radius_mm + design.roller_radius_mm) / problem.size_norm_mm
+
+
+def objective(problem: Problem, weights: Weights, design: Design) -> jax.Array:
+    """F = alpha (R_b + R_f) / N + gamma max_theta sigma / sigma_max (dimensionless, shape ())."""
+    return weighted_objective(weights, size_term(problem, design), peak_stress(problem, design),
+                              problem.sigma_max_MPa)
+
+
+def constraints(problem: Problem, design: Design) -> Constraints:
+    """Every angle's constraints as g <= 0 (mm), shape (n,) each; finite for every design."""
+    g = _geometry(problem, design)
+    reach_r = design.roller_radius_mm + problem.min_curvature_radius_mm
+    rho_eq = roller_geo.roller_equivalent_radius(g.kappa, design.roller_radius_mm)
+    need = _axial_coefficient(problem, design) ** 2 / (problem.sigma_max_MPa**2 * _cos_phi(g))
+    return Constraints(
+        reach=jnp.broadcast_to(g.reach, g.kappa.shape),
+        pressure_angle=jnp.abs(g.along) - problem.tan_max_pressure_angle * g.across,
+        undercut=reach_r * roller_geo.roller_undercut_constraint(g.kappa, design.roller_radius_mm,
+                                                               problem.min_curvature_radius_mm),
+        stress=need - rho_eq,
+    )
+
+
+def constraint_maxima(problem: Problem, design: Design) -> Constraints:
+    """max_theta of each constraint of :func:`constraints`, shape () each."""
+    return jax.tree.map(jnp.max, constraints(problem, design))
+
+
+def size_norm(problem: Problem) -> jax.Array:
+    """N = R_b,max + R_f,max (mm), shape ()."""
+    return problem.size_norm_mm
+
+
+def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
+    """Objective, peak stress and pressure angle (and their angles), violations and feasibility."""
+    g = _geometry(problem, design)
+    sigma = stress(problem, design)
+    phi = jnp.abs(jnp.arctan2(g.along, g.across))
+    i, j = jnp.argmax(sigma), jnp.argmax(phi)
+    rho_c_min = jnp.min(roller_geo.roller_undercut_margin(g.kappa, design.roller_radius_mm, 0.0))
+    v = Violation(
+        reach=positive_part(g.reach),
+        pressure_angle=positive_part(phi[j] - jnp.arctan(problem.tan_max_pressure_angle)),
+        undercut=positive_part(problem.min_curvature_radius_mm - rho_c_min),
+        stress=positive_part(sigma[i] - problem.sigma_max_MPa),
+        bounds=bounds_violation(problem, design),
+    )
+    feasible = all_within(v, _tolerances(problem.sigma_max_MPa))
+    return Evaluation(
+        objective=objective(problem, weights, design),
+        size_mm=design.base_radius_mm + design.roller_radius_mm,
+        stress_max_MPa=sigma[i], stress_max_deg=problem.theta_deg[i],
+        pressure_angle_max_deg=jnp.rad2deg(phi[j]), pressure_angle_max_at_deg=problem.theta_deg[j],
+        cam_rho_min_mm=rho_c_min, violation=v, feasible=feasible,
+    )
+
+
+def condense_pointwise(problem: Problem, per_angle_design: Design) -> tuple[Design, dict]:
+    """The whole-cam design of a pointwise solve: the design of the angle with the largest R_b + R_f."""
+    size = per_angle_design.base_radius_mm + per_angle_design.roller_radius_mm
+    return family.condense_at_largest(problem, per_angle_design, size, "prime_radius_deg")
+
+
+def _tolerances(sigma_max_MPa) -> dict:
+    """Each constraint's feasibility tolerance (mm, rad; the stress's in MPa)."""
+    return {"reach": FEASIBILITY_TOL_MM, "pressure_angle": FEASIBILITY_TOL_RAD,
+            "undercut": FEASIBILITY_TOL_MM, "bounds": FEASIBILITY_TOL_MM,
+            "stress": FEASIBILITY_RTOL_STRESS * sigma_max_MPa}
+
+
+def violated_constraints(problem: Problem, v: Violation) -> list[str]:
+    """Names of the violated constraints (Python; needs concrete values)."""
+    return family.violated(CONSTRAINT_NAMES, v, _tolerances(float(problem.sigma_max_MPa)))
+
+
+# ------------------------------------------------------------------------------- output
+
+_f = finite_float
+
+
+def _design_keys(d: Design) -> dict:
+    return {**family.design_json(d, VARIABLES), "prime_radius_mm": _f(d.base_radius_mm + d.roller_radius_mm)}
+
+
+def solution_json(problem: Problem, solution) -> dict:
+    """The oscillating-roller keys of result.json's design block, for one Solution."""
+    d, v = solution.design, solution.violation
+    limit_deg = np.degrees(np.arctan(problem.tan_max_pressure_angle))
+    return family.solution_keys(
+        problem, solution, VARIABLES, design_keys=_design_keys(d),
+        size_mm=d.base_radius_mm + d.roller_radius_mm,
+        violation={"reach_mm": v.reach, "pressure_angle_deg": np.degrees(v.pressure_angle),
+                   "undercut_mm": v.undercut, "stress_MPa": v.stress, "bounds_mm": v.bounds},
+        figures=roller_figures(solution.evaluation, limit_deg), pointwise_angles=("prime_radius_deg",))
+
+
+def record(solution) -> dict:
+    """The oscillating-roller keys of a pareto.json row: the design, size R_b + R_f and peak stress."""
+    d = solution.design
+    return family.record_json(_design_keys(d), d.base_radius_mm + d.roller_radius_mm, solution.evaluation)

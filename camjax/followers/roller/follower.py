@@ -1,0 +1,192 @@
+"""The translating roller follower with offset (SPEC 3): pressure angle, undercut, roller stress.
+
+The roller's centre follows the pitch curve at R_p = R_b + R_f; the cam surface is that curve
+offset inward by R_f. The limits are the pressure angle (|phi| <= ``max_pressure_angle_deg``) and
+the undercut (the convex cam surface's radius >= ``min_curvature_radius_mm``); the design
+variables are R_b, R_f and the offset e (:mod:`camjax.followers.roller.problem`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from camjax import contact
+from camjax.evaluate import curve_extremes
+from camjax.followers._pitch import rotation_sign
+from camjax.followers._translating import (
+    TRAIN_KEYS,
+    DesignSolution,
+    GeometryCurves,
+    TranslatingFollower,
+    read_train,
+)
+from camjax.followers.roller import geometry as roller_geo
+from camjax.followers.roller.geometry import ROLLER_MAX_PRESSURE_ANGLE_DEG, ROLLER_MIN_CURVATURE_RADIUS_MM
+from camjax.results import MinBaseRadius
+from camjax.scene.reader import DEFAULT, build, fixed_or_free
+from camjax.scene.spec import FollowerSpec
+
+# the roller's curves at the drawing radius: pressure angle (rad), |pitch-curve rho| (mm), undercut
+# margin rho_c - rho_min on convex parts (mm; the largest float on concave ones, as
+# camjax.followers.roller.geometry.roller_undercut_margin)
+ROLLER_CURVES = ("pressure_angle", "pitch_rho_abs", "undercut_margin")
+# the pressure-angle sizing: |s' - e~| / tan(limit) - s (mm), whose max is the smallest
+# d = sqrt(R_p^2 - e^2) (camjax.followers.roller.geometry.roller_min_prime_radius_for_pressure_angle)
+PRESSURE_NEED = "pressure_angle_need"
+
+
+@dataclass(frozen=True, kw_only=True)
+class RollerSpec(FollowerSpec):
+    """[follower] of a roller: its radius, the axis' offset and the two limits."""
+
+    type: str = "roller"
+    roller_radius_mm: float = 0.0  # R_f (required by the scene)
+    offset_mm: float = 0.0  # e, the follower axis' distance from the cam centre
+    max_pressure_angle_deg: float = ROLLER_MAX_PRESSURE_ANGLE_DEG
+    min_curvature_radius_mm: float = ROLLER_MIN_CURVATURE_RADIUS_MM  # 0 = just no undercut
+
+
+class RollerCurveConstants(NamedTuple):
+    """What the roller's curves need besides the motion. The offset is stored times the rotation
+    sign (a cw cam is the mirror image of the ccw one with e -> -e), so the curves are the ccw
+    formulas of :mod:`camjax.followers._pitch` with the pressure angle's sign restored by
+    ``rotation_sign``."""
+
+    roller_radius_mm: jax.Array
+    offset_mm: jax.Array  # rotation_sign * e
+    rotation_sign: jax.Array  # +1 ccw, -1 cw
+    min_curvature_radius_mm: jax.Array  # the undercut margin's rho_min
+    tan_pressure_limit: jax.Array  # tan(follower.max_pressure_angle_deg)
+
+
+def _f(x) -> float:
+    return float(np.asarray(x))
+
+
+class Roller(TranslatingFollower):
+    name = "roller"
+    title = "roller"
+    keys = (*TRAIN_KEYS, "roller_radius_mm", "offset_mm", "max_pressure_angle_deg", "min_curvature_radius_mm")
+    variables = ("base_radius_mm", "roller_radius_mm", "offset_mm")
+
+    def parse(self, r) -> RollerSpec:
+        self.check_keys(r)
+        train = read_train(r)
+        limit = r.number("max_pressure_angle_deg", DEFAULT, low=0.0, low_open=True)
+        if limit is not DEFAULT and limit >= 90.0:
+            raise r.error("max_pressure_angle_deg", limit, "out of range", "> 0 and < 90")
+        return build(RollerSpec, type=self.name, train=train,
+                     roller_radius_mm=r.number("roller_radius_mm", low=0.0, low_open=True),
+                     offset_mm=r.number("offset_mm", DEFAULT), max_pressure_angle_deg=limit,
+                     min_curvature_radius_mm=r.number("min_curvature_radius_mm", DEFAULT, low=0.0))
+
+    def design_bounds(self, r, follower) -> dict[str, tuple[float, float]]:
+        base = fixed_or_free(r, "base_radius_mm")
+        roller = fixed_or_free(r, "roller_radius_mm", (follower.roller_radius_mm,) * 2)
+        offset = fixed_or_free(r, "offset_mm", (follower.offset_mm,) * 2, positive=False)
+        reach = base[0] + roller[0]  # the smallest prime radius in the box
+        if max(abs(offset[0]), abs(offset[1])) >= reach:
+            raise r.error("offset_mm", list(offset) if offset[0] != offset[1] else offset[0],
+                          f"allows |e| >= R_p = R_b + R_f (smallest in the bounds: {reach:g} mm): the "
+                          "follower axis must cut the prime circle", f"|e| < {reach:g}")
+        return {"base_radius_mm": base, "roller_radius_mm": roller, "offset_mm": offset}
+
+    def drawn_follower(self, scene, result):
+        """The [follower] with a design's R_f and offset."""
+        if "roller_radius_mm" not in result:
+            return scene.follower
+        return replace(scene.follower, roller_radius_mm=result["roller_radius_mm"],
+                       offset_mm=result["offset_mm"])
+
+    def min_base_radius(self, scene, arrays) -> MinBaseRadius:
+        """The smallest prime circle with |phi| <= max_pressure_angle_deg and no undercut (convex
+        cam-surface radius >= min_curvature_radius_mm) at the follower's R_f and offset
+        (:func:`camjax.followers.roller.geometry.roller_min_prime_radius`: closed form for the
+        pressure angle, its max over the angle refined off the grid with exact extrema; bisection
+        on the samples for the undercut), minus R_f; the angle is where the binding limit is reached.
+        """
+        f, t = scene.follower, np.asarray(arrays.theta_deg)
+        sizing = roller_geo.roller_min_prime_radius(arrays.kin, f.roller_radius_mm, f.offset_mm,
+                                                    math.radians(f.max_pressure_angle_deg),
+                                                    f.min_curvature_radius_mm, scene.motion.rotation)
+        rp = _f(sizing.prime_radius_mm)
+        if arrays.model is not None and not bool(sizing.undercut_binds):
+            # exact: the closed form's max over the angle refined off the grid; it is >= the samples'
+            # max, so the undercut (which relaxes as R_p grows) still holds
+            need = curve_extremes(scene, arrays, (PRESSURE_NEED,))[PRESSURE_NEED]
+            rp = math.hypot(f.offset_mm, max(need.max, 0.0))
+            return MinBaseRadius(rp - f.roller_radius_mm, need.max_deg, "pressure_angle", rp)
+        return MinBaseRadius(rp - f.roller_radius_mm, _f(t[int(sizing.index)]),
+                             "undercut" if bool(sizing.undercut_binds) else "pressure_angle", rp)
+
+    def design_solution(self, scene, arrays, result, problem) -> DesignSolution:
+        """A roller design's figures: its peak stress as the stress curve computes it, and the
+        smallest R_b its R_f and offset admit (pressure angle and undercut; stress aside)."""
+        f, t = scene.follower, np.asarray(arrays.theta_deg)
+        rf, e = result["roller_radius_mm"], result["offset_mm"]
+        curves = self.curves(scene, arrays, result["base_radius_mm"], self.drawn_follower(scene, result))
+        sizing = roller_geo.roller_min_prime_radius(arrays.kin, rf, e, math.radians(f.max_pressure_angle_deg),
+                                                    f.min_curvature_radius_mm, scene.motion.rotation)
+        peak_stress = None if curves.stress_MPa is None else _f(np.max(curves.stress_MPa))
+        return DesignSolution(result, peak_stress, _f(sizing.prime_radius_mm) - rf, _f(t[int(sizing.index)]),
+                              "undercut" if bool(sizing.undercut_binds) else "pressure_angle", None,
+                              f.min_curvature_radius_mm)
+
+    def geometry(self, follower, rotation, arrays, base_radius_mm) -> GeometryCurves:
+        kin, rf, e = arrays.kin, float(follower.roller_radius_mm), float(follower.offset_mm)
+        x, y = roller_geo.roller_profile(base_radius_mm, rf, e, kin, rotation)
+        pitch_x, pitch_y = roller_geo.roller_pitch_curve(base_radius_mm, rf, e, kin, rotation)
+        g = roller_geo.roller_geometry(base_radius_mm, rf, e, kin, rotation, follower.min_curvature_radius_mm)
+        stress = None
+        if arrays.stress_coefficient is not None:
+            rho_eq = roller_geo.roller_equivalent_radius(g.pitch_curvature, rf)
+            stress = contact.roller_stress(arrays.stress_coefficient, g.pressure_angle, rho_eq)
+        return GeometryCurves(x, y, stress_MPa=stress, pitch_x_mm=pitch_x, pitch_y_mm=pitch_y,
+                              pressure_angle_deg=jnp.rad2deg(g.pressure_angle),
+                              pitch_rho_mm=g.pitch_radius_of_curvature, undercut_margin_mm=g.undercut_margin)
+
+    def curve_dimensions(self, follower):
+        return (float(follower.roller_radius_mm), float(follower.offset_mm),
+                follower.max_pressure_angle_deg)
+
+    def curve_names(self, scene, arrays) -> tuple[str, ...]:
+        return ROLLER_CURVES
+
+    def curve_constants(self, scene, follower) -> RollerCurveConstants:
+        sign = rotation_sign(scene.motion.rotation)
+        return RollerCurveConstants(float(follower.roller_radius_mm), sign * float(follower.offset_mm), sign,
+                                    follower.min_curvature_radius_mm,
+                                    math.tan(math.radians(follower.max_pressure_angle_deg)))
+
+    def curve(self, name, p, consts, base_radius_mm):
+        c = consts.follower
+        if name == "stress":  # contact stress, MPa (even in phi)
+            g = roller_geo.roller_geometry(base_radius_mm, c.roller_radius_mm, c.offset_mm, p.kin)
+            rho_eq = roller_geo.roller_equivalent_radius(g.pitch_curvature, c.roller_radius_mm)
+            return contact.roller_stress(p.stress_coefficient, g.pressure_angle, rho_eq)
+        if name == PRESSURE_NEED:
+            return roller_geo.roller_pressure_angle_need(p.kin.ds, p.kin.s, c.offset_mm, c.tan_pressure_limit)
+        if name in ROLLER_CURVES:
+            g = roller_geo.roller_geometry(base_radius_mm, c.roller_radius_mm, c.offset_mm, p.kin,
+                                           "ccw", c.min_curvature_radius_mm)
+            return {"pressure_angle": c.rotation_sign * g.pressure_angle,
+                    "undercut_margin": g.undercut_margin,
+                    "pitch_rho_abs": jnp.abs(g.pitch_radius_of_curvature)}[name]
+        return super().curve(name, p, consts, base_radius_mm)
+
+    def summary(self, design) -> str:
+        return (f"R_f = {design['roller_radius_mm']:.4f} mm, offset {design['offset_mm']:.4f} mm, "
+                f"R_p = {design['prime_radius_mm']:.4f} mm")
+
+    def drawn_summary(self, data) -> str:
+        roller = data["roller"]
+        return f", R_f = {roller['roller_radius_mm']:.4f} mm, offset {roller['offset_mm']:.4f} mm"
+
+
+FOLLOWER = Roller()

@@ -1,0 +1,463 @@
+"""The roller follower's optimal-design problem: a problem family of :mod:`camjax.solvers.base`.
+
+Design variables (:class:`Design`, mm): base radius R_b, roller radius R_f and offset e of a
+translating roller follower; each is free between its bounds or fixed (lower == upper).
+
+Objective, weights alpha (size) and gamma (stress), N = R_b,max + R_f,max:
+
+    F = alpha (R_b + R_f) / N + gamma max_theta sigma(theta) / sigma_max,
+
+with the roller's Hertz stress sigma = C sqrt(1 / (cos phi rho_eq)) (:func:`camjax.contact.roller_stress`:
+C from the axial follower force, rho_eq = 1 / (1/rho_c + 1/R_f)). Without [contact] C = 0: no
+stress term and no stress constraint. Constraints, one value per angle, ``g <= 0`` in mm
+(:class:`Constraints`):
+
+- pressure_angle: |s' - e~| - tan(phi_max) (d + s) <= 0, which is |phi| <= phi_max written
+  without the arctan (d = sqrt(R_p^2 - e^2), e~ = e for ccw, -e for cw; finite everywhere);
+- undercut: (R_f + rho_min) (kappa_pitch (R_f + rho_min) - 1) <= 0, i.e. rho_c >= rho_min where
+  the pitch curve is convex (:func:`camjax.followers.roller.geometry.roller_undercut_constraint` times a length;
+  concave parts satisfy it for every roller, as they must);
+- stress: C^2 / (sigma_max^2 cos phi) - rho_eq <= 0, which is sigma <= sigma_max written on the
+  equivalent radius so that it stays finite at and beyond an undercut (rho_eq <= 0 there);
+- and the box bounds, which the solvers keep by projection. The scene checks that the bounds
+  keep |e| < R_p (the follower axis cuts the prime circle) for every design in the box.
+
+The solvers work in this family's own unit-box coordinates (:func:`to_unit`, :func:`from_unit`):
+the prime radius R_b + R_f instead of R_b, floored at the closed-form smallest prime radius that
+meets the pressure-angle limit at the design's offset, so that the optimum's flat valley
+(R_b + R_f = const) and its curved valley along the pressure-angle limit lie along the axes.
+
+Everything that does not depend on the design (s, s', s'', C) is computed once per scene by
+:func:`problem_from_scene`. Modes are those of :mod:`camjax.followers.flat.problem`: :func:`per_angle` gives the
+n one-angle problems; a pointwise solve is condensed into the design of its critical angle, the
+one with the largest prime radius (with R_f and e fixed: the largest R_b, SPEC 5's rule).
+"""
+
+from __future__ import annotations
+
+from typing import Any, NamedTuple
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from camjax import family
+from camjax.contact import roller_stress
+from camjax.family import FEASIBILITY_RTOL_STRESS, FEASIBILITY_TOL_MM, Weights, all_within, weighted_objective
+
+# re-exported: this family's protocol functions and tolerance, written once for every family
+from camjax.family import FEASIBILITY_TOL_RAD as FEASIBILITY_TOL_RAD
+from camjax.family import bounds as bounds
+from camjax.family import bounds_violation as bounds_violation
+from camjax.followers import _pitch as pitch
+from camjax.followers.roller import geometry as roller_geo
+from camjax.numerics import COS_FLOOR, RHO_FLOOR_MM, finite_float, floor_positive, positive_part, safe_sqrt
+
+CONSTRAINT_NAMES = ("pressure_angle", "undercut", "stress", "bounds")
+VARIABLES = ("base_radius_mm", "roller_radius_mm", "offset_mm")
+
+
+class Design(NamedTuple):
+    """One roller-follower design (scalars), or a batch of them (arrays with leading axes)."""
+
+    base_radius_mm: jax.Array  # R_b, mm
+    roller_radius_mm: jax.Array  # R_f, mm
+    offset_mm: jax.Array  # e, mm (follower axis at x = e in the follower frame)
+
+
+class Problem(NamedTuple):
+    """Design-independent data of one roller design problem on an angle grid of n samples."""
+
+    theta_deg: jax.Array  # (n,) cam angle, degrees
+    s_mm: jax.Array  # (n,) s, mm
+    ds_mm: jax.Array  # (n,) s', mm/rad
+    d2s_mm: jax.Array  # (n,) s'', mm/rad^2
+    stress_coefficient: jax.Array  # (n,) C = 0.564 sqrt(F / (w K)), MPa mm^0.5 (0: no stress)
+    lower: Design  # lower bounds, mm
+    upper: Design  # upper bounds, mm
+    sigma_max_MPa: jax.Array  # () allowable contact stress
+    size_norm_mm: jax.Array  # () N = R_b,max + R_f,max
+    tan_max_pressure_angle: jax.Array  # () tan(phi_max)
+    max_pressure_angle_deg: jax.Array  # () phi_max, deg (as the scene gives it)
+    min_curvature_radius_mm: jax.Array  # () smallest convex cam-surface radius allowed
+    rotation_sign: jax.Array  # () +1 ccw, -1 cw (geometry.pitch): e~ = sign e
+    # the motion program (as arrays) behind the grid when extrema are exact: :func:`polish`
+    # raises the prime circle to the pressure-angle limit between the samples; None: the grid's
+    program: Any = None
+
+
+class Constraints(NamedTuple):
+    """Constraint functions g <= 0, mm, one value per angle (shape (n,) each)."""
+
+    pressure_angle: jax.Array  # |s' - e~| - tan(phi_max) (d + s)
+    undercut: jax.Array  # (R_f + rho_min) (kappa (R_f + rho_min) - 1)
+    stress: jax.Array  # C^2 / (sigma_max^2 cos phi) - rho_eq
+
+
+class Violation(NamedTuple):
+    """Worst violation of each constraint in physical units, 0 when satisfied (shape ())."""
+
+    pressure_angle: jax.Array  # rad: max |phi| - phi_max
+    undercut: jax.Array  # mm: rho_min - min rho_c over the convex parts
+    stress: jax.Array  # MPa: max sigma - sigma_max
+    bounds: jax.Array  # mm: largest distance outside the box
+
+
+class Evaluation(NamedTuple):
+    """A design judged on the whole grid (true maxima; shape () each)."""
+
+    objective: jax.Array  # F
+    size_mm: jax.Array  # R_b + R_f, the prime-circle radius
+    stress_max_MPa: jax.Array  # max_theta sigma
+    stress_max_deg: jax.Array  # where it occurs
+    pressure_angle_max_deg: jax.Array  # max_theta |phi|
+    pressure_angle_max_at_deg: jax.Array  # where it occurs
+    cam_rho_min_mm: jax.Array  # smallest convex cam-surface radius rho_c (undercut at <= 0)
+    violation: Violation
+    feasible: jax.Array  # bool
+
+
+# ------------------------------------------------------------------------------ building
+
+
+def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=None,
+                       extrema: str | None = None) -> Problem:
+    """Problem of a roller scene with a [design] section (Python, not traceable: it reads the scene).
+
+    Args:
+      scene: a :class:`camjax.scene.Scene` with a roller follower and [design].
+      arrays: its :class:`camjax.evaluate.SceneArrays` if already computed (else computed here).
+      samples: grid size override (ignored when ``arrays`` is given).
+      dtype: floating dtype of the arrays (default float64).
+      extrema: "exact" or "grid" (ignored when ``arrays`` is given: theirs applies); default the
+        scene's ``[motion] extrema``. Exact: the solvers' designs are polished so that the
+        pressure angle meets its limit between the samples too (:func:`polish`).
+    """
+    from camjax.evaluate import scene_arrays
+
+    if scene.design is None:
+        raise ValueError("scene has no [design] section: nothing to optimize")
+    if scene.follower.type != "roller":
+        raise ValueError(f"follower.type: {scene.follower.type!r} is not a roller follower")
+    if arrays is None:
+        arrays = scene_arrays(scene, samples=samples, dtype=dtype, extrema=extrema)
+    d, f, kin = scene.design, scene.follower, arrays.kin
+    dt = kin.s.dtype
+    as_ = lambda v: jnp.asarray(v, dt)  # noqa: E731
+    box = [d.bounds("base_radius_mm"), d.bounds("roller_radius_mm"), d.bounds("offset_mm")]
+    coeff = arrays.stress_coefficient
+    return Problem(
+        theta_deg=as_(arrays.theta_deg), s_mm=kin.s, ds_mm=kin.ds, d2s_mm=kin.d2s,
+        stress_coefficient=jnp.zeros_like(kin.s) if coeff is None else as_(coeff),
+        lower=Design(*(as_(b[0]) for b in box)), upper=Design(*(as_(b[1]) for b in box)),
+        sigma_max_MPa=as_(d.sigma_max_MPa if d.sigma_max_MPa is not None else 1.0),
+        size_norm_mm=as_(d.bounds("base_radius_mm")[1] + d.bounds("roller_radius_mm")[1]),
+        tan_max_pressure_angle=as_(np.tan(np.radians(f.max_pressure_angle_deg))),
+        max_pressure_angle_deg=as_(f.max_pressure_angle_deg),
+        min_curvature_radius_mm=as_(f.min_curvature_radius_mm),
+        rotation_sign=as_(pitch.rotation_sign(scene.motion.rotation)),
+        program=None if arrays.model is None else arrays.model.program,
+    )
+
+
+def per_angle(problem: Problem) -> Problem:
+    """The n pointwise problems: every grid leaf (n,) -> (n, 1), every scalar leaf -> (n,); one
+    angle's problem has no program (its sample is all there is)."""
+    return family.per_angle(problem._replace(program=None),
+                            {"theta_deg", "s_mm", "ds_mm", "d2s_mm", "stress_coefficient"})
+
+
+# ---------------------------------------------------------------------------- physics
+
+
+class _Kin(NamedTuple):  # the geometry functions' view of the problem's grid (theta unused there)
+    theta: jax.Array
+    s: jax.Array
+    ds: jax.Array
+    d2s: jax.Array
+
+
+class _Terms(NamedTuple):
+    """Per-angle quantities every function of a design shares (shape (n,) each)."""
+
+    w: jax.Array  # d + s, mm: the pitch point's height on the follower axis
+    u: jax.Array  # s' - e~, mm: tan phi = u / w (up to the rotation's sign)
+    inv_cos: jax.Array  # 1 / cos phi = |(w, u)| / w, with cos phi floored at COS_FLOOR
+    kappa: jax.Array  # pitch-curve curvature, 1/mm (convex > 0)
+    rho_eq: jax.Array  # Hertz equivalent radius 1 / (1/rho_c + 1/R_f), mm
+
+
+def _terms(problem: Problem, design: Design) -> _Terms:
+    """The shared per-angle terms of a design.
+
+    The rotation enters only through e~ = sign e (geometry.pitch); with it every formula is the
+    ccw one, and |phi|, cos phi and kappa are those of the true rotation. 1 / cos phi is written
+    as r / w (r = |(w, u)|) to share the root with the curvature and avoid a cos(atan2(.)).
+    """
+    e = problem.rotation_sign * design.offset_mm
+    kin = _Kin(problem.theta_deg, problem.s_mm, problem.ds_mm, problem.d2s_mm)
+    w = roller_geo.roller_pitch_height(design.base_radius_mm, design.roller_radius_mm, e, kin)
+    u = kin.ds - e
+    r = jnp.sqrt(w**2 + u**2)
+    kappa = pitch.pitch_curvature(w, kin.ds, kin.d2s, e)
+    return _Terms(w, u, r / jnp.maximum(w, COS_FLOOR * r), kappa,
+                  roller_geo.roller_equivalent_radius(kappa, design.roller_radius_mm))
+
+
+def pressure_angle(problem: Problem, design: Design) -> jax.Array:
+    """phi (rad) per angle, signed as :func:`camjax.followers._pitch.pressure_angle`."""
+    x = _terms(problem, design)
+    return problem.rotation_sign * jnp.arctan2(x.u, x.w)
+
+
+def stress(problem: Problem, design: Design) -> jax.Array:
+    """Hertz contact stress sigma(theta) (MPa), shape (n,); finite (saturated) at an undercut."""
+    x = _terms(problem, design)
+    return roller_stress(problem.stress_coefficient, jnp.arctan2(x.u, x.w), x.rho_eq)
+
+
+def peak_stress(problem: Problem, design: Design) -> jax.Array:
+    """max_theta sigma (MPa), shape (), as sqrt(max_theta C^2 / (cos phi rho_eq)): one root."""
+    x = _terms(problem, design)
+    ratio = problem.stress_coefficient**2 * x.inv_cos / floor_positive(x.rho_eq, RHO_FLOOR_MM)
+    return safe_sqrt(jnp.max(ratio))
+
+
+def size_term(problem: Problem, design: Design) -> jax.Array:
+    """Normalized size (R_b + R_f) / N (dimensionless)."""
+    return (design.base_radius_mm + design.roller_radius_mm) / problem.size_norm_mm
+
+
+def objective(problem: Problem, weights: Weights, design: Design) -> jax.Array:
+    """F = alpha (R_b + R_f) / N + gamma max_theta sigma / sigma_max (dimensionless, shape ())."""
+    return weighted_objective(weights, size_term(problem, design), peak_stress(problem, design),
+                              problem.sigma_max_MPa)
+
+
+def constraints(problem: Problem, design: Design) -> Constraints:
+    """Every angle's constraints as g <= 0 (mm), shape (n,) each; finite for every design."""
+    x = _terms(problem, design)
+    reach = design.roller_radius_mm + problem.min_curvature_radius_mm
+    need = problem.stress_coefficient**2 * x.inv_cos / problem.sigma_max_MPa**2
+    return Constraints(
+        pressure_angle=jnp.abs(x.u) - problem.tan_max_pressure_angle * x.w,
+        undercut=reach * roller_geo.roller_undercut_constraint(x.kappa, design.roller_radius_mm,
+                                                             problem.min_curvature_radius_mm),
+        stress=need - x.rho_eq,
+    )
+
+
+def constraint_maxima(problem: Problem, design: Design) -> Constraints:
+    """max_theta of each constraint of :func:`constraints`, shape () each.
+
+    One reduction over the stacked constraints: XLA then evaluates the shared terms once per
+    angle instead of once per constraint.
+    """
+    return Constraints(*jnp.max(jnp.stack(constraints(problem, design)), axis=-1))
+
+
+def size_norm(problem: Problem) -> jax.Array:
+    """N = R_b,max + R_f,max (mm): the length the constraints are divided by, shape ()."""
+    return problem.size_norm_mm
+
+
+# ------------------------------------------------------------------ solver coordinates
+
+
+def _unit(x, lo, hi):
+    return (x - lo) / jnp.where(hi > lo, hi - lo, 1.0)
+
+
+def _from(v, lo, hi):
+    return lo + v * jnp.where(hi > lo, hi - lo, 1.0)
+
+
+def _straight_through(x, clipped):
+    """``clipped`` in value, the gradient of ``x``: a variable pushed past a moving limit is still
+    drawn back by the objective instead of sitting where a clip would give it a zero gradient."""
+    return x + jax.lax.stop_gradient(clipped - x)
+
+
+def _prime_box(problem: Problem) -> tuple[jax.Array, jax.Array, jax.Array]:
+    """(smallest and largest prime radius in the box, whether R_b is free)."""
+    lo, hi = problem.lower, problem.upper
+    return (lo.base_radius_mm + lo.roller_radius_mm, hi.base_radius_mm + hi.roller_radius_mm,
+            hi.base_radius_mm > lo.base_radius_mm)
+
+
+def to_unit(problem: Problem, design: Design) -> Design:
+    """Design (mm) -> the solvers' unit-box coordinates (not clipped); :func:`from_unit` inverts it.
+
+    With R_b free the first coordinate is the prime radius R_p = R_b + R_f over its range in the
+    box, the second R_f over its bounds and the third e over its bounds. The size, the pressure
+    angle and the pitch-curve curvature depend on R_p and e only, so trading R_f between stress
+    and undercut at a fixed size (the optimum's flat valley R_b + R_f = const) moves one
+    coordinate instead of the diagonal of (R_b, R_f). With R_b fixed each variable is scaled by
+    its own bounds (as for every family).
+    """
+    p_lo, p_hi, rb_free = _prime_box(problem)
+    plain = jax.tree.map(_unit, design, problem.lower, problem.upper)
+    prime = _unit(design.base_radius_mm + design.roller_radius_mm, p_lo, p_hi)
+    return plain._replace(base_radius_mm=jnp.where(rb_free, prime, plain.base_radius_mm))
+
+
+def from_unit(problem: Problem, u: Design) -> Design:
+    """The solvers' unit-box coordinates -> design (mm): the inverse of :func:`to_unit` on the box,
+    with the prime circle floored at the pressure-angle limit.
+
+    With R_b free, R_p from the first coordinate is raised where it is below the smallest prime
+    radius that meets the pressure-angle limit at the offset e (closed form,
+    :func:`min_prime_radius_for_pressure_angle`). There R_p follows e along the limit exactly: the
+    curved valley where the optimum rides that limit (R_p falling as e moves towards the
+    balance of rise and return) becomes a problem in e and R_f alone, and every design the
+    solvers see meets the limit. Below the floor the first coordinate keeps the gradient of R_p
+    (straight-through), so a weighting that wants a larger prime circle lifts it off the limit.
+    R_f (second coordinate) is then clipped to the roller radii that keep R_b = R_p - R_f within
+    its bounds, also straight-through. Every unit-box point maps into the box (unless the limit
+    itself needs a prime circle larger than the box allows).
+    """
+    lo, hi = problem.lower, problem.upper
+    p_lo, p_hi, rb_free = _prime_box(problem)
+    plain = jax.tree.map(_from, u, lo, hi)
+    raw = _from(u.base_radius_mm, p_lo, p_hi)
+    floor = jnp.minimum(min_prime_radius_for_pressure_angle(problem, plain.offset_mm), p_hi)
+    height = raw - jax.lax.stop_gradient(floor)  # the gradient of R_p in the first coordinate only
+    prime = jnp.where(height > 0, raw, floor + _straight_through(height, jnp.zeros_like(height)))
+    rf = plain.roller_radius_mm
+    rf = _straight_through(rf, jnp.clip(rf, jnp.maximum(lo.roller_radius_mm, prime - hi.base_radius_mm),
+                                        jnp.minimum(hi.roller_radius_mm, prime - lo.base_radius_mm)))
+    return plain._replace(base_radius_mm=jnp.where(rb_free, prime - rf, plain.base_radius_mm),
+                          roller_radius_mm=jnp.where(rb_free, rf, plain.roller_radius_mm))
+
+
+def min_prime_radius_for_pressure_angle(problem: Problem, offset_mm: jax.Array) -> jax.Array:
+    """Smallest R_p (mm) with |phi| <= the limit at every angle for offset e, in closed form.
+
+    |s' - e~| <= tan(phi_max) (d + s) at every angle  <=>  d >= max(|s' - e~| / tan(phi_max) - s),
+    and R_p = sqrt(e^2 + d^2) (as :func:`camjax.followers.roller.geometry.roller_min_prime_radius_for_pressure_angle`).
+    """
+    e = jnp.expand_dims(problem.rotation_sign * offset_mm, -1)  # (..., 1) against the grid (n,)
+    need = roller_geo.roller_pressure_angle_need(problem.ds_mm, problem.s_mm, e, problem.tan_max_pressure_angle)
+    d_min = jnp.max(need, axis=-1)
+    return safe_sqrt(offset_mm**2 + positive_part(d_min) ** 2)  # 0 (finite gradient) at e = 0 = d_min
+
+
+def exact_min_prime_radius_for_pressure_angle(problem: Problem, offset_mm: jax.Array) -> jax.Array:
+    """:func:`min_prime_radius_for_pressure_angle` with the max over the angle refined off the grid
+    (:func:`camjax.extrema.max_of` on the problem's program; needs ``problem.program``)."""
+    from camjax import extrema
+
+    def need(kin, params):  # the d at which |phi| = phi_max at this angle, mm
+        return roller_geo.roller_pressure_angle_need(kin.ds, kin.s, *params)
+
+    params = (problem.rotation_sign * offset_mm, problem.tan_max_pressure_angle)
+    grid = roller_geo.roller_pressure_angle_need(problem.ds_mm, problem.s_mm, *params)
+    d_min = extrema.max_of(problem.program, need, grid, params).value
+    return safe_sqrt(offset_mm**2 + positive_part(d_min) ** 2)
+
+
+def polish(problem: Problem, weights: Weights, design: Design) -> Design:
+    """The solver's design with its prime circle raised, where it is short, to the smallest that
+    keeps the pressure angle within its limit at every angle, not only at the samples.
+
+    The solvers floor R_p at the closed-form limit over the samples (:func:`from_unit`); between
+    two samples |phi| can pass the limit by ~1e-6 relative. With ``problem.program`` the max
+    over the angle is refined (:func:`exact_min_prime_radius_for_pressure_angle`) and R_b (when
+    free) grows by the difference, at most to its upper bound; R_f and e stay. A larger R_p only
+    relaxes the undercut; the objective changes by the same ~1e-6. Without a program the design
+    is returned unchanged. Traceable and vmappable.
+    """
+    if problem.program is None:
+        return design
+    floor = exact_min_prime_radius_for_pressure_angle(problem, design.offset_mm)
+    raised = jnp.minimum(jnp.maximum(design.base_radius_mm, floor - design.roller_radius_mm),
+                         problem.upper.base_radius_mm)
+    free = problem.upper.base_radius_mm > problem.lower.base_radius_mm
+    radius = jnp.where(free, raised, design.base_radius_mm)
+    return design._replace(base_radius_mm=jax.lax.stop_gradient(radius))
+
+
+def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
+    """Objective, peak stress and pressure angle (and their angles), violations and feasibility."""
+    x = _terms(problem, design)
+    kappa = x.kappa
+    sigma = stress(problem, design)
+    phi = jnp.abs(jnp.arctan2(x.u, x.w))
+    i, j = jnp.argmax(sigma), jnp.argmax(phi)
+    margin = roller_geo.roller_undercut_margin(kappa, design.roller_radius_mm, 0.0)  # rho_c, convex parts
+    rho_c_min = jnp.min(margin)
+    v = Violation(
+        pressure_angle=positive_part(phi[j] - jnp.deg2rad(problem.max_pressure_angle_deg)),
+        undercut=positive_part(problem.min_curvature_radius_mm - rho_c_min),
+        stress=positive_part(sigma[i] - problem.sigma_max_MPa),
+        bounds=bounds_violation(problem, design),
+    )
+    feasible = all_within(v, _tolerances(problem.sigma_max_MPa))
+    return Evaluation(
+        objective=objective(problem, weights, design),
+        size_mm=design.base_radius_mm + design.roller_radius_mm,
+        stress_max_MPa=sigma[i], stress_max_deg=problem.theta_deg[i],
+        pressure_angle_max_deg=jnp.rad2deg(phi[j]), pressure_angle_max_at_deg=problem.theta_deg[j],
+        cam_rho_min_mm=rho_c_min, violation=v, feasible=feasible,
+    )
+
+
+def condense_pointwise(problem: Problem, per_angle_design: Design) -> tuple[Design, dict]:
+    """The whole-cam design of a pointwise solve: the design of the angle with the largest R_b + R_f.
+
+    With R_f and e fixed that is the largest R_b over the angles (SPEC 5's rule). With R_f or e
+    free every angle picks its own; the critical angle's design is reported and judged on the
+    whole grid (its violations, if any, are reported, not hidden). Extras: the critical angle
+    (``prime_radius_deg``) and the grid.
+    """
+    size = per_angle_design.base_radius_mm + per_angle_design.roller_radius_mm
+    return family.condense_at_largest(problem, per_angle_design, size, "prime_radius_deg")
+
+
+def _tolerances(sigma_max_MPa) -> dict:
+    """Each constraint's feasibility tolerance (rad, mm; the stress's in MPa)."""
+    return {"pressure_angle": FEASIBILITY_TOL_RAD, "undercut": FEASIBILITY_TOL_MM,
+            "bounds": FEASIBILITY_TOL_MM, "stress": FEASIBILITY_RTOL_STRESS * sigma_max_MPa}
+
+
+def violated_constraints(problem: Problem, v: Violation) -> list[str]:
+    """Names of the violated constraints (Python; needs concrete values)."""
+    return family.violated(CONSTRAINT_NAMES, v, _tolerances(float(problem.sigma_max_MPa)))
+
+
+# ------------------------------------------------------------------------------- output
+
+_f = finite_float
+
+
+def _design_keys(d: Design) -> dict:
+    return {**family.design_json(d, VARIABLES), "prime_radius_mm": _f(d.base_radius_mm + d.roller_radius_mm)}
+
+
+def solution_json(problem: Problem, solution) -> dict:
+    """The roller keys of result.json's design block, for one :class:`camjax.solvers.base.Solution`."""
+    d, v = solution.design, solution.violation
+    return family.solution_keys(
+        problem, solution, VARIABLES, design_keys=_design_keys(d),
+        size_mm=d.base_radius_mm + d.roller_radius_mm,
+        violation={"pressure_angle_deg": np.degrees(v.pressure_angle), "undercut_mm": v.undercut,
+                   "stress_MPa": v.stress, "bounds_mm": v.bounds},
+        figures=roller_figures(solution.evaluation, problem.max_pressure_angle_deg),
+        pointwise_angles=("prime_radius_deg",))
+
+
+def roller_figures(evaluation, max_pressure_angle_deg) -> dict:
+    """result.json's figures of a roller on a cam (either roller family's :class:`Evaluation`): peak
+    stress (MPa) and pressure angle (deg), their angles (deg), the limit (deg), the smallest convex
+    cam radius (mm)."""
+    ev = evaluation
+    return {"stress_max_MPa": ev.stress_max_MPa, "stress_max_deg": ev.stress_max_deg,
+            "pressure_angle_max_deg": ev.pressure_angle_max_deg,
+            "pressure_angle_max_at_deg": ev.pressure_angle_max_at_deg,
+            "max_pressure_angle_deg": max_pressure_angle_deg, "cam_rho_min_mm": ev.cam_rho_min_mm}
+
+
+def record(solution) -> dict:
+    """The roller keys of a pareto.json row: the design, size R_b + R_f and peak stress."""
+    d = solution.design
+    return family.record_json(_design_keys(d), d.base_radius_mm + d.roller_radius_mm, solution.evaluation)

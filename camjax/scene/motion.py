@@ -1,0 +1,123 @@
+"""[motion]: the cam speed, the angle grid and the program of segments and their laws."""
+
+from __future__ import annotations
+
+import math
+
+from camjax.errors import MISSING, SceneError
+from camjax.extrema import EXTREMA_MODES
+from camjax.laws import FOURIER_PRESETS, LAWS, FourierSeries, fourier_law, get_law, polynomial_law
+from camjax.program import KINDS, MotionProgram, Segment
+from camjax.scene.reader import DEFAULT, TableReader, build
+from camjax.scene.spec import ROTATIONS, RPM_MAX, SAMPLES_MAX, SAMPLES_PER_SEGMENT, MotionSpec
+
+
+def parse_law(seg: TableReader):
+    name = seg.table.get("law")
+    if not isinstance(name, str):
+        raise seg.error("law", name, "a rise or return needs a law name",
+                        ", ".join([*LAWS, "polynomial", "fourier"]))
+    if name == "polynomial":
+        exps = seg.table.get("exponents")
+        if not (isinstance(exps, list) and exps and all(isinstance(e, int) and not isinstance(e, bool)
+                                                         for e in exps)):
+            raise seg.error("exponents", exps, "law 'polynomial' needs a list of integer exponents",
+                            "strictly increasing integers >= 1, e.g. [3, 4, 5]")
+        try:
+            return polynomial_law(exps)
+        except ValueError as exc:
+            raise seg.error("exponents", exps, str(exc).split(": ", 1)[-1]) from None
+    if name == "fourier":
+        coeffs = seg.table.get("coefficients")
+        if isinstance(coeffs, str):
+            if coeffs not in FOURIER_PRESETS:
+                raise seg.error("coefficients", coeffs, "unknown preset", ", ".join(FOURIER_PRESETS))
+            series = FOURIER_PRESETS[coeffs]
+        elif isinstance(coeffs, dict):
+            for k, v in {**coeffs, **seg.table.get("phases", {})}.items():
+                if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
+                    raise seg.error(f"coefficients.{k}", v, "must be a finite number")
+            try:
+                series = FourierSeries.from_mapping(coeffs, seg.table.get("phases"))
+                return fourier_law(series)
+            except ValueError as exc:
+                raise seg.error("coefficients", coeffs, str(exc).split(": ", 1)[-1],
+                                "{h0 = .., h1 = .., ...} with optional phases = {phi1 = ..}") from None
+        else:
+            raise seg.error("coefficients", coeffs, "law 'fourier' needs coefficients",
+                            f"a table {{h0 = .., h1 = .., ...}} or a preset: {', '.join(FOURIER_PRESETS)}")
+        return fourier_law(series)
+    for extra in ("exponents", "coefficients", "phases"):
+        if seg.has(extra):
+            raise seg.error(extra, seg.table[extra], f"only for law 'polynomial' or 'fourier', not '{name}'")
+    try:
+        return get_law(name)
+    except ValueError:
+        raise seg.error("law", name, "unknown law", ", ".join([*LAWS, "polynomial", "fourier"])) from None
+
+
+def parse_motion(r: TableReader, oscillating: bool = False) -> MotionSpec:
+    """[motion]; ``oscillating``: the follower swings, lifts are ``lift_deg`` (kept in rad)."""
+    r.check_keys(("rpm", "samples", "segments", "rotation", "extrema"))
+    lift_key, other_key = ("lift_deg", "lift_mm") if oscillating else ("lift_mm", "lift_deg")
+    rpm = r.number("rpm", low=0.0, high=RPM_MAX)
+    samples = r.number("samples", DEFAULT, low=1, high=SAMPLES_MAX, integer=True)
+    rotation = r.choice("rotation", ROTATIONS, DEFAULT)
+    extrema = r.choice("extrema", EXTREMA_MODES, DEFAULT)
+    raw = r.table.get("segments")
+    if not isinstance(raw, list) or not raw:
+        raise r.error("segments", raw if raw is not None else MISSING, "needs a list of segments",
+                      "[{kind = 'dwell' | 'rise' | 'return', angle_deg = .., law = .., lift_mm = ..}, ...]")
+    segments = []
+    for i, item in enumerate(raw):
+        seg = TableReader(item, f"{r.path}.segments[{i}]", r.source)
+        if seg.has(other_key):
+            raise seg.error(other_key, seg.table[other_key],
+                            f"{'an oscillating' if oscillating else 'a translating'} follower takes its "
+                            f"lift as {lift_key}", lift_key)
+        seg.check_keys(("kind", "angle_deg", "law", lift_key, "exponents", "coefficients", "phases"))
+        kind = seg.choice("kind", KINDS)
+        angle = seg.number("angle_deg", low=0.0, low_open=True, high=360.0)
+        if kind == "dwell":
+            for extra in ("law", lift_key, "exponents", "coefficients", "phases"):
+                if seg.has(extra):
+                    raise seg.error(extra, seg.table[extra], "a dwell takes only kind and angle_deg")
+            segments.append(Segment(kind, angle))
+        else:
+            lift = seg.number(lift_key, low=0.0, low_open=True)
+            if oscillating and lift >= 180.0:
+                raise seg.error(lift_key, lift, "swings the arm through the line of centres", "< 180")
+            lift = math.radians(lift) if oscillating else lift  # the program keeps rad
+            segments.append(Segment(kind, angle, parse_law(seg), lift))
+    try:
+        program = MotionProgram.from_segments(segments)
+    except ValueError as exc:
+        msg = str(exc)
+        fld, _, problem = msg.partition(": ")
+        total = sum(s.angle_deg for s in segments)
+        value = total if fld.endswith("angle_deg") else MISSING
+        raise SceneError(f"{r.path}.{fld}", value, problem,
+                         "angles summing to 360" if value is not MISSING else None, r.source) from None
+    spec = build(MotionSpec, rpm=rpm, program=program, segments=tuple(dict(s) for s in raw),
+                  samples=samples, rotation=rotation, extrema=extrema)
+    check_resolution(spec, r)
+    return spec
+
+
+def samples_needed(program: MotionProgram) -> int:
+    """Smallest grid N that puts :data:`SAMPLES_PER_SEGMENT` samples in the shortest segment."""
+    return math.ceil(SAMPLES_PER_SEGMENT * 360.0 / min(program.angles_deg) - 1e-9)
+
+
+def check_resolution(motion: MotionSpec, r: TableReader) -> None:
+    angles = motion.program.angles_deg
+    need = samples_needed(motion.program)
+    if motion.samples < need:
+        i = min(range(len(angles)), key=lambda k: angles[k])
+        got = motion.samples * angles[i] / 360.0
+        raise r.error("samples", motion.samples,
+                      f"too coarse: the {angles[i]:g} deg segment {r.path}.segments[{i}] gets "
+                      f"{got:.3g} samples, {SAMPLES_PER_SEGMENT} are needed to resolve it",
+                      f"{need}..{SAMPLES_MAX}")
+
+

@@ -1,0 +1,160 @@
+"""The validated scene as immutable data: one dataclass per section, defaults written once.
+
+Nothing here reads TOML or computes: :mod:`camjax.scene` builds these from a file, and the models
+read them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from camjax.contact import Material
+from camjax.loads import FollowerTrain, Guide, RockerTrain
+from camjax.program import MotionProgram
+
+RPM_MAX = 1e6  # cam speed, rev/min: far above any machine, low enough that every load stays finite
+SAMPLES_MAX = 1_000_000  # cam-angle grid: measured to run (design, CSV, DXF) in the README's limits
+# The shortest segment gets at least this many samples. One period of a sine (the acceleration of
+# the cycloidal law, the simplest smooth rise) sampled 8 times shows its peak within
+# 1 - cos(pi / 8) = 8 % and its sign changes; fewer samples cannot resolve the segment's shape.
+SAMPLES_PER_SEGMENT = 8
+ROTATIONS = ("ccw", "cw")  # the cam turns counter-clockwise (the drawings' convention) or clockwise
+DEFAULT_ROTATION = "ccw"
+
+
+@dataclass(frozen=True)
+class MotionSpec:
+    """[motion]: cam speed, grid and program."""
+
+    rpm: float
+    program: MotionProgram = field(compare=False)
+    segments: tuple[dict, ...]  # as written in the scene, for reports
+    samples: int = 360  # cam-angle grid size N
+    rotation: str = DEFAULT_ROTATION  # "ccw" or "cw": camjax.followers._pitch (cw = mirror image)
+    extrema: str = "exact"  # "exact": max/min over the angle refined off the grid; "grid": samples
+
+
+@dataclass(frozen=True, kw_only=True)
+class FollowerSpec:
+    """[follower]: what every follower type's section holds; each type's own dataclass (in its
+    folder, :mod:`camjax.followers`) adds its dimensions and limits.
+
+    A translating follower (its follower's ``rocking`` is False) moves its lifts in mm and carries a
+    :class:`camjax.loads.FollowerTrain`; a rocking one swings an arm through the lifts in rad
+    (``lift_deg`` in the scene) and carries a :class:`camjax.loads.RockerTrain` about the pivot.
+    """
+
+    type: str  # the registered follower type (camjax.followers.names())
+    train: FollowerTrain | RockerTrain | None = None  # loads: None when the scene gives no mass/spring
+    min_curvature_radius_mm: float = 0.0  # smallest admissible radius of curvature of the cam surface
+
+
+@dataclass(frozen=True)
+class ContactSpec:
+    """[contact]: Hertz line contact."""
+
+    cam_width_mm: float
+    cam: Material
+    follower: Material
+
+
+@dataclass(frozen=True)
+class DesignSpec:
+    """[design]: the optimal-design problem (SPEC 5) of any follower type.
+
+    ``variables`` holds the follower's design variables (its ``variables``, in that order) as
+    (low, high) bounds in mm; low == high fixes one (the scene may write a fixed variable as a
+    number). :meth:`bounds` reads one.
+    """
+
+    variables: tuple[tuple[str, tuple[float, float]], ...]  # (name, (low, high)), mm
+    sigma_max_MPa: float | None  # None only without [contact] (no stress)
+    mode: str = "global"  # or "pointwise"
+    alpha: float = 1.0  # weight of the size term
+    gamma: float = 1.0  # weight of the stress term
+    solver: str = "gradient"
+    seed: int = 0
+
+    def bounds(self, name: str) -> tuple[float, float]:
+        """(low, high) of design variable ``name`` (mm); KeyError for one this follower lacks."""
+        return dict(self.variables)[name]
+
+
+DYNAMICS_COMPUTE = ("compensation", "robustness", "time_domain", "drive", "nonlinear", "jump",
+                    "shaping")
+
+
+@dataclass(frozen=True)
+class DynamicsSpec:
+    """[dynamics]: follower-train dynamics (SPEC 6), SI in the units of the follower kind.
+
+    follower = "translating": motion lifts in mm (converted to m), I in kg, c in N s/m, k in N/m;
+    follower = "oscillating": motion lifts (``lift_mm``) are read as rad, I in kg m^2, c in
+    N m s/rad, k in N m/rad. Drive flexibility (I1, k01, c01) is always rotational.
+    """
+
+    follower: str  # "translating" or "oscillating"
+    I3: float  # load inertia
+    c3: float  # load damping to ground
+    k23: float  # follower-to-load stiffness
+    cam_speed_hz: float  # cam speed (from motion.rpm unless given)
+    compute: tuple[str, ...] = ("compensation", "robustness", "time_domain")  # of DYNAMICS_COMPUTE
+    I2: float = 0.0  # follower inertia (drive power balance, contact force)
+    I1: float | None = None  # cam-side inertia, kg m^2 (drive flexibility)
+    k01: float | None = None  # motor-to-cam coupling stiffness, N m/rad
+    c01: float | None = None  # coupling damping, N m s/rad
+    spring_rate: float | None = None  # force closure (jump): N/m or N m/rad
+    spring_preload: float = 0.0  # spring compression at zero follower motion, m or rad
+    follower_damping: float = 0.0  # c2 to ground on the follower
+    weight: float = 0.0  # constant load on the cam (m g, N; translating only)
+    samples: int = 720  # cam-angle grid of the dynamics
+    harmonics: int = 60  # harmonics kept from the FFT of the cam law (below samples / 2)
+    steps_per_cycle: int = 720  # RK4 steps per cam revolution
+    transient_tolerance: float = 1e-9  # time-domain runs until e^{-zeta wn t} is below this
+    max_cycles: int = 600  # cap on the simulated revolutions
+    damping_factors: tuple[float, ...] = (0.5, 0.75, 1.0, 1.5, 2.0)
+    speed_factors: tuple[float, ...] = (0.8, 0.9, 1.0, 1.1, 1.2)
+    wn_factors: tuple[float, ...] = (0.8, 0.9, 1.0, 1.1, 1.2)
+    jump_speed_range_hz: tuple[float, float] | None = None  # default: 0.05x .. 10x cam speed
+    shaping_band: tuple[float, float] = (0.9, 1.1)  # speed band, factors of the cam speed
+    shaping_harmonics: int = 15  # at most harmonics
+    shaping_steps: int = 200
+
+    @property
+    def motion_scale(self) -> float:
+        """Factor from motion-program units to SI: mm -> m (translating), rad -> rad."""
+        return 1e-3 if self.follower == "translating" else 1.0
+
+    @property
+    def has_drive(self) -> bool:
+        return self.I1 is not None
+
+
+@dataclass(frozen=True)
+class Scene:
+    """A validated scene. Optional sections are None when absent: their models are not run."""
+
+    name: str
+    motion: MotionSpec
+    follower: FollowerSpec
+    contact: ContactSpec | None = None
+    design: DesignSpec | None = None
+    guide: Guide | None = None
+    dynamics: DynamicsSpec | None = None
+
+    def needs(self) -> frozenset[str]:
+        """The models this scene requires (kinematics and geometry always)."""
+        out = {"kinematics", "geometry"}
+        if self.follower.train is not None:
+            out.add("loads")
+        if self.contact is not None:
+            out.add("contact")
+        if self.guide is not None:
+            out.add("guide")
+        if self.design is not None:
+            out.add("design")
+        if self.dynamics is not None:
+            out.add("dynamics")
+        return frozenset(out)
+
+
