@@ -43,6 +43,7 @@ class Follower(abc.ABC):
     rocking: ClassVar[bool]  # an arm swinging about a pivot (lifts in deg, loads about it)
     keys: ClassVar[tuple[str, ...]]  # the [follower] table's keys besides ``type``
     variables: ClassVar[tuple[str, ...]]  # design variables (mm), in result.json's order
+    example_scene: ClassVar[str]  # a built-in scene with a [design] that shows it (docs, tests/test_followers.py)
     design_needs_contact: ClassVar[bool] = False  # a [design] needs [contact] (its objective is the stress)
     takes_contact: ClassVar[bool] = True  # a [contact] section (Hertz stress) is defined for it
     takes_guide: ClassVar[bool] = False  # a [guide] section (stem reactions, SPEC 4) applies to it
@@ -93,8 +94,12 @@ class Follower(abc.ABC):
         return self.module("report").report(scene, run)
 
     def drawing(self) -> ModuleType:
-        """The folder's ``drawing.py``: ``figure_builders(curves)``, ``profile_table(curves)``,
-        ``mechanism(curves, title, violation)``, ``title_dimensions(data)`` (no JAX)."""
+        """The folder's ``drawing.py`` (NumPy and matplotlib only, no JAX): ``figure_builders(curves)``,
+        ``profile_table(curves)``, ``mechanism(curves, title, violation)`` (the animation's
+        :class:`camjax.output.animation.Mechanism`), ``follower_points(m, s)`` and
+        ``artists(ax, m, poses, r_max)`` (its pose and artists in the animation),
+        ``title_dimensions(data)``, and ``CONTACT_SHAPE`` ("face" or "circle": what touches the
+        cam, which the riding check of tests/test_followers.py rides on the exported outline)."""
         return self.module("drawing")
 
     @abc.abstractmethod

@@ -38,7 +38,17 @@ __all__ = [
     "parse_scene", "quote", "samples_needed", "scene_from_dict", "with_design", "with_samples",
 ]
 
-BUILTIN_SCENES = {"default": "default.toml", "thesis-bench": "thesis-bench.toml", "roller": "roller.toml"}
+
+
+def _builtin_scenes() -> dict[str, str]:
+    """Built-in scene name -> file: every TOML file of camjax/scenes, named by its stem (the
+    embedded default scene first)."""
+    files = sorted(f.name for f in resources.files("camjax.scenes").iterdir() if f.name.endswith(".toml"))
+    names = {name[: -len(".toml")]: name for name in files}
+    return {"default": names.pop("default"), **names}
+
+
+BUILTIN_SCENES = _builtin_scenes()
 
 SECTIONS = ("motion", "follower", "contact", "design", "guide", "dynamics")
 

@@ -64,6 +64,7 @@ class Flat(TranslatingFollower):
     name = "flat"
     title = "flat-face"
     keys = (*TRAIN_KEYS, "min_curvature_radius_mm")
+    example_scene = "default"
     variables = ("base_radius_mm", "face_width_mm")
     design_needs_contact = True
     takes_guide = True

@@ -13,8 +13,11 @@ import numpy as np
 from camjax.followers import _rocking_drawing as drawing
 from camjax.followers._rocking_drawing import mechanism, profile_table, to_cam_frame
 
-__all__ = ["artists", "draw_follower", "figure_builders", "follower_points", "mechanism", "profile_table",
+__all__ = ["CONTACT_SHAPE", "artists", "draw_follower", "figure_builders", "follower_points", "mechanism", "profile_table",
            "title_dimensions"]
+
+
+CONTACT_SHAPE = "face"  # what touches the cam: a straight face (a line in the follower frame)
 
 
 def draw_follower(ax, curves, theta, psi) -> tuple[float, float]:

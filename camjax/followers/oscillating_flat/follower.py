@@ -41,6 +41,7 @@ class OscillatingFlat(RockingFollower):
     name = "oscillating_flat"
     title = "oscillating flat-face"
     keys = ("pivot_distance_mm", "face_offset_mm", "min_curvature_radius_mm", *TRAIN_KEYS)
+    example_scene = "oscillating-flat"
     variables = ("base_radius_mm", "pivot_distance_mm", "face_offset_mm")
 
     def parse(self, r) -> OscillatingFlatSpec:

@@ -61,6 +61,7 @@ class OscillatingRoller(RockingFollower):
     title = "oscillating roller"
     keys = ("pivot_distance_mm", "arm_length_mm", "roller_radius_mm", "max_pressure_angle_deg",
             "min_curvature_radius_mm", *TRAIN_KEYS)
+    example_scene = "oscillating-roller"
     variables = ("base_radius_mm", "roller_radius_mm", "pivot_distance_mm", "arm_length_mm")
 
     def parse(self, r) -> OscillatingRollerSpec:

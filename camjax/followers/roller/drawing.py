@@ -12,8 +12,11 @@ import numpy as np
 from camjax.followers import _translating_drawing as drawing
 from camjax.followers._translating_drawing import DrawnFollower, mechanism, profile_table
 
-__all__ = ["artists", "draw_follower", "figure_builders", "follower_points", "mechanism", "profile_table",
+__all__ = ["CONTACT_SHAPE", "artists", "draw_follower", "figure_builders", "follower_points", "mechanism", "profile_table",
            "title_dimensions"]
+
+
+CONTACT_SHAPE = "circle"  # what touches the cam: a circle of radius ``roller_radius_mm`` (the Mechanism's)
 
 
 def draw_follower(ax, curves, theta, sign: float) -> DrawnFollower:

@@ -73,6 +73,7 @@ class Roller(TranslatingFollower):
     name = "roller"
     title = "roller"
     keys = (*TRAIN_KEYS, "roller_radius_mm", "offset_mm", "max_pressure_angle_deg", "min_curvature_radius_mm")
+    example_scene = "roller"
     variables = ("base_radius_mm", "roller_radius_mm", "offset_mm")
 
     def parse(self, r) -> RollerSpec:
