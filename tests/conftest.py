@@ -3,6 +3,7 @@
 Shared fixtures: the default scene, its arrays, and the reference case in NumPy (tests/reference.py).
 """
 
+import gc
 import os
 
 import jax
@@ -52,3 +53,27 @@ def default_arrays(default_scene):
 def reference_1deg():
     """The reference case (SPEC 5) in independent NumPy closed forms on the scene's 1 deg grid."""
     return reference_case(360)
+
+
+# Each compiled XLA program holds a few memory mappings of its own; a whole suite in one process
+# compiles tens of thousands and would pass the kernel's vm.max_map_count (65,530 by default),
+# after which mmap fails inside XLA and the process dies (SIGSEGV). Past this many mappings the
+# in-memory caches are dropped (compiled kernels stay in the persistent cache on disk).
+MAX_MAPPINGS = 25_000
+
+
+def _mapping_count() -> int:
+    try:
+        with open("/proc/self/maps", "rb") as maps:
+            return sum(1 for _ in maps)
+    except OSError:  # not Linux: no such limit to keep under
+        return 0
+
+
+@pytest.fixture(autouse=True)
+def _release_compiled_programs():
+    """Drop JAX's in-memory program caches once the process holds more than MAX_MAPPINGS."""
+    yield
+    if _mapping_count() > MAX_MAPPINGS:
+        jax.clear_caches()
+        gc.collect()
