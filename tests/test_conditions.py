@@ -258,3 +258,74 @@ def test_scene_with_conditions_samples_like_its_closed_form():
     ref = np.where(t < 180, 10 * (10 * x**3 - 15 * x**4 + 6 * x**5), 10.0)
     np.testing.assert_allclose(np.asarray(kin.s)[:270], ref[:270], rtol=0, atol=1e-12 * 10)
     assert scene.motion.asked_to_match[1] == ("v", "a") and scene.motion.asked_to_match[0] == ("v", "a", "j")
+
+
+def test_every_builtin_scene_loads():
+    """Built-in scenes are the files of camjax/scenes (discovered, not listed): each one parses,
+    the constant-velocity one included, whose joint conditions are solved at load."""
+    from camjax.scene import BUILTIN_SCENES, load_scene
+
+    assert "constant-velocity" in BUILTIN_SCENES
+    for name in BUILTIN_SCENES:
+        load_scene(name)
+
+
+@pytest.mark.slow
+def test_cli_design_of_the_constant_velocity_scene_is_c3(tmp_path, monkeypatch):
+    """`camjax design constant-velocity`: every joint reported "ok" with v, a, j asked to match,
+    and the profile's own s column continuous through the jerk (finite differences).
+
+    Central differences of s on the 0.5 deg grid (h = 8.7e-3 rad) estimate s', s'', s'''. Where a
+    derivative is continuous, one step changes it by at most h times the next derivative's peak
+    (mean value theorem; the peak taken 3 samples or more away from the joints, where the
+    differences straddle no joint); across a jump it changes by the jump. The bounds: 1.5 h peak
+    for s' and s'' (C1, C2; measured 1.0), and 0.2 of the s''' peak per step for s''' (C3;
+    measured 0.087, and 0.48 with the jerk left free, 20 with the acceleration left free). The
+    CSV's 12 decimals put a rounding of 1e-12 / h^3 = 2e-6 mm/rad^3 on s''': negligible.
+    """
+    import json
+
+    from camjax import cli
+
+    monkeypatch.setenv("CAMJAX_COMPILATION_CACHE", "0")
+    out = tmp_path / "cv"
+    assert cli.main(["design", "constant-velocity", "--out", str(out), "--dpi", "30"]) == 0
+    data = json.loads((out / "result.json").read_text())
+    assert [s.get("solved_degree") for s in data["segments"]] == [None, 6, None, 6, None, 7]
+    assert all(j["class"] == "ok" and j["asked_to_match"] == ["v", "a", "j"] for j in data["flcd"])
+    rows = [line.split(",") for line in (out / "profile.csv").read_text().splitlines()
+            if line and not line.startswith("#")]
+    col = rows[0].index("s_mm")
+    s = np.array([float(r[col]) for r in rows[1:]])
+    n = len(s)
+    h = math.radians(360.0 / n)
+    d1 = (np.roll(s, -1) - np.roll(s, 1)) / (2 * h)
+    d2 = (np.roll(s, -1) - 2 * s + np.roll(s, 1)) / h**2
+    d3 = (np.roll(s, -2) - 2 * np.roll(s, -1) + 2 * np.roll(s, 1) - np.roll(s, 2)) / (2 * h**3)
+    joints_deg = np.cumsum([0.0] + [seg["angle_deg"] for seg in data["segments"]][:-1])
+    k = np.arange(n)
+    near = np.zeros(n, bool)
+    for j in joints_deg * n / 360.0:
+        near |= np.abs((k - j + n / 2) % n - n / 2) <= 3
+    # constant velocity in the middle: 25 mm over 100 deg (away from its ends)
+    mid = ~near & (k >= 100 * n / 360) & (k < 200 * n / 360)
+    np.testing.assert_allclose(d1[mid], 25.0 / math.radians(100.0), rtol=1e-9)
+    assert np.max(np.abs(np.diff(d1))) <= 1.5 * h * np.max(np.abs(d2[~near]))  # C1
+    assert np.max(np.abs(np.diff(d2))) <= 1.5 * h * np.max(np.abs(d3[~near]))  # C2
+    assert np.max(np.abs(np.diff(d3))) <= 0.2 * np.max(np.abs(d3[~near]))  # C3
+
+
+def test_cli_refuses_an_unsolvable_set_with_exit_2(tmp_path, capsys):
+    from camjax import cli
+
+    path = tmp_path / "bad.toml"
+    path.write_text(
+        '[motion]\nrpm = 60.0\nsegments = [\n'
+        '{ kind = "dwell", angle_deg = 90 },\n'
+        '{ kind = "rise", angle_deg = 90, law = "polynomial", lift_mm = 5.0 },\n'
+        '{ kind = "rise", angle_deg = 90, law = "polynomial", lift_mm = 5.0 },\n'
+        '{ kind = "return", angle_deg = 90, law = "cycloidal", lift_mm = 10.0 },\n]\n' + FLAT)
+    assert cli.main(["design", str(path), "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "motion.segments[1].end.v" in err[0] and "Traceback" not in err[0]
+    assert not (tmp_path / "out").exists()
