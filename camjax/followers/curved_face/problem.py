@@ -199,7 +199,8 @@ def pressure_angle(problem: Problem, design: Design) -> jax.Array:
 def face_width_need(problem: Problem, design: Design) -> jax.Array:
     """2 max_theta R_c |sin phi| (mm), the narrowest face that keeps the contact on it, shape ()
     (batched designs: over the last axis)."""
-    return 2.0 * jnp.max(_travel(_terms(problem, design), design), axis=-1)
+    column = jax.tree.map(lambda x: jnp.expand_dims(x, -1), design)  # (..., 1) against the grid (n,)
+    return 2.0 * jnp.max(_travel(_terms(problem, column), column), axis=-1)
 
 
 def stress(problem: Problem, design: Design) -> jax.Array:
