@@ -165,6 +165,13 @@ CASES: dict[str, tuple[list[str], str | bytes | None, str, int]] = {
     "mode_unknown": (["design", "--mode", "best", "--out", "{dir}"], None, "--mode", 2),
     "alpha_negative": (["design", "--alpha", "-1", "--out", "{dir}"], None, "--alpha", 2),
     "seed_negative": (["design", "--seed", "-1", "--out", "{dir}"], None, "--seed", 2),
+    # 2**64: past the 64-bit integer JAX makes a PRNG key from (it raised OverflowError, exit 1)
+    "seed_2_64": (["design", "--seed", "18446744073709551616", "--out", "{dir}"], None,
+                  "--seed = 18446744073709551616: out of range (allowed: >= 0 and <= 9223372036854775807)", 2),
+    "sweep_seed_2_64": (["sweep", "--alpha", "1", "--gamma", "1", "--seed", str(2**63), "--out", "{dir}"],
+                        None, "--seed", 2),
+    "scene_seed_2_64": (SCENE_ARGS, _variant("gamma = 1.0", "gamma = 1.0\nseed = 18446744073709551616"),
+                        "design.seed", 2),
     "design_option_without_design": (["design", "{scene}", "--mode", "pointwise", "--out", "{dir}"],
                                      KINEMATIC, "--mode", 2),
     "unknown_option": (["design", "--colour", "red", "--out", "{dir}"], None, "--colour", 2),
@@ -192,6 +199,32 @@ CASES: dict[str, tuple[list[str], str | bytes | None, str, int]] = {
     "dynamics_dpi": (["dynamics", "thesis-bench", "--dpi", "1", "--out", "{dir}"], None, "--dpi", 2),
     "dynamics_utf16_scene": (["dynamics", "{scene}", "--out", "{dir}"], DEFAULT.encode("utf-16"), "UTF-16", 2),
     "dynamics_missing_scene": (["dynamics", "--out", "{dir}"], None, "scene", 2),
+}
+
+
+# the environment camjax reads: name -> (argv, variables set, word the stderr line must contain)
+ENV_CASES: dict[str, tuple[list[str], dict[str, str], str]] = {
+    # a Unicode digit passes str.isdigit but is no count (int('²') raised ValueError, exit 1)
+    "drawing_processes_superscript": (["design", "--out", "{dir}"], {"CAMJAX_DRAWING_PROCESSES": "\u00b2"},
+                                      "CAMJAX_DRAWING_PROCESSES = '\u00b2': not a count"),
+    "drawing_processes_arabic_digit": (["design", "--out", "{dir}"], {"CAMJAX_DRAWING_PROCESSES": "\u0663"},
+                                       "CAMJAX_DRAWING_PROCESSES"),
+    "drawing_processes_17": (["design", "--out", "{dir}"], {"CAMJAX_DRAWING_PROCESSES": "17"},
+                             "CAMJAX_DRAWING_PROCESSES = '17'"),
+    "drawing_processes_huge": (["design", "--out", "{dir}"], {"CAMJAX_DRAWING_PROCESSES": "9" * 5000},
+                               "CAMJAX_DRAWING_PROCESSES"),
+    # checked by every command, not only the one that reads it
+    "drawing_processes_sweep": (["sweep", "--alpha", "1", "--gamma", "1", "--out", "{dir}"],
+                                {"CAMJAX_DRAWING_PROCESSES": "-1"}, "CAMJAX_DRAWING_PROCESSES"),
+    "progress_word": (["dynamics", "thesis-bench", "--out", "{dir}"], {"CAMJAX_PROGRESS": "yes"},
+                      "CAMJAX_PROGRESS = 'yes': not a switch"),
+    "debug_word": (["laws", "--json", "{tmp}/laws.json"], {"CAMJAX_DEBUG": "true"}, "CAMJAX_DEBUG"),
+    "verify_two": (["design", "--out", "{dir}"], {"CAMJAX_PROGRAM_CACHE_VERIFY": "2"},
+                   "CAMJAX_PROGRAM_CACHE_VERIFY"),
+    "program_cache_is_a_file": (["design", "--out", "{dir}"], {"CAMJAX_PROGRAM_CACHE": "{file}"},
+                                "CAMJAX_PROGRAM_CACHE"),
+    "compilation_cache_is_a_file": (["check-extremes", "--out", "{dir}"], {"CAMJAX_COMPILATION_CACHE": "{file}"},
+                                    "CAMJAX_COMPILATION_CACHE"),
 }
 
 
@@ -238,6 +271,54 @@ def test_hostile_input_is_one_line_and_changes_nothing(name, place, capsys, monk
     assert len(lines[0]) < 1000
     assert {p.name: snapshot(p) for p in place.iterdir()} == before
     assert leftovers(place) == []
+
+
+@pytest.mark.parametrize("name", sorted(ENV_CASES))
+def test_a_bad_environment_is_one_line_and_changes_nothing(name, place, capsys, monkeypatch):
+    template, variables, word = ENV_CASES[name]
+    monkeypatch.setenv("CAMJAX_COMPILATION_CACHE", "0")
+    for key, value in variables.items():
+        monkeypatch.setenv(key, _argv([value], place)[0])
+    calls = []  # no work starts: neither a design nor a sweep is computed
+    monkeypatch.setattr("camjax.output.report.analyse", lambda *a, **k: calls.append(a))
+    monkeypatch.setattr("camjax.pipeline.sweep_scene", lambda *a, **k: calls.append(a))
+    before = {p.name: snapshot(p) for p in place.iterdir()}
+    rc, out, err = run(_argv(template, place), capsys)
+    assert rc == 2, err
+    lines = err.splitlines()
+    assert len(lines) == 1 and "Traceback" not in err and out == "", err[:2000]
+    assert word in lines[0] and len(lines[0]) < 1000
+    assert calls == []
+    assert {p.name: snapshot(p) for p in place.iterdir()} == before and leftovers(place) == []
+
+
+def test_a_platform_jax_cannot_start_is_one_line_naming_jax_platforms(place, capsys, monkeypatch):
+    # in this process JAX has started already: its answer for a missing CUDA (a bare
+    # AssertionError from jaxlib) is what the check is given
+    import jax
+
+    def no_cuda(*args, **kwargs):
+        raise AssertionError()
+
+    monkeypatch.setenv("JAX_PLATFORMS", "cuda")
+    monkeypatch.setattr(jax, "devices", no_cuda)
+    before = snapshot(place / "out")
+    rc, out, err = run(["design", "--out", str(place / "out")], capsys)
+    assert rc == 2 and out == "" and err.count("\n") == 1, err
+    assert err.startswith("camjax design: error: JAX_PLATFORMS = 'cuda': JAX cannot start this platform")
+    assert snapshot(place / "out") == before
+
+
+@pytest.mark.slow
+def test_jax_platforms_cuda_without_a_gpu_exits_2(place):
+    import jax
+
+    if any(d.platform == "gpu" for d in jax.devices()) or jax.default_backend() == "gpu":
+        pytest.skip("this machine has a GPU: JAX_PLATFORMS=cuda is a valid setting here")
+    proc = _start(["laws"], place, JAX_PLATFORMS="cuda")
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 2, err
+    assert len(err.strip().splitlines()) == 1 and "JAX_PLATFORMS = 'cuda'" in err and "Traceback" not in err
 
 
 def test_a_huge_unknown_section_is_quoted_short(place, capsys):
@@ -389,11 +470,12 @@ def test_rpm_1e6_runs_with_finite_results(tmp_path, capsys, monkeypatch):
 # ---------------------------------------------------------------------------------- signals
 
 
-def _start(args: list[str], tmp_path: Path) -> subprocess.Popen:
+def _start(args: list[str], tmp_path: Path, **variables: str) -> subprocess.Popen:
     # this checkout's camjax, whatever the working folder
     root = str(Path(cli.__file__).resolve().parents[2])
     path = os.pathsep.join([root, *filter(None, [os.environ.get("PYTHONPATH")])])
-    env = {**os.environ, "CAMJAX_COMPILATION_CACHE": "0", "PYTHONUNBUFFERED": "1", "PYTHONPATH": path}
+    env = {**os.environ, "CAMJAX_COMPILATION_CACHE": "0", "PYTHONUNBUFFERED": "1", "PYTHONPATH": path,
+           **variables}
     return subprocess.Popen([sys.executable, "-m", "camjax.cli", *args], stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True, env=env, cwd=tmp_path)
 

@@ -48,8 +48,9 @@ class TableReader:
             raise self.error(key, v, f"must be {kind}")
         if not math.isfinite(v):
             raise self.error(key, v, "must be finite", "finite numbers")
-        parts = [f"{'>' if low_open else '>='} {low:g}"] if low is not None else []
-        parts += [f"<= {high:g}"] if high is not None else []
+        shown = (lambda x: f"{x}") if integer else (lambda x: f"{x:g}")
+        parts = [f"{'>' if low_open else '>='} {shown(low)}"] if low is not None else []
+        parts += [f"<= {shown(high)}"] if high is not None else []
         rng = " and ".join(parts)
         if low is not None and (v < low or (low_open and v == low)):
             raise self.error(key, v, "out of range", rng)
