@@ -143,6 +143,18 @@ CASES: dict[str, tuple[list[str], str | bytes | None, str, int]] = {
     "sweep_address_long": (["sweep", "--alpha", "1", "--gamma", "1", "--backend", "process", "--address",
                             "h" * 10_000, "--out", "{dir}"], None, "--address", 2),
     "out_current_folder": (["design", "--out", "."], None, "--out", 2),
+    # /proc and /sys: os.access says root may write there, but nothing can be made in them
+    "out_under_proc": (["design", "--out", "/proc/camjax-out"], None, "--out = '/proc/camjax-out': cannot write", 2),
+    "out_deep_under_proc": (["design", "--out", "/proc/camjax/a/b"], None, "--out", 2),
+    "sweep_out_under_proc": (["sweep", "--alpha", "1", "--gamma", "1", "--out", "/proc/camjax-out"], None,
+                             "--out", 2),
+    "block_sweep_out_under_sys": (["sweep", "--alpha", "1", "--gamma", "1", "--backend", "sequential",
+                                   "--out", "/sys/camjax-out"], None, "--out", 2),
+    "dynamics_out_under_proc": (["dynamics", "thesis-bench", "--out", "/proc/camjax-out"], None, "--out", 2),
+    "extremes_out_under_proc": (["check-extremes", "--out", "/proc/camjax-out"], None, "--out", 2),
+    "laws_json_under_proc": (["laws", "--json", "/proc/camjax-laws.json"], None, "--json", 2),
+    "laws_plot_under_sys": (["laws", "--plot", "/sys/camjax-laws.png"], None, "--plot", 2),
+    "out_dangling_link": (["design", "--out", "{tmp}/dangling"], None, "is a link whose target is missing", 2),
     "out_parent_folder": (["design", "--out", ".."], None, "--out", 2),
     "sweep_out_is_a_file": (["sweep", "--alpha", "1", "--gamma", "1", "--out", "{file}"], None, "--out", 2),
     "extremes_out_is_a_file": (["check-extremes", "--out", "{file}"], None, "--out", 2),
@@ -230,7 +242,9 @@ ENV_CASES: dict[str, tuple[list[str], dict[str, str], str]] = {
 
 @pytest.fixture
 def place(tmp_path):
-    """A test folder with an earlier run's output folder, a plain file and a foreign folder."""
+    """A test folder with an earlier run's output folder, a plain file, a foreign folder and a
+    link to nothing."""
+    (tmp_path / "dangling").symlink_to(tmp_path / "gone")
     old = tmp_path / "out"
     old.mkdir()
     (old / "result.json").write_text('{"scene": "earlier run"}\n')
@@ -340,6 +354,40 @@ def test_an_unwritable_output_folder_is_refused_before_any_work(place, capsys, m
     rc, _, err = run(["design", "--out", str(target)], capsys)
     assert rc == 2 and "--out" in err and "permission denied" in err and err.count("\n") == 1
     assert calls == [] and snapshot(target) == before
+
+
+WRITERS = {  # every command that writes, with the computation that must not start
+    "design": (["design", "--out", "{dir}"], "camjax.output.report.analyse"),
+    "sweep": (["sweep", "--alpha", "1", "--gamma", "1", "--out", "{dir}"], "camjax.pipeline.sweep_scene"),
+    "block_sweep": (["sweep", "--alpha", "1", "--gamma", "1", "--backend", "sequential", "--out", "{dir}"],
+                    "camjax.scaleout.driver.sweep_blocks"),
+    "dynamics": (["dynamics", "thesis-bench", "--out", "{dir}"], "camjax.dynamics.scene_dynamics"),
+    "check-extremes": (["check-extremes", "--out", "{dir}"], "camjax.scene.load_scene"),
+    "laws_json": (["laws", "--json", "{dir}/laws.json"], "camjax.laws.summarize"),
+    "laws_plot": (["laws", "--plot", "{dir}/laws.png"], "camjax.laws.summarize"),
+}
+
+
+@pytest.mark.parametrize("command", sorted(WRITERS))
+def test_a_place_where_nothing_can_be_made_is_refused_before_any_work(command, place, capsys, monkeypatch):
+    # a read-only file system: the permission bits allow writing (root, or a rw mode on a ro
+    # mount), making the staging folder fails with EROFS
+    import errno
+    import tempfile
+
+    def read_only(*args, **kwargs):
+        raise OSError(errno.EROFS, os.strerror(errno.EROFS))
+
+    monkeypatch.setattr(tempfile, "mkdtemp", read_only)
+    template, work = WRITERS[command]
+    calls = []
+    monkeypatch.setattr(work, lambda *a, **k: calls.append(a))
+    before = snapshot(place / "out")
+    rc, out, err = run(_argv(template, place), capsys)
+    option = template[1] if template[0] == "laws" else "--out"
+    assert rc == 2 and out == "" and err.count("\n") == 1, err
+    assert f"{option} = " in err and "Read-only file system" in err
+    assert calls == [] and snapshot(place / "out") == before and leftovers(place) == []
 
 
 def test_an_os_error_while_writing_is_one_line_and_changes_nothing(place, capsys, monkeypatch):

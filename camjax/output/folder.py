@@ -4,8 +4,9 @@ Every command that writes a folder (``design``, ``sweep``, ``dynamics``, ``check
 ``laws --json`` (one file) goes through this module:
 
 1. :func:`check_output_dir` / :func:`check_output_file` run before any computation: an empty path,
-   a file where a folder is wanted (or a folder where a file is), a path under a file, an
-   unwritable parent, or a non-empty folder that camjax did not write is one
+   a file where a folder is wanted (or a folder where a file is), a path under a file, a link
+   whose target is missing, a parent in which nothing can be made (tried: an empty folder is made
+   and removed there), or a non-empty folder that camjax did not write is one
    :class:`OutputError` (the CLI prints it and exits 2).
 2. :func:`replaced_folder` yields a staging folder ``.<DIR>.camjax-staging-<pid>`` beside DIR;
    when the block succeeds the old DIR is renamed aside (``.<DIR>.camjax-old-<pid>``), the staging
@@ -33,6 +34,7 @@ from camjax.scene import quote
 
 STAGING = "camjax-staging"
 OLD = "camjax-old"
+PROBE = "camjax-probe"  # the empty folder made and removed to learn that a place is writable
 # A folder holding one of these was written by camjax (or is empty) and may be replaced whole;
 # any other non-empty folder is refused rather than deleted (e.g. --out ~ or --out .).
 OUTPUT_MARKERS = ("result.json", "pareto.json", "extremes.json", "dynamics.json", "manifest.json")
@@ -91,6 +93,23 @@ def _check_parent(option: str, text: str, out: Path) -> None:
                           "(allowed: a path whose parents are folders)")
     if not os.access(parent, os.W_OK | os.X_OK):
         raise OutputError(f"{_display(option, text)}: cannot write in {parent} (permission denied)")
+    _probe(option, text, parent)
+
+
+def _probe(option: str, text: str, parent: Path) -> None:
+    """Create and remove an empty folder in ``parent``: the staging folder will be made there.
+
+    ``os.access`` answers from the permission bits only; it says yes for root everywhere, and for a
+    read-only file system, /proc or /sys, where making anything fails. Trying is the only answer
+    that holds, and it costs a millisecond before a run of seconds.
+    """
+    import tempfile
+
+    try:
+        os.rmdir(tempfile.mkdtemp(prefix=f".{PROBE}-", dir=parent))
+    except OSError as exc:
+        raise OutputError(f"{_display(option, text)}: cannot write in {parent} "
+                          f"({exc.strerror or type(exc).__name__})") from None
 
 
 def _absolute(option: str, text: str) -> Path:
@@ -129,7 +148,11 @@ def check_output_dir(text: str, option: str = "--out", replace: bool = True) -> 
     if replace and out in (cwd := Path.cwd(), *cwd.parents):
         raise OutputError(f"{_display(option, text)}: is the current folder or holds it; it would be "
                           "replaced whole (allowed: a folder below the current one, e.g. out)")
-    if out.exists() or out.is_symlink():
+    if out.is_symlink() and not out.exists():
+        raise OutputError(f"{_display(option, text)}: is a link whose target is missing "
+                          f"({quote(os.readlink(out))}) (allowed: a new folder, one camjax wrote, or "
+                          "a link to an existing folder)")
+    if out.exists():
         if not out.is_dir():
             raise OutputError(f"{_display(option, text)}: is a file, not a folder "
                               "(allowed: a new folder or one camjax wrote)")
