@@ -129,6 +129,19 @@ CASES: dict[str, tuple[list[str], str | bytes | None, str, int]] = {
     "scene_name_too_long": (["design", "{tmp}/" + "s" * 10_000, "--out", "{dir}"], None, "scene", 2),
     "scene_name_nul": (["design", "a\x00b.toml", "--out", "{dir}"], None, "scene", 2),
     "scene_missing": (["design", "{tmp}/nothing.toml", "--out", "{dir}"], None, "scene", 2),
+    # not "no such file": what the path names instead (and nothing is opened: a FIFO would block)
+    "scene_fifo": (["design", "{tmp}/special/fifo", "--out", "{dir}"], None,
+                   "is not a regular file: it is a FIFO", 2),
+    "scene_dev_zero": (["design", "/dev/zero", "--out", "{dir}"], None,
+                       "scene = '/dev/zero': is not a regular file: it is a character device", 2),
+    "dynamics_scene_dev_null": (["dynamics", "/dev/null", "--out", "{dir}"], None, "not a regular file", 2),
+    "scene_dangling_link": (["design", "{tmp}/dangling", "--out", "{dir}"], None,
+                            "is a link whose target is missing", 2),
+    # 8 samples (SAMPLES_PER_SEGMENT) of the finest grid (1e6) span 8 * 360 / 1e6 = 0.00288 deg
+    "segment_1e-9_deg": (SCENE_ARGS, _variant("{ kind = \"dwell\",  angle_deg = 100 }",
+                                              "{ kind = \"dwell\", angle_deg = 1e-9 },\n"
+                                              "  { kind = \"dwell\", angle_deg = 99.999999999 }"),
+                         "motion.segments[0].angle_deg = 1e-09: too short for any grid", 2),
     "swing_lift_on_translating": (SCENE_ARGS, DEFAULT.replace("lift_mm = 5.0", "lift_deg = 5.0", 1),
                                   "lift_deg", 2),
     # the output location, checked before any computation
@@ -245,6 +258,8 @@ def place(tmp_path):
     """A test folder with an earlier run's output folder, a plain file, a foreign folder and a
     link to nothing."""
     (tmp_path / "dangling").symlink_to(tmp_path / "gone")
+    (tmp_path / "special").mkdir()
+    os.mkfifo(tmp_path / "special" / "fifo")
     old = tmp_path / "out"
     old.mkdir()
     (old / "result.json").write_text('{"scene": "earlier run"}\n')
@@ -333,6 +348,26 @@ def test_jax_platforms_cuda_without_a_gpu_exits_2(place):
     _, err = proc.communicate(timeout=120)
     assert proc.returncode == 2, err
     assert len(err.strip().splitlines()) == 1 and "JAX_PLATFORMS = 'cuda'" in err and "Traceback" not in err
+
+
+def test_the_shortest_segment_any_grid_resolves():
+    # SAMPLES_PER_SEGMENT samples of a SAMPLES_MAX grid: 8 * 360 / 1e6 = 0.00288 deg; a segment of
+    # that angle parses (on the finest grid), one 1 % shorter is refused naming its angle_deg
+    from camjax.scene import SAMPLES_MAX, SAMPLES_PER_SEGMENT, SceneError, parse_scene
+
+    least = SAMPLES_PER_SEGMENT * 360.0 / SAMPLES_MAX
+    assert least == pytest.approx(0.00288, rel=1e-12)
+
+    def scene(angle: float) -> str:
+        return KINEMATIC.replace("samples = 180", f"samples = {SAMPLES_MAX}").replace(
+            "{ kind = \"dwell\", angle_deg = 90 },\n  { kind = \"return\"",
+            f"{{ kind = \"dwell\", angle_deg = {angle!r} }},\n  {{ kind = \"dwell\", angle_deg = {90 - angle!r} }},"
+            "\n  { kind = \"return\"")
+
+    assert parse_scene(scene(least)).motion.samples == SAMPLES_MAX
+    with pytest.raises(SceneError, match=r"motion\.segments\[2\]\.angle_deg = 0\.00285\d*: too short for "
+                       r"any grid: 8 samples of the finest \(1000000\) span 0\.00288 deg \(allowed: >= 0\.00288"):
+        parse_scene(scene(0.99 * least))
 
 
 def test_a_huge_unknown_section_is_quoted_short(place, capsys):
