@@ -459,6 +459,96 @@ def test_a_run_replaces_the_folder_whole(place, capsys):
     assert leftovers(place) == []
 
 
+class _Blocks:
+    """A block backend whose blocks return made-up records at once (or fail): the folder handling
+    of a block sweep without solving anything."""
+
+    def __init__(self, fail: bool = False):
+        self.fail, self.solved = fail, []
+
+    def map_unordered(self, fn, tasks):
+        from camjax.scaleout.backends import Outcome
+
+        for pos, task in enumerate(tasks):
+            self.solved.append(task.index)
+            if self.fail:
+                yield pos, Outcome(False, None, "RuntimeError: injected", 0.0, "")
+                continue
+            records = [{"alpha": a, "gamma": g, "size_mm": 10.0 + a, "stress_max_MPa": 100.0 + g,
+                        "feasible": True, "scene": task.scene_name, "weighting": task.first_weighting + i,
+                        "solver": task.spec.solver, "mode": task.spec.mode}
+                       for i, (a, g) in enumerate(task.weightings)]
+            yield pos, Outcome(True, records, "", 0.0, "test")
+
+    def close(self):
+        pass
+
+
+def _block_sweep(place: Path, capsys, monkeypatch, backend: _Blocks, *extra: str) -> int:
+    from camjax.solvers import sweep
+
+    class Figure:
+        def savefig(self, path, **kwargs):
+            Path(path).write_bytes(b"pareto figure")
+
+    monkeypatch.setattr("camjax.scaleout.driver.make_backend", lambda *a, **k: backend)
+    monkeypatch.setattr(sweep, "plot_pareto", lambda *a, **k: Figure())
+    rc, _, _ = run(["sweep", "--alpha", "1,2", "--gamma", "1", "--backend", "sequential", "--block-size", "1",
+                    "--out", str(place / "out"), *extra], capsys)
+    return rc
+
+
+SWEEP_SET = {"pareto.json", "pareto.png", "manifest.json", "blocks/000000.json", "blocks/000001.json"}
+
+
+def test_a_block_sweep_replaces_an_earlier_designs_folder_whole(place, capsys, monkeypatch):
+    # the folder holds an earlier design's result.json and loads.png: neither survives the sweep
+    assert _block_sweep(place, capsys, monkeypatch, _Blocks()) == 0
+    assert set(snapshot(place / "out")) == SWEEP_SET and leftovers(place) == []
+
+
+def test_a_resumed_block_sweep_keeps_its_checkpoint_and_nothing_else(place, capsys, monkeypatch):
+    # interrupted (every block failed): the checkpoint is written beside what the folder held
+    before = snapshot(place / "out")
+    assert _block_sweep(place, capsys, monkeypatch, _Blocks(fail=True)) == 1
+    after = snapshot(place / "out")
+    assert {k: v for k, v in after.items() if k in before} == before
+    assert set(after) - set(before) == {"manifest.json", "blocks/000000.error.json", "blocks/000001.error.json"}
+    # a finished block, then a resume: block 0 is read, not solved again; the earlier files go
+    first = _Blocks()
+    assert _block_sweep(place, capsys, monkeypatch, first, "--resume") == 0
+    kept = snapshot(place / "out")["blocks/000000.json"]
+    (place / "out" / "blocks" / "000001.json").unlink()
+    (place / "out" / "result.json").write_text('{"scene": "a design written here meanwhile"}\n')
+    again = _Blocks()
+    assert _block_sweep(place, capsys, monkeypatch, again, "--resume") == 0
+    assert first.solved == [0, 1] and again.solved == [1]
+    final = snapshot(place / "out")
+    assert set(final) == SWEEP_SET and final["blocks/000000.json"] == kept and leftovers(place) == []
+
+
+def test_a_failed_swap_puts_the_checkpoint_back(tmp_path, monkeypatch):
+    from camjax.output.folder import replaced_folder
+
+    out = tmp_path / "out"
+    (out / "blocks").mkdir(parents=True)
+    (out / "blocks" / "000000.json").write_text("block")
+    (out / "manifest.json").write_text("manifest")
+    (out / "result.json").write_text("earlier")
+    before = snapshot(out)
+    real = os.replace
+
+    def failing(src, dst):
+        if Path(dst) == out and output_folder.STAGING in Path(src).name:  # the new folder into place
+            raise OSError(28, "No space left on device")
+        return real(src, dst)
+
+    monkeypatch.setattr(output_folder.os, "replace", failing)
+    with pytest.raises(OSError), replaced_folder(out, ("manifest.json", "blocks")) as tmp:
+        (tmp / "pareto.json").write_text("new")
+    assert snapshot(out) == before and leftovers(tmp_path) == []
+
+
 def test_a_stale_staging_folder_of_a_dead_run_is_cleaned(place, capsys):
     dead = subprocess.Popen([sys.executable, "-c", "pass"])
     dead.wait()

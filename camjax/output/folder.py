@@ -197,19 +197,33 @@ def _signals_blocked() -> Iterator[None]:
         signal.pthread_sigmask(signal.SIG_SETMASK, old)
 
 
-def swap_in(staging: Path, out: Path) -> None:
-    """Replace folder ``out`` (if any) by ``staging``; on failure ``out`` is as it was."""
+def swap_in(staging: Path, out: Path, keep: tuple[str, ...] = ()) -> None:
+    """Replace folder ``out`` (if any) by ``staging``; on failure ``out`` is as it was.
+
+    ``keep``: names of entries of ``out`` carried over into the new folder (moved into ``staging``
+    first, each by one rename, unless ``staging`` has its own); everything else of ``out`` goes.
+    """
     old = _leftover_name(out, OLD, os.getpid()) if out.exists() else None
     with _signals_blocked():
-        if old is not None:
-            if old.exists():
-                shutil.rmtree(old)
-            os.replace(out, old)
+        moved: list[str] = []
         try:
-            os.replace(staging, out)
-        except BaseException:
+            for name in keep if old is not None else ():
+                if (out / name).exists() and not (staging / name).exists():
+                    os.replace(out / name, staging / name)
+                    moved.append(name)
             if old is not None:
-                os.replace(old, out)
+                if old.exists():
+                    shutil.rmtree(old)
+                os.replace(out, old)
+            try:
+                os.replace(staging, out)
+            except BaseException:
+                if old is not None:
+                    os.replace(old, out)
+                raise
+        except BaseException:
+            for name in moved:  # ``out`` is the old folder again: its kept entries go back
+                os.replace(staging / name, out / name)
             raise
     if old is not None:
         shutil.rmtree(old, ignore_errors=True)
@@ -226,39 +240,19 @@ def _fresh_staging(out: Path) -> Path:
 
 
 @contextlib.contextmanager
-def replaced_folder(out: str | Path) -> Iterator[Path]:
+def replaced_folder(out: str | Path, keep: tuple[str, ...] = ()) -> Iterator[Path]:
     """Yield an empty staging folder; replace ``out`` with it when the block succeeds.
 
-    ``out`` should have passed :func:`check_output_dir`. Missing parents are created.
+    ``out`` should have passed :func:`check_output_dir`. Missing parents are created. ``keep``:
+    entries of ``out`` that the new folder takes over (a block sweep's checkpoint, written into
+    ``out`` while it ran: ``manifest.json`` and ``blocks/``); nothing else of ``out`` is left.
     """
     out = Path(os.path.abspath(out))
     out.parent.mkdir(parents=True, exist_ok=True)
     staging = _fresh_staging(out)
     try:
         yield staging
-        swap_in(staging, out)
-    finally:
-        shutil.rmtree(staging, ignore_errors=True)
-
-
-@contextlib.contextmanager
-def merged_files(out: str | Path) -> Iterator[Path]:
-    """Yield a staging folder whose files are moved into ``out`` (kept, not replaced) on success.
-
-    For a folder that is a working store between runs (a scale-out sweep keeps its blocks there
-    for ``--resume``): only the files written in the block are replaced, each by one rename.
-    """
-    out = Path(os.path.abspath(out))
-    out.mkdir(parents=True, exist_ok=True)
-    staging = _fresh_staging(out)
-    try:
-        yield staging
-        with _signals_blocked():
-            for item in staging.iterdir():
-                target = out / item.name
-                if target.is_dir() and not target.is_symlink():
-                    shutil.rmtree(target)
-                os.replace(item, target)
+        swap_in(staging, out, keep)
     finally:
         shutil.rmtree(staging, ignore_errors=True)
 
