@@ -89,9 +89,30 @@ CASES: dict[str, tuple[list[str], str | bytes | None, str, int]] = {
     "newline_in_key": (SCENE_ARGS, DEFAULT + '\n["a\\nb"]\n', "unknown key", 2),
     "unknown_key": (SCENE_ARGS, _variant("mass_kg = 1.0", "mass_kg = 1.0\nmas_kg = 2.0"), "follower.mas_kg", 2),
     "rpm_1e160": (SCENE_ARGS, _variant("rpm = 240.0", "rpm = 1e160"), "motion.rpm", 2),
-    "lift_overflows": (SCENE_ARGS, DEFAULT.replace("lift_mm = 5.0", "lift_mm = 1e300"), "overflow", 2),
+    # magnitudes past any cam's, that would overflow float64 downstream: refused naming the field
+    "lift_overflows": (SCENE_ARGS, DEFAULT.replace("lift_mm = 5.0", "lift_mm = 1e300"),
+                       "motion.segments[1].lift_mm = 1e+300: outside the physical range (allowed: 1e-06 "
+                       "to 1e+06 mm)", 2),
     "sigma_max_underflows": (SCENE_ARGS, _variant("sigma_max_MPa = 1230.0", "sigma_max_MPa = 1e-300"),
-                             "overflow", 2),
+                             "design.sigma_max_MPa = 1e-300: outside the physical range", 2),
+    "mass_1e308": (SCENE_ARGS, _variant("mass_kg = 1.0", "mass_kg = 1e308"),
+                   "follower.mass_kg = 1e+308: outside the physical range (allowed: 0, or 1e-09 to 1e+06 kg)", 2),
+    "spring_1e-300": (SCENE_ARGS, _variant("spring_N_per_m = 3004.0", "spring_N_per_m = 1e-300"),
+                      "follower.spring_N_per_m = 1e-300", 2),
+    "bounds_1e300": (SCENE_ARGS, _variant("[5.0, 40.0]", "[5.0, 1e300]"),
+                     "design.base_radius_mm = [5.0, 1e+300]: 1e+300 is outside the physical range", 2),
+    "bounds_1e-300": (SCENE_ARGS, _variant("[5.0, 25.0]", "[1e-300, 25.0]"), "design.face_width_mm", 2),
+    "young_1e300": (SCENE_ARGS, _variant("E_MPa = 2.1e5", "E_MPa = 1e300"), "contact.cam.E_MPa = 1e+300", 2),
+    "rocker_inertia_1e-300": (SCENE_ARGS, _variant("inertia_kg_m2 = 0.002", "inertia_kg_m2 = 1e-300",
+                                                   builtin_scene_text("oscillating-roller")),
+                              "follower.inertia_kg_m2 = 1e-300: outside the physical range", 2),
+    "dynamics_inertia_1e-300": (["dynamics", "{scene}", "--out", "{dir}"],
+                                _variant("I3 = 0.357", "I3 = 1e-300", builtin_scene_text("thesis-bench")),
+                                "dynamics.I3 = 1e-300", 2),
+    "dynamics_factor_1e300": (["dynamics", "{scene}", "--out", "{dir}"],
+                              _variant("speed_factors = [0.8, 0.9, 1.0, 1.1, 1.2]", "speed_factors = [0.8, 1e300]",
+                                       builtin_scene_text("thesis-bench")),
+                              "dynamics.speed_factors = [0.8, 1e+300]: 1e+300 is outside the physical range", 2),
     "rpm_over_max": (SCENE_ARGS, _variant("rpm = 240.0", "rpm = 1.0000001e6"), "motion.rpm", 2),
     "rpm_negative": (SCENE_ARGS, _variant("rpm = 240.0", "rpm = -1.0"), "motion.rpm", 2),
     "rpm_nan": (SCENE_ARGS, _variant("rpm = 240.0", "rpm = nan"), "motion.rpm", 2),
@@ -348,6 +369,41 @@ def test_jax_platforms_cuda_without_a_gpu_exits_2(place):
     _, err = proc.communicate(timeout=120)
     assert proc.returncode == 2, err
     assert len(err.strip().splitlines()) == 1 and "JAX_PLATFORMS = 'cuda'" in err and "Traceback" not in err
+
+
+@pytest.mark.parametrize("key", sorted(__import__("camjax.scene.ranges", fromlist=["RANGES"]).RANGES))
+def test_every_range_admits_its_ends_and_refuses_past_them(key):
+    # the reader's check against the table: the ends pass, 1e-9 past either end is refused naming
+    # the field, and 0 is left to the key's own rule
+    from camjax.scene import SceneError
+    from camjax.scene.ranges import physical_range
+    from camjax.scene.reader import TableReader
+
+    lo, hi, _ = physical_range(key)
+
+    def read(v):
+        return TableReader({key: v}, "section", None).number(key, low=None)
+
+    assert read(hi) == hi and read(-hi) == -hi and read(0.0) == 0.0
+    with pytest.raises(SceneError, match=rf"^section\.{key} = .*: outside the physical range \(allowed: "):
+        read(hi * (1 + 1e-9))
+    if lo > 0:
+        assert read(lo) == lo
+        with pytest.raises(SceneError, match=rf"^section\.{key} = "):
+            read(lo * (1 - 1e-9))
+
+
+def test_the_physical_ranges_are_documented():
+    # docs/scenes.md's table shows every key's range as the code has it
+    from camjax.scene.ranges import RANGES
+
+    text = (Path(cli.__file__).resolve().parents[2] / "docs" / "scenes.md").read_text()
+    section = text.split("## Physical ranges", 1)[1].split("\n## ", 1)[0]
+    rows = {line.split("|")[1].strip(): line for line in section.splitlines() if line.startswith("| `")}
+    for key, (lo, hi, unit) in RANGES.items():
+        row = next((line for names, line in rows.items() if f"`{key}`" in names), None)
+        assert row is not None, key
+        assert f"{hi:g}" in row and (lo == 0 or f"{lo:g}" in row) and unit in row, (key, row)
 
 
 def test_the_shortest_segment_any_grid_resolves():
