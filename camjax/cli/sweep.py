@@ -18,6 +18,8 @@ from camjax.cli.common import (
 )
 from camjax.output.files import write_json
 from camjax.output.folder import check_output_dir, replaced_folder
+from camjax.scene import cut
+from camjax.scene.ranges import allowed_text, outside
 
 
 @command("sweep", "solve every (alpha, gamma) pair of two lists: pareto.json and pareto.png")
@@ -52,6 +54,11 @@ def _setup_sweep(p: argparse.ArgumentParser):
             if bad:
                 raise UsageError(f"{option} = {','.join(f'{v:g}' for v in values)}: {bad[0]:g} is "
                                  "negative (allowed: numbers >= 0)")
+            bad = [v for v in values if outside(option.lstrip("-"), v)]
+            if bad:  # the range of design.alpha / design.gamma
+                raise UsageError(f"{option} = {cut(','.join(f'{v:g}' for v in values), 200)}: {bad[0]:g} is "
+                                 "outside the physical range (allowed: "
+                                 f"{allowed_text(option.lstrip('-'), zero=True, signed=False)})")
         if 0.0 in alphas and 0.0 in gammas:
             raise UsageError("--alpha/--gamma: the pair alpha = 0, gamma = 0 leaves nothing to "
                              "minimize (drop 0 from one of the lists)")
