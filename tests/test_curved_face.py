@@ -148,6 +148,7 @@ def test_sliding_speed_is_the_relative_speed_of_cam_and_face_at_the_contact(rota
     np.testing.assert_allclose(got, speed, rtol=1e-7)
 
 
+@pytest.mark.slow  # a design run (compiles)
 def test_hertz_stress_is_specs_line_contact_of_cam_and_crowned_face():
     """sigma = 0.564 sqrt((F / cos phi / w)(1/rho_c + 1/R_c) / K) with rho_c and phi from positions
     (SPEC 3), against the follower's stress curve at the scene's design."""
@@ -258,6 +259,7 @@ def _max_travel_from_positions(rb, rc, e, program, n=36_000):
     return float(np.max(np.abs(rc * ty / np.hypot(tx, ty))))  # R_c |n_x|
 
 
+@pytest.mark.slow  # a design run (compiles)
 def test_a_narrow_face_sets_the_smallest_cam_where_the_contact_reaches_its_edge():
     scene = parse_scene(_scene_text(face_radius=100.0, face_width=8.0))
     follower = camjax.followers.of(scene)
@@ -297,6 +299,7 @@ def test_a_wide_face_leaves_the_smallest_cam_to_the_other_limits():
     assert _max_travel_from_positions(m.radius_mm, 100.0, 0.0, scene.motion.program) < 20.0
 
 
+@pytest.mark.slow  # a design run (compiles)
 def test_the_problem_and_the_run_report_a_face_too_narrow():
     scene = parse_scene(_scene_text(face_radius=100.0, face_width=8.0))
     problem = P.problem_from_scene(scene)
