@@ -30,7 +30,7 @@ import numpy as np
 import pytest
 
 from camjax import laws
-from camjax.scene import builtin_scene_text, parse_scene
+from camjax.scene import builtin_scene_text, parse_scene, with_samples
 
 ROOT = Path(__file__).resolve().parents[1]
 PAGE = ROOT / "docs" / "extending.md"
@@ -201,23 +201,17 @@ def test_the_example_law_is_a_rest_to_rest_law_with_its_derivatives(gutman):
     assert float(jax.jit(jax.grad(lambda t: gutman(t).p))(0.3)) == pytest.approx(float(gutman(0.3).dp), abs=1e-12)
 
 
-def test_a_scene_takes_the_example_law_and_it_leaves_no_trace(gutman):
+def test_a_scene_takes_the_example_law(gutman):
     from camjax.evaluate import scene_arrays
 
     text = builtin_scene_text("roller").replace('law = "harmonic"', 'law = "gutman_f3"')
     scene = parse_scene(text)
-    kin = scene_arrays(with_samples_90(scene)).kin
+    kin = scene_arrays(with_samples(scene, 90)).kin
     # the rise: 8 mm over 90 deg, s = h p(theta / beta) at the 90-sample grid's points (every 4 deg)
     theta = np.radians(np.arange(0, 92, 4))
     x = theta / (np.pi / 2)
     p = x - (15 * np.sin(2 * np.pi * x) + np.sin(6 * np.pi * x) / 3) / (32 * np.pi)  # the page's formula
     np.testing.assert_allclose(np.asarray(kin.s)[: len(x)], 8.0 * p, rtol=0, atol=1e-12)
-
-
-def with_samples_90(scene):
-    from camjax.scene import with_samples
-
-    return with_samples(scene, 90)
 
 
 def test_the_law_registry_is_as_it_was():
