@@ -112,8 +112,13 @@ def samples_needed(program: MotionProgram) -> int:
 def check_resolution(motion: MotionSpec, r: TableReader) -> None:
     angles = motion.program.angles_deg
     need = samples_needed(motion.program)
+    i = min(range(len(angles)), key=lambda k: angles[k])
+    if need > SAMPLES_MAX:  # no grid resolves it: the segment is at fault, not the grid
+        least = SAMPLES_PER_SEGMENT * 360.0 / SAMPLES_MAX
+        raise r.error(f"segments[{i}].angle_deg", angles[i], f"too short for any grid: "
+                      f"{SAMPLES_PER_SEGMENT} samples of the finest ({SAMPLES_MAX}) span {least:g} deg",
+                      f">= {least:g} deg")
     if motion.samples < need:
-        i = min(range(len(angles)), key=lambda k: angles[k])
         got = motion.samples * angles[i] / 360.0
         raise r.error("samples", motion.samples,
                       f"too coarse: the {angles[i]:g} deg segment {r.path}.segments[{i}] gets "
