@@ -5,8 +5,9 @@ over splines of ``degree`` with a knot at every data point (or at most ``MAX_KNO
 a cubic (m = 2) this is the classical smoothing spline of :func:`scipy.interpolate.
 make_smoothing_spline` (the tests compare the two at equal lam); a quintic (m = 3) penalizes the
 jerk, so the fitted law keeps a continuous jerk and a smooth one where the data allow.
-``lam`` = None picks it by generalized cross-validation, minimizing
-GCV(lam) = n RSS / (n - tr H)^2 over a log grid and then a bounded 1-D search.
+``lam`` = None picks it by generalized cross-validation, minimizing the modified score
+GCV(lam) = n RSS / (n - gamma tr H)^2, gamma = :data:`GCV_GAMMA`, over a log grid and then a
+bounded 1-D search.
 
 The least-squares problem is solved as one stacked QR ([B; sqrt(lam) R] c ~ [y; 0], with R^T R
 the penalty's Gram matrix), never through the normal equations: a fit to noise-free points wants
@@ -25,6 +26,11 @@ from typing import NamedTuple
 
 import numpy as np
 
+# Modified GCV, n RSS / (n - gamma tr H)^2 (Kim & Gu 2004 suggest 1.4; mgcv's ``gamma``): plain GCV
+# (1.0) undersmooths now and then. Measured on a cycloidal rise at 1 deg with 0.01 mm noise, 40 seeds,
+# peak acceleration error > 5 %: 5/40 (max 18 %) at 1.0, 2/40 (max 9.9 %) at 1.4, 0/40 (max 2.0 %)
+# at 2.0; noise-free, 2.0 still fits to 4e-8 mm.
+GCV_GAMMA = 2.0
 MAX_KNOTS = 400  # more points than this share knots (a penalized regression spline); solves stay ~ms
 # The GCV search range for lam / lam0, lam0 = tr(B^T B) / tr(R^T R) (a dimensionless start): below
 # 1e-13 the penalty is at rounding level of the stacked QR and the fit no longer changes.
@@ -159,9 +165,16 @@ def smoothing_spline(x, y, degree: int = 5, lam: float | None = None, *, periodi
     root = _penalty_root(t, k, m, lo, hi)
     prob = _Problem(basis @ expand, y - basis @ offset, root @ expand, -(root @ offset), expand, offset)
 
+    # rows the free coefficients cannot move (a pinned end) have a fixed residual and no degree of
+    # freedom: counted, they would let GCV reward interpolating the rest (RSS -> 0 with n - tr H -> 2)
+    moving = np.any(prob.basis != 0.0, axis=1)
+    n_eff = int(np.count_nonzero(moving))
+
     def gcv(lam_):
         _, res, dof = _solve(prob, lam_)
-        return x.size * float(res @ res) / max(x.size - dof, 1e-300) ** 2
+        r = res[moving]
+        free = n_eff - GCV_GAMMA * dof
+        return n_eff * float(r @ r) / free**2 if free > 0 else np.inf
 
     lam0 = float(np.sum(prob.basis**2) / max(np.sum(prob.root**2), 1e-300))
     if lam is None:
@@ -177,7 +190,8 @@ def smoothing_spline(x, y, degree: int = 5, lam: float | None = None, *, periodi
             g = grid[i]
         lam = lam0 * 10.0 ** float(g)
     coeffs, res, dof = _solve(prob, float(lam))
-    score = x.size * float(res @ res) / max(x.size - dof, 1e-300) ** 2
+    free = n_eff - GCV_GAMMA * dof
+    score = n_eff * float(res[moving] @ res[moving]) / free**2 if free > 0 else float("inf")
     return SplineFit(t, coeffs, k, float(lam), res, dof, score)
 
 
