@@ -9,6 +9,7 @@ from camjax.extrema import EXTREMA_MODES
 from camjax.laws import FOURIER_PRESETS, LAWS, FourierSeries, fourier_law, get_law, polynomial_law
 from camjax.program import KINDS, MotionProgram, Segment
 from camjax.scene.reader import DEFAULT, TableReader, build
+from camjax.scene.shaped import SHAPED_LAWS, parse_cycle_table, parse_shaped_segment
 from camjax.scene.spec import ROTATIONS, RPM_MAX, SAMPLES_MAX, SAMPLES_PER_SEGMENT, MotionSpec
 
 
@@ -16,7 +17,7 @@ def parse_law(seg: TableReader):
     name = seg.table.get("law")
     if not isinstance(name, str):
         raise seg.error("law", name, "a rise or return needs a law name",
-                        ", ".join([*LAWS, "polynomial", "fourier"]))
+                        ", ".join([*LAWS, "polynomial", "fourier", *SHAPED_LAWS]))
     if name == "polynomial":
         exps = seg.table.get("exponents")
         if not (isinstance(exps, list) and exps and all(isinstance(e, int) and not isinstance(e, bool)
@@ -53,28 +54,34 @@ def parse_law(seg: TableReader):
     try:
         return get_law(name)
     except ValueError:
-        raise seg.error("law", name, "unknown law", ", ".join([*LAWS, "polynomial", "fourier"])) from None
+        raise seg.error("law", name, "unknown law",
+                        ", ".join([*LAWS, "polynomial", "fourier", *SHAPED_LAWS])) from None
 
 
 def parse_motion(r: TableReader, oscillating: bool = False) -> MotionSpec:
     """[motion]; ``oscillating``: the follower swings, lifts are ``lift_deg`` (kept in rad)."""
-    r.check_keys(("rpm", "samples", "segments", "rotation", "extrema"))
+    r.check_keys(("rpm", "samples", "segments", "table", "rotation", "extrema"))
     lift_key, other_key = ("lift_deg", "lift_mm") if oscillating else ("lift_mm", "lift_deg")
     rpm = r.number("rpm", low=0.0, high=RPM_MAX)
     samples = r.number("samples", DEFAULT, low=1, high=SAMPLES_MAX, integer=True)
     rotation = r.choice("rotation", ROTATIONS, DEFAULT)
     extrema = r.choice("extrema", EXTREMA_MODES, DEFAULT)
     raw = r.table.get("segments")
+    cycle = parse_cycle_table(r, lift_key, oscillating) if r.has("table") else None  # from points
+    raw = cycle[1] if cycle is not None else list(raw) if isinstance(raw, list) else raw
     if not isinstance(raw, list) or not raw:
         raise r.error("segments", raw if raw is not None else MISSING, "needs a list of segments",
                       "[{kind = 'dwell' | 'rise' | 'return', angle_deg = .., law = .., lift_mm = ..}, ...]")
-    segments = []
-    for i, item in enumerate(raw):
+    segments = list(cycle[0]) if cycle is not None else []
+    for i, item in enumerate(raw if cycle is None else []):
         seg = TableReader(item, f"{r.path}.segments[{i}]", r.source)
         if seg.has(other_key):
             raise seg.error(other_key, seg.table[other_key],
                             f"{'an oscillating' if oscillating else 'a translating'} follower takes its "
                             f"lift as {lift_key}", lift_key)
+        if seg.table.get("law") in SHAPED_LAWS and seg.table.get("kind") in ("rise", "return"):
+            raw[i] = parse_shaped_segment(seg, segments, lift_key, oscillating)  # appends to segments
+            continue
         seg.check_keys(("kind", "angle_deg", "law", lift_key, "exponents", "coefficients", "phases"))
         kind = seg.choice("kind", KINDS)
         angle = seg.number("angle_deg", low=0.0, low_open=True, high=360.0)
