@@ -89,9 +89,30 @@ CASES: dict[str, tuple[list[str], str | bytes | None, str, int]] = {
     "newline_in_key": (SCENE_ARGS, DEFAULT + '\n["a\\nb"]\n', "unknown key", 2),
     "unknown_key": (SCENE_ARGS, _variant("mass_kg = 1.0", "mass_kg = 1.0\nmas_kg = 2.0"), "follower.mas_kg", 2),
     "rpm_1e160": (SCENE_ARGS, _variant("rpm = 240.0", "rpm = 1e160"), "motion.rpm", 2),
-    "lift_overflows": (SCENE_ARGS, DEFAULT.replace("lift_mm = 5.0", "lift_mm = 1e300"), "overflow", 2),
+    # magnitudes past any cam's, that would overflow float64 downstream: refused naming the field
+    "lift_overflows": (SCENE_ARGS, DEFAULT.replace("lift_mm = 5.0", "lift_mm = 1e300"),
+                       "motion.segments[1].lift_mm = 1e+300: outside the physical range (allowed: 1e-06 "
+                       "to 1e+06 mm)", 2),
     "sigma_max_underflows": (SCENE_ARGS, _variant("sigma_max_MPa = 1230.0", "sigma_max_MPa = 1e-300"),
-                             "overflow", 2),
+                             "design.sigma_max_MPa = 1e-300: outside the physical range", 2),
+    "mass_1e308": (SCENE_ARGS, _variant("mass_kg = 1.0", "mass_kg = 1e308"),
+                   "follower.mass_kg = 1e+308: outside the physical range (allowed: 0, or 1e-09 to 1e+06 kg)", 2),
+    "spring_1e-300": (SCENE_ARGS, _variant("spring_N_per_m = 3004.0", "spring_N_per_m = 1e-300"),
+                      "follower.spring_N_per_m = 1e-300", 2),
+    "bounds_1e300": (SCENE_ARGS, _variant("[5.0, 40.0]", "[5.0, 1e300]"),
+                     "design.base_radius_mm = [5.0, 1e+300]: 1e+300 is outside the physical range", 2),
+    "bounds_1e-300": (SCENE_ARGS, _variant("[5.0, 25.0]", "[1e-300, 25.0]"), "design.face_width_mm", 2),
+    "young_1e300": (SCENE_ARGS, _variant("E_MPa = 2.1e5", "E_MPa = 1e300"), "contact.cam.E_MPa = 1e+300", 2),
+    "rocker_inertia_1e-300": (SCENE_ARGS, _variant("inertia_kg_m2 = 0.002", "inertia_kg_m2 = 1e-300",
+                                                   builtin_scene_text("oscillating-roller")),
+                              "follower.inertia_kg_m2 = 1e-300: outside the physical range", 2),
+    "dynamics_inertia_1e-300": (["dynamics", "{scene}", "--out", "{dir}"],
+                                _variant("I3 = 0.357", "I3 = 1e-300", builtin_scene_text("thesis-bench")),
+                                "dynamics.I3 = 1e-300", 2),
+    "dynamics_factor_1e300": (["dynamics", "{scene}", "--out", "{dir}"],
+                              _variant("speed_factors = [0.8, 0.9, 1.0, 1.1, 1.2]", "speed_factors = [0.8, 1e300]",
+                                       builtin_scene_text("thesis-bench")),
+                              "dynamics.speed_factors = [0.8, 1e+300]: 1e+300 is outside the physical range", 2),
     "rpm_over_max": (SCENE_ARGS, _variant("rpm = 240.0", "rpm = 1.0000001e6"), "motion.rpm", 2),
     "rpm_negative": (SCENE_ARGS, _variant("rpm = 240.0", "rpm = -1.0"), "motion.rpm", 2),
     "rpm_nan": (SCENE_ARGS, _variant("rpm = 240.0", "rpm = nan"), "motion.rpm", 2),
@@ -129,6 +150,19 @@ CASES: dict[str, tuple[list[str], str | bytes | None, str, int]] = {
     "scene_name_too_long": (["design", "{tmp}/" + "s" * 10_000, "--out", "{dir}"], None, "scene", 2),
     "scene_name_nul": (["design", "a\x00b.toml", "--out", "{dir}"], None, "scene", 2),
     "scene_missing": (["design", "{tmp}/nothing.toml", "--out", "{dir}"], None, "scene", 2),
+    # not "no such file": what the path names instead (and nothing is opened: a FIFO would block)
+    "scene_fifo": (["design", "{tmp}/special/fifo", "--out", "{dir}"], None,
+                   "is not a regular file: it is a FIFO", 2),
+    "scene_dev_zero": (["design", "/dev/zero", "--out", "{dir}"], None,
+                       "scene = '/dev/zero': is not a regular file: it is a character device", 2),
+    "dynamics_scene_dev_null": (["dynamics", "/dev/null", "--out", "{dir}"], None, "not a regular file", 2),
+    "scene_dangling_link": (["design", "{tmp}/dangling", "--out", "{dir}"], None,
+                            "is a link whose target is missing", 2),
+    # 8 samples (SAMPLES_PER_SEGMENT) of the finest grid (1e6) span 8 * 360 / 1e6 = 0.00288 deg
+    "segment_1e-9_deg": (SCENE_ARGS, _variant("{ kind = \"dwell\",  angle_deg = 100 }",
+                                              "{ kind = \"dwell\", angle_deg = 1e-9 },\n"
+                                              "  { kind = \"dwell\", angle_deg = 99.999999999 }"),
+                         "motion.segments[0].angle_deg = 1e-09: too short for any grid", 2),
     "swing_lift_on_translating": (SCENE_ARGS, DEFAULT.replace("lift_mm = 5.0", "lift_deg = 5.0", 1),
                                   "lift_deg", 2),
     # the output location, checked before any computation
@@ -143,6 +177,18 @@ CASES: dict[str, tuple[list[str], str | bytes | None, str, int]] = {
     "sweep_address_long": (["sweep", "--alpha", "1", "--gamma", "1", "--backend", "process", "--address",
                             "h" * 10_000, "--out", "{dir}"], None, "--address", 2),
     "out_current_folder": (["design", "--out", "."], None, "--out", 2),
+    # /proc and /sys: os.access says root may write there, but nothing can be made in them
+    "out_under_proc": (["design", "--out", "/proc/camjax-out"], None, "--out = '/proc/camjax-out': cannot write", 2),
+    "out_deep_under_proc": (["design", "--out", "/proc/camjax/a/b"], None, "--out", 2),
+    "sweep_out_under_proc": (["sweep", "--alpha", "1", "--gamma", "1", "--out", "/proc/camjax-out"], None,
+                             "--out", 2),
+    "block_sweep_out_under_sys": (["sweep", "--alpha", "1", "--gamma", "1", "--backend", "sequential",
+                                   "--out", "/sys/camjax-out"], None, "--out", 2),
+    "dynamics_out_under_proc": (["dynamics", "thesis-bench", "--out", "/proc/camjax-out"], None, "--out", 2),
+    "extremes_out_under_proc": (["check-extremes", "--out", "/proc/camjax-out"], None, "--out", 2),
+    "laws_json_under_proc": (["laws", "--json", "/proc/camjax-laws.json"], None, "--json", 2),
+    "laws_plot_under_sys": (["laws", "--plot", "/sys/camjax-laws.png"], None, "--plot", 2),
+    "out_dangling_link": (["design", "--out", "{tmp}/dangling"], None, "is a link whose target is missing", 2),
     "out_parent_folder": (["design", "--out", ".."], None, "--out", 2),
     "sweep_out_is_a_file": (["sweep", "--alpha", "1", "--gamma", "1", "--out", "{file}"], None, "--out", 2),
     "extremes_out_is_a_file": (["check-extremes", "--out", "{file}"], None, "--out", 2),
@@ -165,6 +211,13 @@ CASES: dict[str, tuple[list[str], str | bytes | None, str, int]] = {
     "mode_unknown": (["design", "--mode", "best", "--out", "{dir}"], None, "--mode", 2),
     "alpha_negative": (["design", "--alpha", "-1", "--out", "{dir}"], None, "--alpha", 2),
     "seed_negative": (["design", "--seed", "-1", "--out", "{dir}"], None, "--seed", 2),
+    # 2**64: past the 64-bit integer JAX makes a PRNG key from (it raised OverflowError, exit 1)
+    "seed_2_64": (["design", "--seed", "18446744073709551616", "--out", "{dir}"], None,
+                  "--seed = 18446744073709551616: out of range (allowed: >= 0 and <= 9223372036854775807)", 2),
+    "sweep_seed_2_64": (["sweep", "--alpha", "1", "--gamma", "1", "--seed", str(2**63), "--out", "{dir}"],
+                        None, "--seed", 2),
+    "scene_seed_2_64": (SCENE_ARGS, _variant("gamma = 1.0", "gamma = 1.0\nseed = 18446744073709551616"),
+                        "design.seed", 2),
     "design_option_without_design": (["design", "{scene}", "--mode", "pointwise", "--out", "{dir}"],
                                      KINEMATIC, "--mode", 2),
     "unknown_option": (["design", "--colour", "red", "--out", "{dir}"], None, "--colour", 2),
@@ -175,6 +228,10 @@ CASES: dict[str, tuple[list[str], str | bytes | None, str, int]] = {
     "sweep_alpha_empty": (["sweep", "--alpha", "", "--gamma", "1", "--out", "{dir}"], None, "--alpha", 2),
     "sweep_alpha_nan": (["sweep", "--alpha", "nan", "--gamma", "1", "--out", "{dir}"], None, "--alpha", 2),
     "sweep_alpha_negative": (["sweep", "--alpha", "-1", "--gamma", "1", "--out", "{dir}"], None, "--alpha", 2),
+    "sweep_gamma_1e300": (["sweep", "--alpha", "1", "--gamma", "1,1e300", "--out", "{dir}"], None,
+                          "--gamma = 1,1e+300: 1e+300 is outside the physical range (allowed: 0, or 1e-12 to 1e+12)", 2),
+    "design_alpha_1e300": (["design", "--alpha", "1e300", "--out", "{dir}"], None,
+                           "--alpha = 1e+300: outside the physical range", 2),
     "sweep_long_list": (["sweep", "--alpha", "1," + "z" * 10_000, "--gamma", "1", "--out", "{dir}"], None,
                         "--alpha", 2),
     "sweep_both_zero": (["sweep", "--alpha", "0", "--gamma", "0", "--out", "{dir}"], None, "--alpha", 2),
@@ -195,9 +252,39 @@ CASES: dict[str, tuple[list[str], str | bytes | None, str, int]] = {
 }
 
 
+# the environment camjax reads: name -> (argv, variables set, word the stderr line must contain)
+ENV_CASES: dict[str, tuple[list[str], dict[str, str], str]] = {
+    # a Unicode digit passes str.isdigit but is no count (int('²') raised ValueError, exit 1)
+    "drawing_processes_superscript": (["design", "--out", "{dir}"], {"CAMJAX_DRAWING_PROCESSES": "\u00b2"},
+                                      "CAMJAX_DRAWING_PROCESSES = '\u00b2': not a count"),
+    "drawing_processes_arabic_digit": (["design", "--out", "{dir}"], {"CAMJAX_DRAWING_PROCESSES": "\u0663"},
+                                       "CAMJAX_DRAWING_PROCESSES"),
+    "drawing_processes_17": (["design", "--out", "{dir}"], {"CAMJAX_DRAWING_PROCESSES": "17"},
+                             "CAMJAX_DRAWING_PROCESSES = '17'"),
+    "drawing_processes_huge": (["design", "--out", "{dir}"], {"CAMJAX_DRAWING_PROCESSES": "9" * 5000},
+                               "CAMJAX_DRAWING_PROCESSES"),
+    # checked by every command, not only the one that reads it
+    "drawing_processes_sweep": (["sweep", "--alpha", "1", "--gamma", "1", "--out", "{dir}"],
+                                {"CAMJAX_DRAWING_PROCESSES": "-1"}, "CAMJAX_DRAWING_PROCESSES"),
+    "progress_word": (["dynamics", "thesis-bench", "--out", "{dir}"], {"CAMJAX_PROGRESS": "yes"},
+                      "CAMJAX_PROGRESS = 'yes': not a switch"),
+    "debug_word": (["laws", "--json", "{tmp}/laws.json"], {"CAMJAX_DEBUG": "true"}, "CAMJAX_DEBUG"),
+    "verify_two": (["design", "--out", "{dir}"], {"CAMJAX_PROGRAM_CACHE_VERIFY": "2"},
+                   "CAMJAX_PROGRAM_CACHE_VERIFY"),
+    "program_cache_is_a_file": (["design", "--out", "{dir}"], {"CAMJAX_PROGRAM_CACHE": "{file}"},
+                                "CAMJAX_PROGRAM_CACHE"),
+    "compilation_cache_is_a_file": (["check-extremes", "--out", "{dir}"], {"CAMJAX_COMPILATION_CACHE": "{file}"},
+                                    "CAMJAX_COMPILATION_CACHE"),
+}
+
+
 @pytest.fixture
 def place(tmp_path):
-    """A test folder with an earlier run's output folder, a plain file and a foreign folder."""
+    """A test folder with an earlier run's output folder, a plain file, a foreign folder and a
+    link to nothing."""
+    (tmp_path / "dangling").symlink_to(tmp_path / "gone")
+    (tmp_path / "special").mkdir()
+    os.mkfifo(tmp_path / "special" / "fifo")
     old = tmp_path / "out"
     old.mkdir()
     (old / "result.json").write_text('{"scene": "earlier run"}\n')
@@ -240,6 +327,109 @@ def test_hostile_input_is_one_line_and_changes_nothing(name, place, capsys, monk
     assert leftovers(place) == []
 
 
+@pytest.mark.parametrize("name", sorted(ENV_CASES))
+def test_a_bad_environment_is_one_line_and_changes_nothing(name, place, capsys, monkeypatch):
+    template, variables, word = ENV_CASES[name]
+    monkeypatch.setenv("CAMJAX_COMPILATION_CACHE", "0")
+    for key, value in variables.items():
+        monkeypatch.setenv(key, _argv([value], place)[0])
+    calls = []  # no work starts: neither a design nor a sweep is computed
+    monkeypatch.setattr("camjax.output.report.analyse", lambda *a, **k: calls.append(a))
+    monkeypatch.setattr("camjax.pipeline.sweep_scene", lambda *a, **k: calls.append(a))
+    before = {p.name: snapshot(p) for p in place.iterdir()}
+    rc, out, err = run(_argv(template, place), capsys)
+    assert rc == 2, err
+    lines = err.splitlines()
+    assert len(lines) == 1 and "Traceback" not in err and out == "", err[:2000]
+    assert word in lines[0] and len(lines[0]) < 1000
+    assert calls == []
+    assert {p.name: snapshot(p) for p in place.iterdir()} == before and leftovers(place) == []
+
+
+def test_a_platform_jax_cannot_start_is_one_line_naming_jax_platforms(place, capsys, monkeypatch):
+    # in this process JAX has started already: its answer for a missing CUDA (a bare
+    # AssertionError from jaxlib) is what the check is given
+    import jax
+
+    def no_cuda(*args, **kwargs):
+        raise AssertionError()
+
+    monkeypatch.setenv("JAX_PLATFORMS", "cuda")
+    monkeypatch.setattr(jax, "devices", no_cuda)
+    before = snapshot(place / "out")
+    rc, out, err = run(["design", "--out", str(place / "out")], capsys)
+    assert rc == 2 and out == "" and err.count("\n") == 1, err
+    assert err.startswith("camjax design: error: JAX_PLATFORMS = 'cuda': JAX cannot start this platform")
+    assert snapshot(place / "out") == before
+
+
+@pytest.mark.slow
+def test_jax_platforms_cuda_without_a_gpu_exits_2(place):
+    import jax
+
+    if any(d.platform == "gpu" for d in jax.devices()) or jax.default_backend() == "gpu":
+        pytest.skip("this machine has a GPU: JAX_PLATFORMS=cuda is a valid setting here")
+    proc = _start(["laws"], place, JAX_PLATFORMS="cuda")
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 2, err
+    assert len(err.strip().splitlines()) == 1 and "JAX_PLATFORMS = 'cuda'" in err and "Traceback" not in err
+
+
+@pytest.mark.parametrize("key", sorted(__import__("camjax.scene.ranges", fromlist=["RANGES"]).RANGES))
+def test_every_range_admits_its_ends_and_refuses_past_them(key):
+    # the reader's check against the table: the ends pass, 1e-9 past either end is refused naming
+    # the field, and 0 is left to the key's own rule
+    from camjax.scene import SceneError
+    from camjax.scene.ranges import physical_range
+    from camjax.scene.reader import TableReader
+
+    lo, hi, _ = physical_range(key)
+
+    def read(v):
+        return TableReader({key: v}, "section", None).number(key, low=None)
+
+    assert read(hi) == hi and read(-hi) == -hi and read(0.0) == 0.0
+    with pytest.raises(SceneError, match=rf"^section\.{key} = .*: outside the physical range \(allowed: "):
+        read(hi * (1 + 1e-9))
+    if lo > 0:
+        assert read(lo) == lo
+        with pytest.raises(SceneError, match=rf"^section\.{key} = "):
+            read(lo * (1 - 1e-9))
+
+
+def test_the_physical_ranges_are_documented():
+    # docs/scenes.md's table shows every key's range as the code has it
+    from camjax.scene.ranges import RANGES
+
+    text = (Path(cli.__file__).resolve().parents[2] / "docs" / "scenes.md").read_text()
+    section = text.split("## Physical ranges", 1)[1].split("\n## ", 1)[0]
+    rows = {line.split("|")[1].strip(): line for line in section.splitlines() if line.startswith("| `")}
+    for key, (lo, hi, unit) in RANGES.items():
+        row = next((line for names, line in rows.items() if f"`{key}`" in names), None)
+        assert row is not None, key
+        assert f"{hi:g}" in row and (lo == 0 or f"{lo:g}" in row) and unit in row, (key, row)
+
+
+def test_the_shortest_segment_any_grid_resolves():
+    # SAMPLES_PER_SEGMENT samples of a SAMPLES_MAX grid: 8 * 360 / 1e6 = 0.00288 deg; a segment of
+    # that angle parses (on the finest grid), one 1 % shorter is refused naming its angle_deg
+    from camjax.scene import SAMPLES_MAX, SAMPLES_PER_SEGMENT, SceneError, parse_scene
+
+    least = SAMPLES_PER_SEGMENT * 360.0 / SAMPLES_MAX
+    assert least == pytest.approx(0.00288, rel=1e-12)
+
+    def scene(angle: float) -> str:
+        return KINEMATIC.replace("samples = 180", f"samples = {SAMPLES_MAX}").replace(
+            "{ kind = \"dwell\", angle_deg = 90 },\n  { kind = \"return\"",
+            f"{{ kind = \"dwell\", angle_deg = {angle!r} }},\n  {{ kind = \"dwell\", angle_deg = {90 - angle!r} }},"
+            "\n  { kind = \"return\"")
+
+    assert parse_scene(scene(least)).motion.samples == SAMPLES_MAX
+    with pytest.raises(SceneError, match=r"motion\.segments\[2\]\.angle_deg = 0\.00285\d*: too short for "
+                       r"any grid: 8 samples of the finest \(1000000\) span 0\.00288 deg \(allowed: >= 0\.00288"):
+        parse_scene(scene(0.99 * least))
+
+
 def test_a_huge_unknown_section_is_quoted_short(place, capsys):
     (place / "scene.toml").write_text(DEFAULT + "\n[" + "q" * 5_000_000 + "]\n")
     rc, _, err = run(["design", str(place / "scene.toml"), "--out", str(place / "out")], capsys)
@@ -259,6 +449,40 @@ def test_an_unwritable_output_folder_is_refused_before_any_work(place, capsys, m
     rc, _, err = run(["design", "--out", str(target)], capsys)
     assert rc == 2 and "--out" in err and "permission denied" in err and err.count("\n") == 1
     assert calls == [] and snapshot(target) == before
+
+
+WRITERS = {  # every command that writes, with the computation that must not start
+    "design": (["design", "--out", "{dir}"], "camjax.output.report.analyse"),
+    "sweep": (["sweep", "--alpha", "1", "--gamma", "1", "--out", "{dir}"], "camjax.pipeline.sweep_scene"),
+    "block_sweep": (["sweep", "--alpha", "1", "--gamma", "1", "--backend", "sequential", "--out", "{dir}"],
+                    "camjax.scaleout.driver.sweep_blocks"),
+    "dynamics": (["dynamics", "thesis-bench", "--out", "{dir}"], "camjax.dynamics.scene_dynamics"),
+    "check-extremes": (["check-extremes", "--out", "{dir}"], "camjax.scene.load_scene"),
+    "laws_json": (["laws", "--json", "{dir}/laws.json"], "camjax.laws.summarize"),
+    "laws_plot": (["laws", "--plot", "{dir}/laws.png"], "camjax.laws.summarize"),
+}
+
+
+@pytest.mark.parametrize("command", sorted(WRITERS))
+def test_a_place_where_nothing_can_be_made_is_refused_before_any_work(command, place, capsys, monkeypatch):
+    # a read-only file system: the permission bits allow writing (root, or a rw mode on a ro
+    # mount), making the staging folder fails with EROFS
+    import errno
+    import tempfile
+
+    def read_only(*args, **kwargs):
+        raise OSError(errno.EROFS, os.strerror(errno.EROFS))
+
+    monkeypatch.setattr(tempfile, "mkdtemp", read_only)
+    template, work = WRITERS[command]
+    calls = []
+    monkeypatch.setattr(work, lambda *a, **k: calls.append(a))
+    before = snapshot(place / "out")
+    rc, out, err = run(_argv(template, place), capsys)
+    option = template[1] if template[0] == "laws" else "--out"
+    assert rc == 2 and out == "" and err.count("\n") == 1, err
+    assert f"{option} = " in err and "Read-only file system" in err
+    assert calls == [] and snapshot(place / "out") == before and leftovers(place) == []
 
 
 def test_an_os_error_while_writing_is_one_line_and_changes_nothing(place, capsys, monkeypatch):
@@ -293,6 +517,96 @@ def test_a_run_replaces_the_folder_whole(place, capsys):
     assert sorted(p.name for p in (place / "out").iterdir()) == [
         "profile.csv", "profile.dxf", "profile.png", "result.json", "svaj.png"]
     assert leftovers(place) == []
+
+
+class _Blocks:
+    """A block backend whose blocks return made-up records at once (or fail): the folder handling
+    of a block sweep without solving anything."""
+
+    def __init__(self, fail: bool = False):
+        self.fail, self.solved = fail, []
+
+    def map_unordered(self, fn, tasks):
+        from camjax.scaleout.backends import Outcome
+
+        for pos, task in enumerate(tasks):
+            self.solved.append(task.index)
+            if self.fail:
+                yield pos, Outcome(False, None, "RuntimeError: injected", 0.0, "")
+                continue
+            records = [{"alpha": a, "gamma": g, "size_mm": 10.0 + a, "stress_max_MPa": 100.0 + g,
+                        "feasible": True, "scene": task.scene_name, "weighting": task.first_weighting + i,
+                        "solver": task.spec.solver, "mode": task.spec.mode}
+                       for i, (a, g) in enumerate(task.weightings)]
+            yield pos, Outcome(True, records, "", 0.0, "test")
+
+    def close(self):
+        pass
+
+
+def _block_sweep(place: Path, capsys, monkeypatch, backend: _Blocks, *extra: str) -> int:
+    from camjax.solvers import sweep
+
+    class Figure:
+        def savefig(self, path, **kwargs):
+            Path(path).write_bytes(b"pareto figure")
+
+    monkeypatch.setattr("camjax.scaleout.driver.make_backend", lambda *a, **k: backend)
+    monkeypatch.setattr(sweep, "plot_pareto", lambda *a, **k: Figure())
+    rc, _, _ = run(["sweep", "--alpha", "1,2", "--gamma", "1", "--backend", "sequential", "--block-size", "1",
+                    "--out", str(place / "out"), *extra], capsys)
+    return rc
+
+
+SWEEP_SET = {"pareto.json", "pareto.png", "manifest.json", "blocks/000000.json", "blocks/000001.json"}
+
+
+def test_a_block_sweep_replaces_an_earlier_designs_folder_whole(place, capsys, monkeypatch):
+    # the folder holds an earlier design's result.json and loads.png: neither survives the sweep
+    assert _block_sweep(place, capsys, monkeypatch, _Blocks()) == 0
+    assert set(snapshot(place / "out")) == SWEEP_SET and leftovers(place) == []
+
+
+def test_a_resumed_block_sweep_keeps_its_checkpoint_and_nothing_else(place, capsys, monkeypatch):
+    # interrupted (every block failed): the checkpoint is written beside what the folder held
+    before = snapshot(place / "out")
+    assert _block_sweep(place, capsys, monkeypatch, _Blocks(fail=True)) == 1
+    after = snapshot(place / "out")
+    assert {k: v for k, v in after.items() if k in before} == before
+    assert set(after) - set(before) == {"manifest.json", "blocks/000000.error.json", "blocks/000001.error.json"}
+    # a finished block, then a resume: block 0 is read, not solved again; the earlier files go
+    first = _Blocks()
+    assert _block_sweep(place, capsys, monkeypatch, first, "--resume") == 0
+    kept = snapshot(place / "out")["blocks/000000.json"]
+    (place / "out" / "blocks" / "000001.json").unlink()
+    (place / "out" / "result.json").write_text('{"scene": "a design written here meanwhile"}\n')
+    again = _Blocks()
+    assert _block_sweep(place, capsys, monkeypatch, again, "--resume") == 0
+    assert first.solved == [0, 1] and again.solved == [1]
+    final = snapshot(place / "out")
+    assert set(final) == SWEEP_SET and final["blocks/000000.json"] == kept and leftovers(place) == []
+
+
+def test_a_failed_swap_puts_the_checkpoint_back(tmp_path, monkeypatch):
+    from camjax.output.folder import replaced_folder
+
+    out = tmp_path / "out"
+    (out / "blocks").mkdir(parents=True)
+    (out / "blocks" / "000000.json").write_text("block")
+    (out / "manifest.json").write_text("manifest")
+    (out / "result.json").write_text("earlier")
+    before = snapshot(out)
+    real = os.replace
+
+    def failing(src, dst):
+        if Path(dst) == out and output_folder.STAGING in Path(src).name:  # the new folder into place
+            raise OSError(28, "No space left on device")
+        return real(src, dst)
+
+    monkeypatch.setattr(output_folder.os, "replace", failing)
+    with pytest.raises(OSError), replaced_folder(out, ("manifest.json", "blocks")) as tmp:
+        (tmp / "pareto.json").write_text("new")
+    assert snapshot(out) == before and leftovers(tmp_path) == []
 
 
 def test_a_stale_staging_folder_of_a_dead_run_is_cleaned(place, capsys):
@@ -389,11 +703,12 @@ def test_rpm_1e6_runs_with_finite_results(tmp_path, capsys, monkeypatch):
 # ---------------------------------------------------------------------------------- signals
 
 
-def _start(args: list[str], tmp_path: Path) -> subprocess.Popen:
+def _start(args: list[str], tmp_path: Path, **variables: str) -> subprocess.Popen:
     # this checkout's camjax, whatever the working folder
     root = str(Path(cli.__file__).resolve().parents[2])
     path = os.pathsep.join([root, *filter(None, [os.environ.get("PYTHONPATH")])])
-    env = {**os.environ, "CAMJAX_COMPILATION_CACHE": "0", "PYTHONUNBUFFERED": "1", "PYTHONPATH": path}
+    env = {**os.environ, "CAMJAX_COMPILATION_CACHE": "0", "PYTHONUNBUFFERED": "1", "PYTHONPATH": path,
+           **variables}
     return subprocess.Popen([sys.executable, "-m", "camjax.cli", *args], stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True, env=env, cwd=tmp_path)
 

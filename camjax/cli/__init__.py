@@ -29,6 +29,7 @@ from camjax import runtime
 # the commands register themselves, in the order of `camjax --help`
 from camjax.cli import check_extremes, design, dynamics, laws, sweep  # noqa: F401
 from camjax.cli.common import COMMANDS, STRICT_EXIT, UsageError
+from camjax.cli.environment import check_environment
 from camjax.numerics import NonFiniteError
 from camjax.output.folder import OutputError
 from camjax.scene import SceneError, cut
@@ -134,6 +135,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         args = build_parser().parse_args(argv)
         prog = f"camjax {args.command}"
+        check_environment()  # the variables camjax reads and JAX's platform, before any work
         return int(args._run(args) or 0)
     except (SceneError, UsageError, OutputError) as exc:
         print(f"{prog}: error: {exc}", file=sys.stderr)
@@ -159,7 +161,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"{prog}: error: out of memory (allowed: fewer --samples, or a smaller job)", file=sys.stderr)
         return 1
     except Exception as exc:
-        if os.environ.get("CAMJAX_DEBUG"):
+        if os.environ.get("CAMJAX_DEBUG", "").strip() == "1":
             raise
         print(f"{prog}: error: {type(exc).__name__}: {cut(str(exc), 300)} (CAMJAX_DEBUG=1 shows the "
               "traceback)", file=sys.stderr)

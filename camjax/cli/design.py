@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 import threading
 from contextlib import ExitStack
@@ -21,9 +20,9 @@ from camjax.cli.common import (
     check_dpi,
     command,
 )
+from camjax.cli.environment import drawing_processes, show_progress
 from camjax.output.files import write_json
 from camjax.output.folder import check_output_dir, replaced_folder
-from camjax.scene import quote
 
 
 @command("design", "report, plots, profile CSV and DXF (and an animation) of a scene's cam design")
@@ -66,7 +65,7 @@ def _setup_design(p: argparse.ArgumentParser):
 
         # a run takes seconds: on a terminal (or with CAMJAX_PROGRESS=1) say what it is doing;
         # piped, stderr keeps its contract of one line on failure
-        show = sys.stderr.isatty() or os.environ.get("CAMJAX_PROGRESS") == "1"
+        show = show_progress()
 
         def progress(phase: str) -> None:
             if show:
@@ -94,16 +93,13 @@ def _drawing_workers(stack):
     """Started :class:`camjax.output.drawing.DrawingWorkers` (closed with ``stack``), or None
     where processes cannot be started or $CAMJAX_DRAWING_PROCESSES is 0 (the figures and the DXF
     are then drawn in this one). $CAMJAX_DRAWING_PROCESSES: how many."""
-    from camjax.output.drawing import DEFAULT_PROCESSES, MAX_PROCESSES, DrawingWorkers
+    from camjax.output.drawing import DrawingWorkers
 
-    text = os.environ.get("CAMJAX_DRAWING_PROCESSES", str(DEFAULT_PROCESSES))
-    if not (text.isdigit() and int(text) <= MAX_PROCESSES):
-        raise UsageError(f"CAMJAX_DRAWING_PROCESSES = {quote(text)}: not a count (allowed: 0 to "
-                         f"{MAX_PROCESSES}; 0 draws in the command's own process)")
-    if int(text) == 0:
+    count = drawing_processes()
+    if count == 0:
         return None
     try:
-        return stack.enter_context(DrawingWorkers(int(text)))
+        return stack.enter_context(DrawingWorkers(count))
     except OSError:
         return None
 

@@ -3,11 +3,11 @@
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 
 from camjax import runtime
 from camjax.cli.common import OUT_HELP, UsageError, check_dpi, command
+from camjax.cli.environment import show_progress
 from camjax.output.files import write_json
 from camjax.output.folder import check_output_dir, replaced_folder
 
@@ -38,7 +38,7 @@ def _setup_dynamics(p: argparse.ArgumentParser):
         if (refused := refusal(scene, work, args.force)) is not None:
             raise UsageError(refused)
         # a bar with an ETA on a terminal (or with CAMJAX_PROGRESS=1); a piped stderr gets none
-        bar = WorkProgress(work) if sys.stderr.isatty() or os.environ.get("CAMJAX_PROGRESS") == "1" else None
+        bar = WorkProgress(work) if show_progress() else None
 
         def progress(line: str) -> None:  # one write per line: two threads report
             if bar is not None:

@@ -17,6 +17,9 @@ def _setup_laws(p: argparse.ArgumentParser):
     p.add_argument("--plot", metavar="FILE.png",
                    help="also draw normalized s, v, a, j of every law overlaid (one panel each)")
     p.add_argument("--dpi", type=int, default=110, help="resolution of the --plot image (default 110)")
+    p.add_argument("--scene", metavar="SCENE",
+                   help="also list the scene's own laws (B-spline and table segments), normalized, "
+                        "named segments[i] <law>")
 
     def run(args) -> int:
         import jax.numpy as jnp
@@ -43,12 +46,21 @@ def _setup_laws(p: argparse.ArgumentParser):
             return start, end
 
         path = check_output_file(args.json, "--json") if args.json is not None else None
+        laws = dict(LAWS)
+        if args.scene is not None:
+            from camjax.scene import load_scene
+
+            program = load_scene(args.scene).motion.program
+            known = {id(law) for law in LAWS.values()}
+            for i, law in enumerate(program.laws):
+                if law is not None and id(law) not in known:
+                    laws[f"segments[{i}] {law.name}"] = law
         rows = []
-        for law in LAWS.values():
+        for label, law in laws.items():
             s = summarize(law)
             start, end = dwell_joints(law)
             rows.append({
-                "law": s.name,
+                "law": label,
                 "peak_velocity": s.peak_velocity,
                 "peak_accel_pos": s.peak_accel_pos,
                 "peak_accel_neg": s.peak_accel_neg,
@@ -66,7 +78,7 @@ def _setup_laws(p: argparse.ArgumentParser):
             x = np.linspace(0.0, 1.0, 501)
             # legend label: the name and its joint classes after / before a dwell
             curves = {f"{r['law']} [{r['joint_after_dwell']} / {r['joint_before_dwell']}]":
-                      tuple(np.asarray(v) for v in LAWS[r["law"]](jnp.asarray(x))) for r in rows}
+                      tuple(np.asarray(v) for v in laws[r["law"]](jnp.asarray(x))) for r in rows}
             kind = plot.suffix.lstrip(".").lower()
             write_file_atomic(plot, lambda tmp: laws_figure(x, curves).savefig(tmp, dpi=args.dpi,
                                                                                format=kind))
@@ -74,12 +86,13 @@ def _setup_laws(p: argparse.ArgumentParser):
             write_file_atomic(path, lambda tmp: write_json(tmp, {"normalized": True, "laws": rows}))
             print(f"wrote {args.json}" + (f", {args.plot}" if plot else ""))
             return 0
-        head = (f"{'law':20s} {'max|v|':>7s} {'max a':>8s} {'min a':>8s} {'max|j|':>8s}  "
+        width = max(20, *(len(r["law"]) for r in rows))
+        head = (f"{'law':{width}s} {'max|v|':>7s} {'max a':>8s} {'min a':>8s} {'max|j|':>8s}  "
                 f"{'after dwell':12s} {'before dwell':12s} FLCD")
         print(head)
         print("-" * len(head))
         for r in rows:
-            print(f"{r['law']:20s} {r['peak_velocity']:7.4f} {r['peak_accel_pos']:8.4f} "
+            print(f"{r['law']:{width}s} {r['peak_velocity']:7.4f} {r['peak_accel_pos']:8.4f} "
                   f"{r['peak_accel_neg']:8.4f} {r['peak_jerk']:8.3f}  {r['joint_after_dwell']:12s} "
                   f"{r['joint_before_dwell']:12s} {'yes' if r['flcd_against_dwells'] else 'no'}")
         print(LAWS_COLUMNS)

@@ -17,7 +17,9 @@ from camjax.cli.common import (
     parse_float_list,
 )
 from camjax.output.files import write_json
-from camjax.output.folder import check_output_dir, merged_files, replaced_folder
+from camjax.output.folder import check_output_dir, replaced_folder
+from camjax.scene import cut
+from camjax.scene.ranges import allowed_text, outside
 
 
 @command("sweep", "solve every (alpha, gamma) pair of two lists: pareto.json and pareto.png")
@@ -44,8 +46,7 @@ def _setup_sweep(p: argparse.ArgumentParser):
         from camjax.scene import load_scene
         from camjax.solvers.sweep import plot_pareto
 
-        # a scale-out sweep keeps its blocks in --out between runs (--resume): merged, not replaced
-        out = check_output_dir(args.out, replace=not scaleout.requested(args))
+        out = check_output_dir(args.out)
         alphas = parse_float_list("--alpha", args.alpha)
         gammas = parse_float_list("--gamma", args.gamma)
         for option, values in (("--alpha", alphas), ("--gamma", gammas)):
@@ -53,6 +54,11 @@ def _setup_sweep(p: argparse.ArgumentParser):
             if bad:
                 raise UsageError(f"{option} = {','.join(f'{v:g}' for v in values)}: {bad[0]:g} is "
                                  "negative (allowed: numbers >= 0)")
+            bad = [v for v in values if outside(option.lstrip("-"), v)]
+            if bad:  # the range of design.alpha / design.gamma
+                raise UsageError(f"{option} = {cut(','.join(f'{v:g}' for v in values), 200)}: {bad[0]:g} is "
+                                 "outside the physical range (allowed: "
+                                 f"{allowed_text(option.lstrip('-'), zero=True, signed=False)})")
         if 0.0 in alphas and 0.0 in gammas:
             raise UsageError("--alpha/--gamma: the pair alpha = 0, gamma = 0 leaves nothing to "
                              "minimize (drop 0 from one of the lists)")
@@ -82,7 +88,10 @@ def _setup_sweep(p: argparse.ArgumentParser):
         seconds = time.perf_counter() - start
         data = {"scene": scene.name, "mode": mode, "solver": solver, "seed": seed,
                 "alphas": alphas, "gammas": gammas, "seconds": seconds, "records": result.records()}
-        with (merged_files(out) if scaleout.requested(args) else replaced_folder(out)) as tmp:
+        # replaced whole; a block sweep's checkpoint (written into --out as its blocks finished, for
+        # --resume) is carried over, and nothing else of the folder: no earlier run's files
+        keep = scaleout.CHECKPOINT if scaleout.requested(args) else ()
+        with replaced_folder(out, keep) as tmp:
             write_json(tmp / "pareto.json", data)
             fig = plot_pareto(result)
             fig.savefig(tmp / "pareto.png", dpi=args.dpi)

@@ -76,6 +76,7 @@ class GeometryCurves(NamedTuple):
     pressure_angle_deg: jax.Array | None = None
     pitch_rho_mm: jax.Array | None = None
     undercut_margin_mm: jax.Array | None = None  # rho_c - min radius on convex parts (float max on concave)
+    own_curves: dict[str, jax.Array] | None = None  # the follower's own curves (see DesignCurves)
 
 
 class DesignCurves(NamedTuple):
@@ -113,6 +114,10 @@ class DesignCurves(NamedTuple):
     pressure_angle_limit_deg: float | None = None  # roller: follower.max_pressure_angle_deg
     rotation: str = "ccw"  # the cam's turning direction (camjax.followers._pitch)
     force_parts_N: dict[str, np.ndarray] | None = None  # {"inertia", "damping", "spring", "gravity"}
+    # the follower's own per-sample curves, name -> (N,) (profile.csv columns after the shared ones);
+    # "face_travel_mm", where the contact sits on the face off its axis, is what the face width must
+    # cover (a crowned face's R_c sin phi; without it, a flat face's s')
+    own_curves: dict[str, np.ndarray] | None = None
 
 
 def _np(x):
@@ -191,10 +196,14 @@ def geometry_violations(curves: DesignCurves, rho_min_mm: float = 0.0,
     if curves.stress_MPa is not None and curves.sigma_max_MPa is not None:
         out += _checks.stress(*at(curves.stress_MPa, np.argmax, "stress", "max"), curves.sigma_max_MPa)
     if curves.face_width_mm is not None:
-        need = 2.0 * (max(ex["ds"].max, -ex["ds"].min) if "ds" in ex else float(np.max(np.abs(curves.ds_mm))))
+        travel, name = (curves.own_curves or {}).get("face_travel_mm"), "face_travel"
+        if travel is None:  # a flat face: the contact sits s' off the axis
+            travel, name = curves.ds_mm, "ds"
+        need = 2.0 * (max(ex[name].max, -ex[name].min) if name in ex else float(np.max(np.abs(travel))))
         if curves.face_width_mm < need - FEASIBILITY_TOL_MM:
+            what = "max|s'|" if name == "ds" else "max|R_c sin phi|"
             out.append(GeometryViolation(
-                "face_width", f"face width {curves.face_width_mm:.4g} mm < 2 max|s'| = {need:.4g} mm: "
+                "face_width", f"face width {curves.face_width_mm:.4g} mm < 2 {what} = {need:.4g} mm: "
                 "the contact runs off the face"))
     if curves.pressure_angle_deg is not None:
         phi = at(np.abs(curves.pressure_angle_deg), np.argmax)
@@ -312,6 +321,7 @@ class TranslatingFollower(Follower):
             _np(arrays.torque_Nm), _np(g.stress_MPa),
             None if scene.design is None else scene.design.sigma_max_MPa, radius, offset, _np(g.pitch_x_mm), _np(g.pitch_y_mm), _np(g.pressure_angle_deg), _np(g.pitch_rho_mm),
             _np(g.undercut_margin_mm), limit, rot, parts,
+            None if g.own_curves is None else {k: np.asarray(v) for k, v in g.own_curves.items()},
         )
 
     def run(self, scene, arrays: SceneArrays | None = None, *, base_radius_mm: float | None = None,

@@ -297,6 +297,9 @@ def profile_table(curves) -> tuple[list[str], np.ndarray]:
         if values is not None:
             names.append(name)
             cols.append(values)
+    for name, values in (getattr(curves, "own_curves", None) or {}).items():  # the follower's own
+        names.append(name)
+        cols.append(values)
     return names, np.column_stack(cols)
 
 

@@ -4,8 +4,9 @@ Every command that writes a folder (``design``, ``sweep``, ``dynamics``, ``check
 ``laws --json`` (one file) goes through this module:
 
 1. :func:`check_output_dir` / :func:`check_output_file` run before any computation: an empty path,
-   a file where a folder is wanted (or a folder where a file is), a path under a file, an
-   unwritable parent, or a non-empty folder that camjax did not write is one
+   a file where a folder is wanted (or a folder where a file is), a path under a file, a link
+   whose target is missing, a parent in which nothing can be made (tried: an empty folder is made
+   and removed there), or a non-empty folder that camjax did not write is one
    :class:`OutputError` (the CLI prints it and exits 2).
 2. :func:`replaced_folder` yields a staging folder ``.<DIR>.camjax-staging-<pid>`` beside DIR;
    when the block succeeds the old DIR is renamed aside (``.<DIR>.camjax-old-<pid>``), the staging
@@ -33,6 +34,7 @@ from camjax.scene import quote
 
 STAGING = "camjax-staging"
 OLD = "camjax-old"
+PROBE = "camjax-probe"  # the empty folder made and removed to learn that a place is writable
 # A folder holding one of these was written by camjax (or is empty) and may be replaced whole;
 # any other non-empty folder is refused rather than deleted (e.g. --out ~ or --out .).
 OUTPUT_MARKERS = ("result.json", "pareto.json", "extremes.json", "dynamics.json", "manifest.json")
@@ -91,6 +93,23 @@ def _check_parent(option: str, text: str, out: Path) -> None:
                           "(allowed: a path whose parents are folders)")
     if not os.access(parent, os.W_OK | os.X_OK):
         raise OutputError(f"{_display(option, text)}: cannot write in {parent} (permission denied)")
+    _probe(option, text, parent)
+
+
+def _probe(option: str, text: str, parent: Path) -> None:
+    """Create and remove an empty folder in ``parent``: the staging folder will be made there.
+
+    ``os.access`` answers from the permission bits only; it says yes for root everywhere, and for a
+    read-only file system, /proc or /sys, where making anything fails. Trying is the only answer
+    that holds, and it costs a millisecond before a run of seconds.
+    """
+    import tempfile
+
+    try:
+        os.rmdir(tempfile.mkdtemp(prefix=f".{PROBE}-", dir=parent))
+    except OSError as exc:
+        raise OutputError(f"{_display(option, text)}: cannot write in {parent} "
+                          f"({exc.strerror or type(exc).__name__})") from None
 
 
 def _absolute(option: str, text: str) -> Path:
@@ -129,7 +148,11 @@ def check_output_dir(text: str, option: str = "--out", replace: bool = True) -> 
     if replace and out in (cwd := Path.cwd(), *cwd.parents):
         raise OutputError(f"{_display(option, text)}: is the current folder or holds it; it would be "
                           "replaced whole (allowed: a folder below the current one, e.g. out)")
-    if out.exists() or out.is_symlink():
+    if out.is_symlink() and not out.exists():
+        raise OutputError(f"{_display(option, text)}: is a link whose target is missing "
+                          f"({quote(os.readlink(out))}) (allowed: a new folder, one camjax wrote, or "
+                          "a link to an existing folder)")
+    if out.exists():
         if not out.is_dir():
             raise OutputError(f"{_display(option, text)}: is a file, not a folder "
                               "(allowed: a new folder or one camjax wrote)")
@@ -174,19 +197,33 @@ def _signals_blocked() -> Iterator[None]:
         signal.pthread_sigmask(signal.SIG_SETMASK, old)
 
 
-def swap_in(staging: Path, out: Path) -> None:
-    """Replace folder ``out`` (if any) by ``staging``; on failure ``out`` is as it was."""
+def swap_in(staging: Path, out: Path, keep: tuple[str, ...] = ()) -> None:
+    """Replace folder ``out`` (if any) by ``staging``; on failure ``out`` is as it was.
+
+    ``keep``: names of entries of ``out`` carried over into the new folder (moved into ``staging``
+    first, each by one rename, unless ``staging`` has its own); everything else of ``out`` goes.
+    """
     old = _leftover_name(out, OLD, os.getpid()) if out.exists() else None
     with _signals_blocked():
-        if old is not None:
-            if old.exists():
-                shutil.rmtree(old)
-            os.replace(out, old)
+        moved: list[str] = []
         try:
-            os.replace(staging, out)
-        except BaseException:
+            for name in keep if old is not None else ():
+                if (out / name).exists() and not (staging / name).exists():
+                    os.replace(out / name, staging / name)
+                    moved.append(name)
             if old is not None:
-                os.replace(old, out)
+                if old.exists():
+                    shutil.rmtree(old)
+                os.replace(out, old)
+            try:
+                os.replace(staging, out)
+            except BaseException:
+                if old is not None:
+                    os.replace(old, out)
+                raise
+        except BaseException:
+            for name in moved:  # ``out`` is the old folder again: its kept entries go back
+                os.replace(staging / name, out / name)
             raise
     if old is not None:
         shutil.rmtree(old, ignore_errors=True)
@@ -203,39 +240,19 @@ def _fresh_staging(out: Path) -> Path:
 
 
 @contextlib.contextmanager
-def replaced_folder(out: str | Path) -> Iterator[Path]:
+def replaced_folder(out: str | Path, keep: tuple[str, ...] = ()) -> Iterator[Path]:
     """Yield an empty staging folder; replace ``out`` with it when the block succeeds.
 
-    ``out`` should have passed :func:`check_output_dir`. Missing parents are created.
+    ``out`` should have passed :func:`check_output_dir`. Missing parents are created. ``keep``:
+    entries of ``out`` that the new folder takes over (a block sweep's checkpoint, written into
+    ``out`` while it ran: ``manifest.json`` and ``blocks/``); nothing else of ``out`` is left.
     """
     out = Path(os.path.abspath(out))
     out.parent.mkdir(parents=True, exist_ok=True)
     staging = _fresh_staging(out)
     try:
         yield staging
-        swap_in(staging, out)
-    finally:
-        shutil.rmtree(staging, ignore_errors=True)
-
-
-@contextlib.contextmanager
-def merged_files(out: str | Path) -> Iterator[Path]:
-    """Yield a staging folder whose files are moved into ``out`` (kept, not replaced) on success.
-
-    For a folder that is a working store between runs (a scale-out sweep keeps its blocks there
-    for ``--resume``): only the files written in the block are replaced, each by one rename.
-    """
-    out = Path(os.path.abspath(out))
-    out.mkdir(parents=True, exist_ok=True)
-    staging = _fresh_staging(out)
-    try:
-        yield staging
-        with _signals_blocked():
-            for item in staging.iterdir():
-                target = out / item.name
-                if target.is_dir() and not target.is_symlink():
-                    shutil.rmtree(target)
-                os.replace(item, target)
+        swap_in(staging, out, keep)
     finally:
         shutil.rmtree(staging, ignore_errors=True)
 

@@ -3,7 +3,10 @@
 Without any of these options ``camjax sweep`` solves in this process as before. With them the
 sweep is cut into blocks that are stored in the output folder as they finish (``manifest.json``
 and ``blocks/``), so ``--resume`` continues an interrupted sweep, and pareto.json / pareto.png
-are written from the merged blocks at the end.
+are written from the merged blocks at the end. Then the folder is replaced whole, as every
+command's is: it holds that checkpoint (:data:`CHECKPOINT`) and the two files, nothing of an
+earlier run (a design's figures, say). A run that stops early leaves the checkpoint beside
+what the folder held before, for ``--resume``.
 """
 
 from __future__ import annotations
@@ -15,6 +18,8 @@ from pathlib import Path
 from camjax.scaleout.backends import BACKENDS
 
 DEFAULT_BLOCK_SIZE = 64
+# what a resume reads from --out (camjax.scaleout.store): kept when the folder is replaced at the end
+CHECKPOINT = ("manifest.json", "blocks")
 
 
 def add_options(p: argparse.ArgumentParser) -> None:

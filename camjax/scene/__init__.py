@@ -9,6 +9,8 @@ other sections in :mod:`camjax.scene.sections`, typed access to a TOML table in
 
 from __future__ import annotations
 
+import os
+import stat
 import tomllib
 from dataclasses import fields, replace
 from importlib import resources
@@ -152,20 +154,38 @@ def load_scene(path_or_name: str | Path | None = None) -> Scene:
     if str(path_or_name) in BUILTIN_SCENES and not p.is_file():
         return parse_scene(builtin_scene_text(str(path_or_name)), str(path_or_name),
                            f"<built-in {path_or_name}>")
-    try:
-        is_file, is_dir = p.is_file(), p.is_dir()
-    except (OSError, ValueError) as exc:  # a name too long, a NUL character
-        raise SceneError("scene", str(path_or_name), f"cannot be used as a path "
-                         f"({getattr(exc, 'strerror', None) or exc})") from None
-    if not is_file:
-        problem = "is a folder, not a scene file" if is_dir else "no such file or built-in scene"
-        raise SceneError("scene", str(path_or_name), problem,
-                         f"a TOML file or one of {', '.join(BUILTIN_SCENES)}")
+    _check_scene_path(p, str(path_or_name))
     try:
         raw = p.read_bytes()
     except OSError as exc:
         raise SceneError("scene", str(path_or_name), f"cannot be read ({exc.strerror})") from None
     return parse_scene(decode_scene(raw, str(p)), p.stem, str(p))
+
+
+_NOT_REGULAR = ((stat.S_ISFIFO, "a FIFO (named pipe)"), (stat.S_ISCHR, "a character device"),
+                (stat.S_ISBLK, "a block device"), (stat.S_ISSOCK, "a socket"))
+
+
+def _check_scene_path(p: Path, given: str) -> None:
+    """A scene path must name a regular file (through any links); else :class:`SceneError` saying
+    what it names instead. Nothing is opened: reading a FIFO would wait for a writer, /dev/zero
+    would never end."""
+    allowed = f"a TOML file or one of {', '.join(BUILTIN_SCENES)}"
+    try:
+        mode = p.stat().st_mode  # follows links
+    except (FileNotFoundError, NotADirectoryError):
+        if p.is_symlink():
+            raise SceneError("scene", given, f"is a link whose target is missing "
+                             f"({quote(os.readlink(p))})", allowed) from None
+        raise SceneError("scene", given, "no such file or built-in scene", allowed) from None
+    except (OSError, ValueError) as exc:  # a name too long, a NUL character, a loop of links
+        raise SceneError("scene", given, f"cannot be used as a path "
+                         f"({getattr(exc, 'strerror', None) or exc})") from None
+    if stat.S_ISDIR(mode):
+        raise SceneError("scene", given, "is a folder, not a scene file", allowed)
+    if not stat.S_ISREG(mode):
+        kind = next((name for test, name in _NOT_REGULAR if test(mode)), "a special file")
+        raise SceneError("scene", given, f"is not a regular file: it is {kind}", allowed)
 
 
 def decode_scene(raw: bytes, source: str) -> str:

@@ -12,6 +12,7 @@ from camjax.program import KINDS, MotionProgram, Segment
 from camjax.program.conditions import MATCH, Plan, unmatched_joints
 from camjax.scene.conditions import CONDITION_KEYS, asked_to_match, parse_conditions, solve
 from camjax.scene.reader import DEFAULT, TableReader, build
+from camjax.scene.shaped import SHAPED_LAWS, parse_cycle_table, parse_shaped_segment
 from camjax.scene.spec import ROTATIONS, RPM_MAX, SAMPLES_MAX, SAMPLES_PER_SEGMENT, MotionSpec
 
 
@@ -19,7 +20,7 @@ def parse_law(seg: TableReader):
     name = seg.table.get("law")
     if not isinstance(name, str):
         raise seg.error("law", name, "a rise or return needs a law name",
-                        ", ".join([*LAWS, "polynomial", "fourier"]))
+                        ", ".join([*LAWS, "polynomial", "fourier", *SHAPED_LAWS]))
     if name != "polynomial" or seg.has("exponents"):
         for key in CONDITION_KEYS:
             if seg.has(key):
@@ -63,28 +64,35 @@ def parse_law(seg: TableReader):
     try:
         return get_law(name)
     except ValueError:
-        raise seg.error("law", name, "unknown law", ", ".join([*LAWS, "polynomial", "fourier"])) from None
+        raise seg.error("law", name, "unknown law",
+                        ", ".join([*LAWS, "polynomial", "fourier", *SHAPED_LAWS])) from None
 
 
 def parse_motion(r: TableReader, oscillating: bool = False) -> MotionSpec:
     """[motion]; ``oscillating``: the follower swings, lifts are ``lift_deg`` (kept in rad)."""
-    r.check_keys(("rpm", "samples", "segments", "rotation", "extrema"))
+    r.check_keys(("rpm", "samples", "segments", "table", "rotation", "extrema"))
     lift_key, other_key = ("lift_deg", "lift_mm") if oscillating else ("lift_mm", "lift_deg")
     rpm = r.number("rpm", low=0.0, high=RPM_MAX)
     samples = r.number("samples", DEFAULT, low=1, high=SAMPLES_MAX, integer=True)
     rotation = r.choice("rotation", ROTATIONS, DEFAULT)
     extrema = r.choice("extrema", EXTREMA_MODES, DEFAULT)
     raw = r.table.get("segments")
+    cycle = parse_cycle_table(r, lift_key, oscillating) if r.has("table") else None  # from points
+    raw = cycle[1] if cycle is not None else list(raw) if isinstance(raw, list) else raw
     if not isinstance(raw, list) or not raw:
         raise r.error("segments", raw if raw is not None else MISSING, "needs a list of segments",
                       "[{kind = 'dwell' | 'rise' | 'return', angle_deg = .., law = .., lift_mm = ..}, ...]")
-    segments, plans = [], []
-    for i, item in enumerate(raw):
+    segments = list(cycle[0]) if cycle is not None else []
+    conditions_of = {}  # segment index -> its joint conditions (a polynomial solved below)
+    for i, item in enumerate(raw if cycle is None else []):
         seg = TableReader(item, f"{r.path}.segments[{i}]", r.source)
         if seg.has(other_key):
             raise seg.error(other_key, seg.table[other_key],
                             f"{'an oscillating' if oscillating else 'a translating'} follower takes its "
                             f"lift as {lift_key}", lift_key)
+        if seg.table.get("law") in SHAPED_LAWS and seg.table.get("kind") in ("rise", "return"):
+            raw[i] = parse_shaped_segment(seg, segments, lift_key, oscillating)  # appends to segments
+            continue
         seg.check_keys(("kind", "angle_deg", "law", lift_key, "exponents", "coefficients", "phases",
                         *CONDITION_KEYS))
         kind = seg.choice("kind", KINDS)
@@ -94,16 +102,18 @@ def parse_motion(r: TableReader, oscillating: bool = False) -> MotionSpec:
                 if seg.has(extra):
                     raise seg.error(extra, seg.table[extra], "a dwell takes only kind and angle_deg")
             segments.append(Segment(kind, angle))
-            plans.append(Plan(kind, angle))
         else:
             lift = seg.number(lift_key, low=0.0, low_open=True)
             if oscillating and lift >= 180.0:
                 raise seg.error(lift_key, lift, "swings the arm through the line of centres", "< 180")
             law = parse_law(seg)
-            conditions = parse_conditions(seg, angle, oscillating) if law is None else None
-            plans.append(Plan(kind, angle, lift, law, conditions))  # scene units: mm or deg
+            if law is None:
+                conditions_of[len(segments)] = parse_conditions(seg, angle, oscillating)
             lift = math.radians(lift) if oscillating else lift  # the program keeps rad
             segments.append(Segment(kind, angle, law, lift))
+    # the conditions solve works in the scene's units (mm, or deg for a rocking follower)
+    plans = [Plan(seg.kind, seg.angle_deg, math.degrees(seg.lift) if oscillating else seg.lift, seg.law,
+                  conditions_of.get(k)) for k, seg in enumerate(segments)]
     def checked(segs):
         try:
             return MotionProgram.from_segments(segs)
@@ -146,8 +156,13 @@ def samples_needed(program: MotionProgram) -> int:
 def check_resolution(motion: MotionSpec, r: TableReader) -> None:
     angles = motion.program.angles_deg
     need = samples_needed(motion.program)
+    i = min(range(len(angles)), key=lambda k: angles[k])
+    if need > SAMPLES_MAX:  # no grid resolves it: the segment is at fault, not the grid
+        least = SAMPLES_PER_SEGMENT * 360.0 / SAMPLES_MAX
+        raise r.error(f"segments[{i}].angle_deg", angles[i], f"too short for any grid: "
+                      f"{SAMPLES_PER_SEGMENT} samples of the finest ({SAMPLES_MAX}) span {least:g} deg",
+                      f">= {least:g} deg")
     if motion.samples < need:
-        i = min(range(len(angles)), key=lambda k: angles[k])
         got = motion.samples * angles[i] / 360.0
         raise r.error("samples", motion.samples,
                       f"too coarse: the {angles[i]:g} deg segment {r.path}.segments[{i}] gets "

@@ -6,6 +6,7 @@ import math
 from typing import Any
 
 from camjax.errors import MISSING, SceneError
+from camjax.scene.ranges import allowed_text, outside
 
 DEFAULT = object()  # a key the scene leaves out: the dataclass's default applies
 
@@ -48,14 +49,27 @@ class TableReader:
             raise self.error(key, v, f"must be {kind}")
         if not math.isfinite(v):
             raise self.error(key, v, "must be finite", "finite numbers")
-        parts = [f"{'>' if low_open else '>='} {low:g}"] if low is not None else []
-        parts += [f"<= {high:g}"] if high is not None else []
+        shown = (lambda x: f"{x}") if integer else (lambda x: f"{x:g}")
+        parts = [f"{'>' if low_open else '>='} {shown(low)}"] if low is not None else []
+        parts += [f"<= {shown(high)}"] if high is not None else []
         rng = " and ".join(parts)
         if low is not None and (v < low or (low_open and v == low)):
             raise self.error(key, v, "out of range", rng)
         if high is not None and v > high:
             raise self.error(key, v, "out of range", rng)
+        if not integer and outside(key, v):
+            signed = low is None or low < 0
+            raise self.error(key, v, "outside the physical range", allowed_text(
+                key, zero=signed or (low <= 0 and not (low_open and low == 0)), signed=signed))
         return int(v) if integer else float(v)
+
+    def check_bounds(self, key, value, bounds, *, signed: bool = False) -> None:
+        """Every number of ``bounds`` (a [low, high] pair or a list given as ``value``) within the
+        physical range of ``key`` (:mod:`camjax.scene.ranges`)."""
+        for x in bounds:
+            if outside(key, x):
+                raise self.error(key, value, f"{x!r} is outside the physical range",
+                                 allowed_text(key, zero=signed, signed=signed))
 
     def choice(self, key, options, default=MISSING) -> str:
         if key not in self.table:
@@ -82,6 +96,7 @@ class TableReader:
             raise self.error(key, v, "bounds must be finite")
         if not (0 < lo <= hi):
             raise self.error(key, v, "bounds must satisfy 0 < low <= high")
+        self.check_bounds(key, v, (lo, hi))
         return lo, hi
 
     def sub(self, key) -> TableReader:
@@ -107,6 +122,7 @@ def fixed_or_free(r: TableReader, key: str, default=MISSING, *, positive: bool =
                       "(free) of finite numbers")
     if v[0] > v[1]:
         raise r.error(key, v, "bounds must satisfy low <= high")
+    r.check_bounds(key, v, v, signed=True)
     return float(v[0]), float(v[1])
 
 
@@ -117,5 +133,6 @@ def number_list(r: TableReader, key: str) -> tuple[float, ...]:
                                              and math.isfinite(x) and x > 0 for x in v))
     if not ok:
         raise r.error(key, v, "must be a non-empty list of positive numbers", "e.g. [0.9, 1.0, 1.1]")
+    r.check_bounds(key, v, v)
     return tuple(float(x) for x in v)
 

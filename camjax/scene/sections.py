@@ -23,6 +23,8 @@ from camjax.scene.spec import (
 )
 from camjax.solvers.registry import MODES, SOLVERS
 
+SEED_MAX = 2**63 - 1  # design.seed / --seed: JAX takes the seed of a PRNG key as a 64-bit integer
+
 
 def parse_material(r: TableReader) -> Material:
     r.check_keys(("E_MPa", "poisson"))
@@ -68,7 +70,7 @@ def parse_design(r: TableReader, follower, spec: FollowerSpec, has_contact: bool
         # no stress term without [contact] (a roller may be sized without it)
         gamma=r.number("gamma", DEFAULT if has_contact else 0.0, low=0.0),
         solver=r.choice("solver", SOLVERS, DEFAULT),
-        seed=r.number("seed", DEFAULT, low=0, integer=True),
+        seed=r.number("seed", DEFAULT, low=0, high=SEED_MAX, integer=True),
     )
     bounds = follower.design_bounds(r, spec)
     design = build(DesignSpec, variables=tuple((name, bounds[name]) for name in own),

@@ -1,0 +1,395 @@
+"""The curved-face follower's optimal-design problem: a problem family of :mod:`camjax.solvers.base`.
+
+Design variables (:class:`Design`, mm): base radius R_b, face radius R_c, face width W and offset
+e of a translating curved-face (mushroom) follower; each is free between its bounds or fixed
+(lower == upper).
+
+Objective, weights alpha (size) and gamma (stress), N = R_b,max + W_max:
+
+    F = alpha (R_b + W) / N + gamma max_theta sigma(theta) / sigma_max,
+
+the flat face's size (SPEC 5: the cam's base radius and the follower's face), which this problem
+becomes as R_c -> infinity. The stress is the roller's with R_f = R_c
+(:func:`camjax.contact.roller_stress`: sigma = C sqrt(1 / (cos phi rho_eq)),
+rho_eq = 1 / (1/rho_c + 1/R_c)); without [contact] C = 0: no stress term and no stress
+constraint. Constraints, one value per angle, ``g <= 0`` in mm (:class:`Constraints`):
+
+- pressure_angle: |s' - e~| - tan(phi_max) (d + s) <= 0 (as the roller's);
+- undercut: (R_c + rho_min) (kappa_pitch (R_c + rho_min) - 1) <= 0 (as the roller's);
+- face_travel: R_c |s' - e~| / r - W / 2 <= 0, r = sqrt((d + s)^2 + (s' - e~)^2): the contact,
+  R_c |sin phi| off the axis, stays on the face;
+- stress: C^2 / (sigma_max^2 cos phi) - rho_eq <= 0 (as the roller's);
+- and the box bounds, kept by projection. The scene checks |e| < R_b + R_c and W <= 2 R_c in the box.
+
+The solvers work in the unit box of the bounds, with the face width floored at the width the
+design needs on the samples (:func:`from_unit`): W enters the objective and the face constraint
+only, so the optimum's W is that need (or its lower bound), and every design the solvers see
+keeps its contact on the face. :func:`polish` raises W to the need off the grid (exact extrema).
+
+Modes: :func:`per_angle` gives the n one-angle problems; a pointwise solve is condensed into the
+design of the angle with the largest R_b (SPEC 5's rule) with the largest W over the angles (the
+flat face's rule for L).
+"""
+
+from __future__ import annotations
+
+from typing import Any, NamedTuple
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from camjax import family
+from camjax.contact import roller_stress
+from camjax.family import FEASIBILITY_RTOL_STRESS, FEASIBILITY_TOL_MM, Weights, all_within, weighted_objective
+
+# re-exported: this family's protocol functions and tolerance, written once for every family
+from camjax.family import FEASIBILITY_TOL_RAD as FEASIBILITY_TOL_RAD
+from camjax.family import bounds as bounds
+from camjax.family import bounds_violation as bounds_violation
+from camjax.followers import _pitch as pitch
+from camjax.followers.roller import geometry as roller_geo
+from camjax.numerics import COS_FLOOR, RHO_FLOOR_MM, finite_float, floor_positive, positive_part, safe_sqrt
+
+CONSTRAINT_NAMES = ("pressure_angle", "undercut", "face_travel", "stress", "bounds")
+VARIABLES = ("base_radius_mm", "face_radius_mm", "face_width_mm", "offset_mm")
+GRID_FIELDS = frozenset({"theta_deg", "s_mm", "ds_mm", "d2s_mm", "stress_coefficient"})
+
+
+class Design(NamedTuple):
+    """One curved-face design (scalars), or a batch of them (arrays with leading axes)."""
+
+    base_radius_mm: jax.Array  # R_b, mm
+    face_radius_mm: jax.Array  # R_c, mm: the crown's radius
+    face_width_mm: jax.Array  # W, mm: the face's chord, symmetric about the axis
+    offset_mm: jax.Array  # e, mm (follower axis at x = e in the follower frame)
+
+
+class Problem(NamedTuple):
+    """Design-independent data of one curved-face design problem on an angle grid of n samples."""
+
+    theta_deg: jax.Array  # (n,) cam angle, degrees
+    s_mm: jax.Array  # (n,) s, mm
+    ds_mm: jax.Array  # (n,) s', mm/rad
+    d2s_mm: jax.Array  # (n,) s'', mm/rad^2
+    stress_coefficient: jax.Array  # (n,) C = 0.564 sqrt(F / (w K)), MPa mm^0.5 (0: no stress)
+    lower: Design  # lower bounds, mm
+    upper: Design  # upper bounds, mm
+    sigma_max_MPa: jax.Array  # () allowable contact stress
+    size_norm_mm: jax.Array  # () N = R_b,max + W_max
+    tan_max_pressure_angle: jax.Array  # () tan(phi_max)
+    max_pressure_angle_deg: jax.Array  # () phi_max, deg
+    min_curvature_radius_mm: jax.Array  # () smallest convex cam-surface radius allowed
+    rotation_sign: jax.Array  # () +1 ccw, -1 cw: e~ = sign e
+    # the motion program behind the grid when extrema are exact (:func:`polish`); None: the grid's
+    program: Any = None
+
+
+class Constraints(NamedTuple):
+    """Constraint functions g <= 0, mm, one value per angle (shape (n,) each)."""
+
+    pressure_angle: jax.Array  # |s' - e~| - tan(phi_max) (d + s)
+    undercut: jax.Array  # (R_c + rho_min) (kappa (R_c + rho_min) - 1)
+    face_travel: jax.Array  # R_c |sin phi| - W / 2
+    stress: jax.Array  # C^2 / (sigma_max^2 cos phi) - rho_eq
+
+
+class Violation(NamedTuple):
+    """Worst violation of each constraint in physical units, 0 when satisfied (shape ())."""
+
+    pressure_angle: jax.Array  # rad: max |phi| - phi_max
+    undercut: jax.Array  # mm: rho_min - min rho_c over the convex parts
+    face_travel: jax.Array  # mm: max R_c |sin phi| - W / 2
+    stress: jax.Array  # MPa: max sigma - sigma_max
+    bounds: jax.Array  # mm: largest distance outside the box
+
+
+class Evaluation(NamedTuple):
+    """A design judged on the whole grid (true maxima; shape () each)."""
+
+    objective: jax.Array  # F
+    size_mm: jax.Array  # R_b + W
+    stress_max_MPa: jax.Array  # max_theta sigma
+    stress_max_deg: jax.Array  # where it occurs
+    pressure_angle_max_deg: jax.Array  # max_theta |phi|
+    pressure_angle_max_at_deg: jax.Array  # where it occurs
+    cam_rho_min_mm: jax.Array  # smallest convex cam-surface radius rho_c (undercut at <= 0)
+    face_travel_max_mm: jax.Array  # max_theta R_c |sin phi|
+    face_travel_max_deg: jax.Array  # where it occurs
+    violation: Violation
+    feasible: jax.Array  # bool
+
+
+# ------------------------------------------------------------------------------ building
+
+
+def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=None,
+                       extrema: str | None = None) -> Problem:
+    """Problem of a curved-face scene with a [design] section (Python, not traceable).
+
+    Arguments as :func:`camjax.followers.roller.problem.problem_from_scene`.
+    """
+    from camjax.evaluate import scene_arrays
+
+    if scene.design is None:
+        raise ValueError("scene has no [design] section: nothing to optimize")
+    if scene.follower.type != "curved_face":
+        raise ValueError(f"follower.type: {scene.follower.type!r} is not a curved-face follower")
+    if arrays is None:
+        arrays = scene_arrays(scene, samples=samples, dtype=dtype, extrema=extrema)
+    d, f, kin = scene.design, scene.follower, arrays.kin
+    dt = kin.s.dtype
+    as_ = lambda v: jnp.asarray(v, dt)  # noqa: E731
+    box = [d.bounds(name) for name in VARIABLES]
+    coeff = arrays.stress_coefficient
+    return Problem(
+        theta_deg=as_(arrays.theta_deg), s_mm=kin.s, ds_mm=kin.ds, d2s_mm=kin.d2s,
+        stress_coefficient=jnp.zeros_like(kin.s) if coeff is None else as_(coeff),
+        lower=Design(*(as_(b[0]) for b in box)), upper=Design(*(as_(b[1]) for b in box)),
+        sigma_max_MPa=as_(d.sigma_max_MPa if d.sigma_max_MPa is not None else 1.0),
+        size_norm_mm=as_(d.bounds("base_radius_mm")[1] + d.bounds("face_width_mm")[1]),
+        tan_max_pressure_angle=as_(np.tan(np.radians(f.max_pressure_angle_deg))),
+        max_pressure_angle_deg=as_(f.max_pressure_angle_deg),
+        min_curvature_radius_mm=as_(f.min_curvature_radius_mm),
+        rotation_sign=as_(pitch.rotation_sign(scene.motion.rotation)),
+        program=None if arrays.model is None else arrays.model.program,
+    )
+
+
+def per_angle(problem: Problem) -> Problem:
+    """The n pointwise problems: every grid leaf (n,) -> (n, 1), every scalar leaf -> (n,)."""
+    return family.per_angle(problem._replace(program=None), GRID_FIELDS)
+
+
+# ---------------------------------------------------------------------------- physics
+
+
+class _Terms(NamedTuple):
+    """Per-angle quantities every function of a design shares (shape (n,) each)."""
+
+    w: jax.Array  # d + s, mm: the face centre's height on the follower axis
+    u: jax.Array  # s' - e~, mm: tan phi = u / w (up to the rotation's sign)
+    r: jax.Array  # sqrt(w^2 + u^2), mm: the face centre's distance from the instant centre
+    inv_cos: jax.Array  # 1 / cos phi = r / w, cos phi floored at COS_FLOOR
+    kappa: jax.Array  # pitch-curve curvature, 1/mm (convex > 0)
+    rho_eq: jax.Array  # Hertz equivalent radius 1 / (1/rho_c + 1/R_c), mm
+
+
+def _terms(problem: Problem, design: Design) -> _Terms:
+    e = problem.rotation_sign * design.offset_mm
+    w = pitch.pitch_height(design.base_radius_mm + design.face_radius_mm, e, problem.s_mm)
+    u = problem.ds_mm - e
+    r = jnp.sqrt(w**2 + u**2)
+    kappa = pitch.pitch_curvature(w, problem.ds_mm, problem.d2s_mm, e)
+    return _Terms(w, u, r, r / jnp.maximum(w, COS_FLOOR * r), kappa,
+                  roller_geo.roller_equivalent_radius(kappa, design.face_radius_mm))
+
+
+def _travel(x: _Terms, design: Design) -> jax.Array:
+    """R_c |u| / r (mm): the contact's distance from the face's axis, per angle."""
+    return design.face_radius_mm * jnp.abs(x.u) / floor_positive(x.r, RHO_FLOOR_MM)
+
+
+def pressure_angle(problem: Problem, design: Design) -> jax.Array:
+    """phi (rad) per angle, signed as :func:`camjax.followers._pitch.pressure_angle`."""
+    x = _terms(problem, design)
+    return problem.rotation_sign * jnp.arctan2(x.u, x.w)
+
+
+def face_width_need(problem: Problem, design: Design) -> jax.Array:
+    """2 max_theta R_c |sin phi| (mm), the narrowest face that keeps the contact on it, shape ()
+    (batched designs: over the last axis)."""
+    column = jax.tree.map(lambda x: jnp.expand_dims(x, -1), design)  # (..., 1) against the grid (n,)
+    return 2.0 * jnp.max(_travel(_terms(problem, column), column), axis=-1)
+
+
+def stress(problem: Problem, design: Design) -> jax.Array:
+    """Hertz contact stress sigma(theta) (MPa), shape (n,); finite (saturated) at an undercut."""
+    x = _terms(problem, design)
+    return roller_stress(problem.stress_coefficient, jnp.arctan2(x.u, x.w), x.rho_eq)
+
+
+def peak_stress(problem: Problem, design: Design) -> jax.Array:
+    """max_theta sigma (MPa), shape (), as sqrt(max_theta C^2 / (cos phi rho_eq)): one root."""
+    x = _terms(problem, design)
+    ratio = problem.stress_coefficient**2 * x.inv_cos / floor_positive(x.rho_eq, RHO_FLOOR_MM)
+    return safe_sqrt(jnp.max(ratio))
+
+
+def size_term(problem: Problem, design: Design) -> jax.Array:
+    """Normalized size (R_b + W) / N (dimensionless)."""
+    return (design.base_radius_mm + design.face_width_mm) / problem.size_norm_mm
+
+
+def objective(problem: Problem, weights: Weights, design: Design) -> jax.Array:
+    """F = alpha (R_b + W) / N + gamma max_theta sigma / sigma_max (dimensionless, shape ())."""
+    return weighted_objective(weights, size_term(problem, design), peak_stress(problem, design),
+                              problem.sigma_max_MPa)
+
+
+def constraints(problem: Problem, design: Design) -> Constraints:
+    """Every angle's constraints as g <= 0 (mm), shape (n,) each; finite for every design."""
+    x = _terms(problem, design)
+    reach = design.face_radius_mm + problem.min_curvature_radius_mm
+    need = problem.stress_coefficient**2 * x.inv_cos / problem.sigma_max_MPa**2
+    return Constraints(
+        pressure_angle=jnp.abs(x.u) - problem.tan_max_pressure_angle * x.w,
+        undercut=reach * roller_geo.roller_undercut_constraint(x.kappa, design.face_radius_mm,
+                                                             problem.min_curvature_radius_mm),
+        face_travel=_travel(x, design) - 0.5 * design.face_width_mm,
+        stress=need - x.rho_eq,
+    )
+
+
+def constraint_maxima(problem: Problem, design: Design) -> Constraints:
+    """max_theta of each constraint of :func:`constraints`, shape () each (one stacked reduction)."""
+    return Constraints(*jnp.max(jnp.stack(constraints(problem, design)), axis=-1))
+
+
+def size_norm(problem: Problem) -> jax.Array:
+    """N = R_b,max + W_max (mm): the length the constraints are divided by, shape ()."""
+    return problem.size_norm_mm
+
+
+# ------------------------------------------------------------------ solver coordinates
+
+
+def _unit(x, lo, hi):
+    return (x - lo) / jnp.where(hi > lo, hi - lo, 1.0)
+
+
+def _from(v, lo, hi):
+    return lo + v * jnp.where(hi > lo, hi - lo, 1.0)
+
+
+def to_unit(problem: Problem, design: Design) -> Design:
+    """Design (mm) -> the solvers' unit-box coordinates: each variable over its bounds."""
+    return jax.tree.map(_unit, design, problem.lower, problem.upper)
+
+
+def from_unit(problem: Problem, u: Design) -> Design:
+    """The unit box -> design (mm), with the face width floored at the need of the design's
+    R_b, R_c and e on the samples (:func:`face_width_need`, at most W_max).
+
+    Below the floor W takes the floor's value and keeps the gradient of its own coordinate too
+    (straight-through), so a weighting never finds a flat, zero-gradient stretch there.
+    """
+    plain = jax.tree.map(_from, u, problem.lower, problem.upper)
+    floor = jnp.minimum(face_width_need(problem, plain), problem.upper.face_width_mm)
+    raw = plain.face_width_mm
+    height = raw - jax.lax.stop_gradient(floor)
+    width = jnp.where(height > 0, raw, floor + height - jax.lax.stop_gradient(height))
+    return plain._replace(face_width_mm=width)
+
+
+def exact_face_width_need(problem: Problem, design: Design) -> jax.Array:
+    """:func:`face_width_need` with the max over the angle refined off the grid (needs
+    ``problem.program``; :func:`camjax.extrema.max_of`)."""
+    from camjax import extrema
+
+    def travel(kin, params):  # R_c |u| / r, mm
+        rb, rc, e = params
+        w = pitch.pitch_height(rb + rc, e, kin.s)
+        u = kin.ds - e
+        return rc * jnp.abs(u) / floor_positive(jnp.sqrt(w**2 + u**2), RHO_FLOOR_MM)
+
+    params = (design.base_radius_mm, design.face_radius_mm, problem.rotation_sign * design.offset_mm)
+    grid = _travel(_terms(problem, design), design)
+    return 2.0 * extrema.max_of(problem.program, travel, grid, params).value
+
+
+def polish(problem: Problem, weights: Weights, design: Design) -> Design:
+    """The solver's design with its face widened, where it is short, to the narrowest that keeps
+    the contact on the face at every angle, not only at the samples (exact extrema; at most
+    W_max). Without a program (grid extrema) the design is returned unchanged. Traceable."""
+    if problem.program is None:
+        return design
+    need = exact_face_width_need(problem, design)
+    width = jnp.minimum(jnp.maximum(design.face_width_mm, need), problem.upper.face_width_mm)
+    free = problem.upper.face_width_mm > problem.lower.face_width_mm
+    return design._replace(face_width_mm=jax.lax.stop_gradient(jnp.where(free, width, design.face_width_mm)))
+
+
+def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
+    """Objective, peak stress, pressure angle and face travel (and their angles), violations and
+    feasibility."""
+    x = _terms(problem, design)
+    sigma = stress(problem, design)
+    phi = jnp.abs(jnp.arctan2(x.u, x.w))
+    travel = _travel(x, design)
+    i, j, k = jnp.argmax(sigma), jnp.argmax(phi), jnp.argmax(travel)
+    rho_c_min = jnp.min(roller_geo.roller_undercut_margin(x.kappa, design.face_radius_mm, 0.0))
+    v = Violation(
+        pressure_angle=positive_part(phi[j] - jnp.deg2rad(problem.max_pressure_angle_deg)),
+        undercut=positive_part(problem.min_curvature_radius_mm - rho_c_min),
+        face_travel=positive_part(travel[k] - 0.5 * design.face_width_mm),
+        stress=positive_part(sigma[i] - problem.sigma_max_MPa),
+        bounds=bounds_violation(problem, design),
+    )
+    return Evaluation(
+        objective=objective(problem, weights, design),
+        size_mm=design.base_radius_mm + design.face_width_mm,
+        stress_max_MPa=sigma[i], stress_max_deg=problem.theta_deg[i],
+        pressure_angle_max_deg=jnp.rad2deg(phi[j]), pressure_angle_max_at_deg=problem.theta_deg[j],
+        cam_rho_min_mm=rho_c_min, face_travel_max_mm=travel[k], face_travel_max_deg=problem.theta_deg[k],
+        violation=v, feasible=all_within(v, _tolerances(problem.sigma_max_MPa)),
+    )
+
+
+def condense_pointwise(problem: Problem, per_angle_design: Design) -> tuple[Design, dict]:
+    """The whole-cam design of a pointwise solve: the design of the angle with the largest R_b
+    (SPEC 5's rule; R_c and e are that angle's) with the largest W over the angles (the flat
+    face's rule for L). Judged on the whole grid, its violations, if any, are reported. Extras:
+    the critical angle (``base_radius_deg``) and the grid."""
+    design, extras = family.condense_at_largest(problem, per_angle_design, per_angle_design.base_radius_mm,
+                                                "base_radius_deg")
+    return design._replace(face_width_mm=jnp.max(per_angle_design.face_width_mm)), extras
+
+
+def polish_pointwise(problem: Problem, weights: Weights, design: Design, extras: dict) -> tuple[Design, dict]:
+    """The condensed pointwise design with W raised to the exact need (:func:`polish`)."""
+    return polish(problem, weights, design), extras
+
+
+def _tolerances(sigma_max_MPa) -> dict:
+    """Each constraint's feasibility tolerance (rad, mm; the stress's in MPa)."""
+    return {"pressure_angle": FEASIBILITY_TOL_RAD, "undercut": FEASIBILITY_TOL_MM,
+            "face_travel": FEASIBILITY_TOL_MM, "bounds": FEASIBILITY_TOL_MM,
+            "stress": FEASIBILITY_RTOL_STRESS * sigma_max_MPa}
+
+
+def violated_constraints(problem: Problem, v: Violation) -> list[str]:
+    """Names of the violated constraints (Python; needs concrete values)."""
+    return family.violated(CONSTRAINT_NAMES, v, _tolerances(float(problem.sigma_max_MPa)))
+
+
+# ------------------------------------------------------------------------------- output
+
+_f = finite_float
+
+
+def _design_keys(d: Design) -> dict:
+    return {**family.design_json(d, VARIABLES), "prime_radius_mm": _f(d.base_radius_mm + d.face_radius_mm)}
+
+
+def solution_json(problem: Problem, solution) -> dict:
+    """The curved-face keys of result.json's design block, for one :class:`camjax.solvers.base.Solution`."""
+    d, v, ev = solution.design, solution.violation, solution.evaluation
+    return family.solution_keys(
+        problem, solution, VARIABLES, design_keys=_design_keys(d),
+        size_mm=d.base_radius_mm + d.face_width_mm,
+        violation={"pressure_angle_deg": np.degrees(v.pressure_angle), "undercut_mm": v.undercut,
+                   "face_travel_mm": v.face_travel, "stress_MPa": v.stress, "bounds_mm": v.bounds},
+        figures={"stress_max_MPa": ev.stress_max_MPa, "stress_max_deg": ev.stress_max_deg,
+                 "pressure_angle_max_deg": ev.pressure_angle_max_deg,
+                 "pressure_angle_max_at_deg": ev.pressure_angle_max_at_deg,
+                 "max_pressure_angle_deg": problem.max_pressure_angle_deg,
+                 "cam_rho_min_mm": ev.cam_rho_min_mm,
+                 "face_travel_max_mm": ev.face_travel_max_mm, "face_travel_max_deg": ev.face_travel_max_deg},
+        pointwise_angles=("base_radius_deg",))
+
+
+def record(solution) -> dict:
+    """The curved-face keys of a pareto.json row: the design, size R_b + W and peak stress."""
+    d = solution.design
+    return family.record_json(_design_keys(d), d.base_radius_mm + d.face_width_mm, solution.evaluation)

@@ -1,0 +1,286 @@
+"""The knife-edge follower's optimal-design problem: a problem family of :mod:`camjax.solvers.base`.
+
+Design variables (:class:`Design`, mm): base radius R_b and offset e of a translating knife edge,
+each free between its bounds or fixed (lower == upper). The knife edge is the roller of
+:mod:`camjax.followers.roller.problem` with R_f = 0 (SPEC 3), and this family is that problem with
+the roller's radius pinned at zero: every function below hands the roller's its design with
+R_f = 0, so the knife edge and the roller agree wherever the roller's radius does not enter.
+
+Objective, weight alpha (size): F = alpha R_b / R_b,max. No stress term: the Hertz stress of a
+point contact is unbounded, so a knife edge takes no [contact] (the scene refuses one) and gamma is
+0 (a sweep's gamma multiplies a zero term). Constraints, one value per angle, ``g <= 0`` in mm
+(:class:`Constraints`):
+
+- pressure_angle: |s' - e~| - tan(phi_max) (s + sqrt(R_b^2 - e^2)) <= 0, which is |phi| <= phi_max;
+- curvature: rho_min (kappa rho_min - 1) <= 0, i.e. the profile's convex radius 1/kappa >= rho_min
+  (concave parts hold it for every design; with rho_min = 0 it holds identically: a smooth motion
+  gives no cusp);
+- and the box bounds, kept by projection; the scene checks |e| < R_b in the box.
+
+The solvers' unit-box coordinates, the polish of the prime circle onto the pressure-angle limit
+between the samples, and the modes are the roller's (:func:`to_unit`, :func:`from_unit`,
+:func:`polish`); a pointwise solve condenses into the design of the angle with the largest R_b.
+"""
+
+from __future__ import annotations
+
+from typing import Any, NamedTuple
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from camjax import family
+from camjax.family import FEASIBILITY_TOL_MM, Weights, all_within, weighted_objective
+
+# re-exported: this family's protocol functions and tolerance, written once for every family
+from camjax.family import FEASIBILITY_TOL_RAD as FEASIBILITY_TOL_RAD
+from camjax.family import bounds as bounds
+from camjax.family import bounds_violation as bounds_violation
+from camjax.followers import _pitch as pitch
+from camjax.followers.roller import problem as roller
+
+CONSTRAINT_NAMES = ("pressure_angle", "curvature", "bounds")
+VARIABLES = ("base_radius_mm", "offset_mm")
+
+
+class Design(NamedTuple):
+    """One knife-edge design (scalars), or a batch of them (arrays with leading axes)."""
+
+    base_radius_mm: jax.Array  # R_b (= R_p), mm
+    offset_mm: jax.Array  # e, mm (follower axis at x = e in the follower frame)
+
+
+class Problem(NamedTuple):
+    """Design-independent data of one knife-edge design problem on an angle grid of n samples."""
+
+    theta_deg: jax.Array  # (n,) cam angle, degrees
+    s_mm: jax.Array  # (n,) s, mm
+    ds_mm: jax.Array  # (n,) s', mm/rad
+    d2s_mm: jax.Array  # (n,) s'', mm/rad^2
+    lower: Design  # lower bounds, mm
+    upper: Design  # upper bounds, mm
+    sigma_max_MPa: jax.Array  # () 1: the objective's unused stress scale (no stress is modelled)
+    size_norm_mm: jax.Array  # () N = R_b,max
+    tan_max_pressure_angle: jax.Array  # () tan(phi_max)
+    max_pressure_angle_deg: jax.Array  # () phi_max, deg (as the scene gives it)
+    min_curvature_radius_mm: jax.Array  # () smallest convex profile radius allowed
+    rotation_sign: jax.Array  # () +1 ccw, -1 cw (geometry.pitch): e~ = sign e
+    program: Any = None  # the motion program behind the grid when extrema are exact (:func:`polish`)
+
+
+class Constraints(NamedTuple):
+    """Constraint functions g <= 0, mm, one value per angle (shape (n,) each)."""
+
+    pressure_angle: jax.Array  # |s' - e~| - tan(phi_max) (d + s)
+    curvature: jax.Array  # rho_min (kappa rho_min - 1)
+
+
+class Violation(NamedTuple):
+    """Worst violation of each constraint in physical units, 0 when satisfied (shape ())."""
+
+    pressure_angle: jax.Array  # rad: max |phi| - phi_max
+    curvature: jax.Array  # mm: rho_min - the smallest convex profile radius
+    bounds: jax.Array  # mm: largest distance outside the box
+
+
+class Evaluation(NamedTuple):
+    """A design judged on the whole grid (true maxima; shape () each)."""
+
+    objective: jax.Array  # F
+    size_mm: jax.Array  # R_b
+    pressure_angle_max_deg: jax.Array  # max_theta |phi|
+    pressure_angle_max_at_deg: jax.Array  # where it occurs
+    profile_rho_min_mm: jax.Array  # smallest convex radius of the profile
+    violation: Violation
+    feasible: jax.Array  # bool
+    # a sweep's record has a stress column (the Pareto front's second objective): 0, none modelled
+    stress_max_MPa: jax.Array
+    stress_max_deg: jax.Array
+
+
+# ------------------------------------------------------------------------------ building
+
+
+def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=None,
+                       extrema: str | None = None) -> Problem:
+    """Problem of a knife-edge scene with a [design] section (Python, not traceable).
+
+    Arguments as :func:`camjax.followers.roller.problem.problem_from_scene`.
+    """
+    from camjax.evaluate import scene_arrays
+
+    if scene.design is None:
+        raise ValueError("scene has no [design] section: nothing to optimize")
+    if scene.follower.type != "knife_edge":
+        raise ValueError(f"follower.type: {scene.follower.type!r} is not a knife-edge follower")
+    if arrays is None:
+        arrays = scene_arrays(scene, samples=samples, dtype=dtype, extrema=extrema)
+    d, f, kin = scene.design, scene.follower, arrays.kin
+    dt = kin.s.dtype
+    as_ = lambda v: jnp.asarray(v, dt)  # noqa: E731
+    box = [d.bounds(name) for name in VARIABLES]
+    return Problem(
+        theta_deg=as_(arrays.theta_deg), s_mm=kin.s, ds_mm=kin.ds, d2s_mm=kin.d2s,
+        lower=Design(*(as_(b[0]) for b in box)), upper=Design(*(as_(b[1]) for b in box)),
+        sigma_max_MPa=as_(1.0), size_norm_mm=as_(d.bounds("base_radius_mm")[1]),
+        tan_max_pressure_angle=as_(np.tan(np.radians(f.max_pressure_angle_deg))),
+        max_pressure_angle_deg=as_(f.max_pressure_angle_deg),
+        min_curvature_radius_mm=as_(f.min_curvature_radius_mm),
+        rotation_sign=as_(pitch.rotation_sign(scene.motion.rotation)),
+        program=None if arrays.model is None else arrays.model.program,
+    )
+
+
+def per_angle(problem: Problem) -> Problem:
+    """The n pointwise problems: every grid leaf (n,) -> (n, 1), every scalar leaf -> (n,)."""
+    return family.per_angle(problem._replace(program=None), {"theta_deg", "s_mm", "ds_mm", "d2s_mm"})
+
+
+# ------------------------------------------------------------------- the roller at R_f = 0
+
+
+def _zero(x) -> jax.Array:
+    return jnp.zeros_like(jnp.asarray(x))
+
+
+def _as_roller_design(design: Design) -> roller.Design:
+    return roller.Design(design.base_radius_mm, _zero(design.base_radius_mm), design.offset_mm)
+
+
+def _from_roller_design(design: roller.Design) -> Design:
+    return Design(design.base_radius_mm, design.offset_mm)
+
+
+def _as_roller(problem: Problem) -> roller.Problem:
+    """The roller's problem with R_f pinned at 0 (no stress: its coefficient is 0)."""
+    return roller.Problem(
+        theta_deg=problem.theta_deg, s_mm=problem.s_mm, ds_mm=problem.ds_mm, d2s_mm=problem.d2s_mm,
+        stress_coefficient=jnp.zeros_like(problem.s_mm), lower=_as_roller_design(problem.lower),
+        upper=_as_roller_design(problem.upper), sigma_max_MPa=problem.sigma_max_MPa,
+        size_norm_mm=problem.size_norm_mm, tan_max_pressure_angle=problem.tan_max_pressure_angle,
+        max_pressure_angle_deg=problem.max_pressure_angle_deg,
+        min_curvature_radius_mm=problem.min_curvature_radius_mm, rotation_sign=problem.rotation_sign,
+        program=problem.program)
+
+
+# ---------------------------------------------------------------------------- physics
+
+
+def pressure_angle(problem: Problem, design: Design) -> jax.Array:
+    """phi (rad) per angle, signed as :func:`camjax.followers._pitch.pressure_angle`."""
+    return roller.pressure_angle(_as_roller(problem), _as_roller_design(design))
+
+
+def size_term(problem: Problem, design: Design) -> jax.Array:
+    """Normalized size R_b / N (dimensionless)."""
+    return design.base_radius_mm / problem.size_norm_mm
+
+
+def objective(problem: Problem, weights: Weights, design: Design) -> jax.Array:
+    """F = alpha R_b / N (dimensionless, shape ()); gamma multiplies a zero stress term."""
+    return weighted_objective(weights, size_term(problem, design), jnp.zeros_like(design.base_radius_mm),
+                              problem.sigma_max_MPa)
+
+
+def constraints(problem: Problem, design: Design) -> Constraints:
+    """Every angle's constraints as g <= 0 (mm), shape (n,) each; finite for every design."""
+    g = roller.constraints(_as_roller(problem), _as_roller_design(design))
+    # the roller's undercut constraint at R_f = 0 is the convex-radius limit
+    return Constraints(pressure_angle=g.pressure_angle, curvature=g.undercut)
+
+
+def constraint_maxima(problem: Problem, design: Design) -> Constraints:
+    """max_theta of each constraint of :func:`constraints`, shape () each."""
+    return Constraints(*jnp.max(jnp.stack(constraints(problem, design)), axis=-1))
+
+
+def size_norm(problem: Problem) -> jax.Array:
+    """N = R_b,max (mm): the length the constraints are divided by, shape ()."""
+    return problem.size_norm_mm
+
+
+# ------------------------------------------------------------------ solver coordinates
+
+
+def to_unit(problem: Problem, design: Design) -> Design:
+    """Design (mm) -> the solvers' unit-box coordinates: the roller's at R_f = 0
+    (:func:`camjax.followers.roller.problem.to_unit`)."""
+    return _from_roller_design(roller.to_unit(_as_roller(problem), _as_roller_design(design)))
+
+
+def from_unit(problem: Problem, u: Design) -> Design:
+    """The inverse of :func:`to_unit`, with R_b floored at the pressure-angle limit of the offset
+    (:func:`camjax.followers.roller.problem.from_unit` at R_f = 0)."""
+    return _from_roller_design(roller.from_unit(_as_roller(problem), _as_roller_design(u)))
+
+
+def polish(problem: Problem, weights: Weights, design: Design) -> Design:
+    """R_b raised to the pressure-angle limit between the samples
+    (:func:`camjax.followers.roller.problem.polish` at R_f = 0)."""
+    return _from_roller_design(roller.polish(_as_roller(problem), weights, _as_roller_design(design)))
+
+
+def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
+    """Objective, largest pressure angle (and its angle), smallest convex radius, violations."""
+    ev = roller.evaluate(_as_roller(problem), weights, _as_roller_design(design))
+    v = Violation(pressure_angle=ev.violation.pressure_angle, curvature=ev.violation.undercut,
+                  bounds=bounds_violation(problem, design))
+    zero = jnp.zeros_like(ev.objective)
+    return Evaluation(
+        objective=objective(problem, weights, design), size_mm=design.base_radius_mm,
+        pressure_angle_max_deg=ev.pressure_angle_max_deg,
+        pressure_angle_max_at_deg=ev.pressure_angle_max_at_deg,
+        profile_rho_min_mm=ev.cam_rho_min_mm, violation=v, feasible=all_within(v, _TOLERANCES),
+        stress_max_MPa=zero, stress_max_deg=zero)
+
+
+def condense_pointwise(problem: Problem, per_angle_design: Design) -> tuple[Design, dict]:
+    """The whole-cam design of a pointwise solve: the design of the angle with the largest R_b
+    (SPEC 5's rule); extras: that angle (``base_radius_deg``) and the grid."""
+    return family.condense_at_largest(problem, per_angle_design, per_angle_design.base_radius_mm,
+                                      "base_radius_deg")
+
+
+# each constraint's feasibility tolerance (rad, mm)
+_TOLERANCES = {"pressure_angle": FEASIBILITY_TOL_RAD, "curvature": FEASIBILITY_TOL_MM,
+               "bounds": FEASIBILITY_TOL_MM}
+
+
+def violated_constraints(problem: Problem, v: Violation) -> list[str]:
+    """Names of the violated constraints (Python; needs concrete values)."""
+    return family.violated(CONSTRAINT_NAMES, v, _TOLERANCES)
+
+
+# ------------------------------------------------------------------------------- output
+
+
+def solution_json(problem: Problem, solution) -> dict:
+    """The knife edge's keys of result.json's design block, for one
+    :class:`camjax.solvers.base.Solution` (no ``sigma_max_MPa``: no stress is modelled)."""
+    d, v, ev = solution.design, solution.violation, solution.evaluation
+    out = family.solution_keys(
+        problem, solution, VARIABLES, design_keys=family.design_json(d, VARIABLES), size_mm=d.base_radius_mm,
+        violation={"pressure_angle_deg": np.degrees(v.pressure_angle), "curvature_mm": v.curvature,
+                   "bounds_mm": v.bounds},
+        figures={"pressure_angle_max_deg": ev.pressure_angle_max_deg,
+                 "pressure_angle_max_at_deg": ev.pressure_angle_max_at_deg,
+                 "max_pressure_angle_deg": problem.max_pressure_angle_deg,
+                 "profile_rho_min_mm": ev.profile_rho_min_mm},
+        pointwise_angles=("base_radius_deg",))
+    out.pop("sigma_max_MPa")
+    return out
+
+
+def record(solution) -> dict:
+    """The knife edge's keys of a pareto.json row: the design, size R_b and a zero peak stress."""
+    d = solution.design
+    return family.record_json(family.design_json(d, VARIABLES), d.base_radius_mm, solution.evaluation)
+
+
+__all__ = [
+    "CONSTRAINT_NAMES", "VARIABLES", "Constraints", "Design", "Evaluation", "Problem", "Violation",
+    "condense_pointwise", "constraint_maxima", "constraints", "evaluate", "from_unit", "objective",
+    "per_angle", "polish", "pressure_angle", "problem_from_scene", "size_norm", "size_term", "to_unit",
+    "violated_constraints",
+]
