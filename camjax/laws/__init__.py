@@ -14,45 +14,22 @@ from __future__ import annotations
 import functools
 import math
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
-from fractions import Fraction
+from dataclasses import dataclass
 from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 
+from camjax.laws.base import Law as Law
+from camjax.laws.base import LawValues as LawValues
+from camjax.laws.polynomial import PolynomialLaw as PolynomialLaw
+from camjax.laws.polynomial import bernstein_law as bernstein_law
+from camjax.laws.polynomial import boundary_condition_number as boundary_condition_number
+from camjax.laws.polynomial import polynomial_coefficients as polynomial_coefficients
+from camjax.laws.polynomial import polynomial_law as polynomial_law
+
 PI = math.pi
-
-
-class LawValues(NamedTuple):
-    """A normalized law and its derivatives, each with the shape of x."""
-
-    p: jax.Array  # displacement, 0..1
-    dp: jax.Array  # dp/dx
-    d2p: jax.Array  # d2p/dx2
-    d3p: jax.Array  # d3p/dx3
-
-
-@dataclass(frozen=True, eq=False)
-class Law:
-    """A normalized rise law.
-
-    Attributes:
-      name: registry name, or a generated description for parametric laws.
-      evaluate: x -> LawValues, pure JAX, elementwise over any shape of x in [0, 1].
-      description: one line for tables and reports.
-      end_velocity: p' at both ends; 0 for every rest-to-rest law, 1 for the uniform law (whose
-        joints against dwells are therefore velocity jumps, "shock" in the FLCD classes).
-    """
-
-    name: str
-    evaluate: Callable[[jax.Array], LawValues] = field(repr=False)
-    description: str = ""
-    end_velocity: float = 0.0
-
-    def __call__(self, x: jax.Array) -> LawValues:
-        return self.evaluate(jnp.asarray(x))
 
 
 # ------------------------------------------------------------------------------- uniform
@@ -107,75 +84,6 @@ def _double_cycloidal(x):
         k * (w * jnp.sin(w * x) - 0.5 * w * jnp.sin(2 * w * x)),
         k * (w**2 * jnp.cos(w * x) - w**2 * jnp.cos(2 * w * x)),
     )
-
-
-# ------------------------------------------------------------------------------ polynomial
-
-
-def _falling(e: int, j: int) -> int:
-    """Falling factorial [e]_j = e (e-1) ... (e-j+1)."""
-    out = 1
-    for i in range(j):
-        out *= e - i
-    return out
-
-
-def polynomial_coefficients(exponents: Sequence[int]) -> tuple[Fraction, ...]:
-    """Exact coefficients c_k of f = sum c_k x**e_k with f(1) = 1, f'(1) = ... = f^(n-1)(1) = 0.
-
-    Solves sum_k c_k [e_k]_j = delta_{j0}, j = 0..n-1 (SPEC section 1) in rational arithmetic,
-    so the coefficients carry no rounding; only their evaluation does.
-    """
-    e = [int(v) for v in exponents]
-    n = len(e)
-    if n == 0:
-        raise ValueError("exponents: need at least one exponent")
-    if sorted(set(e)) != e or e[0] < 1:
-        raise ValueError(f"exponents: {list(exponents)} must be strictly increasing integers >= 1")
-    a = [[Fraction(_falling(ek, j)) for ek in e] + [Fraction(int(j == 0))] for j in range(n)]
-    for col in range(n):  # Gauss-Jordan elimination, exact
-        piv = next((r for r in range(col, n) if a[r][col] != 0), None)
-        if piv is None:
-            raise ValueError(f"exponents: {e} give a singular boundary-condition system")
-        a[col], a[piv] = a[piv], a[col]
-        a[col] = [v / a[col][col] for v in a[col]]
-        for r in range(n):
-            if r != col and a[r][col] != 0:
-                f = a[r][col]
-                a[r] = [vr - f * vc for vr, vc in zip(a[r], a[col], strict=True)]
-    return tuple(a[j][n] for j in range(n))
-
-
-def boundary_condition_number(exponents: Sequence[int]) -> float:
-    """2-norm condition number of the boundary-condition matrix [e_k]_j (float64)."""
-    e = [int(v) for v in exponents]
-    m = np.array([[_falling(ek, j) for ek in e] for j in range(len(e))], dtype=np.float64)
-    return float(np.linalg.cond(m))
-
-
-@functools.cache
-def _polynomial_law(exponents: tuple[int, ...]) -> Law:
-    coeffs = polynomial_coefficients(exponents)
-    terms = [(float(c), e) for c, e in zip(coeffs, exponents, strict=True)]
-
-    def evaluate(x):
-        out = []
-        for k in range(4):
-            acc = jnp.zeros_like(x)
-            for c, e in terms:
-                if e - k >= 0:  # skip vanished terms: x**(negative) would be inf at x = 0
-                    acc = acc + (c * _falling(e, k)) * x ** (e - k)
-            out.append(acc)
-        return LawValues(*out)
-
-    name = "poly_" + "_".join(str(e) for e in exponents)
-    desc = " ".join(f"{'+' if c >= 0 else '-'} {abs(c)}x^{e}" for c, e in zip(coeffs, exponents, strict=True))
-    return Law(name, evaluate, f"polynomial {desc}")
-
-
-def polynomial_law(exponents: Sequence[int]) -> Law:
-    """The polynomial law with the given exponents (e.g. (3, 4, 5) -> 10x^3 - 15x^4 + 6x^5)."""
-    return _polynomial_law(tuple(int(e) for e in exponents))
 
 
 # --------------------------------------------------- piecewise-sine acceleration (mod. trap/sine)

@@ -114,11 +114,16 @@ def _si(e: Extremes, w: float, order: int) -> dict[str, float]:
 
 
 def flcd_block(scene: Scene) -> list[dict[str, Any]]:
-    """Jumps of s, s', s'', s''' (mm, per rad; see FLCD_UNITS) and their FLCD class at every joint."""
+    """Jumps of s, s', s'', s''' (mm, per rad; see FLCD_UNITS) and their FLCD class at every joint.
+
+    Where the scene has joint conditions, each joint also lists the derivatives it was asked to
+    match (``asked_to_match``: "v", "a", "j"; a scene where one of them jumps is refused).
+    """
+    asked = scene.motion.asked_to_match
     return [
         {"joint_deg": j.joint_deg, "before_segment": j.before, "after_segment": j.after,
          "jump_s": j.jump_s, "jump_v": j.jump_v, "jump_a": j.jump_a, "jump_j": j.jump_j,
-         "class": j.flcd_class}
+         "class": j.flcd_class, **({"asked_to_match": list(asked[j.after])} if asked else {})}
         for j in joints(scene.motion.program)
     ]
 

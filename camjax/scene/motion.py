@@ -3,11 +3,14 @@
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 from camjax.errors import MISSING, SceneError
 from camjax.extrema import EXTREMA_MODES
 from camjax.laws import FOURIER_PRESETS, LAWS, FourierSeries, fourier_law, get_law, polynomial_law
 from camjax.program import KINDS, MotionProgram, Segment
+from camjax.program.conditions import MATCH, Plan, unmatched_joints
+from camjax.scene.conditions import CONDITION_KEYS, asked_to_match, parse_conditions, solve
 from camjax.scene.reader import DEFAULT, TableReader, build
 from camjax.scene.shaped import SHAPED_LAWS, parse_cycle_table, parse_shaped_segment
 from camjax.scene.spec import ROTATIONS, RPM_MAX, SAMPLES_MAX, SAMPLES_PER_SEGMENT, MotionSpec
@@ -18,7 +21,14 @@ def parse_law(seg: TableReader):
     if not isinstance(name, str):
         raise seg.error("law", name, "a rise or return needs a law name",
                         ", ".join([*LAWS, "polynomial", "fourier", *SHAPED_LAWS]))
+    if name != "polynomial" or seg.has("exponents"):
+        for key in CONDITION_KEYS:
+            if seg.has(key):
+                raise seg.error(key, seg.table[key], "joint conditions are only for law 'polynomial' "
+                                "without exponents (the polynomial is solved from them)")
     if name == "polynomial":
+        if not seg.has("exponents"):
+            return None  # a conditions segment: solved once the whole program is read
         exps = seg.table.get("exponents")
         if not (isinstance(exps, list) and exps and all(isinstance(e, int) and not isinstance(e, bool)
                                                          for e in exps)):
@@ -73,6 +83,7 @@ def parse_motion(r: TableReader, oscillating: bool = False) -> MotionSpec:
         raise r.error("segments", raw if raw is not None else MISSING, "needs a list of segments",
                       "[{kind = 'dwell' | 'rise' | 'return', angle_deg = .., law = .., lift_mm = ..}, ...]")
     segments = list(cycle[0]) if cycle is not None else []
+    conditions_of = {}  # segment index -> its joint conditions (a polynomial solved below)
     for i, item in enumerate(raw if cycle is None else []):
         seg = TableReader(item, f"{r.path}.segments[{i}]", r.source)
         if seg.has(other_key):
@@ -82,11 +93,12 @@ def parse_motion(r: TableReader, oscillating: bool = False) -> MotionSpec:
         if seg.table.get("law") in SHAPED_LAWS and seg.table.get("kind") in ("rise", "return"):
             raw[i] = parse_shaped_segment(seg, segments, lift_key, oscillating)  # appends to segments
             continue
-        seg.check_keys(("kind", "angle_deg", "law", lift_key, "exponents", "coefficients", "phases"))
+        seg.check_keys(("kind", "angle_deg", "law", lift_key, "exponents", "coefficients", "phases",
+                        *CONDITION_KEYS))
         kind = seg.choice("kind", KINDS)
         angle = seg.number("angle_deg", low=0.0, low_open=True, high=360.0)
         if kind == "dwell":
-            for extra in ("law", lift_key, "exponents", "coefficients", "phases"):
+            for extra in ("law", lift_key, "exponents", "coefficients", "phases", *CONDITION_KEYS):
                 if seg.has(extra):
                     raise seg.error(extra, seg.table[extra], "a dwell takes only kind and angle_deg")
             segments.append(Segment(kind, angle))
@@ -94,18 +106,43 @@ def parse_motion(r: TableReader, oscillating: bool = False) -> MotionSpec:
             lift = seg.number(lift_key, low=0.0, low_open=True)
             if oscillating and lift >= 180.0:
                 raise seg.error(lift_key, lift, "swings the arm through the line of centres", "< 180")
+            law = parse_law(seg)
+            if law is None:
+                conditions_of[len(segments)] = parse_conditions(seg, angle, oscillating)
             lift = math.radians(lift) if oscillating else lift  # the program keeps rad
-            segments.append(Segment(kind, angle, parse_law(seg), lift))
-    try:
-        program = MotionProgram.from_segments(segments)
-    except ValueError as exc:
-        msg = str(exc)
-        fld, _, problem = msg.partition(": ")
-        total = sum(s.angle_deg for s in segments)
-        value = total if fld.endswith("angle_deg") else MISSING
-        raise SceneError(f"{r.path}.{fld}", value, problem,
-                         "angles summing to 360" if value is not MISSING else None, r.source) from None
-    spec = build(MotionSpec, rpm=rpm, program=program, segments=tuple(dict(s) for s in raw),
+            segments.append(Segment(kind, angle, law, lift))
+    # the conditions solve works in the scene's units (mm, or deg for a rocking follower)
+    plans = [Plan(seg.kind, seg.angle_deg, math.degrees(seg.lift) if oscillating else seg.lift, seg.law,
+                  conditions_of.get(k)) for k, seg in enumerate(segments)]
+    def checked(segs):
+        try:
+            return MotionProgram.from_segments(segs)
+        except ValueError as exc:
+            msg = str(exc)
+            fld, _, problem = msg.partition(": ")
+            total = sum(s.angle_deg for s in segs)
+            value = total if fld.endswith("angle_deg") else MISSING
+            raise SceneError(f"{r.path}.{fld}", value, problem,
+                             "angles summing to 360" if value is not MISSING else None, r.source) from None
+
+    solved = [None] * len(plans)
+    if any(p.conditions is not None for p in plans):
+        # the program's own rules first (angles, levels), with a stand-in law where one is solved
+        checked([seg if seg.law or seg.kind == "dwell" else replace(seg, law=LAWS["uniform"])
+                 for seg in segments])
+        solved = solve(plans, r)
+        segments = [seg if sol is None else replace(seg, law=sol.law) for seg, sol in zip(segments, solved,
+                                                                                          strict=True)]
+    program = checked(segments)
+    asked = asked_to_match(plans) if any(p.conditions is not None for p in plans) else ()
+    for i, name, jump in unmatched_joints(program, asked) if asked else ():
+        side = f"segments[{i}].start" if plans[i].conditions is not None else \
+            f"segments[{(i - 1) % len(plans)}].end"
+        raise SceneError(f"{r.path}.{side}.{name}", MATCH, f"the joint jumps in {name} by {jump:.3g} "
+                         "(per rad of cam angle) although the scene asks to match it", source=r.source)
+    reported = tuple(dict(s) if sol is None else {**dict(s), "solved_degree": sol.degree}
+                     for s, sol in zip(raw, solved, strict=True))
+    spec = build(MotionSpec, rpm=rpm, program=program, segments=reported, asked_to_match=asked,
                   samples=samples, rotation=rotation, extrema=extrema)
     check_resolution(spec, r)
     return spec

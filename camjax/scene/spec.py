@@ -28,7 +28,10 @@ class MotionSpec:
 
     rpm: float
     program: MotionProgram = field(compare=False)
-    segments: tuple[dict, ...]  # as written in the scene, for reports
+    segments: tuple[dict, ...]  # as written in the scene, for reports (+ solved_degree: conditions)
+    # per joint k (where segment k starts): the derivatives ("v", "a", "j") a conditions segment
+    # asked to match there; () when the program has no conditions segment
+    asked_to_match: tuple[tuple[str, ...], ...] = ()
     samples: int = 360  # cam-angle grid size N
     rotation: str = DEFAULT_ROTATION  # "ccw" or "cw": camjax.followers._pitch (cw = mirror image)
     extrema: str = "exact"  # "exact": max/min over the angle refined off the grid; "grid": samples
