@@ -122,8 +122,7 @@ def synthesizer(problem: SynthesisProblem, iterations: int = ITERATIONS) -> Call
         c = cp + null @ z
         meas = measures(problem, c)
         obj = objective_value(problem, weights, meas)
-        ok = jnp.all(jnp.isfinite(c)) & (gap < 1e-8 * (1.0 + jnp.abs(model))) & \
-            (residual < 1e-6 * (1.0 + jnp.abs(model)))
+        ok = jnp.all(jnp.isfinite(c)) & (gap < 1e-8 * (1.0 + jnp.abs(model))) & (residual < 1e-6)
         return SynthesisResult(c, obj, model, meas, gap, residual, ok)
 
     return solve
