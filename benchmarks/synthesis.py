@@ -33,7 +33,8 @@ def problems(batch: int, seed: int = 0):
     p = build_problem(make_basis(3, 32), conds, TERMS)
     rng = np.random.default_rng(seed)
     values = np.column_stack([np.zeros(batch), np.ones(batch), rng.uniform(0, 1.5, batch),
-                              rng.uniform(-3, 3, batch), rng.uniform(0, 1.5, batch), rng.uniform(-3, 3, batch)])
+                              rng.uniform(-3, 3, batch), rng.uniform(0, 1.5, batch),
+                              rng.uniform(-3, 3, batch)])
     weights = rng.uniform(0.1, 1.0, (batch, len(TERMS)))
     return p, kept_values(p, values), weights
 

@@ -35,7 +35,8 @@ from camjax.numerics import NonFiniteError
 from camjax.output.folder import OutputError
 from camjax.scene import SceneError, cut
 
-HELP_ORDER = ("laws", "design", "synthesize", "sweep", "check-extremes", "dynamics")  # as `camjax --help` lists them
+# as `camjax --help` lists them
+HELP_ORDER = ("laws", "design", "synthesize", "sweep", "check-extremes", "dynamics")
 
 __all__ = ["COMMANDS", "STRICT_EXIT", "UsageError", "build_parser", "entry", "main"]
 

@@ -120,7 +120,8 @@ def resolve(drafts: dict[int, Draft], plans: list[Plan], levels: list[float], pa
             side, _, name = label.partition(".")
             table = d.seg.table.get(side)
             value = table.get(name, MATCH) if isinstance(table, dict) else MISSING
-            raise SceneError(f"{where}.{label}", value, f"over-constrained: degree {d.degree} with {d.count} control values already fixes this "
+            raise SceneError(f"{where}.{label}", value, f"over-constrained: degree {d.degree} with "
+                             f"{d.count} control values already fixes this "
                 f"value by the conditions before it, {bad[1]:+.3g} (normalized) away from it",
                 "more control values, a higher degree, or 'free'", d.seg.source)
         if problem.free == 0:
@@ -157,7 +158,8 @@ def law_from_control(ds: DesignedSegment, control):
     scene_control = 1.0 - c if ds.kind == "return" else c
     if ds.kind == "return":
         scene_control[0], scene_control[-1] = 1.0, 0.0
-    return bspline_law(ds.degree, scene_control.tolist(), ds.knots, falling=ds.kind == "return"), scene_control
+    law = bspline_law(ds.degree, scene_control.tolist(), ds.knots, falling=ds.kind == "return")
+    return law, scene_control
 
 
 def parse_synthesis(r: TableReader, designed: tuple[DesignedSegment, ...]) -> SynthesisSpec:
@@ -180,8 +182,9 @@ def parse_synthesis(r: TableReader, designed: tuple[DesignedSegment, ...]) -> Sy
     for ds in designed:
         for name, _ in terms:
             if orders[name] > ds.degree:
-                raise SceneError(f"{ds.path}.degree", ds.degree, f"has no {('v', 'a', 'j')[orders[name] - 1]} "
-                                 f"for synthesis.objective.{name} (a degree-{ds.degree} law's is not a function)",
+                what = ("v", "a", "j")[orders[name] - 1]
+                raise SceneError(f"{ds.path}.degree", ds.degree, f"has no {what} for synthesis.objective."
+                                 f"{name} (a degree-{ds.degree} law's is not a function)",
                                  f">= {orders[name]}")
     per_span = int(r.number("samples_per_span", 8, low=1, high=256, integer=True))
     return SynthesisSpec(terms, per_span)

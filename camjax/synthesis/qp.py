@@ -36,7 +36,8 @@ class QPResult(NamedTuple):
 def solve_qp(P, q, G, h, x0, lam0=None, iterations: int = 40, tol: float = 1e-13) -> QPResult:
     """Minimize 0.5 x'Px + q'x subject to Gx <= h from ``x0`` (G x0 < h preferred; the slacks
     start at max(h - G x0, 1e-3)) and ``lam0`` (default ones; a dual-feasible lam0 starts
-    the method on the central path's side it converges fastest from). P must be positive semidefinite and P + G^T G definite.
+    the method on the central path's side it converges fastest from). P must be positive
+    semidefinite and P + G^T G definite.
     Pure JAX, differentiable in none of its arguments (a solver, not a layer); vmap over any of them.
     """
     P, q, G, h, x0 = (jnp.asarray(a, dtype=jnp.float64) for a in (P, q, G, h, x0))

@@ -60,7 +60,8 @@ def builtin_measures(law, kind: str) -> dict:
     wg = (half[:, None] * w[None, :]).ravel()
     _, _, ag, jg = builtin_q(law, kind, xg)
     return {"peak_velocity": float(np.max(np.abs(v))), "peak_accel": float(np.max(np.abs(a))),
-            "peak_jerk": float(np.max(np.abs(j))), "l2_accel": float(wg @ ag**2), "l2_jerk": float(wg @ jg**2)}
+            "peak_jerk": float(np.max(np.abs(j))), "l2_accel": float(wg @ ag**2),
+            "l2_jerk": float(wg @ jg**2)}
 
 
 def best_builtin(segment, weights: dict) -> tuple[str, float, dict] | None:
@@ -100,7 +101,8 @@ def synthesize_segments(segments, weights: dict, samples_per_span: int = 8) -> l
         w = np.tile(np.asarray([weights[n] for n in problem.objective]), (len(members), 1))
         out = batch_synthesizer(problem)(values, w)
         for b, seg in enumerate(members):
-            meas = {n: (float(getattr(out.measures, n)[b]) if ORDERS[n] <= degree else None) for n in OBJECTIVES}
+            meas = {n: (float(getattr(out.measures, n)[b]) if ORDERS[n] <= degree else None)
+                    for n in OBJECTIVES}
             results[seg.index] = SegmentSynthesis(
                 seg, basis.knots, np.asarray(out.control[b]), meas, float(out.objective[b]),
                 float(out.model_objective[b]), bool(out.converged[b]), float(out.residual[b]),

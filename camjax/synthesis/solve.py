@@ -77,9 +77,9 @@ def synthesizer(problem: SynthesisProblem, iterations: int = ITERATIONS) -> Call
     names = problem.objective
     peaks = [jnp.asarray(m) for m in problem.peak_rows]
     peak_at = [i for i, n in enumerate(names) if n in PEAK_OBJECTIVES]
-    l2 = [(i, jnp.asarray(null.T @ problem.grams[L2_OBJECTIVES[n]] @ null),
-           jnp.asarray(null.T @ problem.grams[L2_OBJECTIVES[n]]), jnp.asarray(problem.grams[L2_OBJECTIVES[n]]))
-          for i, n in enumerate(names) if n in L2_OBJECTIVES]
+    grams = {i: problem.grams[L2_OBJECTIVES[n]] for i, n in enumerate(names) if n in L2_OBJECTIVES}
+    l2 = [(i, jnp.asarray(null.T @ q @ null), jnp.asarray(null.T @ q), jnp.asarray(q))
+          for i, q in grams.items()]
     nz, k = problem.free, len(peaks)
     peak_null = [m @ null for m in peaks]
 
