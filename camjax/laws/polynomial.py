@@ -159,6 +159,38 @@ def error_bounds(b: Sequence[Fraction]) -> tuple[float, float, float, float]:
     return tuple(out)
 
 
+class BernsteinForm:
+    """x -> LawValues of sum_i b_i B_{i,n}(x) and its first three derivatives, in Bernstein form.
+
+    A module-level callable (not a closure) so that a motion program holding the law pickles: its
+    tree structure keys the saved programs of :func:`camjax.runtime.program_cache`. Two forms of
+    the same coefficients are equal (and hash alike).
+    """
+
+    def __init__(self, coefficients: tuple[Fraction, ...], weights: tuple[np.ndarray, ...]):
+        self.coefficients = coefficients  # b_0 .. b_n, exact
+        self.weights = weights  # per derivative order k: binomial-weighted coefficients of p^(k)
+
+    def __eq__(self, other) -> bool:
+        return isinstance(other, BernsteinForm) and self.coefficients == other.coefficients
+
+    def __hash__(self) -> int:
+        return hash(self.coefficients)
+
+    def __call__(self, x):
+        n = len(self.coefficients) - 1
+        x = jnp.asarray(x)
+        if not jnp.issubdtype(x.dtype, jnp.floating):
+            x = x.astype(float)
+        # powers 0..n of x and of 1 - x by repeated products: no pow (whose derivative at x = 0
+        # would be 0 * inf), every term a product of factors in [0, 1]
+        ones = jnp.ones((*x.shape, 1), x.dtype)
+        xp = jnp.cumprod(jnp.concatenate([ones, jnp.repeat(x[..., None], n, axis=-1)], axis=-1), axis=-1)
+        y = 1.0 - x
+        yp = jnp.cumprod(jnp.concatenate([ones, jnp.repeat(y[..., None], n, axis=-1)], axis=-1), axis=-1)
+        return LawValues(*(_bernstein_sum(w, xp, yp) for w in self.weights))
+
+
 def bernstein_law(b: Sequence[Fraction], name: str, description: str = "") -> PolynomialLaw:
     """The law sum_i b_i B_{i,n}(x), evaluated in Bernstein form (p', p'', p''' likewise).
 
@@ -180,19 +212,7 @@ def bernstein_law(b: Sequence[Fraction], name: str, description: str = "") -> Po
         d = bernstein_derivative(b, k) if k <= n else ()
         m = len(d) - 1
         weights.append(np.array([float(v * math.comb(m, i)) for i, v in enumerate(d)], dtype=np.float64))
-
-    def evaluate(x):
-        x = jnp.asarray(x)
-        if not jnp.issubdtype(x.dtype, jnp.floating):
-            x = x.astype(float)
-        # powers 0..n of x and of 1 - x by repeated products: no pow (whose derivative at x = 0
-        # would be 0 * inf), every term a product of factors in [0, 1]
-        ones = jnp.ones((*x.shape, 1), x.dtype)
-        xp = jnp.cumprod(jnp.concatenate([ones, jnp.repeat(x[..., None], n, axis=-1)], axis=-1), axis=-1)
-        y = 1.0 - x
-        yp = jnp.cumprod(jnp.concatenate([ones, jnp.repeat(y[..., None], n, axis=-1)], axis=-1), axis=-1)
-        return LawValues(*(_bernstein_sum(w, xp, yp) for w in weights))
-
+    evaluate = BernsteinForm(b, tuple(weights))
     return PolynomialLaw(name, evaluate, description, bernstein=b, error_bound=bound)
 
 
