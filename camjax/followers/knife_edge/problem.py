@@ -215,6 +215,20 @@ def from_unit(problem: Problem, u: Design) -> Design:
     return _from_roller_design(roller.from_unit(_as_roller(problem), _as_roller_design(u)))
 
 
+def problem_at(problem: Problem, segment: int, theta_deg: jax.Array) -> Problem:
+    """The problem at cam angles ``theta_deg`` (deg) of one segment of its model (needs
+    ``problem.model``; :func:`camjax.followers.roller.problem.problem_at`)."""
+    from camjax.evaluate import model_at
+
+    kin = model_at(problem.model, segment, theta_deg).kin
+    return problem._replace(theta_deg=theta_deg, s_mm=kin.s, ds_mm=kin.ds, d2s_mm=kin.d2s)
+
+
+def exact_constraints(problem: Problem) -> tuple[str, ...]:
+    """The constraints :func:`polish` keeps at every angle (static): all of them."""
+    return CONSTRAINT_NAMES[:2]
+
+
 def polish(problem: Problem, weights: Weights, design: Design) -> Design:
     """R_b and e moved the least that keeps the pressure angle and the convex-radius limit at every
     angle, not only at the samples (:func:`camjax.followers.roller.problem.polish` at R_f = 0)."""
@@ -287,7 +301,7 @@ def record(solution) -> dict:
 
 __all__ = [
     "CONSTRAINT_NAMES", "VARIABLES", "Constraints", "Design", "Evaluation", "Problem", "Violation",
-    "condense_pointwise", "constraint_maxima", "constraints", "evaluate", "from_unit", "objective",
-    "per_angle", "polish", "polish_pointwise", "pressure_angle", "problem_from_scene", "size_norm", "size_term", "to_unit",
+    "condense_pointwise", "constraint_maxima", "constraints", "evaluate", "exact_constraints", "from_unit",
+    "objective", "per_angle", "problem_at", "polish", "polish_pointwise", "pressure_angle", "problem_from_scene", "size_norm", "size_term", "to_unit",
     "violated_constraints",
 ]
