@@ -302,6 +302,6 @@ def record(solution) -> dict:
 __all__ = [
     "CONSTRAINT_NAMES", "VARIABLES", "Constraints", "Design", "Evaluation", "Problem", "Violation",
     "condense_pointwise", "constraint_maxima", "constraints", "evaluate", "exact_constraints", "from_unit",
-    "objective", "per_angle", "problem_at", "polish", "polish_pointwise", "pressure_angle", "problem_from_scene", "size_norm", "size_term", "to_unit",
-    "violated_constraints",
+    "objective", "per_angle", "polish", "polish_pointwise", "pressure_angle", "problem_at",
+    "problem_from_scene", "size_norm", "size_term", "to_unit", "violated_constraints",
 ]

@@ -377,8 +377,8 @@ def polish(problem: Problem, weights: Weights, design: Design, free: tuple[str, 
         return design
     from camjax.followers._polish import polish_design
 
-    return polish_design(problem, design, constraints, exact_constraints(problem), program=problem.model.program,
-                         at=lambda j, t: problem_at(problem, j, t), free=free)
+    return polish_design(problem, design, constraints, exact_constraints(problem),
+                         program=problem.model.program, at=lambda j, t: problem_at(problem, j, t), free=free)
 
 
 def polish_pointwise(problem: Problem, weights: Weights, design: Design, extras: dict) -> tuple[Design, dict]:
