@@ -175,9 +175,9 @@ def geometry_violations(curves: DesignCurves, rho_min_mm: float = 0.0,
     < 0 (the follower leaves the cam). Tolerances are the solvers' (:mod:`camjax.followers._checks`).
 
     ``extremes`` (:func:`camjax.evaluate.curve_extremes` at the curves' design): rho, stress, face
-    width and force are judged on them (exact extrema: the continuous ones, as the report states
-    them); the pressure angle and undercut stay on the samples, as the design problems constrain
-    them.
+    width, pressure angle (``pressure_angle``, rad), undercut (``undercut_margin``) and force are
+    judged on them (exact extrema: the continuous ones, as the report states them and as the
+    design problems' polish keeps them, :mod:`camjax.followers._polish`).
     """
     t, out, ex = curves.theta_deg, [], extremes or {}
 
@@ -206,10 +206,14 @@ def geometry_violations(curves: DesignCurves, rho_min_mm: float = 0.0,
                 "face_width", f"face width {curves.face_width_mm:.4g} mm < 2 {what} = {need:.4g} mm: "
                 "the contact runs off the face"))
     if curves.pressure_angle_deg is not None:
-        phi = at(np.abs(curves.pressure_angle_deg), np.argmax)
+        if "pressure_angle" in ex:  # rad, signed: the larger of max phi and -min phi
+            e = ex["pressure_angle"]
+            phi = (math.degrees(e.max), e.max_deg) if e.max >= -e.min else (math.degrees(-e.min), e.min_deg)
+        else:
+            phi = at(np.abs(curves.pressure_angle_deg), np.argmax)
         out += _checks.pressure_angle(*phi, curves.pressure_angle_limit_deg)
     if curves.undercut_margin_mm is not None:
-        out += _checks.undercut(*at(curves.undercut_margin_mm, np.argmin))
+        out += _checks.undercut(*at(curves.undercut_margin_mm, np.argmin, "undercut_margin"))
     if curves.force_N is not None:
         force, deg = at(curves.force_N, np.argmin, "force")
         if force < 0:

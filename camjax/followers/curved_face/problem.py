@@ -24,7 +24,8 @@ constraint. Constraints, one value per angle, ``g <= 0`` in mm (:class:`Constrai
 The solvers work in the unit box of the bounds, with the face width floored at the width the
 design needs on the samples (:func:`from_unit`): W enters the objective and the face constraint
 only, so the optimum's W is that need (or its lower bound), and every design the solvers see
-keeps its contact on the face. :func:`polish` raises W to the need off the grid (exact extrema).
+keeps its contact on the face. :func:`polish` keeps every constraint between the samples too
+(exact extrema).
 
 Modes: :func:`per_angle` gives the n one-angle problems; a pointwise solve is condensed into the
 design of the angle with the largest R_b (SPEC 5's rule) with the largest W over the angles (the
@@ -81,8 +82,9 @@ class Problem(NamedTuple):
     max_pressure_angle_deg: jax.Array  # () phi_max, deg
     min_curvature_radius_mm: jax.Array  # () smallest convex cam-surface radius allowed
     rotation_sign: jax.Array  # () +1 ccw, -1 cw: e~ = sign e
-    # the motion program behind the grid when extrema are exact (:func:`polish`); None: the grid's
-    program: Any = None
+    # the scene's closed forms (camjax.evaluate.SceneModel) behind the grid when extrema are
+    # exact: :func:`polish` keeps every constraint between the samples too; None: the grid's
+    model: Any = None
 
 
 class Constraints(NamedTuple):
@@ -152,13 +154,13 @@ def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=
         max_pressure_angle_deg=as_(f.max_pressure_angle_deg),
         min_curvature_radius_mm=as_(f.min_curvature_radius_mm),
         rotation_sign=as_(pitch.rotation_sign(scene.motion.rotation)),
-        program=None if arrays.model is None else arrays.model.program,
+        model=arrays.model,
     )
 
 
 def per_angle(problem: Problem) -> Problem:
     """The n pointwise problems: every grid leaf (n,) -> (n, 1), every scalar leaf -> (n,)."""
-    return family.per_angle(problem._replace(program=None), GRID_FIELDS)
+    return family.per_angle(problem._replace(model=None), GRID_FIELDS)
 
 
 # ---------------------------------------------------------------------------- physics
@@ -282,32 +284,37 @@ def from_unit(problem: Problem, u: Design) -> Design:
     return plain._replace(face_width_mm=width)
 
 
-def exact_face_width_need(problem: Problem, design: Design) -> jax.Array:
-    """:func:`face_width_need` with the max over the angle refined off the grid (needs
-    ``problem.program``; :func:`camjax.extrema.max_of`)."""
-    from camjax import extrema
+def problem_at(problem: Problem, segment: int, theta_deg: jax.Array) -> Problem:
+    """The problem at cam angles ``theta_deg`` (deg) of one segment of its model, its grid fields
+    taken from the closed forms (:func:`camjax.evaluate.model_at`; needs ``problem.model``)."""
+    from camjax.evaluate import model_at
 
-    def travel(kin, params):  # R_c |u| / r, mm
-        rb, rc, e = params
-        w = pitch.pitch_height(rb + rc, e, kin.s)
-        u = kin.ds - e
-        return rc * jnp.abs(u) / floor_positive(jnp.sqrt(w**2 + u**2), RHO_FLOOR_MM)
-
-    params = (design.base_radius_mm, design.face_radius_mm, problem.rotation_sign * design.offset_mm)
-    grid = _travel(_terms(problem, design), design)
-    return 2.0 * extrema.max_of(problem.program, travel, grid, params).value
+    p = model_at(problem.model, segment, theta_deg)
+    coefficient = jnp.zeros_like(p.kin.s) if p.stress_coefficient is None else p.stress_coefficient
+    return problem._replace(theta_deg=theta_deg, s_mm=p.kin.s, ds_mm=p.kin.ds, d2s_mm=p.kin.d2s,
+                            stress_coefficient=coefficient)
 
 
-def polish(problem: Problem, weights: Weights, design: Design) -> Design:
-    """The solver's design with its face widened, where it is short, to the narrowest that keeps
-    the contact on the face at every angle, not only at the samples (exact extrema; at most
-    W_max). Without a program (grid extrema) the design is returned unchanged. Traceable."""
-    if problem.program is None:
+def exact_constraints(problem: Problem) -> tuple[str, ...]:
+    """The constraints :func:`polish` keeps at every angle (static): pressure angle, undercut,
+    face travel, and the stress with a contact model."""
+    has_stress = problem.model is not None and problem.model.cam_width_mm is not None
+    return ("pressure_angle", "undercut", "face_travel", *(("stress",) if has_stress else ()))
+
+
+def polish(problem: Problem, weights: Weights, design: Design, free: tuple[str, ...] | None = None) -> Design:
+    """The solver's design moved, where it is short, the least distance that keeps the pressure
+    angle, the undercut, the contact on the face and the stress within their limits at every
+    angle, not only at the samples (:func:`camjax.followers._polish.polish_design`: each
+    constraint's max over every segment refined off the grid, minimum-norm Newton steps of the
+    free variables onto the short ones). Without a model (grid extrema) the design is returned
+    unchanged. ``free``: the fields that may move (default all free in the box). Traceable."""
+    if problem.model is None:
         return design
-    need = exact_face_width_need(problem, design)
-    width = jnp.minimum(jnp.maximum(design.face_width_mm, need), problem.upper.face_width_mm)
-    free = problem.upper.face_width_mm > problem.lower.face_width_mm
-    return design._replace(face_width_mm=jax.lax.stop_gradient(jnp.where(free, width, design.face_width_mm)))
+    from camjax.followers._polish import polish_design
+
+    return polish_design(problem, design, constraints, exact_constraints(problem),
+                         program=problem.model.program, at=lambda j, t: problem_at(problem, j, t), free=free)
 
 
 def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
@@ -347,8 +354,9 @@ def condense_pointwise(problem: Problem, per_angle_design: Design) -> tuple[Desi
 
 
 def polish_pointwise(problem: Problem, weights: Weights, design: Design, extras: dict) -> tuple[Design, dict]:
-    """The condensed pointwise design with W raised to the exact need (:func:`polish`)."""
-    return polish(problem, weights, design), extras
+    """The condensed pointwise design with R_b and W, the variables condensed by the largest-value
+    rules, moved where a limit is passed between the samples (:func:`polish` with R_c and e held)."""
+    return polish(problem, weights, design, free=("base_radius_mm", "face_width_mm")), extras
 
 
 def _tolerances(sigma_max_MPa) -> dict:

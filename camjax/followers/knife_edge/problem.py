@@ -66,7 +66,7 @@ class Problem(NamedTuple):
     max_pressure_angle_deg: jax.Array  # () phi_max, deg (as the scene gives it)
     min_curvature_radius_mm: jax.Array  # () smallest convex profile radius allowed
     rotation_sign: jax.Array  # () +1 ccw, -1 cw (geometry.pitch): e~ = sign e
-    program: Any = None  # the motion program behind the grid when extrema are exact (:func:`polish`)
+    model: Any = None  # the scene's closed forms behind the grid when extrema are exact (:func:`polish`)
 
 
 class Constraints(NamedTuple):
@@ -128,13 +128,13 @@ def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=
         max_pressure_angle_deg=as_(f.max_pressure_angle_deg),
         min_curvature_radius_mm=as_(f.min_curvature_radius_mm),
         rotation_sign=as_(pitch.rotation_sign(scene.motion.rotation)),
-        program=None if arrays.model is None else arrays.model.program,
+        model=arrays.model,
     )
 
 
 def per_angle(problem: Problem) -> Problem:
     """The n pointwise problems: every grid leaf (n,) -> (n, 1), every scalar leaf -> (n,)."""
-    return family.per_angle(problem._replace(program=None), {"theta_deg", "s_mm", "ds_mm", "d2s_mm"})
+    return family.per_angle(problem._replace(model=None), {"theta_deg", "s_mm", "ds_mm", "d2s_mm"})
 
 
 # ------------------------------------------------------------------- the roller at R_f = 0
@@ -161,7 +161,7 @@ def _as_roller(problem: Problem) -> roller.Problem:
         size_norm_mm=problem.size_norm_mm, tan_max_pressure_angle=problem.tan_max_pressure_angle,
         max_pressure_angle_deg=problem.max_pressure_angle_deg,
         min_curvature_radius_mm=problem.min_curvature_radius_mm, rotation_sign=problem.rotation_sign,
-        program=problem.program)
+        model=problem.model)
 
 
 # ---------------------------------------------------------------------------- physics
@@ -215,10 +215,31 @@ def from_unit(problem: Problem, u: Design) -> Design:
     return _from_roller_design(roller.from_unit(_as_roller(problem), _as_roller_design(u)))
 
 
+def problem_at(problem: Problem, segment: int, theta_deg: jax.Array) -> Problem:
+    """The problem at cam angles ``theta_deg`` (deg) of one segment of its model (needs
+    ``problem.model``; :func:`camjax.followers.roller.problem.problem_at`)."""
+    from camjax.evaluate import model_at
+
+    kin = model_at(problem.model, segment, theta_deg).kin
+    return problem._replace(theta_deg=theta_deg, s_mm=kin.s, ds_mm=kin.ds, d2s_mm=kin.d2s)
+
+
+def exact_constraints(problem: Problem) -> tuple[str, ...]:
+    """The constraints :func:`polish` keeps at every angle (static): all of them."""
+    return CONSTRAINT_NAMES[:2]
+
+
 def polish(problem: Problem, weights: Weights, design: Design) -> Design:
-    """R_b raised to the pressure-angle limit between the samples
-    (:func:`camjax.followers.roller.problem.polish` at R_f = 0)."""
+    """R_b and e moved the least that keeps the pressure angle and the convex-radius limit at every
+    angle, not only at the samples (:func:`camjax.followers.roller.problem.polish` at R_f = 0)."""
     return _from_roller_design(roller.polish(_as_roller(problem), weights, _as_roller_design(design)))
+
+
+def polish_pointwise(problem: Problem, weights: Weights, design: Design, extras: dict) -> tuple[Design, dict]:
+    """The condensed pointwise design with R_b raised where a limit is passed between the samples
+    (:func:`camjax.followers.roller.problem.polish_pointwise` at R_f = 0)."""
+    out, extras = roller.polish_pointwise(_as_roller(problem), weights, _as_roller_design(design), extras)
+    return _from_roller_design(out), extras
 
 
 def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
@@ -280,7 +301,7 @@ def record(solution) -> dict:
 
 __all__ = [
     "CONSTRAINT_NAMES", "VARIABLES", "Constraints", "Design", "Evaluation", "Problem", "Violation",
-    "condense_pointwise", "constraint_maxima", "constraints", "evaluate", "from_unit", "objective",
-    "per_angle", "polish", "pressure_angle", "problem_from_scene", "size_norm", "size_term", "to_unit",
-    "violated_constraints",
+    "condense_pointwise", "constraint_maxima", "constraints", "evaluate", "exact_constraints", "from_unit",
+    "objective", "per_angle", "polish", "polish_pointwise", "pressure_angle", "problem_at",
+    "problem_from_scene", "size_norm", "size_term", "to_unit", "violated_constraints",
 ]

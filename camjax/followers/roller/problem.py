@@ -81,9 +81,9 @@ class Problem(NamedTuple):
     max_pressure_angle_deg: jax.Array  # () phi_max, deg (as the scene gives it)
     min_curvature_radius_mm: jax.Array  # () smallest convex cam-surface radius allowed
     rotation_sign: jax.Array  # () +1 ccw, -1 cw (geometry.pitch): e~ = sign e
-    # the motion program (as arrays) behind the grid when extrema are exact: :func:`polish`
-    # raises the prime circle to the pressure-angle limit between the samples; None: the grid's
-    program: Any = None
+    # the scene's closed forms (camjax.evaluate.SceneModel) behind the grid when extrema are
+    # exact: :func:`polish` keeps every constraint between the samples too; None: the grid's
+    model: Any = None
 
 
 class Constraints(NamedTuple):
@@ -130,8 +130,8 @@ def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=
       samples: grid size override (ignored when ``arrays`` is given).
       dtype: floating dtype of the arrays (default float64).
       extrema: "exact" or "grid" (ignored when ``arrays`` is given: theirs applies); default the
-        scene's ``[motion] extrema``. Exact: the solvers' designs are polished so that the
-        pressure angle meets its limit between the samples too (:func:`polish`).
+        scene's ``[motion] extrema``. Exact: the solvers' designs are polished so that every
+        constraint holds between the samples too (:func:`polish`).
     """
     from camjax.evaluate import scene_arrays
 
@@ -156,14 +156,14 @@ def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=
         max_pressure_angle_deg=as_(f.max_pressure_angle_deg),
         min_curvature_radius_mm=as_(f.min_curvature_radius_mm),
         rotation_sign=as_(pitch.rotation_sign(scene.motion.rotation)),
-        program=None if arrays.model is None else arrays.model.program,
+        model=arrays.model,
     )
 
 
 def per_angle(problem: Problem) -> Problem:
     """The n pointwise problems: every grid leaf (n,) -> (n, 1), every scalar leaf -> (n,); one
-    angle's problem has no program (its sample is all there is)."""
-    return family.per_angle(problem._replace(program=None),
+    angle's problem has no model (its sample is all there is)."""
+    return family.per_angle(problem._replace(model=None),
                             {"theta_deg", "s_mm", "ds_mm", "d2s_mm", "stress_coefficient"})
 
 
@@ -342,39 +342,50 @@ def min_prime_radius_for_pressure_angle(problem: Problem, offset_mm: jax.Array) 
     return safe_sqrt(offset_mm**2 + positive_part(d_min) ** 2)  # 0 (finite gradient) at e = 0 = d_min
 
 
-def exact_min_prime_radius_for_pressure_angle(problem: Problem, offset_mm: jax.Array) -> jax.Array:
-    """:func:`min_prime_radius_for_pressure_angle` with the max over the angle refined off the grid
-    (:func:`camjax.extrema.max_of` on the problem's program; needs ``problem.program``)."""
-    from camjax import extrema
+def problem_at(problem: Problem, segment: int, theta_deg: jax.Array) -> Problem:
+    """The problem at cam angles ``theta_deg`` (deg) of one segment of its model, its grid fields
+    taken from the closed forms (:func:`camjax.evaluate.model_at`; needs ``problem.model``)."""
+    from camjax.evaluate import model_at
 
-    def need(kin, params):  # the d at which |phi| = phi_max at this angle, mm
-        return roller_geo.roller_pressure_angle_need(kin.ds, kin.s, *params)
-
-    params = (problem.rotation_sign * offset_mm, problem.tan_max_pressure_angle)
-    grid = roller_geo.roller_pressure_angle_need(problem.ds_mm, problem.s_mm, *params)
-    d_min = extrema.max_of(problem.program, need, grid, params).value
-    return safe_sqrt(offset_mm**2 + positive_part(d_min) ** 2)
+    p = model_at(problem.model, segment, theta_deg)
+    coefficient = jnp.zeros_like(p.kin.s) if p.stress_coefficient is None else p.stress_coefficient
+    return problem._replace(theta_deg=theta_deg, s_mm=p.kin.s, ds_mm=p.kin.ds, d2s_mm=p.kin.d2s,
+                            stress_coefficient=coefficient)
 
 
-def polish(problem: Problem, weights: Weights, design: Design) -> Design:
-    """The solver's design with its prime circle raised, where it is short, to the smallest that
-    keeps the pressure angle within its limit at every angle, not only at the samples.
+def exact_constraints(problem: Problem) -> tuple[str, ...]:
+    """The constraints :func:`polish` keeps at every angle (static): the pressure angle and the
+    undercut, and the stress with a contact model."""
+    has_stress = problem.model is not None and problem.model.cam_width_mm is not None
+    return ("pressure_angle", "undercut", *(("stress",) if has_stress else ()))
 
-    The solvers floor R_p at the closed-form limit over the samples (:func:`from_unit`); between
-    two samples |phi| can pass the limit by ~1e-6 relative. With ``problem.program`` the max
-    over the angle is refined (:func:`exact_min_prime_radius_for_pressure_angle`) and R_b (when
-    free) grows by the difference, at most to its upper bound; R_f and e stay. A larger R_p only
-    relaxes the undercut; the objective changes by the same ~1e-6. Without a program the design
-    is returned unchanged. Traceable and vmappable.
+
+def polish(problem: Problem, weights: Weights, design: Design, free: tuple[str, ...] | None = None) -> Design:
+    """The solver's design moved, where it is short, the least distance that keeps the pressure
+    angle, the undercut and the stress within their limits at every angle, not only at the samples.
+
+    The solvers keep the constraints on the samples (R_p floored at the closed-form
+    pressure-angle limit there, :func:`from_unit`); between two samples a constraint can pass its
+    limit by ~1e-6 relative. With ``problem.model`` each constraint's max over every segment is
+    refined off the grid and the free variables take minimum-norm Newton steps onto the short
+    ones (:func:`camjax.followers._polish.polish_design`; the undercut is written on the
+    pitch-curve curvature, finite through the inflections where the radius is infinite). The
+    objective changes by the same ~1e-6. Without a model the design is returned unchanged.
+    ``free``: the fields that may move (default all free in the box). Traceable and vmappable.
     """
-    if problem.program is None:
+    if problem.model is None:
         return design
-    floor = exact_min_prime_radius_for_pressure_angle(problem, design.offset_mm)
-    raised = jnp.minimum(jnp.maximum(design.base_radius_mm, floor - design.roller_radius_mm),
-                         problem.upper.base_radius_mm)
-    free = problem.upper.base_radius_mm > problem.lower.base_radius_mm
-    radius = jnp.where(free, raised, design.base_radius_mm)
-    return design._replace(base_radius_mm=jax.lax.stop_gradient(radius))
+    from camjax.followers._polish import polish_design
+
+    return polish_design(problem, design, constraints, exact_constraints(problem),
+                         program=problem.model.program, at=lambda j, t: problem_at(problem, j, t), free=free)
+
+
+def polish_pointwise(problem: Problem, weights: Weights, design: Design, extras: dict) -> tuple[Design, dict]:
+    """The condensed pointwise design with R_b, the variable condensed by the largest-R_p rule,
+    raised where a constraint passes its limit between the samples (:func:`polish` with R_f and
+    e held: the pointwise rule's R_b taken as the continuous max over the angles)."""
+    return polish(problem, weights, design, free=("base_radius_mm",)), extras
 
 
 def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
