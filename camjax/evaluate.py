@@ -54,7 +54,8 @@ def scene_model(scene: Scene, dtype=None) -> SceneModel:
     dtype = dtype or jnp.result_type(float)
     as_ = partial(jax.tree_util.tree_map, lambda x: jnp.asarray(x, dtype))
     c = scene.contact
-    train = scene.follower.train
+    # a rocker's loads are its follower's (camjax.followers._rocking), not a translating train's
+    train = None if followers.of(scene).rocking else scene.follower.train
     return SceneModel(
         as_(scene.motion.program), jnp.asarray(program.rpm_to_rad_s(scene.motion.rpm), dtype),
         None if train is None else as_(train),
@@ -110,8 +111,7 @@ def scene_arrays(scene: Scene, samples: int | None = None, dtype=None, extrema: 
     # of the program, so a fresh process finds it in the compilation cache) instead of a dozen
     # eager operations, each traced and looked up on its own
     arrays = jax.jit(lambda: _scene_arrays(scene, n, dtype))()
-    # a rocking follower's extrema stay on the grid (camjax.followers._rocking evaluates its curves)
-    model = scene_model(scene, dtype) if mode == "exact" and not followers.of(scene).rocking else None
+    model = scene_model(scene, dtype) if mode == "exact" else None
     return arrays._replace(model=model)
 
 
@@ -221,6 +221,9 @@ def curve_extremes(scene: Scene, arrays: SceneArrays, names: tuple[str, ...],
     floats); the refinement itself is one jitted call.
     """
     radius = 0.0 if base_radius_mm is None else float(base_radius_mm)
+    kind = followers.of(scene)
+    if kind.rocking:  # its curves are its geometry's and its loads' about the pivot
+        return kind.curve_extremes(scene, arrays, names, radius, follower)
     model, consts = arrays.model, curve_constants(scene, follower)
     grid_point = PointValues(arrays.kin, arrays.force_N, arrays.torque_Nm, arrays.stress_coefficient)
     grid = jnp.stack([_curve(n, grid_point, consts, radius, scene.follower.type) for n in names])

@@ -282,6 +282,18 @@ def refine_max(fn: SegmentFunction, params: Any, bounds_deg, grid_values: jax.Ar
       :class:`Extremum` (value, angle_deg). The value is never below any grid sample's value of
       ``fn`` and never below a one-sided limit at a joint.
     """
+    e = refine_max_segments(fn, params, bounds_deg, grid_values, candidates=candidates, iterations=iterations,
+                            constant=constant)
+    i = jnp.argmax(jnp.where(jnp.isnan(e.value), -jnp.inf, e.value))
+    return Extremum(e.value[i], jnp.mod(e.angle_deg[i], 360.0))
+
+
+def refine_max_segments(fn: SegmentFunction, params: Any, bounds_deg, grid_values: jax.Array, *,
+                        candidates: int = CANDIDATES, iterations: int = ITERATIONS,
+                        constant: tuple[bool, ...] | None = None) -> Extremum:
+    """The continuous max of each segment (shape (S,) each: values, angles in deg): what
+    :func:`refine_max` takes the largest of (same arguments). A constraint that must hold at
+    every angle is each of these values; a design step that lowers one peak can raise another."""
     frozen = jax.lax.stop_gradient(params)
     n = grid_values.shape[0]
     ranges = segment_sample_ranges(bounds_deg, n)
@@ -297,9 +309,7 @@ def refine_max(fn: SegmentFunction, params: Any, bounds_deg, grid_values: jax.Ar
         best = jnp.asarray(lo, grid_values.dtype) if constant[j] else refined[active.index(j)]
         angles.append(best)
         values.append(fn(j, best, params))  # envelope theorem: live params, frozen angle
-    angles, values = jnp.stack(angles), jnp.stack(values)
-    i = jnp.argmax(jnp.where(jnp.isnan(values), -jnp.inf, values))
-    return Extremum(values[i], jnp.mod(angles[i], 360.0))
+    return Extremum(jnp.stack(values), jnp.stack(angles))
 
 
 def refine_min(fn: SegmentFunction, params: Any, bounds_deg, grid_values: jax.Array, **kwargs) -> Extremum:
@@ -358,4 +368,4 @@ def grid_min(grid_values: jax.Array) -> Extremum:
 
 
 __all__ = ["CANDIDATES", "EXTREMA_MODES", "ITERATIONS", "Extremum", "dwells", "grid_max", "grid_min",
-           "max_of", "min_of", "refine_max", "refine_min", "segment_sample_ranges"]
+           "max_of", "min_of", "refine_max", "refine_max_segments", "refine_min", "segment_sample_ranges"]

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 from test_rocker import ROLLER_SCENE
 
+from camjax import followers
 from camjax.evaluate import scene_arrays
 from camjax.family import Weights
 from camjax.followers.oscillating_flat import geometry as rocker_flat_geo
@@ -50,19 +51,27 @@ def scene_of(rotation="ccw", design=""):
 @pytest.mark.parametrize("rotation", ["ccw", "cw"])
 def test_smallest_cam_with_fixed_pivot_and_arm_is_the_sizing(rotation):
     scene = scene_of(rotation)
-    problem = problem_from_scene(scene)
-    sol = solve(problem, (1.0, 0.0), mode="global", solver="gradient")
+    grid = scene_arrays(scene, extrema="grid")
+    sol = solve(problem_from_scene(scene, grid), (1.0, 0.0), mode="global", solver="gradient")
     assert bool(sol.evaluation.feasible)
-    kin = scene_arrays(scene).kin
-    sizing = rocker_roller_geo.oscillating_roller_min_prime_radius(kin, 80.0, 60.0, 8.0, math.radians(30.0), 0.0, rotation)
-    # both reach the boundary of the same admissible set: the sizing by bisection in the arm angle
-    # (to float64 resolution), the solver to its feasibility tolerance (1e-7 rad in phi ~ 1e-5 mm)
+    sizing = rocker_roller_geo.oscillating_roller_min_prime_radius(grid.kin, 80.0, 60.0, 8.0, math.radians(30.0),
+                                                                   0.0, rotation)
+    # both reach the boundary of the same admissible set (on the samples): the sizing by bisection
+    # in the arm angle (to float64 resolution), the solver to its feasibility tolerance (1e-7 rad in
+    # phi ~ 1e-5 mm)
     assert float(sol.design.base_radius_mm) == pytest.approx(float(sizing.base_radius_mm), abs=1e-5)
+    # with exact extrema the polish moves the design onto the continuous limit: |phi| <= 30 deg
+    # between the samples too (to the polish's margin), within the 2-deg grid's error of the above
+    exact = solve(problem_from_scene(scene), (1.0, 0.0), mode="global", solver="gradient")
+    radius = float(exact.design.base_radius_mm)
+    phi = followers.get("oscillating_roller").curve_extremes(scene, scene_arrays(scene), ("pressure_angle",), radius)
+    assert max(phi["pressure_angle"].max, -phi["pressure_angle"].min) <= math.radians(30.0) + 1e-12
+    assert bool(exact.evaluation.feasible) and abs(radius - float(sizing.base_radius_mm)) < 1e-2
 
 
 def test_pointwise_mode_condenses_to_the_same_smallest_cam():
     scene = scene_of()
-    problem = problem_from_scene(scene)
+    problem = problem_from_scene(scene, scene_arrays(scene, extrema="grid"))  # both on the samples
     glob = solve(problem, (1.0, 0.0), mode="global", solver="gradient")
     point = solve(problem, (1.0, 0.0), mode="pointwise", solver="gradient")
     # size only, one free variable: the largest per-angle need is the whole-cam need
@@ -155,7 +164,8 @@ def test_flat_face_smallest_cam_is_the_sizing_and_the_stress_limit_binds_as_the_
 
     loose = parse_scene(FLAT.replace("ROT", rotation).replace("DESIGN", "").replace(
         "sigma_max_MPa = 2000.0", "sigma_max_MPa = 1e6"))
-    problem = problem_from_scene(loose)
+    # on the samples, as the sizing is (the exact polish: test_the_polish_keeps_the_flat_face_...)
+    problem = problem_from_scene(loose, scene_arrays(loose, extrema="grid"))
     sol = solve(problem, (1.0, 0.0), mode="global", solver="gradient")
     assert bool(sol.evaluation.feasible)
     arrays = scene_arrays(loose)
@@ -166,7 +176,8 @@ def test_flat_face_smallest_cam_is_the_sizing_and_the_stress_limit_binds_as_the_
     # camjax.contact.hertz_line_stress, not the family's formula) sits on sigma_max
     tight = parse_scene(FLAT.replace("ROT", rotation).replace("DESIGN", "").replace(
         "sigma_max_MPa = 2000.0", "sigma_max_MPa = 1000.0"))
-    sol = solve(problem_from_scene(tight), (1.0, 0.0), mode="global", solver="gradient")
+    sol = solve(problem_from_scene(tight, scene_arrays(tight, extrema="grid")), (1.0, 0.0), mode="global",
+                solver="gradient")
     assert bool(sol.evaluation.feasible)
     assert float(sol.design.base_radius_mm) > float(sizing.base_radius_mm) + 0.01
     curves = followers.of(tight).evaluate(tight, arrays.kin, arrays.cam_speed_rad_s, float(sol.design.base_radius_mm))
@@ -184,7 +195,28 @@ def test_flat_face_gradients_match_finite_differences_and_stay_finite():
     # pointwise mode condenses to the whole-cam smallest radius (size only, R_b free)
     scene = parse_scene(FLAT.replace("ROT", "ccw").replace("DESIGN", "").replace(
         "sigma_max_MPa = 2000.0", "sigma_max_MPa = 1e6"))
-    problem = problem_from_scene(scene)
+    problem = problem_from_scene(scene, scene_arrays(scene, extrema="grid"))  # both on the samples
     glob = solve(problem, (1.0, 0.0), mode="global", solver="gradient")
     point = solve(problem, (1.0, 0.0), mode="pointwise", solver="gradient")
     assert float(point.design.base_radius_mm) == pytest.approx(float(glob.design.base_radius_mm), abs=1e-5)
+
+
+@pytest.mark.parametrize("sigma_max", [1e6, 1000.0])
+def test_the_polish_keeps_the_flat_face_limits_between_the_samples(sigma_max):
+    """With exact extrema the solver's design keeps rho >= rho_min and sigma <= sigma_max at every
+    angle (the report's own curves, refined off the grid), where the samples' design breaks one of
+    them between two samples; it moves no more than the 2-deg grid's error."""
+    scene = parse_scene(FLAT.replace("ROT", "ccw").replace("DESIGN", "").replace(
+        "sigma_max_MPa = 2000.0", f"sigma_max_MPa = {sigma_max!r}"))
+    follower = followers.of(scene)
+    grid = solve(problem_from_scene(scene, scene_arrays(scene, extrema="grid")), (1.0, 0.0))
+    exact = solve(problem_from_scene(scene), (1.0, 0.0))
+    arrays = scene_arrays(scene)
+
+    def worst(design):  # how far the continuous curves pass the limits (mm of rho, MPa of stress)
+        e = follower.curve_extremes(scene, arrays, ("rho", "stress"), float(design.base_radius_mm))
+        return max(1e-3 - e["rho"].min, e["stress"].max - sigma_max)
+
+    assert worst(grid.design) > 0  # the samples' design breaks a limit between the samples
+    assert worst(exact.design) <= 1e-9 * sigma_max and bool(exact.evaluation.feasible)
+    assert 0 < float(exact.design.base_radius_mm - grid.design.base_radius_mm) < 0.5

@@ -26,17 +26,20 @@ import math
 from dataclasses import replace
 from typing import Any, NamedTuple
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 
+from camjax import extrema as extrema_mod
 from camjax import loads
+from camjax import program as program_mod
 from camjax.errors import SceneError
 from camjax.evaluate import SceneArrays, scene_arrays
 from camjax.followers import _checks
 from camjax.followers._contract import Follower
 from camjax.loads import RockerTrain
 from camjax.program import Kinematics
-from camjax.results import GeometryViolation
+from camjax.results import Extremes, GeometryViolation
 from camjax.scene.reader import DEFAULT, TableReader, build
 
 DRAWING_MARGIN_MM = 1.0  # drawn at the smallest admissible base radius + this, rounded up
@@ -139,36 +142,49 @@ class RockerRun(NamedTuple):
     arrays: SceneArrays | None = None
     design: dict[str, Any] | None = None  # the solver's JSON of the [design] (None without one)
     violations: tuple[GeometryViolation, ...] = ()
+    # max/min of each of RockingFollower.point_curves at base_radius_mm (exact unless the scene
+    # asks for grid extrema)
+    extremes: dict[str, Extremes] | None = None
 
 
 def _f(x) -> float:
     return float(np.asarray(x))
 
 
-def rocker_violations(curves: RockerCurves, scene) -> list[GeometryViolation]:
+def rocker_violations(curves: RockerCurves, scene, extremes: dict[str, Extremes] | None = None
+                      ) -> list[GeometryViolation]:
     """Constraints broken by a rocking follower's evaluated geometry (empty: usable geometry).
 
     Whatever curves the follower has are judged: |pressure angle| > its limit and undercut (a
     roller), cam-surface radius < ``follower.min_curvature_radius_mm`` (a face); with loads,
     contact force < 0; with a [design], peak stress > sigma_max. Tolerances are the solvers'
-    (:mod:`camjax.followers._checks`).
+    (:mod:`camjax.followers._checks`). ``extremes`` (:meth:`RockingFollower.curve_extremes` at the
+    curves' design): judged on them where they have the curve (exact extrema: the continuous ones,
+    as the report states them), else on the samples.
     """
-    t, out = curves.theta_deg, []
+    t, out, ex = curves.theta_deg, [], extremes or {}
 
-    def at(values, pick):
+    def at(values, pick, name=None, sense="min"):
+        if name in ex:
+            e = ex[name]
+            return (e.min, e.min_deg) if sense == "min" else (e.max, e.max_deg)
         i = int(pick(values))
         return float(values[i]), float(t[i])
 
     if curves.undercut_margin_mm is not None:
-        out += _checks.pressure_angle(*at(np.abs(curves.pressure_angle_deg), np.argmax),
-                                      curves.pressure_angle_limit_deg)
-        out += _checks.undercut(*at(curves.undercut_margin_mm, np.argmin))
+        if "pressure_angle" in ex:  # rad in the extremes, deg in the checks
+            e = ex["pressure_angle"]
+            phi = max((math.degrees(e.max), e.max_deg), (-math.degrees(e.min), e.min_deg))
+        else:
+            phi = at(np.abs(curves.pressure_angle_deg), np.argmax)
+        out += _checks.pressure_angle(*phi, curves.pressure_angle_limit_deg)
+        out += _checks.undercut(*at(curves.undercut_margin_mm, np.argmin, "undercut_margin"))
     else:
-        out += _checks.curvature(*at(curves.rho_mm, np.argmin), scene.follower.min_curvature_radius_mm)
+        out += _checks.curvature(*at(curves.rho_mm, np.argmin, "rho"), scene.follower.min_curvature_radius_mm)
     if curves.stress_MPa is not None and scene.design is not None and scene.design.sigma_max_MPa:
-        out += _checks.stress(*at(curves.stress_MPa, np.argmax), scene.design.sigma_max_MPa)
+        out += _checks.stress(*at(curves.stress_MPa, np.argmax, "stress", "max"), scene.design.sigma_max_MPa)
     if curves.contact_force_N is not None:
-        force, deg = at(curves.contact_force_N, np.argmin)
+        force, deg = at(curves.contact_force_N, np.argmin, "contact_force")
         if force < 0:
             out.append(GeometryViolation(
                 "contact", f"contact force {force:.4g} N at {deg:g} deg < 0: the follower leaves the cam"))
@@ -198,6 +214,86 @@ class RockingFollower(Follower):
     def contact(self, scene, moment, g: RockerGeometry) -> tuple[Any, Any]:
         """(normal contact force (N), Hertz stress (MPa) or None without [contact]) from the torque
         ``moment`` (N m) the cam applies about the pivot."""
+
+    def drawn_follower(self, scene, result: dict):
+        """The [follower] spec with a solved design's pivot, arm (or face) and roller (those the cam
+        is drawn with; ``result``: the solver's JSON, empty without a design)."""
+        dims = {k: result[k] for k in self.variables if k != "base_radius_mm" and k in result}
+        return replace(scene.follower, **dims) if dims else scene.follower
+
+    # ---- the curves the report takes extrema of
+
+    def point_curves(self, scene, kin: Kinematics, cam_speed_rad_s, base_radius_mm: float) -> dict[str, Any]:
+        """The curves whose max and min the report states, at the angles of ``kin`` (any angles:
+        grid samples or one segment's points), keyed by name.
+
+        Functions of the motion (s, s', s'', s''') alone and pointwise, so that the same closed
+        forms give the samples and the refined extrema: the motion (``s``, ``ds``, ``d2s``,
+        ``d3s``; rad per rad^k), ``arm_angle`` and ``pressure_angle`` (rad), ``rho`` (cam surface,
+        mm; none where the type has an undercut margin: a roller's cam radius has poles), what the
+        type's geometry has of ``pitch_curvature`` (the pitch curve's, 1/mm),
+        ``undercut_margin`` (mm) and ``contact_distance`` (along a face, mm), and with loads
+        ``pivot_torque`` (N m), ``torque`` (cam shaft, N m), ``contact_force`` (N) and, with a
+        [contact] section, ``stress`` (MPa).
+        """
+        g = self.geometry(scene, kin, base_radius_mm)
+        out = {"s": kin.s, "ds": kin.ds, "d2s": kin.d2s, "d3s": kin.d3s, "arm_angle": g.arm_angle,
+               "pressure_angle": g.pressure_angle}
+        if g.undercut_margin_mm is None:
+            out["rho"] = g.rho_mm
+        else:  # a roller's cam radius passes through infinity at an inflection: its margin instead
+            out["undercut_margin"] = g.undercut_margin_mm
+        if g.pitch_curvature is not None:  # 1 / pitch-curve radius: finite where the radius is not
+            out["pitch_curvature"] = g.pitch_curvature
+        if g.contact_distance_mm is not None:
+            out["contact_distance"] = g.contact_distance_mm
+        if scene.follower.train is not None:
+            moment = loads.rocker_torque(scene.follower.train, kin, cam_speed_rad_s)
+            force, stress = self.contact(scene, moment, g)
+            out.update(pivot_torque=moment, torque=loads.rocker_cam_torque(moment, kin.ds), contact_force=force)
+            if stress is not None:
+                out["stress"] = stress
+        return {k: jnp.broadcast_to(v, jnp.shape(kin.s)) for k, v in out.items()}
+
+    def curve_extremes(self, scene, arrays: SceneArrays, names: tuple[str, ...] | None,
+                       base_radius_mm: float, follower=None) -> dict[str, Extremes]:
+        """Max and min over the cam angle of each named curve of :meth:`point_curves` (all of them
+        when ``names`` is None) at one base radius (mm), with ``follower`` (the [follower] spec the
+        cam is drawn with; default the scene's).
+
+        Exact (refined off the grid by :mod:`camjax.extrema`, in one compiled call) when the
+        arrays carry their closed forms (``[motion] extrema = "exact"``), else the samples' own
+        (the first sample wins on ties). Python: returns floats.
+        """
+        drawn = scene if follower is None or follower is scene.follower else replace(scene, follower=follower)
+        radius, speed = float(base_radius_mm), arrays.cam_speed_rad_s
+        curves = self.point_curves(drawn, arrays.kin, speed, radius)
+        names = tuple(curves) if names is None else tuple(names)
+        grid = jnp.stack([curves[n] for n in names])
+        if arrays.model is None:
+            g, t = np.asarray(grid), np.asarray(arrays.theta_deg)
+            i, j = np.argmax(g, axis=1), np.argmin(g, axis=1)
+            rows = np.arange(len(names))
+            hi, hi_deg, lo, lo_deg = g[rows, i], t[i], g[rows, j], t[j]
+        else:
+            def refine(prog, speed, grid):
+                def fn(segment, theta_deg, params):
+                    p, w, row = params
+                    c = self.point_curves(drawn, program_mod.segment_motion(p, segment, theta_deg), w, radius)
+                    return jnp.tensordot(row, jnp.stack([c[n] for n in names]), axes=1)
+
+                count = len(names)
+                rows = jnp.concatenate([jnp.eye(count, dtype=grid.dtype), -jnp.eye(count, dtype=grid.dtype)])
+                bounds, dwells = program_mod.segment_bounds_deg(prog), extrema_mod.dwells(prog)
+                # one row at a time (as camjax.evaluate's): the refinement is traced once
+                e = jax.lax.map(lambda r: extrema_mod.refine_max(fn, (prog, speed, r), bounds, r @ grid,
+                                                                 constant=dwells), rows)
+                return e.value[:count], e.angle_deg[:count], -e.value[count:], e.angle_deg[count:]
+
+            refined = jax.jit(refine)(arrays.model.program, speed, grid)
+            hi, hi_deg, lo, lo_deg = (np.asarray(a) for a in refined)
+        return {n: Extremes(float(hi[k]), float(hi_deg[k]), float(lo[k]), float(lo_deg[k]))
+                for k, n in enumerate(names)}
 
     # ---- the run
 
@@ -262,8 +358,7 @@ class RockingFollower(Follower):
         kin, w, drawn = arrays.kin, arrays.cam_speed_rad_s, scene
         if design is not None:
             # the cam is sized and drawn with the design's pivot, arm (or face) and roller
-            dims = {k: design[k] for k in self.variables if k != "base_radius_mm" and k in design}
-            drawn = replace(scene, follower=replace(scene.follower, **dims))
+            drawn = replace(scene, follower=self.drawn_follower(scene, design))
             try:
                 sizing = self.sizing(drawn, kin)
             except SceneError:  # an infeasible design: its own radius is all there is to report
@@ -276,5 +371,6 @@ class RockingFollower(Follower):
             sizing = self.sizing(scene, kin)
             radius, source = self.drawing_radius(scene, kin, sizing, base_radius_mm)
         curves = self.evaluate(drawn, kin, w, radius)
+        extremes = self.curve_extremes(drawn, arrays, None, radius)
         return RockerRun(sizing, radius, source, curves, arrays, design,
-                         tuple(rocker_violations(curves, scene)))
+                         tuple(rocker_violations(curves, scene, extremes)), extremes)

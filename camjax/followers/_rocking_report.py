@@ -6,8 +6,10 @@ with these functions):
 - ``follower_dimensions(curves, follower) -> dict``: its dimensions in ``oscillating_follower``
   (those the drawn cam was computed with);
 - ``min_base_radius_rule(follower, binding) -> str``: the rule of its smallest cam;
-- ``evaluated_block(curves, follower, worst) -> dict``: its own figures at the evaluated cam
-  (``worst``: the sample of the largest |pressure angle|).
+- ``evaluated_block(curves, follower, worst, block) -> dict``: its own figures at the evaluated
+  cam (``worst``: the sample of the largest |pressure angle|; ``block(values, name)``: the
+  {max, max_deg, min, min_deg} of a curve, exact where the run refined it, see
+  :meth:`camjax.followers._rocking.RockingFollower.point_curves` for the names).
 
 The motion is reported in rad (swing in deg, angular velocity ... in SI); formatting only, as
 :mod:`camjax.output.report`, whose shared blocks this uses.
@@ -15,6 +17,7 @@ The motion is reported in rad (swing in deg, angular velocity ... in SI); format
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
@@ -46,24 +49,36 @@ def report(scene, run, blocks) -> dict[str, Any]:
     the drawn cam was computed with.
     """
     sizing, c, f = run.sizing, run.curves, scene.follower
-    t = c.theta_deg
-    phi = c.pressure_angle_deg
-    i = int(np.argmax(np.abs(phi)))
+    t, ex = c.theta_deg, run.extremes or {}
+    w = _f(run.arrays.cam_speed_rad_s) if run.arrays is not None else None
+
+    def block(values, name=None, scale=1.0):
+        """{max, max_deg, min, min_deg}: the run's (exact) extremes of ``name`` times ``scale`` (> 0)
+        where it has them, else the samples' of ``values``."""
+        if name in ex and scale is not None:
+            e = ex[name]
+            return {"max": scale * e.max, "max_deg": e.max_deg, "min": scale * e.min, "min_deg": e.min_deg}
+        return extrema(values, t)
+
+    deg = math.degrees(1.0)
+    phi = block(c.pressure_angle_deg, "pressure_angle", deg)
+    worst = (phi["max"], phi["max_deg"]) if phi["max"] >= -phi["min"] else (-phi["min"], phi["min_deg"])
+    i = int(np.argmax(np.abs(c.pressure_angle_deg)))  # the sample of the largest |pressure angle|
     # the dimensions the drawn cam was computed with (a [design]'s where it solved them), not the
     # scene's [follower] table: those stay visible under follower_scene
     follower = {"type": f.type, "pivot_distance_mm": c.pivot_distance_mm, "rotation": c.rotation,
                 **blocks.follower_dimensions(c, f), "min_curvature_radius_mm": f.min_curvature_radius_mm}
     rule = NO_ADMISSIBLE_CAM if sizing.binding == "none" else blocks.min_base_radius_rule(f, sizing.binding)
-    out = header_block(scene, run.arrays)
+    out = header_block(scene, run.arrays, extremes=run.extremes)
     out.update({
         "flcd_units": ROCKER_FLCD_UNITS,
         "kinematics": {
-            "swing_deg": extrema(c.swing_deg, t),
-            "angular_velocity_rad_s": extrema(c.angular_velocity_rad_s, t),
-            "angular_accel_rad_s2": extrema(c.angular_accel_rad_s2, t),
-            "angular_jerk_rad_s3": extrema(c.angular_jerk_rad_s3, t),
-            "velocity_rad_per_rad": extrema(c.ds, t),
-            "accel_rad_per_rad2": extrema(c.d2s, t),
+            "swing_deg": block(c.swing_deg, "s", deg),
+            "angular_velocity_rad_s": block(c.angular_velocity_rad_s, "ds", w),
+            "angular_accel_rad_s2": block(c.angular_accel_rad_s2, "d2s", None if w is None else w**2),
+            "angular_jerk_rad_s3": block(c.angular_jerk_rad_s3, "d3s", None if w is None else w**3),
+            "velocity_rad_per_rad": block(c.ds, "ds"),
+            "accel_rad_per_rad2": block(c.d2s, "d2s"),
         },
         "oscillating_follower": follower,
         "min_base_radius_mm": sizing.min_base_radius_mm,
@@ -75,27 +90,29 @@ def report(scene, run, blocks) -> dict[str, Any]:
     })
     if sizing.min_prime_radius_mm is not None:
         out["min_prime_radius_mm"] = sizing.min_prime_radius_mm
+    rho = block(c.rho_mm, "rho")
     out["evaluated"] = {
         "base_radius_mm": c.base_radius_mm,
         "arm_start_angle_deg": c.arm_start_angle_deg,
-        "arm_angle_deg": extrema(c.arm_angle_deg, t),
-        "pressure_angle_deg": {**extrema(phi, t), "max_abs": _f(abs(phi[i])), "max_abs_deg": _f(t[i])},
-        "rho_mm": {"min": _f(np.min(c.rho_mm)), "min_deg": _f(t[int(np.argmin(c.rho_mm))])},
-        **blocks.evaluated_block(c, f, i),
+        "arm_angle_deg": block(c.arm_angle_deg, "arm_angle", deg),
+        "pressure_angle_deg": {**phi, "max_abs": worst[0], "max_abs_deg": worst[1]},
+        "rho_mm": {"min": rho["min"], "min_deg": rho["min_deg"]},
+        **blocks.evaluated_block(c, f, i, block),
     }
     if c.pivot_torque_Nm is not None:
         m = c.pivot_torque_Nm
+        moment = block(m, "pivot_torque")
         out["loads"] = {
-            "pivot_torque_Nm": extrema(m, t),
-            "contact_force_N": extrema(c.contact_force_N, t),
-            "torque_Nm": extrema(c.torque_Nm, t),
-            "contact": {"min_pivot_torque_Nm": _f(np.min(m)),
-                        "min_pivot_torque_deg": _f(t[int(np.argmin(m))]),
-                        "lost": bool(np.any(m < 0)), "lost_ranges_deg": negative_ranges_deg(m, t)},
+            "pivot_torque_Nm": moment,
+            "contact_force_N": block(c.contact_force_N, "contact_force"),
+            "torque_Nm": block(c.torque_Nm, "torque"),
+            "contact": {"min_pivot_torque_Nm": moment["min"], "min_pivot_torque_deg": moment["min_deg"],
+                        "lost": bool(moment["min"] < 0 or np.any(m < 0)),
+                        "lost_ranges_deg": negative_ranges_deg(m, t)},
         }
     if c.stress_MPa is not None:
-        k = int(np.argmax(c.stress_MPa))
-        out["stress_MPa"] = {"max": _f(c.stress_MPa[k]), "max_deg": _f(t[k])}
+        stress = block(c.stress_MPa, "stress")
+        out["stress_MPa"] = {"max": stress["max"], "max_deg": stress["max_deg"]}
     if run.design is not None:
         out["design"] = run.design
         out["follower_scene"] = follower_scene_block(followers.of(scene), f)

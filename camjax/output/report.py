@@ -165,8 +165,8 @@ def header_block(scene: Scene, arrays: SceneArrays, extremes: dict[str, Extremes
     """Keys every report starts with: version, scene, grid, speed, follower, segments, motion, FLCD.
 
     ``extremes``: the run's (:func:`camjax.evaluate.curve_extremes`; exact when the arrays carry
-    their model); None: the samples' own (an oscillating follower, whose report replaces the
-    kinematics with its own, stays on the grid).
+    their model); None: the samples' own. A rocking follower's report replaces the kinematics with
+    its own (in rad).
     """
     import camjax  # the version lives in the package
 

@@ -25,7 +25,7 @@ The face length the contact needs (max xi - min xi) is reported with the design.
 from __future__ import annotations
 
 import math
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import jax
 import jax.numpy as jnp
@@ -38,6 +38,7 @@ from camjax.family import FEASIBILITY_RTOL_STRESS, FEASIBILITY_TOL_MM, Weights, 
 from camjax.family import bounds as bounds
 from camjax.family import bounds_violation as bounds_violation
 from camjax.followers import _pitch as pitch
+from camjax.followers._swing import moment_model, polish_design
 from camjax.followers.oscillating_flat import geometry as rocker_flat_geo
 from camjax.followers.oscillating_roller.problem import moment_coefficient
 from camjax.numerics import RHO_FLOOR_MM, capped_divide, finite_float, floor_positive, positive_part
@@ -68,6 +69,9 @@ class Problem(NamedTuple):
     size_norm_mm: jax.Array  # () R_b,max
     min_curvature_radius_mm: jax.Array  # ()
     rotation_sign: jax.Array  # () +1 ccw, -1 cw
+    # the motion program (as arrays) behind the grid when extrema are exact: :func:`polish`
+    program: Any = None
+    moment_model: Any = None  # camjax.followers._swing.MomentModel: C_M between the samples (the polish)
 
 
 class Constraints(NamedTuple):
@@ -123,12 +127,15 @@ def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=
         sigma_max_MPa=as_(d.sigma_max_MPa if d.sigma_max_MPa is not None else 1.0),
         size_norm_mm=as_(d.bounds("base_radius_mm")[1]), min_curvature_radius_mm=as_(f.min_curvature_radius_mm),
         rotation_sign=as_(pitch.rotation_sign(scene.motion.rotation)),
+        program=None if arrays.model is None else arrays.model.program,
+        moment_model=None if arrays.model is None else moment_model(scene, arrays),
     )
 
 
 def per_angle(problem: Problem) -> Problem:
     """The n pointwise problems: every grid leaf (n,) -> (n, 1), every scalar leaf -> (n,)."""
-    return family.per_angle(problem, {"theta_deg", "s_rad", "ds", "d2s", "moment_coefficient"})
+    return family.per_angle(problem._replace(program=None, moment_model=None), {"theta_deg", "s_rad", "ds", "d2s",
+                                                             "moment_coefficient"})
 
 
 class _Geometry(NamedTuple):
@@ -182,6 +189,13 @@ def constraints(problem: Problem, design: Design) -> Constraints:
         curvature=problem.min_curvature_radius_mm - g.rho,
         stress=need - g.rho,
     )
+
+
+def polish(problem: Problem, weights: Weights, design: Design) -> Design:
+    """The solver's design moved, where it is short, the least that keeps the curvature and the stress at every
+    cam angle, not only at the samples (:func:`camjax.followers._swing.polish_design`; needs
+    ``problem.program``, i.e. exact extrema)."""
+    return polish_design(problem, design, constraints, ("curvature", "stress"))
 
 
 def constraint_maxima(problem: Problem, design: Design) -> Constraints:

@@ -22,13 +22,13 @@ def min_base_radius_rule(follower, binding: str) -> str:
     return {"curvature": f"cam radius of curvature >= {follower.min_curvature_radius_mm:g} mm"}[binding]
 
 
-def evaluated_block(curves, follower, worst: int) -> dict[str, Any]:
+def evaluated_block(curves, follower, worst: int, block) -> dict[str, Any]:
     """Whether the curvature holds, and where the contact runs along the face."""
-    c, xi = curves, curves.contact_distance_mm
+    c = curves
+    rho, xi = block(c.rho_mm, "rho"), block(c.contact_distance_mm, "contact_distance")
     return dict(
-        curvature_ok=bool(np.min(c.rho_mm) >= follower.min_curvature_radius_mm),
-        face={"contact_min_mm": _f(np.min(xi)), "contact_max_mm": _f(np.max(xi)),
-              "min_length_mm": _f(np.max(xi) - np.min(xi)),
+        curvature_ok=bool(rho["min"] >= follower.min_curvature_radius_mm),
+        face={"contact_min_mm": xi["min"], "contact_max_mm": xi["max"], "min_length_mm": xi["max"] - xi["min"],
               "note": "contact point along the face from the foot of the pivot, towards the cam centre"},
     )
 

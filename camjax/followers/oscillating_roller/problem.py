@@ -29,7 +29,7 @@ design of the angle with the largest R_b + R_f.
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import jax
 import jax.numpy as jnp
@@ -50,6 +50,7 @@ from camjax.family import (
 from camjax.family import bounds as bounds
 from camjax.family import bounds_violation as bounds_violation
 from camjax.followers import _pitch as pitch
+from camjax.followers._swing import moment_coefficient_at, moment_model, polish_design
 from camjax.followers.oscillating_roller import geometry as rocker_roller_geo
 from camjax.followers.roller import geometry as roller_geo
 from camjax.followers.roller.problem import roller_figures
@@ -83,6 +84,9 @@ class Problem(NamedTuple):
     tan_max_pressure_angle: jax.Array  # () tan(phi_max)
     min_curvature_radius_mm: jax.Array  # () smallest convex cam-surface radius allowed
     rotation_sign: jax.Array  # () +1 ccw, -1 cw
+    # the motion program (as arrays) behind the grid when extrema are exact: :func:`polish`
+    program: Any = None
+    moment_model: Any = None  # camjax.followers._swing.MomentModel: C_M between the samples (the polish)
 
 
 class Constraints(NamedTuple):
@@ -144,6 +148,8 @@ def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=
         tan_max_pressure_angle=as_(np.tan(np.radians(f.max_pressure_angle_deg))),
         min_curvature_radius_mm=as_(f.min_curvature_radius_mm),
         rotation_sign=as_(pitch.rotation_sign(scene.motion.rotation)),
+        program=None if arrays.model is None else arrays.model.program,
+        moment_model=None if arrays.model is None else moment_model(scene, arrays),
     )
 
 
@@ -151,21 +157,17 @@ def moment_coefficient(scene, arrays) -> jax.Array:
     """C_M = 0.564 sqrt(M / (w K)) per angle, shape (n,), of a rocker scene: M (N m) the torque about
     the pivot (:func:`camjax.loads.rocker_torque`), w the cam width (mm), K the compliance (1/MPa);
     zeros without a follower train or [contact]. Divided by the root of the lever arm of the contact
-    force (m) it is the Hertz coefficient C (MPa mm^0.5); both oscillating families use it.
+    force (m) it is the Hertz coefficient C (MPa mm^0.5); both oscillating families use it
+    (:func:`camjax.followers._swing.moment_coefficient_at`).
     """
-    from camjax.loads import rocker_torque
-
-    kin = arrays.kin
-    if scene.follower.train is None or scene.contact is None:
-        return jnp.zeros_like(kin.s)
-    c = scene.contact
-    moment = rocker_torque(scene.follower.train, kin, arrays.cam_speed_rad_s)
-    return HERTZ_FACTOR * safe_sqrt(moment / (c.cam_width_mm * compliance(c.cam, c.follower)))
+    model = moment_model(scene, arrays)
+    return jnp.zeros_like(arrays.kin.s) if model is None else moment_coefficient_at(model, arrays.kin)
 
 
 def per_angle(problem: Problem) -> Problem:
     """The n pointwise problems: every grid leaf (n,) -> (n, 1), every scalar leaf -> (n,)."""
-    return family.per_angle(problem, {"theta_deg", "s_rad", "ds", "d2s", "moment_coefficient"})
+    return family.per_angle(problem._replace(program=None, moment_model=None), {"theta_deg", "s_rad", "ds", "d2s",
+                                                             "moment_coefficient"})
 
 
 # ---------------------------------------------------------------------------- physics
@@ -248,6 +250,13 @@ def constraints(problem: Problem, design: Design) -> Constraints:
                                                                problem.min_curvature_radius_mm),
         stress=need - rho_eq,
     )
+
+
+def polish(problem: Problem, weights: Weights, design: Design) -> Design:
+    """The solver's design moved, where it is short, the least that keeps the pressure angle, the undercut and the stress at every
+    cam angle, not only at the samples (:func:`camjax.followers._swing.polish_design`; needs
+    ``problem.program``, i.e. exact extrema)."""
+    return polish_design(problem, design, constraints, ("pressure_angle", "undercut", "stress"))
 
 
 def constraint_maxima(problem: Problem, design: Design) -> Constraints:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import sys
 from typing import Any
 
@@ -28,18 +29,22 @@ def min_base_radius_rule(follower, binding: str) -> str:
     }[binding]
 
 
-def evaluated_block(curves, follower, worst: int) -> dict[str, Any]:
+def evaluated_block(curves, follower, worst: int, block) -> dict[str, Any]:
     """Prime radius, the pressure angle against its limit, pitch curvature and undercut."""
-    c, t, phi = curves, curves.theta_deg, curves.pressure_angle_deg
-    j = int(np.argmin(np.abs(c.pitch_rho_mm)))
+    c, deg = curves, math.degrees(1.0)
+    phi = block(c.pressure_angle_deg, "pressure_angle", deg)
+    # the smallest |pitch radius| is 1 / the largest |pitch curvature| (the radius has poles)
+    kappa = block(1.0 / c.pitch_rho_mm, "pitch_curvature")
+    top = (kappa["max"], kappa["max_deg"]) if kappa["max"] >= -kappa["min"] else (-kappa["min"], kappa["min_deg"])
+    pitch = {"min": 1.0 / top[0], "min_deg": top[1]}
+    undercut = block(c.undercut_margin_mm, "undercut_margin")
     return dict(
         prime_radius_mm=c.prime_radius_mm,
-        pressure_angle_ok=bool(abs(phi[worst]) <= follower.max_pressure_angle_deg),
-        pitch_rho_mm={"min_abs": _f(abs(c.pitch_rho_mm[j])), "min_abs_deg": _f(t[j]),
+        pressure_angle_ok=bool(max(phi["max"], -phi["min"]) <= follower.max_pressure_angle_deg),
+        pitch_rho_mm={"min_abs": pitch["min"], "min_abs_deg": pitch["min_deg"],
                       "concave": bool(np.any(c.pitch_rho_mm < 0))},
-        undercut_margin_mm={"min": _f(np.min(c.undercut_margin_mm)),
-                            "min_deg": _f(t[int(np.argmin(c.undercut_margin_mm))])},
-        undercut=bool(np.any(c.undercut_margin_mm <= 0)),
+        undercut_margin_mm={"min": undercut["min"], "min_deg": undercut["min_deg"]},
+        undercut=bool(undercut["min"] <= 0 or np.any(c.undercut_margin_mm <= 0)),
     )
 
 
