@@ -173,24 +173,33 @@ class OscillatingCurvedFace(RockingFollower):
             stress = contact.roller_stress(coeff, g.pressure_angle, rho_eq)
         return force, stress
 
+    def face_curves(self, scene, kin, cam_speed_rad_s, psi) -> dict:
+        """The face's own curves at arm angles psi (rad): ``face_travel`` (mm, R_c sin phi) and
+        ``sliding_speed`` (m/s); pointwise in the motion."""
+        f = scene.follower
+        rate = relative_rate(kin, scene.motion.rotation)
+        legs = curved_geo.legs(f.pivot_distance_mm, f.arm_length_mm, psi, rate)
+        return {"face_travel": curved_geo.face_travel_of(legs, f.face_radius_mm),
+                "sliding_speed": curved_geo.sliding_speed_of(legs, rate, f.face_radius_mm, cam_speed_rad_s)}
+
+    def point_curves(self, scene, kin, cam_speed_rad_s, base_radius_mm) -> dict:
+        """The rocking family's curves and the face's (:meth:`face_curves`)."""
+        out = super().point_curves(scene, kin, cam_speed_rad_s, base_radius_mm)
+        return {**out, **self.face_curves(scene, kin, cam_speed_rad_s, out["arm_angle"])}
+
     def evaluate(self, scene, kin, cam_speed_rad_s, base_radius_mm) -> OscillatingCurvedCurves:
         """The rocker's curves with the face's width, the contact's travel on it and the sliding speed."""
         curves = super().evaluate(scene, kin, cam_speed_rad_s, base_radius_mm)
-        f, rotation = scene.follower, scene.motion.rotation
-        rp = base_radius_mm + f.face_radius_mm
-        psi0 = rocker_roller_geo.arm_start_angle(rp, f.pivot_distance_mm, f.arm_length_mm)
-        rate = relative_rate(kin, rotation)
-        legs = curved_geo.legs(f.pivot_distance_mm, f.arm_length_mm, psi0 + kin.s, rate)
+        face = self.face_curves(scene, kin, cam_speed_rad_s, np.radians(curves.arm_angle_deg))
         return OscillatingCurvedCurves(
-            **curves._asdict(), face_width_mm=float(f.face_width_mm),
-            face_travel_mm=np.asarray(curved_geo.face_travel_of(legs, f.face_radius_mm)),
-            sliding_speed_m_s=np.asarray(curved_geo.sliding_speed_of(legs, rate, f.face_radius_mm,
-                                                                     cam_speed_rad_s)))
+            **curves._asdict(), face_width_mm=float(scene.follower.face_width_mm),
+            face_travel_mm=np.asarray(face["face_travel"]),
+            sliding_speed_m_s=np.asarray(face["sliding_speed"]))
 
     def run(self, scene, arrays=None, *, base_radius_mm=None, dtype=None):
         """The rocking family's run, with the face-width check added to the violations."""
         out = super().run(scene, arrays, base_radius_mm=base_radius_mm, dtype=dtype)
-        return out._replace(violations=out.violations + tuple(face_violations(out.curves)))
+        return out._replace(violations=out.violations + tuple(face_violations(out.curves, out.extremes)))
 
     def summary(self, design) -> str:
         return (f"R_c = {design['face_radius_mm']:.4f} mm, W = {design['face_width_mm']:.4f} mm, "
@@ -198,13 +207,18 @@ class OscillatingCurvedFace(RockingFollower):
                 f"R_p = {design['prime_radius_mm']:.4f} mm")
 
 
-def face_violations(curves) -> list[GeometryViolation]:
-    """The contact running off the face: max |R_c sin phi| > W / 2 (the solvers' tolerance)."""
-    travel = np.abs(np.asarray(curves.face_travel_mm))
-    need = 2.0 * float(np.max(travel))
+def face_violations(curves, extremes=None) -> list[GeometryViolation]:
+    """The contact running off the face: max |R_c sin phi| > W / 2 (the solvers' tolerance), on the
+    exact extrema where ``extremes`` has them, else on the samples."""
+    e = (extremes or {}).get("face_travel")
+    if e is None:
+        travel = np.abs(np.asarray(curves.face_travel_mm))
+        worst = (float(np.max(travel)), float(curves.theta_deg[int(np.argmax(travel))]))
+    else:
+        worst = max((e.max, e.max_deg), (-e.min, e.min_deg))
+    need, deg = 2.0 * worst[0], worst[1]
     if curves.face_width_mm >= need - FEASIBILITY_TOL_MM:
         return []
-    deg = float(curves.theta_deg[int(np.argmax(travel))])
     return [GeometryViolation("face_width", f"face width {curves.face_width_mm:.4g} mm < "
                               f"2 max|R_c sin phi| = "
                               f"{need:.4g} mm (at {deg:g} deg): the contact runs off the face")]

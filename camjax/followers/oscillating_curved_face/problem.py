@@ -26,6 +26,8 @@ angle, ``g <= 0`` in mm (:class:`Constraints`):
 The solvers work in the unit box of the bounds, with the face width floored at the width the
 design needs on the samples (:func:`from_unit`), as the translating curved face's: W enters the
 objective and the face constraint only, so the optimum's W is that need (or its lower bound).
+With exact extrema, :func:`polish` moves the solved design the least that keeps every constraint
+between the samples too (the rocking family's polish).
 
 Modes: :func:`per_angle` gives the n one-angle problems; a pointwise solve is condensed into the
 design of the angle with the largest R_b + R_c with the largest W over the angles.
@@ -33,7 +35,7 @@ design of the angle with the largest R_b + R_c with the largest W over the angle
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import jax
 import jax.numpy as jnp
@@ -54,6 +56,7 @@ from camjax.family import (
 from camjax.family import bounds as bounds
 from camjax.family import bounds_violation as bounds_violation
 from camjax.followers import _pitch as pitch
+from camjax.followers._swing import moment_model, polish_design
 from camjax.followers.oscillating_curved_face import geometry as curved_geo
 from camjax.followers.oscillating_roller import geometry as rocker_roller_geo
 from camjax.followers.oscillating_roller.problem import moment_coefficient
@@ -90,6 +93,9 @@ class Problem(NamedTuple):
     tan_max_pressure_angle: jax.Array  # () tan(phi_max)
     min_curvature_radius_mm: jax.Array  # () smallest convex cam-surface radius allowed
     rotation_sign: jax.Array  # () +1 ccw, -1 cw
+    # the motion program (as arrays) behind the grid when extrema are exact: :func:`polish`
+    program: Any = None
+    moment_model: Any = None  # camjax.followers._swing.MomentModel: C_M between the samples (the polish)
 
 
 class Constraints(NamedTuple):
@@ -155,12 +161,14 @@ def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=
         tan_max_pressure_angle=as_(np.tan(np.radians(f.max_pressure_angle_deg))),
         min_curvature_radius_mm=as_(f.min_curvature_radius_mm),
         rotation_sign=as_(pitch.rotation_sign(scene.motion.rotation)),
+        program=None if arrays.model is None else arrays.model.program,
+        moment_model=None if arrays.model is None else moment_model(scene, arrays),
     )
 
 
 def per_angle(problem: Problem) -> Problem:
     """The n pointwise problems: every grid leaf (n,) -> (n, 1), every scalar leaf -> (n,)."""
-    return family.per_angle(problem, GRID_FIELDS)
+    return family.per_angle(problem._replace(program=None, moment_model=None), GRID_FIELDS)
 
 
 # ---------------------------------------------------------------------------- physics
@@ -256,6 +264,14 @@ def constraints(problem: Problem, design: Design) -> Constraints:
         face_travel=_travel(x, design) - 0.5 * design.face_width_mm,
         stress=need - x.rho_eq,
     )
+
+
+def polish(problem: Problem, weights: Weights, design: Design) -> Design:
+    """The solver's design moved, where it is short, the least that keeps the pressure angle, the
+    undercut, the contact on the face and the stress at every cam angle, not only at the samples
+    (:func:`camjax.followers._swing.polish_design`; needs ``problem.program``, i.e. exact extrema)."""
+    names = ("pressure_angle", "undercut", "face_travel", "stress")
+    return polish_design(problem, design, constraints, names)
 
 
 def constraint_maxima(problem: Problem, design: Design) -> Constraints:
