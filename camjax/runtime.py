@@ -258,14 +258,19 @@ def program_cache(fn=None, *, static_argnames: tuple[str, ...] = ()):
         return static, dynamic
 
     def load(*args, **kwargs):
+        static, dynamic = split(args, kwargs)
+
+        def plain(*args, **kwargs):  # jax.jit(fn) with the static arguments given to load
+            given = signature.bind_partial(*args, **kwargs).arguments
+            return jitted(*args, **kwargs, **{k: v for k, v in static.items() if k not in given})
+
         folder = _PROGRAM_DIR[0]
         if folder is None or name in _UNEXPORTABLE:
-            return jitted
-        static, dynamic = split(args, kwargs)
+            return plain
         try:
             entry = _program(folder, name, fn, static, dynamic)
-        except _NotCacheable:
-            return jitted
+        except _NotCacheable:  # e.g. a tree structure that does not pickle: traced as usual
+            return plain
 
         def run(*args, **kwargs):  # new values of the dynamic arguments given to load
             given = signature.bind_partial(*args, **kwargs).arguments

@@ -51,6 +51,7 @@ def test_rotation_brings_the_contact_angle_onto_the_follower_axis():
     np.testing.assert_allclose(y, 1.0, rtol=1e-15)
 
 
+@pytest.mark.slow
 def test_flat_poses_match_closed_form(flat_mechanism):
     m = flat_mechanism
     p = frame_poses(m, 72)
@@ -64,6 +65,7 @@ def test_flat_poses_match_closed_form(flat_mechanism):
     assert np.all(np.abs(p.contact_x_mm) <= 0.5 * m.face_width_mm + 1e-9)  # on the face
 
 
+@pytest.mark.slow
 def test_roller_poses_touch_the_roller_along_the_pressure_angle(roller_mechanism):
     m = roller_mechanism
     p = frame_poses(m, 36)

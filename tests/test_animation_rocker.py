@@ -174,6 +174,7 @@ def test_rocker_gif_has_every_frame(rocker, tmp_path):
         assert np.any(np.asarray(im.convert("RGB")) != first)  # the cam and the arm move
 
 
+@pytest.mark.slow
 def test_infeasible_flat_rocker_animates_with_the_violation_in_red(tmp_path):
     # R_b = 30 mm is far below this face's smallest admissible base radius (about 81 mm)
     curves = camjax.analyse(_scene("oscillating_flat", "cw"), base_radius_mm=30.0).curves
@@ -214,6 +215,7 @@ def test_undrawable_rocker_is_refused(rocker):
         frame_poses(m._replace(swing_deg=swing), 12)
 
 
+@pytest.mark.slow
 def test_design_refuses_an_undrawable_rocker_in_one_line(tmp_path, capsys, monkeypatch):
     from camjax.followers._rocking import RockingFollower
 

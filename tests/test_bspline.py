@@ -30,6 +30,7 @@ def _random_spline(k, n, seed, repeat=False):
     return np.concatenate([np.zeros(k + 1), inner, np.ones(k + 1)]), rng.normal(size=n)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("k", range(1, B.MAX_DEGREE + 1))
 def test_de_boor_matches_scipy_with_derivatives(k):
     t, c = _random_spline(k, k + 9, seed=k, repeat=k >= 3)
@@ -56,6 +57,7 @@ def _exact_de_boor(t, c, k, x):
     return d[k]
 
 
+@pytest.mark.slow
 def test_degree_nine_matches_exact_rational_evaluation():
     k, n = 9, 16
     rng = np.random.default_rng(9)
@@ -76,6 +78,7 @@ def _bernstein_coefficients(power: dict[int, Fraction], n: int) -> list[Fraction
                 Fraction(0)) for i in range(n + 1)]
 
 
+@pytest.mark.slow
 def test_degree_five_bspline_is_the_345_polynomial():
     control = _bernstein_coefficients({3: Fraction(10), 4: Fraction(-15), 5: Fraction(6)}, 5)
     law = B.bspline_law(5, [float(v) for v in control])
@@ -86,6 +89,7 @@ def test_degree_five_bspline_is_the_345_polynomial():
         np.testing.assert_allclose(np.asarray(g), np.asarray(r), rtol=0, atol=1e-12)
 
 
+@pytest.mark.slow
 def test_gradient_with_respect_to_control_values_matches_finite_differences():
     t, c = _random_spline(5, 12, seed=3)
     x = jnp.linspace(0.0, 1.0, 301)
@@ -102,6 +106,7 @@ def test_gradient_with_respect_to_control_values_matches_finite_differences():
     np.testing.assert_allclose(np.asarray(g), fd, rtol=1e-7, atol=1e-7 * float(np.max(np.abs(fd))))
 
 
+@pytest.mark.slow
 def test_derivative_in_x_by_jvp_is_the_derivative_spline():
     t, c = _random_spline(5, 10, seed=4)
     x = jnp.linspace(0.01, 0.99, 57)
@@ -110,6 +115,7 @@ def test_derivative_in_x_by_jvp_is_the_derivative_spline():
                                atol=1e-12)
 
 
+@pytest.mark.slow
 def test_return_control_runs_backwards():
     law = B.bspline_law(5, [1, 1, 1, 0, 0, 0], falling=True)
     x = jnp.linspace(0, 1, 101)
@@ -138,6 +144,7 @@ POLY_RET = 'law = "polynomial", exponents = [3, 4, 5], lift_mm = 5'
      'law = "bspline", degree = 5, control = [1, 1, 1, 0, 0, 0], lift_mm = 5'),
     ('law = "bspline", control_mm = [0, 0, 0, 5, 5, 5]', 'law = "bspline", control_mm = [5, 5, 5, 0, 0, 0]'),
 ])
+@pytest.mark.slow
 def test_bspline_segments_in_a_scene_give_the_polynomial_program(rise, ret):
     got = program_evaluate(parse_scene(SCENE.format(rise=rise, ret=ret)).motion.program, 360)
     ref = program_evaluate(parse_scene(SCENE.format(rise=POLY_RISE, ret=POLY_RET)).motion.program, 360)

@@ -197,6 +197,7 @@ QUICK = {"flat": [["design", "{scene}"], ["design", "{scene}", "--mode", "pointw
                   ["design", "{scene}", "--solver", "ga", "--seed", "7"], ["design", "{scene}", "--solver", "ga"]]}
 
 
+@pytest.mark.slow
 def test_flat_face_mode_solver_and_seed_never_reuse_another_runs_program(tmp_path, quiet_files, monkeypatch):
     """The quick loop's share of the matrix: the runs the stale cache got wrong (a pointwise run
     after a global one, a GA run after another seed), in one folder."""

@@ -197,6 +197,7 @@ def test_laws_table_json_and_chart(tmp_path, capsys):
     assert chart.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
+@pytest.mark.slow
 def test_laws_table_names_its_columns(capsys):
     assert cli.main(["laws"]) == 0
     out = capsys.readouterr().out

@@ -413,6 +413,7 @@ def _assert_jump_consistent(j: dict, cam_speed_hz: float) -> None:
     # a weak spring, lost at the cam speed 2.96 Hz, scanned only over 0.1 .. 1 Hz where it holds
     ("spring_rate = 100.0\nspring_preload = 0.5\njump_speed_range_hz = [0.1, 1.0]\n", "holds_in_range"),
 ])
+@pytest.mark.slow
 def test_jump_report_gives_the_speed_or_the_reason_it_has_none(closure, status):
     j = _jump_summary(closure)
     _assert_jump_consistent(j, 2.96)

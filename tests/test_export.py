@@ -94,6 +94,7 @@ type = "flat"
     assert names == FILES - {"loads.png", "stress.png"}
 
 
+@pytest.mark.slow
 def test_roller_outline_is_envelope_of_roller_circles():
     # The cam outline is the pitch curve moved by R_f along its inward normal. The normal is
     # taken here from finite differences of the pitch curve on a dense grid (independent).
@@ -140,6 +141,7 @@ def test_dxf_extents_and_centre_mark(written, csv_table):
     assert not doc.audit().has_errors
 
 
+@pytest.mark.slow
 def test_drawing_workers_write_the_in_process_files_byte_for_byte(default_scene, default_arrays, tmp_path):
     """The worker processes (camjax.output.drawing) write what write_figures and write_profile_dxf
     write here: the same PNG and DXF bytes (same matplotlib and ezdxf, same functions, same

@@ -114,6 +114,7 @@ def _problem_at_a_design(name):
     return family, problem, design, lo, hi
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", NAMES)
 def test_gradients_through_every_design_variable_match_finite_differences(name):
     family, problem, design, lo, hi = _problem_at_a_design(name)
@@ -193,6 +194,7 @@ def _ride(m, shape, x, y, theta_deg):
     return np.asarray(out)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", NAMES)
 def test_the_follower_riding_on_the_exported_outline_reproduces_its_motion(name, runs, written):
     scene, run, curves = runs(name)

@@ -16,6 +16,7 @@ def problem(default_scene, default_arrays):
     return P.problem_from_scene(default_scene, default_arrays)
 
 
+@pytest.mark.slow
 def test_default_settings_match_closed_form_at_every_angle(problem):
     """The issue's claim, with the default settings: 0.05 mm at every angle, two weightings."""
     weightings = [(1.0, 1.0), (1.0, 10.0)]
@@ -30,6 +31,7 @@ def test_default_settings_match_closed_form_at_every_angle(problem):
         assert bool(np.all(res.feasible[i]))
 
 
+@pytest.mark.slow
 def test_global_mode_matches_exact_reference(problem):
     w = weights_of(jnp.array([1.0, 10.0, 1.0]), jnp.array([1.0, 1.0, 0.0]))
     res = ga.solve(ga.weighting_keys(3, 3), problem, w, "global")
@@ -45,6 +47,7 @@ def test_global_mode_matches_exact_reference(problem):
 SMALL = ga.GASettings(population=16, generations=30)
 
 
+@pytest.mark.slow
 def test_seeded_and_reproducible(problem):
     w = weights_of(jnp.array([1.0, 2.0]), jnp.array([1.0, 1.0]))
     a = ga.solve(ga.weighting_keys(7, 2), problem, w, "global", SMALL)

@@ -87,6 +87,7 @@ def test_single_angle_grid(default_scene):
         assert bool(np.all(res.feasible))
 
 
+@pytest.mark.slow
 def test_float32_problem_runs(default_scene):
     """float32 trades digits for speed: still close to the float64 closed form (1e-3 mm)."""
     prob = P.problem_from_scene(default_scene, camjax.scene_arrays(default_scene, dtype=np.float32))

@@ -485,6 +485,7 @@ def test_a_place_where_nothing_can_be_made_is_refused_before_any_work(command, p
     assert calls == [] and snapshot(place / "out") == before and leftovers(place) == []
 
 
+@pytest.mark.slow
 def test_an_os_error_while_writing_is_one_line_and_changes_nothing(place, capsys, monkeypatch):
     def full(*args, **kwargs):
         raise OSError(28, "No space left on device", "profile.csv")
@@ -681,6 +682,7 @@ def test_a_feasible_design_has_no_warning(tmp_path, capsys, monkeypatch):
     assert rc == 0 and err == "" and ": feasible" in std
 
 
+@pytest.mark.slow
 def test_rpm_1e6_runs_with_finite_results(tmp_path, capsys, monkeypatch):
     import json
 
@@ -897,6 +899,7 @@ def test_drawing_processes_count_is_checked(place, monkeypatch, capsys):
     assert "CAMJAX_DRAWING_PROCESSES = 'many': not a count (allowed: 0 to 16" in err
 
 
+@pytest.mark.slow
 def test_roller_violations_agree_with_the_minimum_base_radius():
     # the bisection of pipeline.min_base_radius (jitted, normalized violations) and the NumPy
     # checks on the drawn curves are separate computations of the same constraints: 1 % below

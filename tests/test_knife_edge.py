@@ -106,6 +106,7 @@ def drawn(request):
     return scene, camjax.run_design(scene)
 
 
+@pytest.mark.slow
 def test_the_outline_is_the_tip_seen_from_the_cam(drawn):
     scene, run = drawn
     c = run.curves

@@ -83,6 +83,7 @@ def test_boundary_values(name):
     assert LAWS[name].end_velocity == end_v
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", list(LAWS))
 def test_closed_form_derivatives_equal_autodiff(name):
     law = LAWS[name]
@@ -136,6 +137,7 @@ def test_polynomial_closed_forms_from_spec():
     assert summarize(polynomial_law((4, 5, 7))).peak_accel_neg == pytest.approx(-8.697, abs=5e-4)
 
 
+@pytest.mark.slow
 @settings(max_examples=40, deadline=None)
 @given(st.lists(st.integers(1, 12), min_size=1, max_size=6, unique=True))
 def test_general_polynomial_boundary_conditions(exps):

@@ -35,6 +35,7 @@ def test_max_over_angles_equals_the_plain_max_value_and_gradient(n, tile):
     assert float(jax.grad(tiled)(10.0)) == float(jax.grad(plain)(10.0))
 
 
+@pytest.mark.slow
 def test_peak_stress_on_a_long_grid_is_the_max_of_the_stress():
     prob = P.problem_from_scene(camjax.load_scene(), samples=20_000)  # > one tile, padded
     design = P.Design(jnp.asarray(28.0), jnp.asarray(20.0))

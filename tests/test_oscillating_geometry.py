@@ -360,6 +360,7 @@ def test_flat_min_base_radius_against_a_dense_scan(rotation):
     assert float(sizing.face_min_mm) > 0  # the contact stays on the cam's side of the pivot
 
 
+@pytest.mark.slow
 def test_gradients_match_finite_differences():
     kin = evaluate(PROGRAM, 720)
     PICK = 200  # one outline point inside the rise (a sum over the outline would drown in round-off)

@@ -48,6 +48,7 @@ def scene_of(rotation="ccw", design=""):
     return parse_scene(SCENE.replace("ROT", rotation).replace("DESIGN", design))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("rotation", ["ccw", "cw"])
 def test_smallest_cam_with_fixed_pivot_and_arm_is_the_sizing(rotation):
     scene = scene_of(rotation)
@@ -201,6 +202,7 @@ def test_flat_face_gradients_match_finite_differences_and_stay_finite():
     assert float(point.design.base_radius_mm) == pytest.approx(float(glob.design.base_radius_mm), abs=1e-5)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("sigma_max", [1e6, 1000.0])
 def test_the_polish_keeps_the_flat_face_limits_between_the_samples(sigma_max):
     """With exact extrema the solver's design keeps rho >= rho_min and sigma <= sigma_max at every

@@ -97,6 +97,7 @@ def test_bernstein_coefficients_of_standard_laws():
     assert polynomial_law(range(40, 90)).bernstein == tuple(Fraction(int(i >= 40)) for i in range(90))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("key", ["50..100", "3,50,100"])
 def test_ends_are_exact_and_autodiff_agrees(key):
     law = polynomial_law(HIGH[key])

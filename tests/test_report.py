@@ -291,6 +291,7 @@ offset_mm = 3
 """
 
 
+@pytest.mark.slow
 def test_roller_min_base_radius_puts_pressure_angle_on_limit():
     scene = parse_scene(ROLLER, "roller")
     arrays = camjax.scene_arrays(scene)

@@ -167,6 +167,7 @@ def test_follower_riding_on_exported_profile_reproduces_s(rotation, e):
     np.testing.assert_allclose(np.asarray(y) - d, s, rtol=0, atol=1e-9)
 
 
+@pytest.mark.slow
 def test_gradients_through_base_radius_roller_radius_offset_match_finite_differences():
     kin = evaluate(PROGRAM, 720)
     force = 50.0 + 3.0 * kin.s  # any positive follower force profile (N)

@@ -59,6 +59,7 @@ def test_pressure_angle_constraint_is_the_pressure_angle_limit(roller_problem):
         np.testing.assert_array_equal(g <= 0, phi <= math.radians(30.0))
 
 
+@pytest.mark.slow
 def test_gradients_match_finite_differences_and_stay_finite(roller_problem):
     p = roller_problem
     w = Weights(jnp.asarray(0.7), jnp.asarray(0.4))

@@ -20,6 +20,7 @@ def _variant(old, new, text=ROLLER):
     return text.replace(old, new)
 
 
+@pytest.mark.slow
 def test_min_prime_radius_of_the_harmonic_rise_and_its_rule():
     # rise 8 mm harmonic over 90 deg, e = 0, limit 30 deg (the return over 180 deg is gentler):
     # R_p = sqrt(h^2/4 + A^2 / tan^2 30) - h/2, A = pi h / (2 beta) (tests/test_roller_geometry.py)

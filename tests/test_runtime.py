@@ -104,10 +104,29 @@ def test_off_is_plain_jit():
     before = runtime._PROGRAM_DIR[0]
     runtime._PROGRAM_DIR[0] = None
     try:
-        assert model.load(*_args()) is model.jitted
         _same(model(*_args()), _model(*_args()))
+        # the static arguments given to load hold for the call (the mode or solver of a design)
+        _same(model.load(*_args(), power=3)(*_args()), _model(*_args(), 3))
     finally:
         runtime._PROGRAM_DIR[0] = before
+
+
+def _apply(part, power: int = 2):
+    return part.args[0] ** power
+
+
+apply = runtime.program_cache(_apply, static_argnames=("power",))
+
+
+def test_an_uncacheable_tree_is_traced_with_the_static_arguments_given(cache):
+    """A tree structure that does not pickle (a local function in its auxiliary data, as a law
+    built at run time) has no key: it is traced as usual, and the static arguments given to load
+    still hold (a cached design once ran the default solver here instead of the one asked for)."""
+    part = jax.tree_util.Partial(lambda v: v, jnp.arange(3.0))
+    np.testing.assert_array_equal(apply.load(part, power=3)(part), np.arange(3.0) ** 3)
+    np.testing.assert_array_equal(apply(part, power=3), np.arange(3.0) ** 3)
+    np.testing.assert_array_equal(apply(part), np.arange(3.0) ** 2)
+    assert list(cache.glob(f"*{runtime.PROGRAM_SUFFIX}")) == []
 
 
 @pytest.mark.slow

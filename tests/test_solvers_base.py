@@ -49,6 +49,7 @@ def test_every_solver_returns_a_solution_near_the_exact_global_optimum(problem, 
     assert int(sol.status) == expected and sol.to_json(problem)["status"] == expected.name.lower()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("solver", registry.SOLVERS)
 def test_every_solver_in_pointwise_mode_matches_the_closed_form(coarse, solver):
     w = weights_of(1.0, 1.0)
@@ -71,6 +72,7 @@ def test_unreachable_bounds_give_status_infeasible(problem, solver):
     assert sol.status_name == "infeasible" and "stress" in sol.violated(tight)
 
 
+@pytest.mark.slow
 def test_solve_batch_is_traceable_and_vmapped(problem):
     w = weights_of([1.0, 10.0], [1.0, 1.0])
     sol = base.solve_batch(problem, w, base.weighting_keys(0, 2))

@@ -14,6 +14,7 @@ PACKAGE = ROOT / "camjax"
 # module (dotted prefix) -> modules it must not import: the stages after it in the chain
 # scene -> evaluate -> followers (geometry, problem, run) -> solvers -> pipeline -> output -> cli
 MODELS = ("camjax.errors", "camjax.results", "camjax.numerics", "camjax.extrema", "camjax.laws", "camjax.program",
+          "camjax.synthesis",
           "camjax.contact", "camjax.loads")
 ABOVE_MODELS = ("camjax.scene", "camjax.evaluate", "camjax.followers", "camjax.solvers", "camjax.pipeline",
                 "camjax.output", "camjax.cli", "camjax.scaleout", "camjax.dynamics")

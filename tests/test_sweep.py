@@ -27,6 +27,7 @@ def big_sweep(problem):
     return result
 
 
+@pytest.mark.slow
 def test_sweep_of_121_weightings_is_one_compiled_program(big_sweep):
     assert big_sweep.results.batch_size == 121
     assert S.solve_batch._cache_size() == 1
@@ -77,6 +78,7 @@ def test_records_json_and_plot(big_sweep, tmp_path):
     assert path.stat().st_size > 10_000
 
 
+@pytest.mark.slow
 def test_reference_pointwise_design_json(problem):
     res = S.solve(problem, 1.0, 1.0, mode="pointwise")
     d = res.to_json(problem)
@@ -88,6 +90,7 @@ def test_reference_pointwise_design_json(problem):
     json.dumps(d, allow_nan=False)
 
 
+@pytest.mark.slow
 def test_chunking_does_not_change_results(problem):
     """GA keys come from the weighting's index: chunk sizes 2 and 3 give the same designs."""
     from camjax.solvers import ga
@@ -98,6 +101,7 @@ def test_chunking_does_not_change_results(problem):
     np.testing.assert_array_equal(np.asarray(a.results.base_radius_mm), np.asarray(b.results.base_radius_mm))
 
 
+@pytest.mark.slow
 def test_hybrid_polishes_the_ga(problem):
     res = S.solve(problem, 10.0, 1.0, solver="hybrid")
     ref = optimum.global_optimum(problem, weights_of(10.0, 1.0))

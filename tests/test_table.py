@@ -64,6 +64,7 @@ def test_cubic_fit_is_scipys_smoothing_spline_at_equal_lam():
                                    rtol=0, atol=1e-10)
 
 
+@pytest.mark.slow
 def test_noise_free_cycloidal_table_fits_to_1e_6_mm_and_its_peak_acceleration_to_1e_3(tmp_path):
     angles = np.arange(0.0, BETA + 0.5)  # every degree
     scene = _scene(tmp_path, angles, H * _cycloidal(angles / BETA))
@@ -113,6 +114,7 @@ def test_table_segments_meet_the_dwells_at_rest(tmp_path):
         assert j.flcd_class in ("ok", "perturbation"), j  # pinned levels, v = a = 0 at the ends
 
 
+@pytest.mark.slow
 def test_whole_cycle_table_reproduces_the_program(tmp_path):
     ref_scene = load_scene("default")
     theta = np.arange(360.0)

@@ -1,7 +1,8 @@
 """The ``camjax`` command line. One subcommand per job; each replaces its output folder whole.
 
 One module per command (:mod:`camjax.cli.laws`, :mod:`~camjax.cli.design`, :mod:`~camjax.cli.sweep`,
-:mod:`~camjax.cli.check_extremes`, :mod:`~camjax.cli.dynamics`); each registers itself in ``COMMANDS``
+:mod:`~camjax.cli.check_extremes`, :mod:`~camjax.cli.dynamics`,
+:mod:`~camjax.cli.synthesize`); each registers itself in ``COMMANDS``
 with :func:`camjax.cli.common.command`: a function that adds its arguments to an argparse parser
 and returns the function that runs it. What several commands share is in :mod:`camjax.cli.common`.
 
@@ -27,14 +28,15 @@ import camjax  # noqa: F401  (turns on x64 before any array is made)
 from camjax import runtime
 
 # the commands register themselves, in the order of `camjax --help`
-from camjax.cli import check_extremes, design, dynamics, laws, sweep  # noqa: F401
+from camjax.cli import check_extremes, design, dynamics, laws, sweep, synthesize  # noqa: F401
 from camjax.cli.common import COMMANDS, STRICT_EXIT, UsageError
 from camjax.cli.environment import check_environment
 from camjax.numerics import NonFiniteError
 from camjax.output.folder import OutputError
 from camjax.scene import SceneError, cut
 
-HELP_ORDER = ("laws", "design", "sweep", "check-extremes", "dynamics")  # as `camjax --help` lists them
+# as `camjax --help` lists them
+HELP_ORDER = ("laws", "design", "synthesize", "sweep", "check-extremes", "dynamics")
 
 __all__ = ["COMMANDS", "STRICT_EXIT", "UsageError", "build_parser", "entry", "main"]
 

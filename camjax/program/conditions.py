@@ -223,6 +223,9 @@ def _end_values(plan: Plan, at_end: bool) -> tuple[Fraction, Fraction, Fraction]
     return tuple((sign**k) * h * p[k - 1] / beta**k for k in (1, 2, 3))
 
 
+end_values = _end_values  # public: designed segments resolve "match" the same way
+
+
 def _q_end_values(plan: Plan, q: Sequence[Fraction], at_end: bool) -> tuple[Fraction, ...]:
     """(v, a, j) per degree^k of a solved conditions segment at its start or end."""
     beta, lift = Fraction(plan.angle_deg), Fraction(plan.lift)

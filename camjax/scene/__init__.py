@@ -17,6 +17,7 @@ from importlib import resources
 from pathlib import Path
 
 from camjax.errors import MISSING, QUOTE_CHARS, SceneError, cut, quote
+from camjax.scene.designed import parse_synthesis
 from camjax.scene.motion import check_resolution, parse_motion, samples_needed
 from camjax.scene.reader import TableReader
 from camjax.scene.sections import parse_contact, parse_design, parse_dynamics, parse_guide
@@ -52,7 +53,7 @@ def _builtin_scenes() -> dict[str, str]:
 
 BUILTIN_SCENES = _builtin_scenes()
 
-SECTIONS = ("motion", "follower", "contact", "design", "guide", "dynamics")
+SECTIONS = ("motion", "follower", "contact", "design", "guide", "dynamics", "synthesis")
 
 
 def scene_from_dict(data: dict, name: str = "scene", source: str | None = None) -> Scene:
@@ -93,7 +94,8 @@ def scene_from_dict(data: dict, name: str = "scene", source: str | None = None) 
                          "(follower.mass_kg and/or spring_N_per_m)", source=source)
     dynamics = (parse_dynamics(top.sub("dynamics"), motion, spec, follower.rocking) if "dynamics" in data
                 else None)
-    return Scene(name, motion, spec, contact, design, guide, dynamics)
+    synthesis = parse_synthesis(top.sub("synthesis"), motion.designed) if "synthesis" in data else None
+    return Scene(name, motion, spec, contact, design, guide, dynamics, synthesis)
 
 
 def with_design(scene: Scene, **overrides) -> Scene:

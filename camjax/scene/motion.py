@@ -11,6 +11,7 @@ from camjax.laws import FOURIER_PRESETS, LAWS, FourierSeries, fourier_law, get_l
 from camjax.program import KINDS, MotionProgram, Segment
 from camjax.program.conditions import MATCH, Plan, unmatched_joints
 from camjax.scene.conditions import CONDITION_KEYS, asked_to_match, parse_conditions, solve
+from camjax.scene.designed import Draft, is_designed, resolve, starting_law
 from camjax.scene.reader import DEFAULT, TableReader, build
 from camjax.scene.shaped import SHAPED_LAWS, parse_cycle_table, parse_shaped_segment
 from camjax.scene.spec import ROTATIONS, RPM_MAX, SAMPLES_MAX, SAMPLES_PER_SEGMENT, MotionSpec
@@ -84,12 +85,22 @@ def parse_motion(r: TableReader, oscillating: bool = False) -> MotionSpec:
                       "[{kind = 'dwell' | 'rise' | 'return', angle_deg = .., law = .., lift_mm = ..}, ...]")
     segments = list(cycle[0]) if cycle is not None else []
     conditions_of = {}  # segment index -> its joint conditions (a polynomial solved below)
+    drafts = {}  # segment index -> a designed segment as read (resolved below)
     for i, item in enumerate(raw if cycle is None else []):
         seg = TableReader(item, f"{r.path}.segments[{i}]", r.source)
         if seg.has(other_key):
             raise seg.error(other_key, seg.table[other_key],
                             f"{'an oscillating' if oscillating else 'a translating'} follower takes its "
                             f"lift as {lift_key}", lift_key)
+        if is_designed(item) and item.get("kind") in ("rise", "return"):
+            kind = seg.choice("kind", KINDS)
+            angle = seg.number("angle_deg", low=0.0, low_open=True, high=360.0)
+            lift = seg.number(lift_key, low=0.0, low_open=True)
+            if oscillating and lift >= 180.0:
+                raise seg.error(lift_key, lift, "swings the arm through the line of centres", "< 180")
+            drafts[len(segments)] = Draft(seg, kind, angle, lift, oscillating)
+            segments.append(Segment(kind, angle, None, math.radians(lift) if oscillating else lift))
+            continue
         if seg.table.get("law") in SHAPED_LAWS and seg.table.get("kind") in ("rise", "return"):
             raw[i] = parse_shaped_segment(seg, segments, lift_key, oscillating)  # appends to segments
             continue
@@ -111,6 +122,17 @@ def parse_motion(r: TableReader, oscillating: bool = False) -> MotionSpec:
                 conditions_of[len(segments)] = parse_conditions(seg, angle, oscillating)
             lift = math.radians(lift) if oscillating else lift  # the program keeps rad
             segments.append(Segment(kind, angle, law, lift))
+    designed = ()
+    if drafts:  # resolved against their neighbours, then moving by their starting laws
+        unit = math.degrees if oscillating else float
+        levels, level = [], 0.0
+        for sg in segments:
+            levels.append(level)
+            level += unit(sg.lift) * (1 if sg.kind == "rise" else -1 if sg.kind == "return" else 0)
+        designed = resolve(drafts, [Plan(sg.kind, sg.angle_deg, unit(sg.lift) if sg.kind != "dwell" else 0.0,
+                                         sg.law) for sg in segments], levels, r.path)
+        for ds in designed:
+            segments[ds.index] = replace(segments[ds.index], law=starting_law(ds))
     # the conditions solve works in the scene's units (mm, or deg for a rocking follower)
     plans = [Plan(seg.kind, seg.angle_deg, math.degrees(seg.lift) if oscillating else seg.lift, seg.law,
                   conditions_of.get(k)) for k, seg in enumerate(segments)]
@@ -143,7 +165,7 @@ def parse_motion(r: TableReader, oscillating: bool = False) -> MotionSpec:
     reported = tuple(dict(s) if sol is None else {**dict(s), "solved_degree": sol.degree}
                      for s, sol in zip(raw, solved, strict=True))
     spec = build(MotionSpec, rpm=rpm, program=program, segments=reported, asked_to_match=asked,
-                  samples=samples, rotation=rotation, extrema=extrema)
+                  samples=samples, rotation=rotation, extrema=extrema, designed=designed)
     check_resolution(spec, r)
     return spec
 

@@ -35,6 +35,8 @@ class MotionSpec:
     samples: int = 360  # cam-angle grid size N
     rotation: str = DEFAULT_ROTATION  # "ccw" or "cw": camjax.followers._pitch (cw = mirror image)
     extrema: str = "exact"  # "exact": max/min over the angle refined off the grid; "grid": samples
+    # the segments whose law is to be designed (``design = true``): camjax.scene.designed
+    designed: tuple = ()
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -134,6 +136,15 @@ class DynamicsSpec:
 
 
 @dataclass(frozen=True)
+class SynthesisSpec:
+    """[synthesis]: the objective of the designed laws (weights of the terms of
+    :data:`camjax.synthesis.OBJECTIVES`, zero weights left out) and the sampling of sampled peaks."""
+
+    objective: tuple[tuple[str, float], ...]
+    samples_per_span: int = 8
+
+
+@dataclass(frozen=True)
 class Scene:
     """A validated scene. Optional sections are None when absent: their models are not run."""
 
@@ -144,6 +155,7 @@ class Scene:
     design: DesignSpec | None = None
     guide: Guide | None = None
     dynamics: DynamicsSpec | None = None
+    synthesis: SynthesisSpec | None = None
 
     def needs(self) -> frozenset[str]:
         """The models this scene requires (kinematics and geometry always)."""

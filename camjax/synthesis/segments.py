@@ -1,0 +1,110 @@
+"""A scene's designed segments synthesized together, and the best built-in law of each one's class.
+
+Segments of the same structure (basis and the positions and orders of their conditions) form one
+batch: one problem, one ``jit(vmap(solve))`` over their conditions' values. Each result is compared
+with the built-in laws (:data:`camjax.laws.LAWS`) that meet the same conditions (the same joint
+class: what the designed law must do at its ends, a built-in law does too), measured the same way.
+
+The segments are read by duck typing (the attributes of :class:`camjax.scene.designed.DesignedSegment`),
+so this model-layer module imports nothing of the scene layer.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import jax.numpy as jnp
+import numpy as np
+
+from camjax.laws import LAWS
+from camjax.synthesis.basis import make_basis
+from camjax.synthesis.problem import L2_OBJECTIVES, OBJECTIVES, PEAK_OBJECTIVES, build_problem, kept_values
+from camjax.synthesis.solve import batch_synthesizer
+
+ORDERS = {**PEAK_OBJECTIVES, **L2_OBJECTIVES}
+BUILTIN_TOL = 1e-6  # a built-in law meets a condition when its normalized value is this close
+
+
+class SegmentSynthesis(NamedTuple):
+    """One designed segment's result (floats and NumPy; q is the normalized motion, q(0) = 0)."""
+
+    segment: object  # the DesignedSegment
+    knots: np.ndarray  # full clamped knot vector
+    control: np.ndarray  # control values of q
+    measures: dict  # name -> value (None where the order exceeds the degree)
+    objective: float
+    model_objective: float
+    converged: bool
+    residual: float
+    best_builtin: tuple[str, float, dict] | None  # (law name, objective, measures) or None
+
+
+def builtin_q(law, kind: str, x: np.ndarray) -> tuple[np.ndarray, ...]:
+    """q, q', q'', q''' of a built-in law played as the segment's normalized motion (a return
+    runs the law backwards: q(x) = 1 - p(1 - x))."""
+    if kind == "rise":
+        return tuple(np.asarray(v) for v in law(jnp.asarray(x)))
+    p = law(jnp.asarray(1.0 - x))
+    return (1.0 - np.asarray(p[0]), np.asarray(p[1]), -np.asarray(p[2]), np.asarray(p[3]))
+
+
+def builtin_measures(law, kind: str) -> dict:
+    """Peaks on 20001 points and integrals by 6-point Gauss-Legendre on 400 spans (the laws are
+    smooth or piecewise smooth with breaks at simple fractions: 1e-9 relative)."""
+    x = np.linspace(0.0, 1.0, 20001)
+    _, v, a, j = builtin_q(law, kind, x)
+    nodes, w = np.polynomial.legendre.leggauss(6)
+    edges = np.linspace(0.0, 1.0, 401)
+    half = 0.5 * np.diff(edges)
+    xg = ((edges[:-1] + half)[:, None] + half[:, None] * nodes[None, :]).ravel()
+    wg = (half[:, None] * w[None, :]).ravel()
+    _, _, ag, jg = builtin_q(law, kind, xg)
+    return {"peak_velocity": float(np.max(np.abs(v))), "peak_accel": float(np.max(np.abs(a))),
+            "peak_jerk": float(np.max(np.abs(j))), "l2_accel": float(wg @ ag**2),
+            "l2_jerk": float(wg @ jg**2)}
+
+
+def best_builtin(segment, weights: dict) -> tuple[str, float, dict] | None:
+    """The built-in law meeting the segment's conditions with the least objective, or None."""
+    best = None
+    for name, law in LAWS.items():
+        ok = True
+        for c, value in zip(segment.conditions, segment.values, strict=True):
+            got = float(builtin_q(law, segment.kind, np.asarray([c.x]))[c.order][0])
+            if abs(got - value) > BUILTIN_TOL * max(1.0, abs(value)):
+                ok = False
+                break
+        if not ok:
+            continue
+        m = builtin_measures(law, segment.kind)
+        obj = sum(w * m[n] for n, w in weights.items())
+        if best is None or obj < best[1]:
+            best = (name, float(obj), m)
+    return best
+
+
+def synthesize_segments(segments, weights: dict, samples_per_span: int = 8) -> list[SegmentSynthesis]:
+    """Synthesize every designed segment for the objective ``weights`` ({name: weight > 0}).
+
+    Raises ValueError for a term whose order exceeds a segment's degree (the scene checks it first).
+    """
+    names = tuple(n for n in OBJECTIVES if n in weights)
+    groups: dict[tuple, list] = {}
+    for seg in segments:
+        key = (seg.degree, seg.control_count, seg.knots, tuple((c.x, c.order) for c in seg.conditions))
+        groups.setdefault(key, []).append(seg)
+    results = {}
+    for (degree, count, knots, _), members in groups.items():
+        basis = make_basis(degree, count, knots)
+        problem = build_problem(basis, members[0].conditions, names, samples_per_span)
+        values = kept_values(problem, np.asarray([m.values for m in members], dtype=np.float64))
+        w = np.tile(np.asarray([weights[n] for n in problem.objective]), (len(members), 1))
+        out = batch_synthesizer(problem)(values, w)
+        for b, seg in enumerate(members):
+            meas = {n: (float(getattr(out.measures, n)[b]) if ORDERS[n] <= degree else None)
+                    for n in OBJECTIVES}
+            results[seg.index] = SegmentSynthesis(
+                seg, basis.knots, np.asarray(out.control[b]), meas, float(out.objective[b]),
+                float(out.model_objective[b]), bool(out.converged[b]), float(out.residual[b]),
+                best_builtin(seg, {n: weights[n] for n in names}))
+    return [results[seg.index] for seg in segments]
