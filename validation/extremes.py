@@ -589,8 +589,9 @@ def _rocker_base(scene: Scene):
 
 def _rocker_curves(scene: Scene, kin, w, base_radius_mm):
     """{name: array} of a rocker at one base radius, composed from camjax.geometry, loads and
-    contact as :meth:`camjax.followers._rocking.RockingFollower.evaluate` composes them, but kept in JAX so that it can
-    be differentiated in the base radius and the cam speed (loads and [contact] required)."""
+    contact as :meth:`camjax.followers._rocking.RockingFollower.evaluate` composes them, but kept
+    in JAX so that it can be differentiated in the base radius and the cam speed (loads and
+    [contact] required; another rocking type: its ``point_curves``, differentiable in the speed)."""
     f, c, rot = scene.follower, scene.contact, scene.motion.rotation
     d = f.pivot_distance_mm
     moment = loads.rocker_torque(f.train, kin, w)
@@ -603,6 +604,12 @@ def _rocker_curves(scene: Scene, kin, w, base_radius_mm):
         coeff = contact.stress_coefficient(moment / (arm * 1e-3), c.cam_width_mm, c.cam, c.follower)
         stress = contact.roller_stress(coeff, phi, roller_geo.roller_equivalent_radius(g.pitch_curvature, rf))
         limit = g.undercut_margin  # <= 0: undercut
+    elif f.type != "oscillating_flat":  # any other rocking follower: its own curves (a float radius)
+        c = followers.of(scene).point_curves(scene, kin, w, base_radius_mm)
+        limit = c["undercut_margin"] if "undercut_margin" in c else c["rho"] - f.min_curvature_radius_mm
+        return {"moment": c["pivot_torque"], "force": c["contact_force"], "cam_torque": c["torque"],
+                "pressure_angle": c["pressure_angle"], "stress": c.get("stress"), "limit": limit,
+                "arm_angle": c["arm_angle"]}
     else:
         g = rocker_flat_geo.oscillating_flat_geometry(d, f.face_offset_mm, base_radius_mm, kin, rot)
         phi = g.pressure_angle

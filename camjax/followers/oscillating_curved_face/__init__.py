@@ -1,0 +1,1 @@
+"""The oscillating curved-face follower: a crowned face of radius R_c on an arm swinging about a pivot."""

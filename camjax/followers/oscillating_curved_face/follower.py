@@ -1,0 +1,227 @@
+"""The oscillating curved-face follower (SPEC 3): a crowned face of radius R_c on a swinging arm.
+
+The face's circle (radius R_c, its centre at ``arm_length_mm`` l from a pivot at
+``pivot_distance_mm`` d from the cam centre) follows the pitch curve of an oscillating roller of
+radius R_c, so the pressure angle, the undercut, the contact force and the Hertz stress are that
+roller's; the face does not roll, so the contact travels R_c sin phi across it (which the face
+width W must cover) and slides on the cam
+(:mod:`camjax.followers.oscillating_curved_face.geometry`). Design variables: R_b, R_c, W, d and l
+(:mod:`camjax.followers.oscillating_curved_face.problem`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import NamedTuple
+
+import numpy as np
+
+from camjax import contact, loads
+from camjax.errors import SceneError
+from camjax.family import FEASIBILITY_TOL_MM
+from camjax.followers._rocking import (
+    TRAIN_KEYS,
+    RockerCurves,
+    RockerGeometry,
+    RockerSizing,
+    RockingFollower,
+    read_train,
+)
+from camjax.followers._swing import relative_rate
+from camjax.followers.oscillating_curved_face import geometry as curved_geo
+from camjax.followers.oscillating_curved_face.geometry import (
+    CURVED_MAX_PRESSURE_ANGLE_DEG,
+    CURVED_MIN_CURVATURE_RADIUS_MM,
+)
+from camjax.followers.oscillating_roller import geometry as rocker_roller_geo
+from camjax.followers.oscillating_roller.follower import check_rocker_closes
+from camjax.followers.roller import geometry as roller_geo
+from camjax.results import GeometryViolation
+from camjax.scene.reader import DEFAULT, build, fixed_or_free
+from camjax.scene.spec import FollowerSpec
+
+
+@dataclass(frozen=True, kw_only=True)
+class OscillatingCurvedFaceSpec(FollowerSpec):
+    """[follower] of a rocker with a crowned face: pivot, arm, the face's radius and width, limits."""
+
+    type: str = "oscillating_curved_face"
+    pivot_distance_mm: float = 0.0  # d, cam centre to pivot (required by the scene)
+    arm_length_mm: float = 0.0  # l, pivot to the centre of the face's circle (required)
+    face_radius_mm: float = 0.0  # R_c (required)
+    face_width_mm: float = 0.0  # W, <= 2 R_c (required)
+    max_pressure_angle_deg: float = CURVED_MAX_PRESSURE_ANGLE_DEG
+    min_curvature_radius_mm: float = CURVED_MIN_CURVATURE_RADIUS_MM  # 0 = just no undercut
+
+
+# the rocker's curves and the face's own: its width (mm), where the contact sits on it off its
+# axis, R_c sin phi (mm), and the sliding speed of cam and face at the contact (m/s)
+OscillatingCurvedCurves = NamedTuple("OscillatingCurvedCurves", [
+    *RockerCurves.__annotations__.items(), ("face_width_mm", float), ("face_travel_mm", np.ndarray),
+    ("sliding_speed_m_s", np.ndarray)])
+
+
+def _f(x) -> float:
+    return float(np.asarray(x))
+
+
+class OscillatingCurvedFace(RockingFollower):
+    name = "oscillating_curved_face"
+    title = "oscillating curved-face"
+    keys = ("pivot_distance_mm", "arm_length_mm", "face_radius_mm", "face_width_mm", "max_pressure_angle_deg",
+            "min_curvature_radius_mm", *TRAIN_KEYS)
+    example_scene = "oscillating-curved-face"
+    variables = ("base_radius_mm", "face_radius_mm", "face_width_mm", "pivot_distance_mm", "arm_length_mm")
+
+    def parse(self, r) -> OscillatingCurvedFaceSpec:
+        """d, l, R_c > 0 and 0 < W <= 2 R_c; whether the geometry closes is checked where the base
+        radius is known (the design or the sizing)."""
+        self.check_keys(r)
+        train = read_train(r)
+        pivot = r.number("pivot_distance_mm", low=0.0, low_open=True)
+        limit = r.number("max_pressure_angle_deg", DEFAULT, low=0.0, low_open=True)
+        if limit is not DEFAULT and limit >= 90.0:
+            raise r.error("max_pressure_angle_deg", limit, "out of range", "> 0 and < 90")
+        radius = r.number("face_radius_mm", low=0.0, low_open=True)
+        width = r.number("face_width_mm", low=0.0, low_open=True)
+        if width > 2.0 * radius:
+            raise r.error("face_width_mm", width, f"is wider than the face's circle (2 face_radius_mm = "
+                          f"{2.0 * radius:g} mm)", f"<= {2.0 * radius:g}")
+        return build(OscillatingCurvedFaceSpec, type=self.name, train=train, pivot_distance_mm=pivot,
+                     arm_length_mm=r.number("arm_length_mm", low=0.0, low_open=True),
+                     face_radius_mm=radius, face_width_mm=width, max_pressure_angle_deg=limit,
+                     min_curvature_radius_mm=r.number("min_curvature_radius_mm", DEFAULT, low=0.0))
+
+    def design_bounds(self, r, follower) -> dict[str, tuple[float, float]]:
+        base = fixed_or_free(r, "base_radius_mm")
+        radius = fixed_or_free(r, "face_radius_mm", (follower.face_radius_mm,) * 2)
+        width = fixed_or_free(r, "face_width_mm", (follower.face_width_mm,) * 2)
+        variables = dict(
+            pivot_distance_mm=fixed_or_free(r, "pivot_distance_mm", (follower.pivot_distance_mm,) * 2),
+            arm_length_mm=fixed_or_free(r, "arm_length_mm", (follower.arm_length_mm,) * 2))
+        if width[1] > 2.0 * radius[0]:
+            raise r.error("face_width_mm", list(width) if width[0] != width[1] else width[0],
+                          f"allows a face wider than its circle (2 R_c = {2.0 * radius[0]:g} mm at the "
+                          "smallest face_radius_mm)", f"<= {2.0 * radius[0]:g}")
+        check_rocker_closes(r, base, radius, **variables)
+        return {"base_radius_mm": base, "face_radius_mm": radius, "face_width_mm": width, **variables}
+
+    # ---- hooks of the rocking family
+
+    def sizing(self, scene, kin) -> RockerSizing:
+        """The smallest prime circle with |phi| <= max_pressure_angle_deg, the contact on the face
+        (|phi| <= asin(W / 2 R_c)) and no undercut, minus R_c
+        (:func:`camjax.followers.oscillating_curved_face.geometry.min_prime_radius`)."""
+        f, rotation = scene.follower, scene.motion.rotation
+        t = np.degrees(np.asarray(kin.theta))
+        s, face = curved_geo.min_prime_radius(kin, f.pivot_distance_mm, f.arm_length_mm, f.face_radius_mm,
+                                              f.face_width_mm, math.radians(f.max_pressure_angle_deg),
+                                              f.min_curvature_radius_mm, rotation)
+        if not bool(s.found):
+            raise SceneError("follower.arm_length_mm", f.arm_length_mm,
+                             f"with pivot_distance_mm = {f.pivot_distance_mm:g} no prime radius keeps "
+                             f"|pressure angle| <= {f.max_pressure_angle_deg:g} deg and the contact on the "
+                             f"face (W = {f.face_width_mm:g} mm) without undercut",
+                             "a longer arm, another pivot distance, a wider face or a larger "
+                             "max_pressure_angle_deg")
+        binding = "face_travel" if bool(face) else "pressure_angle"
+        if bool(s.undercut_binds):
+            binding = "undercut"
+        return RockerSizing(_f(s.base_radius_mm), _f(s.prime_radius_mm), _f(t[int(s.index)]), binding)
+
+    def closure_problem(self, scene, kin, base_radius_mm) -> str | None:
+        """As the oscillating roller's with R_f = R_c: |d - l| < R_b + R_c < d + l and the arm stays
+        off the line of centres while it swings."""
+        f = scene.follower
+        swing = float(np.max(np.asarray(kin.s)))
+        if base_radius_mm <= 0:
+            return "the base radius must be > 0"
+        d, l, rp = f.pivot_distance_mm, f.arm_length_mm, base_radius_mm + f.face_radius_mm
+        if not abs(d - l) < rp < d + l:
+            return (f"the face cannot reach the prime circle R_p = R_b + R_c = {rp:g} mm: needs |d - l| = "
+                    f"{abs(d - l):g} < R_p < d + l = {d + l:g}")
+        psi0 = math.acos((d * d + l * l - rp * rp) / (2 * d * l))
+        if psi0 + swing >= math.pi:
+            return (f"the arm starts {math.degrees(psi0):g} deg from the line of centres and the lift "
+                    f"({math.degrees(swing):g} deg) swings it through that line")
+        return None
+
+    def geometry(self, scene, kin, base_radius_mm) -> RockerGeometry:
+        f, rotation = scene.follower, scene.motion.rotation
+        d, rc, l = f.pivot_distance_mm, f.face_radius_mm, f.arm_length_mm
+        rp = base_radius_mm + rc
+        g = curved_geo.geometry(d, l, rc, rp, kin, rotation, f.min_curvature_radius_mm)
+        x, y = curved_geo.profile(d, l, rc, rp, kin, rotation)
+        pitch_x, pitch_y = rocker_roller_geo.oscillating_roller_pitch_curve(d, l, rp, kin, rotation)
+        return RockerGeometry(
+            x, y, g.arm_angle, rocker_roller_geo.arm_start_angle(rp, d, l), g.pressure_angle,
+            g.cam_radius_of_curvature, pitch_x, pitch_y, g.pitch_radius_of_curvature, g.pitch_curvature,
+            g.undercut_margin, arm_length_mm=l, roller_radius_mm=rc, prime_radius_mm=float(rp),
+            pressure_angle_limit_deg=float(f.max_pressure_angle_deg))
+
+    def contact(self, scene, moment, g):
+        """The oscillating roller's with R_f = R_c: the normal runs through the face's centre, so
+        P = M / (l cos phi); Hertz line contact of the cam and the crowned face."""
+        force = loads.rocker_roller_contact_force(moment, g.arm_length_mm, g.pressure_angle)
+        stress = None
+        if scene.contact is not None:
+            c = scene.contact
+            along = moment / (g.arm_length_mm * 1e-3)  # the force along the path of the face's centre, M / l
+            coeff = contact.stress_coefficient(along, c.cam_width_mm, c.cam, c.follower)
+            rho_eq = roller_geo.roller_equivalent_radius(g.pitch_curvature, scene.follower.face_radius_mm)
+            stress = contact.roller_stress(coeff, g.pressure_angle, rho_eq)
+        return force, stress
+
+    def face_curves(self, scene, kin, cam_speed_rad_s, psi) -> dict:
+        """The face's own curves at arm angles psi (rad): ``face_travel`` (mm, R_c sin phi) and
+        ``sliding_speed`` (m/s); pointwise in the motion."""
+        f = scene.follower
+        rate = relative_rate(kin, scene.motion.rotation)
+        legs = curved_geo.legs(f.pivot_distance_mm, f.arm_length_mm, psi, rate)
+        return {"face_travel": curved_geo.face_travel_of(legs, f.face_radius_mm),
+                "sliding_speed": curved_geo.sliding_speed_of(legs, rate, f.face_radius_mm, cam_speed_rad_s)}
+
+    def point_curves(self, scene, kin, cam_speed_rad_s, base_radius_mm) -> dict:
+        """The rocking family's curves and the face's (:meth:`face_curves`)."""
+        out = super().point_curves(scene, kin, cam_speed_rad_s, base_radius_mm)
+        return {**out, **self.face_curves(scene, kin, cam_speed_rad_s, out["arm_angle"])}
+
+    def evaluate(self, scene, kin, cam_speed_rad_s, base_radius_mm) -> OscillatingCurvedCurves:
+        """The rocker's curves with the face's width, the contact's travel on it and the sliding speed."""
+        curves = super().evaluate(scene, kin, cam_speed_rad_s, base_radius_mm)
+        face = self.face_curves(scene, kin, cam_speed_rad_s, np.radians(curves.arm_angle_deg))
+        return OscillatingCurvedCurves(
+            **curves._asdict(), face_width_mm=float(scene.follower.face_width_mm),
+            face_travel_mm=np.asarray(face["face_travel"]),
+            sliding_speed_m_s=np.asarray(face["sliding_speed"]))
+
+    def run(self, scene, arrays=None, *, base_radius_mm=None, dtype=None):
+        """The rocking family's run, with the face-width check added to the violations."""
+        out = super().run(scene, arrays, base_radius_mm=base_radius_mm, dtype=dtype)
+        return out._replace(violations=out.violations + tuple(face_violations(out.curves, out.extremes)))
+
+    def summary(self, design) -> str:
+        return (f"R_c = {design['face_radius_mm']:.4f} mm, W = {design['face_width_mm']:.4f} mm, "
+                f"pivot {design['pivot_distance_mm']:.4f} mm, arm {design['arm_length_mm']:.4f} mm, "
+                f"R_p = {design['prime_radius_mm']:.4f} mm")
+
+
+def face_violations(curves, extremes=None) -> list[GeometryViolation]:
+    """The contact running off the face: max |R_c sin phi| > W / 2 (the solvers' tolerance), on the
+    exact extrema where ``extremes`` has them, else on the samples."""
+    e = (extremes or {}).get("face_travel")
+    if e is None:
+        travel = np.abs(np.asarray(curves.face_travel_mm))
+        worst = (float(np.max(travel)), float(curves.theta_deg[int(np.argmax(travel))]))
+    else:
+        worst = max((e.max, e.max_deg), (-e.min, e.min_deg))
+    need, deg = 2.0 * worst[0], worst[1]
+    if curves.face_width_mm >= need - FEASIBILITY_TOL_MM:
+        return []
+    return [GeometryViolation("face_width", f"face width {curves.face_width_mm:.4g} mm < "
+                              f"2 max|R_c sin phi| = "
+                              f"{need:.4g} mm (at {deg:g} deg): the contact runs off the face")]
+
+
+FOLLOWER = OscillatingCurvedFace()
