@@ -71,7 +71,7 @@ class GradientSettings:
     inner_rtol: float = 0.1  # inexact inner solves: stop when steps <= inner_rtol * AL residual
     secant: bool = True  # secant-Newton steps inside Rprop's trust region (False: plain Rprop)
     aggregate_constraints: bool = True  # one multiplier per constraint (max over angles; exact here)
-    lbfgs_rounds: int = 30  # multiplier updates of the L-BFGS refinement after Rprop (0: none)
+    lbfgs_rounds: int = 30  # cap on the multiplier updates of the L-BFGS refinement after Rprop (0: none)
     lbfgs_steps: int = 200  # cap on L-BFGS steps per round
     lbfgs_gtol: float = 1e-11  # L-BFGS gradient norm (2-norm, box angle coordinates) ending a round
     lbfgs_penalty_growth: float = 2.0  # the penalty grows by this factor each round ...
@@ -328,7 +328,10 @@ def postprocess(state: GradientState, problem: Problem, weights: Weights,
     ev = family.evaluate(problem, weights, design)
     steps, done = state.step, state.done
     if settings.lbfgs_rounds > 0:
-        refined, lbfgs_steps = refine_lbfgs(problem, weights, state.u, state.multipliers, settings)
+        # Rprop's own stopping rule on the gradient is a KKT point; a stall (steps shrunk by sign
+        # flips, typically in a curved valley) is not, and is refined
+        needed = ~(state.done & (state.pg_norm <= settings.gtol))
+        refined, lbfgs_steps = refine_lbfgs(problem, weights, state.u, state.multipliers, settings, needed)
         ev_r = family.evaluate(problem, weights, refined)
         # kept only when no worse: feasible, and a smaller objective or a feasibility repaired
         better = ev_r.feasible & (~ev.feasible | (ev_r.objective <= ev.objective))
@@ -350,7 +353,8 @@ def _from_angle(problem: Problem, z: Design) -> Design:
 
 
 def refine_lbfgs(problem: Problem, weights: Weights, u: Design, multipliers: Constraints,
-                 settings: GradientSettings = DEFAULT_SETTINGS) -> tuple[Design, jax.Array]:
+                 settings: GradientSettings = DEFAULT_SETTINGS, needed: jax.Array | bool = True
+                 ) -> tuple[Design, jax.Array]:
     """Augmented-Lagrangian rounds of L-BFGS (optax, zoom line search) from unit-box point ``u``.
 
     Rprop moves one variable at a time by sign; in a curved valley that couples the variables
@@ -359,7 +363,9 @@ def refine_lbfgs(problem: Problem, weights: Weights, u: Design, multipliers: Con
     The box is kept by the map u = (1 - cos z) / 2 (z unbounded). Each round minimizes L_A for
     fixed multipliers (to ``lbfgs_gtol`` or ``lbfgs_steps``), then updates them as
     :func:`step` does, the penalty growing from round to round (``lbfgs_penalty_growth``, up to
-    ``lbfgs_penalty_max``) so that the last rounds end feasible to the families' tolerances. Returns the design (mm) and the L-BFGS steps taken.
+    ``lbfgs_penalty_max``) so that the last rounds end feasible to the families' tolerances.
+    The rounds stop once a round's inner solve met ``lbfgs_gtol`` and the AL residual ``ctol``;
+    none is run where ``needed`` is false (a vmapped batch runs until its last member is done). Returns the design (mm) and the L-BFGS steps taken.
     """
     opt = optax.lbfgs()
 
@@ -385,17 +391,26 @@ def refine_lbfgs(problem: Problem, weights: Weights, u: Design, multipliers: Con
         z, _, k = jax.lax.while_loop(cond, body, (z, opt.init(z), jnp.asarray(0)))
         return z, k
 
-    def round_(carry, mu):
-        z, lam, steps = carry
+    dtype = problem_dtype(problem)
+
+    def cond(carry):
+        _, _, _, r, finished = carry
+        return (r < settings.lbfgs_rounds) & ~finished
+
+    def round_(carry):
+        z, lam, steps, r, _ = carry
+        mu = jnp.minimum(settings.penalty * settings.lbfgs_penalty_growth ** r.astype(dtype),
+                         max(settings.lbfgs_penalty_max, settings.penalty))
         z, k = solve_round(z, lam, mu)
         g = lagrangian(z, lam, mu)[1]
+        residual = _tree_max_abs(jax.tree.map(lambda gi, m: jnp.minimum(-gi, m / mu), g, lam))
         lam = jax.tree.map(lambda m, gi: jnp.clip(m + mu * gi, 0.0, LAM_MAX), lam, g)
-        return (z, lam, steps + k), None
+        # done: the round's inner problem solved to lbfgs_gtol and the AL residual met
+        finished = (k < settings.lbfgs_steps) & (residual <= settings.ctol)
+        return z, lam, steps + k, r + 1, finished
 
-    dtype = problem_dtype(problem)
-    mus = jnp.minimum(settings.penalty * settings.lbfgs_penalty_growth ** jnp.arange(settings.lbfgs_rounds, dtype=dtype),
-                      max(settings.lbfgs_penalty_max, settings.penalty))
-    (z, _, steps), _ = jax.lax.scan(round_, (_to_angle(problem, u), multipliers, jnp.asarray(0)), mus)
+    start = (_to_angle(problem, u), multipliers, jnp.asarray(0), jnp.asarray(0), ~needed)
+    z, _, steps, _, _ = jax.lax.while_loop(cond, round_, start)
     return from_unit(problem, _from_angle(problem, z)), steps
 
 
