@@ -26,7 +26,8 @@ OUT = pathlib.Path(__file__).parent / "results" / "convergence.json"
 def four_free_roller():
     text = resources.files("camjax.scenes").joinpath("oscillating-roller.toml").read_text()
     old = "pivot_distance_mm = [65.0, 110.0]\n"
-    return parse_scene(text.replace(old, old + "roller_radius_mm = [4.0, 12.0]\narm_length_mm = [40.0, 80.0]\n"))
+    extra = "roller_radius_mm = [4.0, 12.0]\narm_length_mm = [40.0, 80.0]\n"
+    return parse_scene(text.replace(old, old + extra))
 
 
 def scenes():

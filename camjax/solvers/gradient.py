@@ -344,8 +344,9 @@ def postprocess(state: GradientState, problem: Problem, weights: Weights,
 
 def _to_angle(problem: Problem, u: Design) -> Design:
     """Unit box -> unbounded angles z, u = u_max (1 - cos z) / 2 (the inverse on [0, pi])."""
-    return jax.tree.map(lambda v, top: jnp.arccos(jnp.clip(1.0 - 2.0 * v / jnp.where(top > 0, top, 1.0), -1.0, 1.0)),
-                        u, _u_max(problem))
+    return jax.tree.map(
+        lambda v, top: jnp.arccos(jnp.clip(1.0 - 2.0 * v / jnp.where(top > 0, top, 1.0), -1.0, 1.0)),
+        u, _u_max(problem))
 
 
 def _from_angle(problem: Problem, z: Design) -> Design:
@@ -365,7 +366,8 @@ def refine_lbfgs(problem: Problem, weights: Weights, u: Design, multipliers: Con
     :func:`step` does, the penalty growing from round to round (``lbfgs_penalty_growth``, up to
     ``lbfgs_penalty_max``) so that the last rounds end feasible to the families' tolerances.
     The rounds stop once a round's inner solve met ``lbfgs_gtol`` and the AL residual ``ctol``;
-    none is run where ``needed`` is false (a vmapped batch runs until its last member is done). Returns the design (mm) and the L-BFGS steps taken.
+    none is run where ``needed`` is false (a vmapped batch runs until its last member is done).
+    Returns the design (mm) and the L-BFGS steps taken.
     """
     opt = optax.lbfgs()
 
