@@ -71,6 +71,11 @@ class GradientSettings:
     inner_rtol: float = 0.1  # inexact inner solves: stop when steps <= inner_rtol * AL residual
     secant: bool = True  # secant-Newton steps inside Rprop's trust region (False: plain Rprop)
     aggregate_constraints: bool = True  # one multiplier per constraint (max over angles; exact here)
+    lbfgs_rounds: int = 30  # cap on the multiplier updates of the L-BFGS refinement after Rprop (0: none)
+    lbfgs_steps: int = 200  # cap on L-BFGS steps per round
+    lbfgs_gtol: float = 1e-11  # L-BFGS gradient norm (2-norm, box angle coordinates) ending a round
+    lbfgs_penalty_growth: float = 2.0  # the penalty grows by this factor each round ...
+    lbfgs_penalty_max: float = 1e6  # ... up to this
 
 
 DEFAULT_SETTINGS = GradientSettings()
@@ -315,12 +320,100 @@ def _transform(settings: GradientSettings) -> optax.GradientTransformation:
                                  max_step=settings.max_step, secant=settings.secant)
 
 
-def postprocess(state: GradientState, problem: Problem, weights: Weights) -> GradientResult:
-    """Design in mm, judged with the true max over angles."""
+def postprocess(state: GradientState, problem: Problem, weights: Weights,
+                settings: GradientSettings = DEFAULT_SETTINGS) -> GradientResult:
+    """Design in mm, judged with the true max over angles (after the L-BFGS refinement, if any)."""
     design = from_unit(problem, state.u)
-    ev = family_of(problem).evaluate(problem, weights, design)
-    return GradientResult(design, ev.objective, ev.violation, ev.feasible, state.step, state.done,
+    family = family_of(problem)
+    ev = family.evaluate(problem, weights, design)
+    steps, done = state.step, state.done
+    if settings.lbfgs_rounds > 0:
+        # Rprop's own stopping rule on the gradient is a KKT point; a stall (steps shrunk by sign
+        # flips, typically in a curved valley) is not, and is refined
+        needed = ~(state.done & (state.pg_norm <= settings.gtol))
+        refined, lbfgs_steps = refine_lbfgs(problem, weights, state.u, state.multipliers, settings, needed)
+        ev_r = family.evaluate(problem, weights, refined)
+        # kept only when no worse: feasible, and a smaller objective or a feasibility repaired
+        better = ev_r.feasible & (~ev.feasible | (ev_r.objective <= ev.objective))
+        design = jax.tree.map(lambda a, b: jnp.where(better, a, b), refined, design)
+        ev = jax.tree.map(lambda a, b: jnp.where(better, a, b), ev_r, ev)
+        steps, done = steps + lbfgs_steps, done | better
+    return GradientResult(design, ev.objective, ev.violation, ev.feasible, steps, done,
                           state.pg_norm, state.multipliers)
+
+
+def _to_angle(problem: Problem, u: Design) -> Design:
+    """Unit box -> unbounded angles z, u = u_max (1 - cos z) / 2 (the inverse on [0, pi])."""
+    return jax.tree.map(
+        lambda v, top: jnp.arccos(jnp.clip(1.0 - 2.0 * v / jnp.where(top > 0, top, 1.0), -1.0, 1.0)),
+        u, _u_max(problem))
+
+
+def _from_angle(problem: Problem, z: Design) -> Design:
+    return jax.tree.map(lambda v, top: top * (0.5 - 0.5 * jnp.cos(v)), z, _u_max(problem))
+
+
+def refine_lbfgs(problem: Problem, weights: Weights, u: Design, multipliers: Constraints,
+                 settings: GradientSettings = DEFAULT_SETTINGS, needed: jax.Array | bool = True
+                 ) -> tuple[Design, jax.Array]:
+    """Augmented-Lagrangian rounds of L-BFGS (optax, zoom line search) from unit-box point ``u``.
+
+    Rprop moves one variable at a time by sign; in a curved valley that couples the variables
+    (the oscillating followers: pivot distance, arm length and prime radius together) its steps
+    flip sign and shrink until it stalls far from the optimum. L-BFGS follows such a valley.
+    The box is kept by the map u = (1 - cos z) / 2 (z unbounded). Each round minimizes L_A for
+    fixed multipliers (to ``lbfgs_gtol`` or ``lbfgs_steps``), then updates them as
+    :func:`step` does, the penalty growing from round to round (``lbfgs_penalty_growth``, up to
+    ``lbfgs_penalty_max``) so that the last rounds end feasible to the families' tolerances.
+    The rounds stop once a round's inner solve met ``lbfgs_gtol`` and the AL residual ``ctol``;
+    none is run where ``needed`` is false (a vmapped batch runs until its last member is done).
+    Returns the design (mm) and the L-BFGS steps taken.
+    """
+    opt = optax.lbfgs()
+
+    def lagrangian(z, lam, mu):
+        return augmented_lagrangian(_from_angle(problem, z), problem, weights, lam, mu,
+                                    settings.aggregate_constraints)
+
+    def solve_round(z, lam, mu):
+        fun = lambda v: lagrangian(v, lam, mu)[0]  # noqa: E731
+        value_and_grad = optax.value_and_grad_from_state(fun)
+
+        def body(carry):
+            z, state, k = carry
+            value, grad = value_and_grad(z, state=state)
+            updates, state = opt.update(grad, state, z, value=value, grad=grad, value_fn=fun)
+            return optax.apply_updates(z, updates), state, k + 1
+
+        def cond(carry):
+            _, state, k = carry
+            gnorm = optax.tree.norm(optax.tree.get(state, "grad"))
+            return (k == 0) | ((k < settings.lbfgs_steps) & (gnorm > settings.lbfgs_gtol))
+
+        z, _, k = jax.lax.while_loop(cond, body, (z, opt.init(z), jnp.asarray(0)))
+        return z, k
+
+    dtype = problem_dtype(problem)
+
+    def cond(carry):
+        _, _, _, r, finished = carry
+        return (r < settings.lbfgs_rounds) & ~finished
+
+    def round_(carry):
+        z, lam, steps, r, _ = carry
+        mu = jnp.minimum(settings.penalty * settings.lbfgs_penalty_growth ** r.astype(dtype),
+                         max(settings.lbfgs_penalty_max, settings.penalty))
+        z, k = solve_round(z, lam, mu)
+        g = lagrangian(z, lam, mu)[1]
+        residual = _tree_max_abs(jax.tree.map(lambda gi, m: jnp.minimum(-gi, m / mu), g, lam))
+        lam = jax.tree.map(lambda m, gi: jnp.clip(m + mu * gi, 0.0, LAM_MAX), lam, g)
+        # done: the round's inner problem solved to lbfgs_gtol and the AL residual met
+        finished = (k < settings.lbfgs_steps) & (residual <= settings.ctol)
+        return z, lam, steps + k, r + 1, finished
+
+    start = (_to_angle(problem, u), multipliers, jnp.asarray(0), jnp.asarray(0), ~needed)
+    z, _, steps, _, _ = jax.lax.while_loop(cond, round_, start)
+    return from_unit(problem, _from_angle(problem, z)), steps
 
 
 # ------------------------------------------------------------------------------ solves
@@ -342,7 +435,7 @@ def minimize(problem: Problem, weights: Weights, init_design: Design | None = No
     state = init(problem, init_design, settings)
     state = jax.lax.while_loop(cond, partial(step, problem=problem, weights=weights, settings=settings),
                                state)
-    return postprocess(state, problem, weights)
+    return postprocess(state, problem, weights, settings)
 
 
 @partial(jax.jit, static_argnames="settings")
