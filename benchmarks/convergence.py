@@ -18,7 +18,8 @@ jax.config.update("jax_enable_x64", True)
 
 from camjax import load_scene  # noqa: E402
 from camjax.scene import parse_scene  # noqa: E402
-from camjax.solvers.base import problem_from_scene, solve  # noqa: E402
+from camjax.solvers.base import DEFAULT_SETTINGS, Settings, problem_from_scene, solve  # noqa: E402
+from camjax.solvers.gradient import REFINED_SETTINGS  # noqa: E402
 
 OUT = pathlib.Path(__file__).parent / "results" / "convergence.json"
 
@@ -47,7 +48,9 @@ def main():
         row = {"scene": name, "follower": scene.follower.type}
         for solver in ("gradient", "hybrid"):
             t0 = time.perf_counter()
-            sol = solve(problem, weights, solver=solver, seed=0)
+            # the gradient solver with its L-BFGS refinement after a stall (off by default)
+            settings = Settings.of_solvers(gradient=REFINED_SETTINGS) if solver == "gradient" else DEFAULT_SETTINGS
+            sol = solve(problem, weights, solver=solver, seed=0, settings=settings)
             row[solver] = {"objective": float(sol.objective), "iterations": int(sol.iterations),
                            "status": sol.status_name, "feasible": bool(sol.feasible),
                            "seconds": time.perf_counter() - t0}

@@ -12,7 +12,8 @@ import pytest
 from camjax.family import Weights
 from camjax.followers.oscillating_roller import problem as OP
 from camjax.scene import parse_scene
-from camjax.solvers.base import problem_from_scene, solve
+from camjax.solvers.base import Settings, problem_from_scene, solve
+from camjax.solvers.gradient import REFINED_SETTINGS
 
 
 def four_free_scene():
@@ -29,7 +30,7 @@ def test_gradient_reaches_the_hybrid_optimum_and_beats_a_random_scan():
     scene = four_free_scene()
     problem = problem_from_scene(scene)
     weights = (scene.design.alpha, scene.design.gamma)
-    grad = solve(problem, weights, solver="gradient")
+    grad = solve(problem, weights, solver="gradient", settings=Settings.of_solvers(gradient=REFINED_SETTINGS))
     hybrid = solve(problem, weights, solver="hybrid", seed=0)
     assert bool(grad.feasible) and grad.status_name == "converged"
     # the goal: within 1e-6 relative of the hybrid (GA + polish); not worse by more

@@ -71,7 +71,10 @@ class GradientSettings:
     inner_rtol: float = 0.1  # inexact inner solves: stop when steps <= inner_rtol * AL residual
     secant: bool = True  # secant-Newton steps inside Rprop's trust region (False: plain Rprop)
     aggregate_constraints: bool = True  # one multiplier per constraint (max over angles; exact here)
-    lbfgs_rounds: int = 30  # cap on the multiplier updates of the L-BFGS refinement after Rprop (0: none)
+    # cap on the multiplier updates of the L-BFGS refinement after an Rprop stall; 0 (the default):
+    # none. 30 reaches the optimum where Rprop stalls in a curved valley, at about twice the compile
+    # time and up to lbfgs_rounds * lbfgs_steps more steps (docs/optimization.md)
+    lbfgs_rounds: int = 0
     lbfgs_steps: int = 200  # cap on L-BFGS steps per round
     lbfgs_gtol: float = 1e-11  # L-BFGS gradient norm (2-norm, box angle coordinates) ending a round
     lbfgs_penalty_growth: float = 2.0  # the penalty grows by this factor each round ...
@@ -79,6 +82,8 @@ class GradientSettings:
 
 
 DEFAULT_SETTINGS = GradientSettings()
+# the gradient solver with the L-BFGS refinement after a stall
+REFINED_SETTINGS = GradientSettings(lbfgs_rounds=30)
 
 
 class GradientState(NamedTuple):
