@@ -785,7 +785,8 @@ def rocker_optimization_cases(scene: Scene) -> list[Case]:
     rb_hi = max(float(problem.upper.base_radius_mm), 2.0 * sizing.min_base_radius_mm)
     fixed = box({**at_scene, "base_radius_mm": rb_lo}, {**at_scene, "base_radius_mm": rb_hi})
     loose = fixed._replace(sigma_max_MPa=jnp.asarray(1e12, dt))  # stress never binds
-    res = solve(loose, (1.0, 0.0))
+    # on the samples, as the sizing is: no polish between them (program None)
+    res = solve(loose._replace(program=None), (1.0, 0.0))
     out.append(_case("rocker optimization", "size only, pivot and arm (or face) fixed at the scene's: R_b vs "
                      "the sizing", float(res.base_radius_mm), sizing.min_base_radius_mm, 1e-5,
                      note="the same admissible set's boundary: bisection to float64 resolution, the solver "
