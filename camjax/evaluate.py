@@ -180,26 +180,16 @@ def curve_names(scene: Scene, arrays: SceneArrays, with_stress: bool = True) -> 
 @runtime.program_cache(static_argnames=("names", "follower"))
 def _refined_extremes(model: SceneModel, consts: CurveConstants, grid: jax.Array, base_radius_mm,
                       names: tuple[str, ...], follower: str):
-    """Max and min of every named curve, refined off the grid ``grid`` (Q, N), in one program.
-
-    One refinement per (curve, sense): the function refined is w . curves with w = +-e_q, so a
-    single :func:`camjax.extrema.refine_max`, mapped over the rows w, covers them all.
-    """
-    count = len(names)
-
-    def fn(segment, theta_deg, params):
-        m, c, radius, w = params
+    """Max and min of every named curve, refined off the grid ``grid`` (Q, N), in one program
+    (:func:`camjax.extrema.refine_curves`)."""
+    def curves(segment, theta_deg, params):
+        m, c, radius = params
         p = model_at(m, segment, theta_deg)
-        return jnp.tensordot(w, jnp.stack([_curve(n, p, c, radius, follower) for n in names]), axes=1)
+        return jnp.stack([_curve(n, p, c, radius, follower) for n in names])
 
-    bounds = program.segment_bounds_deg(model.program)
-    weights = jnp.concatenate([jnp.eye(count, dtype=grid.dtype), -jnp.eye(count, dtype=grid.dtype)])
-    dwells = extrema_mod.dwells(model.program)  # every curve here is a function of the motion
-    # one row at a time (lax.map, not vmap): the refinement is traced once and not batched again,
-    # which costs far more time than the rows' sequential run saves
-    e = jax.lax.map(lambda w: extrema_mod.refine_max(fn, (model, consts, base_radius_mm, w), bounds, w @ grid,
-                                                     constant=dwells), weights)
-    return e.value[:count], e.angle_deg[:count], -e.value[count:], e.angle_deg[count:]
+    # every curve here is a function of the motion: dwells are constant
+    return extrema_mod.refine_curves(curves, (model, consts, base_radius_mm), program.segment_bounds_deg(model.program),
+                                     grid, constant=extrema_mod.dwells(model.program))
 
 
 def refined_extremes(model: SceneModel, consts: CurveConstants, grid_point: PointValues, base_radius_mm,
@@ -228,10 +218,7 @@ def curve_extremes(scene: Scene, arrays: SceneArrays, names: tuple[str, ...],
     grid_point = PointValues(arrays.kin, arrays.force_N, arrays.torque_Nm, arrays.stress_coefficient)
     grid = jnp.stack([_curve(n, grid_point, consts, radius, scene.follower.type) for n in names])
     if model is None:
-        g, t = np.asarray(grid), np.asarray(arrays.theta_deg)
-        i, j = np.argmax(g, axis=1), np.argmin(g, axis=1)
-        rows = np.arange(len(names))
-        hi, hi_deg, lo, lo_deg = g[rows, i], t[i], g[rows, j], t[j]
+        hi, hi_deg, lo, lo_deg = extrema_mod.sampled_extremes(grid, arrays.theta_deg)
     else:
         consts = jax.tree_util.tree_map(lambda x: jnp.asarray(x, grid.dtype), consts)
         refined = _refined_extremes(model, consts, grid, radius, names, scene.follower.type)

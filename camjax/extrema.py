@@ -318,6 +318,37 @@ def refine_min(fn: SegmentFunction, params: Any, bounds_deg, grid_values: jax.Ar
     return Extremum(-e.value, e.angle_deg)
 
 
+def refine_curves(curves: SegmentFunction, params: Any, bounds_deg, grid: jax.Array, *,
+                  constant: tuple[bool, ...] | None = None):
+    """Max and min over the cam angle of each of Q curves, refined off their grid values.
+
+    ``curves(segment, theta_deg, params)`` gives the Q curves stacked (shape (Q, *theta.shape));
+    ``grid`` (Q, N) their values on the grid. One refinement per (curve, sense): the function
+    refined is w . curves with w = +-e_q, mapped over the rows w one at a time (``lax.map``, not
+    ``vmap``: the refinement is traced once and not batched again, which costs far more time than
+    the rows' sequential run saves). Returns (max, max_deg, min, min_deg), each of shape (Q,).
+    """
+    count = grid.shape[0]
+
+    def fn(segment, theta_deg, both):
+        p, w = both
+        return jnp.tensordot(w, curves(segment, theta_deg, p), axes=1)
+
+    weights = jnp.concatenate([jnp.eye(count, dtype=grid.dtype), -jnp.eye(count, dtype=grid.dtype)])
+    e = jax.lax.map(lambda w: refine_max(fn, (params, w), bounds_deg, w @ grid, constant=constant), weights)
+    return e.value[:count], e.angle_deg[:count], -e.value[count:], e.angle_deg[count:]
+
+
+def sampled_extremes(grid, theta_deg):
+    """(max, max_deg, min, min_deg) of each row of ``grid`` (Q, N) over its samples at ``theta_deg``
+    (N,) (NumPy; the first sample wins on ties): the ``extrema = "grid"`` counterpart of
+    :func:`refine_curves`."""
+    g, t = np.asarray(grid), np.asarray(theta_deg)
+    i, j = np.argmax(g, axis=1), np.argmin(g, axis=1)
+    rows = np.arange(g.shape[0])
+    return g[rows, i], t[i], g[rows, j], t[j]
+
+
 # ------------------------------------------------------------------ quantities of the motion
 
 
@@ -368,4 +399,5 @@ def grid_min(grid_values: jax.Array) -> Extremum:
 
 
 __all__ = ["CANDIDATES", "EXTREMA_MODES", "ITERATIONS", "Extremum", "dwells", "grid_max", "grid_min",
-           "max_of", "min_of", "refine_max", "refine_max_segments", "refine_min", "segment_sample_ranges"]
+           "max_of", "min_of", "refine_curves", "refine_max", "refine_max_segments", "refine_min",
+           "sampled_extremes", "segment_sample_ranges"]

@@ -271,27 +271,18 @@ class RockingFollower(Follower):
         names = tuple(curves) if names is None else tuple(names)
         grid = jnp.stack([curves[n] for n in names])
         if arrays.model is None:
-            g, t = np.asarray(grid), np.asarray(arrays.theta_deg)
-            i, j = np.argmax(g, axis=1), np.argmin(g, axis=1)
-            rows = np.arange(len(names))
-            hi, hi_deg, lo, lo_deg = g[rows, i], t[i], g[rows, j], t[j]
+            hi, hi_deg, lo, lo_deg = extrema_mod.sampled_extremes(grid, arrays.theta_deg)
         else:
-            def refine(prog, speed, grid):
-                def fn(segment, theta_deg, params):
-                    p, w, row = params
-                    c = self.point_curves(drawn, program_mod.segment_motion(p, segment, theta_deg), w, radius)
-                    return jnp.tensordot(row, jnp.stack([c[n] for n in names]), axes=1)
+            def stacked(segment, theta_deg, params):
+                p, w = params
+                c = self.point_curves(drawn, program_mod.segment_motion(p, segment, theta_deg), w, radius)
+                return jnp.stack([c[n] for n in names])
 
-                count = len(names)
-                rows = jnp.concatenate([jnp.eye(count, dtype=grid.dtype), -jnp.eye(count, dtype=grid.dtype)])
-                bounds, dwells = program_mod.segment_bounds_deg(prog), extrema_mod.dwells(prog)
-                # one row at a time (as camjax.evaluate's): the refinement is traced once
-                e = jax.lax.map(lambda r: extrema_mod.refine_max(fn, (prog, speed, r), bounds, r @ grid,
-                                                                 constant=dwells), rows)
-                return e.value[:count], e.angle_deg[:count], -e.value[count:], e.angle_deg[count:]
+            def refine(prog, speed, grid):  # every curve is a function of the motion: dwells are constant
+                return extrema_mod.refine_curves(stacked, (prog, speed), program_mod.segment_bounds_deg(prog), grid,
+                                                 constant=extrema_mod.dwells(prog))
 
-            refined = jax.jit(refine)(arrays.model.program, speed, grid)
-            hi, hi_deg, lo, lo_deg = (np.asarray(a) for a in refined)
+            hi, hi_deg, lo, lo_deg = (np.asarray(a) for a in jax.jit(refine)(arrays.model.program, speed, grid))
         return {n: Extremes(float(hi[k]), float(hi_deg[k]), float(lo[k]), float(lo_deg[k]))
                 for k, n in enumerate(names)}
 

@@ -76,8 +76,6 @@ def first_admissible(bad, lo, hi, samples: int, scan: int = SIZING_SCAN,
     return jnp.where(found, b, hi), found
 
 
-
-
 class MomentModel(NamedTuple):
     """What the Hertz coefficient of a rocker's contact is made of (SI and MPa; arrays)."""
 
