@@ -104,6 +104,7 @@ def test_roller_frame_artist_centre(roller_mechanism):
                                          - m.offset_mm**2) + s, abs=1e-9)
 
 
+@pytest.mark.slow
 def test_gif_has_every_frame(flat_mechanism, tmp_path):
     path = write_motion_gif(tmp_path / "motion.gif", flat_mechanism, frames=24, fps=10, dpi=40)
     with Image.open(path) as im:
@@ -117,6 +118,7 @@ def test_gif_has_every_frame(flat_mechanism, tmp_path):
         assert np.any(np.asarray(im.convert("RGB")) != first)
 
 
+@pytest.mark.slow
 def test_infeasible_outline_still_animates(default_scene, default_arrays, tmp_path):
     curves = camjax.analyse(default_scene, default_arrays, base_radius_mm=10.0).curves
     bad = curves.rho_mm < 0

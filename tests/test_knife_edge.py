@@ -116,6 +116,7 @@ def test_the_outline_is_the_tip_seen_from_the_cam(drawn):
     np.testing.assert_allclose(c.profile_y_mm, y, rtol=0, atol=1e-12)
 
 
+@pytest.mark.slow
 def test_pressure_angle_and_curvature_match_finite_differences_of_the_outline(drawn):
     scene, run = drawn
     c = run.curves

@@ -239,6 +239,7 @@ def test_a_narrow_face_binds_the_sizing_where_the_contact_reaches_its_edge():
     assert wide.binding == "pressure_angle" and wide.min_base_radius_mm < sizing.min_base_radius_mm
 
 
+@pytest.mark.slow
 def test_a_face_too_narrow_is_reported_by_the_problem_and_the_run():
     scene = _scene(16.0)
     run = camjax.run_design(scene, base_radius_mm=20.0)  # below the smallest cam the face admits (24.6 mm)

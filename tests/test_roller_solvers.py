@@ -164,6 +164,7 @@ def _dense_max_pressure_angle_deg(scene, design, samples: int = 720_001) -> floa
     return float(np.degrees(np.max(np.abs(phi))))
 
 
+@pytest.mark.slow
 def test_exact_extrema_keep_the_pressure_angle_between_the_samples(scene):
     """Solved on the 1 deg grid, the prime circle sits on the limit at the samples and passes it
     between them (the dense NumPy scan finds |phi| above 30 deg); with exact extrema (the scene's

@@ -80,6 +80,7 @@ def test_known_optimum_within_5_percent_on_a_uniform_cubic_of_32(name, orders, o
     assert optimum * (1.0 - 1e-9) <= float(r.objective) <= 1.05 * optimum
 
 
+@pytest.mark.slow
 def test_the_l2_optima_are_the_cubic_and_the_3_4_5_polynomial():
     x = np.linspace(0.0, 1.0, 101)
     p, r = run(make_basis(3, 5, (0.5,)), 1, ["l2_accel"])
@@ -90,6 +91,7 @@ def test_the_l2_optima_are_the_cubic_and_the_3_4_5_polynomial():
     np.testing.assert_allclose(s, 10 * x**3 - 15 * x**4 + 6 * x**5, atol=1e-11)
 
 
+@pytest.mark.slow
 def test_the_peak_accel_optimum_is_bang_bang():
     p, r = run(make_basis(2, 6, (0.25, 0.5, 0.75)), 1, ["peak_accel"])
     x = np.asarray([0.1, 0.3, 0.45, 0.55, 0.7, 0.9])
