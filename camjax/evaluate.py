@@ -117,7 +117,14 @@ def scene_arrays(scene: Scene, samples: int | None = None, dtype=None, extrema: 
 
 def _scene_arrays(scene: Scene, n: int, dtype) -> SceneArrays:
     prog = jax.tree_util.tree_map(lambda x: jnp.asarray(x, dtype), scene.motion.program)
-    kin = program.evaluate(prog, n)
+    return arrays_from_kinematics(scene, program.evaluate(prog, n))
+
+
+def arrays_from_kinematics(scene: Scene, kin: Kinematics) -> SceneArrays:
+    """The scene's arrays (loads, contact coefficient) for the kinematics ``kin`` on the grid of
+    ``len(kin.s)`` samples instead of its program's: traceable in ``kin`` (law co-design builds
+    them from kinematics linear in a law's control values). Extrema on the grid (no model)."""
+    n, dtype = kin.s.shape[-1], kin.s.dtype
     omega = jnp.asarray(program.rpm_to_rad_s(scene.motion.rpm), dtype)
     motion = program.time_kinematics(kin, omega)
     force = torque = coeff = None

@@ -25,6 +25,7 @@ LATER = {
     "camjax.followers": ("camjax.pipeline", "camjax.cli", "camjax.scaleout"),
     "camjax.solvers": ("camjax.pipeline", "camjax.output", "camjax.cli"),
     "camjax.pipeline": ("camjax.output", "camjax.cli", "camjax.scaleout"),
+    "camjax.codesign": ("camjax.output", "camjax.cli", "camjax.scaleout"),  # the pipeline's layer
     "camjax.output": ("camjax.cli", "camjax.scaleout"),
     "camjax.runtime": ("camjax.",),  # set-up only: must load before anything it could configure
 }

@@ -136,6 +136,11 @@ def resolve(drafts: dict[int, Draft], plans: list[Plan], levels: list[float], pa
 def starting_law(ds: DesignedSegment, oscillating: bool = False):
     """The law the segment moves by until designed: the control values meeting its conditions
     nearest (least squares) to the uniform law's (the Greville abscissae), as a B-spline law."""
+    return law_from_control(ds, starting_control(ds))[0]
+
+
+def starting_control(ds: DesignedSegment) -> np.ndarray:
+    """The normalized control values of :func:`starting_law` (q(0) = 0, q(1) = 1)."""
     from camjax.synthesis import build_problem, kept_values
 
     basis = ds.basis()
@@ -143,8 +148,7 @@ def starting_law(ds: DesignedSegment, oscillating: bool = False):
     k, t = basis.degree, basis.knots
     greville = np.asarray([t[i + 1: i + k + 1].mean() for i in range(basis.n)])
     cp = problem.A_pinv @ kept_values(problem, np.asarray(ds.values))
-    c = cp + problem.null @ (problem.null.T @ (greville - cp))
-    return law_from_control(ds, c)[0]
+    return cp + problem.null @ (problem.null.T @ (greville - cp))
 
 
 def law_from_control(ds: DesignedSegment, control):

@@ -64,17 +64,21 @@ def builtin_measures(law, kind: str) -> dict:
             "l2_jerk": float(wg @ jg**2)}
 
 
+def meets_conditions(law, segment) -> bool:
+    """Whether a built-in law played as the segment meets every one of its conditions (the same
+    joint class)."""
+    for c, value in zip(segment.conditions, segment.values, strict=True):
+        got = float(builtin_q(law, segment.kind, np.asarray([c.x]))[c.order][0])
+        if abs(got - value) > BUILTIN_TOL * max(1.0, abs(value)):
+            return False
+    return True
+
+
 def best_builtin(segment, weights: dict) -> tuple[str, float, dict] | None:
     """The built-in law meeting the segment's conditions with the least objective, or None."""
     best = None
     for name, law in LAWS.items():
-        ok = True
-        for c, value in zip(segment.conditions, segment.values, strict=True):
-            got = float(builtin_q(law, segment.kind, np.asarray([c.x]))[c.order][0])
-            if abs(got - value) > BUILTIN_TOL * max(1.0, abs(value)):
-                ok = False
-                break
-        if not ok:
+        if not meets_conditions(law, segment):
             continue
         m = builtin_measures(law, segment.kind)
         obj = sum(w * m[n] for n, w in weights.items())

@@ -1,0 +1,350 @@
+"""Co-design of a scene's designed laws and the cam's geometry: the bilevel search of ``camjax design``.
+
+A scene with both [design] and ``design = true`` segments asks for the motion and the cam around
+it together. The free coordinates z of the designed laws (:mod:`camjax.synthesis.linear`: the
+joint conditions met by construction) are the outer variables; for each z the cam's geometry is
+the [design] optimum of the follower family's problem built on the kinematics of z:
+
+    F(z) = min_d  f(P(z), d)  subject to  g(P(z), d) <= 0  +  law(z),
+
+f the family's objective (alpha size + gamma stress), g its constraints, P(z) its problem on the
+sample grid (the kinematics affine in z, loads and contact coefficient computed from them by
+:func:`camjax.evaluate.arrays_from_kinematics`), law(z) the [synthesis] squared-derivative terms.
+
+- **Inner**: the registered gradient solver on the grid (``extrema = "grid"``: the problem is a
+  pytree of arrays whose kinematic fields are functions of z; one compiled program for every z).
+- **Gradient of the inner optimum** by the envelope theorem: at the optimum d* with multipliers
+  lambda of its active constraints (from stationarity, :func:`multipliers`), dF/dz is the partial
+  derivative in z of the Lagrangian f + lambda . g_max with d* and lambda held fixed (g_max: the
+  family's ``constraint_maxima``), by ``jax.grad`` through the problem's construction, plus the
+  law terms'. tests/test_codesign.py checks it against central differences of F.
+- **Outer**: BFGS on z with a backtracking (Armijo) line search, in NumPy (z has tens of
+  coordinates); an infeasible inner optimum counts as +inf.
+- **Never worse than choosing**: every combination of the built-in laws that meet each designed
+  segment's conditions is solved with its own optimal geometry (:func:`builtin_candidates`); the
+  search starts from the best of them projected onto the B-spline space and from the law-only
+  synthesis, and if it cannot beat the best built-in combination that combination is returned.
+
+Python (a driver of jitted pieces); the pieces are pure JAX.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import itertools
+import math
+from typing import Any, NamedTuple
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from camjax.evaluate import arrays_from_kinematics
+from camjax.family import weights_of
+from camjax.laws import LAWS
+from camjax.program import Kinematics, MotionProgram
+from camjax.solvers.base import family_of, problem_from_scene, solve_one
+from camjax.synthesis.linear import law_quadratics, linear_kinematics, segment_samples
+from camjax.synthesis.problem import L2_OBJECTIVES, PEAK_OBJECTIVES
+from camjax.synthesis.segments import builtin_measures, builtin_q, meets_conditions
+
+SUPPORTED = tuple(L2_OBJECTIVES)  # the [synthesis] terms the co-design takes (smooth in z)
+MAX_ITERATIONS = 60  # BFGS steps of the outer search
+MAX_COMBINATIONS = 256  # built-in law combinations solved (more: one law for every segment)
+ACTIVE_RTOL = 1e-7  # a constraint is active within this fraction of the problem's size norm
+
+
+class CodesignError(ValueError):
+    """A scene the co-design cannot take: ``field`` names the scene key."""
+
+    def __init__(self, field: str, message: str):
+        super().__init__(f"{field}: {message}")
+        self.field = field
+
+
+class Inner(NamedTuple):
+    """The geometry optimum of one set of kinematics (NumPy floats)."""
+
+    objective: float  # the family's objective at its optimum (+inf if infeasible)
+    design: Any
+    feasible: bool
+
+
+class Codesign:
+    """The static data of one co-design and its compiled pieces (see the module docstring)."""
+
+    def __init__(self, scene, samples: int | None = None, controls=None):
+        from camjax.scene.designed import starting_control
+
+        if scene.design is None:
+            raise CodesignError("design", "co-design needs a [design] section")
+        if scene.design.mode != "global":
+            raise CodesignError("design.mode", f"'{scene.design.mode}': co-design designs one cam for "
+                                "the whole turn (allowed: 'global')")
+        terms = dict(scene.synthesis.objective) if scene.synthesis is not None else {}
+        for name in terms:
+            if name not in SUPPORTED:
+                raise CodesignError(f"synthesis.objective.{name}", "a peak term is not supported by "
+                                    f"camjax design's co-design yet (allowed: {', '.join(SUPPORTED)}; "
+                                    "camjax synthesize takes it)")
+        self.scene = scene
+        self.law_weights = terms
+        self.samples = int(scene.motion.samples if samples is None else samples)
+        self.designed = scene.motion.designed
+        program = scene.motion.program
+        starts = [starting_control(ds) for ds in self.designed] if controls is None else controls
+        self.lin = linear_kinematics(program, self.designed, self.samples, starts)
+        self.jacobian = jnp.asarray(self.lin.jacobian)
+        grid = dataclasses.replace(scene, motion=dataclasses.replace(scene.motion, extrema="grid"))
+        self.grid_scene = grid
+        from camjax.evaluate import scene_arrays
+
+        kin = scene_arrays(grid, samples=self.samples, extrema="grid").kin
+        self.theta = kin.theta
+        self.kin0 = jnp.stack([kin.s, kin.ds, kin.d2s, kin.d3s])
+        self.law_P, self.law_q, self.law_c = law_quadratics(self.lin, self.designed, terms)
+        self.weights = weights_of(scene.design.alpha, scene.design.gamma)
+        self._inner = jax.jit(self._inner_fn)
+        self._lagrangian_grad = jax.jit(jax.grad(self._lagrangian, argnums=0))
+        self._local = jax.jit(self._local_fn)
+        self.evaluations = 0
+
+    # ------------------------------------------------------------------ pure pieces
+
+    def problem(self, kin4):
+        """The family's problem on kinematics ``kin4`` (4, samples): s, s', s'', s''' (traceable)."""
+        kin = Kinematics(self.theta, kin4[0], kin4[1], kin4[2], kin4[3])
+        return problem_from_scene(self.grid_scene, arrays_from_kinematics(self.grid_scene, kin))
+
+    def kinematics(self, z):
+        """(4, samples) kinematics of the coordinates z (traceable)."""
+        return self.kin0 + jnp.tensordot(self.jacobian, jnp.asarray(z) - self.lin.z0, axes=1)
+
+    def _inner_fn(self, kin4):
+        sol = solve_one(self.problem(kin4), self.weights, jax.random.key(0), mode="global", solver="gradient")
+        return sol.objective, sol.design, sol.feasible
+
+    def _lagrangian(self, kin4, design, lam):
+        problem = self.problem(kin4)
+        family = family_of(problem)
+        g = family.constraint_maxima(problem, design)
+        return family.objective(problem, self.weights, design) + jnp.dot(lam, jnp.stack(list(g)))
+
+    def _local_fn(self, kin4, design):
+        """Objective and constraint maxima with their gradients in the design at ``design``."""
+        problem = self.problem(kin4)
+        family = family_of(problem)
+
+        def parts(d):
+            g = family.constraint_maxima(problem, d)
+            return jnp.concatenate([family.objective(problem, self.weights, d)[None], jnp.stack(list(g))])
+
+        return parts(design), jax.jacobian(parts)(design), problem.lower, problem.upper, family.size_norm(problem)
+
+    # ------------------------------------------------------------------ evaluations
+
+    def law_value(self, z) -> float:
+        z = np.asarray(z, dtype=np.float64)
+        return float(0.5 * z @ self.law_P @ z + self.law_q @ z + self.law_c)
+
+    def inner(self, kin4) -> Inner:
+        self.evaluations += 1
+        f, d, ok = jax.device_get(self._inner(jnp.asarray(kin4)))
+        return Inner(float(f) if bool(ok) and np.isfinite(f) else math.inf, d, bool(ok))
+
+    def value(self, z) -> tuple[float, Inner]:
+        """F(z) and the inner optimum."""
+        inner = self.inner(self.kinematics(z))
+        return inner.objective + self.law_value(z), inner
+
+    def gradient(self, z, inner: Inner) -> np.ndarray:
+        """dF/dz by the envelope theorem at the inner optimum ``inner`` of z."""
+        kin4 = self.kinematics(z)
+        values, jac, lower, upper, norm = jax.device_get(self._local(kin4, inner.design))
+        lam = multipliers(values, jac, inner.design, lower, upper, norm)
+        gk = self._lagrangian_grad(kin4, inner.design, jnp.asarray(lam))
+        gz = np.asarray(jnp.tensordot(gk, self.jacobian, axes=((0, 1), (0, 1))))
+        z = np.asarray(z, dtype=np.float64)
+        return gz + self.law_P @ z + self.law_q
+
+    def gradient_fd(self, z, h: float = 1e-5) -> np.ndarray:
+        """dF/dz by central differences of F (2 inner solves per coordinate)."""
+        z = np.asarray(z, dtype=np.float64)
+        out = np.zeros_like(z)
+        for i in range(z.size):
+            e = np.zeros_like(z)
+            e[i] = h
+            out[i] = (self.value(z + e)[0] - self.value(z - e)[0]) / (2.0 * h)
+        return out
+
+
+def multipliers(values, jac, design, lower, upper, size_norm) -> np.ndarray:
+    """Multipliers lambda >= 0 of the constraint maxima at ``design``: the least-squares solution of
+    stationarity grad f + sum lambda_c grad g_c - mu_lo + mu_hi = 0 over the active constraints
+    (g_c within :data:`ACTIVE_RTOL` of the size norm of 0) and active bounds, all nonnegative
+    (every subset of the active set is tried: a family has a handful of constraints and
+    variables). Inactive constraints get 0; the box's multipliers are dropped (the box does not
+    depend on z)."""
+    grads = np.stack([np.asarray(leaf, dtype=np.float64) for leaf in jax.tree.leaves(jac)], axis=1)
+    g = np.asarray(values[1:], dtype=np.float64)
+    tol = ACTIVE_RTOL * float(size_norm)
+    active = [i for i in range(g.size) if g[i] > -tol]
+    d = np.asarray([float(v) for v in jax.tree.leaves(design)])
+    lo = np.asarray([float(v) for v in jax.tree.leaves(lower)])
+    hi = np.asarray([float(v) for v in jax.tree.leaves(upper)])
+    eye = np.eye(d.size)
+    cols = [grads[1 + i] for i in active]
+    cols += [-eye[i] for i in range(d.size) if d[i] - lo[i] <= tol]
+    cols += [eye[i] for i in range(d.size) if hi[i] - d[i] <= tol]
+    lam = np.zeros(g.size)
+    best, best_res = (), math.inf
+    for r in range(len(cols) + 1):
+        for subset in itertools.combinations(range(len(cols)), r):
+            if subset:
+                A = np.stack([cols[k] for k in subset], axis=1)
+                sol = np.linalg.lstsq(A, -grads[0], rcond=None)[0]
+                if np.any(sol < 0.0):
+                    continue
+                res = float(np.linalg.norm(A @ sol + grads[0]))
+            else:
+                sol, res = np.zeros(0), float(np.linalg.norm(grads[0]))
+            if res < best_res * (1.0 - 1e-9):
+                best, best_res = tuple(zip(subset, sol, strict=True)), res
+    for k, v in best:
+        if k < len(active):
+            lam[active[k]] = v
+    return lam
+
+
+# ------------------------------------------------------------------------------ built-in laws
+
+
+def builtin_candidates(designed) -> list[list[str]]:
+    """Per designed segment, the built-in laws that meet its conditions (its joint class)."""
+    return [[name for name, law in LAWS.items() if meets_conditions(law, ds)] for ds in designed]
+
+
+def builtin_kinematics(cd: Codesign, names) -> jnp.ndarray:
+    """(4, samples) kinematics with designed segment k moving by the built-in law ``names[k]``."""
+    program = cd.scene.motion.program
+    lifts = np.asarray(program.lifts, dtype=np.float64)
+    signs = [1.0 if k == "rise" else -1.0 if k == "return" else 0.0 for k in program.kinds]
+    levels = np.concatenate([[0.0], np.cumsum(lifts * np.asarray(signs))])
+    kin = np.array(cd.kin0)
+    for ds, name in zip(cd.designed, names, strict=True):
+        i = ds.index
+        rows, x = segment_samples(program, i, cd.samples)
+        q = builtin_q(LAWS[name], program.kinds[i], x)
+        signed, beta = signs[i] * lifts[i], math.radians(program.angles_deg[i])
+        kin[0, rows] = levels[i] + signed * q[0]
+        for r in (1, 2, 3):
+            kin[r, rows] = signed * q[r] / beta**r
+    return jnp.asarray(kin)
+
+
+@functools.cache
+def _builtin_measures(name: str, kind: str) -> dict:
+    return builtin_measures(LAWS[name], kind)
+
+
+def builtin_law_value(cd: Codesign, names) -> float:
+    """The [synthesis] terms of built-in laws (their exact figures, :func:`builtin_measures`)."""
+    total = 0.0
+    for ds, name in zip(cd.designed, names, strict=True):
+        m = _builtin_measures(name, ds.kind)
+        total += sum(w * m[term] for term, w in cd.law_weights.items())
+    return total
+
+
+def best_builtin_combination(cd: Codesign) -> tuple[tuple[str, ...], float, Inner] | None:
+    """The combination of built-in laws (one per designed segment, each meeting its conditions)
+    with the least co-design objective, each with its own optimal geometry: (names, F, inner)."""
+    cands = builtin_candidates(cd.designed)
+    if any(not c for c in cands):
+        return None
+    combos = list(itertools.product(*cands))
+    if len(combos) > MAX_COMBINATIONS:
+        common = set.intersection(*(set(c) for c in cands))
+        combos = [tuple([n] * len(cands)) for n in LAWS if n in common]
+    best = None
+    for names in combos:
+        inner = cd.inner(builtin_kinematics(cd, names))
+        f = inner.objective + builtin_law_value(cd, names)
+        if best is None or f < best[1]:
+            best = (tuple(names), f, inner)
+    return best
+
+
+def fitted_coordinates(cd: Codesign, names) -> np.ndarray:
+    """z of the B-spline laws nearest (least squares on 401 points, within the conditions) to the
+    built-in laws ``names``."""
+    from camjax.synthesis.basis import evaluation_matrix
+
+    x = np.linspace(0.0, 1.0, 401)
+    z = np.zeros(cd.lin.free)
+    for seg, ds, name in zip(cd.lin.segments, cd.designed, names, strict=True):
+        E = evaluation_matrix(ds.basis(), x, 0)
+        target = builtin_q(LAWS[name], ds.kind, x)[0]
+        m = seg.null.shape[1]
+        z[seg.offset: seg.offset + m] = np.linalg.lstsq(E @ seg.null, target - E @ seg.cp, rcond=None)[0]
+    return z
+
+
+# ------------------------------------------------------------------------------ the search
+
+
+class SearchResult(NamedTuple):
+    z: np.ndarray
+    objective: float  # F on the grid
+    inner: Inner
+    iterations: int
+    start: str  # "synthesis" or "builtin_fit"
+    history: list  # F after each iteration
+
+
+def bfgs(cd: Codesign, z0, f0: float, inner0: Inner, max_iterations: int = MAX_ITERATIONS,
+         gtol: float = 1e-9, ftol: float = 1e-12) -> tuple[np.ndarray, float, Inner, int, list]:
+    """BFGS with Armijo backtracking on F (inverse Hessian started at the identity scaled by the
+    first step). Stops on a small gradient, no decrease, or ``max_iterations``."""
+    z, f, inner = np.asarray(z0, dtype=np.float64), f0, inner0
+    g = cd.gradient(z, inner)
+    H = None
+    history = [f]
+    it = 0
+    for it in range(1, max_iterations + 1):
+        if not np.isfinite(f) or np.linalg.norm(g, np.inf) < gtol:
+            break
+        p = -(g if H is None else H @ g)
+        slope = float(g @ p)
+        if slope >= 0.0:  # not a descent direction: restart from steepest descent
+            H, p, slope = None, -g, -float(g @ g)
+        step = 1.0 if H is not None else min(1.0, 0.1 / max(np.linalg.norm(g, np.inf), 1e-300))
+        accepted = False
+        for _ in range(30):
+            zn = z + step * p
+            fn, innern = cd.value(zn)
+            if fn <= f + 1e-4 * step * slope:
+                accepted = True
+                break
+            step *= 0.5
+        if not accepted:
+            if H is None:
+                break
+            H = None  # retry along the gradient
+            continue
+        gn = cd.gradient(zn, innern)
+        s_, y_ = zn - z, gn - g
+        sy = float(s_ @ y_)
+        if sy > 1e-12 * np.linalg.norm(s_) * np.linalg.norm(y_):
+            if H is None:
+                H = (sy / float(y_ @ y_)) * np.eye(z.size)
+            rho = 1.0 / sy
+            V = np.eye(z.size) - rho * np.outer(s_, y_)
+            H = V @ H @ V.T + rho * np.outer(s_, s_)
+        decrease = f - fn
+        z, f, g, inner = zn, fn, gn, innern
+        history.append(f)
+        if decrease <= ftol * max(1.0, abs(f)):
+            break
+    return z, f, inner, it, history
