@@ -67,9 +67,9 @@ def builtin_measures(law, kind: str) -> dict:
 def meets_conditions(law, segment) -> bool:
     """Whether a built-in law played as the segment meets every one of its conditions (the same
     joint class)."""
-    for c, value in zip(segment.conditions, segment.values, strict=True):
-        got = float(builtin_q(law, segment.kind, np.asarray([c.x]))[c.order][0])
-        if abs(got - value) > BUILTIN_TOL * max(1.0, abs(value)):
+    q = builtin_q(law, segment.kind, np.asarray([c.x for c in segment.conditions]))  # one call
+    for k, (c, value) in enumerate(zip(segment.conditions, segment.values, strict=True)):
+        if abs(float(q[c.order][k]) - value) > BUILTIN_TOL * max(1.0, abs(value)):
             return False
     return True
 

@@ -31,7 +31,6 @@ Python (a driver of jitted pieces); the pieces are pure JAX.
 from __future__ import annotations
 
 import dataclasses
-import functools
 import itertools
 import math
 from typing import Any, NamedTuple
@@ -42,16 +41,12 @@ import numpy as np
 
 from camjax.evaluate import arrays_from_kinematics
 from camjax.family import weights_of
-from camjax.laws import LAWS
-from camjax.program import Kinematics, MotionProgram
+from camjax.program import Kinematics
 from camjax.solvers.base import family_of, problem_from_scene, solve_one
-from camjax.synthesis.linear import law_quadratics, linear_kinematics, segment_samples
-from camjax.synthesis.problem import L2_OBJECTIVES, PEAK_OBJECTIVES
-from camjax.synthesis.segments import builtin_measures, builtin_q, meets_conditions
+from camjax.synthesis.linear import law_quadratics, linear_kinematics
+from camjax.synthesis.problem import L2_OBJECTIVES
 
 SUPPORTED = tuple(L2_OBJECTIVES)  # the [synthesis] terms the co-design takes (smooth in z)
-MAX_ITERATIONS = 60  # BFGS steps of the outer search
-MAX_COMBINATIONS = 256  # built-in law combinations solved (more: one law for every segment)
 ACTIVE_RTOL = 1e-7  # a constraint is active within this fraction of the problem's size norm
 
 
@@ -109,6 +104,7 @@ class Codesign:
         self._lagrangian_grad = jax.jit(jax.grad(self._lagrangian, argnums=0))
         self._local = jax.jit(self._local_fn)
         self.evaluations = 0
+        self.builtin_cache: dict = {}
 
     # ------------------------------------------------------------------ pure pieces
 
@@ -140,7 +136,8 @@ class Codesign:
             g = family.constraint_maxima(problem, d)
             return jnp.concatenate([family.objective(problem, self.weights, d)[None], jnp.stack(list(g))])
 
-        return parts(design), jax.jacobian(parts)(design), problem.lower, problem.upper, family.size_norm(problem)
+        jac = jax.jacobian(parts)(design)
+        return parts(design), jac, problem.lower, problem.upper, family.size_norm(problem)
 
     # ------------------------------------------------------------------ evaluations
 
@@ -215,136 +212,3 @@ def multipliers(values, jac, design, lower, upper, size_norm) -> np.ndarray:
         if k < len(active):
             lam[active[k]] = v
     return lam
-
-
-# ------------------------------------------------------------------------------ built-in laws
-
-
-def builtin_candidates(designed) -> list[list[str]]:
-    """Per designed segment, the built-in laws that meet its conditions (its joint class)."""
-    return [[name for name, law in LAWS.items() if meets_conditions(law, ds)] for ds in designed]
-
-
-def builtin_kinematics(cd: Codesign, names) -> jnp.ndarray:
-    """(4, samples) kinematics with designed segment k moving by the built-in law ``names[k]``."""
-    program = cd.scene.motion.program
-    lifts = np.asarray(program.lifts, dtype=np.float64)
-    signs = [1.0 if k == "rise" else -1.0 if k == "return" else 0.0 for k in program.kinds]
-    levels = np.concatenate([[0.0], np.cumsum(lifts * np.asarray(signs))])
-    kin = np.array(cd.kin0)
-    for ds, name in zip(cd.designed, names, strict=True):
-        i = ds.index
-        rows, x = segment_samples(program, i, cd.samples)
-        q = builtin_q(LAWS[name], program.kinds[i], x)
-        signed, beta = signs[i] * lifts[i], math.radians(program.angles_deg[i])
-        kin[0, rows] = levels[i] + signed * q[0]
-        for r in (1, 2, 3):
-            kin[r, rows] = signed * q[r] / beta**r
-    return jnp.asarray(kin)
-
-
-@functools.cache
-def _builtin_measures(name: str, kind: str) -> dict:
-    return builtin_measures(LAWS[name], kind)
-
-
-def builtin_law_value(cd: Codesign, names) -> float:
-    """The [synthesis] terms of built-in laws (their exact figures, :func:`builtin_measures`)."""
-    total = 0.0
-    for ds, name in zip(cd.designed, names, strict=True):
-        m = _builtin_measures(name, ds.kind)
-        total += sum(w * m[term] for term, w in cd.law_weights.items())
-    return total
-
-
-def best_builtin_combination(cd: Codesign) -> tuple[tuple[str, ...], float, Inner] | None:
-    """The combination of built-in laws (one per designed segment, each meeting its conditions)
-    with the least co-design objective, each with its own optimal geometry: (names, F, inner)."""
-    cands = builtin_candidates(cd.designed)
-    if any(not c for c in cands):
-        return None
-    combos = list(itertools.product(*cands))
-    if len(combos) > MAX_COMBINATIONS:
-        common = set.intersection(*(set(c) for c in cands))
-        combos = [tuple([n] * len(cands)) for n in LAWS if n in common]
-    best = None
-    for names in combos:
-        inner = cd.inner(builtin_kinematics(cd, names))
-        f = inner.objective + builtin_law_value(cd, names)
-        if best is None or f < best[1]:
-            best = (tuple(names), f, inner)
-    return best
-
-
-def fitted_coordinates(cd: Codesign, names) -> np.ndarray:
-    """z of the B-spline laws nearest (least squares on 401 points, within the conditions) to the
-    built-in laws ``names``."""
-    from camjax.synthesis.basis import evaluation_matrix
-
-    x = np.linspace(0.0, 1.0, 401)
-    z = np.zeros(cd.lin.free)
-    for seg, ds, name in zip(cd.lin.segments, cd.designed, names, strict=True):
-        E = evaluation_matrix(ds.basis(), x, 0)
-        target = builtin_q(LAWS[name], ds.kind, x)[0]
-        m = seg.null.shape[1]
-        z[seg.offset: seg.offset + m] = np.linalg.lstsq(E @ seg.null, target - E @ seg.cp, rcond=None)[0]
-    return z
-
-
-# ------------------------------------------------------------------------------ the search
-
-
-class SearchResult(NamedTuple):
-    z: np.ndarray
-    objective: float  # F on the grid
-    inner: Inner
-    iterations: int
-    start: str  # "synthesis" or "builtin_fit"
-    history: list  # F after each iteration
-
-
-def bfgs(cd: Codesign, z0, f0: float, inner0: Inner, max_iterations: int = MAX_ITERATIONS,
-         gtol: float = 1e-9, ftol: float = 1e-12) -> tuple[np.ndarray, float, Inner, int, list]:
-    """BFGS with Armijo backtracking on F (inverse Hessian started at the identity scaled by the
-    first step). Stops on a small gradient, no decrease, or ``max_iterations``."""
-    z, f, inner = np.asarray(z0, dtype=np.float64), f0, inner0
-    g = cd.gradient(z, inner)
-    H = None
-    history = [f]
-    it = 0
-    for it in range(1, max_iterations + 1):
-        if not np.isfinite(f) or np.linalg.norm(g, np.inf) < gtol:
-            break
-        p = -(g if H is None else H @ g)
-        slope = float(g @ p)
-        if slope >= 0.0:  # not a descent direction: restart from steepest descent
-            H, p, slope = None, -g, -float(g @ g)
-        step = 1.0 if H is not None else min(1.0, 0.1 / max(np.linalg.norm(g, np.inf), 1e-300))
-        accepted = False
-        for _ in range(30):
-            zn = z + step * p
-            fn, innern = cd.value(zn)
-            if fn <= f + 1e-4 * step * slope:
-                accepted = True
-                break
-            step *= 0.5
-        if not accepted:
-            if H is None:
-                break
-            H = None  # retry along the gradient
-            continue
-        gn = cd.gradient(zn, innern)
-        s_, y_ = zn - z, gn - g
-        sy = float(s_ @ y_)
-        if sy > 1e-12 * np.linalg.norm(s_) * np.linalg.norm(y_):
-            if H is None:
-                H = (sy / float(y_ @ y_)) * np.eye(z.size)
-            rho = 1.0 / sy
-            V = np.eye(z.size) - rho * np.outer(s_, y_)
-            H = V @ H @ V.T + rho * np.outer(s_, s_)
-        decrease = f - fn
-        z, f, g, inner = zn, fn, gn, innern
-        history.append(f)
-        if decrease <= ftol * max(1.0, abs(f)):
-            break
-    return z, f, inner, it, history

@@ -1,0 +1,178 @@
+"""The outer search of a co-design and the scene it hands to the normal design run.
+
+BFGS on the laws' free coordinates z (:class:`camjax.codesign.problem.Codesign` gives F(z) and its
+envelope gradient), from the best built-in combination fitted onto the B-spline space and from
+the law-only synthesis (or the starting law); the result is compared with the best built-in
+combination (:mod:`camjax.codesign.builtin`) and the better one written into the scene as fixed
+laws (:func:`fixed_scene`), on which ``camjax design`` runs as usual.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from camjax.codesign.builtin import best_builtin_combination, fitted_coordinates
+from camjax.codesign.problem import Codesign, CodesignError, Inner
+from camjax.laws import LAWS
+from camjax.program import MotionProgram
+
+MAX_ITERATIONS = 60  # BFGS steps of the outer search
+
+class SearchResult(NamedTuple):
+    z: np.ndarray
+    objective: float  # F on the grid
+    inner: Inner
+    iterations: int
+    start: str  # "synthesis" or "builtin_fit"
+    history: list  # F after each iteration
+
+
+def bfgs(cd: Codesign, z0, f0: float, inner0: Inner, max_iterations: int = MAX_ITERATIONS,
+         gtol: float = 1e-9, ftol: float = 1e-12) -> tuple[np.ndarray, float, Inner, int, list]:
+    """BFGS with Armijo backtracking on F (inverse Hessian started at the identity scaled by the
+    first step). Stops on a small gradient, no decrease, or ``max_iterations``; returns z, F, the
+    inner optimum, the number of accepted steps and F after each."""
+    z, f, inner = np.asarray(z0, dtype=np.float64), f0, inner0
+    g = cd.gradient(z, inner)
+    H = None
+    history = [f]
+    for _ in range(max_iterations):
+        if not np.isfinite(f) or np.linalg.norm(g, np.inf) < gtol:
+            break
+        p = -(g if H is None else H @ g)
+        slope = float(g @ p)
+        if slope >= 0.0:  # not a descent direction: restart from steepest descent
+            H, p, slope = None, -g, -float(g @ g)
+        step = 1.0 if H is not None else min(1.0, 0.1 / max(np.linalg.norm(g, np.inf), 1e-300))
+        accepted = False
+        for _ in range(30):
+            zn = z + step * p
+            fn, innern = cd.value(zn)
+            if fn <= f + 1e-4 * step * slope:
+                accepted = True
+                break
+            step *= 0.5
+        if not accepted:
+            if H is None:
+                break
+            H = None  # retry along the gradient
+            continue
+        gn = cd.gradient(zn, innern)
+        s_, y_ = zn - z, gn - g
+        sy = float(s_ @ y_)
+        if sy > 1e-12 * np.linalg.norm(s_) * np.linalg.norm(y_):
+            if H is None:
+                H = (sy / float(y_ @ y_)) * np.eye(z.size)
+            rho = 1.0 / sy
+            V = np.eye(z.size) - rho * np.outer(s_, y_)
+            H = V @ H @ V.T + rho * np.outer(s_, s_)
+        decrease = f - fn
+        z, f, g, inner = zn, fn, gn, innern
+        history.append(f)
+        if decrease <= ftol * max(1.0, abs(f)):
+            break
+    return z, f, inner, len(history) - 1, history
+
+
+class Outcome(NamedTuple):
+    """A co-design: the scene to run the normal design on, and what the report says of it."""
+
+    scene: Any  # the scene with every designed segment's law fixed (the chosen laws)
+    chosen: str  # "codesign" (the designed B-splines) or "best_builtin"
+    controls: list  # normalized control values of the designed laws (the search's best)
+    objective: float  # F on the grid of the chosen laws
+    codesign_objective: float  # F on the grid of the designed B-splines
+    best_builtin: tuple[tuple[str, ...], float] | None  # (laws, F on the grid)
+    iterations: int
+    start: str
+    evaluations: int  # inner solves
+    history: list
+
+
+def codesign_scene(scene, samples: int | None = None) -> Outcome:
+    """Co-design the scene's designed laws and its [design] geometry (see the module docstring).
+
+    Raises :class:`CodesignError` (naming the scene field) for what the co-design does not take.
+    """
+    from camjax.synthesis.segments import synthesize_segments
+
+    cd = Codesign(scene, samples)
+    builtin = best_builtin_combination(cd)
+    starts = []
+    if builtin is not None:
+        starts.append(("builtin_fit", fitted_coordinates(cd, builtin[0])))
+    if cd.law_weights:
+        spec = scene.synthesis
+        law_only = synthesize_segments(cd.designed, cd.law_weights, spec.samples_per_span)
+        starts.append(("synthesis", cd.lin.coordinates([r.control for r in law_only])))
+    else:
+        starts.append(("starting_law", cd.lin.z0))
+    best = None
+    for name, z0 in starts:
+        f0, inner0 = cd.value(z0)
+        if not np.isfinite(f0):
+            continue
+        z, f, inner, it, hist = bfgs(cd, z0, f0, inner0)
+        if best is None or f < best.objective:
+            best = SearchResult(z, f, inner, it, name, hist)
+    if best is None and builtin is None:
+        raise CodesignError("design", "no start of the co-design has a feasible geometry within [design]'s "
+                            "bounds, and no built-in law meets the designed segments' conditions")
+    controls = cd.lin.control(best.z) if best is not None else cd.lin.control(cd.lin.z0)
+    designed_f = best.objective if best is not None else math.inf
+    use_builtin = builtin is not None and builtin[1] <= designed_f
+    laws = ([LAWS[n] for n in builtin[0]] if use_builtin else
+            [_designed_law(ds, c) for ds, c in zip(cd.designed, controls, strict=True)])
+    tables = _segment_tables(scene, controls, builtin[0] if use_builtin else None)
+    return Outcome(fixed_scene(scene, laws, tables),
+                   "best_builtin" if use_builtin else "codesign", controls,
+                   builtin[1] if use_builtin else designed_f, designed_f,
+                   None if builtin is None else (builtin[0], builtin[1]),
+                   0 if best is None else best.iterations, "" if best is None else best.start,
+                   cd.evaluations, [] if best is None else best.history)
+
+
+def _designed_law(ds, control):
+    from camjax.scene.designed import law_from_control
+
+    return law_from_control(ds, control)[0]
+
+
+def _segment_tables(scene, controls, builtin_names) -> list[dict]:
+    """The designed segments as fixed [motion] segment tables (what result.json's scene_segment
+    holds): the B-spline's control values, or the chosen built-in law."""
+    from camjax.scene.designed import law_from_control
+
+    out = []
+    from camjax import followers
+
+    lift_key = "lift_deg" if followers.of(scene).rocking else "lift_mm"
+    for k, (ds, c) in enumerate(zip(scene.motion.designed, controls, strict=True)):
+        table = {"kind": ds.kind, "angle_deg": ds.angle_deg, lift_key: ds.lift}
+        if builtin_names is not None:
+            table["law"] = builtin_names[k]
+        else:
+            table.update({"law": "bspline", "degree": ds.degree,
+                          "control": [float(v) for v in law_from_control(ds, c)[1]]})
+            if ds.knots is not None:
+                table["knots"] = list(ds.knots)
+        out.append(table)
+    return out
+
+
+def fixed_scene(scene, laws, tables):
+    """The scene with designed segment k moving by ``laws[k]`` (no segment designed any more), its
+    reported segment table ``tables[k]``."""
+    motion = scene.motion
+    program = motion.program
+    new_laws, reported = list(program.laws), list(motion.segments)
+    for ds, law, table in zip(motion.designed, laws, tables, strict=True):
+        new_laws[ds.index] = law
+        reported[ds.index] = table
+    fixed = MotionProgram(program.kinds, program.angles_deg, new_laws, program.lifts)
+    motion = dataclasses.replace(motion, program=fixed, segments=tuple(reported), designed=())
+    return dataclasses.replace(scene, motion=motion)
