@@ -72,6 +72,9 @@ def _setup_design(p: argparse.ArgumentParser):
                 sys.stderr.write(f"camjax design: {phase}\n")
                 sys.stderr.flush()
 
+        codesign = None
+        if scene.motion.designed and scene.design is not None:  # laws and geometry together
+            codesign = _codesign(scene, progress)
         progress("computing")
         with ExitStack() as stack:
             # the drawing processes import matplotlib and ezdxf while JAX computes; without them
@@ -81,12 +84,29 @@ def _setup_design(p: argparse.ArgumentParser):
             if workers is None or args.animate:
                 preload = threading.Thread(target=_import_drawing_modules, daemon=True)
                 preload.start()
-            result = runtime.interruptible(analyse, scene, base_radius_mm=r)
+            result = runtime.interruptible(analyse, scene if codesign is None else codesign.scene,
+                                           base_radius_mm=r)
+            if codesign is not None:
+                from camjax.output.synthesis import codesign_report
+
+                result.data["synthesis"] = codesign_report(scene, codesign, result.data)
             if preload is not None:
                 preload.join()
             return _write_design(args, out, scene, result, workers, progress)
 
     return run
+
+
+def _codesign(scene, progress):
+    """The co-design of a scene's designed laws with its [design] geometry
+    (:func:`camjax.codesign.codesign_scene`); what it cannot take is bad input (exit 2)."""
+    from camjax.codesign import CodesignError, codesign_scene
+
+    progress("co-designing the laws and the geometry")
+    try:
+        return runtime.interruptible(codesign_scene, scene)
+    except CodesignError as exc:
+        raise UsageError(f"scene {scene.name}: {exc}") from None
 
 
 def _drawing_workers(stack):
@@ -133,6 +153,11 @@ def _write_design(args, out, scene, result, workers, progress) -> int:
         g = d["design"]
         print(f"design ({g['solver']}): R_b = {g['base_radius_mm']:.4f} mm, {follower.summary(g)}, "
               f"objective {g['objective']:.5f}, feasible {g['feasible']}")
+    if "synthesis" in d:
+        c = d["synthesis"]["codesign"]
+        b = c["best_builtin"]
+        best = "" if b is None else f"; best built-in ({', '.join(b['law'])}): {b['objective']:.5f}"
+        print(f"co-design: laws {c['chosen']}, objective {c['objective']:.5f} on the search grid{best}")
     width = follower.drawn_summary(d)
     state = f"INFEASIBLE ({', '.join(broken)})" if broken else "feasible"
     print(f"files drawn at R_b = {at['base_radius_mm']:.4f} mm{width} ({at['source']}): {state}")

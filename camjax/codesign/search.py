@@ -15,7 +15,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from camjax.codesign.builtin import best_builtin_combination, fitted_coordinates
+from camjax.codesign.builtin import best_builtin_combination, builtin_law_value, fitted_coordinates
 from camjax.codesign.problem import Codesign, CodesignError, Inner
 from camjax.laws import LAWS
 from camjax.program import MotionProgram
@@ -91,6 +91,10 @@ class Outcome(NamedTuple):
     start: str
     evaluations: int  # inner solves
     history: list
+    law_objective: float  # the [synthesis] terms of the chosen laws
+    tables: list  # the designed segments as fixed [motion] segment tables (the chosen laws)
+    samples: int  # the search's grid
+    segments: list  # camjax.synthesis.segments.SegmentSynthesis of the designed B-splines
 
 
 def codesign_scene(scene, samples: int | None = None) -> Outcome:
@@ -128,12 +132,32 @@ def codesign_scene(scene, samples: int | None = None) -> Outcome:
     laws = ([LAWS[n] for n in builtin[0]] if use_builtin else
             [_designed_law(ds, c) for ds, c in zip(cd.designed, controls, strict=True)])
     tables = _segment_tables(scene, controls, builtin[0] if use_builtin else None)
+    law_f = builtin_law_value(cd, builtin[0]) if use_builtin else cd.law_value(cd.lin.coordinates(controls))
     return Outcome(fixed_scene(scene, laws, tables),
                    "best_builtin" if use_builtin else "codesign", controls,
                    builtin[1] if use_builtin else designed_f, designed_f,
                    None if builtin is None else (builtin[0], builtin[1]),
                    0 if best is None else best.iterations, "" if best is None else best.start,
-                   cd.evaluations, [] if best is None else best.history)
+                   cd.evaluations, [] if best is None else best.history, law_f, tables, cd.samples,
+                   segment_results(cd, controls))
+
+
+def segment_results(cd: Codesign, controls) -> list:
+    """Each designed B-spline's figures as ``camjax synthesize`` reports them (normalized measures,
+    its [synthesis] terms, the best built-in law of its class for those terms alone)."""
+    from camjax.synthesis.problem import OBJECTIVES, build_problem
+    from camjax.synthesis.segments import ORDERS, SegmentSynthesis, best_builtin
+    from camjax.synthesis.solve import measures
+
+    out = []
+    for ds, c in zip(cd.designed, controls, strict=True):
+        basis = ds.basis()
+        m = measures(build_problem(basis, ds.conditions, ()), c)
+        meas = {n: (float(getattr(m, n)) if ORDERS[n] <= ds.degree else None) for n in OBJECTIVES}
+        law_f = sum(w * meas[n] for n, w in cd.law_weights.items())
+        out.append(SegmentSynthesis(ds, basis.knots, np.asarray(c), meas, law_f, law_f, True, 0.0,
+                                    best_builtin(ds, cd.law_weights) if cd.law_weights else None))
+    return out
 
 
 def _designed_law(ds, control):

@@ -53,6 +53,49 @@ def synthesis_report(scene_name: str, weights: dict, results, scene_controls, li
             "synthesis": {"objective": dict(weights), "segments": segments}}
 
 
+def codesign_report(scene, outcome, data: dict) -> dict:
+    """result.json's ``synthesis`` block of ``camjax design``'s co-design: the designed laws per
+    segment as ``camjax synthesize`` writes them (their ``scene_segment`` the chosen law: the
+    designed B-spline, or the built-in law when the search did not beat it) and ``codesign``.
+
+    ``codesign.objective``: the co-design objective (the [design] objective at the optimal
+    geometry plus the [synthesis] terms) of the chosen laws on the search's grid, the footing
+    ``best_builtin.objective`` is measured on; ``objective_exact``: the design written (exact
+    extrema) plus the same terms."""
+    lift_key = "lift_deg" if "lift_deg" in outcome.tables[0] else "lift_mm"
+    controls = [table.get("control") for table in outcome.tables]
+    if outcome.chosen != "codesign":  # the B-spline found is still reported, as normalized values
+        controls = [1.0 - r.control if r.segment.kind == "return" else r.control for r in outcome.segments]
+    weights = dict(scene.synthesis.objective) if scene.synthesis is not None else {}
+    report = synthesis_report(scene.name, weights, outcome.segments, controls, lift_key)
+    segments = report["synthesis"]["segments"]
+    for seg, table in zip(segments, outcome.tables, strict=True):
+        seg["status"] = "optimal" if outcome.chosen == "codesign" else "not_chosen"
+        seg["scene_segment"] = table
+    design_f = data["design"]["objective"]
+    best = outcome.best_builtin
+    return {
+        "objective": weights,
+        "segments": segments,
+        "codesign": {
+            "objective": outcome.objective,
+            "objective_exact": design_f + outcome.law_objective,
+            "design_objective": design_f,
+            "law_objective": outcome.law_objective,
+            "chosen": outcome.chosen,
+            "codesign_objective": outcome.codesign_objective,
+            "best_builtin": None if best is None else {"law": list(best[0]), "objective": best[1]},
+            "improvement": None if best is None else (best[1] - outcome.objective) / best[1],
+            "iterations": outcome.iterations,
+            "start": outcome.start,
+            "inner_solves": outcome.evaluations,
+            "samples": outcome.samples,
+            "gradient": "envelope",
+            "history": [float(v) for v in outcome.history],
+        },
+    }
+
+
 def write_curves_csv(path: Path, curves: list[tuple[int, np.ndarray, tuple[np.ndarray, ...]]]) -> None:
     """synthesis.csv: segment, x, s, v, a, j of each designed law (normalized: lift 1 over x in [0, 1],
     derivatives with respect to x)."""
