@@ -31,7 +31,6 @@ Python (a driver of jitted pieces); the pieces are pure JAX.
 from __future__ import annotations
 
 import dataclasses
-import itertools
 import math
 from typing import Any, NamedTuple
 
@@ -124,17 +123,17 @@ class Codesign:
     def _lagrangian(self, kin4, design, lam):
         problem = self.problem(kin4)
         family = family_of(problem)
-        g = family.constraint_maxima(problem, design)
-        return family.objective(problem, self.weights, design) + jnp.dot(lam, jnp.stack(list(g)))
+        g = _stacked(family, problem, design)
+        return family.objective(problem, self.weights, design) + jnp.dot(lam, g)
 
     def _local_fn(self, kin4, design):
-        """Objective and constraint maxima with their gradients in the design at ``design``."""
+        """Objective and every angle's constraints, with their gradients in the design, at ``design``."""
         problem = self.problem(kin4)
         family = family_of(problem)
 
         def parts(d):
-            g = family.constraint_maxima(problem, d)
-            return jnp.concatenate([family.objective(problem, self.weights, d)[None], jnp.stack(list(g))])
+            g = _stacked(family, problem, d)
+            return jnp.concatenate([family.objective(problem, self.weights, d)[None], g])
 
         jac = jax.jacobian(parts)(design)
         return parts(design), jac, problem.lower, problem.upper, family.size_norm(problem)
@@ -176,17 +175,23 @@ class Codesign:
         return out
 
 
+def _stacked(family, problem, design):
+    """Every constraint of the family at every angle, g <= 0 (mm), as one vector."""
+    return jnp.concatenate([jnp.atleast_1d(g) for g in family.constraints(problem, design)])
+
+
 def multipliers(values, jac, design, lower, upper, size_norm) -> np.ndarray:
-    """Multipliers lambda >= 0 of the constraint maxima at ``design``: the least-squares solution of
-    stationarity grad f + sum lambda_c grad g_c - mu_lo + mu_hi = 0 over the active constraints
-    (g_c within :data:`ACTIVE_RTOL` of the size norm of 0) and active bounds, all nonnegative
-    (every subset of the active set is tried: a family has a handful of constraints and
-    variables). Inactive constraints get 0; the box's multipliers are dropped (the box does not
-    depend on z)."""
-    grads = np.stack([np.asarray(leaf, dtype=np.float64) for leaf in jax.tree.leaves(jac)], axis=1)
+    """Multipliers lambda >= 0 of the constraints (every angle's) at ``design``: the nonnegative
+    least-squares solution of stationarity grad f + sum lambda_i grad g_i - mu_lo + mu_hi = 0 over
+    the active constraints (g_i within :data:`ACTIVE_RTOL` of the size norm of 0) and the active
+    bounds (:func:`nnls`). Every angle's constraint is its own column, so a constraint whose
+    maximum is reached at two angles at once (a kink of the maximum: e.g. a roller's pressure
+    angle on the rise and on the return, balanced by the offset) gets a multiplier at each.
+    Inactive constraints get 0; the box's multipliers are dropped (the box does not depend on z)."""
+    grads = np.stack([np.asarray(leaf, dtype=np.float64) for leaf in jax.tree.leaves(jac)], axis=-1)
     g = np.asarray(values[1:], dtype=np.float64)
     tol = ACTIVE_RTOL * float(size_norm)
-    active = [i for i in range(g.size) if g[i] > -tol]
+    active = np.nonzero(g > -tol)[0]
     d = np.asarray([float(v) for v in jax.tree.leaves(design)])
     lo = np.asarray([float(v) for v in jax.tree.leaves(lower)])
     hi = np.asarray([float(v) for v in jax.tree.leaves(upper)])
@@ -195,20 +200,32 @@ def multipliers(values, jac, design, lower, upper, size_norm) -> np.ndarray:
     cols += [-eye[i] for i in range(d.size) if d[i] - lo[i] <= tol]
     cols += [eye[i] for i in range(d.size) if hi[i] - d[i] <= tol]
     lam = np.zeros(g.size)
-    best, best_res = (), math.inf
-    for r in range(len(cols) + 1):
-        for subset in itertools.combinations(range(len(cols)), r):
-            if subset:
-                A = np.stack([cols[k] for k in subset], axis=1)
-                sol = np.linalg.lstsq(A, -grads[0], rcond=None)[0]
-                if np.any(sol < 0.0):
-                    continue
-                res = float(np.linalg.norm(A @ sol + grads[0]))
-            else:
-                sol, res = np.zeros(0), float(np.linalg.norm(grads[0]))
-            if res < best_res * (1.0 - 1e-9):
-                best, best_res = tuple(zip(subset, sol, strict=True)), res
-    for k, v in best:
-        if k < len(active):
-            lam[active[k]] = v
+    if cols:
+        sol = nnls(np.stack(cols, axis=1), -grads[0])
+        lam[active] = sol[:active.size]
     return lam
+
+
+def nnls(A: np.ndarray, b: np.ndarray, iterations: int = 200) -> np.ndarray:
+    """min ||A x - b|| subject to x >= 0, by Lawson and Hanson's active-set method (NumPy; the
+    problems here have a few rows and a few dozen columns)."""
+    m, n = A.shape
+    x = np.zeros(n)
+    passive = np.zeros(n, dtype=bool)
+    tol = 1e-12 * max(1.0, float(np.abs(A).max(initial=0.0)) * float(np.abs(b).max(initial=0.0)))
+    for _ in range(iterations):
+        w = A.T @ (b - A @ x)
+        if passive.all() or np.max(np.where(passive, -np.inf, w)) <= tol:
+            break
+        passive[int(np.argmax(np.where(passive, -np.inf, w)))] = True
+        while True:
+            z = np.zeros(n)
+            z[passive] = np.linalg.lstsq(A[:, passive], b, rcond=None)[0]
+            if np.all(z[passive] > 0.0):
+                x = z
+                break
+            neg = passive & (z <= 0.0)
+            alpha = np.min(x[neg] / (x[neg] - z[neg]))
+            x = x + alpha * (z - x)
+            passive &= x > tol
+    return x
