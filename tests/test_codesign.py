@@ -1,0 +1,185 @@
+"""Co-design of the designed laws and the cam's geometry (``camjax design`` on a scene with [design]
+and ``design = true`` segments): the affine kinematics against the program, the envelope gradient
+against central differences, "co-design never loses to choosing" against the built-in laws each
+with its own optimal geometry (re-evaluated through the program, not the search's affine map), and
+the command end to end, its designed law fed back reproducing the design."""
+
+from __future__ import annotations
+
+import json
+import tomllib
+
+import numpy as np
+import pytest
+
+from camjax.cli import main
+from camjax.codesign import Codesign, codesign_scene, fixed_scene
+from camjax.codesign.builtin import fitted_coordinates
+from camjax.codesign.problem import nnls
+from camjax.evaluate import scene_arrays
+from camjax.laws import LAWS
+from camjax.output.report import design_report
+from camjax.scene import builtin_scene_text, load_scene, scene_from_dict
+from camjax.scene.designed import law_from_control
+from camjax.solvers.base import problem_from_scene, solve
+from camjax.synthesis.problem import build_problem
+from camjax.synthesis.segments import builtin_measures
+from camjax.synthesis.solve import measures
+
+SAMPLES = 120  # search grid of the tests (the built-in scene searches on its 360)
+
+
+def roller_data() -> dict:
+    """The built-in roller scene with its rise and return designed (cubic, 12 control values, at
+    rest at the dwells) and a stress weight, for the same small jerk term as the codesign scene."""
+    data = tomllib.loads(builtin_scene_text("roller"))
+    segs = data["motion"]["segments"]
+    for i in (0, 2):
+        segs[i] = {k: segs[i][k] for k in ("kind", "angle_deg", "lift_mm")} | {
+            "law": "bspline", "degree": 3, "control_count": 12, "design": True}
+    data["design"]["gamma"] = 0.5
+    data["synthesis"] = {"objective": {"l2_jerk": 1e-6}}
+    return data
+
+
+SCENES = {"flat": lambda: load_scene("codesign"), "roller": lambda: scene_from_dict(roller_data(), "roller-codesign")}
+
+
+@pytest.fixture(scope="module", params=sorted(SCENES))
+def case(request):
+    scene = SCENES[request.param]()
+    return request.param, scene, Codesign(scene, SAMPLES)
+
+
+# ------------------------------------------------------------------------------ quick
+
+
+def test_nnls_matches_scipy():
+    optimize = pytest.importorskip("scipy.optimize")
+    rng = np.random.default_rng(3)
+    for _ in range(20):
+        A, b = rng.normal(size=(4, 9)), rng.normal(size=4)
+        x = nnls(A, b)
+        ref = optimize.nnls(A, b)[0]
+        assert np.all(x >= 0.0)
+        # the residual is unique (the solution need not be, with more columns than rows)
+        assert np.linalg.norm(A @ x - b) == pytest.approx(np.linalg.norm(A @ ref - b), rel=1e-9, abs=1e-12)
+
+
+@pytest.mark.parametrize("edit, field", [
+    (("l2_jerk = 1e-6", "peak_accel = 1.0"), "synthesis.objective.peak_accel"),
+    (('mode = "global"', 'mode = "pointwise"'), "design.mode"),
+])
+def test_what_the_codesign_does_not_take_exits_2_naming_the_field(tmp_path, capsys, edit, field):
+    text = builtin_scene_text("codesign").replace(*edit)
+    assert edit[1] in text
+    scene = tmp_path / "bad.toml"
+    scene.write_text(text)
+    out = tmp_path / "out"
+    assert main(["design", str(scene), "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and field in err, err
+    assert not out.exists()
+
+
+# ------------------------------------------------------------------------------ slow
+
+
+@pytest.mark.slow
+def test_the_affine_kinematics_are_the_programs(case):
+    # kinematics(z) = kin0 + J (z - z0) against the program built from the control values c(z):
+    # the same de Boor evaluation, so equal to rounding (1e-12 of each row's scale)
+    _, scene, cd = case
+    z = cd.lin.z0 + 0.05 * np.random.default_rng(0).normal(size=cd.lin.free)
+    laws = [law_from_control(ds, c)[0] for ds, c in zip(cd.designed, cd.lin.control(z), strict=True)]
+    kin = scene_arrays(fixed_scene(scene, laws, [{}] * len(laws)), samples=SAMPLES, extrema="grid").kin
+    mine = np.asarray(cd.kinematics(z))
+    for r, ref in enumerate((kin.s, kin.ds, kin.d2s, kin.d3s)):
+        ref = np.asarray(ref)
+        np.testing.assert_allclose(mine[r], ref, rtol=0, atol=1e-12 * np.max(np.abs(ref)))
+
+
+@pytest.mark.slow
+def test_the_envelope_gradient_matches_central_differences(case):
+    # at the best built-in combination fitted onto the B-splines (a feasible, generic point: the
+    # flat face's face width and the roller's pressure angle (at two angles, balanced by the
+    # offset) are active there). Central differences with h = 1e-5: truncation ~h^2 F''' ~ 1e-10
+    # relative, and the inner solve repeats its optimum to ~1e-12; measured agreement 2e-10 to
+    # 4e-10. 1e-6 leaves margin, while a missing multiplier (one angle of a tie) is off by ~30 %.
+    _, _, cd = case
+    from camjax.codesign import best_builtin_combination
+
+    names = best_builtin_combination(cd)[0]
+    z = fitted_coordinates(cd, names)
+    f, inner = cd.value(z)
+    assert np.isfinite(f) and inner.feasible
+    g = cd.gradient(z, inner)
+    fd = cd.gradient_fd(z, 1e-5)
+    assert np.linalg.norm(g - fd) <= 1e-6 * np.linalg.norm(fd)
+
+
+def _program_objective(scene, laws, law_terms: float) -> float:
+    """F of fixed laws through the program (scene arrays on the grid, the registered solver)."""
+    fixed = fixed_scene(scene, laws, [{}] * len(laws))
+    problem = problem_from_scene(fixed, scene_arrays(fixed, samples=SAMPLES, extrema="grid"))
+    sol = solve(problem, (scene.design.alpha, scene.design.gamma))
+    assert bool(sol.feasible)
+    return float(sol.objective) + law_terms
+
+
+@pytest.mark.slow
+def test_codesign_never_loses_to_choosing(case):
+    name, scene, _ = case
+    out = codesign_scene(scene, samples=SAMPLES)
+    weights = dict(scene.synthesis.objective)
+    designed = scene.motion.designed
+    # the co-designed laws, re-evaluated through the program: the search's F to 1e-9 (the same
+    # solver on the same grid; the affine map equals the program to rounding)
+    laws = [law_from_control(ds, c)[0] for ds, c in zip(designed, out.controls, strict=True)]
+    law_terms = sum(w * float(getattr(measures(build_problem(ds.basis(), ds.conditions, ()), c), n))
+                    for ds, c in zip(designed, out.controls, strict=True) for n, w in weights.items())
+    mine = _program_objective(scene, laws, law_terms)
+    assert mine == pytest.approx(out.codesign_objective, rel=1e-9)
+    # built-in laws (one for both segments, each with its own optimal geometry, exact law figures)
+    best = out.best_builtin[1]
+    for law in ("cycloidal", "poly_3_4_5", "modified_sine", "modified_trapezoid"):
+        terms = sum(w * builtin_measures(LAWS[law], ds.kind)[n] for ds in designed for n, w in weights.items())
+        assert _program_objective(scene, [LAWS[law]] * len(designed), terms) >= best * (1 - 1e-9), law
+    combo = out.best_builtin[0]
+    terms = sum(w * builtin_measures(LAWS[n_], ds.kind)[n] for ds, n_ in zip(designed, combo, strict=True)
+                for n, w in weights.items())
+    assert _program_objective(scene, [LAWS[n_] for n_ in combo], terms) == pytest.approx(best, rel=1e-9)
+    # never loses; on both scenes it wins by more than 1 % (measured: flat 4 %, roller 6 %)
+    assert out.chosen == "codesign" and out.objective == out.codesign_objective
+    assert out.codesign_objective <= best * (1 - 0.01), (name, out.codesign_objective, best)
+
+
+@pytest.mark.slow
+def test_design_codesign_end_to_end_and_fed_back(tmp_path):
+    out = tmp_path / "out"
+    assert main(["design", "codesign", "--out", str(out), "--samples", "180"]) == 0
+    res = json.loads((out / "result.json").read_text())
+    syn = res["synthesis"]
+    c = syn["codesign"]
+    assert set(c) >= {"objective", "objective_exact", "design_objective", "law_objective", "chosen",
+                      "best_builtin", "iterations", "inner_solves"}
+    assert c["chosen"] == "codesign" and c["objective"] <= c["best_builtin"]["objective"]
+    assert c["design_objective"] == pytest.approx(res["design"]["objective"], rel=1e-15)
+    segs = syn["segments"]
+    assert [s["segment"] for s in segs] == [1, 3]
+    for s in segs:
+        assert set(s) >= {"peak_velocity", "peak_accel", "peak_jerk", "l2_accel", "l2_jerk", "control",
+                          "knots", "best_builtin", "scene_segment", "status"}
+    # the law terms are the segments' own figures times the weights
+    w = syn["objective"]
+    assert c["law_objective"] == pytest.approx(sum(v * s[k] for s in segs for k, v in w.items()), rel=1e-9)
+    # the designed laws fed back as fixed B-spline segments: the same design to 1e-9
+    data = tomllib.loads(builtin_scene_text("codesign"))
+    del data["synthesis"]
+    data["motion"]["samples"] = 180
+    for s in segs:
+        data["motion"]["segments"][s["segment"]] = s["scene_segment"]
+    scene = scene_from_dict(data)
+    assert not scene.motion.designed
+    again = design_report(scene)["design"]["objective"]
+    assert again == pytest.approx(res["design"]["objective"], rel=1e-9)
