@@ -83,7 +83,9 @@ def codesign_report(scene, outcome, data: dict) -> dict:
             "design_objective": design_f,
             "law_objective": outcome.law_objective,
             "chosen": outcome.chosen,
-            "codesign_objective": outcome.codesign_objective,
+            # None: no start of the search had a feasible geometry (the built-in laws are written)
+            "codesign_objective": (outcome.codesign_objective if np.isfinite(outcome.codesign_objective)
+                                   else None),
             "best_builtin": None if best is None else {"law": list(best[0]), "objective": best[1]},
             "improvement": None if best is None else (best[1] - outcome.objective) / best[1],
             "iterations": outcome.iterations,
