@@ -14,10 +14,11 @@ sample grid (the kinematics affine in z, loads and contact coefficient computed 
 - **Inner**: the registered gradient solver on the grid (``extrema = "grid"``: the problem is a
   pytree of arrays whose kinematic fields are functions of z; one compiled program for every z).
 - **Gradient of the inner optimum** by the envelope theorem: at the optimum d* with multipliers
-  lambda of its active constraints (from stationarity, :func:`multipliers`), dF/dz is the partial
-  derivative in z of the Lagrangian f + lambda . g_max with d* and lambda held fixed (g_max: the
-  family's ``constraint_maxima``), by ``jax.grad`` through the problem's construction, plus the
-  law terms'. tests/test_codesign.py checks it against central differences of F.
+  lambda >= 0 of its active constraints, every angle's its own (from stationarity by nonnegative
+  least squares, :func:`multipliers`), dF/dz is the partial derivative in z of the Lagrangian
+  f + lambda . g with d* and lambda held fixed (g: the family's ``constraints`` at every angle), by
+  ``jax.grad`` through the problem's construction, plus the law terms'. tests/test_codesign.py
+  checks it against central differences of F.
 - **Outer**: BFGS on z with a backtracking (Armijo) line search, in NumPy (z has tens of
   coordinates); an infeasible inner optimum counts as +inf.
 - **Never worse than choosing**: every combination of the built-in laws that meet each designed
@@ -38,7 +39,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from camjax.evaluate import arrays_from_kinematics
+from camjax.evaluate import arrays_from_kinematics, scene_arrays
 from camjax.family import weights_of
 from camjax.program import Kinematics
 from camjax.solvers.base import family_of, problem_from_scene, solve_one
@@ -69,6 +70,8 @@ class Codesign:
     """The static data of one co-design and its compiled pieces (see the module docstring)."""
 
     def __init__(self, scene, samples: int | None = None, controls=None):
+        """``samples``: the search grid (default the scene's); ``controls``: the normalized control
+        values the scene's designed segments move by (default their starting laws)."""
         from camjax.scene.designed import starting_control
 
         if scene.design is None:
@@ -92,8 +95,6 @@ class Codesign:
         self.jacobian = jnp.asarray(self.lin.jacobian)
         grid = dataclasses.replace(scene, motion=dataclasses.replace(scene.motion, extrema="grid"))
         self.grid_scene = grid
-        from camjax.evaluate import scene_arrays
-
         kin = scene_arrays(grid, samples=self.samples, extrema="grid").kin
         self.theta = kin.theta
         self.kin0 = jnp.stack([kin.s, kin.ds, kin.d2s, kin.d3s])
