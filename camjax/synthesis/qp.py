@@ -1,4 +1,4 @@
-"""A dense convex QP by a primal-dual interior-point method: one problem, a fixed number of steps.
+"""A dense convex QP by a primal-dual interior-point method: one problem, at most a given number of steps.
 
     minimize 0.5 x^T P x + q^T x   subject to   G x <= h
 
@@ -6,8 +6,9 @@ Mehrotra's predictor-corrector on the slack form G x + s = h, s >= 0, multiplier
 step solves the reduced Newton system (P + G^T diag(lam/s) G) dx = ... by Cholesky (n is a few
 tens), takes the affine-scaling direction, centres it with sigma = (mu_aff / mu)^3 and the
 second-order correction, and moves 0.99 of the way to the boundary. The whole solve is one
-``lax.scan`` of ``iterations`` steps, so it vmaps predictably (a batch costs its longest member,
-which is every member); a step after convergence (mu below ``tol``) leaves the iterate unchanged.
+``lax.while_loop`` that stops once mu is below ``tol`` or after ``iterations`` steps; under vmap
+a batch runs until its slowest member has converged, and a step after a member's convergence
+leaves its iterate unchanged.
 
 Why an interior-point method and not a first-order one: the synthesis problems are small and
 dense (tens of variables, hundreds of constraints), where 20-30 Newton steps reach 1e-9 of the
@@ -76,8 +77,8 @@ def solve_qp(P, q, G, h, x0, lam0=None, iterations: int = 40, tol: float = 1e-13
         ratio = jnp.where(dv < 0.0, -v / jnp.where(dv < 0.0, dv, -1.0), jnp.inf)
         return jnp.min(ratio, initial=jnp.inf)
 
-    def step(carry, _):
-        x, s, lam = carry
+    def step(carry):
+        x, s, lam, k = carry
         rd, rp = residuals(x, s, lam)
         mu = jnp.dot(s, lam) / m
         w = lam / s
@@ -99,9 +100,13 @@ def solve_qp(P, q, G, h, x0, lam0=None, iterations: int = 40, tol: float = 1e-13
         # converged: a smaller mu only loses the Newton system's digits (s or lam near 0 divides)
         done = (mu < tol) | ~jnp.all(jnp.isfinite(dx))
         keep = lambda old, new: jnp.where(done, old, new)  # noqa: E731
-        return (keep(x, x + alpha * dx), keep(s, s + alpha * ds), keep(lam, lam + alpha * dlam)), None
+        return keep(x, x + alpha * dx), keep(s, s + alpha * ds), keep(lam, lam + alpha * dlam), k + 1
+
+    def running(carry):
+        _, s, lam, k = carry
+        return (k < iterations) & (jnp.dot(s, lam) / m >= tol)
 
     s0 = jnp.maximum(h - G @ x0, 1e-3)
-    (x, s, lam), _ = jax.lax.scan(step, (x0, s0, lam0 * norms), None, length=iterations)
+    x, s, lam, _ = jax.lax.while_loop(running, step, (x0, s0, lam0 * norms, jnp.zeros((), jnp.int32)))
     residual = relative_residual(x, s, lam)
     return QPResult(x, lam / norms, jnp.dot(s, lam) / m, residual)
