@@ -18,8 +18,7 @@ jax.config.update("jax_enable_x64", True)
 
 from camjax import load_scene  # noqa: E402
 from camjax.scene import parse_scene  # noqa: E402
-from camjax.solvers.base import DEFAULT_SETTINGS, Settings, problem_from_scene, solve  # noqa: E402
-from camjax.solvers.gradient import REFINED_SETTINGS  # noqa: E402
+from camjax.solvers.base import DEFAULT_SETTINGS, problem_from_scene, solve  # noqa: E402
 
 OUT = pathlib.Path(__file__).parent / "results" / "convergence.json"
 
@@ -48,9 +47,7 @@ def main():
         row = {"scene": name, "follower": scene.follower.type}
         for solver in ("gradient", "hybrid"):
             t0 = time.perf_counter()
-            # the gradient solver with its L-BFGS refinement after a stall (off by default)
-            settings = Settings.of_solvers(gradient=REFINED_SETTINGS) if solver == "gradient" else DEFAULT_SETTINGS
-            sol = solve(problem, weights, solver=solver, seed=0, settings=settings)
+            sol = solve(problem, weights, solver=solver, seed=0, settings=DEFAULT_SETTINGS)
             row[solver] = {"objective": float(sol.objective), "iterations": int(sol.iterations),
                            "status": sol.status_name, "feasible": bool(sol.feasible),
                            "seconds": time.perf_counter() - t0}
