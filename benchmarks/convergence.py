@@ -8,6 +8,7 @@ solver's iterations per follower type. Writes benchmarks/results/convergence.jso
 from __future__ import annotations
 
 import json
+import os
 import pathlib
 import time
 from importlib import resources
@@ -39,7 +40,16 @@ def scenes():
     yield "oscillating-roller-4-free", four_free_roller()
 
 
+def by_follower(rows):
+    """The gradient solver's largest iteration count per follower type."""
+    out = {}
+    for row in rows:
+        out[row["follower"]] = max(out.get(row["follower"], 0), row["gradient"]["iterations"])
+    return dict(sorted(out.items()))
+
+
 def main():
+    load_start = os.getloadavg()
     rows = []
     for name, scene in scenes():
         problem = problem_from_scene(scene)
@@ -55,7 +65,13 @@ def main():
         row["relative_gap"] = (row["gradient"]["objective"] - h) / abs(h)
         print(json.dumps(row), flush=True)
         rows.append(row)
-    OUT.write_text(json.dumps({"goal_relative_gap": 1e-6, "scenes": rows}, indent=1) + "\n")
+    report = {"goal_relative_gap": 1e-6,
+              "max_relative_gap": max(abs(r["relative_gap"]) for r in rows),
+              "gradient_iterations_by_follower": by_follower(rows),
+              # 1-minute load average of the machine at the start and the end (seconds are wall times)
+              "load_average": [round(load_start[0], 2), round(os.getloadavg()[0], 2)],
+              "cpu_count": os.cpu_count(), "scenes": rows}
+    OUT.write_text(json.dumps(report, indent=1) + "\n")
 
 
 if __name__ == "__main__":
