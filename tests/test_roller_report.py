@@ -155,7 +155,7 @@ BAD_ROLLER = {
                            "design.roller_radius_mm"),
     "roller_radius_negative": (_variant("roller_radius_mm = 5.0 ", "roller_radius_mm = -5.0 "),
                                "follower.roller_radius_mm"),
-    "offset_reaches_prime_circle": (_variant("offset_mm = [-4.0, 4.0]", "offset_mm = [-6.0, 4.0]"),
+    "offset_reaches_prime_circle": (_variant("offset_mm = [-4.0, 4.0]", "offset_mm = [-60.0, -53.0]"),
                                     "design.offset_mm"),
     "free_low_above_high": (_variant("offset_mm = [-4.0, 4.0]", "offset_mm = [3.0, -3.0]"),
                             "design.offset_mm"),
