@@ -20,7 +20,7 @@ from camjax.codesign.problem import Codesign, CodesignError, Inner
 from camjax.laws import LAWS
 from camjax.program import MotionProgram
 
-MAX_ITERATIONS = 60  # BFGS steps of the outer search
+MAX_ITERATIONS = 400  # BFGS steps of the outer search (the built-in scene stops by itself after ~200)
 
 class SearchResult(NamedTuple):
     z: np.ndarray
@@ -97,7 +97,7 @@ class Outcome(NamedTuple):
     segments: list  # camjax.synthesis.segments.SegmentSynthesis of the designed B-splines
 
 
-def codesign_scene(scene, samples: int | None = None) -> Outcome:
+def codesign_scene(scene, samples: int | None = None, max_iterations: int = MAX_ITERATIONS) -> Outcome:
     """Co-design the scene's designed laws and its [design] geometry (see the module docstring).
 
     Raises :class:`CodesignError` (naming the scene field) for what the co-design does not take.
@@ -120,7 +120,7 @@ def codesign_scene(scene, samples: int | None = None) -> Outcome:
         f0, inner0 = cd.value(z0)
         if not np.isfinite(f0):
             continue
-        z, f, inner, it, hist = bfgs(cd, z0, f0, inner0)
+        z, f, inner, it, hist = bfgs(cd, z0, f0, inner0, max_iterations)
         if best is None or f < best.objective:
             best = SearchResult(z, f, inner, it, name, hist)
     if best is None and builtin is None:
