@@ -284,6 +284,7 @@ def test_envelope_gradient_matches_finite_differences():
     assert float(g_r) < 0.0  # a larger base circle lowers the stress
 
 
+@pytest.mark.slow
 def test_jit_and_vmap_over_designs_match_single_calls():
     prog = ref_program()
     kin = evaluate(prog, 360)
