@@ -156,6 +156,9 @@ def test_design_codesign_end_to_end_and_fed_back(tmp_path):
     out = tmp_path / "out"
     assert main(["design", "codesign", "--out", str(out), "--samples", "180"]) == 0
     res = json.loads((out / "result.json").read_text())
+    assert (out / "synthesis.png").stat().st_size > 10_000
+    rows = (out / "synthesis.csv").read_text().splitlines()
+    assert rows[0] == "segment,x,s,v,a,j" and len(rows) == 1 + 2 * 401
     syn = res["synthesis"]
     c = syn["codesign"]
     assert set(c) >= {"objective", "objective_exact", "design_objective", "law_objective", "chosen",

@@ -86,13 +86,16 @@ def _setup_design(p: argparse.ArgumentParser):
                 preload.start()
             result = runtime.interruptible(analyse, scene if codesign is None else codesign.scene,
                                            base_radius_mm=r)
+            extra = None
             if codesign is not None:
                 from camjax.output.synthesis import codesign_report
 
                 result.data["synthesis"] = codesign_report(scene, codesign, result.data)
             if preload is not None:
                 preload.join()
-            return _write_design(args, out, scene, result, workers, progress)
+            if codesign is not None:
+                extra = _law_files(codesign, args.dpi)
+            return _write_design(args, out, scene, result, workers, progress, extra)
 
     return run
 
@@ -124,7 +127,39 @@ def _drawing_workers(stack):
         return None
 
 
-def _write_design(args, out, scene, result, workers, progress) -> int:
+def _law_files(codesign, dpi: int):
+    """``write(folder) -> names``: synthesis.csv and synthesis.png of a co-design's designed laws
+    (normalized s, v, a, j; drawn against the best built-in law of each one's class), as
+    ``camjax synthesize`` writes them."""
+    import numpy as np
+
+    from camjax.laws import LAWS
+    from camjax.laws.bspline import evaluate_derivatives
+    from camjax.output.synthesis import CURVE_POINTS, synthesis_figure, write_curves_csv
+    from camjax.synthesis.segments import builtin_q
+
+    x = np.linspace(0.0, 1.0, CURVE_POINTS)
+    curves, panels = [], []
+    builtin = codesign.best_builtin[0] if codesign.best_builtin is not None else None
+    for k, r in enumerate(codesign.segments):
+        seg = r.segment
+        q = tuple(np.asarray(v) for v in evaluate_derivatives(r.knots, r.control, seg.degree, x, 3))
+        curves.append((seg.index, x, q))
+        name = builtin[k] if builtin is not None else None
+        panels.append((f"segments[{seg.index}] {seg.kind}", x, q,
+                       builtin_q(LAWS[name], seg.kind, x) if name else None,
+                       f"{name} (best built-in with its geometry)" if name else None))
+    fig = synthesis_figure(panels)
+
+    def write(folder) -> list[str]:
+        write_curves_csv(folder / "synthesis.csv", curves)
+        fig.savefig(folder / "synthesis.png", dpi=dpi)
+        return ["synthesis.csv", "synthesis.png"]
+
+    return write
+
+
+def _write_design(args, out, scene, result, workers, progress, extra=None) -> int:
     """Check, write and report a computed design run (``camjax design``'s second half)."""
     from camjax import followers
     from camjax.output.animation import UndrawableGeometry, check_drawable
@@ -145,7 +180,7 @@ def _write_design(args, out, scene, result, workers, progress) -> int:
         write_json(tmp / "result.json", d)
         written = write_design_files(tmp, result.curves, args.dpi, banner, title_block(d),
                                      animate=args.animate, progress=progress, workers=workers)
-        names = ["result.json"] + [p.name for p in written]
+        names = ["result.json"] + [p.name for p in written] + (extra(tmp) if extra is not None else [])
     print(f"scene {d['scene']}: min base radius {d['min_base_radius_mm']:.4f} mm at "
           f"{d['min_base_radius_deg']:g} deg")
     follower = followers.of(scene)
