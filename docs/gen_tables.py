@@ -168,13 +168,18 @@ def _ratio_cell(value, goal: float, at_least: bool = True) -> str:
     return f"{value:.1f}× ({'pass' if ok else '**miss**'})"
 
 
+def _yes(flag) -> str:
+    return "–" if flag is None else ("yes" if flag else "**no**")
+
+
 def _sweeps(followers: dict) -> dict[str, dict]:
     """The 100-weighting sweep of each follower that has one: the flat face (full.json ``sweep``),
     the roller (roller.json) and the rockers (followers.json)."""
-    out = {name: v for name, v in followers.items() if isinstance(v, dict) and "gradient_speedup" in v}
+    out = {name: {**v, "_file": "followers.json"} for name, v in followers.items()
+           if isinstance(v, dict) and "gradient_speedup" in v}
     for source, key, name in (("roller", "roller", "roller"), ("bench", "sweep", "flat")):
         try:
-            out.setdefault(name, load(source)[key])
+            out.setdefault(name, {**load(source)[key], "_file": SOURCES[source].name})
         except (OSError, KeyError):
             pass
     return out
@@ -192,23 +197,23 @@ def follower_speed(followers: dict) -> str:
     lines = [
         f"| follower | gradient vs SLSQP (goal ≥ {SWEEP_GOALS['gradient_speedup']:g}×) | matched | "
         f"GA or hybrid vs differential evolution (goal ≥ {SWEEP_GOALS['ga_speedup']:g}×) | matched | "
-        f"gradient steps (max) | exact / grid report, N = 360 (goal ≤ {EXACT_GOAL:g}×) |",
-        "|---|---|---|---|---|---:|---|",
+        f"gradient steps (max) | exact / grid report, N = 360 (goal ≤ {EXACT_GOAL:g}×) | sweep from |",
+        "|---|---|---|---|---|---:|---|---|",
     ]
     for name in _follower_names():
         s = sweeps.get(name)
         e = extrema.get(name, {})
         exact = _ratio_cell(e.get("exact_over_grid_time_360"), EXACT_GOAL, at_least=False)
         if s is None:
-            lines.append(f"| `{name}` | no sweep benchmark | | no sweep benchmark | | – | {exact} |")
+            lines.append(f"| `{name}` | no sweep benchmark | | no sweep benchmark | | – | {exact} | |")
             continue
         gradient = s.get("methods", {}).get("camjax_gradient", {})
         steps = gradient.get("iterations_max")
         via = s.get("ga_speedup_method", "camjax_ga").removeprefix("camjax_")
         lines.append(
             f"| `{name}` | {_ratio_cell(s['gradient_speedup'], SWEEP_GOALS['gradient_speedup'])} | "
-            f"{_g(s.get('gradient_accuracy_matched'))} | {_ratio_cell(s['ga_speedup'], SWEEP_GOALS['ga_speedup'])} "
-            f"({via}) | {_g(s.get('ga_accuracy_matched'))} | {_g(steps)} | {exact} |"
+            f"{_yes(s.get('gradient_accuracy_matched'))} | {_ratio_cell(s['ga_speedup'], SWEEP_GOALS['ga_speedup'])} "
+            f"({via}) | {_yes(s.get('ga_accuracy_matched'))} | {_g(steps)} | {exact} | `{s['_file']}` |"
         )
     return "\n".join(lines)
 
