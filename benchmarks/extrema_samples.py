@@ -37,8 +37,6 @@ import sys
 import time
 from pathlib import Path
 
-import numpy as np
-
 import camjax
 from benchmarks.harness import environment, time_python
 from camjax import followers
@@ -129,7 +127,8 @@ def main(argv=None) -> int:
     names = args.followers or list(followers.names())
     unknown = [n for n in names if n not in followers.names()]
     if unknown:
-        parser.error(f"unknown follower type(s) {', '.join(unknown)}; registered: {', '.join(followers.names())}")
+        parser.error(f"unknown follower type(s) {', '.join(unknown)}; "
+                     f"registered: {', '.join(followers.names())}")
     data = json.loads(args.out.read_text()) if args.out.exists() else {}
     data.setdefault("followers", {})
     for name in names:

@@ -110,14 +110,15 @@ def run_follower(follower: str, quick: bool = False) -> dict:
                           problem, weights, keys, repeats=3)
         its = np.asarray(sol.iterations)
         results["camjax_" + solver] = (t.median_s, t.compile_s, count, sol.design,
-                                       {"iterations_max": int(np.max(its)), "iterations_median": float(np.median(its))})
+                                       {"iterations_max": int(np.max(its)),
+                                        "iterations_median": float(np.median(its))})
     n_slsqp, n_de = SUBSETS["quick" if quick else "full"]
     for name, n, solve_one in (("scipy_slsqp", n_slsqp, baseline.slsqp),
                                ("scipy_de", n_de, baseline.differential_evolution)):
         subset = np.linspace(0, count - 1, n).round().astype(int)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            solve_one(problem, float(alpha[0]), float(gamma[0]))  # compiles the JAX functions it calls (rockers)
+            solve_one(problem, float(alpha[0]), float(gamma[0]))  # compiles the JAX it calls (rockers)
             t0 = time.perf_counter()
             out = [solve_one(problem, float(alpha[i]), float(gamma[i])) for i in subset]
             seconds = time.perf_counter() - t0
@@ -195,7 +196,8 @@ def main(argv=None) -> int:
         data[follower] = run_follower(follower, quick=args.quick)
         data.setdefault("environment", {})[follower] = environment("float64")
         r = data[follower]
-        print(f"{follower}.gradient_speedup = {r['gradient_speedup']:.1f} (matched: {r['gradient_accuracy_matched']})")
+        print(f"{follower}.gradient_speedup = {r['gradient_speedup']:.1f} "
+              f"(matched: {r['gradient_accuracy_matched']})")
         print(f"{follower}.ga_speedup = {r['ga_speedup']:.1f} via {r['ga_speedup_method']} "
               f"(matched: {r['ga_accuracy_matched']})", flush=True)
         args.out.parent.mkdir(parents=True, exist_ok=True)

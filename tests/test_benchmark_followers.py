@@ -64,3 +64,10 @@ def test_speed_table_has_a_row_per_follower_and_shows_misses():
     assert [r.split("|")[1].strip().strip("`") for r in rows] == names
     row = next(r for r in rows if "`oscillating_flat`" in r)
     assert "1.5× (**miss**)" in row and "45.0× (pass)" in row and "2000" in row
+
+
+def test_a_speed_up_without_matched_accuracy_is_a_miss():
+    gen = _gen_tables()
+    assert gen._ratio_cell(61.5, 20.0, matched=False) == "61.5× (**miss**: accuracy not matched)"
+    assert gen._ratio_cell(61.5, 20.0, matched=True) == "61.5× (pass)"
+    assert gen._ratio_cell(1.9, 2.0, at_least=False) == "1.9× (pass)"

@@ -150,7 +150,8 @@ def slsqp(problem, alpha: float, gamma: float, *, x0=None, ftol: float = 1e-12,
         warnings.simplefilter("ignore", RuntimeWarning)
         res = minimize(lambda z: z[-1], np.append(x_full[free], t0), jac=lambda z: grad_t, method="SLSQP",
                        bounds=[*zip(lo[free], hi[free], strict=True), (None, None)],
-                       constraints=[{"type": "ineq", "fun": lambda z: rows(z)[0], "jac": lambda z: rows(z)[1]}],
+                       constraints=[{"type": "ineq", "fun": lambda z: rows(z)[0],
+                                     "jac": lambda z: rows(z)[1]}],
                        options={"ftol": ftol, "maxiter": maxiter})
     x = x_full.copy()
     x[free] = res.x[:-1]
@@ -158,7 +159,8 @@ def slsqp(problem, alpha: float, gamma: float, *, x0=None, ftol: float = 1e-12,
 
 
 def differential_evolution(problem, alpha: float, gamma: float, *, seed: int = 0, popsize: int = 20,
-                           maxiter: int = 1000, tol: float = 1e-10, polish: bool = True) -> FamilyBaselineResult:
+                           maxiter: int = 1000, tol: float = 1e-10,
+                           polish: bool = True) -> FamilyBaselineResult:
     """``scipy.optimize.differential_evolution`` on the problem (true max over the angles), the
     largest constraint row <= 0 as a ``NonlinearConstraint``."""
     from scipy.optimize import NonlinearConstraint
