@@ -17,9 +17,8 @@ of the same report at :data:`REFERENCE_SAMPLES` samples (1e6: a sampled extremum
 N^-2, so ~1e-11 relative there; it does not use the refinement it judges).
 
 Time: the median of warm calls of ``design_report`` (the whole analysis: curves, extrema, loads,
-report), compile time apart (first call minus the median). Rocking followers' exact reports
-trace again on every call (their extrema are refined outside a cached program), which the
-times show.
+report), compile time apart (first call minus the median). The rocking followers' exact reports
+cost seconds per warm call whatever N (a per-call overhead the times show).
 
 ``python -m benchmarks.extrema_samples --out benchmarks/results/extrema.json [FOLLOWER ...]``
 (followers already in the file and not named are kept; ``--quick``: N = 90 and 360, reference
