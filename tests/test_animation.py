@@ -93,6 +93,7 @@ def test_frame_artists_show_the_follower_at_s_of_theta(flat_mechanism, k):
     assert f"θ = {theta:5.1f}°" in mf.artists["label"].get_text()
 
 
+@pytest.mark.slow
 def test_roller_frame_artist_centre(roller_mechanism):
     mf = motion_frames(roller_mechanism, 36)
     mf.update(7)
@@ -104,6 +105,7 @@ def test_roller_frame_artist_centre(roller_mechanism):
                                          - m.offset_mm**2) + s, abs=1e-9)
 
 
+@pytest.mark.slow
 def test_gif_has_every_frame(flat_mechanism, tmp_path):
     path = write_motion_gif(tmp_path / "motion.gif", flat_mechanism, frames=24, fps=10, dpi=40)
     with Image.open(path) as im:
@@ -117,6 +119,7 @@ def test_gif_has_every_frame(flat_mechanism, tmp_path):
         assert np.any(np.asarray(im.convert("RGB")) != first)
 
 
+@pytest.mark.slow
 def test_infeasible_outline_still_animates(default_scene, default_arrays, tmp_path):
     curves = camjax.analyse(default_scene, default_arrays, base_radius_mm=10.0).curves
     bad = curves.rho_mm < 0
@@ -144,6 +147,7 @@ def test_violation_samples_are_where_rho_is_negative(default_scene, default_arra
     assert violation_samples(bad).any()
 
 
+@pytest.mark.slow
 def test_clockwise_cam_is_the_mirror_image(roller_mechanism):
     # a cw cam: outline mirrored (X -> -X), turning the other way; the follower moves the same and
     # every contact point is the mirror of the ccw one (the mechanism seen from behind)

@@ -84,6 +84,7 @@ def test_lowest_degree_takes_a_gap_in_the_orders():
     assert sol.degree == 1 and sol.q == (0, 1)
 
 
+@pytest.mark.slow
 def test_a_return_moves_down_by_its_conditions():
     cond = SegmentConditions(EndConditions(j=MATCH), EndConditions(j=MATCH))
     plans = [Plan("rise", 90.0, 8.0, LAWS["poly_4_5_6_7"]), Plan("dwell", 90.0),

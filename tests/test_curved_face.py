@@ -84,6 +84,7 @@ def _near_joints(n, width=2, program=PROGRAM):
 # ---------------------------------------------------------------------------- geometry
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("rotation,e", CASES)
 def test_outline_is_the_brute_force_envelope_of_the_face_circle(rotation, e):
     """Every outline point's distance from the cam centre is the first hit, along its ray, of the
@@ -106,6 +107,7 @@ def test_outline_is_the_brute_force_envelope_of_the_face_circle(rotation, e):
     np.testing.assert_allclose(r, brute, rtol=0, atol=1e-7)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("rotation,e", CASES)
 def test_pressure_angle_face_travel_and_curvature_from_positions(rotation, e):
     n = 36_000
@@ -210,6 +212,7 @@ def test_the_curved_face_tends_to_the_flat_face_as_its_radius_grows(e):
             assert 7.0 < a[key] / b[key] < 13.0, (key, a[key], b[key])
 
 
+@pytest.mark.slow
 def test_the_problems_face_need_tends_to_the_flat_faces_width():
     """2 max R_c |sin phi| -> 2 max|s'| (the flat face's L, SPEC 3) as R_c grows (e = 0)."""
     scene = parse_scene(_scene_text(face_radius=100.0, face_width=20.0, design="face_radius_mm = [50.0, 1e7]"))
@@ -273,6 +276,7 @@ def test_a_narrow_face_sets_the_smallest_cam_where_the_contact_reaches_its_edge(
     assert _max_travel_from_positions(m.radius_mm - 0.01, 100.0, 0.0, scene.motion.program) > 4.0 + 1e-4
 
 
+@pytest.mark.slow
 def test_a_wide_face_leaves_the_smallest_cam_to_the_other_limits():
     scene = parse_scene(_scene_text(face_radius=100.0, face_width=60.0))
     follower = camjax.followers.of(scene)

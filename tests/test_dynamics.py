@@ -744,6 +744,7 @@ def test_the_design_path_does_not_even_import_the_dynamics_models(tmp_path):
     assert run.stdout.strip().endswith("NOT LOADED")
 
 
+@pytest.mark.slow
 def test_meanwhile_sees_each_thread_but_the_last_as_it_finishes():
     """scene_dynamics calls ``meanwhile`` with this thread's analyses, then once per finished
     thread but the last (two threads here: time domain and jump): each report holds what the one
@@ -848,6 +849,7 @@ def test_cli_dynamics_refuses_a_scene_over_the_budget_naming_the_fields(tmp_path
     assert budget.refusal(scene, work, force=True) is None  # --force: the run goes ahead
 
 
+@pytest.mark.slow
 def test_force_runs_a_scene_over_the_budget_and_a_terminal_gets_a_progress_bar(tmp_path, capsys, monkeypatch):
     """A budget of 1 ns puts a small scene over it: refused without --force (nothing written),
     run with it. With CAMJAX_PROGRESS=1 (as on a terminal) stderr gets the bar and its ETA; piped,

@@ -80,6 +80,7 @@ def test_dxf_reopens_as_closed_polyline_in_mm(written, csv_table):
     np.testing.assert_allclose(points, csv_table[1][:, 1:3], atol=1e-9)
 
 
+@pytest.mark.slow
 def test_no_stress_or_loads_figures_without_them(tmp_path):
     text = """
 [motion]
@@ -175,6 +176,7 @@ def _dxf_content(path):
             tuple(doc.header["$EXTMIN"]), tuple(doc.header["$EXTMAX"]))
 
 
+@pytest.mark.slow
 def test_drawing_worker_failure_is_one_line(default_report, tmp_path):
     from camjax.output.drawing import DrawingError, DrawingWorkers
 
@@ -185,6 +187,7 @@ def test_drawing_worker_failure_is_one_line(default_report, tmp_path):
     assert "\n" not in str(info.value)
 
 
+@pytest.mark.slow
 def test_drawing_workers_do_not_import_jax():
     """A worker enters camjax without its __init__ (which imports JAX): that is its head start."""
     import subprocess

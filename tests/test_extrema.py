@@ -197,6 +197,7 @@ def test_extremum_on_a_sample_keeps_the_grid_value(law, half_width, start):
 # ----------------------------------------------------------------------- joints, dwells
 
 
+@pytest.mark.slow
 def test_extremum_at_a_joint_is_the_one_sided_limit():
     """A harmonic rise ends with s'' = -h pi^2 / (2 beta^2), then a dwell (s'' = 0): the min of s''
     is the left limit at the joint, which no sample reaches (the joint's sample is the dwell's)."""
@@ -213,6 +214,7 @@ def test_extremum_at_a_joint_is_the_one_sided_limit():
     assert float(e.angle_deg) in (pytest.approx(40 + beta_deg, abs=1e-9), pytest.approx(360 - beta_deg, abs=1e-9))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("law", [None, polynomial_law([1])])
 def test_degenerate_segments_keep_the_grid_value(law):
     """A single 360-deg dwell, or constant-velocity rise and return: f' = 0, no NaN, grid value kept."""
@@ -230,6 +232,7 @@ def test_degenerate_segments_keep_the_grid_value(law):
         assert np.all(np.isfinite(np.asarray(g)))
 
 
+@pytest.mark.slow
 def test_more_candidates_than_a_short_segment_has_points():
     """Segments of very different sample counts (one holds a single sample) refined together, with
     more candidates than the short one's sub-grid has points: each segment's max is the dense
@@ -260,6 +263,7 @@ def test_more_candidates_than_a_short_segment_has_points():
 # ------------------------------------------------------------------ gradients, batching
 
 
+@pytest.mark.slow
 def test_envelope_gradient_matches_finite_differences():
     """d(max sigma)/dR_b and d(max F)/dh by the envelope theorem against central differences."""
     base = ref_program()
@@ -280,6 +284,7 @@ def test_envelope_gradient_matches_finite_differences():
     assert float(g_r) < 0.0  # a larger base circle lowers the stress
 
 
+@pytest.mark.slow
 def test_jit_and_vmap_over_designs_match_single_calls():
     prog = ref_program()
     kin = evaluate(prog, 360)

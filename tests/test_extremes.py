@@ -36,6 +36,7 @@ def test_matrix_has_no_failure_and_no_nonfinite(matrix):
     assert all(math.isfinite(c.value) for c in matrix)
 
 
+@pytest.mark.slow
 @settings(max_examples=60, deadline=None)
 @given(st.sampled_from(LAW_NAMES), st.floats(0.0, 1.0, allow_nan=False))
 def test_every_law_finite_and_bounded_for_all_x(name, x):
@@ -83,6 +84,7 @@ def test_stress_force_and_gradients_finite_for_any_radius_and_speed(log_factor, 
     assert np.isfinite(float(val)) and np.all(np.isfinite(np.asarray(grad)))
 
 
+@pytest.mark.slow
 def test_float32_warns_near_the_curvature_limit_and_not_far_from_it(default_scene):
     a32 = camjax.scene_arrays(default_scene, dtype=jnp.float32)
     rb_min = float(flat_geo.flat_min_base_radius(a32.kin)[0])

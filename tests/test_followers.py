@@ -33,6 +33,11 @@ from camjax import cli, followers
 from camjax.scene import builtin_scene_text, parse_scene, with_samples
 
 NAMES = followers.names()
+# The quick loop (-m "not slow") runs the costly checks on the flat face (and the exact extrema on
+# a rocker too); the full suite (CI) runs every follower through every check.
+QUICK = ("flat", "oscillating_flat")
+EACH = [name if name in QUICK else pytest.param(name, marks=pytest.mark.slow) for name in NAMES]
+EACH_RUN = [name if name == "flat" else pytest.param(name, marks=pytest.mark.slow) for name in NAMES]  # `camjax design`
 SHARED_KEYS = ("camjax_version", "scene", "dtype", "models", "samples", "cam_speed_rpm", "rotation",
                "follower_type", "segments", "kinematics", "flcd", "min_base_radius_mm", "evaluated_at", "design")
 
@@ -140,7 +145,7 @@ def test_gradients_through_every_design_variable_match_finite_differences(name):
                                    err_msg=f"{name}: d/d{var}")
 
 
-@pytest.mark.parametrize("name", NAMES)
+@pytest.mark.parametrize("name", EACH_RUN)
 def test_gradients_stay_finite_far_outside_the_box(name):
     family, problem, design, lo, hi = _problem_at_a_design(name)
     weights = camjax.family.weights_of(1.0, 1.0)
@@ -218,7 +223,7 @@ def test_the_follower_riding_on_the_exported_outline_reproduces_its_motion(name,
     np.testing.assert_allclose(got, s, rtol=0, atol=tol, err_msg=name)
 
 
-@pytest.mark.parametrize("name", NAMES)
+@pytest.mark.parametrize("name", EACH_RUN)
 def test_the_base_circle_of_the_exported_outline_is_the_reported_base_radius(name, written):
     data, folder = written(name)
     names, table = _outline(folder)
@@ -232,7 +237,7 @@ def test_the_base_circle_of_the_exported_outline_is_the_reported_base_radius(nam
     np.testing.assert_allclose(radius, data["evaluated_at"]["base_radius_mm"], rtol=0, atol=1e-9)
 
 
-@pytest.mark.parametrize("name", NAMES)
+@pytest.mark.parametrize("name", EACH)
 def test_exact_extrema_are_those_of_a_dense_grid(name, runs):
     """Every curve's refined max and min against a 100 000-sample grid of the same curve: never
     beaten by it (beyond round-off), and within the grid's resolution of it."""
@@ -266,7 +271,7 @@ def test_exact_extrema_are_those_of_a_dense_grid(name, runs):
                 assert abs(exact - fine) < abs(exact - coarse), (name, key, sense, exact, coarse, fine)
 
 
-@pytest.mark.parametrize("name", NAMES)
+@pytest.mark.parametrize("name", EACH_RUN)
 def test_result_json_is_strict_and_has_the_shared_keys(name, written):
     data, folder = written(name)
     text = (folder / "result.json").read_text()
@@ -279,7 +284,7 @@ def test_result_json_is_strict_and_has_the_shared_keys(name, written):
         assert math.isfinite(data["design"][var]), (name, var)
 
 
-@pytest.mark.parametrize("name", NAMES)
+@pytest.mark.parametrize("name", EACH_RUN)
 def test_the_figures_profile_and_dxf_are_written(name, runs, written):
     from PIL import Image
 

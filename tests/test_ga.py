@@ -63,6 +63,7 @@ def test_seeded_and_reproducible(problem):
     np.testing.assert_array_equal(np.asarray(ga.weighting_keys(7, 1, offset=1)[0] == keys[1]), True)
 
 
+@pytest.mark.slow
 def test_population_layout_weightings_first(problem):
     """State arrays are (weightings, population, genes): the axes a device mesh would shard."""
     w = weights_of(jnp.ones(3), jnp.ones(3))

@@ -510,6 +510,7 @@ def test_an_unexpected_error_is_one_line(place, capsys, monkeypatch):
 # ------------------------------------------------------------------- folders replaced whole
 
 
+@pytest.mark.slow
 def test_a_run_replaces_the_folder_whole(place, capsys):
     (place / "scene.toml").write_text(KINEMATIC)
     rc, _, _ = run(["design", str(place / "scene.toml"), "--out", str(place / "out"), "--dpi", "20"], capsys)
@@ -610,6 +611,7 @@ def test_a_failed_swap_puts_the_checkpoint_back(tmp_path, monkeypatch):
     assert snapshot(out) == before and leftovers(tmp_path) == []
 
 
+@pytest.mark.slow
 def test_a_stale_staging_folder_of_a_dead_run_is_cleaned(place, capsys):
     dead = subprocess.Popen([sys.executable, "-c", "pass"])
     dead.wait()
@@ -655,6 +657,7 @@ def infeasible_run(tmp_path_factory):
     return rc, std.getvalue(), err.getvalue(), out
 
 
+@pytest.mark.slow
 def test_infeasible_geometry_is_loud(infeasible_run):
     import json
 
@@ -674,6 +677,7 @@ def test_infeasible_geometry_is_loud(infeasible_run):
     assert (out / "profile.dxf").exists()  # written anyway: --strict only changes the exit status
 
 
+@pytest.mark.slow
 def test_a_feasible_design_has_no_warning(tmp_path, capsys, monkeypatch):
     # the smallest admissible radius + 1 mm of a kinematics-only scene: rho > 0 everywhere
     (tmp_path / "scene.toml").write_text(KINEMATIC)
@@ -876,6 +880,7 @@ def test_an_interrupted_write_leaves_the_old_or_the_new_complete_folder(tmp_path
     assert outcomes == {True, False}  # both interrupted and finished runs were drawn
 
 
+@pytest.mark.slow
 def test_a_failed_drawing_process_leaves_the_folder_as_it_was(place, monkeypatch, capsys):
     """A drawing process that fails (here: its figure function raises) ends the run with one
     line and status 1, and the output folder keeps its old files."""

@@ -116,6 +116,7 @@ def test_the_outline_is_the_tip_seen_from_the_cam(drawn):
     np.testing.assert_allclose(c.profile_y_mm, y, rtol=0, atol=1e-12)
 
 
+@pytest.mark.slow
 def test_pressure_angle_and_curvature_match_finite_differences_of_the_outline(drawn):
     scene, run = drawn
     c = run.curves
@@ -276,10 +277,14 @@ def test_a_roller_radius_is_refused_naming_the_key():
 
 
 def test_an_offset_outside_the_base_circle_is_refused():
+    # |e| < R_b is a constraint of the problem: a box with some designs past it is accepted ...
     text = builtin_scene_text("knife-edge").replace("base_radius_mm = [5.0, 60.0]", "base_radius_mm = [3.0, 60.0]")
+    assert parse_scene(text).design.bounds("offset_mm") == (-4.0, 4.0)
+    # ... one where every design has |e| >= R_b is refused, naming the field and the largest R_b
+    text = text.replace("offset_mm = [-4.0, 4.0]", "offset_mm = [61.0, 70.0]")
     with pytest.raises(SceneError) as err:
         parse_scene(text)
-    assert err.value.field == "design.offset_mm" and "|e| < 3" in str(err.value)
+    assert err.value.field == "design.offset_mm" and "|e| < 60" in str(err.value)
 
 
 @pytest.mark.slow

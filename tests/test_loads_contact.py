@@ -66,6 +66,7 @@ def test_hertz_stress_closed_form():
     assert float(sat) == pytest.approx(0.564 * math.sqrt(5.0 / (RHO_FLOOR_MM * k)), rel=1e-12)
 
 
+@pytest.mark.slow
 def test_gradients_finite_for_any_base_radius_lift_speed_spring(default_scene):
     """d(max stress)/d(R_b, lift, rpm, k) is finite everywhere, far below the feasible R_b too."""
     sc = default_scene

@@ -239,6 +239,7 @@ def test_a_narrow_face_binds_the_sizing_where_the_contact_reaches_its_edge():
     assert wide.binding == "pressure_angle" and wide.min_base_radius_mm < sizing.min_base_radius_mm
 
 
+@pytest.mark.slow
 def test_a_face_too_narrow_is_reported_by_the_problem_and_the_run():
     scene = _scene(16.0)
     run = camjax.run_design(scene, base_radius_mm=20.0)  # below the smallest cam the face admits (24.6 mm)
@@ -255,9 +256,6 @@ def test_a_face_too_narrow_is_reported_by_the_problem_and_the_run():
     need = float(P.face_width_need(pc, design))
     np.testing.assert_allclose(float(ev.violation.face_travel), need / 2 - 6.0, rtol=1e-12)
     assert "face_travel" in P.violated_constraints(pc, ev.violation)
-    # and the solvers' coordinates floor W at that need
-    floored = P.from_unit(pc, P.to_unit(pc, design))
-    np.testing.assert_allclose(float(floored.face_width_mm), need, rtol=1e-12)
 
 
 # ---------------------------------------------------------------------------- scene and solvers

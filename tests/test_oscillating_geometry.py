@@ -316,6 +316,7 @@ def test_long_arm_flat_face_approaches_the_translating_flat_face():
             assert 9.0 < errors[0][k] / errors[1][k] < 11.0
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("rotation,rf,limit_deg", [("ccw", 8.0, 30.0), ("cw", 8.0, 30.0), ("ccw", 30.0, 60.0)])
 def test_roller_min_prime_radius_against_a_dense_scan(rotation, rf, limit_deg):
     d, l = ROLLER["d"], ROLLER["l"]

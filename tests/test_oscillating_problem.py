@@ -70,6 +70,7 @@ def test_smallest_cam_with_fixed_pivot_and_arm_is_the_sizing(rotation):
     assert bool(exact.evaluation.feasible) and abs(radius - float(sizing.base_radius_mm)) < 1e-2
 
 
+@pytest.mark.slow
 def test_pointwise_mode_condenses_to_the_same_smallest_cam():
     scene = scene_of()
     problem = problem_from_scene(scene, scene_arrays(scene, extrema="grid"))  # both on the samples
@@ -120,6 +121,7 @@ def assert_gradients(family, scene, x0, far_points, sums):
         assert np.all(np.isfinite(np.asarray(g))) and np.all(np.isfinite(np.asarray(f(jnp.asarray(x)))))
 
 
+@pytest.mark.slow
 def test_objective_and_constraints_gradients_match_finite_differences():
     scene = parse_scene(SCENE.replace("ROT", "cw").replace("gamma = 0.0", "gamma = 1.0").replace(
         "DESIGN", "roller_radius_mm = [4.0, 12.0]\npivot_distance_mm = [60.0, 100.0]\narm_length_mm = [40.0, 80.0]"))
@@ -159,6 +161,7 @@ FLAT = (SCENE.replace('type = "oscillating_roller"', 'type = "oscillating_flat"'
         .replace("base_radius_mm = [5.0, 60.0]", "base_radius_mm = [5.0, 130.0]"))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("rotation", ["ccw", "cw"])
 def test_flat_face_smallest_cam_is_the_sizing_and_the_stress_limit_binds_as_the_curves_say(rotation):
     from camjax import followers
@@ -185,6 +188,7 @@ def test_flat_face_smallest_cam_is_the_sizing_and_the_stress_limit_binds_as_the_
     assert float(np.max(curves.stress_MPa)) == pytest.approx(1000.0, rel=1e-6)
 
 
+@pytest.mark.slow
 def test_flat_face_gradients_match_finite_differences_and_stay_finite():
     from camjax.followers.oscillating_flat import problem as FP
 

@@ -112,6 +112,7 @@ def _drawn_boxes(fig):
     return canvas.get_renderer()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("rpm", ["240.0", "10.0"])
 def test_loads_labels_stay_inside_their_axes_wherever_the_minimum_falls(default_scene, rpm):
     # at 10 rpm the inertia is negligible and the force is least on the first dwell, at theta = 0:

@@ -249,6 +249,7 @@ overhang_ratio = {xi}
 """
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("b, mu0, mu, xi", [(40.0, 0.1, 0.2, 0.5), (12.0, 0.3, 0.8, 1.0)])
 def test_guide_jamming_check_agrees_with_gamma(b, mu0, mu, xi):
     text = without_section(builtin_scene_text("default"), "design") + GUIDE.format(b=b, mu0=mu0, mu=mu,
@@ -266,6 +267,7 @@ def test_guide_jamming_check_agrees_with_gamma(b, mu0, mu, xi):
     json.dumps(data, allow_nan=False)
 
 
+@pytest.mark.slow
 def test_frictionless_guide_never_jams_and_stays_valid_json():
     text = without_section(builtin_scene_text("default"), "design") + GUIDE.format(b=40, mu0=0.1, mu=0.0,
                                                                                    xi=0.5)

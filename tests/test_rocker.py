@@ -210,6 +210,7 @@ def test_design_writes_the_rocker_files(tmp_path, scene, rotation):
 
 @pytest.mark.parametrize("radius,words", [("5", "cannot reach the prime circle"),
                                           ("135", "cannot reach the prime circle")])  # R_p < |d - l|, > d + l
+@pytest.mark.slow
 def test_design_refuses_a_base_radius_the_rocker_cannot_close(tmp_path, capsys, radius, words):
     rc, out = _design(tmp_path, ROLLER_SCENE.replace("ROT", "ccw"), "--base-radius", radius)
     assert rc == 2 and not out.exists()
@@ -302,6 +303,7 @@ def rocker_report():
     return analyse(parse_scene(ROLLER_SCENE.replace("ROT", "cw"), "rocker"))
 
 
+@pytest.mark.slow
 def test_rocker_figures_carry_the_title_block_with_the_pivot_and_arm(rocker_report):
     from camjax.followers import drawing
     from camjax.output.titles import title_block
@@ -365,6 +367,7 @@ def test_rho_panel_is_clipped_to_the_cams_size_and_marks_what_it_clips():
     assert not any(t.get_text().startswith(f"{float(np.max(c.rho_mm[~over])):.4g} @") for t in ax.texts)
 
 
+@pytest.mark.slow
 def test_rho_panel_keeps_its_whole_range_when_nothing_is_clipped(rocker_report):
     from camjax.followers._rocking_drawing import geometry_figure
 

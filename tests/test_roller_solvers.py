@@ -164,6 +164,7 @@ def _dense_max_pressure_angle_deg(scene, design, samples: int = 720_001) -> floa
     return float(np.degrees(np.max(np.abs(phi))))
 
 
+@pytest.mark.slow
 def test_exact_extrema_keep_the_pressure_angle_between_the_samples(scene):
     """Solved on the 1 deg grid, the prime circle sits on the limit at the samples and passes it
     between them (the dense NumPy scan finds |phi| above 30 deg); with exact extrema (the scene's
@@ -179,3 +180,27 @@ def test_exact_extrema_keep_the_pressure_angle_between_the_samples(scene):
     assert bool(exact.feasible)
     for name in ("base_radius_mm", "roller_radius_mm", "offset_mm"):
         assert abs(float(getattr(exact, name) - getattr(grid, name))) < 1e-4, name
+
+
+def test_an_offset_box_that_never_cuts_the_prime_circle_is_refused(scene):
+    # R_p <= 2 + 3 = 5 mm everywhere in the box, |e| >= 6 mm: no design can work
+    from camjax.scene import SceneError
+
+    with pytest.raises(SceneError, match=r"design\.offset_mm.*every design in the bounds"):
+        with_design(scene, base_radius_mm=[1.0, 2.0], roller_radius_mm=3.0, offset_mm=[6.0, 8.0])
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("solver", ["gradient", "hybrid"])
+def test_a_box_with_offsets_past_some_prime_circles_is_solved_to_its_optimum(scene, solver):
+    """The issue's box, R_b in [1, 40] mm with e in [-5, 5] mm, holds designs with |e| >= R_p
+    (R_b + R_f down to 4 mm): |e| < R_p is then a constraint (the pressure angle's, on the base
+    circle's dwell), not a reason to refuse the box. The optimum lies inside the smaller box of
+    test_gradient_finds_the_optimal_offset, so both must equal the exact offset scan's optimum
+    (to the solvers' feasibility tolerance, 1e-6 mm)."""
+    wide = with_design(scene, base_radius_mm=[1.0, 40.0], offset_mm=[-5.0, 5.0], gamma=0.0)
+    sol = solve(R.problem_from_scene(wide, extrema="grid"), (1.0, 0.0), solver=solver)
+    rp = float(sol.base_radius_mm + sol.roller_radius_mm)
+    assert bool(sol.feasible) and abs(float(sol.offset_mm)) < rp
+    exact_rp, _ = exact_offset_scan(wide)
+    assert rp == pytest.approx(exact_rp, abs=1e-6)

@@ -88,6 +88,7 @@ def test_bad_designed_segments_exit_2_naming_the_field(tmp_path, capsys, change,
     _check_refused(tmp_path, capsys, data, field)
 
 
+@pytest.mark.slow
 def test_an_unknown_objective_name_exits_2(tmp_path, capsys):
     data = tomllib.loads(builtin_scene_text("synthesis"))
     data["synthesis"]["objective"]["peak_snap"] = 1.0

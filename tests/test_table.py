@@ -82,6 +82,7 @@ def test_noise_free_cycloidal_table_fits_to_1e_6_mm_and_its_peak_acceleration_to
     assert not fit["noisy"] and fit["jerk_noise_ratio"] < NOISE_RATIO
 
 
+@pytest.mark.slow
 def test_noisy_cycloidal_table_keeps_its_peak_acceleration_within_5_percent(tmp_path):
     angles = np.arange(0.0, BETA + 0.5)
     noise = 0.01 * np.random.default_rng(22).normal(size=angles.size)
@@ -94,6 +95,7 @@ def test_noisy_cycloidal_table_keeps_its_peak_acceleration_within_5_percent(tmp_
     assert 0.005 < fit["rms_residual"] < 0.015
 
 
+@pytest.mark.slow
 def test_too_little_smoothing_on_noisy_points_is_flagged(tmp_path):
     angles = np.arange(0.0, BETA + 0.5)
     noise = 0.01 * np.random.default_rng(22).normal(size=angles.size)
@@ -104,6 +106,7 @@ def test_too_little_smoothing_on_noisy_points_is_flagged(tmp_path):
     assert fit["smoothing"] == pytest.approx(1e-3)
 
 
+@pytest.mark.slow
 def test_table_segments_meet_the_dwells_at_rest(tmp_path):
     angles = np.arange(0.0, BETA + 0.5)
     noise = 0.01 * np.random.default_rng(5).normal(size=angles.size)
@@ -179,6 +182,7 @@ def test_without_scipy_the_error_names_the_extra(tmp_path, monkeypatch):
         _scene(tmp_path, angles, H * _cycloidal(angles / BETA))
 
 
+@pytest.mark.slow
 def test_smoothing_is_in_scene_units(tmp_path):
     """The same smoothing in (mm, deg) gives the same fit whatever the segment's angle."""
     angles = np.arange(0.0, BETA + 0.5)

@@ -24,7 +24,7 @@ def _setup_laws(p: argparse.ArgumentParser):
     def run(args) -> int:
         import jax.numpy as jnp
 
-        from camjax.laws import LAWS, summarize
+        from camjax.laws import LAWS, summarize_all
         from camjax.program import classify_jump
 
         plot = check_output_file(args.plot, "--plot") if args.plot is not None else None
@@ -37,12 +37,11 @@ def _setup_laws(p: argparse.ArgumentParser):
                 raise UsageError(f"--plot = {args.plot!r}: unknown image type '{plot.suffix}' "
                                  f"(allowed: {', '.join('.' + k for k in sorted(kinds))})")
 
-        def dwell_joints(law) -> tuple[str, str]:
+        def dwell_joints(s) -> tuple[str, str]:
             # the law as a rise from a dwell and into a dwell: the jumps at the joints are its end
             # values (a dwell has zero derivatives); normalized, so every scale is 1
-            v = law(jnp.asarray([0.0, 1.0]))
-            start = classify_jump([0.0, float(v.dp[0]), float(v.d2p[0]), float(v.d3p[0])], [1.0] * 4)
-            end = classify_jump([0.0, -float(v.dp[1]), -float(v.d2p[1]), -float(v.d3p[1])], [1.0] * 4)
+            start = classify_jump([0.0, s.end_velocity[0], s.end_accel[0], s.end_jerk[0]], [1.0] * 4)
+            end = classify_jump([0.0, -s.end_velocity[1], -s.end_accel[1], -s.end_jerk[1]], [1.0] * 4)
             return start, end
 
         path = check_output_file(args.json, "--json") if args.json is not None else None
@@ -56,9 +55,8 @@ def _setup_laws(p: argparse.ArgumentParser):
                 if law is not None and id(law) not in known:
                     laws[f"segments[{i}] {law.name}"] = law
         rows = []
-        for label, law in laws.items():
-            s = summarize(law)
-            start, end = dwell_joints(law)
+        for label, s in zip(laws, summarize_all(laws.values()), strict=True):
+            start, end = dwell_joints(s)
             rows.append({
                 "law": label,
                 "peak_velocity": s.peak_velocity,

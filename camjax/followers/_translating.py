@@ -120,6 +120,12 @@ class DesignCurves(NamedTuple):
     own_curves: dict[str, np.ndarray] | None = None
 
 
+def least_abs_offset(bounds: tuple[float, float]) -> float:
+    """The smallest |e| (mm) in the offset's bounds (lo, hi): 0 when they straddle 0."""
+    lo, hi = bounds
+    return 0.0 if lo <= 0.0 <= hi else min(abs(lo), abs(hi))
+
+
 def _np(x):
     return None if x is None else np.asarray(x)
 

@@ -314,24 +314,42 @@ class LawSummary(NamedTuple):
     end_jerk: tuple[float, float]  # p'''(0), p'''(1)
     flcd_against_dwells: bool  # p', p'' vanish at both ends
     perturbation_against_dwells: bool  # p''' does not vanish at an end
+    end_velocity: tuple[float, float] = (0.0, 0.0)  # p'(0), p'(1)
 
 
 def summarize(law: Law, samples: int = 200_001, tol: float = 1e-9) -> LawSummary:
     """Peaks of ``law`` over a grid of ``samples`` points on [0, 1] (float64 if enabled)."""
-    x = jnp.linspace(0.0, 1.0, samples)
-    v = law(x)
-    ends = law(jnp.asarray([0.0, 1.0]))
-    e_v = np.abs(np.asarray(ends.dp))
-    e_a = np.asarray(ends.d2p)
-    e_j = np.asarray(ends.d3p)
-    return LawSummary(
-        law.name,
-        float(jnp.max(jnp.abs(v.dp))),
-        float(jnp.max(v.d2p)),
-        float(jnp.min(v.d2p)),
-        float(jnp.max(jnp.abs(v.d3p))),
-        (float(e_a[0]), float(e_a[1])),
-        (float(e_j[0]), float(e_j[1])),
-        bool(np.all(e_v < tol) and np.all(np.abs(e_a) < tol)),
-        bool(np.any(np.abs(e_j) >= tol)),
-    )
+    return summarize_all([law], samples, tol)[0]
+
+
+def summarize_all(laws: Sequence[Law], samples: int = 200_001, tol: float = 1e-9) -> list[LawSummary]:
+    """:func:`summarize` of every law of ``laws``, in one compiled program.
+
+    Evaluated op by op, each law's peaks cost a dispatch (and a compile or a cache read) per
+    operation; here every law's figures are one ``jax.jit`` program: one trace and one compile
+    (or compilation-cache read) for the whole table. Not itself traceable (it returns Python
+    numbers).
+    """
+    laws = tuple(laws)
+
+    def figures(x, ends):
+        rows = []
+        for law in laws:
+            v, e = law(x), law(ends)
+            rows.append(jnp.stack([jnp.max(jnp.abs(v.dp)), jnp.max(v.d2p), jnp.min(v.d2p),
+                                   jnp.max(jnp.abs(v.d3p)), e.dp[0], e.dp[1], e.d2p[0], e.d2p[1],
+                                   e.d3p[0], e.d3p[1]]))
+        return jnp.stack(rows)
+
+    table = np.asarray(jax.jit(figures)(jnp.linspace(0.0, 1.0, samples), jnp.asarray([0.0, 1.0])))
+    out = []
+    for law, row in zip(laws, table, strict=True):
+        e_v, e_a, e_j = row[4:6], row[6:8], row[8:10]
+        out.append(LawSummary(
+            law.name, float(row[0]), float(row[1]), float(row[2]), float(row[3]),
+            (float(e_a[0]), float(e_a[1])), (float(e_j[0]), float(e_j[1])),
+            bool(np.all(np.abs(e_v) < tol) and np.all(np.abs(e_a) < tol)),
+            bool(np.any(np.abs(e_j) >= tol)),
+            (float(e_v[0]), float(e_v[1])),
+        ))
+    return out

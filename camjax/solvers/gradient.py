@@ -43,6 +43,7 @@ from typing import NamedTuple
 import jax
 import jax.numpy as jnp
 import optax
+from jax.flatten_util import ravel_pytree
 
 from camjax.family import Constraints, Design, Problem, Violation, Weights
 from camjax.solvers.base import Raw, family_of, in_mode
@@ -71,19 +72,18 @@ class GradientSettings:
     inner_rtol: float = 0.1  # inexact inner solves: stop when steps <= inner_rtol * AL residual
     secant: bool = True  # secant-Newton steps inside Rprop's trust region (False: plain Rprop)
     aggregate_constraints: bool = True  # one multiplier per constraint (max over angles; exact here)
-    # cap on the multiplier updates of the L-BFGS refinement after an Rprop stall; 0 (the default):
-    # none. 30 reaches the optimum where Rprop stalls in a curved valley, at about twice the compile
-    # time and up to lbfgs_rounds * lbfgs_steps more steps (docs/optimization.md)
-    lbfgs_rounds: int = 0
-    lbfgs_steps: int = 200  # cap on L-BFGS steps per round
-    lbfgs_gtol: float = 1e-11  # L-BFGS gradient norm (2-norm, box angle coordinates) ending a round
-    lbfgs_penalty_growth: float = 2.0  # the penalty grows by this factor each round ...
-    lbfgs_penalty_max: float = 1e6  # ... up to this
+    # the BFGS refinement after an Rprop stall (:func:`refine_bfgs`): cap on its rounds (multiplier
+    # updates); 0 turns it off (Rprop alone)
+    refine_rounds: int = 30
+    refine_steps: int = 200  # cap on BFGS evaluations per round
+    refine_gtol: float = 1e-11  # gradient norm (2-norm, box angle coordinates) ending a round
+    refine_penalty_growth: float = 4.0  # the penalty grows by this factor each round ...
+    refine_penalty_max: float = 1e6  # ... up to this
 
 
 DEFAULT_SETTINGS = GradientSettings()
-# the gradient solver with the L-BFGS refinement after a stall
-REFINED_SETTINGS = GradientSettings(lbfgs_rounds=30)
+# Rprop alone, without the refinement after a stall (speed studies)
+RPROP_SETTINGS = GradientSettings(refine_rounds=0)
 
 
 class GradientState(NamedTuple):
@@ -275,8 +275,9 @@ def init(problem: Problem, design: Design | None = None,
     dtype = problem_dtype(problem)
     u = _clip_unit(problem, jax.tree.map(lambda x: jnp.asarray(x, dtype), to_unit(problem, design)))
     rprop = _transform(settings).init(u)
-    zeros = jax.tree.map(jnp.zeros_like,
-                         scaled_constraints(problem, from_unit(problem, u), settings.aggregate_constraints))
+    shapes = jax.eval_shape(
+        lambda v: scaled_constraints(problem, from_unit(problem, v), settings.aggregate_constraints), u)
+    zeros = jax.tree.map(lambda a: jnp.zeros(a.shape, a.dtype), shapes)
     inf = jnp.asarray(jnp.inf, dtype)
     return GradientState(u, rprop, zeros, jnp.asarray(0), jnp.asarray(0), inf, inf, jnp.asarray(False))
 
@@ -327,22 +328,27 @@ def _transform(settings: GradientSettings) -> optax.GradientTransformation:
 
 def postprocess(state: GradientState, problem: Problem, weights: Weights,
                 settings: GradientSettings = DEFAULT_SETTINGS) -> GradientResult:
-    """Design in mm, judged with the true max over angles (after the L-BFGS refinement, if any)."""
+    """Design in mm, judged with the true max over angles (after the BFGS refinement, if any)."""
     design = from_unit(problem, state.u)
     family = family_of(problem)
-    ev = family.evaluate(problem, weights, design)
     steps, done = state.step, state.done
-    if settings.lbfgs_rounds > 0:
+    if settings.refine_rounds > 0:
         # Rprop's own stopping rule on the gradient is a KKT point; a stall (steps shrunk by sign
-        # flips, typically in a curved valley) is not, and is refined
+        # flips, at a kink of a max over angles or in a curved valley) need not be, and is refined
         needed = ~(state.done & (state.pg_norm <= settings.gtol))
-        refined, lbfgs_steps = refine_lbfgs(problem, weights, state.u, state.multipliers, settings, needed)
-        ev_r = family.evaluate(problem, weights, refined)
+        refined, refine_steps, finished = refine_bfgs(problem, weights, state.u, settings, needed)
+        # both designs judged in one (vmapped) evaluation: one trace of the family's physics
+        both = jax.vmap(lambda d: family.evaluate(problem, weights, d))(
+            jax.tree.map(lambda a, b: jnp.stack([a, b]), design, refined))
+        ev, ev_r = jax.tree.map(lambda x: x[0], both), jax.tree.map(lambda x: x[1], both)
         # kept only when no worse: feasible, and a smaller objective or a feasibility repaired
-        better = ev_r.feasible & (~ev.feasible | (ev_r.objective <= ev.objective))
+        better = needed & ev_r.feasible & (~ev.feasible | (ev_r.objective <= ev.objective))
         design = jax.tree.map(lambda a, b: jnp.where(better, a, b), refined, design)
         ev = jax.tree.map(lambda a, b: jnp.where(better, a, b), ev_r, ev)
-        steps, done = steps + lbfgs_steps, done | better
+        # converged: Rprop's stopping rule, or the refinement's (its point no better: Rprop's kept)
+        steps, done = steps + refine_steps, done | better | (needed & finished)
+    else:
+        ev = family.evaluate(problem, weights, design)
     return GradientResult(design, ev.objective, ev.violation, ev.feasible, steps, done,
                           state.pg_norm, state.multipliers)
 
@@ -358,67 +364,118 @@ def _from_angle(problem: Problem, z: Design) -> Design:
     return jax.tree.map(lambda v, top: top * (0.5 - 0.5 * jnp.cos(v)), z, _u_max(problem))
 
 
-def refine_lbfgs(problem: Problem, weights: Weights, u: Design, multipliers: Constraints,
-                 settings: GradientSettings = DEFAULT_SETTINGS, needed: jax.Array | bool = True
-                 ) -> tuple[Design, jax.Array]:
-    """Augmented-Lagrangian rounds of L-BFGS (optax, zoom line search) from unit-box point ``u``.
+class _BfgsState(NamedTuple):
+    x: jax.Array  # (m,) accepted point, box angle coordinates
+    f: jax.Array  # () L_A there
+    grad: jax.Array  # (m,) its gradient
+    g: Constraints  # scaled constraints there, per angle
+    h: jax.Array  # (m, m) inverse-Hessian estimate
+    p: jax.Array  # (m,) search direction
+    t: jax.Array  # () step length being tried
+    lam: Constraints  # multipliers, per angle
+    rnd: jax.Array  # () int: rounds (multiplier updates) so far
+    k: jax.Array  # () int: evaluations in this round
+    steps: jax.Array  # () int: evaluations in all
+    fresh: jax.Array  # () bool: the next evaluation restarts a round at x
+    done: jax.Array  # () bool
 
-    Rprop moves one variable at a time by sign; in a curved valley that couples the variables
-    (the oscillating followers: pivot distance, arm length and prime radius together) its steps
-    flip sign and shrink until it stalls far from the optimum. L-BFGS follows such a valley.
-    The box is kept by the map u = (1 - cos z) / 2 (z unbounded). Each round minimizes L_A for
-    fixed multipliers (to ``lbfgs_gtol`` or ``lbfgs_steps``), then updates them as
-    :func:`step` does, the penalty growing from round to round (``lbfgs_penalty_growth``, up to
-    ``lbfgs_penalty_max``) so that the last rounds end feasible to the families' tolerances.
-    The rounds stop once a round's inner solve met ``lbfgs_gtol`` and the AL residual ``ctol``;
-    none is run where ``needed`` is false (a vmapped batch runs until its last member is done).
-    Returns the design (mm) and the L-BFGS steps taken.
+
+def refine_bfgs(problem: Problem, weights: Weights, u: Design,
+                settings: GradientSettings = DEFAULT_SETTINGS, needed: jax.Array | bool = True
+                ) -> tuple[Design, jax.Array, jax.Array]:
+    """Augmented-Lagrangian rounds of BFGS with an Armijo line search, from unit-box point ``u``.
+
+    Rprop moves each variable by the sign of its own derivative. Where the optimum sits on a
+    kink of a max over angles (two angles' constraints active at once, e.g. the pressure angle
+    on the rise and on the return, or the face width each needs) or in a curved valley that
+    couples the variables (pivot distance, arm length and prime radius of a rocker), its steps
+    flip sign and shrink until it stalls short of the optimum. Here every angle's constraint
+    has its own multiplier (the aggregated max is a kink there), which makes L_A smooth, and a
+    quasi-Newton step follows the valley. The box is kept by the map u = (1 - cos z) / 2 (z
+    unbounded); with at most a handful of variables the inverse Hessian is kept dense.
+
+    Each round minimizes L_A for fixed multipliers (to ``refine_gtol``, ``refine_steps``
+    evaluations, or a line search that cannot decrease it any more: a kink), then updates the
+    multipliers as :func:`step` does, the penalty growing from round to round
+    (``refine_penalty_growth`` up to ``refine_penalty_max``) so that the last rounds end feasible
+    to the families' tolerances. The rounds stop once a round ended on its gradient or line-search
+    test with the AL residual within ``ctol``. Every loop iteration is one evaluation of L_A and
+    its gradient (one trace: the compile cost of one more Rprop loop), the line search's trials
+    included; none is run where ``needed`` is false (a vmapped batch runs until its last member
+    is done). Returns the design (mm), the evaluations made and whether the rounds stopped on
+    their rule (not on ``refine_rounds``).
     """
-    opt = optax.lbfgs()
+    x0, unravel = ravel_pytree(_to_angle(problem, u))
+    dtype, m = x0.dtype, x0.shape[0]
+    eye = jnp.eye(m, dtype=dtype)
+    mu_max = max(settings.refine_penalty_max, settings.penalty)
 
-    def lagrangian(z, lam, mu):
-        return augmented_lagrangian(_from_angle(problem, z), problem, weights, lam, mu,
-                                    settings.aggregate_constraints)
+    def penalty(rnd):
+        return jnp.minimum(settings.penalty * settings.refine_penalty_growth ** rnd.astype(dtype), mu_max)
 
-    def solve_round(z, lam, mu):
-        fun = lambda v: lagrangian(v, lam, mu)[0]  # noqa: E731
-        value_and_grad = optax.value_and_grad_from_state(fun)
+    def lagrangian(x, lam, mu):
+        return augmented_lagrangian(_from_angle(problem, unravel(x)), problem, weights, lam, mu, False)
 
-        def body(carry):
-            z, state, k = carry
-            value, grad = value_and_grad(z, state=state)
-            updates, state = opt.update(grad, state, z, value=value, grad=grad, value_fn=fun)
-            return optax.apply_updates(z, updates), state, k + 1
+    value_and_grad = jax.value_and_grad(lagrangian, has_aux=True)
+    # per-angle multipliers, 0 (their shapes only: nothing is traced)
+    shapes = jax.eval_shape(lambda v: scaled_constraints(problem, from_unit(problem, v), False), u)
+    lam0 = jax.tree.map(lambda a: jnp.zeros(a.shape, a.dtype), shapes)
 
-        def cond(carry):
-            _, state, k = carry
-            gnorm = optax.tree.norm(optax.tree.get(state, "grad"))
-            return (k == 0) | ((k < settings.lbfgs_steps) & (gnorm > settings.lbfgs_gtol))
+    def body(s: _BfgsState) -> _BfgsState:
+        mu = penalty(s.rnd)
+        x_try = jnp.where(s.fresh, s.x, s.x + s.t * s.p)
+        (f_try, g_try), grad_try = value_and_grad(x_try, s.lam, mu)
+        f_try = f_try.astype(dtype)  # (the weights may be wider than the problem)
+        slope = s.grad @ s.p
+        ok = s.fresh | (jnp.isfinite(f_try) & (f_try <= s.f + 1e-4 * s.t * slope))
+        # BFGS update of the inverse Hessian on an accepted step with positive curvature
+        dx, dg = x_try - s.x, grad_try - s.grad
+        sy = dx @ dg
+        curved = ok & ~s.fresh & (sy > 1e-12 * jnp.linalg.norm(dx) * jnp.linalg.norm(dg))
+        first = jnp.all(s.h == eye)  # Shanno's scaling before the first update
+        h = jnp.where(first, sy / jnp.where(curved, dg @ dg, 1.0) * eye, s.h)
+        rho = 1.0 / jnp.where(curved, sy, 1.0)
+        v = eye - rho * jnp.outer(dx, dg)
+        h = jnp.where(curved, v @ h @ v.T + rho * jnp.outer(dx, dx), jnp.where(s.fresh, eye, s.h))
+        x = jnp.where(ok, x_try, s.x)
+        f = jnp.where(ok, f_try, s.f)
+        grad = jnp.where(ok, grad_try, s.grad)
+        g = jax.tree.map(lambda a, b: jnp.where(ok, a, b), g_try, s.g)
+        p = -h @ grad
+        p = jnp.where(p @ grad < 0, p, -grad)  # a descent direction (h reset if it is not)
+        # first step of a round: 0.1 in the largest angle; else the full quasi-Newton step
+        t_new = jnp.where(s.fresh, 0.1 / jnp.maximum(jnp.max(jnp.abs(p)), 1e-300), 1.0)
+        # a rejected trial: the minimizer of the quadratic through f, the slope and f_try,
+        # within [0.1, 0.5] of the step
+        curv = f_try - s.f - s.t * slope
+        t_quad = -slope * s.t**2 / (2.0 * jnp.where(curv > 0, curv, 1.0))
+        quad = jnp.isfinite(f_try) & (curv > 0)
+        t_back = jnp.where(quad, jnp.clip(t_quad, 0.1 * s.t, 0.5 * s.t), 0.1 * s.t)
+        t = jnp.where(ok, t_new, t_back).astype(dtype)
+        p = jnp.where(ok, p, s.p)
+        # end of a round: gradient small, line search exhausted (a kink: no decrease along p
+        # above rounding) or the step cap
+        gnorm = jnp.linalg.norm(grad)
+        stuck = ~ok & (t * jnp.max(jnp.abs(p)) <= settings.xtol)
+        solved = ok & (gnorm <= settings.refine_gtol)
+        ends = solved | stuck | (s.k + 1 >= settings.refine_steps)
+        residual = _tree_max_abs(jax.tree.map(lambda gi, lam: jnp.minimum(-gi, lam / mu), g, s.lam))
+        finished = ends & (solved | stuck) & (residual <= settings.ctol)
+        update = ends & ~finished
+        lam = jax.tree.map(lambda lm, gi: jnp.where(update, jnp.clip(lm + mu * gi, 0.0, LAM_MAX), lm),
+                           s.lam, g)
+        rnd = s.rnd + jnp.where(update, 1, 0)
+        done = finished | (rnd >= settings.refine_rounds)
+        return _BfgsState(x, f, grad, g, jnp.where(update, eye, h), p, t, lam, rnd,
+                          jnp.where(update, 0, s.k + 1), s.steps + 1, update, done)
 
-        z, _, k = jax.lax.while_loop(cond, body, (z, opt.init(z), jnp.asarray(0)))
-        return z, k
-
-    dtype = problem_dtype(problem)
-
-    def cond(carry):
-        _, _, _, r, finished = carry
-        return (r < settings.lbfgs_rounds) & ~finished
-
-    def round_(carry):
-        z, lam, steps, r, _ = carry
-        mu = jnp.minimum(settings.penalty * settings.lbfgs_penalty_growth ** r.astype(dtype),
-                         max(settings.lbfgs_penalty_max, settings.penalty))
-        z, k = solve_round(z, lam, mu)
-        g = lagrangian(z, lam, mu)[1]
-        residual = _tree_max_abs(jax.tree.map(lambda gi, m: jnp.minimum(-gi, m / mu), g, lam))
-        lam = jax.tree.map(lambda m, gi: jnp.clip(m + mu * gi, 0.0, LAM_MAX), lam, g)
-        # done: the round's inner problem solved to lbfgs_gtol and the AL residual met
-        finished = (k < settings.lbfgs_steps) & (residual <= settings.ctol)
-        return z, lam, steps + k, r + 1, finished
-
-    start = (_to_angle(problem, u), multipliers, jnp.asarray(0), jnp.asarray(0), ~needed)
-    z, _, steps, _, _ = jax.lax.while_loop(cond, round_, start)
-    return from_unit(problem, _from_angle(problem, z)), steps
+    zero = jnp.asarray(0)
+    start = _BfgsState(x0, jnp.asarray(jnp.inf, dtype), jnp.zeros_like(x0), lam0, eye, jnp.zeros_like(x0),
+                       jnp.asarray(0.0, dtype), lam0, zero, zero, zero, jnp.asarray(True),
+                       ~jnp.asarray(needed) | (settings.refine_rounds <= 0))
+    end = jax.lax.while_loop(lambda s: ~s.done, body, start)
+    design = from_unit(problem, _from_angle(problem, unravel(end.x)))
+    return design, end.steps, end.rnd < settings.refine_rounds
 
 
 # ------------------------------------------------------------------------------ solves

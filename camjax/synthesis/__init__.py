@@ -3,7 +3,7 @@
 - :mod:`camjax.synthesis.basis`: the B-spline basis as matrices (values, derivative control values,
   exact Gram matrices by Gauss-Legendre quadrature per knot span);
 - :mod:`camjax.synthesis.problem`: the conditions (null-space form) and the objective's terms;
-- :mod:`camjax.synthesis.qp`: a dense interior-point QP solver (one ``lax.scan``, vmaps);
+- :mod:`camjax.synthesis.qp`: a dense interior-point QP solver (one ``lax.while_loop``, vmaps);
 - :mod:`camjax.synthesis.solve`: one synthesis as a pure JAX function, batched with ``vmap``.
 
 See docs/synthesis.md.

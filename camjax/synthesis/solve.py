@@ -87,20 +87,25 @@ def synthesizer(problem: SynthesisProblem, iterations: int = ITERATIONS) -> Call
         values = jnp.asarray(values, dtype=jnp.float64)
         weights = jnp.asarray(weights, dtype=jnp.float64)
         cp = pinv @ values if values.shape[0] else jnp.zeros(problem.basis.n)
-        Pz = jnp.zeros((nz, nz))
-        qz = jnp.zeros(nz)
+        # the L2 terms as 0.5 z'Pz z + qz'z + const; None without any (no matrix of zeros: see
+        # camjax.synthesis.qp.solve_qp on XLA's batched x @ zeros @ x)
+        Pz = qz = None
         const = jnp.zeros(())
         for i, NQN, NQ, Q in l2:
-            Pz = Pz + 2.0 * weights[i] * NQN
-            qz = qz + 2.0 * weights[i] * (NQ @ cp)
+            Pz = 2.0 * weights[i] * NQN if Pz is None else Pz + 2.0 * weights[i] * NQN
+            qz = 2.0 * weights[i] * (NQ @ cp) if qz is None else qz + 2.0 * weights[i] * (NQ @ cp)
             const = const + weights[i] * (cp @ Q @ cp)
+
+        def l2_part(z):
+            return const if Pz is None else 0.5 * z @ Pz @ z + qz @ z + const
+
         if k == 0:
             z = jnp.linalg.solve(Pz + 1e-14 * jnp.eye(nz), -qz)
             gap = residual = jnp.zeros(())
-            model = 0.5 * z @ Pz @ z + qz @ z + const
+            model = l2_part(z)
         else:
-            P = jnp.zeros((nz + k, nz + k)).at[:nz, :nz].set(Pz)
-            q = jnp.concatenate([qz, weights[jnp.asarray(peak_at)]])
+            P = None if Pz is None else jnp.zeros((nz + k, nz + k)).at[:nz, :nz].set(Pz)
+            q = jnp.concatenate([jnp.zeros(nz) if qz is None else qz, weights[jnp.asarray(peak_at)]])
             blocks, rhs, start_t, lam0 = [], [], [], []
             for j, (mn, m) in enumerate(zip(peak_null, peaks, strict=True)):
                 e = -jnp.zeros((mn.shape[0], k)).at[:, j].set(1.0)
@@ -117,7 +122,7 @@ def synthesizer(problem: SynthesisProblem, iterations: int = ITERATIONS) -> Call
             # the model's objective with t at its least value for this z (t_k = max |M_k c|)
             c = cp + null @ z
             t = jnp.stack([jnp.max(jnp.abs(m @ c)) for m in peaks])
-            model = 0.5 * z @ Pz @ z + qz @ z + const + q[nz:] @ t
+            model = l2_part(z) + q[nz:] @ t
             gap, residual = res.gap, res.residual
         c = cp + null @ z
         meas = measures(problem, c)

@@ -25,6 +25,7 @@ from camjax.followers._translating import (
     DesignSolution,
     GeometryCurves,
     TranslatingFollower,
+    least_abs_offset,
     read_train,
 )
 from camjax.followers.curved_face import geometry as curved_geo
@@ -107,11 +108,14 @@ class CurvedFace(TranslatingFollower):
         radius = fixed_or_free(r, "face_radius_mm", (follower.face_radius_mm,) * 2)
         width = fixed_or_free(r, "face_width_mm", (follower.face_width_mm,) * 2)
         offset = fixed_or_free(r, "offset_mm", (follower.offset_mm,) * 2, positive=False)
-        reach = base[0] + radius[0]  # the smallest prime radius in the box
-        if max(abs(offset[0]), abs(offset[1])) >= reach:
+        # |e| < R_p is a constraint of the problem (its pressure-angle constraint holds only there):
+        # refused here only when no design in the bounds meets it
+        reach = base[1] + radius[1]  # the largest prime radius in the bounds
+        if least_abs_offset(offset) >= reach:
             raise r.error("offset_mm", list(offset) if offset[0] != offset[1] else offset[0],
-                          f"allows |e| >= R_p = R_b + R_c (smallest in the bounds: {reach:g} mm): the "
-                          "follower axis must cut the prime circle", f"|e| < {reach:g}")
+                          f"gives |e| >= R_p = R_b + R_c for every design in the bounds (largest R_p: "
+                          f"{reach:g} mm): the follower axis must cut the prime circle",
+                          f"|e| < {reach:g} somewhere in the bounds")
         if width[1] > 2.0 * radius[0]:
             raise r.error("face_width_mm", list(width) if width[0] != width[1] else width[0],
                           f"allows a face wider than its circle (2 R_c = {2.0 * radius[0]:g} mm at the "

@@ -20,7 +20,13 @@ from dataclasses import dataclass, replace
 import jax.numpy as jnp
 import numpy as np
 
-from camjax.followers._translating import TRAIN_KEYS, DesignSolution, GeometryCurves, read_train
+from camjax.followers._translating import (
+    TRAIN_KEYS,
+    DesignSolution,
+    GeometryCurves,
+    least_abs_offset,
+    read_train,
+)
 from camjax.followers.knife_edge import geometry as knife_geo
 from camjax.followers.roller.follower import Roller, RollerSpec
 from camjax.results import GeometryViolation, MinBaseRadius
@@ -64,10 +70,13 @@ class KnifeEdge(Roller):
     def design_bounds(self, r, follower) -> dict[str, tuple[float, float]]:
         base = fixed_or_free(r, "base_radius_mm")
         offset = fixed_or_free(r, "offset_mm", (follower.offset_mm,) * 2, positive=False)
-        if max(abs(offset[0]), abs(offset[1])) >= base[0]:
+        # |e| < R_b is a constraint of the problem (its pressure-angle constraint holds only there):
+        # refused here only when no design in the bounds meets it
+        if least_abs_offset(offset) >= base[1]:
             raise r.error("offset_mm", list(offset) if offset[0] != offset[1] else offset[0],
-                          f"allows |e| >= R_b (smallest in the bounds: {base[0]:g} mm): the follower axis "
-                          "must cut the base circle", f"|e| < {base[0]:g}")
+                          f"gives |e| >= R_b for every design in the bounds (largest R_b: {base[1]:g} mm): "
+                          "the follower axis must cut the base circle",
+                          f"|e| < {base[1]:g} somewhere in the bounds")
         return {"base_radius_mm": base, "offset_mm": offset}
 
     def drawn_follower(self, scene, result):

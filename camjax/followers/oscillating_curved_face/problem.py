@@ -23,9 +23,14 @@ angle, ``g <= 0`` in mm (:class:`Constraints`):
 - stress: C_M^2 / (sigma_max^2 l cos phi) - rho_eq <= 0;
 - and the box bounds, kept by projection. The scene checks W <= 2 R_c in the box.
 
-The solvers work in the unit box of the bounds, with the face width floored at the width the
-design needs on the samples (:func:`from_unit`), as the translating curved face's: W enters the
-objective and the face constraint only, so the optimum's W is that need (or its lower bound).
+The solvers work in the plain unit box of the bounds, W a variable like the others: W enters the
+objective and the face constraint only, so the optimum's W is the width the design needs
+(:func:`face_width_need`, or W's lower bound). W is not eliminated as that need (a floor in the
+solvers' coordinates, as the translating curved face's): the need is a max over angles whose
+argmax jumps between the rise and the return, and the objective would get a kink there where
+the optimum lies (the gradient solver then stalled at objective 1.044 against 0.969). As a
+constraint per angle, each angle with its own multiplier in the gradient solver's refinement,
+it is smooth.
 With exact extrema, :func:`polish` moves the solved design the least that keeps every constraint
 between the samples too (the rocking family's polish).
 
@@ -282,35 +287,6 @@ def constraint_maxima(problem: Problem, design: Design) -> Constraints:
 def size_norm(problem: Problem) -> jax.Array:
     """N = R_b,max + W_max (mm), shape ()."""
     return problem.size_norm_mm
-
-
-# ------------------------------------------------------------------ solver coordinates
-
-
-def _unit(x, lo, hi):
-    return (x - lo) / jnp.where(hi > lo, hi - lo, 1.0)
-
-
-def _from(v, lo, hi):
-    return lo + v * jnp.where(hi > lo, hi - lo, 1.0)
-
-
-def to_unit(problem: Problem, design: Design) -> Design:
-    """Design (mm) -> the solvers' unit-box coordinates: each variable over its bounds."""
-    return jax.tree.map(_unit, design, problem.lower, problem.upper)
-
-
-def from_unit(problem: Problem, u: Design) -> Design:
-    """The unit box -> design (mm), with the face width floored at the need of the design's R_b,
-    R_c, d and l on the samples (:func:`face_width_need`, at most W_max); below the floor W takes
-    the floor's value and keeps the gradient of its own coordinate (straight-through), as
-    :func:`camjax.followers.curved_face.problem.from_unit`."""
-    plain = jax.tree.map(_from, u, problem.lower, problem.upper)
-    floor = jnp.minimum(face_width_need(problem, plain), problem.upper.face_width_mm)
-    raw = plain.face_width_mm
-    height = raw - jax.lax.stop_gradient(floor)
-    width = jnp.where(height > 0, raw, floor + height - jax.lax.stop_gradient(height))
-    return plain._replace(face_width_mm=width)
 
 
 def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:

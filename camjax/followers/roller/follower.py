@@ -24,6 +24,7 @@ from camjax.followers._translating import (
     DesignSolution,
     GeometryCurves,
     TranslatingFollower,
+    least_abs_offset,
     read_train,
 )
 from camjax.followers.roller import geometry as roller_geo
@@ -91,11 +92,14 @@ class Roller(TranslatingFollower):
         base = fixed_or_free(r, "base_radius_mm")
         roller = fixed_or_free(r, "roller_radius_mm", (follower.roller_radius_mm,) * 2)
         offset = fixed_or_free(r, "offset_mm", (follower.offset_mm,) * 2, positive=False)
-        reach = base[0] + roller[0]  # the smallest prime radius in the box
-        if max(abs(offset[0]), abs(offset[1])) >= reach:
+        # |e| < R_p is a constraint of the problem (its pressure-angle constraint holds only there):
+        # refused here only when no design in the bounds meets it
+        reach = base[1] + roller[1]  # the largest prime radius in the bounds
+        if least_abs_offset(offset) >= reach:
             raise r.error("offset_mm", list(offset) if offset[0] != offset[1] else offset[0],
-                          f"allows |e| >= R_p = R_b + R_f (smallest in the bounds: {reach:g} mm): the "
-                          "follower axis must cut the prime circle", f"|e| < {reach:g}")
+                          f"gives |e| >= R_p = R_b + R_f for every design in the bounds (largest R_p: "
+                          f"{reach:g} mm): the follower axis must cut the prime circle",
+                          f"|e| < {reach:g} somewhere in the bounds")
         return {"base_radius_mm": base, "roller_radius_mm": roller, "offset_mm": offset}
 
     def drawn_follower(self, scene, result):
