@@ -1,12 +1,14 @@
 """Benchmark: exact extrema (refined off the grid) against the grid's, in time and in accuracy.
 
 ``exact.time_ratio``: steady-state time of the exact path over the grid path (both warm, the
-same 360-sample grid) for the report (``camjax.output.report.design_report``), the pointwise design (problem
-+ solve) and a 100-weighting global sweep. ``exact.max_rel_error``: the exact path's largest
-relative error at 360 samples over four figures against independent references: the smallest
-flat-face base radius (closed form, cos 2 pi u = -1/35), the peak force, the peak stress at the
-optimum and the alpha = gamma = 1 optimum base radius (NumPy closed forms, a 1e6-sample grid
-polished by SciPy; the optimum as the root of the envelope-theorem slope by brentq).
+same 360-sample grid; the two alternate call by call, ``exact.ratio_rounds`` the ratio of each
+round, so that both see the same load of a shared machine) for the report
+(``camjax.output.report.design_report``), the pointwise design (problem + solve) and a
+100-weighting global sweep. ``exact.max_rel_error``: the exact path's largest relative error at
+360 samples over four figures against independent references: the smallest flat-face base radius
+(closed form, cos 2 pi u = -1/35), the peak force, the peak stress at the optimum and the alpha
+= gamma = 1 optimum base radius (NumPy closed forms, a 1e6-sample grid polished by SciPy; the
+optimum as the root of the envelope-theorem slope by brentq).
 
 ``python -m benchmarks.exact --out FILE.json`` runs it alone.
 """
@@ -17,6 +19,7 @@ import argparse
 import dataclasses
 import json
 import math
+import os
 from pathlib import Path
 
 import numpy as np
@@ -98,21 +101,33 @@ def figures(scene) -> dict:
 
 def run(scene, quick: bool = False) -> dict:
     repeats = 2 if quick else 5
-    out: dict = {"samples": scene.motion.samples, "times_s": {}, "compile_s": {}}
+    out: dict = {"samples": scene.motion.samples, "times_s": {}, "compile_s": {}, "ratio_rounds": {},
+                 "load_average_1min": [os.getloadavg()[0]]}
     alphas = np.linspace(0.05, 1.0, 10 if quick else 100)
-    for mode in ("grid", "exact"):
-        sc = _with_extrema(scene, mode)
-        paths = {
-            "report": lambda sc=sc: design_report(sc),
-            "pointwise": lambda sc=sc: solve(P.problem_from_scene(sc), (1.0, 1.0), mode="pointwise"),
-            "sweep": lambda sc=sc: sweep(P.problem_from_scene(sc), alphas, 1.0 - alphas + 0.05,
-                                         progress=False).records(),
+
+    def paths(sc):
+        return {
+            "report": lambda: design_report(sc),
+            "pointwise": lambda: solve(P.problem_from_scene(sc), (1.0, 1.0), mode="pointwise"),
+            "sweep": lambda: sweep(P.problem_from_scene(sc), alphas, 1.0 - alphas + 0.05,
+                                   progress=False).records(),
         }
-        for name, call in paths.items():
-            first = time_python(call, repeats=1, warmup=0)[0].median_s
-            timing, _ = time_python(call, repeats=repeats)
-            out["times_s"].setdefault(name, {})[mode] = timing.median_s
-            out["compile_s"].setdefault(name, {})[mode] = first - timing.median_s
+
+    calls = {mode: paths(_with_extrema(scene, mode)) for mode in ("grid", "exact")}
+    for name in calls["grid"]:
+        firsts = {mode: time_python(calls[mode][name], repeats=1, warmup=0)[0].median_s for mode in calls}
+        # the two modes alternate call by call, so that both see the same load of a shared machine
+        times: dict = {mode: [] for mode in calls}
+        for _ in range(repeats + 1):  # the first round warms up
+            for mode in calls:
+                times[mode].append(time_python(calls[mode][name], repeats=1, warmup=0)[0].median_s)
+        for mode in calls:
+            median = float(np.median(times[mode][1:]))
+            out["times_s"].setdefault(name, {})[mode] = median
+            out["compile_s"].setdefault(name, {})[mode] = firsts[mode] - median
+        rounds = zip(times["grid"][1:], times["exact"][1:], strict=True)
+        out["ratio_rounds"][name] = [e / g for g, e in rounds]
+    out["load_average_1min"].append(os.getloadavg()[0])
     out["time_ratio"] = {name: t["exact"] / t["grid"] for name, t in out["times_s"].items()}
     out["time_ratio_max"] = max(out["time_ratio"].values())
     ref = references(100_000 if quick else 1_000_000)

@@ -21,7 +21,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 import camjax  # noqa: E402  (turns on float64)
-from benchmarks import accuracy, gradients, plots, pointwise, roller, scaling, sweep  # noqa: E402
+from benchmarks import accuracy, follower_sweep, gradients, plots, pointwise, scaling, sweep  # noqa: E402
 from benchmarks.harness import environment  # noqa: E402
 
 # (json path, comparison, threshold, description)
@@ -132,7 +132,7 @@ def print_table(data: dict) -> None:
 BENCHMARKS = (
     ("pointwise", pointwise.run),
     ("sweep", sweep.run),
-    ("roller", roller.run),
+    ("roller", follower_sweep.run),
     ("fitness", scaling.run),
     ("gradients", gradients.run),
     ("accuracy", accuracy.run),

@@ -1,6 +1,6 @@
 """Tables and figures of the documentation, generated from the JSON that camjax's own commands write.
 
-Seven sources, all committed (:data:`SOURCES`):
+Nine sources, all committed (:data:`SOURCES`):
 
 - ``bench``, ``benchmarks/results/full.json``: ``python benchmarks/run.py --out
   benchmarks/results/full.json``;
@@ -10,12 +10,16 @@ Seven sources, all committed (:data:`SOURCES`):
   ``cp DIR/result.json docs/data/default/``;
 - ``dynamics``, ``docs/data/thesis-bench/dynamics.json``: ``python -m camjax.cli dynamics
   thesis-bench --out DIR``, then ``cp DIR/dynamics.json docs/data/thesis-bench/``;
-- ``roller``, ``benchmarks/results/roller.json``: ``python -m benchmarks.roller --out
+- ``roller``, ``benchmarks/results/roller.json``: ``python -m benchmarks.follower_sweep roller --out
   benchmarks/results/roller.json``;
 - ``cli``, ``benchmarks/results/cli_timing.json``: ``python benchmarks/cli_timing.py --runs 5 --out
   benchmarks/results/cli_timing.json``;
 - ``exact``, ``benchmarks/results/exact.json``: ``python -m benchmarks.exact --out
-  benchmarks/results/exact.json``.
+  benchmarks/results/exact.json``;
+- ``followers``, ``benchmarks/results/followers.json``: ``python -m benchmarks.follower_sweep
+  oscillating_roller oscillating_flat --out benchmarks/results/followers.json``;
+- ``extrema``, ``benchmarks/results/extrema.json``: ``python -m benchmarks.extrema_samples --out
+  benchmarks/results/extrema.json [FOLLOWER ...]``.
 
 A page asks for a table with a line ``{{ table: NAME }}`` (NAME one of :data:`TABLES`) and for a
 single figure with ``{{ SOURCE: dotted.path[*factor][:format] }}``, e.g.
@@ -45,6 +49,8 @@ SOURCES = {
     "roller": ROOT / "benchmarks" / "results" / "roller.json",
     "cli": ROOT / "benchmarks" / "results" / "cli_timing.json",
     "exact": ROOT / "benchmarks" / "results" / "exact.json",
+    "followers": ROOT / "benchmarks" / "results" / "followers.json",
+    "extrema": ROOT / "benchmarks" / "results" / "extrema.json",
 }
 
 
@@ -143,6 +149,125 @@ def bench_sweep_methods(bench: dict) -> str:
     return "\n".join(lines)
 
 
+# ------------------------------------------------------------------------------------ followers
+
+SWEEP_GOALS = {"gradient_speedup": 20.0, "ga_speedup": 30.0}
+EXACT_GOAL = 2.0
+
+
+def _follower_names() -> list[str]:
+    """Every registered follower type (the folders of camjax/followers, read without importing camjax)."""
+    base = ROOT / "camjax" / "followers"
+    return sorted(p.name for p in base.iterdir()
+                  if (p / "follower.py").exists() and not p.name.startswith("_"))
+
+
+def _ratio_cell(value, goal: float, at_least: bool = True, matched: bool | None = None) -> str:
+    """A measured ratio and its verdict; a speed-up whose accuracy is not matched is a miss."""
+    if value is None:
+        return "not measured"
+    ok = value >= goal if at_least else value <= goal
+    if ok and matched is False:
+        return f"{value:.1f}× (**miss**: accuracy not matched)"
+    return f"{value:.1f}× ({'pass' if ok else '**miss**'})"
+
+
+def _yes(flag) -> str:
+    return "–" if flag is None else ("yes" if flag else "**no**")
+
+
+def _sweeps(followers: dict) -> dict[str, dict]:
+    """The 100-weighting sweep of each follower that has one: the flat face (full.json ``sweep``),
+    the roller (roller.json) and the rockers (followers.json)."""
+    out = {name: {**v, "_file": "followers.json"} for name, v in followers.items()
+           if isinstance(v, dict) and "gradient_speedup" in v}
+    for source, key, name in (("roller", "roller", "roller"), ("bench", "sweep", "flat")):
+        try:
+            out.setdefault(name, {**load(source)[key], "_file": SOURCES[source].name})
+        except (OSError, KeyError):
+            pass
+    return out
+
+
+def follower_speed(followers: dict) -> str:
+    """A row per registered follower: the sweep speed-ups against SciPy at matched accuracy, the
+    gradient solver's largest iteration count, and the exact report's time over the grid one at 360
+    samples, with the goals; a follower not measured says so."""
+    sweeps = _sweeps(followers)
+    try:
+        extrema = load("extrema")["followers"]
+    except OSError:
+        extrema = {}
+    lines = [
+        f"| follower | gradient vs SLSQP (goal ≥ {SWEEP_GOALS['gradient_speedup']:g}×) | matched | "
+        f"GA or hybrid vs differential evolution (goal ≥ {SWEEP_GOALS['ga_speedup']:g}×) | matched | "
+        f"gradient steps (max) | exact / grid report, N = 360 (goal ≤ {EXACT_GOAL:g}×) | sweep from |",
+        "|---|---|---|---|---|---:|---|---|",
+    ]
+    for name in _follower_names():
+        s = sweeps.get(name)
+        e = extrema.get(name, {})
+        exact = _ratio_cell(e.get("exact_over_grid_time_360"), EXACT_GOAL, at_least=False)
+        if s is None:
+            lines.append(f"| `{name}` | no sweep benchmark | | no sweep benchmark | | – | {exact} | |")
+            continue
+        gradient = s.get("methods", {}).get("camjax_gradient", {})
+        steps = gradient.get("iterations_max")
+        via = s.get("ga_speedup_method", "camjax_ga").removeprefix("camjax_")
+        gradient_cell = _ratio_cell(s["gradient_speedup"], SWEEP_GOALS["gradient_speedup"],
+                                    matched=s.get("gradient_accuracy_matched"))
+        ga_cell = _ratio_cell(s["ga_speedup"], SWEEP_GOALS["ga_speedup"],
+                              matched=s.get("ga_accuracy_matched"))
+        lines.append(
+            f"| `{name}` | {gradient_cell} | {_yes(s.get('gradient_accuracy_matched'))} | {ga_cell} "
+            f"({via}) | {_yes(s.get('ga_accuracy_matched'))} | {_g(steps)} | {exact} | `{s['_file']}` |"
+        )
+    return "\n".join(lines)
+
+
+def follower_sweeps(followers: dict) -> str:
+    """Every method of each rocker's sweep: time for all weightings, worst gap, infeasible results."""
+    lines = ["| follower | method | time, 100 weightings (s) | weightings measured | worst rel. gap | "
+             "infeasible | steps (max) |", "|---|---|---:|---:|---:|---:|---:|"]
+    for name, s in followers.items():
+        if not isinstance(s, dict) or "methods" not in s:
+            continue
+        for method, m in s["methods"].items():
+            extra = " (extrapolated)" if m.get("extrapolated") else ""
+            lines.append(f"| `{name}` | `{method}` | {_g(m['time_s'])}{extra} | {m['weightings']} | "
+                         f"{m['max_rel_objective_gap']:.1e} | {m['infeasible']} | "
+                         f"{_g(m.get('iterations_max'))} |")
+    return "\n".join(lines)
+
+
+def extrema_provenance(extrema: dict) -> str:
+    """One line per run: followers, date, load average before and after."""
+    parts = []
+    for name, f in extrema["followers"].items():
+        env = extrema["environment"][name]
+        before, after = f["load_average_1min"]
+        parts.append(f"`{name}` {env['date_utc']} (load {before:.1f} → {after:.1f})")
+    env = next(iter(extrema["environment"].values()))
+    return (f"Run: `python -m benchmarks.extrema_samples --out benchmarks/results/extrema.json` on "
+            f"{env['machine']}, {env['cpu_count']} CPUs, jax {env['jax']}, {env['dtype']}; "
+            + "; ".join(parts) + ".")
+
+
+def extrema_table(extrema: dict) -> str:
+    """A row per follower and sample count: time and largest relative error of the grid and the exact
+    extrema against the dense reference."""
+    lines = ["| follower | N | grid: time (s) | grid: max rel. error | exact: time (s) "
+             "| exact: max rel. error | worst figure (exact) |", "|---|---:|---:|---:|---:|---:|---|"]
+    for name, f in extrema["followers"].items():
+        by = {(r["samples"], r["extrema"]): r for r in f["rows"]}
+        for n in sorted({r["samples"] for r in f["rows"]}):
+            g, e = by.get((n, "grid"), {}), by.get((n, "exact"), {})
+            err = lambda r: f"{r['max_rel_error']:.1e}" if r else "–"  # noqa: E731
+            lines.append(f"| `{name}` | {n:,} | {_g(g.get('time_s'))} | {err(g)} | {_g(e.get('time_s'))} | "
+                         f"{err(e)} | {e.get('worst_figure', '–')} |")
+    return "\n".join(lines)
+
+
 # ------------------------------------------------------------------------------------ extremes
 
 
@@ -215,6 +340,10 @@ TABLES: dict[str, tuple[str, Callable[[dict], str]]] = {
     "bench_fitness": ("bench", bench_fitness),
     "bench_knobs": ("bench", bench_knobs),
     "bench_sweep_methods": ("bench", bench_sweep_methods),
+    "follower_speed": ("followers", follower_speed),
+    "follower_sweeps": ("followers", follower_sweeps),
+    "extrema_provenance": ("extrema", extrema_provenance),
+    "extrema_table": ("extrema", extrema_table),
     "extremes_summary": ("extremes", extremes_summary),
     "extremes_groups": ("extremes", extremes_groups),
     "extremes_precision": ("extremes", extremes_precision),

@@ -1,0 +1,209 @@
+"""Per-follower sweep benchmark: 100 weightings of one follower's design problem, camjax against SciPy.
+
+One benchmark for every follower with a design problem; a follower is named by its built-in
+scene (:data:`SCENES`) and its free variables are those the scene's [design] declares (the JSON
+lists them). Keys ``<follower>.*``: ``roller.*`` (R_b, R_f, e), ``oscillating_roller.*`` and
+``oscillating_flat.*`` (R_b and the pivot distance d).
+
+camjax solves all weightings in one program (:func:`camjax.solvers.base.solve_batch`, global
+mode) with the gradient, GA and hybrid solvers. SciPy solves them one by one on the same grid:
+SLSQP in epigraph form from the box centre, and ``differential_evolution`` (polished by SciPy:
+its own hybrid). The roller's SciPy side is :mod:`camjax.solvers.scipy_roller` (NumPy, written
+from SPEC 3, finite-difference Jacobians); the rockers' is :mod:`camjax.solvers.scipy_family`
+(SciPy calling the family's jitted JAX functions and their JAX Jacobians).
+
+Accuracy: every weighting's reference objective F* is the best feasible one found by any method
+(tests/test_roller_solvers.py and tests/test_scipy_family.py check the solvers' optimum against
+SciPy separately). For each method: the worst relative gap (F - F*) / F* and the number of
+infeasible results. "Matched accuracy": a camjax method is compared with a SciPy one when its
+worst gap is no larger (or both are within GAP_TOLERANCE) and it has no more infeasible results;
+the GA figure uses the GA if it matches differential evolution, else the hybrid (named in the
+JSON).
+
+SciPy runs on evenly spaced subsets of the weightings (:data:`SUBSETS`); its time is scaled to
+all weightings by the mean per weighting and the JSON says so (``extrapolated``). The SciPy
+baseline's one-off JIT compilation (rockers) is done before the clock starts. Timings on a
+shared machine are noisy: the JSON records the load average before and after each follower.
+
+Run alone: ``python -m benchmarks.follower_sweep roller --out benchmarks/results/roller.json`` and
+``python -m benchmarks.follower_sweep oscillating_roller oscillating_flat --out
+benchmarks/results/followers.json`` (an existing file keeps the followers not run), ``--quick``
+for 20 weightings; ``benchmarks/run.py`` runs the roller's (``roller.*``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import importlib
+import json
+import os
+import sys
+import time
+import warnings
+from pathlib import Path
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+import camjax
+from benchmarks.harness import environment, time_jit
+from camjax.family import Weights, weights_of
+from camjax.solvers.base import family_of, problem_from_scene, solve_batch, weighting_keys
+
+GAP_TOLERANCE = 1e-7  # relative objective gaps below this count as equal
+# follower -> (built-in scene, SciPy baseline module)
+SCENES = {
+    "roller": ("roller", "camjax.solvers.scipy_roller"),
+    "oscillating_roller": ("oscillating-roller", "camjax.solvers.scipy_family"),
+    "oscillating_flat": ("oscillating-flat", "camjax.solvers.scipy_family"),
+}
+SUBSETS = {"full": (20, 10), "quick": (4, 2)}  # SciPy weightings measured: (SLSQP, differential evolution)
+
+
+def weightings(count: int) -> tuple[np.ndarray, np.ndarray]:
+    """alpha + gamma = 1, gamma/alpha log-spaced over 1e-2 .. 1e2."""
+    ratio = np.logspace(-2, 2, count)
+    return 1.0 / (1.0 + ratio), ratio / (1.0 + ratio)
+
+
+def grid_problem(scene_name: str):
+    """The design problem of a built-in scene with grid extrema (the solvers' kernels compared)."""
+    scene = camjax.load_scene(scene_name)
+    scene = dataclasses.replace(scene, motion=dataclasses.replace(scene.motion, extrema="grid"))
+    return problem_from_scene(scene)
+
+
+def free_variables(problem) -> list[str]:
+    """The design variables the problem's box leaves free (lower < upper)."""
+    lower, upper = family_of(problem).bounds(problem)
+    return [name for name, lo, hi in zip(lower._fields, lower, upper, strict=True) if float(hi) > float(lo)]
+
+
+def _evaluate(problem, weights: Weights, designs):
+    ev = jax.vmap(family_of(problem).evaluate, in_axes=(None, 0, 0))(problem, weights, designs)
+    return np.asarray(ev.objective), np.asarray(ev.feasible)
+
+
+def _accuracy(objective, feasible, reference) -> dict:
+    gap = (objective - reference) / np.abs(reference)
+    return {"max_rel_objective_gap": float(np.max(gap)), "median_rel_objective_gap": float(np.median(gap)),
+            "infeasible": int(np.sum(~feasible))}
+
+
+def run_follower(follower: str, quick: bool = False) -> dict:
+    """The sweep benchmark of one follower of :data:`SCENES`: the dict stored under its name."""
+    scene_name, baseline_name = SCENES[follower]
+    baseline = importlib.import_module(baseline_name)
+    load_before = os.getloadavg()
+    count = 20 if quick else 100
+    problem = grid_problem(scene_name)
+    lower, _ = family_of(problem).bounds(problem)
+    alpha, gamma = weightings(count)
+    weights = weights_of(alpha, gamma)
+    keys = weighting_keys(0, count)
+
+    results = {}
+    for solver in ("gradient", "ga", "hybrid"):
+        t, sol = time_jit(lambda p, w, k, solver=solver: solve_batch(p, w, k, "global", solver),
+                          problem, weights, keys, repeats=3)
+        its = np.asarray(sol.iterations)
+        results["camjax_" + solver] = (t.median_s, t.compile_s, count, sol.design,
+                                       {"iterations_max": int(np.max(its)),
+                                        "iterations_median": float(np.median(its))})
+    n_slsqp, n_de = SUBSETS["quick" if quick else "full"]
+    for name, n, solve_one in (("scipy_slsqp", n_slsqp, baseline.slsqp),
+                               ("scipy_de", n_de, baseline.differential_evolution)):
+        subset = np.linspace(0, count - 1, n).round().astype(int)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            solve_one(problem, float(alpha[0]), float(gamma[0]))  # compiles the JAX it calls (rockers)
+            t0 = time.perf_counter()
+            out = [solve_one(problem, float(alpha[i]), float(gamma[i])) for i in subset]
+            seconds = time.perf_counter() - t0
+        x = np.stack([o.design for o in out])
+        designs = type(lower)(*(jnp.asarray(x[:, j]) for j in range(x.shape[1])))
+        results[name] = (seconds, 0.0, subset, designs,
+                         {"iterations_max": int(max(o.iterations for o in out)),
+                          "iterations_median": float(np.median([o.iterations for o in out]))})
+
+    # reference: the best feasible objective any method reached, per weighting
+    judged = {}
+    for name, (_, _, n, designs, _) in results.items():
+        sub = np.arange(count) if isinstance(n, int) else n
+        w = Weights(weights.alpha[sub], weights.gamma[sub])
+        obj, ok = _evaluate(problem, w, designs)
+        full_obj, full_ok = np.full(count, np.inf), np.zeros(count, bool)
+        full_obj[sub], full_ok[sub] = obj, ok
+        judged[name] = (full_obj, full_ok)
+    reference = np.min(np.stack([np.where(ok, obj, np.inf) for obj, ok in judged.values()]), axis=0)
+
+    methods = {}
+    for name, (seconds, compile_s, n, _, iterations) in results.items():
+        sub = np.arange(count) if isinstance(n, int) else n
+        obj, ok = judged[name]
+        entry = {"weightings": len(sub), **_accuracy(obj[sub], ok[sub], reference[sub]), **iterations}
+        if name.startswith("camjax"):
+            entry.update(time_s=seconds, compile_s=compile_s)
+        else:
+            entry.update(time_s=seconds * count / len(sub), measured_s=seconds,
+                         per_weighting_s=seconds / len(sub), extrapolated=len(sub) != count)
+        methods[name] = entry
+
+    def matched(a: str, b: str) -> bool:
+        ga_, gb = methods[a]["max_rel_objective_gap"], methods[b]["max_rel_objective_gap"]
+        return ga_ <= max(gb, GAP_TOLERANCE) and methods[a]["infeasible"] <= methods[b]["infeasible"]
+
+    ga_name = "camjax_ga" if matched("camjax_ga", "scipy_de") else "camjax_hybrid"
+    return {
+        "scene": scene_name,
+        "weightings": count,
+        "free_variables": free_variables(problem),
+        "samples": int(problem.theta_deg.shape[0]),
+        "scipy_baseline": baseline_name,
+        "gradient_speedup": methods["scipy_slsqp"]["time_s"] / methods["camjax_gradient"]["time_s"],
+        "gradient_accuracy_matched": matched("camjax_gradient", "scipy_slsqp"),
+        "ga_speedup": methods["scipy_de"]["time_s"] / methods[ga_name]["time_s"],
+        "ga_speedup_method": ga_name,
+        "ga_accuracy_matched": matched(ga_name, "scipy_de"),
+        "ga_alone_speedup": methods["scipy_de"]["time_s"] / methods["camjax_ga"]["time_s"],
+        "hybrid_vs_slsqp_speedup": methods["scipy_slsqp"]["time_s"] / methods["camjax_hybrid"]["time_s"],
+        "hybrid_accuracy_matched_slsqp": matched("camjax_hybrid", "scipy_slsqp"),
+        "gap_tolerance": GAP_TOLERANCE,
+        "scipy_weightings_measured": {k: methods[k]["weightings"] for k in ("scipy_slsqp", "scipy_de")},
+        "load_average_1min": [load_before[0], os.getloadavg()[0]],
+        "note": "SciPy times measured on evenly spaced subsets and scaled to all weightings; shared "
+                "2-core machine, timings noisy (load_average_1min: before, after)",
+        "methods": methods,
+    }
+
+
+def run(scene=None, quick: bool = False) -> dict:
+    """The roller's sweep (``scene``: ignored, the built-in roller scene is used); the dict that
+    benchmarks/run.py stores under "roller"."""
+    return run_follower("roller", quick)
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("followers", nargs="+", choices=sorted(SCENES))
+    parser.add_argument("--out", type=Path, required=True, help="JSON file (followers not run are kept)")
+    parser.add_argument("--quick", action="store_true", help="20 weightings, SciPy on 4 and 2")
+    args = parser.parse_args(argv)
+    data = json.loads(args.out.read_text()) if args.out.exists() else {}
+    for follower in args.followers:
+        data[follower] = run_follower(follower, quick=args.quick)
+        data.setdefault("environment", {})[follower] = environment("float64")
+        r = data[follower]
+        print(f"{follower}.gradient_speedup = {r['gradient_speedup']:.1f} "
+              f"(matched: {r['gradient_accuracy_matched']})")
+        print(f"{follower}.ga_speedup = {r['ga_speedup']:.1f} via {r['ga_speedup_method']} "
+              f"(matched: {r['ga_accuracy_matched']})", flush=True)
+        args.out.parent.mkdir(parents=True, exist_ok=True)
+        args.out.write_text(json.dumps(data, indent=1, default=float))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
