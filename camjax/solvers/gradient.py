@@ -270,8 +270,10 @@ def _tree_max_abs(tree) -> jax.Array:
 
 def init(problem: Problem, design: Design | None = None,
          settings: GradientSettings = DEFAULT_SETTINGS) -> GradientState:
-    """Start at ``design`` (mm; default: the centre of the box), multipliers 0."""
-    design = midpoint(problem) if design is None else design
+    """Start at ``design`` (mm; default: the family's ``start(problem)`` where it has one, else the
+    centre of the box), multipliers 0."""
+    if design is None:
+        design = getattr(family_of(problem), "start", midpoint)(problem)
     dtype = problem_dtype(problem)
     u = _clip_unit(problem, jax.tree.map(lambda x: jnp.asarray(x, dtype), to_unit(problem, design)))
     rprop = _transform(settings).init(u)
@@ -488,9 +490,26 @@ def minimize(problem: Problem, weights: Weights, init_design: Design | None = No
     Args:
       problem: the problem, grid arrays of shape (n,).
       weights: scalar alpha, gamma.
-      init_design: start (mm); default the centre of the box.
+      init_design: start (mm); default the centre of the box, and for a family with its own
+        ``start(problem)`` both (the better result kept).
       settings: static configuration.
     """
+    start = getattr(family_of(problem), "start", None)
+    if init_design is not None or start is None:
+        return _minimize_from(problem, weights, init_design, settings)
+    # a family with its own start: solved from it and from the box's centre (one vmapped solve),
+    # the better kept (feasible first, then the smaller objective); iterations are the sum
+    both = jax.vmap(lambda d: _minimize_from(problem, weights, d, settings))(
+        jax.tree.map(lambda a, b: jnp.stack([a, b]), start(problem), midpoint(problem)))
+    first, second = jax.tree.map(lambda x: x[0], both), jax.tree.map(lambda x: x[1], both)
+    take_second = (second.feasible & ~first.feasible) | (
+        (second.feasible == first.feasible) & (second.objective < first.objective))
+    best = jax.tree.map(lambda a, b: jnp.where(take_second, b, a), first, second)
+    return best._replace(iterations=first.iterations + second.iterations)
+
+
+def _minimize_from(problem: Problem, weights: Weights, init_design: Design | None,
+                   settings: GradientSettings) -> GradientResult:
     def cond(state):
         return ~state.done & (state.step < settings.max_steps)
 
