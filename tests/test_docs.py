@@ -16,7 +16,7 @@ ROOT = Path(__file__).resolve().parents[1]
 README = ROOT / "README.md"
 SETUP_LINES = [
     "python3 -m pip install -e . && camjax design --out out/",
-    'python3 -m pip install -e ".[dev]" && python3 -m pytest -q',
+    'python3 -m pip install -e ".[dev]" && python3 -m pytest -q -n auto --dist loadfile',
 ]
 
 
