@@ -70,6 +70,7 @@ def test_nnls_matches_scipy():
     (("l2_jerk = 1e-6", "peak_accel = 1.0"), "synthesis.objective.peak_accel"),
     (('mode = "global"', 'mode = "pointwise"'), "design.mode"),
 ])
+@pytest.mark.slow
 def test_what_the_codesign_does_not_take_exits_2_naming_the_field(tmp_path, capsys, edit, field):
     text = builtin_scene_text("codesign").replace(*edit)
     assert edit[1] in text

@@ -33,10 +33,8 @@ from camjax import cli, followers
 from camjax.scene import builtin_scene_text, parse_scene, with_samples
 
 NAMES = followers.names()
-# The quick loop (-m "not slow") runs the costly checks on the flat face (and the exact extrema on
-# a rocker too); the full suite (CI) runs every follower through every check.
-QUICK = ("flat", "oscillating_flat")
-EACH = [name if name in QUICK else pytest.param(name, marks=pytest.mark.slow) for name in NAMES]
+# The quick loop (-m "not slow") runs the costly checks on the flat face; the full suite (CI) runs
+# every follower through every check.
 EACH_RUN = [name if name == "flat" else pytest.param(name, marks=pytest.mark.slow) for name in NAMES]  # `camjax design`
 SHARED_KEYS = ("camjax_version", "scene", "dtype", "models", "samples", "cam_speed_rpm", "rotation",
                "follower_type", "segments", "kinematics", "flcd", "min_base_radius_mm", "evaluated_at", "design")
@@ -237,7 +235,7 @@ def test_the_base_circle_of_the_exported_outline_is_the_reported_base_radius(nam
     np.testing.assert_allclose(radius, data["evaluated_at"]["base_radius_mm"], rtol=0, atol=1e-9)
 
 
-@pytest.mark.parametrize("name", EACH)
+@pytest.mark.parametrize("name", EACH_RUN)
 def test_exact_extrema_are_those_of_a_dense_grid(name, runs):
     """Every curve's refined max and min against a 100 000-sample grid of the same curve: never
     beaten by it (beyond round-off), and within the grid's resolution of it."""

@@ -75,6 +75,7 @@ def test_infeasible_bounds_reported_by_name_without_nan(problem):
     assert P.violated_constraints(tight, res.violation) == ["curvature", "stress", "face_width"]
 
 
+@pytest.mark.slow
 def test_single_angle_grid(default_scene):
     scene = dataclasses.replace(default_scene, motion=dataclasses.replace(default_scene.motion, samples=1))
     prob = P.problem_from_scene(scene, extrema="grid")  # the problem at the one angle itself

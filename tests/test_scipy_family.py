@@ -46,6 +46,7 @@ def test_scipy_reaches_camjax_optimum(problem, camjax_optimum, method):
     assert result.design[1] == design[1] and result.design[3] == design[3]  # fixed R_f, l stay fixed
 
 
+@pytest.mark.slow
 def test_fixed_variables_are_not_searched(problem):
     """SLSQP from a start at the box centre moves only the free variables (R_b, d)."""
     lower, upper = problem.lower, problem.upper
