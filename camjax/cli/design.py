@@ -131,24 +131,12 @@ def _law_files(codesign, dpi: int):
     """``write(folder) -> names``: synthesis.csv and synthesis.png of a co-design's designed laws
     (normalized s, v, a, j; drawn against the best built-in law of each one's class), as
     ``camjax synthesize`` writes them."""
-    import numpy as np
+    from camjax.cli.synthesize import law_curves
+    from camjax.output.synthesis import synthesis_figure, write_curves_csv
 
-    from camjax.laws import LAWS
-    from camjax.laws.bspline import evaluate_derivatives
-    from camjax.output.synthesis import CURVE_POINTS, synthesis_figure, write_curves_csv
-    from camjax.synthesis.segments import builtin_q
-
-    x = np.linspace(0.0, 1.0, CURVE_POINTS)
-    curves, panels = [], []
     builtin = codesign.best_builtin[0] if codesign.best_builtin is not None else None
-    for k, r in enumerate(codesign.segments):
-        seg = r.segment
-        q = tuple(np.asarray(v) for v in evaluate_derivatives(r.knots, r.control, seg.degree, x, 3))
-        curves.append((seg.index, x, q))
-        name = builtin[k] if builtin is not None else None
-        panels.append((f"segments[{seg.index}] {seg.kind}", x, q,
-                       builtin_q(LAWS[name], seg.kind, x) if name else None,
-                       f"{name} (best built-in with its geometry)" if name else None))
+    names = [builtin[k] if builtin is not None else None for k in range(len(codesign.segments))]
+    curves, panels = law_curves(codesign.segments, names, "best built-in with its geometry")
     fig = synthesis_figure(panels)
 
     def write(folder) -> list[str]:

@@ -18,20 +18,11 @@ def _setup_synthesize(p: argparse.ArgumentParser):
     p.add_argument("--dpi", type=int, default=100, help="resolution of svaj.png (default 100)")
 
     def run(args) -> int:
-        import numpy as np
-
         from camjax import followers, runtime
-        from camjax.laws import LAWS
-        from camjax.laws.bspline import evaluate_derivatives
-        from camjax.output.synthesis import (
-            CURVE_POINTS,
-            synthesis_figure,
-            synthesis_report,
-            write_curves_csv,
-        )
+        from camjax.output.synthesis import synthesis_figure, synthesis_report, write_curves_csv
         from camjax.scene import load_scene
         from camjax.scene.designed import law_from_control
-        from camjax.synthesis.segments import builtin_q, synthesize_segments
+        from camjax.synthesis.segments import synthesize_segments
 
         out = check_output_dir(args.out)
         check_dpi(args.dpi)
@@ -54,16 +45,8 @@ def _setup_synthesize(p: argparse.ArgumentParser):
         lift_key = "lift_deg" if followers.of(scene).rocking else "lift_mm"
         controls = [law_from_control(r.segment, r.control)[1] for r in results]
         report = synthesis_report(scene.name, weights, results, controls, lift_key)
-        x = np.linspace(0.0, 1.0, CURVE_POINTS)
-        curves, panels = [], []
-        for r in results:
-            seg = r.segment
-            q = tuple(np.asarray(v) for v in evaluate_derivatives(r.knots, r.control, seg.degree, x, 3))
-            curves.append((seg.index, x, q))
-            best = r.best_builtin
-            builtin = builtin_q(LAWS[best[0]], seg.kind, x) if best is not None else None
-            panels.append((f"segments[{seg.index}] {seg.kind}", x, q, builtin,
-                           f"{best[0]} (best built-in)" if best is not None else None))
+        curves, panels = law_curves(results, [r.best_builtin[0] if r.best_builtin else None for r in results],
+                                    "best built-in")
         fig = synthesis_figure(panels)
         with replaced_folder(out) as tmp:
             write_json(tmp / "result.json", report)
@@ -77,3 +60,27 @@ def _setup_synthesize(p: argparse.ArgumentParser):
         return 0
 
     return run
+
+
+def law_curves(results, builtin_names, note: str):
+    """(curves, panels) of designed laws for synthesis.csv and their figure: each result's
+    normalized s, v, a, j on CURVE_POINTS points, beside the built-in law named for it (None:
+    none), labelled ``"<law> (<note>)"``. ``results``: objects with ``segment``, ``knots`` and
+    ``control`` (camjax synthesize's and the co-design's)."""
+    import numpy as np
+
+    from camjax.laws import LAWS
+    from camjax.laws.bspline import evaluate_derivatives
+    from camjax.output.synthesis import CURVE_POINTS
+    from camjax.synthesis.segments import builtin_q
+
+    x = np.linspace(0.0, 1.0, CURVE_POINTS)
+    curves, panels = [], []
+    for r, name in zip(results, builtin_names, strict=True):
+        seg = r.segment
+        q = tuple(np.asarray(v) for v in evaluate_derivatives(r.knots, r.control, seg.degree, x, 3))
+        curves.append((seg.index, x, q))
+        panels.append((f"segments[{seg.index}] {seg.kind}", x, q,
+                       builtin_q(LAWS[name], seg.kind, x) if name else None,
+                       f"{name} ({note})" if name else None))
+    return curves, panels
