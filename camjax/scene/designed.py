@@ -167,31 +167,54 @@ def law_from_control(ds: DesignedSegment, control):
 
 
 def parse_synthesis(r: TableReader, designed: tuple[DesignedSegment, ...]) -> SynthesisSpec:
-    """[synthesis]: objective = {name = weight, ...}, samples_per_span."""
+    """[synthesis]: objective = {name = weight, ...}, samples_per_span, speed_band, speed_count."""
     from camjax.synthesis import L2_OBJECTIVES, OBJECTIVES, PEAK_OBJECTIVES
+    from camjax.synthesis.problem import ALL_OBJECTIVES
 
-    r.check_keys(("objective", "samples_per_span"))
+    r.check_keys(("objective", "samples_per_span", "speed_band", "speed_count"))
     if not designed:
         raise r.error("objective", r.table.get("objective", MISSING), "no segment of [motion] has "
                       "design = true: there is no law to synthesize")
     o = r.sub("objective")
     if not o.table:
         raise r.error("objective", o.table, "needs at least one term", ", ".join(OBJECTIVES))
-    o.check_keys(OBJECTIVES)
+    o.check_keys(ALL_OBJECTIVES)
     weights = {name: o.number(name, low=0.0) for name in o.table}
-    terms = tuple((n, w) for n in OBJECTIVES if (w := weights.get(n, 0.0)) > 0.0)
+    terms = tuple((n, w) for n in ALL_OBJECTIVES if (w := weights.get(n, 0.0)) > 0.0)
     if not terms:
         raise r.error("objective", o.table, "every weight is 0", "at least one weight > 0")
     orders = {**PEAK_OBJECTIVES, **L2_OBJECTIVES}
     for ds in designed:
         for name, _ in terms:
-            if orders[name] > ds.degree:
-                what = ("v", "a", "j")[orders[name] - 1]
+            if orders.get(name, 2 if name == "peak_force" else 0) > ds.degree:
+                what = ("v", "a", "j")[orders.get(name, 2) - 1]
                 raise SceneError(f"{ds.path}.degree", ds.degree, f"has no {what} for synthesis.objective."
                                  f"{name} (a degree-{ds.degree} law's is not a function)",
                                  f">= {orders[name]}")
+    if terms and all(n == "residual_vibration" for n, _ in terms):
+        raise r.error("objective", o.table, "residual_vibration alone leaves the law undetermined (it "
+                      "weighs two numbers per speed)", "with it a law term, e.g. l2_jerk or peak_accel")
     per_span = int(r.number("samples_per_span", 8, low=1, high=256, integer=True))
-    return SynthesisSpec(terms, per_span)
+    band = float(r.number("speed_band", 0.0, low=0.0, high=0.9))
+    count = int(r.number("speed_count", 5 if band > 0.0 else 1, low=1, high=64, integer=True))
+    if band > 0.0 and count < 2:
+        raise r.error("speed_count", count, "a speed band needs at least 2 speeds", ">= 2")
+    return SynthesisSpec(terms, per_span, band, count)
+
+
+def check_train(synthesis: SynthesisSpec | None, dynamics, source=None) -> None:
+    """The follower-train terms of [synthesis] need the scene's [dynamics] (its train; peak_force
+    its spring too). Raises SceneError naming the missing field."""
+    names = {n for n, _ in synthesis.objective} if synthesis is not None else set()
+    for name in ("residual_vibration", "peak_force"):
+        if name not in names:
+            continue
+        if dynamics is None:
+            raise SceneError("dynamics", MISSING, f"synthesis.objective.{name} needs the follower train: "
+                             "a [dynamics] section (I3, c3, k23)", source=source)
+        if name == "peak_force" and dynamics.spring_rate is None:
+            raise SceneError("dynamics.spring_rate", MISSING, "synthesis.objective.peak_force needs the "
+                             "contact force's spring", "> 0 (or follower.spring_N_per_m)", source)
 
 
 def is_designed(table: dict) -> bool:

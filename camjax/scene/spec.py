@@ -142,6 +142,8 @@ class SynthesisSpec:
 
     objective: tuple[tuple[str, float], ...]
     samples_per_span: int = 8
+    speed_band: float = 0.0  # residual_vibration over speeds (1 +- speed_band) x the cam speed
+    speed_count: int = 1  # speeds of that band, equally spaced (1: the cam speed alone)
 
 
 @dataclass(frozen=True)
