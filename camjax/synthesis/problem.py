@@ -93,8 +93,8 @@ def build_problem(basis: Basis, conditions, objective, per_span: int = PER_SPAN,
             raise ValueError(f"{name}: unknown objective term (allowed: {', '.join(ALL_OBJECTIVES)})")
         if name in TRAIN_OBJECTIVES:
             if train is None or (name == "peak_force" and train.force_rows is None):
-                raise ValueError(f"{name}: needs the follower train (a [dynamics] section"
-                                 f"{' with a spring, on a law of degree >= 2' if name == 'peak_force' else ''})")
+                extra = " with a spring, on a law of degree >= 2" if name == "peak_force" else ""
+                raise ValueError(f"{name}: needs the follower train (a [dynamics] section{extra})")
             continue
         order = {**PEAK_OBJECTIVES, **L2_OBJECTIVES}[name]
         if order > basis.degree:

@@ -96,14 +96,16 @@ def best_builtin(segment, weights: dict, train=None) -> tuple[str, float, dict] 
             continue
         m = builtin_measures(law, segment.kind)
         if train is not None:
-            m.update(builtin_train_measures(lambda x, law=law: builtin_q(law, segment.kind, x), train, segment))
+            m.update(builtin_train_measures(lambda x, law=law: builtin_q(law, segment.kind, x), train,
+                                            segment))
         obj = sum(w * term_value(n, m[n]) for n, w in weights.items())
         if best is None or obj < best[1]:
             best = (name, float(obj), m)
     return best
 
 
-def synthesize_segments(segments, weights: dict, samples_per_span: int = 8, train=None) -> list[SegmentSynthesis]:
+def synthesize_segments(segments, weights: dict, samples_per_span: int = 8,
+                        train=None) -> list[SegmentSynthesis]:
     """Synthesize every designed segment for the objective ``weights`` ({name: weight > 0}).
     ``train``: the follower train (:class:`camjax.synthesis.vibration.Train`) for the terms
     ``peak_force`` and ``residual_vibration`` and their figures (None: the law's terms only).

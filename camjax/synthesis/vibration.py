@@ -177,21 +177,26 @@ def train_terms(basis: Basis, train: Train, segment, per_span: int) -> TrainTerm
 def force_matrix(basis: Basis, train: Train, segment, points: np.ndarray) -> np.ndarray:
     """(len(points), n): the contact force F(x) at ``points`` (N or N m) as rows on c, at the
     design speed (``points`` sorted, including 0 and 1)."""
-    beta = float(np.deg2rad(segment.angle_deg))
-    level, lift = train.segments[segment.index]
-    w = train.cam_speed_rad_s
     edges = np.union1d(points, basis.breaks)
     z = state_maps(ratio(train, segment.angle_deg), train.damping_ratio, edges, _basis_values(basis),
                    basis.degree)
     y = z[np.searchsorted(edges, points), 0]  # (points, n)
-    q = evaluation_matrix(basis, points, 0)
-    v = evaluation_matrix(basis, points, 1)
-    a = evaluation_matrix(basis, points, 2)
+    q, v, a = (evaluation_matrix(basis, points, k) for k in (0, 1, 2))
+    end_row = evaluation_matrix(basis, np.asarray([1.0]), 0)[0]  # q(1) = 1 carries the constant
+    return contact_force(train, segment, q, v, a, y, end_row[None, :])
+
+
+def contact_force(train: Train, segment, q, v, a, y, one=1.0):
+    """F = D [I2 Omega^2 / beta^2 q'' + c2 Omega / beta q' + (k_s + k23) q - k23 y] + (k_s (L + x0)
+    + weight) ``one``, from the normalized q, q', q'', y (values or rows on c; ``one``: 1, or the
+    row of q(1) to keep the force linear in c)."""
+    beta = float(np.deg2rad(segment.angle_deg))
+    level, lift = train.segments[segment.index]
+    w = train.cam_speed_rad_s
     ks, k23 = float(train.spring_rate), train.stiffness
     const = ks * (level + train.spring_preload) + train.weight
-    end_row = evaluation_matrix(basis, np.asarray([1.0]), 0)[0]
     return (lift * (train.follower_inertia * w**2 / beta**2 * a + train.follower_damping * w / beta * v
-                    + (ks + k23) * q - k23 * y) + const * end_row[None, :])
+                    + (ks + k23) * q - k23 * y) + const * one)
 
 
 # ------------------------------------------------------------------ a built-in law's figures
@@ -210,15 +215,9 @@ def builtin_train_measures(q_of, train: Train, segment) -> dict:
     out = residual_figures(np.asarray(amps))
     if train.spring_rate is not None:
         pts = np.linspace(0.0, 1.0, 4097)
-        beta = float(np.deg2rad(segment.angle_deg))
-        level, lift = train.segments[segment.index]
-        w = train.cam_speed_rad_s
         z = state_maps(ratio(train, segment.angle_deg), train.damping_ratio, pts, values, 9)
         q, v, a = (np.asarray(t) for t in q_of(pts)[:3])
-        ks, k23 = float(train.spring_rate), train.stiffness
-        f = (lift * (train.follower_inertia * w**2 / beta**2 * a + train.follower_damping * w / beta * v
-                     + (ks + k23) * q - k23 * z[:, 0, 0]) + ks * (level + train.spring_preload) + train.weight)
-        out["peak_force"] = float(np.max(np.abs(f)))
+        out["peak_force"] = float(np.max(np.abs(contact_force(train, segment, q, v, a, z[:, 0, 0]))))
     return out
 
 
