@@ -183,11 +183,12 @@ def parse_synthesis(r: TableReader, designed: tuple[DesignedSegment, ...]) -> Sy
     terms = tuple((n, w) for n in ALL_OBJECTIVES if (w := weights.get(n, 0.0)) > 0.0)
     if not terms:
         raise r.error("objective", o.table, "every weight is 0", "at least one weight > 0")
-    orders = {**PEAK_OBJECTIVES, **L2_OBJECTIVES}
+    # the derivative a term needs (the contact force has the acceleration in it)
+    orders = {**PEAK_OBJECTIVES, **L2_OBJECTIVES, "peak_force": 2, "residual_vibration": 0}
     for ds in designed:
         for name, _ in terms:
-            if orders.get(name, 2 if name == "peak_force" else 0) > ds.degree:
-                what = ("v", "a", "j")[orders.get(name, 2) - 1]
+            if orders[name] > ds.degree:
+                what = ("v", "a", "j")[orders[name] - 1]
                 raise SceneError(f"{ds.path}.degree", ds.degree, f"has no {what} for synthesis.objective."
                                  f"{name} (a degree-{ds.degree} law's is not a function)",
                                  f">= {orders[name]}")
