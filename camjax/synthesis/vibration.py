@@ -36,6 +36,10 @@ the mean of those over the band's speeds.
 
 **Contact force.** F(x) = D [I2 Omega^2 / beta^2 q'' + c2 Omega / beta q' + (k_s + k23) q - k23 y]
 + k_s (L + x0) + weight, linear in c (the constant times c_n = 1), at the design speed.
+
+The matrices are NumPy arrays: static data of a synthesis problem, built once per segment without
+tracing anything (as :mod:`camjax.synthesis.basis`'s); the synthesis that uses them is the pure JAX
+solve of :mod:`camjax.synthesis.solve`.
 """
 
 from __future__ import annotations
@@ -206,8 +210,18 @@ def builtin_train_measures(q_of, train: Train, segment) -> dict:
     """``residual_vibration`` (RMS over the speed factors of A / |D|), its values per speed and, with
     a spring, ``peak_force`` (N) of a law given as ``q_of(x) -> (q, q', q'')`` (NumPy), on a grid of
     BUILTIN_GRID subintervals per unit (the built-in laws' breaks are multiples of 1/8)."""
-    grid = np.linspace(0.0, 1.0, BUILTIN_GRID + 1)
-    values = lambda x: np.asarray(q_of(x)[0])[:, None]  # noqa: E731
+    # one grid fine enough for the slowest speed (largest r), so the law is evaluated once
+    r_max = max(ratio(train, segment.angle_deg, f) for f in train.speed_factors)
+    per = int(np.ceil(r_max * max(1.0, 2.0 * train.damping_ratio) / STEP / BUILTIN_GRID))
+    grid = np.linspace(0.0, 1.0, BUILTIN_GRID * max(1, per) + 1)
+    cache: dict = {}
+
+    def values(x):
+        key = x.tobytes()
+        if key not in cache:
+            cache[key] = np.asarray(q_of(x)[0])[:, None]
+        return cache[key]
+
     amps = []
     for f in train.speed_factors:
         z1 = state_maps(ratio(train, segment.angle_deg, f), train.damping_ratio, grid, values, 9)[-1, :, 0]
