@@ -197,48 +197,49 @@ def test_the_quadratic_optimum_is_the_least_squares_solution():
 
 
 @pytest.mark.slow
-def test_the_peak_force_optimum_matches_scipy():
+@pytest.mark.parametrize("w", [{"peak_force": 1.0},
+                               {"peak_force": 1.0, "residual_vibration": 1e4, "l2_jerk": 1e-3}])
+def test_the_peak_force_optimum_matches_scipy(w):
     # the same discretization (force rows at 9 points per span, residual and jerk quadratics) as an
     # epigraph problem in (z, t) for SciPy: HiGHS for peak_force alone (an LP), SLSQP for the mixed
     # QP. HiGHS solves the LP to ~1e-9: 1e-7 relative; SLSQP stops at ftol 1e-10 on a smooth
     # problem of 5 variables: 1e-6 relative (measured 1e-11 for both)
     from scipy.optimize import linprog, minimize
 
-    for w in ({"peak_force": 1.0}, {"peak_force": 1.0, "residual_vibration": 1e4, "l2_jerk": 1e-3}):
-        sc, train = _small_scene(w)
-        r = synthesize_segments(sc.motion.designed, w, 8, train)[0]
-        ds = r.segment
-        assert r.converged
-        basis = make_basis(ds.degree, ds.control_count)
-        problem = build_problem(basis, ds.conditions, tuple(w), 8, train_terms(basis, train, ds, 8))
-        cp = problem.A_pinv @ np.asarray(ds.values)[list(problem.kept)]
-        N, F = problem.null, problem.train.force_rows
-        nz = N.shape[1]
-        G = np.vstack([np.hstack([F @ N, -np.ones((len(F), 1))]), np.hstack([-F @ N, -np.ones((len(F), 1))])])
-        h = np.concatenate([-F @ cp, F @ cp])
-        if len(w) == 1:
-            lp = linprog(np.r_[np.zeros(nz), 1.0], A_ub=G, b_ub=h, bounds=[(None, None)] * (nz + 1),
-                         method="highs")
-            assert r.model_objective == pytest.approx(lp.fun, rel=1e-7)
-            continue
-        Q = w["residual_vibration"] * problem.train.residual_gram + w["l2_jerk"] * problem.grams[3]
+    sc, train = _small_scene(w)
+    r = synthesize_segments(sc.motion.designed, w, 8, train)[0]
+    ds = r.segment
+    assert r.converged
+    basis = make_basis(ds.degree, ds.control_count)
+    problem = build_problem(basis, ds.conditions, tuple(w), 8, train_terms(basis, train, ds, 8))
+    cp = problem.A_pinv @ np.asarray(ds.values)[list(problem.kept)]
+    N, F = problem.null, problem.train.force_rows
+    nz = N.shape[1]
+    G = np.vstack([np.hstack([F @ N, -np.ones((len(F), 1))]), np.hstack([-F @ N, -np.ones((len(F), 1))])])
+    h = np.concatenate([-F @ cp, F @ cp])
+    if len(w) == 1:
+        lp = linprog(np.r_[np.zeros(nz), 1.0], A_ub=G, b_ub=h, bounds=[(None, None)] * (nz + 1),
+                     method="highs")
+        assert r.model_objective == pytest.approx(lp.fun, rel=1e-7)
+        return
+    Q = w["residual_vibration"] * problem.train.residual_gram + w["l2_jerk"] * problem.grams[3]
 
-        def f(x):
-            c = cp + N @ x[:nz]
-            return x[nz] + c @ Q @ c
+    def f(x):
+        c = cp + N @ x[:nz]
+        return x[nz] + c @ Q @ c
 
-        def grad(x):
-            return np.r_[2.0 * N.T @ (Q @ (cp + N @ x[:nz])), 1.0]
+    def grad(x):
+        return np.r_[2.0 * N.T @ (Q @ (cp + N @ x[:nz])), 1.0]
 
-        x0 = np.r_[np.zeros(nz), np.max(np.abs(F @ cp)) + 1.0]
-        res = minimize(f, x0, jac=grad, method="SLSQP", constraints=[{"type": "ineq", "fun": lambda x: h - G @ x,
-                                                            "jac": lambda x: -G}],
-                       options={"ftol": 1e-10, "maxiter": 500})
-        # status 8 (no descent along the line search) is SLSQP stopping at its precision, at the
-        # optimum here: its point must be feasible and no better than ours
-        assert res.status in (0, 8) and np.max(G @ res.x - h) < 1e-7  # N, on forces of ~100 N
-        assert r.model_objective == pytest.approx(res.fun, rel=1e-6)
-        assert r.model_objective <= res.fun * (1 + 1e-9)
+    x0 = np.r_[np.zeros(nz), np.max(np.abs(F @ cp)) + 1.0]
+    ineq = {"type": "ineq", "fun": lambda x: h - G @ x, "jac": lambda x: -G}
+    res = minimize(f, x0, jac=grad, method="SLSQP", constraints=[ineq],
+                   options={"ftol": 1e-10, "maxiter": 500})
+    # status 8 (no descent along the line search) is SLSQP stopping at its precision, at the
+    # optimum here: its point must be feasible and no better than ours
+    assert res.status in (0, 8) and np.max(G @ res.x - h) < 1e-7  # N, on forces of ~100 N
+    assert r.model_objective == pytest.approx(res.fun, rel=1e-6)
+    assert r.model_objective <= res.fun * (1 + 1e-9)
 
 
 # ------------------------------------------------------------------ the check
