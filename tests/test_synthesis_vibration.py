@@ -339,3 +339,31 @@ def test_result_json_reports_the_train_figures(tmp_path):
         assert s["objective"] < b["objective"]
         # the contact force is above the spring's preload force at rest and of its size
         assert 30.0 < s["peak_force"] < 200.0
+
+
+@pytest.mark.slow
+def test_a_batch_with_the_train_terms_equals_one_at_a_time(scene):
+    # the train terms are static matrices of the problem: the pure JAX solve vmaps over weights as
+    # it does without them. A member that has converged keeps its iterate while the batch runs on,
+    # so each equals its own solve up to the batched products' rounding: 1e-9 relative
+    import jax
+
+    from camjax.synthesis import batch_synthesizer, kept_values, synthesizer
+
+    ds = scene.motion.designed[0]
+    basis = ds.basis()
+    names = ("l2_jerk", "peak_force", "residual_vibration")
+    problem = build_problem(basis, ds.conditions, names, 8, train_terms(basis, synthesis_train(scene), ds, 8))
+    assert problem.objective == names
+    values = kept_values(problem, np.asarray(ds.values))
+    weights = np.asarray([[1e-3, 1e-2, 1e4], [1e-3, 1e-1, 1e6], [1e-2, 1e-3, 1e5]])
+    batch = batch_synthesizer(problem)(np.tile(values, (3, 1)), weights)
+    one = jax.jit(synthesizer(problem))
+    for b in range(3):
+        single = one(values, weights[b])
+        assert bool(batch.converged[b]) and bool(single.converged)
+        assert float(batch.objective[b]) == pytest.approx(float(single.objective), rel=1e-9)
+        # the reported objective is the weighted sum of the measures, the residual squared
+        m = single.measures
+        expected = weights[b] @ np.asarray([m.l2_jerk, m.peak_force, m.residual_vibration**2])
+        assert float(single.objective) == pytest.approx(float(expected), rel=1e-12)
