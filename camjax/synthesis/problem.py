@@ -52,7 +52,7 @@ class SynthesisProblem(NamedTuple):
     basis: Basis
     conditions: tuple[Condition, ...]  # all of them, in the order given
     kept: tuple[int, ...]  # indices of the independent conditions (rows of A)
-    dependent: tuple[tuple[int, np.ndarray], ...]  # (index, coefficients over kept rows)
+    dependent: tuple[tuple[int, tuple[int, ...], np.ndarray], ...]  # (index, rows kept before it, coefficients over them)
     A: np.ndarray  # (r, n) rows of the kept conditions
     A_pinv: np.ndarray  # (n, r)
     null: np.ndarray  # (n, n - r) orthonormal
@@ -109,9 +109,9 @@ def build_problem(basis: Basis, conditions, objective, per_span: int = PER_SPAN,
         scale = max(1.0, float(np.abs(trial).max()))
         if np.linalg.matrix_rank(trial, tol=1e-10 * scale * basis.n) > len(kept):
             kept.append(i)
-        else:  # row = coeffs . rows[kept]
+        else:  # row = coeffs . rows[kept], the rows kept so far (more may be kept later)
             coeffs = np.linalg.lstsq(rows[kept].T, row, rcond=None)[0] if kept else np.zeros(0)
-            dependent.append((i, coeffs))
+            dependent.append((i, tuple(kept), coeffs))
     A = rows[kept] if kept else np.zeros((0, basis.n))
     u, sv, vt = np.linalg.svd(A, full_matrices=True)
     r = len(kept)
@@ -138,9 +138,8 @@ def inconsistent_condition(problem: SynthesisProblem, values, rtol: float = 1e-9
     """The first condition that repeats earlier ones with a different value, as (index, the
     difference), or None. ``values``: one per condition, in the problem's order."""
     values = np.asarray(values, dtype=np.float64)
-    kept = values[list(problem.kept)] if problem.kept else np.zeros(0)
-    for i, coeffs in problem.dependent:
-        implied = float(coeffs @ kept) if kept.size else 0.0
+    for i, before, coeffs in problem.dependent:
+        implied = float(coeffs @ values[list(before)]) if before else 0.0
         if abs(values[i] - implied) > rtol * max(1.0, abs(values[i]), abs(implied)):
             return i, values[i] - implied
     return None
