@@ -22,7 +22,7 @@ from camjax.errors import MISSING, SceneError
 from camjax.program.conditions import DERIVATIVES, FREE, MATCH, Plan, end_values
 from camjax.scene.conditions import parse_conditions
 from camjax.scene.reader import TableReader
-from camjax.scene.spec import SynthesisSpec
+from camjax.scene.spec import SpringSpec, SynthesisSpec
 
 DESIGN_KEYS = ("kind", "law", "angle_deg", "degree", "control_count", "knots", "design", "start", "end",
                "through")
@@ -170,10 +170,13 @@ def parse_synthesis(r: TableReader, designed: tuple[DesignedSegment, ...]) -> Sy
     """[synthesis]: objective = {name = weight, ...}, samples_per_span."""
     from camjax.synthesis import L2_OBJECTIVES, OBJECTIVES, PEAK_OBJECTIVES
 
-    r.check_keys(("objective", "samples_per_span"))
+    r.check_keys(("objective", "samples_per_span", *SPRING_KEYS))
+    spring = parse_spring(r)
     if not designed:
         raise r.error("objective", r.table.get("objective", MISSING), "no segment of [motion] has "
                       "design = true: there is no law to synthesize")
+    if spring is not None and not r.has("objective"):  # a co-design of the spring and geometry only
+        return SynthesisSpec((), int(r.number("samples_per_span", 8, low=1, high=256, integer=True)), spring)
     o = r.sub("objective")
     if not o.table:
         raise r.error("objective", o.table, "needs at least one term", ", ".join(OBJECTIVES))
@@ -191,7 +194,24 @@ def parse_synthesis(r: TableReader, designed: tuple[DesignedSegment, ...]) -> Sy
                                  f"{name} (a degree-{ds.degree} law's is not a function)",
                                  f">= {orders[name]}")
     per_span = int(r.number("samples_per_span", 8, low=1, high=256, integer=True))
-    return SynthesisSpec(terms, per_span)
+    return SynthesisSpec(terms, per_span, spring)
+
+
+SPRING_KEYS = ("spring_N_per_m", "preload_N", "min_contact_force_N", "overspeed")
+
+
+def parse_spring(r: TableReader) -> SpringSpec | None:
+    """[synthesis]'s spring keys (camjax.codesign.spring): ``spring_N_per_m`` and ``preload_N``, a
+    number (fixed) or [low, high] (free, 0 < low <= high); ``min_contact_force_N`` >= 0 (default 0);
+    ``overspeed`` >= 1 (default 1). None when none is given."""
+    from camjax.scene.reader import fixed_or_free
+
+    if not any(r.has(k) for k in SPRING_KEYS):
+        return None
+    rate = fixed_or_free(r, "spring_N_per_m") if r.has("spring_N_per_m") else None
+    preload = fixed_or_free(r, "preload_N") if r.has("preload_N") else None
+    return SpringSpec(rate, preload, r.number("min_contact_force_N", 0.0, low=0.0),
+                      r.number("overspeed", 1.0, low=1.0, high=100.0))
 
 
 def is_designed(table: dict) -> bool:
