@@ -17,7 +17,7 @@ import pytest
 
 from camjax import loads, program
 from camjax.cli import main
-from camjax.codesign import Codesign, codesign_scene
+from camjax.codesign import Codesign, CodesignError, codesign_scene
 from camjax.codesign import spring as spring_mod
 from camjax.codesign.builtin import builtin_kinematics
 from camjax.errors import SceneError
@@ -26,7 +26,7 @@ from camjax.program import Kinematics
 from camjax.scene import builtin_scene_text, scene_from_dict
 
 SAMPLES = 120  # search grid (3 deg)
-ITERATIONS = 40  # BFGS steps of the tests' searches (the command takes up to 400)
+ITERATIONS = 400  # BFGS steps at most (the command's; these searches stop by themselves after ~70)
 RATE = [1000.0, 20000.0]  # N/m
 PRELOAD = [1.0, 200.0]  # N
 MARGIN = 5.0  # N
@@ -110,13 +110,15 @@ def test_spring_keys_parse_to_the_spec():
 
 @pytest.mark.slow
 def test_a_spring_without_the_followers_loads_exits_2(tmp_path, capsys):
-    text = builtin_scene_text("codesign")
-    for line in ("mass_kg = 1.0\n", "spring_N_per_m = 3004.0\n", "preload_mm = 13.0\n",
-                 "damping_Ns_per_m = 0.345\n", "gravity_m_s2 = 9.81\n"):
+    # the knife-edge scene (its design needs no stress) without its follower train, its rise and
+    # return designed
+    text = builtin_scene_text("knife-edge")
+    for line in ("mass_kg = 0.3\n", "spring_N_per_m = 1500.0\n", "preload_mm = 8.0\n",
+                 "damping_Ns_per_m = 0.4\n", "gravity_m_s2 = 9.81\n"):
+        assert line in text
         text = text.replace(line, "")
-    text = text.split("[contact]")[0] + "[design]" + text.split("[design]")[1]
-    text = text.replace("sigma_max_MPa = 1230.0\n", "")
-    text = text.replace("[synthesis]", "[synthesis]\nspring_N_per_m = [1000.0, 2000.0]")
+    text = text.replace('law = "cycloidal"', 'law = "bspline", degree = 3, control_count = 8, design = true')
+    text += "\n[synthesis]\nobjective = { l2_jerk = 1e-6 }\nspring_N_per_m = [1000.0, 2000.0]\n"
     path = tmp_path / "noloads.toml"
     path.write_text(text)
     out = tmp_path / "out"
@@ -129,7 +131,7 @@ def test_a_spring_without_the_followers_loads_exits_2(tmp_path, capsys):
 @pytest.mark.slow
 def test_no_spring_in_the_box_keeps_contact_exits_2_saying_by_how_much(tmp_path, capsys):
     data = spring_data(min_contact_force_N=1000.0)
-    with pytest.raises(Exception) as exc:
+    with pytest.raises(CodesignError) as exc:
         codesign_scene(scene_from_dict(data, "infeasible"), SAMPLES, max_iterations=2)
     msg = str(exc.value)
     assert msg.startswith("synthesis.min_contact_force_N") and "binds" in msg and "short" in msg
@@ -202,9 +204,13 @@ def test_a_free_spring_never_loses_to_a_fixed_one(free):
     for case in fixed_cases:
         scene = scene_from_dict(spring_data(**case), "fixed")
         other = codesign_scene(scene, SAMPLES, max_iterations=ITERATIONS)
-        # the searches end at no certified optimum; the free one must not be worse by more than
-        # the stopping rule's 1e-12 relative decrease, times the steps left (loose: 1e-9)
-        assert out.objective <= other.objective + 1e-9, (case, out.objective, other.objective)
+        # the searches end at no certified optimum but where a step decreases F by less than
+        # 1e-12 relative; on the piecewise-smooth F two such ends scatter: the free spring ends
+        # 4.5e-8 relative above the one fixed at the box's low rate (where its optimum lies: F is
+        # flat in the rate there), the scatter of where the search stops; 1e-6 relative allows
+        # that and would catch a free rate that misses the fixed one's optimum (at 40 steps,
+        # before either search stopped, the gap was 2.5e-5)
+        assert out.objective <= other.objective * (1 + 1e-6), (case, out.objective, other.objective)
 
 
 @pytest.mark.slow

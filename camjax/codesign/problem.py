@@ -43,7 +43,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from camjax.codesign import spring as spring_mod
+import camjax.codesign.spring as spring_mod
 from camjax.evaluate import arrays_from_kinematics, scene_arrays
 from camjax.family import weights_of
 from camjax.program import Kinematics
@@ -156,7 +156,8 @@ class Codesign:
         return self.kin0 + jnp.tensordot(self.jacobian, jnp.asarray(z) - self.lin.z0, axes=1)
 
     def _inner_fn(self, kin4, spring):
-        sol = solve_one(self.problem(kin4, spring), self.weights, jax.random.key(0), mode="global", solver="gradient")
+        sol = solve_one(self.problem(kin4, spring), self.weights, jax.random.key(0), mode="global",
+                        solver="gradient")
         return sol.objective, sol.design, sol.feasible
 
     def _lagrangian(self, x, design, lam):

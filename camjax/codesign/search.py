@@ -15,7 +15,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from camjax.codesign import spring as spring_mod
+import camjax.codesign.spring as spring_mod
 from camjax.codesign.builtin import (
     best_builtin_combination,
     builtin_kinematics,
