@@ -113,6 +113,7 @@ class Codesign:
         self.weights = weights_of(scene.design.alpha, scene.design.gamma)
         self._inner = jax.jit(self._inner_fn)
         self._lagrangian_grad = jax.jit(jax.grad(self._lagrangian, argnums=0))
+        self._kin_lagrangian_grad = jax.jit(jax.grad(self._kin_lagrangian, argnums=0))
         self._local = jax.jit(self._local_fn)
         self._spring_at = jax.jit(self._spring_fn)
         self.evaluations = 0
@@ -161,9 +162,12 @@ class Codesign:
         return sol.objective, sol.design, sol.feasible
 
     def _lagrangian(self, x, design, lam):
+        """f + lam . g as a function of the outer x (the spring's rate and preload follow from x)."""
         z, u = self.split(x)
         kin4 = self.kinematics(z)
-        spring = None if self.spring is None else self._spring_fn(kin4, u)[:2]
+        return self._kin_lagrangian(kin4, design, lam, self._spring_fn(kin4, u)[:2])
+
+    def _kin_lagrangian(self, kin4, design, lam, spring=None):
         problem = self.problem(kin4, spring)
         family = family_of(problem)
         g = _stacked(family, problem, design)
@@ -215,9 +219,13 @@ class Codesign:
         kin4 = self.kinematics(x[: self.nz])
         values, jac, lower, upper, norm = jax.device_get(self._local(kin4, inner.spring, inner.design))
         lam = multipliers(values, jac, inner.design, lower, upper, norm)
-        g = np.array(self._lagrangian_grad(jnp.asarray(x), inner.design, jnp.asarray(lam)))
-        g[: self.nz] += self.law_P @ x[: self.nz] + self.law_q
-        return g
+        if self.spring is None:  # through the kinematics, chained with J
+            gk = self._kin_lagrangian_grad(kin4, inner.design, jnp.asarray(lam))
+            g = np.asarray(jnp.tensordot(gk, self.jacobian, axes=((0, 1), (0, 1))))
+        else:  # x's rate and the preload it implies too
+            g = np.asarray(self._lagrangian_grad(jnp.asarray(x), inner.design, jnp.asarray(lam)))
+        # (g + P z) + q: the order of the sums as ever (the search's path is sensitive to rounding)
+        return np.concatenate([g[: self.nz] + self.law_P @ x[: self.nz] + self.law_q, g[self.nz:]])
 
     def best_rate(self, kin4, count: int = 9, refine: int = 12) -> tuple[float, Inner]:
         """The rate (as u) with the least objective on fixed kinematics ``kin4``: ``count`` rates

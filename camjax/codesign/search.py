@@ -266,7 +266,8 @@ def spring_report(cd: Codesign, fixed, spring) -> dict | None:
     force = np.asarray(arrays.force_N)
     k, p = spring
     need = box.min_force - float(force.min()) + p  # the least preload keeping the margin
-    binding = "contact" if abs(p - need) <= 1e-6 * max(1.0, abs(p)) else "preload_low"
+    binding = ("contact" if abs(p - need) <= 1e-6 * max(1.0, abs(p)) else
+               "preload_low" if box.preload[1] > box.preload[0] else "none")
     return {
         "rate_N_per_m": k, "preload_N": p, "preload_mm": 1e3 * p / k,
         "rate_bounds_N_per_m": list(box.rate), "preload_bounds_N": list(box.preload),
