@@ -251,3 +251,50 @@ def test_the_envelope_gradient_in_the_rate_matches_central_differences(cd):
         # the inner solve repeats to ~1e-12: differences at h = 1e-5 to ~1e-7 of the gradient
         assert np.linalg.norm(g - fd) <= 1e-6 * max(1.0, np.linalg.norm(fd)), (k, g, fd)
     assert abs(g[-1]) > 1e-3  # at 8000 N/m the rate matters (a stiffer spring: more stress)
+
+
+def test_a_rocker_spring_is_refused_naming_the_field():
+    data = tomllib.loads(builtin_scene_text("oscillating-roller"))
+    for i in (0, 2):
+        seg = data["motion"]["segments"][i]
+        data["motion"]["segments"][i] = {k: seg[k] for k in ("kind", "angle_deg", "lift_deg")} | {
+            "law": "bspline", "degree": 3, "control_count": 8, "design": True}
+    data["synthesis"] = {"objective": {"l2_jerk": 1e-6}, "spring_N_per_m": [10.0, 40.0]}
+    with pytest.raises(CodesignError) as exc:
+        Codesign(scene_from_dict(data, "rocker"), SAMPLES)
+    assert exc.value.field == "synthesis.spring_N_per_m" and "translating" in str(exc.value)
+
+
+@pytest.mark.slow
+def test_design_with_a_free_spring_end_to_end_and_fed_back(tmp_path):
+    """`camjax design` writes the designed spring; the designed laws and spring fed back as a plain
+    scene (no [synthesis]) keep contact at the overspeed and give the same design."""
+    from camjax.output.report import design_report
+
+    path = tmp_path / "spring.toml"
+    text = builtin_scene_text("codesign").replace("samples = 360", f"samples = {SAMPLES}")
+    text = text.replace("control_count = 16", "control_count = 8").replace(
+        "[synthesis]", f"[synthesis]\nspring_N_per_m = {RATE}\npreload_N = {PRELOAD}\n"
+        f"min_contact_force_N = {MARGIN}\noverspeed = {OVERSPEED}")
+    path.write_text(text)
+    out = tmp_path / "out"
+    assert main(["design", str(path), "--out", str(out)]) == 0
+    res = json.loads((out / "result.json").read_text())
+    sp = res["synthesis"]["codesign"]["spring"]
+    assert set(sp) >= {"rate_N_per_m", "preload_N", "preload_mm", "min_contact_force_N", "overspeed",
+                       "min_contact_force_at_overspeed_N", "binding"}
+    assert sp["preload_mm"] == pytest.approx(1e3 * sp["preload_N"] / sp["rate_N_per_m"], rel=1e-12)
+    data = tomllib.loads(text)
+    del data["synthesis"]
+    for seg in res["synthesis"]["segments"]:
+        data["motion"]["segments"][seg["segment"]] = seg["scene_segment"]
+    data["follower"].update(spring_N_per_m=sp["rate_N_per_m"], preload_mm=sp["preload_mm"])
+    scene = scene_from_dict(data, "fed-back")
+    force = force_of(scene, 240.0 * OVERSPEED, SAMPLES)
+    assert force.min() >= MARGIN - 1e-9  # on the search grid; 5 N within rounding where it binds
+    if sp["binding"] == "contact":
+        assert force.min() == pytest.approx(MARGIN, abs=1e-9)
+    again = design_report(scene)
+    assert again["design"]["objective"] == pytest.approx(res["design"]["objective"], rel=1e-9)
+    # the loads written are the designed spring's (exact extrema at the design speed)
+    assert again["loads"]["force_N"]["min"] == pytest.approx(res["loads"]["force_N"]["min"], rel=1e-9)
