@@ -298,3 +298,21 @@ def test_design_with_a_free_spring_end_to_end_and_fed_back(tmp_path):
     assert again["design"]["objective"] == pytest.approx(res["design"]["objective"], rel=1e-9)
     # the loads written are the designed spring's (exact extrema at the design speed)
     assert again["loads"]["force_N"]["min"] == pytest.approx(res["loads"]["force_N"]["min"], rel=1e-9)
+
+
+@pytest.mark.slow
+def test_spring_keys_without_a_law_objective(tmp_path, capsys):
+    """[synthesis] with spring keys and no objective: the co-design of size and stress alone (the
+    law terms 0); `camjax synthesize`, which needs an objective, refuses the scene (exit 2)."""
+    data = spring_data()
+    del data["synthesis"]["objective"]
+    scene = scene_from_dict(data, "no-objective")
+    assert scene.synthesis.objective == ()
+    out = codesign_scene(scene, SAMPLES, max_iterations=5)
+    assert out.law_objective == 0.0 and np.isfinite(out.objective)
+    assert out.spring["min_contact_force_at_overspeed_N"] >= MARGIN - 1e-9
+    path = tmp_path / "s.toml"
+    path.write_text(builtin_scene_text("codesign").replace("objective = { l2_jerk = 1e-6 }",
+                                                           "min_contact_force_N = 5.0"))
+    assert main(["synthesize", str(path), "--out", str(tmp_path / "out")]) == 2
+    assert "synthesis" in capsys.readouterr().err and not (tmp_path / "out").exists()
