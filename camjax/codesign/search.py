@@ -4,7 +4,10 @@ BFGS on the laws' free coordinates z (:class:`camjax.codesign.problem.Codesign` 
 envelope gradient), from the best built-in combination fitted onto the B-spline space and from
 the law-only synthesis (or the starting law); the result is compared with the best built-in
 combination (:mod:`camjax.codesign.builtin`) and the better one written into the scene as fixed
-laws (:func:`fixed_scene`), on which ``camjax design`` runs as usual.
+laws (:func:`fixed_scene`), on which ``camjax design`` runs as usual. With a designed spring
+(:mod:`camjax.codesign.spring`) x = (z, u): the rate's coordinate u follows z, the fixed scene
+carries the designed spring, and a box that keeps contact for no start is refused saying by how
+much (:func:`spring_infeasible`).
 """
 
 from __future__ import annotations
