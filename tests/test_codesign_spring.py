@@ -251,6 +251,13 @@ def test_the_envelope_gradient_in_the_rate_matches_central_differences(cd):
         # the inner solve repeats to ~1e-12: differences at h = 1e-5 to ~1e-7 of the gradient
         assert np.linalg.norm(g - fd) <= 1e-6 * max(1.0, np.linalg.norm(fd)), (k, g, fd)
     assert abs(g[-1]) > 1e-3  # at 8000 N/m the rate matters (a stiffer spring: more stress)
+    # a fixed rate: x = z, the preload (the least keeping contact) still follows the laws
+    fixed = Codesign(scene_from_dict(spring_data(spring_N_per_m=2000.0), "fixed-rate"), SAMPLES)
+    assert fixed.free == fixed.nz
+    x = fixed.x0
+    g = fixed.gradient(x, fixed.value(x)[1])
+    fd = fixed.gradient_fd(x, 1e-5)
+    assert np.linalg.norm(g - fd) <= 1e-6 * max(1.0, np.linalg.norm(fd)), (g, fd)
 
 
 def test_a_rocker_spring_is_refused_naming_the_field():
