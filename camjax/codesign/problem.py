@@ -88,7 +88,8 @@ class Codesign:
         terms = dict(scene.synthesis.objective) if scene.synthesis is not None else {}
         for name in terms:
             if name not in SUPPORTED:
-                raise CodesignError(f"synthesis.objective.{name}", "a peak term is not supported by "
+                kind = "a peak term" if name.startswith("peak_") else "a follower-train term"
+                raise CodesignError(f"synthesis.objective.{name}", f"{kind} is not supported by "
                                     f"camjax design's co-design yet (allowed: {', '.join(SUPPORTED)}; "
                                     "camjax synthesize takes it)")
         self.scene = scene
