@@ -19,7 +19,8 @@ import numpy as np
 from camjax.codesign.problem import Codesign, Inner
 from camjax.laws import LAWS
 from camjax.synthesis.linear import segment_samples
-from camjax.synthesis.segments import builtin_measures, builtin_q, meets_conditions
+from camjax.synthesis.segments import builtin_measures, builtin_q, meets_conditions, term_value
+from camjax.synthesis.vibration import builtin_train_measures
 
 MAX_COMBINATIONS = 256  # built-in law combinations solved (more: one law for every segment)
 RATE_REFINED = 3  # with a free spring rate: the best combinations at the start's rate given their own
@@ -55,12 +56,27 @@ def _builtin_measures(name: str, kind: str) -> dict:
 
 
 def builtin_law_value(cd: Codesign, names) -> float:
-    """The [synthesis] terms of built-in laws (their exact figures, :func:`builtin_measures`)."""
+    """The [synthesis] terms of built-in laws (their exact figures, :func:`builtin_measures`; the
+    residual vibration squared, as the designed laws' term, from :func:`builtin_residual`)."""
     total = 0.0
     for ds, name in zip(cd.designed, names, strict=True):
-        m = _builtin_measures(name, ds.kind)
-        total += sum(w * m[term] for term, w in cd.law_weights.items())
+        m = dict(_builtin_measures(name, ds.kind))
+        if "residual_vibration" in cd.law_weights:
+            m["residual_vibration"] = builtin_residual(cd, name, ds)["residual_vibration"]
+        total += sum(w * term_value(term, m[term]) for term, w in cd.law_weights.items())
     return total
+
+
+def builtin_residual(cd: Codesign, name: str, ds) -> dict:
+    """The residual vibration of the built-in law ``name`` played as designed segment ``ds`` on the
+    co-design's follower train (:func:`camjax.synthesis.vibration.builtin_train_measures`: RMS over
+    the speeds, per lift, and its values per speed), cached per law and segment."""
+    key = ("residual", name, ds.index)
+    if key not in cd.builtin_cache:
+        q_of = functools.partial(builtin_q, LAWS[name], ds.kind)
+        train = cd.train._replace(spring_rate=None)  # the residual alone (no force)
+        cd.builtin_cache[key] = builtin_train_measures(q_of, train, ds)
+    return cd.builtin_cache[key]
 
 
 def best_builtin_combination(cd: Codesign) -> tuple[tuple[str, ...], float, Inner] | None:

@@ -9,7 +9,12 @@ the [design] optimum of the follower family's problem built on the kinematics of
 
 f the family's objective (alpha size + gamma stress), g its constraints, P(z) its problem on the
 sample grid (the kinematics affine in z, loads and contact coefficient computed from them by
-:func:`camjax.evaluate.arrays_from_kinematics`), law(z) the [synthesis] squared-derivative terms.
+:func:`camjax.evaluate.arrays_from_kinematics`), law(z) the [synthesis] terms that are quadratics
+in z: the squared-derivative terms and the mean square residual vibration of the follower train
+(:func:`train_quadratics`: the map of :mod:`camjax.synthesis.vibration`, with the scene's
+[dynamics] and [synthesis]'s speed band, the same term ``camjax synthesize`` weighs). The peak
+terms (``peak_velocity``, ``peak_accel``, ``peak_jerk``, ``peak_force``) are refused: non-smooth
+in z.
 
 - **Inner**: the registered gradient solver on the grid (``extrema = "grid"``: the problem is a
   pytree of arrays whose kinematic fields are functions of z; one compiled program for every z).
@@ -50,8 +55,10 @@ from camjax.program import Kinematics
 from camjax.solvers.base import family_of, problem_from_scene, solve_one
 from camjax.synthesis.linear import law_quadratics, linear_kinematics
 from camjax.synthesis.problem import L2_OBJECTIVES
+from camjax.synthesis.vibration import residual_maps
 
-SUPPORTED = tuple(L2_OBJECTIVES)  # the [synthesis] terms the co-design takes (smooth in z)
+# the [synthesis] terms the co-design takes: quadratics in z (the peaks are not smooth in z)
+SUPPORTED = (*L2_OBJECTIVES, "residual_vibration")
 ACTIVE_RTOL = 1e-7  # a constraint is active within this fraction of the problem's size norm
 
 
@@ -88,10 +95,12 @@ class Codesign:
         terms = dict(scene.synthesis.objective) if scene.synthesis is not None else {}
         for name in terms:
             if name not in SUPPORTED:
-                kind = "a peak term" if name.startswith("peak_") else "a follower-train term"
-                raise CodesignError(f"synthesis.objective.{name}", f"{kind} is not supported by "
-                                    f"camjax design's co-design yet (allowed: {', '.join(SUPPORTED)}; "
-                                    "camjax synthesize takes it)")
+                raise CodesignError(f"synthesis.objective.{name}", "a peak term is not supported by "
+                                    "camjax design's co-design (it is not smooth in the laws; allowed: "
+                                    f"{', '.join(SUPPORTED)}; camjax synthesize takes it)")
+        if "residual_vibration" in terms and scene.dynamics is None:
+            raise CodesignError("dynamics", "synthesis.objective.residual_vibration needs the follower "
+                                "train: a [dynamics] section (I3, c3, k23)")
         self.scene = scene
         self.law_weights = terms
         self.samples = int(scene.motion.samples if samples is None else samples)
@@ -110,7 +119,19 @@ class Codesign:
         kin = scene_arrays(grid, samples=self.samples, extrema="grid").kin
         self.theta = kin.theta
         self.kin0 = jnp.stack([kin.s, kin.ds, kin.d2s, kin.d3s])
-        self.law_P, self.law_q, self.law_c = law_quadratics(self.lin, self.designed, terms)
+        self.train = None
+        if scene.dynamics is not None:  # the follower train: its residual term and figures
+            from camjax.dynamics.context import synthesis_train
+
+            self.train = synthesis_train(scene)
+        # per designed segment: (rows, Q) of its residual vibration (None without the train)
+        self.residual = ([residual_maps(ds.basis(), self.train, ds) for ds in self.designed]
+                         if self.train is not None else None)
+        l2 = {n: w for n, w in terms.items() if n in L2_OBJECTIVES}
+        self.law_P, self.law_q, self.law_c = law_quadratics(self.lin, self.designed, l2)
+        if "residual_vibration" in terms:
+            P, q, c = train_quadratics(self.lin, [Q for _, Q in self.residual], terms["residual_vibration"])
+            self.law_P, self.law_q, self.law_c = self.law_P + P, self.law_q + q, self.law_c + c
         self.weights = weights_of(scene.design.alpha, scene.design.gamma)
         self._inner = jax.jit(self._inner_fn)
         self._lagrangian_grad = jax.jit(jax.grad(self._lagrangian, argnums=0))
@@ -268,6 +289,22 @@ class Codesign:
             e[i] = h
             out[i] = (self.value(z + e)[0] - self.value(z - e)[0]) / (2.0 * h)
         return out
+
+
+def train_quadratics(lin, grams, weight: float) -> tuple[np.ndarray, np.ndarray, float]:
+    """``weight`` x the residual vibration squared (mean square over the speeds, per lift) summed over
+    the designed segments, each c^T Q c with Q in ``grams`` (:func:`camjax.synthesis.vibration.residual_maps`),
+    as 0.5 z^T P z + q^T z + const in the coordinates z of ``lin`` (c = cp + N z), as
+    :func:`camjax.synthesis.linear.law_quadratics` writes the squared-derivative terms."""
+    m = lin.free
+    P, q, const = np.zeros((m, m)), np.zeros(m), 0.0
+    for seg, Q in zip(lin.segments, grams, strict=True):
+        sl = slice(seg.offset, seg.offset + seg.null.shape[1])
+        NQ = seg.null.T @ Q
+        P[sl, sl] += 2.0 * weight * NQ @ seg.null
+        q[sl] += 2.0 * weight * NQ @ seg.cp
+        const += weight * float(seg.cp @ Q @ seg.cp)
+    return P, q, const
 
 
 def _stacked(family, problem, design):

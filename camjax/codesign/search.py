@@ -105,6 +105,7 @@ class Outcome(NamedTuple):
     samples: int  # the search's grid
     segments: list  # camjax.synthesis.segments.SegmentSynthesis of the designed B-splines
     spring: dict | None = None  # the designed spring (spring_report), None when not designed
+    train: Any = None  # the follower train the residual vibration is measured on (vibration.Train), or None
 
 
 def codesign_scene(scene, samples: int | None = None, max_iterations: int = MAX_ITERATIONS) -> Outcome:
@@ -121,7 +122,8 @@ def codesign_scene(scene, samples: int | None = None, max_iterations: int = MAX_
         starts.append(("builtin_fit", fitted_coordinates(cd, builtin[0])))
     if cd.law_weights:
         spec = scene.synthesis
-        law_only = synthesize_segments(cd.designed, cd.law_weights, spec.samples_per_span)
+        law_only = synthesize_segments(cd.designed, cd.law_weights, spec.samples_per_span,
+                                       residual_train(cd) if "residual_vibration" in cd.law_weights else None)
         starts.append(("synthesis", cd.lin.coordinates([r.control for r in law_only])))
     else:
         starts.append(("starting_law", cd.lin.z0))
@@ -158,24 +160,35 @@ def codesign_scene(scene, samples: int | None = None, max_iterations: int = MAX_
                    None if builtin is None else (builtin[0], builtin[1]),
                    0 if best is None else best.iterations, "" if best is None else best.start,
                    cd.evaluations, [] if best is None else best.history, law_f, tables, cd.samples,
-                   segment_results(cd, controls), spring_report(cd, fixed, inner.spring))
+                   segment_results(cd, controls), spring_report(cd, fixed, inner.spring), cd.train)
+
+
+def residual_train(cd: Codesign):
+    """The co-design's follower train for the residual vibration alone (no spring: no force
+    figures; the co-design's spring may differ from [dynamics]'), or None without [dynamics]."""
+    return None if cd.train is None else cd.train._replace(spring_rate=None)
 
 
 def segment_results(cd: Codesign, controls) -> list:
     """Each designed B-spline's figures as ``camjax synthesize`` reports them (normalized measures,
-    its [synthesis] terms, the best built-in law of its class for those terms alone)."""
+    with [dynamics] the residual vibration, its [synthesis] terms, the best built-in law of its
+    class for those terms alone)."""
     from camjax.synthesis.problem import OBJECTIVES, build_problem
-    from camjax.synthesis.segments import ORDERS, SegmentSynthesis, best_builtin
+    from camjax.synthesis.segments import ORDERS, SegmentSynthesis, best_builtin, term_value
     from camjax.synthesis.solve import measures
+    from camjax.synthesis.vibration import residual_figures
 
     out = []
-    for ds, c in zip(cd.designed, controls, strict=True):
+    train = residual_train(cd)
+    for k, (ds, c) in enumerate(zip(cd.designed, controls, strict=True)):
         basis = ds.basis()
         m = measures(build_problem(basis, ds.conditions, ()), c)
         meas = {n: (float(getattr(m, n)) if ORDERS[n] <= ds.degree else None) for n in OBJECTIVES}
-        law_f = sum(w * meas[n] for n, w in cd.law_weights.items())
+        if cd.residual is not None:
+            meas.update(residual_figures(np.linalg.norm(cd.residual[k][0] @ np.asarray(c), axis=1)))
+        law_f = sum(w * term_value(n, meas[n]) for n, w in cd.law_weights.items())
         out.append(SegmentSynthesis(ds, basis.knots, np.asarray(c), meas, law_f, law_f, True, 0.0,
-                                    best_builtin(ds, cd.law_weights) if cd.law_weights else None))
+                                    best_builtin(ds, cd.law_weights, train) if cd.law_weights else None))
     return out
 
 

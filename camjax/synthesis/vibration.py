@@ -162,6 +162,18 @@ def train_terms(basis: Basis, train: Train, segment, per_span: int) -> TrainTerm
     """The residual and force matrices of a designed segment (``segment``: its index, angle_deg;
     its level and lift in ``train.segments``) on ``basis``; ``per_span`` + 1 force samples per
     knot span for the synthesis (as the sampled peaks), 65 for the reported peak."""
+    rows, gram = residual_maps(basis, train, segment)
+    force = dense = None
+    if train.spring_rate is not None and basis.degree >= 2:
+        force = force_matrix(basis, train, segment, span_points(basis, per_span))
+        dense = force_matrix(basis, train, segment, span_points(basis, MEASURE_PER_SPAN))
+    return TrainTerms(rows, gram, force, dense)
+
+
+def residual_maps(basis: Basis, train: Train, segment) -> tuple[np.ndarray, np.ndarray]:
+    """(rows, Q) of the residual vibration on ``basis`` (``segment``: its angle_deg): rows
+    (speeds, 2, n) with z(1) - (1, 0) = rows[s] @ c at each speed factor, and Q (n, n) the mean
+    over the speeds of rows^T rows (symmetrized), so residual_vibration^2 = c^T Q c."""
     values = _basis_values(basis)
     end_row = evaluation_matrix(basis, np.asarray([1.0]), 0)[0]  # q(1) = c_n
     rows = []
@@ -171,11 +183,7 @@ def train_terms(basis: Basis, train: Train, segment, per_span: int) -> TrainTerm
         rows.append(np.stack([z1[0] - end_row, z1[1]]))
     rows = np.asarray(rows)
     gram = np.einsum("sin,sim->nm", rows, rows) / len(rows)
-    force = dense = None
-    if train.spring_rate is not None and basis.degree >= 2:
-        force = force_matrix(basis, train, segment, span_points(basis, per_span))
-        dense = force_matrix(basis, train, segment, span_points(basis, MEASURE_PER_SPAN))
-    return TrainTerms(rows, 0.5 * (gram + gram.T), force, dense)
+    return rows, 0.5 * (gram + gram.T)
 
 
 def force_matrix(basis: Basis, train: Train, segment, points: np.ndarray) -> np.ndarray:
