@@ -129,8 +129,12 @@ class Codesign:
                          if self.train is not None else None)
         l2 = {n: w for n, w in terms.items() if n in L2_OBJECTIVES}
         self.law_P, self.law_q, self.law_c = law_quadratics(self.lin, self.designed, l2)
-        if "residual_vibration" in terms:
-            P, q, c = train_quadratics(self.lin, [Q for _, Q in self.residual], terms["residual_vibration"])
+        self.l2_quadratic = (self.law_P, self.law_q, self.law_c)
+        # law_P, law_q: the gradient of every law term; the residual's value is summed from its
+        # rows (law_value: the expanded quadratic cancels to ~1e-8 relative near a zero residual)
+        self.residual_weight = float(terms.get("residual_vibration", 0.0))
+        if self.residual_weight > 0.0:
+            P, q, c = train_quadratics(self.lin, [Q for _, Q in self.residual], self.residual_weight)
             self.law_P, self.law_q, self.law_c = self.law_P + P, self.law_q + q, self.law_c + c
         self.weights = weights_of(scene.design.alpha, scene.design.gamma)
         self._inner = jax.jit(self._inner_fn)
@@ -210,8 +214,15 @@ class Codesign:
     # ------------------------------------------------------------------ evaluations
 
     def law_value(self, x) -> float:
+        """The [synthesis] terms at the outer x: the squared-derivative terms' quadratic in z, plus
+        the weighted mean square residual of each designed law (from its rows on c(z))."""
         z = np.asarray(x, dtype=np.float64)[: self.nz]
-        return float(0.5 * z @ self.law_P @ z + self.law_q @ z + self.law_c)
+        P, q, c = self.l2_quadratic
+        value = float(0.5 * z @ P @ z + q @ z + c)
+        if self.residual_weight > 0.0:
+            for control, (rows, _) in zip(self.lin.control(z), self.residual, strict=True):
+                value += self.residual_weight * float(np.mean(np.sum((rows @ control) ** 2, axis=1)))
+        return value
 
     def inner(self, kin4, u=None) -> Inner:
         """The geometry optimum on ``kin4``; with a designed spring at the rate of ``u`` (default
