@@ -304,9 +304,10 @@ class Codesign:
 
 def train_quadratics(lin, grams, weight: float) -> tuple[np.ndarray, np.ndarray, float]:
     """``weight`` x the residual vibration squared (mean square over the speeds, per lift) summed over
-    the designed segments, each c^T Q c with Q in ``grams`` (:func:`camjax.synthesis.vibration.residual_maps`),
-    as 0.5 z^T P z + q^T z + const in the coordinates z of ``lin`` (c = cp + N z), as
-    :func:`camjax.synthesis.linear.law_quadratics` writes the squared-derivative terms."""
+    the designed segments, each c^T Q c with Q in ``grams``
+    (:func:`camjax.synthesis.vibration.residual_maps`), as 0.5 z^T P z + q^T z + const in the
+    coordinates z of ``lin`` (c = cp + N z), as :func:`camjax.synthesis.linear.law_quadratics`
+    writes the squared-derivative terms."""
     m = lin.free
     P, q, const = np.zeros((m, m)), np.zeros(m), 0.0
     for seg, Q in zip(lin.segments, grams, strict=True):
