@@ -24,7 +24,11 @@ space (:func:`camjax.codesign.builtin.fitted_coordinates`), and its optimal geom
 Both ends are evaluated by the same jitted function: the family's objective (true max over the
 grid's angles) + law(z), and the largest constraint row g / N. Reported: per problem both times,
 objectives, iterations; medians; ``slsqp_speedup`` = median over problems of (SLSQP time / camjax
-time), with the ratio of the totals beside it; the relative gaps; the load average.
+time), with the ratio of the totals beside it; the relative gaps; the load average. Where
+camjax's time goes is an estimate: ``share_in_inner_solves`` = inner solves × the median time of
+one inner solve at the search's end point / the search's time (it can exceed 1 where the end
+point's solve takes more solver steps than the average step's, or the load changed), likewise
+``share_in_gradients``.
 
     python -m benchmarks.codesign [--quick] [--out benchmarks/results/codesign.json]
 """
