@@ -30,8 +30,8 @@ def _setup_synthesize(p: argparse.ArgumentParser):
         if not scene.motion.designed:
             raise UsageError(f"scene '{scene.name}' has no segment with design = true: nothing to "
                              "synthesize (allowed: a scene like the built-in 'synthesis')")
-        if scene.synthesis is None:
-            raise UsageError(f"scene '{scene.name}' has no [synthesis] section (allowed: [synthesis] "
+        if scene.synthesis is None or not scene.synthesis.objective:  # (spring keys alone: co-design)
+            raise UsageError(f"scene '{scene.name}' has no [synthesis] objective (allowed: [synthesis] "
                              "objective = { peak_accel = 1.0, ... })")
         runtime.enable_caches()
         weights = dict(scene.synthesis.objective)

@@ -22,6 +22,7 @@ from camjax.synthesis.linear import segment_samples
 from camjax.synthesis.segments import builtin_measures, builtin_q, meets_conditions
 
 MAX_COMBINATIONS = 256  # built-in law combinations solved (more: one law for every segment)
+RATE_REFINED = 3  # with a free spring rate: the best combinations at the start's rate given their own
 
 def builtin_candidates(designed) -> list[list[str]]:
     """Per designed segment, the built-in laws that meet its conditions (its joint class)."""
@@ -64,7 +65,10 @@ def builtin_law_value(cd: Codesign, names) -> float:
 
 def best_builtin_combination(cd: Codesign) -> tuple[tuple[str, ...], float, Inner] | None:
     """The combination of built-in laws (one per designed segment, each meeting its conditions)
-    with the least co-design objective, each with its own optimal geometry: (names, F, inner)."""
+    with the least co-design objective, each with its own optimal geometry: (names, F, inner).
+    With a free spring rate every combination is solved at the start's rate, then the
+    :data:`RATE_REFINED` best get their own optimal rate (:meth:`Codesign.best_rate`); the preload is
+    each one's optimal at its rate (:mod:`camjax.codesign.spring`)."""
     cands = builtin_candidates(cd.designed)
     if any(not c for c in cands):
         return None
@@ -72,13 +76,17 @@ def best_builtin_combination(cd: Codesign) -> tuple[tuple[str, ...], float, Inne
     if len(combos) > MAX_COMBINATIONS:
         common = set.intersection(*(set(c) for c in cands))
         combos = [tuple([n] * len(cands)) for n in LAWS if n in common]
-    best = None
+    solved = []
     for names in combos:
         inner = cd.inner(builtin_kinematics(cd, names))
-        f = inner.objective + builtin_law_value(cd, names)
-        if best is None or f < best[1]:
-            best = (tuple(names), f, inner)
-    return best
+        solved.append((inner.objective + builtin_law_value(cd, names), tuple(names), inner))
+    solved.sort(key=lambda t: t[0])
+    if cd.u0 is not None:
+        for j, (_, names, _) in enumerate(solved[:RATE_REFINED]):
+            inner = cd.best_rate(builtin_kinematics(cd, names))[1]
+            solved[j] = (inner.objective + builtin_law_value(cd, names), names, inner)
+    f, names, inner = min(solved, key=lambda t: t[0])
+    return names, f, inner
 
 
 def fitted_coordinates(cd: Codesign, names) -> np.ndarray:

@@ -93,6 +93,8 @@ def codesign_report(scene, outcome, data: dict) -> dict:
             "inner_solves": outcome.evaluations,
             "samples": outcome.samples,
             "gradient": "envelope",
+            # the designed spring (camjax.codesign.spring), None when [synthesis] designs none
+            "spring": getattr(outcome, "spring", None),
             "history": [float(v) for v in outcome.history],
         },
     }

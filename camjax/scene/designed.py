@@ -22,7 +22,7 @@ from camjax.errors import MISSING, SceneError
 from camjax.program.conditions import DERIVATIVES, FREE, MATCH, Plan, end_values
 from camjax.scene.conditions import parse_conditions
 from camjax.scene.reader import TableReader
-from camjax.scene.spec import SynthesisSpec
+from camjax.scene.spec import SpringSpec, SynthesisSpec
 
 DESIGN_KEYS = ("kind", "law", "angle_deg", "degree", "control_count", "knots", "design", "start", "end",
                "through")
@@ -167,14 +167,19 @@ def law_from_control(ds: DesignedSegment, control):
 
 
 def parse_synthesis(r: TableReader, designed: tuple[DesignedSegment, ...]) -> SynthesisSpec:
-    """[synthesis]: objective = {name = weight, ...}, samples_per_span, speed_band, speed_count."""
+    """[synthesis]: objective = {name = weight, ...}, samples_per_span, speed_band, speed_count and
+    the spring keys (:data:`SPRING_KEYS`)."""
     from camjax.synthesis import L2_OBJECTIVES, OBJECTIVES, PEAK_OBJECTIVES
     from camjax.synthesis.problem import ALL_OBJECTIVES
 
-    r.check_keys(("objective", "samples_per_span", "speed_band", "speed_count"))
+    r.check_keys(("objective", "samples_per_span", "speed_band", "speed_count", *SPRING_KEYS))
+    spring = parse_spring(r)
     if not designed:
         raise r.error("objective", r.table.get("objective", MISSING), "no segment of [motion] has "
                       "design = true: there is no law to synthesize")
+    if spring is not None and not r.has("objective"):  # a co-design of the spring and geometry only
+        return SynthesisSpec((), int(r.number("samples_per_span", 8, low=1, high=256, integer=True)),
+                             spring=spring)
     o = r.sub("objective")
     if not o.table:
         raise r.error("objective", o.table, "needs at least one term", ", ".join(OBJECTIVES))
@@ -200,7 +205,7 @@ def parse_synthesis(r: TableReader, designed: tuple[DesignedSegment, ...]) -> Sy
     count = int(r.number("speed_count", 5 if band > 0.0 else 1, low=1, high=64, integer=True))
     if band > 0.0 and count < 2:
         raise r.error("speed_count", count, "a speed band needs at least 2 speeds", ">= 2")
-    return SynthesisSpec(terms, per_span, band, count)
+    return SynthesisSpec(terms, per_span, band, count, spring)
 
 
 def check_train(synthesis: SynthesisSpec | None, dynamics, source=None) -> None:
@@ -216,6 +221,23 @@ def check_train(synthesis: SynthesisSpec | None, dynamics, source=None) -> None:
         if name == "peak_force" and dynamics.spring_rate is None:
             raise SceneError("dynamics.spring_rate", MISSING, "synthesis.objective.peak_force needs the "
                              "contact force's spring", "> 0 (or follower.spring_N_per_m)", source)
+
+
+SPRING_KEYS = ("spring_N_per_m", "preload_N", "min_contact_force_N", "overspeed")
+
+
+def parse_spring(r: TableReader) -> SpringSpec | None:
+    """[synthesis]'s spring keys (camjax.codesign.spring): ``spring_N_per_m`` and ``preload_N``, a
+    number (fixed) or [low, high] (free, 0 < low <= high); ``min_contact_force_N`` >= 0 (default 0);
+    ``overspeed`` >= 1 (default 1). None when none is given."""
+    from camjax.scene.reader import fixed_or_free
+
+    if not any(r.has(k) for k in SPRING_KEYS):
+        return None
+    rate = fixed_or_free(r, "spring_N_per_m") if r.has("spring_N_per_m") else None
+    preload = fixed_or_free(r, "preload_N") if r.has("preload_N") else None
+    return SpringSpec(rate, preload, r.number("min_contact_force_N", 0.0, low=0.0),
+                      r.number("overspeed", 1.0, low=1.0, high=100.0))
 
 
 def is_designed(table: dict) -> bool:

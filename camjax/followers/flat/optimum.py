@@ -29,7 +29,7 @@ from camjax.followers.flat.problem import (
 from camjax.numerics import safe_divide
 
 POLISH_STEPS = 12  # most refinements of the peak per polish (it stops once the point holds)
-STOP_RTOL = 1e-13  # a next point closer than this (relative) to the last is the optimum
+STOP_RTOL = 1e-9  # a model step shorter than this (relative) ends the search: its point is the optimum
 # Newton steps of the peak refinements inside the polish: the scan leaves 1/8 of two samples,
 # which Newton closes in ~5; the final evaluation refines with the full ITERATIONS.
 POLISH_ITERATIONS = 8
@@ -48,8 +48,8 @@ def polish(problem: Problem, weights: Weights, design: Design) -> Design:
     its angle, whose root is :func:`optimal_curvature_radius` - q* (exact in one step when the
     peak's angle does not move with R; a fast fixed point when it moves a little); bisection
     when that leaves the bracket or the last step did not halve |g'| (the peak jumps between
-    two angles: a kink). It stops once a step no longer moves the point, after at most
-    :data:`POLISH_STEPS`; the point of least |g'| is the answer. An end is kept when g'
+    two angles: a kink). It stops once a model step is shorter than :data:`STOP_RTOL` (its point
+    is the answer) or after :data:`POLISH_STEPS` (the point of least |g'| seen is). An end is kept when g'
     does not change sign there. The ends' peak slopes do not depend on the weighting: under
     ``vmap`` over weightings they are computed once. Without ``problem.exact`` the design is
     returned unchanged. Traceable and vmappable.
@@ -100,8 +100,12 @@ def polish(problem: Problem, weights: Weights, design: Design) -> Design:
     r0 = jnp.clip(design.base_radius_mm, lo, hi)
     inf = jnp.full_like(lo, jnp.inf)
     state = (jnp.zeros((), jnp.int32), lo, hi, inf, r0, r0, r0, inf)
-    state = jax.lax.while_loop(cond, body, state)
-    x = state[6]  # the point of smallest |g'| seen
+    i, a, b, g_last, x, nxt, best, g_best = jax.lax.while_loop(cond, body, state)
+    # a search that stopped on a short model step ends at that step's point (the model's error
+    # there is the square of a step already below STOP_RTOL); one stopped by the step count or
+    # at a kink, at the point of least |g'| seen
+    settled = jnp.abs(nxt - x) <= STOP_RTOL * (1.0 + jnp.abs(x))
+    x = jnp.where(settled & (nxt >= a) & (nxt <= b), nxt, best)
     radius = jnp.where(g_lo >= 0, lo, jnp.where(g_hi <= 0, hi, x))
     return Design(jax.lax.stop_gradient(radius), width)
 
