@@ -31,7 +31,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from camjax import extrema as extrema_mod
-from camjax import loads
+from camjax import loads, runtime
 from camjax import program as program_mod
 from camjax.errors import SceneError
 from camjax.evaluate import SceneArrays, scene_arrays
@@ -191,6 +191,43 @@ def rocker_violations(curves: RockerCurves, scene, extremes: dict[str, Extremes]
     return out
 
 
+class _Motion(NamedTuple):
+    rotation: str
+
+
+class CurveScene(NamedTuple):
+    """What :meth:`RockingFollower.point_curves` reads of a scene (its follower spec, [contact] and
+    the cam's rotation): hashable and picklable, so that it keys a saved program."""
+
+    follower: Any
+    contact: Any
+    motion: _Motion
+
+    @classmethod
+    def of(cls, scene) -> CurveScene:
+        return cls(scene.follower, scene.contact, _Motion(scene.motion.rotation))
+
+
+@runtime.program_cache(static_argnames=("drawn", "base_radius_mm", "names"))
+def _refined_curves(prog, speed, grid, drawn: CurveScene, base_radius_mm: float, names: tuple[str, ...]):
+    """Max and min of the named point curves of ``drawn``'s rocker at one base radius, refined off
+    their grid values ``grid`` (Q, N) in one program (:func:`camjax.extrema.refine_curves`).
+    Module-level, so that one compiled program (and a saved one, :func:`camjax.runtime.program_cache`)
+    serves every call with the same follower, radius and curves."""
+    from camjax import followers
+
+    kind = followers.get(drawn.follower.type)
+
+    def stacked(segment, theta_deg, params):
+        p, w = params
+        c = kind.point_curves(drawn, program_mod.segment_motion(p, segment, theta_deg), w, base_radius_mm)
+        return jnp.stack([c[n] for n in names])
+
+    # every curve is a function of the motion: dwells are constant
+    return extrema_mod.refine_curves(stacked, (prog, speed), program_mod.segment_bounds_deg(prog), grid,
+                                     constant=extrema_mod.dwells(prog))
+
+
 class RockingFollower(Follower):
     """An arm swinging about a pivot: the run every such type shares, and its hooks."""
 
@@ -273,16 +310,9 @@ class RockingFollower(Follower):
         if arrays.model is None:
             hi, hi_deg, lo, lo_deg = extrema_mod.sampled_extremes(grid, arrays.theta_deg)
         else:
-            def stacked(segment, theta_deg, params):
-                p, w = params
-                c = self.point_curves(drawn, program_mod.segment_motion(p, segment, theta_deg), w, radius)
-                return jnp.stack([c[n] for n in names])
-
-            def refine(prog, speed, grid):  # every curve is a function of the motion: dwells are constant
-                return extrema_mod.refine_curves(stacked, (prog, speed), program_mod.segment_bounds_deg(prog), grid,
-                                                 constant=extrema_mod.dwells(prog))
-
-            hi, hi_deg, lo, lo_deg = (np.asarray(a) for a in jax.jit(refine)(arrays.model.program, speed, grid))
+            hi, hi_deg, lo, lo_deg = (np.asarray(a) for a in _refined_curves(
+                arrays.model.program, jnp.asarray(speed, grid.dtype), grid, drawn=CurveScene.of(drawn),
+                base_radius_mm=radius, names=names))
         return {n: Extremes(float(hi[k]), float(hi_deg[k]), float(lo[k]), float(lo_deg[k]))
                 for k, n in enumerate(names)}
 
