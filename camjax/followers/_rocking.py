@@ -236,8 +236,10 @@ class RockingFollower(Follower):
     # ---- hooks: the follower's physics
 
     @abc.abstractmethod
-    def sizing(self, scene, kin: Kinematics) -> RockerSizing:
-        """Smallest admissible cam of the scene's rocker (Python; SceneError when none exists)."""
+    def sizing(self, scene, kin: Kinematics, program=None) -> RockerSizing:
+        """Smallest admissible cam of the scene's rocker (Python; SceneError when none exists): with
+        ``program`` (the :class:`camjax.program.MotionProgram` behind ``kin``; exact extrema) its
+        limits hold at every cam angle, else at the samples of ``kin``."""
 
     @abc.abstractmethod
     def closure_problem(self, scene, kin: Kinematics, base_radius_mm: float) -> str | None:
@@ -377,11 +379,12 @@ class RockingFollower(Follower):
             problem = problem_from_scene(scene, arrays)
             design = solve(problem, (d.alpha, d.gamma), mode=d.mode, solver=d.solver, seed=d.seed).to_json(problem)
         kin, w, drawn = arrays.kin, arrays.cam_speed_rad_s, scene
+        program = None if arrays.model is None else arrays.model.program
         if design is not None:
             # the cam is sized and drawn with the design's pivot, arm (or face) and roller
             drawn = replace(scene, follower=self.drawn_follower(scene, design))
             try:
-                sizing = self.sizing(drawn, kin)
+                sizing = self.sizing(drawn, kin, program)
             except SceneError:  # an infeasible design: its own radius is all there is to report
                 sizing = RockerSizing(design["base_radius_mm"], design.get("prime_radius_mm"), 0.0, "none")
             if base_radius_mm is None:
@@ -389,7 +392,7 @@ class RockingFollower(Follower):
             else:
                 radius, source = self.drawing_radius(drawn, kin, sizing, base_radius_mm)
         else:
-            sizing = self.sizing(scene, kin)
+            sizing = self.sizing(scene, kin, program)
             radius, source = self.drawing_radius(scene, kin, sizing, base_radius_mm)
         curves = self.evaluate(drawn, kin, w, radius)
         extremes = self.curve_extremes(drawn, arrays, None, radius)

@@ -17,7 +17,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from camjax import contact, loads
+from camjax import contact, loads, runtime
 from camjax.errors import SceneError
 from camjax.family import FEASIBILITY_TOL_MM
 from camjax.followers._rocking import (
@@ -35,12 +35,15 @@ from camjax.followers.oscillating_curved_face.geometry import (
     CURVED_MIN_CURVATURE_RADIUS_MM,
 )
 from camjax.followers.oscillating_roller import geometry as rocker_roller_geo
-from camjax.followers.oscillating_roller.follower import check_rocker_closes
+from camjax.followers.oscillating_roller.follower import check_rocker_closes, roller_arm_sizing
 from camjax.followers.roller import geometry as roller_geo
 from camjax.results import GeometryViolation
 from camjax.scene.reader import DEFAULT, build, fixed_or_free
 from camjax.scene.spec import FollowerSpec
 
+
+# the sampled sizing, one compiled (and saved) program for every call
+_grid_sizing = runtime.program_cache(curved_geo.min_prime_radius, static_argnames=("rotation",))
 
 @dataclass(frozen=True, kw_only=True)
 class OscillatingCurvedFaceSpec(FollowerSpec):
@@ -109,13 +112,13 @@ class OscillatingCurvedFace(RockingFollower):
 
     # ---- hooks of the rocking family
 
-    def sizing(self, scene, kin) -> RockerSizing:
+    def sizing(self, scene, kin, program=None) -> RockerSizing:
         """The smallest prime circle with |phi| <= max_pressure_angle_deg, the contact on the face
         (|phi| <= asin(W / 2 R_c)) and no undercut, minus R_c
         (:func:`camjax.followers.oscillating_curved_face.geometry.min_prime_radius`)."""
         f, rotation = scene.follower, scene.motion.rotation
         t = np.degrees(np.asarray(kin.theta))
-        s, face = curved_geo.min_prime_radius(kin, f.pivot_distance_mm, f.arm_length_mm, f.face_radius_mm,
+        s, face = _grid_sizing(kin, f.pivot_distance_mm, f.arm_length_mm, f.face_radius_mm,
                                               f.face_width_mm, math.radians(f.max_pressure_angle_deg),
                                               f.min_curvature_radius_mm, rotation)
         if not bool(s.found):
@@ -126,6 +129,11 @@ class OscillatingCurvedFace(RockingFollower):
                              "a longer arm, another pivot distance, a wider face or a larger "
                              "max_pressure_angle_deg")
         binding = "face_travel" if bool(face) else "pressure_angle"
+        if program is not None:  # exact: the limits held between the samples too
+            limit = min(math.radians(f.max_pressure_angle_deg),
+                        _f(curved_geo.face_travel_limit_rad(f.face_radius_mm, f.face_width_mm)))
+            return roller_arm_sizing(kin, program, s.arm_start_angle, f.pivot_distance_mm, f.arm_length_mm,
+                                     f.face_radius_mm, limit, f.min_curvature_radius_mm, rotation, binding)
         if bool(s.undercut_binds):
             binding = "undercut"
         return RockerSizing(_f(s.base_radius_mm), _f(s.prime_radius_mm), _f(t[int(s.index)]), binding)

@@ -11,9 +11,10 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import jax.numpy as jnp
 import numpy as np
 
-from camjax import contact, loads
+from camjax import contact, loads, runtime
 from camjax.errors import SceneError
 from camjax.followers._rocking import TRAIN_KEYS, RockerGeometry, RockerSizing, RockingFollower, read_train
 from camjax.followers.oscillating_flat import geometry as rocker_flat_geo
@@ -21,6 +22,9 @@ from camjax.followers.oscillating_flat.geometry import OSCILLATING_FLAT_MIN_CURV
 from camjax.scene.reader import DEFAULT, build, fixed_or_free
 from camjax.scene.spec import FollowerSpec
 
+
+# the sampled sizing, one compiled (and saved) program for every call
+_grid_sizing = runtime.program_cache(rocker_flat_geo.oscillating_flat_min_base_radius, static_argnames=("rotation",))
 
 @dataclass(frozen=True, kw_only=True)
 class OscillatingFlatSpec(FollowerSpec):
@@ -64,16 +68,27 @@ class OscillatingFlat(RockingFollower):
                           "a larger pivot distance")
         return {"base_radius_mm": base, "pivot_distance_mm": pivot, "face_offset_mm": offset}
 
-    def sizing(self, scene, kin) -> RockerSizing:
+    def sizing(self, scene, kin, program=None) -> RockerSizing:
         f, rotation = scene.follower, scene.motion.rotation
         t = np.degrees(np.asarray(kin.theta))
-        s = rocker_flat_geo.oscillating_flat_min_base_radius(kin, f.pivot_distance_mm, f.face_offset_mm,
-                                                             f.min_curvature_radius_mm, rotation)
+        s = _grid_sizing(kin, f.pivot_distance_mm, f.face_offset_mm, f.min_curvature_radius_mm, rotation)
         if not bool(s.found):
             raise SceneError("follower.pivot_distance_mm", f.pivot_distance_mm,
                              f"with face_offset_mm = {f.face_offset_mm:g} no base radius keeps the cam's "
                              f"radius of curvature >= {f.min_curvature_radius_mm:g} mm",
                              "a larger pivot distance")
+        if program is not None:  # exact: rho >= rho_min between the samples too
+            from camjax.followers import _sizing
+            from camjax.followers._pitch import rotation_sign
+
+            dtype = kin.s.dtype
+            params = tuple(jnp.asarray(v, dtype) for v in (f.pivot_distance_mm, f.face_offset_mm,
+                                                         rotation_sign(rotation), f.min_curvature_radius_mm))
+            hi = 0.5 * math.pi - float(np.max(np.asarray(kin.s)))
+            b = _sizing.exact_boundary(program, kin, jnp.asarray(s.arm_start_angle, dtype), jnp.asarray(hi, dtype),
+                                       params, limits=rocker_flat_geo.sizing_limits)
+            rb = f.pivot_distance_mm * math.sin(_f(b.x)) - f.face_offset_mm
+            return RockerSizing(rb, None, _f(b.angle_deg), "curvature")
         return RockerSizing(_f(s.base_radius_mm), None, _f(t[int(s.index)]), "curvature")
 
     def closure_problem(self, scene, kin, base_radius_mm) -> str | None:

@@ -11,9 +11,10 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import jax.numpy as jnp
 import numpy as np
 
-from camjax import contact, loads
+from camjax import contact, loads, runtime
 from camjax.errors import SceneError
 from camjax.followers._rocking import TRAIN_KEYS, RockerGeometry, RockerSizing, RockingFollower, read_train
 from camjax.followers.oscillating_roller import geometry as rocker_roller_geo
@@ -22,6 +23,10 @@ from camjax.followers.roller.geometry import ROLLER_MAX_PRESSURE_ANGLE_DEG, ROLL
 from camjax.scene.reader import DEFAULT, build, fixed_or_free
 from camjax.scene.spec import FollowerSpec
 
+
+# the sampled sizing, one compiled (and saved) program for every call
+_grid_sizing = runtime.program_cache(rocker_roller_geo.oscillating_roller_min_prime_radius,
+                                     static_argnames=("rotation",))
 
 @dataclass(frozen=True, kw_only=True)
 class OscillatingRollerSpec(FollowerSpec):
@@ -56,6 +61,29 @@ def check_rocker_closes(r, base, roller, pivot_distance_mm, arm_length_mm) -> No
                       "a pivot distance closer to the arm length, or a larger base radius")
 
 
+def roller_arm_sizing(kin, program, grid_psi0, pivot_distance_mm, arm_length_mm, roller_radius_mm,
+                      max_pressure_angle_rad, min_curvature_radius_mm, rotation,
+                      angle_binding: str = "pressure_angle") -> RockerSizing:
+    """The exact sizing of a roller (or curved face of radius ``roller_radius_mm``) on an arm: the
+    smallest psi0 from the grid's ``grid_psi0`` up with |phi| <= the limit and no undercut at every
+    cam angle (:func:`camjax.followers._sizing.exact_boundary` on
+    :func:`camjax.followers.oscillating_roller.geometry.sizing_limits`); ``angle_binding`` names
+    the angle limit when it binds. The grid's psi0 where no admissible psi0 is found above it."""
+    from camjax.followers import _sizing
+    from camjax.followers._pitch import rotation_sign
+
+    d, l, rf = pivot_distance_mm, arm_length_mm, roller_radius_mm
+    dtype = kin.s.dtype
+    params = tuple(jnp.asarray(v, dtype) for v in (d, l, rotation_sign(rotation), math.tan(max_pressure_angle_rad),
+                                                 rf + min_curvature_radius_mm))
+    hi = math.pi - float(np.max(np.asarray(kin.s)))
+    b = _sizing.exact_boundary(program, kin, jnp.asarray(grid_psi0, dtype), jnp.asarray(hi, dtype), params,
+                               limits=rocker_roller_geo.sizing_limits)
+    rp = _f(rocker_roller_geo.roller_centre_distance(d, l, b.x))
+    binding = "undercut" if int(b.row) == 1 else angle_binding
+    return RockerSizing(rp - rf, rp, _f(b.angle_deg), binding)
+
+
 class OscillatingRoller(RockingFollower):
     name = "oscillating_roller"
     title = "oscillating roller"
@@ -88,10 +116,10 @@ class OscillatingRoller(RockingFollower):
         check_rocker_closes(r, base, roller, **variables)
         return {"base_radius_mm": base, "roller_radius_mm": roller, **variables}
 
-    def sizing(self, scene, kin) -> RockerSizing:
+    def sizing(self, scene, kin, program=None) -> RockerSizing:
         f, rotation = scene.follower, scene.motion.rotation
         t = np.degrees(np.asarray(kin.theta))
-        s = rocker_roller_geo.oscillating_roller_min_prime_radius(
+        s = _grid_sizing(
             kin, f.pivot_distance_mm, f.arm_length_mm, f.roller_radius_mm,
             math.radians(f.max_pressure_angle_deg), f.min_curvature_radius_mm, rotation)
         if not bool(s.found):
@@ -100,6 +128,10 @@ class OscillatingRoller(RockingFollower):
                              f"|pressure angle| <= {f.max_pressure_angle_deg:g} deg without undercut",
                              "a longer arm, another pivot distance or a larger max_pressure_angle_deg")
         binding = "undercut" if bool(s.undercut_binds) else "pressure_angle"
+        if program is not None:  # exact: the limits held between the samples too
+            return roller_arm_sizing(kin, program, s.arm_start_angle, f.pivot_distance_mm, f.arm_length_mm,
+                                     f.roller_radius_mm, math.radians(f.max_pressure_angle_deg),
+                                     f.min_curvature_radius_mm, rotation)
         return RockerSizing(_f(s.base_radius_mm), _f(s.prime_radius_mm), _f(t[int(s.index)]), binding)
 
     def closure_problem(self, scene, kin, base_radius_mm) -> str | None:
