@@ -34,6 +34,7 @@ from camjax.followers.curved_face.geometry import (
     CURVED_MIN_CURVATURE_RADIUS_MM,
 )
 from camjax.followers.roller import geometry as roller_geo
+from camjax.followers.roller.follower import exact_prime_radius
 from camjax.results import MinBaseRadius
 from camjax.scene.reader import DEFAULT, build, fixed_or_free
 from camjax.scene.spec import FollowerSpec
@@ -135,13 +136,14 @@ class CurvedFace(TranslatingFollower):
                                                    math.radians(f.max_pressure_angle_deg),
                                                    f.min_curvature_radius_mm, scene.motion.rotation)
         angle = "face_travel" if bool(face) else "pressure_angle"
+        if arrays.model is not None:  # exact: the pressure angle's and the undercut's limits refined (as the roller)
+            need = curve_extremes(scene, arrays, (PRESSURE_NEED,), follower=follower)[PRESSURE_NEED]
+            rp, deg, undercut = exact_prime_radius(arrays, sizing.prime_radius_mm, need, f.face_radius_mm, f.offset_mm,
+                                                   f.min_curvature_radius_mm, scene.motion.rotation)
+            return MinBaseRadius(rp - f.face_radius_mm, deg, "undercut" if undercut else angle, rp)
         if bool(sizing.undercut_binds):
             return MinBaseRadius(_f(sizing.prime_radius_mm) - f.face_radius_mm, _f(t[int(sizing.index)]),
                                  "undercut", _f(sizing.prime_radius_mm))
-        if arrays.model is not None:  # exact: the closed form's max refined off the grid (as the roller)
-            need = curve_extremes(scene, arrays, (PRESSURE_NEED,), follower=follower)[PRESSURE_NEED]
-            rp = math.hypot(f.offset_mm, max(need.max, 0.0))
-            return MinBaseRadius(rp - f.face_radius_mm, need.max_deg, angle, rp)
         return MinBaseRadius(_f(sizing.prime_radius_mm) - f.face_radius_mm, _f(t[int(sizing.index)]), angle,
                              _f(sizing.prime_radius_mm))
 
