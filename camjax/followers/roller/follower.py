@@ -16,7 +16,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from camjax import contact
+from camjax import contact, runtime
 from camjax.evaluate import curve_extremes
 from camjax.followers._pitch import rotation_sign
 from camjax.followers._translating import (
@@ -40,6 +40,10 @@ ROLLER_CURVES = ("pressure_angle", "pitch_rho_abs", "undercut_margin")
 # the pressure-angle sizing: |s' - e~| / tan(limit) - s (mm), whose max is the smallest
 # d = sqrt(R_p^2 - e^2) (camjax.followers.roller.geometry.roller_min_prime_radius_for_pressure_angle)
 PRESSURE_NEED = "pressure_angle_need"
+
+
+# the sampled sizing, one compiled (and saved) program for every call
+_grid_sizing = runtime.program_cache(roller_geo.roller_min_prime_radius, static_argnames=("rotation",))
 
 
 def exact_prime_radius(arrays, grid_prime_radius_mm, pressure_need, roller_radius_mm, offset_mm,
@@ -136,12 +140,12 @@ class Roller(TranslatingFollower):
         cam-surface radius >= min_curvature_radius_mm) at the follower's R_f and offset
         (:func:`camjax.followers.roller.geometry.roller_min_prime_radius`: closed form for the
         pressure angle, its max over the angle refined off the grid with exact extrema; bisection
-        on the samples for the undercut, moved to the root of its refined peak with exact extrema), minus R_f; the angle is where the binding limit is reached.
+        on the samples for the undercut, with exact extrema moved on to the root of its refined
+        peak, :func:`exact_prime_radius`), minus R_f; the angle is where the binding limit is reached.
         """
         f, t = scene.follower, np.asarray(arrays.theta_deg)
-        sizing = roller_geo.roller_min_prime_radius(arrays.kin, f.roller_radius_mm, f.offset_mm,
-                                                    math.radians(f.max_pressure_angle_deg),
-                                                    f.min_curvature_radius_mm, scene.motion.rotation)
+        sizing = _grid_sizing(arrays.kin, f.roller_radius_mm, f.offset_mm, math.radians(f.max_pressure_angle_deg),
+                              f.min_curvature_radius_mm, scene.motion.rotation)
         rp = _f(sizing.prime_radius_mm)
         if arrays.model is not None:
             # exact: the pressure angle's closed form at its refined max (>= the samples' max) and
@@ -158,12 +162,17 @@ class Roller(TranslatingFollower):
         smallest R_b its R_f and offset admit (pressure angle and undercut; stress aside)."""
         f, t = scene.follower, np.asarray(arrays.theta_deg)
         rf, e = result["roller_radius_mm"], result["offset_mm"]
-        curves = self.curves(scene, arrays, result["base_radius_mm"], self.drawn_follower(scene, result))
-        sizing = roller_geo.roller_min_prime_radius(arrays.kin, rf, e, math.radians(f.max_pressure_angle_deg),
-                                                    f.min_curvature_radius_mm, scene.motion.rotation)
+        drawn = self.drawn_follower(scene, result)
+        curves = self.curves(scene, arrays, result["base_radius_mm"], drawn)
+        sizing = _grid_sizing(arrays.kin, rf, e, math.radians(f.max_pressure_angle_deg), f.min_curvature_radius_mm,
+                              scene.motion.rotation)
         peak_stress = None if curves.stress_MPa is None else _f(np.max(curves.stress_MPa))
-        return DesignSolution(result, peak_stress, _f(sizing.prime_radius_mm) - rf, _f(t[int(sizing.index)]),
-                              "undercut" if bool(sizing.undercut_binds) else "pressure_angle", None,
+        rp, deg, undercut = _f(sizing.prime_radius_mm), _f(t[int(sizing.index)]), bool(sizing.undercut_binds)
+        if arrays.model is not None:  # exact, as min_base_radius
+            need = curve_extremes(scene, arrays, (PRESSURE_NEED,), follower=drawn)[PRESSURE_NEED]
+            rp, deg, undercut = exact_prime_radius(arrays, rp, need, rf, e, f.min_curvature_radius_mm,
+                                                   scene.motion.rotation)
+        return DesignSolution(result, peak_stress, rp - rf, deg, "undercut" if undercut else "pressure_angle", None,
                               f.min_curvature_radius_mm)
 
     def geometry(self, follower, rotation, arrays, base_radius_mm) -> GeometryCurves:
