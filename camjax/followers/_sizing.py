@@ -33,8 +33,11 @@ from camjax import program as program_mod
 from camjax import runtime
 from camjax.program import Kinematics
 
-# Bracket growths after the Newton estimate (each doubles the step; clipped at the domain's end).
+# Newton steps towards the root before the bracket is closed (each a little past the Newton point).
 EXPANSIONS = 40
+NEWTON_OVERSHOOT = 1.01
+# Points scanned between the last two Newton points when a step passed the admissible x.
+SCAN = 32
 # Illinois steps: superlinear, so a bracket of ~1e-3 relative closes to float64 in ~10; the rest
 # are a margin for limits whose binding row switches inside the bracket (a kink of G).
 ITERATIONS = 40
@@ -88,26 +91,36 @@ def exact_boundary(prog, kin: Kinematics, x0, hi, params, limits: Limits) -> Bou
     def g(x):
         return peak(limits, prog, kin, x, params)[0]
 
-    g0, angle0, row0 = peak(limits, prog, kin, x0, params)
-    # Newton estimate of the root from x0, the slope by the envelope theorem (the binding limit's
-    # derivative in x at its peak's angle)
-    slope = jax.grad(lambda x: g(x))(x0)
-    tiny = 1e-12 * (1.0 + jnp.abs(x0))
-    newton = jnp.where(slope < 0, -g0 / jnp.where(slope < 0, slope, -1.0), tiny)
-    step0 = jnp.clip(2.0 * newton, tiny, jnp.maximum(hi - x0, tiny))
+    value_and_slope = jax.value_and_grad(g)  # the slope by the envelope theorem
+
+    # Newton steps from x0 while G > 0 and falls (a little past the root each: from a convex G's
+    # infeasible side plain Newton would only creep up to it). The admissible x can form a narrow
+    # window (a rocker's pressure angle limits the arm from both sides), so no blind growth: a
+    # step that lands where G > 0 and rises has passed the root or found none
+    def newton_cond(c):
+        k, a, b, gb, sb = c
+        return (gb > 0) & (sb < 0) & (k < EXPANSIONS) & (b < hi)
+
+    def newton(c):
+        k, a, b, gb, sb = c
+        nb = jnp.minimum(b - NEWTON_OVERSHOOT * gb / sb, hi)
+        gn, sn = value_and_slope(nb)
+        return k + 1, b, nb, gn, sn
+
+    g0, s0 = value_and_slope(x0)
+    _, a, b, gb, sb = jax.lax.while_loop(newton_cond, newton, (0, x0, x0, g0, s0))
     inside = g0 > 0
+    # passed it (G > 0 and rising at b): the first admissible point of a scan of [a, b], if any
+    def scan(bracket):
+        a, b, gb = bracket
+        ts = a + (b - a) * jnp.linspace(0.0, 1.0, SCAN + 1, dtype=dtype)[1:]
+        gs = jax.lax.map(g, ts)
+        j = jnp.argmax(gs <= 0)
+        hit = gs[j] <= 0
+        return (jnp.where(hit & (j > 0), ts[jnp.maximum(j - 1, 0)], a), jnp.where(hit, ts[j], b),
+                jnp.where(hit, gs[j], gb))
 
-    def grow_cond(c):
-        k, a, b, gb = c
-        return inside & (gb > 0) & (k < EXPANSIONS) & (b < hi)
-
-    def grow(c):
-        k, a, b, gb = c
-        nb = jnp.minimum(x0 + 2.0 * (b - x0), hi)
-        return k + 1, b, nb, g(nb)
-
-    b1 = jnp.minimum(x0 + step0, hi)
-    _, a, b, gb = jax.lax.while_loop(grow_cond, grow, (0, x0, b1, jnp.where(inside, g(b1), -1.0)))
+    a, b, gb = jax.lax.cond(gb > 0, scan, lambda bracket: bracket, (a, b, gb))
     found = ~inside | (gb <= 0)
 
     def illinois(c):

@@ -87,6 +87,12 @@ class OscillatingFlat(RockingFollower):
             hi = 0.5 * math.pi - float(np.max(np.asarray(kin.s)))
             b = _sizing.exact_boundary(program, kin, jnp.asarray(s.arm_start_angle, dtype), jnp.asarray(hi, dtype),
                                        params, limits=rocker_flat_geo.sizing_limits)
+            if not bool(b.refined):
+                raise SceneError("follower.pivot_distance_mm", f.pivot_distance_mm,
+                                 f"with face_offset_mm = {f.face_offset_mm:g} no base radius keeps the cam's "
+                                 f"radius of curvature >= {f.min_curvature_radius_mm:g} mm at every cam angle "
+                                 f"(the {kin.s.shape[-1]} samples alone admit one: extrema = \"grid\" sizes on them)",
+                                 "a larger pivot distance")
             rb = f.pivot_distance_mm * math.sin(_f(b.x)) - f.face_offset_mm
             return RockerSizing(rb, None, _f(b.angle_deg), "curvature")
         return RockerSizing(_f(s.base_radius_mm), None, _f(t[int(s.index)]), "curvature")

@@ -68,7 +68,9 @@ def roller_arm_sizing(kin, program, grid_psi0, pivot_distance_mm, arm_length_mm,
     smallest psi0 from the grid's ``grid_psi0`` up with |phi| <= the limit and no undercut at every
     cam angle (:func:`camjax.followers._sizing.exact_boundary` on
     :func:`camjax.followers.oscillating_roller.geometry.sizing_limits`); ``angle_binding`` names
-    the angle limit when it binds. The grid's psi0 where no admissible psi0 is found above it."""
+    the angle limit when it binds. A SceneError where the samples admit an arm start angle but
+    no angle keeps the limits between them (a narrow window of admissible psi0 that only the
+    grid sees)."""
     from camjax.followers import _sizing
     from camjax.followers._pitch import rotation_sign
 
@@ -79,6 +81,12 @@ def roller_arm_sizing(kin, program, grid_psi0, pivot_distance_mm, arm_length_mm,
     hi = math.pi - float(np.max(np.asarray(kin.s)))
     b = _sizing.exact_boundary(program, kin, jnp.asarray(grid_psi0, dtype), jnp.asarray(hi, dtype), params,
                                limits=rocker_roller_geo.sizing_limits)
+    if not bool(b.refined):
+        raise SceneError("follower.arm_length_mm", l,
+                         f"with pivot_distance_mm = {d:g} no prime radius keeps |pressure angle| <= "
+                         f"{math.degrees(max_pressure_angle_rad):g} deg without undercut at every cam angle "
+                         f"(the {kin.s.shape[-1]} samples alone admit one: extrema = \"grid\" sizes on them)",
+                         "a longer arm, another pivot distance or a larger max_pressure_angle_deg")
     rp = _f(rocker_roller_geo.roller_centre_distance(d, l, b.x))
     binding = "undercut" if int(b.row) == 1 else angle_binding
     return RockerSizing(rp - rf, rp, _f(b.angle_deg), binding)
