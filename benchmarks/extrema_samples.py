@@ -22,7 +22,7 @@ refined, the smallest admissible base radius included (the root of the sizing's 
 between the samples, :mod:`camjax.followers._sizing`); a roller rocker's smallest cam-surface radius
 is exact where its pitch curve is convex at every angle (the example scenes' are). ``--check``
 prints, per follower, the exact figures' largest error at N = 360 and fails (exit 1) above
-:data:`EXACT_TOLERANCE`.
+:data:`EXACT_TOLERANCE` (:data:`QUICK_TOLERANCE` with ``--quick``).
 
 ``python -m benchmarks.extrema_samples --out benchmarks/results/extrema.json [FOLLOWER ...]``
 (followers already in the file and not named are kept; ``--quick``: N = 90 and 360, reference
@@ -49,8 +49,10 @@ SAMPLES = (90, 360, 3600, 36_000)
 REFERENCE_SAMPLES = 1_000_000
 MODES = ("grid", "exact")
 _EXTREMUM_LEAVES = ("max", "min", "max_abs", "min_abs")
-# exact figures at N = 360 must be within this of the reference (whose own error is ~1e-11)
+# exact figures at N = 360 must be within this of the reference (whose own error is ~1e-11;
+# --quick's 36 000-sample reference is off by up to ~2e-6 in its worst figure, a sharp minimum)
 EXACT_TOLERANCE = 1e-9
+QUICK_TOLERANCE = 1e-5
 
 
 def figures(report: dict, prefix: str = "") -> dict[str, float]:
@@ -129,7 +131,8 @@ def main(argv=None) -> int:
     parser.add_argument("--out", type=Path, required=True, help="JSON file (followers not run are kept)")
     parser.add_argument("--quick", action="store_true", help="N = 90 and 360, reference 36 000")
     parser.add_argument("--check", action="store_true",
-                        help=f"exit 1 when an exact figure at N = 360 is off by more than {EXACT_TOLERANCE:g}")
+                        help=f"exit 1 when an exact figure at N = 360 is off by more than {EXACT_TOLERANCE:g} "
+                             f"({QUICK_TOLERANCE:g} with --quick)")
     args = parser.parse_args(argv)
     names = args.followers or list(followers.names())
     unknown = [n for n in names if n not in followers.names()]
@@ -149,7 +152,8 @@ def main(argv=None) -> int:
                             if r["samples"] == 360 and r["extrema"] == "exact") for name in names}
         for name, row in worst.items():
             print(f"{name}: exact at N = 360 off by {row['max_rel_error']:.1e} ({row['worst_figure']})")
-        if any(row["max_rel_error"] > EXACT_TOLERANCE for row in worst.values()):
+        tolerance = QUICK_TOLERANCE if args.quick else EXACT_TOLERANCE
+        if any(row["max_rel_error"] > tolerance for row in worst.values()):
             return 1
     return 0
 
