@@ -131,8 +131,8 @@ def main(argv=None) -> int:
     parser.add_argument("--out", type=Path, required=True, help="JSON file (followers not run are kept)")
     parser.add_argument("--quick", action="store_true", help="N = 90 and 360, reference 36 000")
     parser.add_argument("--check", action="store_true",
-                        help=f"exit 1 when an exact figure at N = 360 is off by more than {EXACT_TOLERANCE:g} "
-                             f"({QUICK_TOLERANCE:g} with --quick)")
+                        help=f"exit 1 when an exact figure at N = 360 is off by more than "
+                             f"{EXACT_TOLERANCE:g} ({QUICK_TOLERANCE:g} with --quick)")
     args = parser.parse_args(argv)
     names = args.followers or list(followers.names())
     unknown = [n for n in names if n not in followers.names()]

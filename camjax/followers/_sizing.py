@@ -13,7 +13,8 @@ candidate bracket of every segment checked). Since the refined max is never belo
 max, G(x) >= 0 at the grid's boundary and the exact boundary lies above it: the result is never
 smaller than the grid's (never less safe), and G <= 0 holds there. The root is bracketed (the
 bracket's upper end grows from a Newton estimate, envelope theorem, until G <= 0) and closed by
-the Illinois variant of regula falsi (until it is a few ulps wide); the result is the bracket's admissible end.
+the Illinois variant of regula falsi (until it is a few ulps wide); the result is the bracket's
+admissible end.
 
 The limits must be functions of the motion (s and its derivatives) and of x: on a dwell they are
 constant. Module-level and decorated with :func:`camjax.runtime.program_cache`, so that a compiled
@@ -139,8 +140,8 @@ def exact_boundary(prog, kin: Kinematics, x0, hi, params, limits: Limits) -> Bou
         return (k < ITERATIONS) & (b - a > 4.0 * jnp.finfo(dtype).eps * jnp.abs(b))
 
     run = inside & found
-    start = (0, jnp.where(run, a, x0), jnp.where(run, g(a), 1.0), jnp.where(run, b, x0), jnp.where(run, gb, 0.0),
-             jnp.asarray(0))
+    start = (0, jnp.where(run, a, x0), jnp.where(run, g(a), 1.0), jnp.where(run, b, x0),
+             jnp.where(run, gb, 0.0), jnp.asarray(0))
     _, a, _, b, _, _ = jax.lax.while_loop(lambda c: run & open_(c), illinois, start)
     x = jnp.where(run, b, x0)
     value, angle, row = peak(limits, prog, kin, x, params)

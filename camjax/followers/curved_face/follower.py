@@ -139,10 +139,11 @@ class CurvedFace(TranslatingFollower):
                                     math.radians(f.max_pressure_angle_deg), f.min_curvature_radius_mm,
                                     scene.motion.rotation)
         angle = "face_travel" if bool(face) else "pressure_angle"
-        if arrays.model is not None:  # exact: the pressure angle's and the undercut's limits refined (as the roller)
+        if arrays.model is not None:  # exact: the pressure angle's and the undercut's limits refined
             need = curve_extremes(scene, arrays, (PRESSURE_NEED,), follower=follower)[PRESSURE_NEED]
-            rp, deg, undercut = exact_prime_radius(arrays, sizing.prime_radius_mm, need, f.face_radius_mm, f.offset_mm,
-                                                   f.min_curvature_radius_mm, scene.motion.rotation)
+            rp, deg, undercut = exact_prime_radius(arrays, sizing.prime_radius_mm, need, f.face_radius_mm,
+                                                   f.offset_mm, f.min_curvature_radius_mm,
+                                                   scene.motion.rotation)
             return MinBaseRadius(rp - f.face_radius_mm, deg, "undercut" if undercut else angle, rp)
         if bool(sizing.undercut_binds):
             return MinBaseRadius(_f(sizing.prime_radius_mm) - f.face_radius_mm, _f(t[int(sizing.index)]),

@@ -61,7 +61,8 @@ def exact_prime_radius(arrays, grid_prime_radius_mm, pressure_need, roller_radiu
     params = (jnp.asarray(rotation_sign(rotation) * offset_mm, dtype),
               jnp.asarray(roller_radius_mm + min_curvature_radius_mm, dtype))
     b = _sizing.exact_boundary(arrays.model.program, arrays.kin, jnp.asarray(x0, dtype),
-                               jnp.asarray(1e6 * (1.0 + x0), dtype), params, limits=roller_geo.undercut_limits)
+                               jnp.asarray(1e6 * (1.0 + x0), dtype), params,
+                               limits=roller_geo.undercut_limits)
     rp_uc = _f(b.x)
     if rp_uc > rp_phi:
         return rp_uc, _f(b.angle_deg), True
@@ -144,8 +145,9 @@ class Roller(TranslatingFollower):
         peak, :func:`exact_prime_radius`), minus R_f; the angle is where the binding limit is reached.
         """
         f, t = scene.follower, np.asarray(arrays.theta_deg)
-        sizing = _grid_sizing(arrays.kin, f.roller_radius_mm, f.offset_mm, math.radians(f.max_pressure_angle_deg),
-                              f.min_curvature_radius_mm, scene.motion.rotation)
+        sizing = _grid_sizing(arrays.kin, f.roller_radius_mm, f.offset_mm,
+                              math.radians(f.max_pressure_angle_deg), f.min_curvature_radius_mm,
+                              scene.motion.rotation)
         rp = _f(sizing.prime_radius_mm)
         if arrays.model is not None:
             # exact: the pressure angle's closed form at its refined max (>= the samples' max) and
@@ -153,7 +155,8 @@ class Roller(TranslatingFollower):
             need = curve_extremes(scene, arrays, (PRESSURE_NEED,))[PRESSURE_NEED]
             rp, deg, undercut = exact_prime_radius(arrays, rp, need, f.roller_radius_mm, f.offset_mm,
                                                    f.min_curvature_radius_mm, scene.motion.rotation)
-            return MinBaseRadius(rp - f.roller_radius_mm, deg, "undercut" if undercut else "pressure_angle", rp)
+            binding = "undercut" if undercut else "pressure_angle"
+            return MinBaseRadius(rp - f.roller_radius_mm, deg, binding, rp)
         return MinBaseRadius(rp - f.roller_radius_mm, _f(t[int(sizing.index)]),
                              "undercut" if bool(sizing.undercut_binds) else "pressure_angle", rp)
 
@@ -164,16 +167,16 @@ class Roller(TranslatingFollower):
         rf, e = result["roller_radius_mm"], result["offset_mm"]
         drawn = self.drawn_follower(scene, result)
         curves = self.curves(scene, arrays, result["base_radius_mm"], drawn)
-        sizing = _grid_sizing(arrays.kin, rf, e, math.radians(f.max_pressure_angle_deg), f.min_curvature_radius_mm,
-                              scene.motion.rotation)
+        sizing = _grid_sizing(arrays.kin, rf, e, math.radians(f.max_pressure_angle_deg),
+                              f.min_curvature_radius_mm, scene.motion.rotation)
         peak_stress = None if curves.stress_MPa is None else _f(np.max(curves.stress_MPa))
         rp, deg, undercut = _f(sizing.prime_radius_mm), _f(t[int(sizing.index)]), bool(sizing.undercut_binds)
         if arrays.model is not None:  # exact, as min_base_radius
             need = curve_extremes(scene, arrays, (PRESSURE_NEED,), follower=drawn)[PRESSURE_NEED]
             rp, deg, undercut = exact_prime_radius(arrays, rp, need, rf, e, f.min_curvature_radius_mm,
                                                    scene.motion.rotation)
-        return DesignSolution(result, peak_stress, rp - rf, deg, "undercut" if undercut else "pressure_angle", None,
-                              f.min_curvature_radius_mm)
+        return DesignSolution(result, peak_stress, rp - rf, deg, "undercut" if undercut else "pressure_angle",
+                              None, f.min_curvature_radius_mm)
 
     def geometry(self, follower, rotation, arrays, base_radius_mm) -> GeometryCurves:
         kin, rf, e = arrays.kin, float(follower.roller_radius_mm), float(follower.offset_mm)
