@@ -8,7 +8,7 @@ command runs once untimed first so that the compilation cache is warm. CPU time 
 the child) is reported beside the wall time (``cli.<name>_cpu_s``): on a shared machine the wall
 time also measures the other processes.
 
-One function per command (:func:`dynamics`, :func:`design`); add another the same way.
+One function per command (:func:`dynamics`, :func:`design`, :func:`laws`); add another the same way.
 """
 
 from __future__ import annotations
@@ -100,7 +100,15 @@ def design(runs: int, reference: dict) -> dict:
             "cli.design_phases_s": phases}
 
 
-COMMANDS = {"dynamics": dynamics, "design": design}
+def laws(runs: int, reference: dict) -> dict:
+    """``camjax laws``: the table of every built-in law's dimensionless figures (goal <= 1.5x import)."""
+    r = _median_runs([sys.executable, "-m", "camjax.cli", "laws"], runs)
+    return {"cli.laws_s": r["wall_s"], "cli.laws_walls_s": r["walls_s"], "cli.laws_cpu_s": r["cpu_s"],
+            "cli.laws_over_import": r["wall_s"] / reference["cli.import_jax_s"],
+            "cli.laws_cpu_over_import": r["cpu_s"] / reference["cli.import_jax_cpu_s"]}
+
+
+COMMANDS = {"dynamics": dynamics, "design": design, "laws": laws}
 
 
 def main(argv: list[str] | None = None) -> int:

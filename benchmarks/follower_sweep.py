@@ -173,8 +173,9 @@ def run_follower(follower: str, quick: bool = False) -> dict:
         "gap_tolerance": GAP_TOLERANCE,
         "scipy_weightings_measured": {k: methods[k]["weightings"] for k in ("scipy_slsqp", "scipy_de")},
         "load_average_1min": [load_before[0], os.getloadavg()[0]],
-        "note": "SciPy times measured on evenly spaced subsets and scaled to all weightings; shared "
-                "2-core machine, timings noisy (load_average_1min: before, after)",
+        "note": "SciPy times measured on evenly spaced subsets and scaled to all weightings; "
+                f"{os.cpu_count()} CPU cores; on a shared machine the timings are noisy "
+                "(load_average_1min: before, after)",
         "methods": methods,
     }
 

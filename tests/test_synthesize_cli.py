@@ -112,3 +112,23 @@ def test_the_command_exits_2_with_one_line_and_writes_nothing(tmp_path, capsys):
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "synthesis.objective.peak_snap" in err and "unknown key" in err
     assert not out.exists()
+
+
+def test_a_linear_law_between_dwells_takes_the_default_conditions(tmp_path):
+    """Degree 1 with the default start/end conditions (v and a "match" the dwells): the
+    acceleration rows of a piecewise-linear law are zero (dependent on nothing) and the velocity
+    rows pin the first and last spans flat. Least peak |v| is then the lift spread evenly over the
+    29 middle spans of 31: 31/29 (closed form), reached exactly by the LP (its rows are the
+    derivative spline's control values)."""
+    from camjax.synthesis.segments import synthesize_segments
+
+    data = tomllib.loads(builtin_scene_text("synthesis"))
+    data["motion"]["segments"][1].update({"degree": 1})
+    data["motion"]["segments"][1].pop("start", None)
+    data["motion"]["segments"][1].pop("end", None)
+    data["synthesis"]["objective"] = {"peak_velocity": 1.0}
+    scene = scene_from_dict(data)
+    result = synthesize_segments(scene.motion.designed[:1], dict(scene.synthesis.objective),
+                                 scene.synthesis.samples_per_span)[0]
+    assert result.converged
+    assert result.objective == pytest.approx(31 / 29, rel=1e-9)

@@ -107,3 +107,18 @@ def apply_design_options(scene, args):
         raise UsageError(f"--{option} = {exc.value!r}: {exc.problem}{allowed}") from None
 
 
+
+
+def warn_starting_laws(scene, command: str) -> None:
+    """One warning line on stderr when the scene has designed segments (``design = true``): this
+    command moves them by their starting laws, not by designed ones (``camjax synthesize`` designs
+    the laws alone, ``camjax design`` with the geometry)."""
+    import sys
+
+    if not scene.motion.designed:
+        return
+    where = ", ".join(ds.path for ds in scene.motion.designed)
+    print(f"camjax {command}: warning: {where} {'has' if len(scene.motion.designed) == 1 else 'have'} "
+          "design = true: this command moves them by their starting laws (the control values nearest "
+          "the uniform law's that meet their conditions); camjax synthesize designs the laws, camjax "
+          "design designs them with the cam", file=sys.stderr)

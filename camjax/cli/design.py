@@ -181,6 +181,12 @@ def _write_design(args, out, scene, result, workers, progress, extra=None) -> in
         b = c["best_builtin"]
         best = "" if b is None else f"; best built-in ({', '.join(b['law'])}): {b['objective']:.5f}"
         print(f"co-design: laws {c['chosen']}, objective {c['objective']:.5f} on the search grid{best}")
+        if c.get("spring") is not None:
+            sp = c["spring"]
+            least = sp["min_contact_force_at_overspeed_N"]
+            print(f"co-design spring: {sp['rate_N_per_m']:.6g} N/m, preload {sp['preload_N']:.6g} N "
+                  f"({sp['preload_mm']:.6g} mm); least contact force {least:.6g} N at {sp['overspeed']:g} x "
+                  f"rpm (margin {sp['min_contact_force_N']:g} N, binds: {sp['binding']})")
     width = follower.drawn_summary(d)
     state = f"INFEASIBLE ({', '.join(broken)})" if broken else "feasible"
     print(f"files drawn at R_b = {at['base_radius_mm']:.4f} mm{width} ({at['source']}): {state}")

@@ -6,7 +6,7 @@ import argparse
 import sys
 
 from camjax import runtime
-from camjax.cli.common import OUT_HELP, UsageError, check_dpi, command
+from camjax.cli.common import OUT_HELP, UsageError, check_dpi, command, warn_starting_laws
 from camjax.cli.environment import show_progress
 from camjax.output.files import write_json
 from camjax.output.folder import check_output_dir, replaced_folder
@@ -33,6 +33,7 @@ def _setup_dynamics(p: argparse.ArgumentParser):
         if scene.dynamics is None:
             raise UsageError(f"scene '{scene.name}' has no [dynamics] section: nothing to compute "
                              "(allowed: a scene with [dynamics], e.g. thesis-bench)")
+        warn_starting_laws(scene, "dynamics")
         runtime.enable_caches()
         work = estimate_work(scene)  # counts (and the cam's FFT when a drive runs): no analysis yet
         if (refused := refusal(scene, work, args.force)) is not None:

@@ -24,8 +24,11 @@ def _setup_laws(p: argparse.ArgumentParser):
     def run(args) -> int:
         import jax.numpy as jnp
 
+        from camjax import runtime
         from camjax.laws import LAWS, summarize_all
         from camjax.program import classify_jump
+
+        runtime.enable_compilation_cache()  # the table is one program: read it, do not recompile it
 
         plot = check_output_file(args.plot, "--plot") if args.plot is not None else None
         check_dpi(args.dpi)

@@ -15,6 +15,7 @@ from camjax.cli.common import (
     check_dpi,
     command,
     parse_float_list,
+    warn_starting_laws,
 )
 from camjax.output.files import write_json
 from camjax.output.folder import check_output_dir, replaced_folder
@@ -74,6 +75,7 @@ def _setup_sweep(p: argparse.ArgumentParser):
         d = apply_design_options(scene, overrides).design
         mode, solver, seed = d.mode, d.solver, d.seed
         scaleout.check(args, UsageError)
+        warn_starting_laws(scene, "sweep")
         runtime.enable_caches()
         start = time.perf_counter()
         if scaleout.requested(args):  # blocks on a backend, stored in --out as they finish

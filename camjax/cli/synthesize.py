@@ -30,13 +30,18 @@ def _setup_synthesize(p: argparse.ArgumentParser):
         if not scene.motion.designed:
             raise UsageError(f"scene '{scene.name}' has no segment with design = true: nothing to "
                              "synthesize (allowed: a scene like the built-in 'synthesis')")
-        if scene.synthesis is None:
-            raise UsageError(f"scene '{scene.name}' has no [synthesis] section (allowed: [synthesis] "
+        if scene.synthesis is None or not scene.synthesis.objective:  # (spring keys alone: co-design)
+            raise UsageError(f"scene '{scene.name}' has no [synthesis] objective (allowed: [synthesis] "
                              "objective = { peak_accel = 1.0, ... })")
         runtime.enable_caches()
         weights = dict(scene.synthesis.objective)
+        train = None
+        if scene.dynamics is not None:  # the follower train's terms and figures
+            from camjax.dynamics.context import synthesis_train
+
+            train = synthesis_train(scene)
         results = runtime.interruptible(synthesize_segments, scene.motion.designed, weights,
-                                        scene.synthesis.samples_per_span)
+                                        scene.synthesis.samples_per_span, train)
         bad = [r for r in results if not r.converged]
         if bad:
             r = bad[0]
@@ -45,6 +50,8 @@ def _setup_synthesize(p: argparse.ArgumentParser):
         lift_key = "lift_deg" if followers.of(scene).rocking else "lift_mm"
         controls = [law_from_control(r.segment, r.control)[1] for r in results]
         report = synthesis_report(scene.name, weights, results, controls, lift_key)
+        if train is not None:
+            report["synthesis"]["train"] = train_report(train)
         curves, panels = law_curves(results, [r.best_builtin[0] if r.best_builtin else None for r in results],
                                     "best built-in")
         fig = synthesis_figure(panels)
@@ -60,6 +67,16 @@ def _setup_synthesize(p: argparse.ArgumentParser):
         return 0
 
     return run
+
+
+def train_report(train) -> dict:
+    """result.json's ``synthesis.train``: the follower train the residual vibration and the peak
+    force are measured on (camjax.synthesis.vibration)."""
+    import math
+
+    return {"natural_frequency_hz": train.natural_frequency_rad_s / (2 * math.pi),
+            "damping_ratio": train.damping_ratio, "cam_speed_hz": train.cam_speed_rad_s / (2 * math.pi),
+            "speed_factors": list(train.speed_factors), "spring": train.spring_rate is not None}
 
 
 def law_curves(results, builtin_names, note: str):

@@ -3,7 +3,8 @@
 
 - :mod:`camjax.codesign.problem`: F(z), the inner geometry optimum and its envelope gradient;
 - :mod:`camjax.codesign.builtin`: the built-in laws of each joint class, each with its own geometry;
-- :mod:`camjax.codesign.search`: the BFGS search and the scene with the chosen laws fixed.
+- :mod:`camjax.codesign.search`: the BFGS search and the scene with the chosen laws fixed;
+- :mod:`camjax.codesign.spring`: the spring's rate and preload as variables, contact kept at an overspeed.
 
 The pipeline's layer: it runs the solvers and imports no output.
 """

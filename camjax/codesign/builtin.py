@@ -19,9 +19,11 @@ import numpy as np
 from camjax.codesign.problem import Codesign, Inner
 from camjax.laws import LAWS
 from camjax.synthesis.linear import segment_samples
-from camjax.synthesis.segments import builtin_measures, builtin_q, meets_conditions
+from camjax.synthesis.segments import builtin_measures, builtin_q, meets_conditions, term_value
+from camjax.synthesis.vibration import builtin_train_measures
 
 MAX_COMBINATIONS = 256  # built-in law combinations solved (more: one law for every segment)
+RATE_REFINED = 3  # with a free spring rate: the best combinations at the start's rate given their own
 
 def builtin_candidates(designed) -> list[list[str]]:
     """Per designed segment, the built-in laws that meet its conditions (its joint class)."""
@@ -54,17 +56,35 @@ def _builtin_measures(name: str, kind: str) -> dict:
 
 
 def builtin_law_value(cd: Codesign, names) -> float:
-    """The [synthesis] terms of built-in laws (their exact figures, :func:`builtin_measures`)."""
+    """The [synthesis] terms of built-in laws (their exact figures, :func:`builtin_measures`; the
+    residual vibration squared, as the designed laws' term, from :func:`builtin_residual`)."""
     total = 0.0
     for ds, name in zip(cd.designed, names, strict=True):
-        m = _builtin_measures(name, ds.kind)
-        total += sum(w * m[term] for term, w in cd.law_weights.items())
+        m = dict(_builtin_measures(name, ds.kind))
+        if "residual_vibration" in cd.law_weights:
+            m["residual_vibration"] = builtin_residual(cd, name, ds)["residual_vibration"]
+        total += sum(w * term_value(term, m[term]) for term, w in cd.law_weights.items())
     return total
+
+
+def builtin_residual(cd: Codesign, name: str, ds) -> dict:
+    """The residual vibration of the built-in law ``name`` played as designed segment ``ds`` on the
+    co-design's follower train (:func:`camjax.synthesis.vibration.builtin_train_measures`: RMS over
+    the speeds, per lift, and its values per speed), cached per law and segment."""
+    key = ("residual", name, ds.index)
+    if key not in cd.builtin_cache:
+        q_of = functools.partial(builtin_q, LAWS[name], ds.kind)
+        train = cd.train._replace(spring_rate=None)  # the residual alone (no force)
+        cd.builtin_cache[key] = builtin_train_measures(q_of, train, ds)
+    return cd.builtin_cache[key]
 
 
 def best_builtin_combination(cd: Codesign) -> tuple[tuple[str, ...], float, Inner] | None:
     """The combination of built-in laws (one per designed segment, each meeting its conditions)
-    with the least co-design objective, each with its own optimal geometry: (names, F, inner)."""
+    with the least co-design objective, each with its own optimal geometry: (names, F, inner).
+    With a free spring rate every combination is solved at the start's rate, then the
+    :data:`RATE_REFINED` best get their own optimal rate (:meth:`Codesign.best_rate`); the preload is
+    each one's optimal at its rate (:mod:`camjax.codesign.spring`)."""
     cands = builtin_candidates(cd.designed)
     if any(not c for c in cands):
         return None
@@ -72,13 +92,17 @@ def best_builtin_combination(cd: Codesign) -> tuple[tuple[str, ...], float, Inne
     if len(combos) > MAX_COMBINATIONS:
         common = set.intersection(*(set(c) for c in cands))
         combos = [tuple([n] * len(cands)) for n in LAWS if n in common]
-    best = None
+    solved = []
     for names in combos:
         inner = cd.inner(builtin_kinematics(cd, names))
-        f = inner.objective + builtin_law_value(cd, names)
-        if best is None or f < best[1]:
-            best = (tuple(names), f, inner)
-    return best
+        solved.append((inner.objective + builtin_law_value(cd, names), tuple(names), inner))
+    solved.sort(key=lambda t: t[0])
+    if cd.u0 is not None:
+        for j, (_, names, _) in enumerate(solved[:RATE_REFINED]):
+            inner = cd.best_rate(builtin_kinematics(cd, names))[1]
+            solved[j] = (inner.objective + builtin_law_value(cd, names), names, inner)
+    f, names, inner = min(solved, key=lambda t: t[0])
+    return names, f, inner
 
 
 def fitted_coordinates(cd: Codesign, names) -> np.ndarray:

@@ -9,7 +9,12 @@ the [design] optimum of the follower family's problem built on the kinematics of
 
 f the family's objective (alpha size + gamma stress), g its constraints, P(z) its problem on the
 sample grid (the kinematics affine in z, loads and contact coefficient computed from them by
-:func:`camjax.evaluate.arrays_from_kinematics`), law(z) the [synthesis] squared-derivative terms.
+:func:`camjax.evaluate.arrays_from_kinematics`), law(z) the [synthesis] terms that are quadratics
+in z: the squared-derivative terms and the mean square residual vibration of the follower train
+(:func:`train_quadratics`: the map of :mod:`camjax.synthesis.vibration`, with the scene's
+[dynamics] and [synthesis]'s speed band, the same term ``camjax synthesize`` weighs). The peak
+terms (``peak_velocity``, ``peak_accel``, ``peak_jerk``, ``peak_force``) are refused: non-smooth
+in z.
 
 - **Inner**: the registered gradient solver on the grid (``extrema = "grid"``: the problem is a
   pytree of arrays whose kinematic fields are functions of z; one compiled program for every z).
@@ -19,6 +24,10 @@ sample grid (the kinematics affine in z, loads and contact coefficient computed 
   f + lambda . g with d* and lambda held fixed (g: the family's ``constraints`` at every angle), by
   ``jax.grad`` through the problem's construction, plus the law terms'. tests/test_codesign.py
   checks it against central differences of F.
+- **Spring** (:mod:`camjax.codesign.spring`, where [synthesis] gives spring keys): the preload is
+  eliminated in closed form (the least keeping contact at the overspeed: exact, the objective
+  grows with it), the rate is one more outer coordinate u (box transform) after z; the problem is
+  built with that spring, and the envelope gradient differentiates through both.
 - **Outer**: BFGS on z with a backtracking (Armijo) line search, in NumPy (z has tens of
   coordinates); an infeasible inner optimum counts as +inf.
 - **Never worse than choosing**: every combination of the built-in laws that meet each designed
@@ -39,14 +48,17 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+import camjax.codesign.spring as spring_mod
 from camjax.evaluate import arrays_from_kinematics, scene_arrays
 from camjax.family import weights_of
 from camjax.program import Kinematics
 from camjax.solvers.base import family_of, problem_from_scene, solve_one
 from camjax.synthesis.linear import law_quadratics, linear_kinematics
 from camjax.synthesis.problem import L2_OBJECTIVES
+from camjax.synthesis.vibration import residual_maps
 
-SUPPORTED = tuple(L2_OBJECTIVES)  # the [synthesis] terms the co-design takes (smooth in z)
+# the [synthesis] terms the co-design takes: quadratics in z (the peaks are not smooth in z)
+SUPPORTED = (*L2_OBJECTIVES, "residual_vibration")
 ACTIVE_RTOL = 1e-7  # a constraint is active within this fraction of the problem's size norm
 
 
@@ -64,6 +76,7 @@ class Inner(NamedTuple):
     objective: float  # the family's objective at its optimum (+inf if infeasible)
     design: Any
     feasible: bool
+    spring: tuple[float, float] | None = None  # (rate N/m, preload N) the geometry was solved with
 
 
 class Codesign:
@@ -83,8 +96,11 @@ class Codesign:
         for name in terms:
             if name not in SUPPORTED:
                 raise CodesignError(f"synthesis.objective.{name}", "a peak term is not supported by "
-                                    f"camjax design's co-design yet (allowed: {', '.join(SUPPORTED)}; "
-                                    "camjax synthesize takes it)")
+                                    "camjax design's co-design (it is not smooth in the laws; allowed: "
+                                    f"{', '.join(SUPPORTED)}; camjax synthesize takes it)")
+        if "residual_vibration" in terms and scene.dynamics is None:
+            raise CodesignError("dynamics", "synthesis.objective.residual_vibration needs the follower "
+                                "train: a [dynamics] section (I3, c3, k23)")
         self.scene = scene
         self.law_weights = terms
         self.samples = int(scene.motion.samples if samples is None else samples)
@@ -93,43 +109,99 @@ class Codesign:
         starts = [starting_control(ds) for ds in self.designed] if controls is None else controls
         self.lin = linear_kinematics(program, self.designed, self.samples, starts)
         self.jacobian = jnp.asarray(self.lin.jacobian)
+        self.spring = spring_mod.spring_box(scene, CodesignError)
+        self.nz = self.lin.free  # the laws' coordinates; the outer x = z, then u (a free rate)
+        free_rate = self.spring is not None and self.spring.free_rate
+        self.u0 = self._start_rate() if free_rate else None
+        self.x0 = np.concatenate([self.lin.z0, [self.u0]]) if free_rate else np.asarray(self.lin.z0)
         grid = dataclasses.replace(scene, motion=dataclasses.replace(scene.motion, extrema="grid"))
         self.grid_scene = grid
         kin = scene_arrays(grid, samples=self.samples, extrema="grid").kin
         self.theta = kin.theta
         self.kin0 = jnp.stack([kin.s, kin.ds, kin.d2s, kin.d3s])
-        self.law_P, self.law_q, self.law_c = law_quadratics(self.lin, self.designed, terms)
+        self.train = None
+        if scene.dynamics is not None:  # the follower train: its residual term and figures
+            from camjax.dynamics.context import synthesis_train
+
+            self.train = synthesis_train(scene)
+        # per designed segment: (rows, Q) of its residual vibration (None without the train)
+        self.residual = ([residual_maps(ds.basis(), self.train, ds) for ds in self.designed]
+                         if self.train is not None else None)
+        l2 = {n: w for n, w in terms.items() if n in L2_OBJECTIVES}
+        self.law_P, self.law_q, self.law_c = law_quadratics(self.lin, self.designed, l2)
+        self.l2_quadratic = (self.law_P, self.law_q, self.law_c)
+        # law_P, law_q: the gradient of every law term; the residual's value is summed from its
+        # rows (law_value: the expanded quadratic cancels to ~1e-8 relative near a zero residual)
+        self.residual_weight = float(terms.get("residual_vibration", 0.0))
+        if self.residual_weight > 0.0:
+            P, q, c = train_quadratics(self.lin, [Q for _, Q in self.residual], self.residual_weight)
+            self.law_P, self.law_q, self.law_c = self.law_P + P, self.law_q + q, self.law_c + c
         self.weights = weights_of(scene.design.alpha, scene.design.gamma)
         self._inner = jax.jit(self._inner_fn)
         self._lagrangian_grad = jax.jit(jax.grad(self._lagrangian, argnums=0))
+        self._kin_lagrangian_grad = jax.jit(jax.grad(self._kin_lagrangian, argnums=0))
         self._local = jax.jit(self._local_fn)
+        self._spring_at = jax.jit(self._spring_fn)
         self.evaluations = 0
         self.builtin_cache: dict = {}
 
     # ------------------------------------------------------------------ pure pieces
 
-    def problem(self, kin4):
-        """The family's problem on kinematics ``kin4`` (4, samples): s, s', s'', s''' (traceable)."""
+    def _start_rate(self) -> float:
+        """u of the scene's rate, or of the box's geometric middle where the scene's is outside."""
+        lo, hi = self.spring.rate
+        k0 = float(self.spring.train.spring_N_per_m)
+        return spring_mod.u_of(self.spring, k0 if lo < k0 < hi else math.sqrt(lo * hi))
+
+    @property
+    def free(self) -> int:
+        """The number of outer coordinates (the laws' z, and u for a free rate)."""
+        return self.x0.size
+
+    def split(self, x):
+        """(z, u) of the outer coordinates x (u None without a free rate; traceable)."""
+        return x[: self.nz], (x[self.nz] if self.x0.size > self.nz else None)
+
+    def problem(self, kin4, spring=None):
+        """The family's problem on kinematics ``kin4`` (4, samples): s, s', s'', s''' (traceable);
+        ``spring``: (rate N/m, preload N) replacing the scene's (a designed spring)."""
         kin = Kinematics(self.theta, kin4[0], kin4[1], kin4[2], kin4[3])
-        return problem_from_scene(self.grid_scene, arrays_from_kinematics(self.grid_scene, kin))
+        scene = self.grid_scene
+        if spring is not None:
+            train = spring_mod.train_of(self.spring, spring[0], spring[1])
+            scene = dataclasses.replace(scene, follower=dataclasses.replace(scene.follower, train=train))
+        return problem_from_scene(scene, arrays_from_kinematics(scene, kin))
+
+    def _spring_fn(self, kin4, u):
+        """(k, P, P_min): the rate of u, the optimal preload and the least keeping contact."""
+        k = spring_mod.rate_of(self.spring, u)
+        p, need = spring_mod.preload_of(self.spring, kin4, k)
+        return k, p, need
 
     def kinematics(self, z):
         """(4, samples) kinematics of the coordinates z (traceable)."""
         return self.kin0 + jnp.tensordot(self.jacobian, jnp.asarray(z) - self.lin.z0, axes=1)
 
-    def _inner_fn(self, kin4):
-        sol = solve_one(self.problem(kin4), self.weights, jax.random.key(0), mode="global", solver="gradient")
+    def _inner_fn(self, kin4, spring):
+        sol = solve_one(self.problem(kin4, spring), self.weights, jax.random.key(0), mode="global",
+                        solver="gradient")
         return sol.objective, sol.design, sol.feasible
 
-    def _lagrangian(self, kin4, design, lam):
-        problem = self.problem(kin4)
+    def _lagrangian(self, x, design, lam):
+        """f + lam . g as a function of the outer x (the spring's rate and preload follow from x)."""
+        z, u = self.split(x)
+        kin4 = self.kinematics(z)
+        return self._kin_lagrangian(kin4, design, lam, self._spring_fn(kin4, u)[:2])
+
+    def _kin_lagrangian(self, kin4, design, lam, spring=None):
+        problem = self.problem(kin4, spring)
         family = family_of(problem)
         g = _stacked(family, problem, design)
         return family.objective(problem, self.weights, design) + jnp.dot(lam, g)
 
-    def _local_fn(self, kin4, design):
+    def _local_fn(self, kin4, spring, design):
         """Objective and every angle's constraints, with their gradients in the design, at ``design``."""
-        problem = self.problem(kin4)
+        problem = self.problem(kin4, spring)
         family = family_of(problem)
 
         def parts(d):
@@ -141,32 +213,86 @@ class Codesign:
 
     # ------------------------------------------------------------------ evaluations
 
-    def law_value(self, z) -> float:
-        z = np.asarray(z, dtype=np.float64)
-        return float(0.5 * z @ self.law_P @ z + self.law_q @ z + self.law_c)
+    def law_value(self, x) -> float:
+        """The [synthesis] terms at the outer x: the squared-derivative terms' quadratic in z, plus
+        the weighted mean square residual of each designed law (from its rows on c(z))."""
+        z = np.asarray(x, dtype=np.float64)[: self.nz]
+        P, q, c = self.l2_quadratic
+        value = float(0.5 * z @ P @ z + q @ z + c)
+        if self.residual_weight > 0.0:
+            for control, (rows, _) in zip(self.lin.control(z), self.residual, strict=True):
+                value += self.residual_weight * float(np.mean(np.sum((rows @ control) ** 2, axis=1)))
+        return value
 
-    def inner(self, kin4) -> Inner:
+    def inner(self, kin4, u=None) -> Inner:
+        """The geometry optimum on ``kin4``; with a designed spring at the rate of ``u`` (default
+        the start's) and the optimal preload, +inf where no preload in the box keeps contact."""
         self.evaluations += 1
-        f, d, ok = jax.device_get(self._inner(jnp.asarray(kin4)))
-        return Inner(float(f) if bool(ok) and np.isfinite(f) else math.inf, d, bool(ok))
+        spring = None
+        if self.spring is not None:
+            u = self.u0 if u is None else u
+            k, p, need = (float(v) for v in jax.device_get(
+                self._spring_at(jnp.asarray(kin4), None if u is None else jnp.asarray(u))))
+            spring = (k, p)
+            high = self.spring.preload[1]
+            if not need <= high + spring_mod.PRELOAD_TOL * max(1.0, abs(high)):
+                return Inner(math.inf, None, False, spring)
+        f, d, ok = jax.device_get(self._inner(jnp.asarray(kin4), spring))
+        return Inner(float(f) if bool(ok) and np.isfinite(f) else math.inf, d, bool(ok), spring)
 
-    def value(self, z) -> tuple[float, Inner]:
-        """F(z) and the inner optimum."""
-        inner = self.inner(self.kinematics(z))
-        return inner.objective + self.law_value(z), inner
+    def value(self, x) -> tuple[float, Inner]:
+        """F(x) and the inner optimum (x: the laws' z, then u for a free rate)."""
+        z, u = self.split(np.asarray(x, dtype=np.float64))
+        inner = self.inner(self.kinematics(z), u)
+        return inner.objective + self.law_value(x), inner
 
-    def gradient(self, z, inner: Inner) -> np.ndarray:
-        """dF/dz by the envelope theorem at the inner optimum ``inner`` of z."""
-        kin4 = self.kinematics(z)
-        values, jac, lower, upper, norm = jax.device_get(self._local(kin4, inner.design))
+    def gradient(self, x, inner: Inner) -> np.ndarray:
+        """dF/dx by the envelope theorem at the inner optimum ``inner`` of x."""
+        x = np.asarray(x, dtype=np.float64)
+        kin4 = self.kinematics(x[: self.nz])
+        values, jac, lower, upper, norm = jax.device_get(self._local(kin4, inner.spring, inner.design))
         lam = multipliers(values, jac, inner.design, lower, upper, norm)
-        gk = self._lagrangian_grad(kin4, inner.design, jnp.asarray(lam))
-        gz = np.asarray(jnp.tensordot(gk, self.jacobian, axes=((0, 1), (0, 1))))
-        z = np.asarray(z, dtype=np.float64)
-        return gz + self.law_P @ z + self.law_q
+        if self.spring is None:  # through the kinematics, chained with J
+            gk = self._kin_lagrangian_grad(kin4, inner.design, jnp.asarray(lam))
+            g = np.asarray(jnp.tensordot(gk, self.jacobian, axes=((0, 1), (0, 1))))
+        else:  # x's rate and the preload it implies too
+            g = np.asarray(self._lagrangian_grad(jnp.asarray(x), inner.design, jnp.asarray(lam)))
+        # (g + P z) + q: the order of the sums as ever (the search's path is sensitive to rounding)
+        return np.concatenate([g[: self.nz] + self.law_P @ x[: self.nz] + self.law_q, g[self.nz:]])
+
+    def best_rate(self, kin4, count: int = 9, refine: int = 12) -> tuple[float, Inner]:
+        """The rate (as u) with the least objective on fixed kinematics ``kin4``: ``count`` rates
+        geometric over the box, then golden-section search in log k between the best one's
+        neighbours (Python; a fixed rate: the inner optimum at it)."""
+        if self.u0 is None:
+            return 0.0, self.inner(kin4)
+        lo, hi = (math.log(v) for v in self.spring.rate)
+
+        def u_at(t):
+            return spring_mod.u_of(self.spring, math.exp(lo + t * (hi - lo)))
+
+        ts = np.linspace(0.0, 1.0, count)
+        inners = [self.inner(kin4, u_at(t)) for t in ts]
+        i = int(np.argmin([inn.objective for inn in inners]))
+        best = (u_at(ts[i]), inners[i])
+        if not np.isfinite(best[1].objective):
+            return best
+        a, b = ts[max(i - 1, 0)], ts[min(i + 1, count - 1)]
+        ratio = (math.sqrt(5.0) - 1.0) / 2.0
+        for _ in range(refine):
+            c, d = b - ratio * (b - a), a + ratio * (b - a)
+            ic, id_ = self.inner(kin4, u_at(c)), self.inner(kin4, u_at(d))
+            for t, inn in ((c, ic), (d, id_)):
+                if inn.objective < best[1].objective:
+                    best = (u_at(t), inn)
+            if ic.objective <= id_.objective:
+                b = d
+            else:
+                a = c
+        return best
 
     def gradient_fd(self, z, h: float = 1e-5) -> np.ndarray:
-        """dF/dz by central differences of F (2 inner solves per coordinate)."""
+        """dF/dx by central differences of F (2 inner solves per coordinate)."""
         z = np.asarray(z, dtype=np.float64)
         out = np.zeros_like(z)
         for i in range(z.size):
@@ -174,6 +300,23 @@ class Codesign:
             e[i] = h
             out[i] = (self.value(z + e)[0] - self.value(z - e)[0]) / (2.0 * h)
         return out
+
+
+def train_quadratics(lin, grams, weight: float) -> tuple[np.ndarray, np.ndarray, float]:
+    """``weight`` x the residual vibration squared (mean square over the speeds, per lift) summed over
+    the designed segments, each c^T Q c with Q in ``grams``
+    (:func:`camjax.synthesis.vibration.residual_maps`), as 0.5 z^T P z + q^T z + const in the
+    coordinates z of ``lin`` (c = cp + N z), as :func:`camjax.synthesis.linear.law_quadratics`
+    writes the squared-derivative terms."""
+    m = lin.free
+    P, q, const = np.zeros((m, m)), np.zeros(m), 0.0
+    for seg, Q in zip(lin.segments, grams, strict=True):
+        sl = slice(seg.offset, seg.offset + seg.null.shape[1])
+        NQ = seg.null.T @ Q
+        P[sl, sl] += 2.0 * weight * NQ @ seg.null
+        q[sl] += 2.0 * weight * NQ @ seg.cp
+        const += weight * float(seg.cp @ Q @ seg.cp)
+    return P, q, const
 
 
 def _stacked(family, problem, design):

@@ -4,7 +4,10 @@ BFGS on the laws' free coordinates z (:class:`camjax.codesign.problem.Codesign` 
 envelope gradient), from the best built-in combination fitted onto the B-spline space and from
 the law-only synthesis (or the starting law); the result is compared with the best built-in
 combination (:mod:`camjax.codesign.builtin`) and the better one written into the scene as fixed
-laws (:func:`fixed_scene`), on which ``camjax design`` runs as usual.
+laws (:func:`fixed_scene`), on which ``camjax design`` runs as usual. With a designed spring
+(:mod:`camjax.codesign.spring`) x = (z, u): the rate's coordinate u follows z, the fixed scene
+carries the designed spring, and a box that keeps contact for no start is refused saying by how
+much (:func:`spring_infeasible`).
 """
 
 from __future__ import annotations
@@ -15,7 +18,13 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from camjax.codesign.builtin import best_builtin_combination, builtin_law_value, fitted_coordinates
+import camjax.codesign.spring as spring_mod
+from camjax.codesign.builtin import (
+    best_builtin_combination,
+    builtin_kinematics,
+    builtin_law_value,
+    fitted_coordinates,
+)
 from camjax.codesign.problem import Codesign, CodesignError, Inner
 from camjax.laws import LAWS
 from camjax.program import MotionProgram
@@ -95,6 +104,8 @@ class Outcome(NamedTuple):
     tables: list  # the designed segments as fixed [motion] segment tables (the chosen laws)
     samples: int  # the search's grid
     segments: list  # camjax.synthesis.segments.SegmentSynthesis of the designed B-splines
+    spring: dict | None = None  # the designed spring (spring_report), None when not designed
+    train: Any = None  # the follower train the residual vibration is measured on (vibration.Train), or None
 
 
 def codesign_scene(scene, samples: int | None = None, max_iterations: int = MAX_ITERATIONS) -> Outcome:
@@ -111,52 +122,73 @@ def codesign_scene(scene, samples: int | None = None, max_iterations: int = MAX_
         starts.append(("builtin_fit", fitted_coordinates(cd, builtin[0])))
     if cd.law_weights:
         spec = scene.synthesis
-        law_only = synthesize_segments(cd.designed, cd.law_weights, spec.samples_per_span)
+        law_only = synthesize_segments(cd.designed, cd.law_weights, spec.samples_per_span,
+                                       residual_train(cd) if "residual_vibration" in cd.law_weights else None)
         starts.append(("synthesis", cd.lin.coordinates([r.control for r in law_only])))
     else:
         starts.append(("starting_law", cd.lin.z0))
     best = None
     for name, z0 in starts:
-        f0, inner0 = cd.value(z0)
+        x0 = _with_rate(cd, z0, builtin)
+        f0, inner0 = cd.value(x0)
+        if not np.isfinite(f0) and cd.u0 is not None:  # the laws' own best rate
+            u, inner0 = cd.best_rate(cd.kinematics(z0))
+            x0, f0 = np.append(z0, u), inner0.objective + cd.law_value(z0)
         if not np.isfinite(f0):
             continue
-        z, f, inner, it, hist = bfgs(cd, z0, f0, inner0, max_iterations)
+        z, f, inner, it, hist = bfgs(cd, x0, f0, inner0, max_iterations)
         if best is None or f < best.objective:
             best = SearchResult(z, f, inner, it, name, hist)
-    if best is None and builtin is None:
+    if best is None and (builtin is None or not np.isfinite(builtin[1])):
+        if cd.spring is not None:
+            raise spring_infeasible(cd, [z for _, z in starts], builtin)
         raise CodesignError("design", "no start of the co-design has a feasible geometry within [design]'s "
                             "bounds, and no built-in law meets the designed segments' conditions")
-    controls = cd.lin.control(best.z) if best is not None else cd.lin.control(cd.lin.z0)
+    controls = cd.lin.control(best.z[: cd.nz]) if best is not None else cd.lin.control(cd.lin.z0)
     designed_f = best.objective if best is not None else math.inf
     use_builtin = builtin is not None and builtin[1] <= designed_f
     laws = ([LAWS[n] for n in builtin[0]] if use_builtin else
             [_designed_law(ds, c) for ds, c in zip(cd.designed, controls, strict=True)])
     tables = _segment_tables(scene, controls, builtin[0] if use_builtin else None)
     law_f = builtin_law_value(cd, builtin[0]) if use_builtin else cd.law_value(cd.lin.coordinates(controls))
-    return Outcome(fixed_scene(scene, laws, tables),
+    inner = builtin[2] if use_builtin else best.inner
+    train = None if inner.spring is None else spring_mod.train_of(cd.spring, *inner.spring)
+    fixed = fixed_scene(scene, laws, tables, train)
+    return Outcome(fixed,
                    "best_builtin" if use_builtin else "codesign", controls,
                    builtin[1] if use_builtin else designed_f, designed_f,
                    None if builtin is None else (builtin[0], builtin[1]),
                    0 if best is None else best.iterations, "" if best is None else best.start,
                    cd.evaluations, [] if best is None else best.history, law_f, tables, cd.samples,
-                   segment_results(cd, controls))
+                   segment_results(cd, controls), spring_report(cd, fixed, inner.spring), cd.train)
+
+
+def residual_train(cd: Codesign):
+    """The co-design's follower train for the residual vibration alone (no spring: no force
+    figures; the co-design's spring may differ from [dynamics]'), or None without [dynamics]."""
+    return None if cd.train is None else cd.train._replace(spring_rate=None)
 
 
 def segment_results(cd: Codesign, controls) -> list:
     """Each designed B-spline's figures as ``camjax synthesize`` reports them (normalized measures,
-    its [synthesis] terms, the best built-in law of its class for those terms alone)."""
+    with [dynamics] the residual vibration, its [synthesis] terms, the best built-in law of its
+    class for those terms alone)."""
     from camjax.synthesis.problem import OBJECTIVES, build_problem
-    from camjax.synthesis.segments import ORDERS, SegmentSynthesis, best_builtin
+    from camjax.synthesis.segments import ORDERS, SegmentSynthesis, best_builtin, term_value
     from camjax.synthesis.solve import measures
+    from camjax.synthesis.vibration import residual_figures
 
     out = []
-    for ds, c in zip(cd.designed, controls, strict=True):
+    train = residual_train(cd)
+    for k, (ds, c) in enumerate(zip(cd.designed, controls, strict=True)):
         basis = ds.basis()
         m = measures(build_problem(basis, ds.conditions, ()), c)
         meas = {n: (float(getattr(m, n)) if ORDERS[n] <= ds.degree else None) for n in OBJECTIVES}
-        law_f = sum(w * meas[n] for n, w in cd.law_weights.items())
+        if cd.residual is not None:
+            meas.update(residual_figures(np.linalg.norm(cd.residual[k][0] @ np.asarray(c), axis=1)))
+        law_f = sum(w * term_value(n, meas[n]) for n, w in cd.law_weights.items())
         out.append(SegmentSynthesis(ds, basis.knots, np.asarray(c), meas, law_f, law_f, True, 0.0,
-                                    best_builtin(ds, cd.law_weights) if cd.law_weights else None))
+                                    best_builtin(ds, cd.law_weights, train) if cd.law_weights else None))
     return out
 
 
@@ -188,9 +220,9 @@ def _segment_tables(scene, controls, builtin_names) -> list[dict]:
     return out
 
 
-def fixed_scene(scene, laws, tables):
+def fixed_scene(scene, laws, tables, train=None):
     """The scene with designed segment k moving by ``laws[k]`` (no segment designed any more), its
-    reported segment table ``tables[k]``."""
+    reported segment table ``tables[k]``; ``train``: the follower train (a designed spring)."""
     motion = scene.motion
     program = motion.program
     new_laws, reported = list(program.laws), list(motion.segments)
@@ -199,4 +231,67 @@ def fixed_scene(scene, laws, tables):
         reported[ds.index] = table
     fixed = MotionProgram(program.kinds, program.angles_deg, new_laws, program.lifts)
     motion = dataclasses.replace(motion, program=fixed, segments=tuple(reported), designed=())
+    if train is not None:
+        scene = dataclasses.replace(scene, follower=dataclasses.replace(scene.follower, train=train))
     return dataclasses.replace(scene, motion=motion)
+
+
+def _with_rate(cd: Codesign, z, builtin) -> np.ndarray:
+    """The outer x of laws z: z, then (a free rate) the best built-in combination's rate, or the start's."""
+    if cd.u0 is None:
+        return np.asarray(z, dtype=np.float64)
+    spring = builtin[2].spring if builtin is not None and np.isfinite(builtin[1]) else None
+    u = cd.u0 if spring is None else spring_mod.u_of(cd.spring, spring[0])
+    return np.append(np.asarray(z, dtype=np.float64), u)
+
+
+def spring_infeasible(cd: Codesign, starts, builtin) -> CodesignError:
+    """The error of a co-design whose spring box keeps contact for none of its starting laws (nor the
+    best built-in combination): which constraint binds, and by how much at the box's best."""
+    kins = [cd.kinematics(z) for z in starts]
+    if builtin is not None:
+        kins.append(builtin_kinematics(cd, builtin[0]))
+    box = cd.spring
+    deficit, k, at = min(spring_mod.contact_deficit(box, kin4) for kin4 in kins)
+    rpm = cd.scene.motion.rpm * box.overspeed
+    if deficit <= 0.0:
+        return CodesignError("design", "no start of the co-design has a feasible geometry within [design]'s "
+                             f"bounds with a spring that keeps contact (spring_N_per_m = {k:g}, preload_N "
+                             f"<= {box.preload[1]:g})")
+    deg = at * 360.0 / cd.samples  # the grid's sample angles
+    return CodesignError("synthesis.min_contact_force_N", (
+        f"{box.min_force:g} N: no spring in the box keeps contact at {box.overspeed:g} x rpm = {rpm:g} rpm: "
+        f"the constraint contact force >= {box.min_force:g} N binds at {deg:.4g} deg, where the best "
+        f"spring for it (spring_N_per_m = {k:g}, preload_N = {box.preload[1]:g}) gives "
+        f"{box.min_force - deficit:.4g} N, {deficit:.4g} N short (allowed: larger spring_N_per_m or "
+        "preload_N bounds, a smaller min_contact_force_N or overspeed)"))
+
+
+def spring_report(cd: Codesign, fixed, spring) -> dict | None:
+    """result.json's ``synthesis.codesign.spring``: the designed rate and preload, and the least
+    contact force of the chosen design at the overspeed by the loads model of ``fixed`` (the scene
+    the design is written from) on the search grid, with where it is reached and what binds."""
+    if spring is None:
+        return None
+    from camjax.evaluate import scene_arrays
+
+    box = cd.spring
+    rpm = fixed.motion.rpm * box.overspeed
+    fast = dataclasses.replace(fixed, motion=dataclasses.replace(fixed.motion, rpm=rpm))
+    arrays = scene_arrays(fast, samples=cd.samples, extrema="grid")
+    force = np.asarray(arrays.force_N)
+    k, p = spring
+    need = box.min_force - float(force.min()) + p  # the least preload keeping the margin
+    binding = ("contact" if abs(p - need) <= 1e-6 * max(1.0, abs(p)) else
+               "preload_low" if box.preload[1] > box.preload[0] else "none")
+    return {
+        "rate_N_per_m": k, "preload_N": p, "preload_mm": 1e3 * p / k,
+        "rate_bounds_N_per_m": list(box.rate), "preload_bounds_N": list(box.preload),
+        "min_contact_force_N": box.min_force, "overspeed": box.overspeed, "rpm_overspeed": rpm,
+        "min_contact_force_at_overspeed_N": float(force.min()),
+        "min_contact_force_at_overspeed_deg": float(np.asarray(arrays.theta_deg)[int(np.argmin(force))]),
+        "binding": binding,
+        "rate_at_bound": ("low" if k <= box.rate[0] * (1 + 1e-4) else "high" if k >= box.rate[1] * (1 - 1e-4)
+                          else None) if box.free_rate else "fixed",
+    }
+

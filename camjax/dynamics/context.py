@@ -49,6 +49,34 @@ def closure_of(spec) -> ForceClosure:
                         jnp.asarray(spec.weight))
 
 
+def synthesis_train(scene):
+    """The follower train of a scene's [dynamics] as :class:`camjax.synthesis.vibration.Train` (the
+    numbers the synthesis' train terms need, from :func:`plant_of` and :func:`closure_of`), with each
+    designed segment's level at its start and signed lift in SI (the program's, as
+    :func:`program_cam` scales it) and the speeds of [synthesis]'s band. None without [dynamics]."""
+    from camjax.dynamics.plant import damping_ratio, natural_frequency_rad_s
+    from camjax.synthesis.vibration import Train
+
+    spec = scene.dynamics
+    if spec is None:
+        return None
+    plant = plant_of(spec)
+    syn = scene.synthesis
+    band, count = (syn.speed_band, syn.speed_count) if syn is not None else (0.0, 1)
+    factors = tuple(float(f) for f in (1.0 + band * np.linspace(-1.0, 1.0, count))) if count > 1 else (1.0,)
+    program = scene.motion.program
+    segments = {}
+    for ds in scene.motion.designed:
+        lo = program.start_deg[ds.index]
+        ends = prog.motion_at(program, jnp.asarray([lo, lo + ds.angle_deg])).s
+        s0, s1 = (float(v) * spec.motion_scale for v in np.asarray(ends))
+        segments[ds.index] = (s0, s1 - s0)
+    return Train(as_float(natural_frequency_rad_s(plant)), as_float(damping_ratio(plant)),
+                 TWO_PI * float(spec.cam_speed_hz), factors, float(spec.k23), float(spec.I2),
+                 float(spec.follower_damping), None if spec.spring_rate is None else float(spec.spring_rate),
+                 float(spec.spring_preload), float(spec.weight), segments)
+
+
 def program_cam(scene, samples: int | None = None, n_harmonics: int | None = None) -> CamHarmonics:
     """The scene's motion program as CamHarmonics in SI (m or rad), from the FFT of its samples."""
     spec = scene.dynamics

@@ -74,9 +74,12 @@ def codesign_report(scene, outcome, data: dict) -> dict:
         seg["scene_segment"] = table
     design_f = data["design"]["objective"]
     best = outcome.best_builtin
+    train = getattr(outcome, "train", None)
+    extra = {} if train is None else {"train": train_block(train)}
     return {
         "objective": weights,
         "segments": segments,
+        **extra,
         "codesign": {
             "objective": outcome.objective,
             "objective_exact": design_f + outcome.law_objective,
@@ -93,9 +96,22 @@ def codesign_report(scene, outcome, data: dict) -> dict:
             "inner_solves": outcome.evaluations,
             "samples": outcome.samples,
             "gradient": "envelope",
+            # the designed spring (camjax.codesign.spring), None when [synthesis] designs none
+            "spring": getattr(outcome, "spring", None),
             "history": [float(v) for v in outcome.history],
         },
     }
+
+
+def train_block(train) -> dict:
+    """``synthesis.train`` of the co-design: the follower train the segments' residual vibration is
+    measured on (the keys ``camjax synthesize`` writes, ``spring`` False: the co-design reports no
+    peak force)."""
+    import math
+
+    return {"natural_frequency_hz": train.natural_frequency_rad_s / (2 * math.pi),
+            "damping_ratio": train.damping_ratio, "cam_speed_hz": train.cam_speed_rad_s / (2 * math.pi),
+            "speed_factors": list(train.speed_factors), "spring": False}
 
 
 def write_curves_csv(path: Path, curves: list[tuple[int, np.ndarray, tuple[np.ndarray, ...]]]) -> None:

@@ -17,7 +17,7 @@ from importlib import resources
 from pathlib import Path
 
 from camjax.errors import MISSING, QUOTE_CHARS, SceneError, cut, quote
-from camjax.scene.designed import parse_synthesis
+from camjax.scene.designed import check_train, parse_synthesis
 from camjax.scene.motion import check_resolution, parse_motion, samples_needed
 from camjax.scene.reader import TableReader
 from camjax.scene.sections import parse_contact, parse_design, parse_dynamics, parse_guide
@@ -95,6 +95,7 @@ def scene_from_dict(data: dict, name: str = "scene", source: str | None = None) 
     dynamics = (parse_dynamics(top.sub("dynamics"), motion, spec, follower.rocking) if "dynamics" in data
                 else None)
     synthesis = parse_synthesis(top.sub("synthesis"), motion.designed) if "synthesis" in data else None
+    check_train(synthesis, dynamics, source)
     return Scene(name, motion, spec, contact, design, guide, dynamics, synthesis)
 
 

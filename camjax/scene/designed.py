@@ -22,7 +22,7 @@ from camjax.errors import MISSING, SceneError
 from camjax.program.conditions import DERIVATIVES, FREE, MATCH, Plan, end_values
 from camjax.scene.conditions import parse_conditions
 from camjax.scene.reader import TableReader
-from camjax.scene.spec import SynthesisSpec
+from camjax.scene.spec import SpringSpec, SynthesisSpec
 
 DESIGN_KEYS = ("kind", "law", "angle_deg", "degree", "control_count", "knots", "design", "start", "end",
                "through")
@@ -167,22 +167,29 @@ def law_from_control(ds: DesignedSegment, control):
 
 
 def parse_synthesis(r: TableReader, designed: tuple[DesignedSegment, ...]) -> SynthesisSpec:
-    """[synthesis]: objective = {name = weight, ...}, samples_per_span."""
+    """[synthesis]: objective = {name = weight, ...}, samples_per_span, speed_band, speed_count and
+    the spring keys (:data:`SPRING_KEYS`)."""
     from camjax.synthesis import L2_OBJECTIVES, OBJECTIVES, PEAK_OBJECTIVES
+    from camjax.synthesis.problem import ALL_OBJECTIVES
 
-    r.check_keys(("objective", "samples_per_span"))
+    r.check_keys(("objective", "samples_per_span", "speed_band", "speed_count", *SPRING_KEYS))
+    spring = parse_spring(r)
     if not designed:
         raise r.error("objective", r.table.get("objective", MISSING), "no segment of [motion] has "
                       "design = true: there is no law to synthesize")
+    if spring is not None and not r.has("objective"):  # a co-design of the spring and geometry only
+        return SynthesisSpec((), int(r.number("samples_per_span", 8, low=1, high=256, integer=True)),
+                             spring=spring)
     o = r.sub("objective")
     if not o.table:
         raise r.error("objective", o.table, "needs at least one term", ", ".join(OBJECTIVES))
-    o.check_keys(OBJECTIVES)
+    o.check_keys(ALL_OBJECTIVES)
     weights = {name: o.number(name, low=0.0) for name in o.table}
-    terms = tuple((n, w) for n in OBJECTIVES if (w := weights.get(n, 0.0)) > 0.0)
+    terms = tuple((n, w) for n in ALL_OBJECTIVES if (w := weights.get(n, 0.0)) > 0.0)
     if not terms:
         raise r.error("objective", o.table, "every weight is 0", "at least one weight > 0")
-    orders = {**PEAK_OBJECTIVES, **L2_OBJECTIVES}
+    # the derivative a term needs (the contact force has the acceleration in it)
+    orders = {**PEAK_OBJECTIVES, **L2_OBJECTIVES, "peak_force": 2, "residual_vibration": 0}
     for ds in designed:
         for name, _ in terms:
             if orders[name] > ds.degree:
@@ -190,8 +197,47 @@ def parse_synthesis(r: TableReader, designed: tuple[DesignedSegment, ...]) -> Sy
                 raise SceneError(f"{ds.path}.degree", ds.degree, f"has no {what} for synthesis.objective."
                                  f"{name} (a degree-{ds.degree} law's is not a function)",
                                  f">= {orders[name]}")
+    if terms and all(n == "residual_vibration" for n, _ in terms):
+        raise r.error("objective", o.table, "residual_vibration alone leaves the law undetermined (it "
+                      "weighs two numbers per speed)", "with it a law term, e.g. l2_jerk or peak_accel")
     per_span = int(r.number("samples_per_span", 8, low=1, high=256, integer=True))
-    return SynthesisSpec(terms, per_span)
+    band = float(r.number("speed_band", 0.0, low=0.0, high=0.9))
+    count = int(r.number("speed_count", 5 if band > 0.0 else 1, low=1, high=64, integer=True))
+    if band > 0.0 and count < 2:
+        raise r.error("speed_count", count, "a speed band needs at least 2 speeds", ">= 2")
+    return SynthesisSpec(terms, per_span, band, count, spring)
+
+
+def check_train(synthesis: SynthesisSpec | None, dynamics, source=None) -> None:
+    """The follower-train terms of [synthesis] need the scene's [dynamics] (its train; peak_force
+    its spring too). Raises SceneError naming the missing field."""
+    names = {n for n, _ in synthesis.objective} if synthesis is not None else set()
+    for name in ("residual_vibration", "peak_force"):
+        if name not in names:
+            continue
+        if dynamics is None:
+            raise SceneError("dynamics", MISSING, f"synthesis.objective.{name} needs the follower train: "
+                             "a [dynamics] section (I3, c3, k23)", source=source)
+        if name == "peak_force" and dynamics.spring_rate is None:
+            raise SceneError("dynamics.spring_rate", MISSING, "synthesis.objective.peak_force needs the "
+                             "contact force's spring", "> 0 (or follower.spring_N_per_m)", source)
+
+
+SPRING_KEYS = ("spring_N_per_m", "preload_N", "min_contact_force_N", "overspeed")
+
+
+def parse_spring(r: TableReader) -> SpringSpec | None:
+    """[synthesis]'s spring keys (camjax.codesign.spring): ``spring_N_per_m`` and ``preload_N``, a
+    number (fixed) or [low, high] (free, 0 < low <= high); ``min_contact_force_N`` >= 0 (default 0);
+    ``overspeed`` >= 1 (default 1). None when none is given."""
+    from camjax.scene.reader import fixed_or_free
+
+    if not any(r.has(k) for k in SPRING_KEYS):
+        return None
+    rate = fixed_or_free(r, "spring_N_per_m") if r.has("spring_N_per_m") else None
+    preload = fixed_or_free(r, "preload_N") if r.has("preload_N") else None
+    return SpringSpec(rate, preload, r.number("min_contact_force_N", 0.0, low=0.0),
+                      r.number("overspeed", 1.0, low=1.0, high=100.0))
 
 
 def is_designed(table: dict) -> bool:

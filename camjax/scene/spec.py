@@ -136,12 +136,27 @@ class DynamicsSpec:
 
 
 @dataclass(frozen=True)
+class SpringSpec:
+    """[synthesis]'s spring of a co-design (camjax.codesign.spring): the rate (N/m) and the preload
+    force at s = 0 (N) as (low, high) bounds (low == high: fixed; None: the [follower] train's), and
+    the contact kept: contact force >= ``min_contact_force_N`` at ``overspeed`` x [motion] rpm."""
+
+    rate_N_per_m: tuple[float, float] | None = None
+    preload_N: tuple[float, float] | None = None
+    min_contact_force_N: float = 0.0
+    overspeed: float = 1.0
+
+
+@dataclass(frozen=True)
 class SynthesisSpec:
     """[synthesis]: the objective of the designed laws (weights of the terms of
     :data:`camjax.synthesis.OBJECTIVES`, zero weights left out) and the sampling of sampled peaks."""
 
     objective: tuple[tuple[str, float], ...]
     samples_per_span: int = 8
+    speed_band: float = 0.0  # residual_vibration over speeds (1 +- speed_band) x the cam speed
+    speed_count: int = 1  # speeds of that band, equally spaced (1: the cam speed alone)
+    spring: SpringSpec | None = None  # the spring designed with the laws (co-design only)
 
 
 @dataclass(frozen=True)

@@ -5,6 +5,8 @@
 - :mod:`camjax.synthesis.problem`: the conditions (null-space form) and the objective's terms;
 - :mod:`camjax.synthesis.qp`: a dense interior-point QP solver (one ``lax.while_loop``, vmaps);
 - :mod:`camjax.synthesis.solve`: one synthesis as a pure JAX function, batched with ``vmap``.
+- :mod:`camjax.synthesis.vibration`: the follower train's residual vibration and contact force
+  as exact linear maps of the control values (the terms ``residual_vibration``, ``peak_force``).
 
 See docs/synthesis.md.
 """

@@ -18,8 +18,16 @@ import numpy as np
 
 from camjax.laws import LAWS
 from camjax.synthesis.basis import make_basis
-from camjax.synthesis.problem import L2_OBJECTIVES, OBJECTIVES, PEAK_OBJECTIVES, build_problem, kept_values
+from camjax.synthesis.problem import (
+    ALL_OBJECTIVES,
+    L2_OBJECTIVES,
+    OBJECTIVES,
+    PEAK_OBJECTIVES,
+    build_problem,
+    kept_values,
+)
 from camjax.synthesis.solve import batch_synthesizer
+from camjax.synthesis.vibration import builtin_train_measures, residual_figures, train_terms
 
 ORDERS = {**PEAK_OBJECTIVES, **L2_OBJECTIVES}
 BUILTIN_TOL = 1e-6  # a built-in law meets a condition when its normalized value is this close
@@ -74,41 +82,62 @@ def meets_conditions(law, segment) -> bool:
     return True
 
 
-def best_builtin(segment, weights: dict) -> tuple[str, float, dict] | None:
-    """The built-in law meeting the segment's conditions with the least objective, or None."""
+def term_value(name: str, measure: float) -> float:
+    """A term's contribution per unit weight: the measure, squared for the residual vibration."""
+    return measure**2 if name == "residual_vibration" else measure
+
+
+def best_builtin(segment, weights: dict, train=None) -> tuple[str, float, dict] | None:
+    """The built-in law meeting the segment's conditions with the least objective, or None. With
+    ``train`` (:class:`camjax.synthesis.vibration.Train`) its figures include the train's."""
     best = None
     for name, law in LAWS.items():
         if not meets_conditions(law, segment):
             continue
         m = builtin_measures(law, segment.kind)
-        obj = sum(w * m[n] for n, w in weights.items())
+        if train is not None:
+            m.update(builtin_train_measures(lambda x, law=law: builtin_q(law, segment.kind, x), train,
+                                            segment))
+        obj = sum(w * term_value(n, m[n]) for n, w in weights.items())
         if best is None or obj < best[1]:
             best = (name, float(obj), m)
     return best
 
 
-def synthesize_segments(segments, weights: dict, samples_per_span: int = 8) -> list[SegmentSynthesis]:
+def synthesize_segments(segments, weights: dict, samples_per_span: int = 8,
+                        train=None) -> list[SegmentSynthesis]:
     """Synthesize every designed segment for the objective ``weights`` ({name: weight > 0}).
+    ``train``: the follower train (:class:`camjax.synthesis.vibration.Train`) for the terms
+    ``peak_force`` and ``residual_vibration`` and their figures (None: the law's terms only).
 
-    Raises ValueError for a term whose order exceeds a segment's degree (the scene checks it first).
+    Raises ValueError for a term whose order exceeds a segment's degree or a train term without
+    the train (the scene checks both first).
     """
-    names = tuple(n for n in OBJECTIVES if n in weights)
+    names = tuple(n for n in ALL_OBJECTIVES if n in weights)
     groups: dict[tuple, list] = {}
     for seg in segments:
         key = (seg.degree, seg.control_count, seg.knots, tuple((c.x, c.order) for c in seg.conditions))
+        if train is not None:  # the train's matrices depend on the segment's duration, level and lift
+            key = (*key, seg.index)
         groups.setdefault(key, []).append(seg)
     results = {}
-    for (degree, count, knots, _), members in groups.items():
+    for (degree, count, knots, *_), members in groups.items():
         basis = make_basis(degree, count, knots)
-        problem = build_problem(basis, members[0].conditions, names, samples_per_span)
+        terms = None if train is None else train_terms(basis, train, members[0], samples_per_span)
+        problem = build_problem(basis, members[0].conditions, names, samples_per_span, terms)
         values = kept_values(problem, np.asarray([m.values for m in members], dtype=np.float64))
         w = np.tile(np.asarray([weights[n] for n in problem.objective]), (len(members), 1))
         out = batch_synthesizer(problem)(values, w)
         for b, seg in enumerate(members):
             meas = {n: (float(getattr(out.measures, n)[b]) if ORDERS[n] <= degree else None)
                     for n in OBJECTIVES}
+            if terms is not None:
+                c = np.asarray(out.control[b])
+                meas.update(residual_figures(np.linalg.norm(terms.residual_rows @ c, axis=1)))
+                if terms.force_dense is not None:
+                    meas["peak_force"] = float(out.measures.peak_force[b])
             results[seg.index] = SegmentSynthesis(
                 seg, basis.knots, np.asarray(out.control[b]), meas, float(out.objective[b]),
                 float(out.model_objective[b]), bool(out.converged[b]), float(out.residual[b]),
-                best_builtin(seg, {n: weights[n] for n in names}))
+                best_builtin(seg, {n: weights[n] for n in names}, train))
     return [results[seg.index] for seg in segments]

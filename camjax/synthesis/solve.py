@@ -26,7 +26,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from camjax.synthesis.problem import L2_OBJECTIVES, OBJECTIVES, PEAK_OBJECTIVES, SynthesisProblem
+from camjax.synthesis.problem import ALL_OBJECTIVES, L2_OBJECTIVES, PEAK_TERMS, SynthesisProblem
 from camjax.synthesis.qp import solve_qp
 
 ITERATIONS = 40  # interior-point steps: the known optima converge in 15-25 (tests/test_synthesis.py)
@@ -40,6 +40,8 @@ class Measures(NamedTuple):
     peak_jerk: jax.Array
     l2_accel: jax.Array
     l2_jerk: jax.Array
+    peak_force: jax.Array  # N (N m): 0 without the train's force rows
+    residual_vibration: jax.Array  # RMS over the term's speeds of A / |D|: 0 without the train
 
 
 class SynthesisResult(NamedTuple):
@@ -55,17 +57,35 @@ class SynthesisResult(NamedTuple):
 def measures(problem: SynthesisProblem, control) -> Measures:
     """Peak |q'|, |q''|, |q'''| (on 65 points per knot span: exact where the derivative is
     piecewise linear or constant) and the integrals of q''^2 and q'''^2 (exact). A derivative of
-    an order above the degree is 0 here (the law has jumps there; reports leave it out)."""
+    an order above the degree is 0 here (the law has jumps there; reports leave it out). With the
+    train (:mod:`camjax.synthesis.vibration`): the peak |contact force| on 65 points per span and
+    the residual vibration (RMS over the speeds, normalized by the lift); else 0."""
     c = jnp.asarray(control)
     zero = jnp.zeros((), c.dtype)
     peak = {o: jnp.max(jnp.abs(m @ c)) for o, m in problem.dense.items()}
     l2 = {o: c @ (q @ c) for o, q in problem.grams.items()}
-    return Measures(peak.get(1, zero), peak.get(2, zero), peak.get(3, zero), l2.get(2, zero), l2.get(3, zero))
+    force = residual = zero
+    if problem.train is not None:
+        if problem.train.force_dense is not None:
+            force = jnp.max(jnp.abs(jnp.asarray(problem.train.force_dense) @ c))
+        residual = jnp.sqrt(jnp.maximum(c @ (jnp.asarray(problem.train.residual_gram) @ c), 0.0))
+    return Measures(peak.get(1, zero), peak.get(2, zero), peak.get(3, zero), l2.get(2, zero), l2.get(3, zero),
+                    force, residual)
 
 
 def objective_value(problem: SynthesisProblem, weights, m: Measures):
-    """sum of weight x measure over the problem's objective terms (``weights`` in their order)."""
-    return sum(weights[i] * getattr(m, name) for i, name in enumerate(problem.objective))
+    """sum of weight x measure over the problem's objective terms (``weights`` in their order); the
+    residual vibration enters squared (the mean square amplitude over the speeds: a quadratic)."""
+    return sum(weights[i] * getattr(m, name) ** (2 if name == "residual_vibration" else 1)
+               for i, name in enumerate(problem.objective))
+
+
+def quadratic_of(problem: SynthesisProblem, name: str) -> np.ndarray:
+    """The (n, n) matrix Q of a quadratic term c^T Q c: an L2 term's Gram matrix, or the mean square
+    residual vibration's."""
+    if name == "residual_vibration":
+        return np.asarray(problem.train.residual_gram)
+    return problem.grams[L2_OBJECTIVES[name]]
 
 
 def synthesizer(problem: SynthesisProblem, iterations: int = ITERATIONS) -> Callable:
@@ -76,8 +96,8 @@ def synthesizer(problem: SynthesisProblem, iterations: int = ITERATIONS) -> Call
     null = jnp.asarray(problem.null)
     names = problem.objective
     peaks = [jnp.asarray(m) for m in problem.peak_rows]
-    peak_at = [i for i, n in enumerate(names) if n in PEAK_OBJECTIVES]
-    grams = {i: problem.grams[L2_OBJECTIVES[n]] for i, n in enumerate(names) if n in L2_OBJECTIVES}
+    peak_at = [i for i, n in enumerate(names) if n in PEAK_TERMS]
+    grams = {i: quadratic_of(problem, n) for i, n in enumerate(names) if n not in PEAK_TERMS}
     l2 = [(i, jnp.asarray(null.T @ q @ null), jnp.asarray(null.T @ q), jnp.asarray(q))
           for i, q in grams.items()]
     nz, k = problem.free, len(peaks)
@@ -141,7 +161,7 @@ def batch_synthesizer(problem: SynthesisProblem, iterations: int = ITERATIONS) -
 
 def weights_vector(problem: SynthesisProblem, weights: dict) -> np.ndarray:
     """The weights of a {name: weight} mapping in the problem's term order (0 for names absent)."""
-    unknown = [n for n in weights if n not in OBJECTIVES]
+    unknown = [n for n in weights if n not in ALL_OBJECTIVES]
     if unknown:
-        raise ValueError(f"{unknown[0]}: unknown objective term (allowed: {', '.join(OBJECTIVES)})")
+        raise ValueError(f"{unknown[0]}: unknown objective term (allowed: {', '.join(ALL_OBJECTIVES)})")
     return np.asarray([float(weights.get(n, 0.0)) for n in problem.objective], dtype=np.float64)

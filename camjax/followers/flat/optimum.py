@@ -28,8 +28,8 @@ from camjax.followers.flat.problem import (
 )
 from camjax.numerics import safe_divide
 
-POLISH_STEPS = 8
-POLISH_START_STEP = 1e-4
+POLISH_STEPS = 12  # most refinements of the peak per polish (it stops once the point holds)
+STOP_RTOL = 1e-9  # a model step shorter than this (relative) ends the search: its point is the optimum
 # Newton steps of the peak refinements inside the polish: the scan leaves 1/8 of two samples,
 # which Newton closes in ~5; the final evaluation refines with the full ITERATIONS.
 POLISH_ITERATIONS = 8
@@ -41,10 +41,18 @@ def polish(problem: Problem, weights: Weights, design: Design) -> Design:
     L: the objective grows with L, so the optimum is the smallest feasible L, clip(2 max|s'|,
     L_lo, L_hi), exact. R_b: g(R) = alpha R / N + gamma sigma_peak(R) / sigma_max is convex on
     the feasible [R_need, R_hi] (as in :func:`global_optimum`); its derivative, by the envelope
-    theorem at the refined peak, is nondecreasing. A secant on g' safeguarded by bisection in
-    the bracket that the solver's R splits off [R_need, R_hi] converges to the minimizer; an
-    end is kept when g' does not change sign there. Without ``problem.exact`` the
-    design is returned unchanged. Traceable and vmappable (fixed step count).
+    theorem at the refined peak, is nondecreasing. Every point evaluated narrows the bracket
+    [a, b] with g'(a) < 0 < g'(b) that the solver's R splits off [R_need, R_hi]. The next point
+    is the model step: the peak's coefficient C* and curvature radius rho* at the last point give
+    g' as alpha / N - gamma C* / (2 sigma_max (R + rho* - R_last)^(3/2)) while the peak stays at
+    its angle, whose root is :func:`optimal_curvature_radius` - q* (exact in one step when the
+    peak's angle does not move with R; a fast fixed point when it moves a little); bisection
+    when that leaves the bracket or the last step did not halve |g'| (the peak jumps between
+    two angles: a kink). It stops once a model step is shorter than :data:`STOP_RTOL` (its point
+    is the answer) or after :data:`POLISH_STEPS` (the point of least |g'| seen is). An end is kept when g'
+    does not change sign there. The ends' peak slopes do not depend on the weighting: under
+    ``vmap`` over weightings they are computed once. Without ``problem.exact`` the design is
+    returned unchanged. Traceable and vmappable.
     """
     if problem.exact is None:
         return design
@@ -53,59 +61,51 @@ def polish(problem: Problem, weights: Weights, design: Design) -> Design:
                      problem.upper.base_radius_mm)
     hi = problem.upper.base_radius_mm
 
-    def slope(r):
-        def peak(x):
-            return exact_peak_stress(problem, Design(x, width), POLISH_ITERATIONS).value
+    def peak(r):  # (sigma*, d sigma*/dR) at R = r, the slope by the envelope theorem
+        return jax.value_and_grad(lambda x: exact_peak_stress(problem, Design(x, width), POLISH_ITERATIONS).value)(r)
 
-        peak_slope = jax.grad(peak)(r)
+    def slope(peak_slope):
         return weights.alpha / problem.size_norm_mm + weights.gamma * peak_slope / problem.sigma_max_MPa
 
-    # the secant starts at the solver's R and a step beside it (the grid's optimum is ~1e-3
-    # relative off, so the iterates converge superlinearly from there); every point evaluated
-    # narrows the bracket [a, b] with g'(a) < 0 < g'(b)
+    def model_step(x, sigma, peak_slope):
+        # sigma = C / sqrt(rho) and d sigma / dR = -C / (2 rho^(3/2)) at the peak: rho* and C*
+        rho = safe_divide(-sigma, 2.0 * peak_slope, fallback=jnp.inf)
+        coefficient = sigma * jnp.sqrt(jnp.where(jnp.isfinite(rho) & (rho > 0), rho, 0.0))
+        best_rho = optimal_curvature_radius(weights, coefficient, problem.sigma_max_MPa, problem.size_norm_mm)
+        return x + best_rho - rho  # R + rho_best - rho*: inf or nan fall to bisection
+
+    g_lo, g_hi = slope(peak(lo)[1]), slope(peak(hi)[1])  # weighting-independent peaks
+    interior = (g_lo < 0) & (g_hi > 0)  # else an end is the optimum: no search
+
+    def cond(state):
+        i, a, b, g_last, x, nxt, best, g_best = state
+        moves = (i == 0) | (jnp.abs(nxt - x) > STOP_RTOL * (1.0 + jnp.abs(x)))
+        return interior & (i < POLISH_STEPS) & moves & (g_best != 0)
+
+    def body(state):
+        i, a, b, g_last, x, nxt, best, g_best = state
+        x = nxt
+        sigma, peak_slope = peak(x)
+        g = slope(peak_slope)
+        a, b = jnp.where(g < 0, x, a), jnp.where(g < 0, b, x)
+        closer = jnp.abs(g) < jnp.abs(g_best)
+        best, g_best = jnp.where(closer, x, best), jnp.where(closer, g, g_best)
+        # the model step, unless it leaves the bracket or the last one did not halve |g'| (the
+        # peak jumps between two angles at a kink): then bisection, which halves the bracket
+        step = model_step(x, sigma, peak_slope)
+        use_model = (step >= a) & (step <= b) & (jnp.abs(g) <= 0.5 * jnp.abs(g_last))
+        nxt = jnp.where(use_model, step, 0.5 * (a + b))
+        return i + 1, a, b, g, x, nxt, best, g_best
+
     r0 = jnp.clip(design.base_radius_mm, lo, hi)
-    r1 = jnp.clip(r0 + POLISH_START_STEP * (hi - lo), lo, hi)
-    r1 = jnp.where(r1 == r0, jnp.clip(r0 - POLISH_START_STEP * (hi - lo), lo, hi), r1)
-    points = jnp.stack([lo, hi, r0, r1])
-    starts = points.shape[0]
-
-    def secant(state):
-        a, b, x0, g0, x1, g1, best, g_best = state
-        # secant through the last two iterates; bisection when it leaves the bracket (whose ends
-        # count as inside: a converged iterate is an end, and the secant then stays on it)
-        x = x1 - g1 * safe_divide(x1 - x0, g1 - g0)
-        return jnp.where((x >= a) & (x <= b), x, 0.5 * (a + b))
-
-    def after_secant(state, x, gx):
-        a, b, x0, g0, x1, g1, best, g_best = state
-        a, b = jnp.where(gx < 0, x, a), jnp.where(gx < 0, b, x)
-        closer = jnp.abs(gx) < jnp.abs(g_best)
-        return a, b, x1, g1, x, gx, jnp.where(closer, x, best), jnp.where(closer, gx, g_best)
-
-    def after_starts(slopes):
-        g0, g1 = slopes[2], slopes[3]
-        a = jnp.max(jnp.where(slopes < 0, points, lo))
-        b = jnp.min(jnp.where(slopes >= 0, points, hi))
-        start_best = jnp.where(jnp.abs(g1) < jnp.abs(g0), r1, r0)
-        return a, b, r0, g0, r1, g1, start_best, jnp.minimum(jnp.abs(g0), jnp.abs(g1))
-
-    def step(i, carry):
-        # the first ``starts`` passes take the start points' slopes, the rest are secant steps:
-        # one loop body, so the refinement behind the slope is traced (and compiled) once
-        slopes, state = carry
-        starting = i < starts
-        x = jnp.where(starting, points[jnp.minimum(i, starts - 1)], secant(state))
-        gx = slope(x)
-        slopes = jnp.where(starting & (jnp.arange(starts) == i), gx, slopes)
-        state = jax.tree.map(lambda s, t: jnp.where(starting, s, t), after_starts(slopes),
-                             after_secant(state, x, gx))
-        return slopes, state
-
-    zero = jnp.zeros_like(lo)
-    carry = (jnp.zeros_like(points), (zero,) * 8)
-    slopes, state = jax.lax.fori_loop(0, starts + POLISH_STEPS, step, carry)
-    g_lo, g_hi = slopes[0], slopes[1]
-    x = state[6]  # the point of smallest |g'| seen
+    inf = jnp.full_like(lo, jnp.inf)
+    state = (jnp.zeros((), jnp.int32), lo, hi, inf, r0, r0, r0, inf)
+    i, a, b, g_last, x, nxt, best, g_best = jax.lax.while_loop(cond, body, state)
+    # a search that stopped on a short model step ends at that step's point (the model's error
+    # there is the square of a step already below STOP_RTOL); one stopped by the step count or
+    # at a kink, at the point of least |g'| seen
+    settled = jnp.abs(nxt - x) <= STOP_RTOL * (1.0 + jnp.abs(x))
+    x = jnp.where(settled & (nxt >= a) & (nxt <= b), nxt, best)
     radius = jnp.where(g_lo >= 0, lo, jnp.where(g_hi <= 0, hi, x))
     return Design(jax.lax.stop_gradient(radius), width)
 
