@@ -17,8 +17,12 @@ of the same report at :data:`REFERENCE_SAMPLES` samples (1e6: a sampled extremum
 N^-2, so ~1e-11 relative there; it does not use the refinement it judges).
 
 Time: the median of warm calls of ``design_report`` (the whole analysis: curves, extrema, loads,
-report), compile time apart (first call minus the median). The rocking followers' exact reports
-cost seconds per warm call whatever N (a per-call overhead the times show).
+report), compile time apart (first call minus the median). With exact extrema every figure is
+refined, the smallest admissible base radius included (the root of the sizing's limits refined
+between the samples, :mod:`camjax.followers._sizing`); a roller rocker's smallest cam-surface radius
+is exact where its pitch curve is convex at every angle (the example scenes' are). ``--check``
+prints, per follower, the exact figures' largest error at N = 360 and fails (exit 1) above
+:data:`EXACT_TOLERANCE` (:data:`QUICK_TOLERANCE` with ``--quick``).
 
 ``python -m benchmarks.extrema_samples --out benchmarks/results/extrema.json [FOLLOWER ...]``
 (followers already in the file and not named are kept; ``--quick``: N = 90 and 360, reference
@@ -45,6 +49,10 @@ SAMPLES = (90, 360, 3600, 36_000)
 REFERENCE_SAMPLES = 1_000_000
 MODES = ("grid", "exact")
 _EXTREMUM_LEAVES = ("max", "min", "max_abs", "min_abs")
+# exact figures at N = 360 must be within this of the reference (whose own error is ~1e-11;
+# --quick's 36 000-sample reference is off by up to ~2e-6 in its worst figure, a sharp minimum)
+EXACT_TOLERANCE = 1e-9
+QUICK_TOLERANCE = 1e-5
 
 
 def figures(report: dict, prefix: str = "") -> dict[str, float]:
@@ -122,6 +130,9 @@ def main(argv=None) -> int:
     parser.add_argument("followers", nargs="*", help="follower types (default: every registered one)")
     parser.add_argument("--out", type=Path, required=True, help="JSON file (followers not run are kept)")
     parser.add_argument("--quick", action="store_true", help="N = 90 and 360, reference 36 000")
+    parser.add_argument("--check", action="store_true",
+                        help=f"exit 1 when an exact figure at N = 360 is off by more than "
+                             f"{EXACT_TOLERANCE:g} ({QUICK_TOLERANCE:g} with --quick)")
     args = parser.parse_args(argv)
     names = args.followers or list(followers.names())
     unknown = [n for n in names if n not in followers.names()]
@@ -136,6 +147,14 @@ def main(argv=None) -> int:
         data.setdefault("environment", {})[name] = environment("float64")
         args.out.parent.mkdir(parents=True, exist_ok=True)
         args.out.write_text(json.dumps(data, indent=1, default=float))
+    if args.check:
+        worst = {name: next(r for r in data["followers"][name]["rows"]
+                            if r["samples"] == 360 and r["extrema"] == "exact") for name in names}
+        for name, row in worst.items():
+            print(f"{name}: exact at N = 360 off by {row['max_rel_error']:.1e} ({row['worst_figure']})")
+        tolerance = QUICK_TOLERANCE if args.quick else EXACT_TOLERANCE
+        if any(row["max_rel_error"] > tolerance for row in worst.values()):
+            return 1
     return 0
 
 

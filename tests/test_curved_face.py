@@ -14,6 +14,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import jax.numpy as jnp
@@ -279,26 +280,32 @@ def test_a_narrow_face_sets_the_smallest_cam_where_the_contact_reaches_its_edge(
 @pytest.mark.slow
 def test_a_wide_face_leaves_the_smallest_cam_to_the_other_limits():
     scene = parse_scene(_scene_text(face_radius=100.0, face_width=60.0))
+    grid = dataclasses.replace(scene, motion=dataclasses.replace(scene.motion, extrema="grid"))
     follower = camjax.followers.of(scene)
     m = follower.min_base_radius(scene, camjax.evaluate.scene_arrays(scene))
-    assert m.binding == "undercut"
-    # there the smallest convex cam-surface radius on the samples is 0 (min_curvature_radius_mm),
-    # from positions: 1/kappa - R_c with kappa by second differences at 0.01 deg, whose error
-    # ~1e-8 1/mm is R_c^2 1e-8 = 1e-4 mm in rho_c; 0.2 mm smaller and the face undercuts the cam
+    g = follower.min_base_radius(grid, camjax.evaluate.scene_arrays(grid))
+    assert m.binding == g.binding == "undercut"
+    # the smallest convex cam-surface radius is 0 (min_curvature_radius_mm) there, from positions:
+    # 1/kappa - R_c with kappa by second differences at 0.01 deg, whose error ~1e-8 1/mm is
+    # R_c^2 1e-8 = 1e-4 mm in rho_c; 0.2 mm smaller and the face undercuts the cam. With grid
+    # extrema on the scene's samples; with exact extrema (the default) at every angle (all 36 000
+    # dense points), which takes a larger radius than the samples'
     n = 36_000
     every = n // 180  # the scene's samples among the dense ones
 
-    def rho_c_min(rb):
+    def rho_c_min(rb, stride):
         kin = evaluate(scene.motion.program, n)
         x, y = centres(rb, 100.0, 0.0, kin, "ccw")
         h = 2 * np.pi / n
         d1 = lambda v: (np.roll(v, -1) - np.roll(v, 1)) / (2 * h)  # noqa: E731
         d2 = lambda v: (np.roll(v, -1) - 2 * v + np.roll(v, 1)) / h**2  # noqa: E731
         kappa = -(d1(x) * d2(y) - d1(y) * d2(x)) / (d1(x) ** 2 + d1(y) ** 2) ** 1.5
-        return float(np.min(1 / kappa[::every] - 100.0))
+        return float(np.min(1 / kappa[::stride] - 100.0))
 
-    assert abs(rho_c_min(m.radius_mm)) < 1e-3
-    assert rho_c_min(m.radius_mm - 0.2) < -0.1
+    assert abs(rho_c_min(g.radius_mm, every)) < 1e-3
+    assert abs(rho_c_min(m.radius_mm, 1)) < 1e-3
+    assert m.radius_mm > g.radius_mm and rho_c_min(g.radius_mm, 1) < -1e-3
+    assert rho_c_min(m.radius_mm - 0.2, 1) < -0.1
     # the face's edge is far: the contact stays well inside W/2 = 30 mm
     assert _max_travel_from_positions(m.radius_mm, 100.0, 0.0, scene.motion.program) < 20.0
 

@@ -72,23 +72,44 @@ def test_min_base_radius_is_the_smallest_cam_for_the_designs_roller_and_offset()
     assert f"R_f = {rf:g} mm, offset {e:g} mm" in data["min_base_radius_rule"]
 
 
+def _convex_radii(scene, prime_radius_mm, samples=None):
+    """SPEC 3's zero-offset pitch radius in NumPy on the scene's grid (or ``samples`` of them):
+    rho_p on the convex samples and their angles (deg)."""
+    if samples is not None:
+        scene = dataclasses.replace(scene, motion=dataclasses.replace(scene.motion, samples=samples, extrema="grid"))
+    arrays = camjax.scene_arrays(scene)
+    s, v, a = (np.asarray(x) for x in (arrays.kin.s, arrays.kin.ds, arrays.kin.d2s))
+    w = prime_radius_mm + s
+    rho_p = (w**2 + v**2) ** 1.5 / (w**2 + 2 * v**2 - a * w)
+    convex = rho_p > 0
+    return rho_p[convex], np.asarray(arrays.theta_deg)[convex]
+
+
 def test_undercut_binds_for_a_large_roller():
     text = _variant("roller_radius_mm = 5.0 ", "roller_radius_mm = 12.0 ")
     scene = dataclasses.replace(parse_scene(text, "big-roller"), design=None)
-    data = camjax.design_report(scene)
-    assert data["min_base_radius_binding"] == "undercut"
-    assert "undercut" in data["min_base_radius_rule"] and f"{data['min_base_radius_deg']:g} deg" in \
-        data["min_base_radius_rule"]
-    # at that prime radius the smallest convex cam-surface radius is the scene's 1 mm: SPEC 3's
-    # zero-offset pitch radius in NumPy, rho_c = rho_p - R_f on the convex samples
-    kin = camjax.scene_arrays(scene).kin
-    s, v, a = (np.asarray(x) for x in (kin.s, kin.ds, kin.d2s))
-    w = data["min_prime_radius_mm"] + s
-    rho_p = (w**2 + v**2) ** 1.5 / (w**2 + 2 * v**2 - a * w)
-    convex = rho_p > 0
-    # bisection to the last bit; the sampled minimum is then the limit to round-off
-    assert np.min(rho_p[convex] - 12.0) == pytest.approx(1.0, abs=1e-9)
-    assert int(np.argmin(np.where(convex, rho_p, np.inf))) == round(data["min_base_radius_deg"])
+    grid = dataclasses.replace(scene, motion=dataclasses.replace(scene.motion, extrema="grid"))
+    for case in (grid, scene):
+        data = camjax.design_report(case)
+        assert data["min_base_radius_binding"] == "undercut"
+        assert "undercut" in data["min_base_radius_rule"] and f"{data['min_base_radius_deg']:g} deg" in \
+            data["min_base_radius_rule"]
+    # grid extrema: at that prime radius the smallest convex cam-surface radius on the samples is the
+    # scene's 1 mm (rho_c = rho_p - R_f), by bisection to the last bit: the limit to round-off
+    data = camjax.design_report(grid)
+    rho_p, theta = _convex_radii(grid, data["min_prime_radius_mm"])
+    assert np.min(rho_p - 12.0) == pytest.approx(1.0, abs=1e-9)
+    assert theta[int(np.argmin(rho_p))] == pytest.approx(data["min_base_radius_deg"])
+    # exact extrema (the default): the limit holds between the samples too, so the prime radius is
+    # larger than the grid's, its samples keep more than 1 mm, and on 10^6 samples (grid error
+    # ~(360/10^6)^2 of the 360-sample grid's 2e-3 mm, ~1e-9 mm) the smallest radius is 1 mm, at
+    # the angle the report names (to the dense grid's spacing, 3.6e-4 deg)
+    exact = camjax.design_report(scene)
+    assert exact["min_prime_radius_mm"] > data["min_prime_radius_mm"]
+    assert np.min(_convex_radii(scene, exact["min_prime_radius_mm"])[0] - 12.0) > 1.0
+    rho_p, theta = _convex_radii(scene, exact["min_prime_radius_mm"], samples=1_000_000)
+    assert np.min(rho_p - 12.0) == pytest.approx(1.0, abs=1e-8)
+    assert theta[int(np.argmin(rho_p))] == pytest.approx(exact["min_base_radius_deg"], abs=1e-3)
 
 
 @pytest.mark.slow

@@ -26,12 +26,11 @@ import math
 from dataclasses import replace
 from typing import Any, NamedTuple
 
-import jax
 import jax.numpy as jnp
 import numpy as np
 
 from camjax import extrema as extrema_mod
-from camjax import loads
+from camjax import loads, runtime
 from camjax import program as program_mod
 from camjax.errors import SceneError
 from camjax.evaluate import SceneArrays, scene_arrays
@@ -191,6 +190,43 @@ def rocker_violations(curves: RockerCurves, scene, extremes: dict[str, Extremes]
     return out
 
 
+class _Motion(NamedTuple):
+    rotation: str
+
+
+class CurveScene(NamedTuple):
+    """What :meth:`RockingFollower.point_curves` reads of a scene (its follower spec, [contact] and
+    the cam's rotation): hashable and picklable, so that it keys a saved program."""
+
+    follower: Any
+    contact: Any
+    motion: _Motion
+
+    @classmethod
+    def of(cls, scene) -> CurveScene:
+        return cls(scene.follower, scene.contact, _Motion(scene.motion.rotation))
+
+
+@runtime.program_cache(static_argnames=("drawn", "base_radius_mm", "names"))
+def _refined_curves(prog, speed, grid, drawn: CurveScene, base_radius_mm: float, names: tuple[str, ...]):
+    """Max and min of the named point curves of ``drawn``'s rocker at one base radius, refined off
+    their grid values ``grid`` (Q, N) in one program (:func:`camjax.extrema.refine_curves`).
+    Module-level, so that one compiled program (and a saved one, :func:`camjax.runtime.program_cache`)
+    serves every call with the same follower, radius and curves."""
+    from camjax import followers
+
+    kind = followers.get(drawn.follower.type)
+
+    def stacked(segment, theta_deg, params):
+        p, w = params
+        c = kind.point_curves(drawn, program_mod.segment_motion(p, segment, theta_deg), w, base_radius_mm)
+        return jnp.stack([c[n] for n in names])
+
+    # every curve is a function of the motion: dwells are constant
+    return extrema_mod.refine_curves(stacked, (prog, speed), program_mod.segment_bounds_deg(prog), grid,
+                                     constant=extrema_mod.dwells(prog))
+
+
 class RockingFollower(Follower):
     """An arm swinging about a pivot: the run every such type shares, and its hooks."""
 
@@ -199,8 +235,10 @@ class RockingFollower(Follower):
     # ---- hooks: the follower's physics
 
     @abc.abstractmethod
-    def sizing(self, scene, kin: Kinematics) -> RockerSizing:
-        """Smallest admissible cam of the scene's rocker (Python; SceneError when none exists)."""
+    def sizing(self, scene, kin: Kinematics, program=None) -> RockerSizing:
+        """Smallest admissible cam of the scene's rocker (Python; SceneError when none exists): with
+        ``program`` (the :class:`camjax.program.MotionProgram` behind ``kin``; exact extrema) its
+        limits hold at every cam angle, else at the samples of ``kin``."""
 
     @abc.abstractmethod
     def closure_problem(self, scene, kin: Kinematics, base_radius_mm: float) -> str | None:
@@ -273,16 +311,9 @@ class RockingFollower(Follower):
         if arrays.model is None:
             hi, hi_deg, lo, lo_deg = extrema_mod.sampled_extremes(grid, arrays.theta_deg)
         else:
-            def stacked(segment, theta_deg, params):
-                p, w = params
-                c = self.point_curves(drawn, program_mod.segment_motion(p, segment, theta_deg), w, radius)
-                return jnp.stack([c[n] for n in names])
-
-            def refine(prog, speed, grid):  # every curve is a function of the motion: dwells are constant
-                return extrema_mod.refine_curves(stacked, (prog, speed), program_mod.segment_bounds_deg(prog), grid,
-                                                 constant=extrema_mod.dwells(prog))
-
-            hi, hi_deg, lo, lo_deg = (np.asarray(a) for a in jax.jit(refine)(arrays.model.program, speed, grid))
+            hi, hi_deg, lo, lo_deg = (np.asarray(a) for a in _refined_curves(
+                arrays.model.program, jnp.asarray(speed, grid.dtype), grid, drawn=CurveScene.of(drawn),
+                base_radius_mm=radius, names=names))
         return {n: Extremes(float(hi[k]), float(hi_deg[k]), float(lo[k]), float(lo_deg[k]))
                 for k, n in enumerate(names)}
 
@@ -347,11 +378,12 @@ class RockingFollower(Follower):
             problem = problem_from_scene(scene, arrays)
             design = solve(problem, (d.alpha, d.gamma), mode=d.mode, solver=d.solver, seed=d.seed).to_json(problem)
         kin, w, drawn = arrays.kin, arrays.cam_speed_rad_s, scene
+        program = None if arrays.model is None else arrays.model.program
         if design is not None:
             # the cam is sized and drawn with the design's pivot, arm (or face) and roller
             drawn = replace(scene, follower=self.drawn_follower(scene, design))
             try:
-                sizing = self.sizing(drawn, kin)
+                sizing = self.sizing(drawn, kin, program)
             except SceneError:  # an infeasible design: its own radius is all there is to report
                 sizing = RockerSizing(design["base_radius_mm"], design.get("prime_radius_mm"), 0.0, "none")
             if base_radius_mm is None:
@@ -359,7 +391,7 @@ class RockingFollower(Follower):
             else:
                 radius, source = self.drawing_radius(drawn, kin, sizing, base_radius_mm)
         else:
-            sizing = self.sizing(scene, kin)
+            sizing = self.sizing(scene, kin, program)
             radius, source = self.drawing_radius(scene, kin, sizing, base_radius_mm)
         curves = self.evaluate(drawn, kin, w, radius)
         extremes = self.curve_extremes(drawn, arrays, None, radius)

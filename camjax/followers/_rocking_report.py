@@ -91,6 +91,13 @@ def report(scene, run, blocks) -> dict[str, Any]:
     if sizing.min_prime_radius_mm is not None:
         out["min_prime_radius_mm"] = sizing.min_prime_radius_mm
     rho = block(c.rho_mm, "rho")
+    kappa = ex.get("pitch_curvature")
+    if "rho" not in ex and kappa is not None and c.roller_radius_mm is not None and kappa.min > 0:
+        # a roller's cam radius rho_c = 1 / kappa - R_f has poles where its pitch curve inflects (no
+        # refined extremes of its own); where the pitch curve is convex at every angle (the refined
+        # min of kappa > 0) rho_c is smallest where kappa is largest, at kappa's refined max. With a
+        # concave part rho_c passes through infinity and the samples' min stays
+        rho = {"min": 1.0 / kappa.max - c.roller_radius_mm, "min_deg": kappa.max_deg}
     out["evaluated"] = {
         "base_radius_mm": c.base_radius_mm,
         "arm_start_angle_deg": c.arm_start_angle_deg,

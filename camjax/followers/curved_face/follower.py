@@ -17,7 +17,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from camjax import contact, program
+from camjax import contact, program, runtime
 from camjax.evaluate import curve_extremes
 from camjax.followers._pitch import rotation_sign
 from camjax.followers._translating import (
@@ -34,6 +34,7 @@ from camjax.followers.curved_face.geometry import (
     CURVED_MIN_CURVATURE_RADIUS_MM,
 )
 from camjax.followers.roller import geometry as roller_geo
+from camjax.followers.roller.follower import exact_prime_radius
 from camjax.results import MinBaseRadius
 from camjax.scene.reader import DEFAULT, build, fixed_or_free
 from camjax.scene.spec import FollowerSpec
@@ -45,6 +46,9 @@ CURVED_CURVES = ("pressure_angle", "pitch_rho_abs", "undercut_margin", "face_tra
 # the angle-limit sizing: |s' - e~| / tan(limit) - s (mm), limit = min(phi_max, asin(W / 2 R_c))
 PRESSURE_NEED = "pressure_angle_need"
 
+
+# the sampled sizing, one compiled (and saved) program for every call
+_grid_sizing = runtime.program_cache(curved_geo.min_prime_radius, static_argnames=("rotation",))
 
 @dataclass(frozen=True, kw_only=True)
 class CurvedFaceSpec(FollowerSpec):
@@ -131,17 +135,19 @@ class CurvedFace(TranslatingFollower):
 
     def _sizing(self, scene, arrays, follower) -> MinBaseRadius:
         f, t = follower, np.asarray(arrays.theta_deg)
-        sizing, face = curved_geo.min_prime_radius(arrays.kin, f.face_radius_mm, f.face_width_mm, f.offset_mm,
-                                                   math.radians(f.max_pressure_angle_deg),
-                                                   f.min_curvature_radius_mm, scene.motion.rotation)
+        sizing, face = _grid_sizing(arrays.kin, f.face_radius_mm, f.face_width_mm, f.offset_mm,
+                                    math.radians(f.max_pressure_angle_deg), f.min_curvature_radius_mm,
+                                    scene.motion.rotation)
         angle = "face_travel" if bool(face) else "pressure_angle"
+        if arrays.model is not None:  # exact: the pressure angle's and the undercut's limits refined
+            need = curve_extremes(scene, arrays, (PRESSURE_NEED,), follower=follower)[PRESSURE_NEED]
+            rp, deg, undercut = exact_prime_radius(arrays, sizing.prime_radius_mm, need, f.face_radius_mm,
+                                                   f.offset_mm, f.min_curvature_radius_mm,
+                                                   scene.motion.rotation)
+            return MinBaseRadius(rp - f.face_radius_mm, deg, "undercut" if undercut else angle, rp)
         if bool(sizing.undercut_binds):
             return MinBaseRadius(_f(sizing.prime_radius_mm) - f.face_radius_mm, _f(t[int(sizing.index)]),
                                  "undercut", _f(sizing.prime_radius_mm))
-        if arrays.model is not None:  # exact: the closed form's max refined off the grid (as the roller)
-            need = curve_extremes(scene, arrays, (PRESSURE_NEED,), follower=follower)[PRESSURE_NEED]
-            rp = math.hypot(f.offset_mm, max(need.max, 0.0))
-            return MinBaseRadius(rp - f.face_radius_mm, need.max_deg, angle, rp)
         return MinBaseRadius(_f(sizing.prime_radius_mm) - f.face_radius_mm, _f(t[int(sizing.index)]), angle,
                              _f(sizing.prime_radius_mm))
 

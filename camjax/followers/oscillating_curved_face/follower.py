@@ -18,7 +18,6 @@ from typing import NamedTuple
 import numpy as np
 
 from camjax import contact, loads
-from camjax.errors import SceneError
 from camjax.family import FEASIBILITY_TOL_MM
 from camjax.followers._rocking import (
     TRAIN_KEYS,
@@ -35,7 +34,7 @@ from camjax.followers.oscillating_curved_face.geometry import (
     CURVED_MIN_CURVATURE_RADIUS_MM,
 )
 from camjax.followers.oscillating_roller import geometry as rocker_roller_geo
-from camjax.followers.oscillating_roller.follower import check_rocker_closes
+from camjax.followers.oscillating_roller.follower import arm_sizing, arm_sizing_result, check_rocker_closes
 from camjax.followers.roller import geometry as roller_geo
 from camjax.results import GeometryViolation
 from camjax.scene.reader import DEFAULT, build, fixed_or_free
@@ -109,26 +108,20 @@ class OscillatingCurvedFace(RockingFollower):
 
     # ---- hooks of the rocking family
 
-    def sizing(self, scene, kin) -> RockerSizing:
+    def sizing(self, scene, kin, program=None) -> RockerSizing:
         """The smallest prime circle with |phi| <= max_pressure_angle_deg, the contact on the face
-        (|phi| <= asin(W / 2 R_c)) and no undercut, minus R_c
-        (:func:`camjax.followers.oscillating_curved_face.geometry.min_prime_radius`)."""
-        f, rotation = scene.follower, scene.motion.rotation
-        t = np.degrees(np.asarray(kin.theta))
-        s, face = curved_geo.min_prime_radius(kin, f.pivot_distance_mm, f.arm_length_mm, f.face_radius_mm,
-                                              f.face_width_mm, math.radians(f.max_pressure_angle_deg),
-                                              f.min_curvature_radius_mm, rotation)
-        if not bool(s.found):
-            raise SceneError("follower.arm_length_mm", f.arm_length_mm,
-                             f"with pivot_distance_mm = {f.pivot_distance_mm:g} no prime radius keeps "
-                             f"|pressure angle| <= {f.max_pressure_angle_deg:g} deg and the contact on the "
-                             f"face (W = {f.face_width_mm:g} mm) without undercut",
-                             "a longer arm, another pivot distance, a wider face or a larger "
-                             "max_pressure_angle_deg")
-        binding = "face_travel" if bool(face) else "pressure_angle"
-        if bool(s.undercut_binds):
-            binding = "undercut"
-        return RockerSizing(_f(s.base_radius_mm), _f(s.prime_radius_mm), _f(t[int(s.index)]), binding)
+        (|phi| <= asin(W / 2 R_c)) and no undercut, minus R_c: the oscillating roller's sizing
+        (:func:`camjax.followers.oscillating_roller.follower.arm_sizing`) with R_f = R_c and the
+        limit min(phi_max, asin(W / 2 R_c)), as
+        :func:`camjax.followers.oscillating_curved_face.geometry.min_prime_radius`."""
+        f = scene.follower
+        face = _f(curved_geo.face_travel_limit_rad(f.face_radius_mm, f.face_width_mm))
+        limit = min(math.radians(f.max_pressure_angle_deg), face)
+        sampled, boundary = arm_sizing(kin, program, f.pivot_distance_mm, f.arm_length_mm, f.face_radius_mm,
+                                       limit, f.min_curvature_radius_mm, scene.motion.rotation)
+        angle = "face_travel" if face < math.radians(f.max_pressure_angle_deg) else "pressure_angle"
+        return arm_sizing_result(kin, sampled, boundary, f, f.max_pressure_angle_deg, f.face_radius_mm, angle,
+                                 f"and the contact on the face (W = {f.face_width_mm:g} mm) without undercut")
 
     def closure_problem(self, scene, kin, base_radius_mm) -> str | None:
         """As the oscillating roller's with R_f = R_c: |d - l| < R_b + R_c < d + l and the arm stays

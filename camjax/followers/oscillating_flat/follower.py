@@ -11,9 +11,10 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import jax.numpy as jnp
 import numpy as np
 
-from camjax import contact, loads
+from camjax import contact, loads, runtime
 from camjax.errors import SceneError
 from camjax.followers._rocking import TRAIN_KEYS, RockerGeometry, RockerSizing, RockingFollower, read_train
 from camjax.followers.oscillating_flat import geometry as rocker_flat_geo
@@ -21,6 +22,25 @@ from camjax.followers.oscillating_flat.geometry import OSCILLATING_FLAT_MIN_CURV
 from camjax.scene.reader import DEFAULT, build, fixed_or_free
 from camjax.scene.spec import FollowerSpec
 
+
+@runtime.program_cache(static_argnames=("rotation",))
+def flat_sizing(kin, program, pivot_distance_mm, face_offset_mm, min_curvature_radius_mm, rotation):
+    """The sizing in one compiled (and saved) program: the samples'
+    (:func:`camjax.followers.oscillating_flat.geometry.oscillating_flat_min_base_radius`) and, with
+    ``program`` (exact extrema; None: grid), the smallest psi0 from the samples' up with
+    rho >= rho_min at every cam angle (:func:`camjax.followers._sizing.exact_boundary`). Returns
+    (sampled sizing, :class:`camjax.followers._sizing.Boundary` or None)."""
+    from camjax.followers import _sizing
+    from camjax.followers._pitch import rotation_sign
+
+    s = rocker_flat_geo.oscillating_flat_min_base_radius(kin, pivot_distance_mm, face_offset_mm,
+                                                         min_curvature_radius_mm, rotation)
+    if program is None:
+        return s, None
+    values = (pivot_distance_mm, face_offset_mm, rotation_sign(rotation), min_curvature_radius_mm)
+    params = tuple(jnp.asarray(v, kin.s.dtype) for v in values)
+    return s, _sizing.exact_boundary(program, kin, s.arm_start_angle, 0.5 * jnp.pi - jnp.max(kin.s), params,
+                                     limits=rocker_flat_geo.sizing_limits)
 
 @dataclass(frozen=True, kw_only=True)
 class OscillatingFlatSpec(FollowerSpec):
@@ -64,16 +84,21 @@ class OscillatingFlat(RockingFollower):
                           "a larger pivot distance")
         return {"base_radius_mm": base, "pivot_distance_mm": pivot, "face_offset_mm": offset}
 
-    def sizing(self, scene, kin) -> RockerSizing:
-        f, rotation = scene.follower, scene.motion.rotation
-        t = np.degrees(np.asarray(kin.theta))
-        s = rocker_flat_geo.oscillating_flat_min_base_radius(kin, f.pivot_distance_mm, f.face_offset_mm,
-                                                             f.min_curvature_radius_mm, rotation)
-        if not bool(s.found):
+    def sizing(self, scene, kin, program=None) -> RockerSizing:
+        f = scene.follower
+        s, b = flat_sizing(kin, program, f.pivot_distance_mm, f.face_offset_mm, f.min_curvature_radius_mm,
+                           scene.motion.rotation)
+        if not bool(s.found) or (b is not None and not bool(b.refined)):
+            where = "" if not bool(s.found) else (f" at every cam angle (the {kin.s.shape[-1]} samples "
+                                                  'alone admit one: extrema = "grid" sizes on them)')
             raise SceneError("follower.pivot_distance_mm", f.pivot_distance_mm,
                              f"with face_offset_mm = {f.face_offset_mm:g} no base radius keeps the cam's "
-                             f"radius of curvature >= {f.min_curvature_radius_mm:g} mm",
+                             f"radius of curvature >= {f.min_curvature_radius_mm:g} mm{where}",
                              "a larger pivot distance")
+        if b is not None:  # exact: rho >= rho_min between the samples too
+            rb = f.pivot_distance_mm * math.sin(_f(b.x)) - f.face_offset_mm
+            return RockerSizing(rb, None, _f(b.angle_deg), "curvature")
+        t = np.degrees(np.asarray(kin.theta))
         return RockerSizing(_f(s.base_radius_mm), None, _f(t[int(s.index)]), "curvature")
 
     def closure_problem(self, scene, kin, base_radius_mm) -> str | None:

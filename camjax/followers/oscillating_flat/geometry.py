@@ -168,3 +168,13 @@ def oscillating_flat_min_base_radius(kin: Kinematics, pivot_distance_mm, face_of
     xi = oscillating_flat_contact_distance(d, psi0, kin, rotation)
     lo, hi = jnp.min(xi), jnp.max(xi)
     return OscillatingFlatSizing(rb, psi0, found, jnp.argmin(rho), lo, hi, hi - lo)
+
+
+def sizing_limits(kin: Kinematics, psi0, params) -> jax.Array:
+    """The sizing's limit at arm start angle psi0 (rad), <= 0 where admissible (shape
+    (1, *kin.s.shape)): rho_min - rho. ``params``: (d, f, sigma, rho_min), arrays (the exact
+    sizing, :func:`camjax.followers._sizing.exact_boundary`)."""
+    d, f, sigma, rho_min = params
+    rho = swing_face_radius_of_curvature(d, f, psi0 + kin.s, 1.0 + sigma * kin.ds, kin.ds, kin.d2s)
+    return (rho_min - rho)[None]
+

@@ -11,9 +11,10 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import jax.numpy as jnp
 import numpy as np
 
-from camjax import contact, loads
+from camjax import contact, loads, runtime
 from camjax.errors import SceneError
 from camjax.followers._rocking import TRAIN_KEYS, RockerGeometry, RockerSizing, RockingFollower, read_train
 from camjax.followers.oscillating_roller import geometry as rocker_roller_geo
@@ -56,6 +57,55 @@ def check_rocker_closes(r, base, roller, pivot_distance_mm, arm_length_mm) -> No
                       "a pivot distance closer to the arm length, or a larger base radius")
 
 
+@runtime.program_cache(static_argnames=("rotation",))
+def arm_sizing(kin, program, pivot_distance_mm, arm_length_mm, roller_radius_mm, max_pressure_angle_rad,
+               min_curvature_radius_mm, rotation):
+    """The sizing of a roller (or a curved face of radius ``roller_radius_mm``) on an arm, in one
+    compiled (and saved) program: the samples' (:func:`camjax.followers.oscillating_roller.geometry.
+    oscillating_roller_min_prime_radius`) and, with ``program`` (exact extrema; None: grid), the
+    smallest psi0 from the samples' up with |phi| <= the limit and no undercut at every cam angle
+    (:func:`camjax.followers._sizing.exact_boundary` on
+    :func:`camjax.followers.oscillating_roller.geometry.sizing_limits`). Returns (sampled sizing,
+    :class:`camjax.followers._sizing.Boundary` or None)."""
+    from camjax.followers import _sizing
+    from camjax.followers._pitch import rotation_sign
+
+    s = rocker_roller_geo.oscillating_roller_min_prime_radius(
+        kin, pivot_distance_mm, arm_length_mm, roller_radius_mm, max_pressure_angle_rad,
+        min_curvature_radius_mm, rotation)
+    if program is None:
+        return s, None
+    as_ = lambda v: jnp.asarray(v, kin.s.dtype)  # noqa: E731
+    params = (as_(pivot_distance_mm), as_(arm_length_mm), as_(rotation_sign(rotation)),
+              jnp.tan(as_(max_pressure_angle_rad)), as_(roller_radius_mm) + min_curvature_radius_mm)
+    return s, _sizing.exact_boundary(program, kin, s.arm_start_angle, jnp.pi - jnp.max(kin.s), params,
+                                     limits=rocker_roller_geo.sizing_limits)
+
+
+def arm_sizing_result(kin, sampled, boundary, follower, max_pressure_angle_deg: float,
+                      roller_radius_mm: float, angle_binding: str, what: str) -> RockerSizing:
+    """The :class:`RockerSizing` of :func:`arm_sizing`'s result (the follower's [follower] spec;
+    ``what`` names the limits in messages): a SceneError where no arm start angle is admissible,
+    on the samples or (exact) at every cam angle (a narrow window of admissible psi0 that only the
+    samples see)."""
+    f = follower
+    advice = "a longer arm, another pivot distance or a larger max_pressure_angle_deg"
+    if not bool(sampled.found) or (boundary is not None and not bool(boundary.refined)):
+        where = "" if not bool(sampled.found) else (f" at every cam angle (the {kin.s.shape[-1]} samples "
+                                                    'alone admit one: extrema = "grid" sizes on them)')
+        raise SceneError("follower.arm_length_mm", f.arm_length_mm,
+                         f"with pivot_distance_mm = {f.pivot_distance_mm:g} no prime radius keeps "
+                         f"|pressure angle| <= {max_pressure_angle_deg:g} deg {what}{where}", advice)
+    if boundary is None:
+        t = np.degrees(np.asarray(kin.theta))
+        binding = "undercut" if bool(sampled.undercut_binds) else angle_binding
+        return RockerSizing(_f(sampled.base_radius_mm), _f(sampled.prime_radius_mm),
+                            _f(t[int(sampled.index)]), binding)
+    rp = _f(rocker_roller_geo.roller_centre_distance(f.pivot_distance_mm, f.arm_length_mm, boundary.x))
+    binding = "undercut" if int(boundary.row) == 1 else angle_binding
+    return RockerSizing(rp - roller_radius_mm, rp, _f(boundary.angle_deg), binding)
+
+
 class OscillatingRoller(RockingFollower):
     name = "oscillating_roller"
     title = "oscillating roller"
@@ -88,19 +138,13 @@ class OscillatingRoller(RockingFollower):
         check_rocker_closes(r, base, roller, **variables)
         return {"base_radius_mm": base, "roller_radius_mm": roller, **variables}
 
-    def sizing(self, scene, kin) -> RockerSizing:
-        f, rotation = scene.follower, scene.motion.rotation
-        t = np.degrees(np.asarray(kin.theta))
-        s = rocker_roller_geo.oscillating_roller_min_prime_radius(
-            kin, f.pivot_distance_mm, f.arm_length_mm, f.roller_radius_mm,
-            math.radians(f.max_pressure_angle_deg), f.min_curvature_radius_mm, rotation)
-        if not bool(s.found):
-            raise SceneError("follower.arm_length_mm", f.arm_length_mm,
-                             f"with pivot_distance_mm = {f.pivot_distance_mm:g} no prime radius keeps "
-                             f"|pressure angle| <= {f.max_pressure_angle_deg:g} deg without undercut",
-                             "a longer arm, another pivot distance or a larger max_pressure_angle_deg")
-        binding = "undercut" if bool(s.undercut_binds) else "pressure_angle"
-        return RockerSizing(_f(s.base_radius_mm), _f(s.prime_radius_mm), _f(t[int(s.index)]), binding)
+    def sizing(self, scene, kin, program=None) -> RockerSizing:
+        f = scene.follower
+        sampled, boundary = arm_sizing(kin, program, f.pivot_distance_mm, f.arm_length_mm, f.roller_radius_mm,
+                                       math.radians(f.max_pressure_angle_deg), f.min_curvature_radius_mm,
+                                       scene.motion.rotation)
+        return arm_sizing_result(kin, sampled, boundary, f, f.max_pressure_angle_deg, f.roller_radius_mm,
+                                 "pressure_angle", "without undercut")
 
     def closure_problem(self, scene, kin, base_radius_mm) -> str | None:
         """The prime radius R_p = R_b + R_f must lie strictly between |d - l| and d + l (the roller

@@ -225,3 +225,16 @@ def oscillating_roller_min_prime_radius(kin: Kinematics, pivot_distance_mm, arm_
     return OscillatingRollerSizing(rp, rp - roller_radius_mm, psi0, found, undercut, index)
 
 
+def sizing_limits(kin: Kinematics, psi0, params) -> jax.Array:
+    """The sizing's two limits at arm start angle psi0 (rad), <= 0 where admissible (shape
+    (2, *kin.s.shape)): |phi| <= lim written without the arctan and scaled by d,
+    |l Q - d c| / d - tan(lim) sn, and the undercut, kappa (R_f + rho_min) - 1. ``params``:
+    (d, l, sigma, tan(lim), R_f + rho_min), arrays (the exact sizing,
+    :func:`camjax.followers._sizing.exact_boundary`)."""
+    d, l, sigma, tan_lim, reach = params
+    psi = psi0 + kin.s
+    q = 1.0 + sigma * kin.ds
+    phi = jnp.abs(l * q - d * jnp.cos(psi)) / d - tan_lim * jnp.sin(psi)
+    kappa = swing_pitch_curvature(d, l, psi, q, kin.d2s)
+    return jnp.stack([phi, kappa * reach - 1.0])
+

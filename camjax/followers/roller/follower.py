@@ -16,7 +16,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from camjax import contact
+from camjax import contact, runtime
 from camjax.evaluate import curve_extremes
 from camjax.followers._pitch import rotation_sign
 from camjax.followers._translating import (
@@ -40,6 +40,33 @@ ROLLER_CURVES = ("pressure_angle", "pitch_rho_abs", "undercut_margin")
 # the pressure-angle sizing: |s' - e~| / tan(limit) - s (mm), whose max is the smallest
 # d = sqrt(R_p^2 - e^2) (camjax.followers.roller.geometry.roller_min_prime_radius_for_pressure_angle)
 PRESSURE_NEED = "pressure_angle_need"
+
+
+# the sampled sizing, one compiled (and saved) program for every call
+_grid_sizing = runtime.program_cache(roller_geo.roller_min_prime_radius, static_argnames=("rotation",))
+
+
+def exact_prime_radius(arrays, grid_prime_radius_mm, pressure_need, roller_radius_mm, offset_mm,
+                       min_curvature_radius_mm, rotation) -> tuple[float, float, bool]:
+    """The smallest prime radius with the pressure angle and the undercut held at every cam angle
+    (exact extrema): the larger of the pressure angle's (closed form at the refined max of
+    ``pressure_need``, an :class:`camjax.results.Extremes`) and the undercut's, the latter moved up
+    from the grid's ``grid_prime_radius_mm`` to the root of the refined undercut peak
+    (:func:`camjax.followers._sizing.exact_boundary`). Returns (R_p mm, angle deg, undercut binds)."""
+    from camjax.followers import _sizing
+
+    dtype = arrays.kin.s.dtype
+    rp_phi = math.hypot(offset_mm, max(pressure_need.max, 0.0))
+    x0 = float(grid_prime_radius_mm)
+    params = (jnp.asarray(rotation_sign(rotation) * offset_mm, dtype),
+              jnp.asarray(roller_radius_mm + min_curvature_radius_mm, dtype))
+    b = _sizing.exact_boundary(arrays.model.program, arrays.kin, jnp.asarray(x0, dtype),
+                               jnp.asarray(1e6 * (1.0 + x0), dtype), params,
+                               limits=roller_geo.undercut_limits)
+    rp_uc = _f(b.x)
+    if rp_uc > rp_phi:
+        return rp_uc, _f(b.angle_deg), True
+    return rp_phi, pressure_need.max_deg, False
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -114,19 +141,22 @@ class Roller(TranslatingFollower):
         cam-surface radius >= min_curvature_radius_mm) at the follower's R_f and offset
         (:func:`camjax.followers.roller.geometry.roller_min_prime_radius`: closed form for the
         pressure angle, its max over the angle refined off the grid with exact extrema; bisection
-        on the samples for the undercut), minus R_f; the angle is where the binding limit is reached.
+        on the samples for the undercut, with exact extrema moved on to the root of its refined
+        peak, :func:`exact_prime_radius`), minus R_f; the angle is where the binding limit is reached.
         """
         f, t = scene.follower, np.asarray(arrays.theta_deg)
-        sizing = roller_geo.roller_min_prime_radius(arrays.kin, f.roller_radius_mm, f.offset_mm,
-                                                    math.radians(f.max_pressure_angle_deg),
-                                                    f.min_curvature_radius_mm, scene.motion.rotation)
+        sizing = _grid_sizing(arrays.kin, f.roller_radius_mm, f.offset_mm,
+                              math.radians(f.max_pressure_angle_deg), f.min_curvature_radius_mm,
+                              scene.motion.rotation)
         rp = _f(sizing.prime_radius_mm)
-        if arrays.model is not None and not bool(sizing.undercut_binds):
-            # exact: the closed form's max over the angle refined off the grid; it is >= the samples'
-            # max, so the undercut (which relaxes as R_p grows) still holds
+        if arrays.model is not None:
+            # exact: the pressure angle's closed form at its refined max (>= the samples' max) and
+            # the undercut's root of its refined peak, the larger of the two
             need = curve_extremes(scene, arrays, (PRESSURE_NEED,))[PRESSURE_NEED]
-            rp = math.hypot(f.offset_mm, max(need.max, 0.0))
-            return MinBaseRadius(rp - f.roller_radius_mm, need.max_deg, "pressure_angle", rp)
+            rp, deg, undercut = exact_prime_radius(arrays, rp, need, f.roller_radius_mm, f.offset_mm,
+                                                   f.min_curvature_radius_mm, scene.motion.rotation)
+            binding = "undercut" if undercut else "pressure_angle"
+            return MinBaseRadius(rp - f.roller_radius_mm, deg, binding, rp)
         return MinBaseRadius(rp - f.roller_radius_mm, _f(t[int(sizing.index)]),
                              "undercut" if bool(sizing.undercut_binds) else "pressure_angle", rp)
 
@@ -135,13 +165,18 @@ class Roller(TranslatingFollower):
         smallest R_b its R_f and offset admit (pressure angle and undercut; stress aside)."""
         f, t = scene.follower, np.asarray(arrays.theta_deg)
         rf, e = result["roller_radius_mm"], result["offset_mm"]
-        curves = self.curves(scene, arrays, result["base_radius_mm"], self.drawn_follower(scene, result))
-        sizing = roller_geo.roller_min_prime_radius(arrays.kin, rf, e, math.radians(f.max_pressure_angle_deg),
-                                                    f.min_curvature_radius_mm, scene.motion.rotation)
+        drawn = self.drawn_follower(scene, result)
+        curves = self.curves(scene, arrays, result["base_radius_mm"], drawn)
+        sizing = _grid_sizing(arrays.kin, rf, e, math.radians(f.max_pressure_angle_deg),
+                              f.min_curvature_radius_mm, scene.motion.rotation)
         peak_stress = None if curves.stress_MPa is None else _f(np.max(curves.stress_MPa))
-        return DesignSolution(result, peak_stress, _f(sizing.prime_radius_mm) - rf, _f(t[int(sizing.index)]),
-                              "undercut" if bool(sizing.undercut_binds) else "pressure_angle", None,
-                              f.min_curvature_radius_mm)
+        rp, deg, undercut = _f(sizing.prime_radius_mm), _f(t[int(sizing.index)]), bool(sizing.undercut_binds)
+        if arrays.model is not None:  # exact, as min_base_radius
+            need = curve_extremes(scene, arrays, (PRESSURE_NEED,), follower=drawn)[PRESSURE_NEED]
+            rp, deg, undercut = exact_prime_radius(arrays, rp, need, rf, e, f.min_curvature_radius_mm,
+                                                   scene.motion.rotation)
+        return DesignSolution(result, peak_stress, rp - rf, deg, "undercut" if undercut else "pressure_angle",
+                              None, f.min_curvature_radius_mm)
 
     def geometry(self, follower, rotation, arrays, base_radius_mm) -> GeometryCurves:
         kin, rf, e = arrays.kin, float(follower.roller_radius_mm), float(follower.offset_mm)

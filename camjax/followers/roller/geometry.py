@@ -220,11 +220,20 @@ def prime_radius(base_radius_mm, roller_radius_mm) -> jax.Array:
     return base_radius_mm + roller_radius_mm
 
 
+def undercut_limits(kin: Kinematics, prime_radius_mm, params) -> jax.Array:
+    """The undercut limit at prime radius R_p (mm), <= 0 where admissible (shape
+    (1, *kin.s.shape)): kappa_pitch (R_f + rho_min) - 1. ``params``: (sign e, R_f + rho_min),
+    arrays (the exact sizing, :func:`camjax.followers._sizing.exact_boundary`)."""
+    e, reach = params
+    w = pitch.pitch_height(prime_radius_mm, e, kin.s)
+    return (pitch.pitch_curvature(w, kin.ds, kin.d2s, e) * reach - 1.0)[None]
+
+
 __all__ = [
     "ROLLER_MAX_PRESSURE_ANGLE_DEG", "ROLLER_MIN_CURVATURE_RADIUS_MM", "RollerGeometry", "RollerSizing",
     "prime_radius", "roller_equivalent_radius", "roller_geometry", "roller_min_prime_radius",
     "roller_min_prime_radius_for_pressure_angle", "roller_pitch_curvature", "roller_pitch_curve",
     "roller_pressure_angle_need",
     "roller_pitch_height", "roller_pressure_angle", "roller_profile", "roller_reach_constraint",
-    "roller_undercut_constraint", "roller_undercut_margin",
+    "roller_undercut_constraint", "roller_undercut_margin", "undercut_limits",
 ]
