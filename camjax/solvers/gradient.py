@@ -61,9 +61,10 @@ class GradientSettings:
     """
 
     # cap on Rprop's steps; with the BFGS refinement on (the default) it is where Rprop hands over:
-    # the refinement finishes what Rprop has not in 300 steps (the oscillating roller: 2,347 steps
-    # with a cap of 2000, 753 with 300, the same optimum; benchmarks/convergence.py)
-    max_steps: int = 300
+    # the refinement finishes what Rprop has not in 1000 steps (the oscillating roller: 2,347 steps
+    # with a cap of 2000, 1,140 with 1000, the same optimum). A cap of 300 was tried: 753 steps
+    # there, but 10 of the oscillating flat's 100 sweep weightings ended infeasible (1 with 1000)
+    max_steps: int = 1000
     inner_steps: int = 300  # cap on steps between multiplier updates
     initial_step: float = 0.05  # first Rprop step
     reset_step: float = 1e-2  # cap on the step size a multiplier update restarts from
