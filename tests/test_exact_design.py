@@ -99,6 +99,7 @@ def test_pointwise_condensed_design_is_the_continuous_max():
     assert float(r.face_width_mm) == pytest.approx(2 * H * 2 / (math.pi / 3), rel=1e-14)
 
 
+@pytest.mark.slow
 def test_the_polish_reaches_one_optimum_from_any_start_and_is_a_stationary_point():
     """The polish (model steps safeguarded by bisection) from the bracket's ends and the grid's
     answer ends at one R for each weighting, where the envelope-theorem slope of the objective,

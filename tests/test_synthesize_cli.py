@@ -114,6 +114,7 @@ def test_the_command_exits_2_with_one_line_and_writes_nothing(tmp_path, capsys):
     assert not out.exists()
 
 
+@pytest.mark.slow
 def test_a_linear_law_between_dwells_takes_the_default_conditions(tmp_path):
     """Degree 1 with the default start/end conditions (v and a "match" the dwells): the
     acceleration rows of a piecewise-linear law are zero (dependent on nothing) and the velocity
