@@ -19,31 +19,17 @@ from camjax.dynamics import ForceClosure, contact_force, harmonics_from_samples,
 from camjax.dynamics.context import synthesis_train
 from camjax.laws import LAWS
 from camjax.laws.bspline import evaluate_derivatives
-from camjax.scene import SceneError, scene_from_dict
+from camjax.scene import SceneError, builtin_scene_text, scene_from_dict
 from camjax.scene.designed import starting_control
 from camjax.synthesis import build_problem, make_basis
 from camjax.synthesis.segments import builtin_q, meets_conditions, synthesize_segments
 from camjax.synthesis.vibration import builtin_train_measures, force_matrix, state_maps, train_terms
 
-# a 60 Hz load train (k23 = I3 (2 pi 60)^2) at 240 rpm: r = omega_n beta / Omega = 23.6 on the rise
-SCENE = """
-[motion]
-rpm = 240.0
-samples = 360
-segments = [
-  { kind = "dwell",  angle_deg = 100 },
-  { kind = "rise",   angle_deg = 90, lift_mm = 10.0, law = "bspline", degree = 3, control_count = 32, design = true, start = { v = "match", a = "match" }, end = { v = "match", a = "match" } },
-  { kind = "dwell",  angle_deg = 90 },
-  { kind = "return", angle_deg = 80, lift_mm = 10.0, law = "bspline", degree = 3, control_count = 32, design = true },
-]
-
-[follower]
-type = "flat"
-mass_kg = 1.0
-spring_N_per_m = 3004.0
-preload_mm = 13.0
-damping_Ns_per_m = 0.345
-
+# the built-in synthesis scene (rise and return designed between dwells, the reference follower
+# train of mass, spring and damping) with a 60 Hz load train (k23 = I3 (2 pi 60)^2) at 240 rpm
+# (r = omega_n beta / Omega = 23.6 on the rise) and the follower-train objective
+BUILTIN = builtin_scene_text("synthesis")
+SCENE = BUILTIN[: BUILTIN.index("[synthesis]")] + """
 [dynamics]
 follower = "translating"
 I3 = 0.5
