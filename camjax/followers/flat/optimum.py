@@ -77,10 +77,12 @@ def polish(problem: Problem, weights: Weights, design: Design) -> Design:
     g_lo, g_hi = slope(peak(lo)[1]), slope(peak(hi)[1])  # weighting-independent peaks
     interior = (g_lo < 0) & (g_hi > 0)  # else an end is the optimum: no search
 
+    def settled(x, nxt):  # the next step is shorter than STOP_RTOL
+        return jnp.abs(nxt - x) <= STOP_RTOL * (1.0 + jnp.abs(x))
+
     def cond(state):
         i, a, b, g_last, x, nxt, best, g_best = state
-        moves = (i == 0) | (jnp.abs(nxt - x) > STOP_RTOL * (1.0 + jnp.abs(x)))
-        return interior & (i < POLISH_STEPS) & moves & (g_best != 0)
+        return interior & (i < POLISH_STEPS) & ((i == 0) | ~settled(x, nxt)) & (g_best != 0)
 
     def body(state):
         i, a, b, g_last, x, nxt, best, g_best = state
@@ -101,11 +103,10 @@ def polish(problem: Problem, weights: Weights, design: Design) -> Design:
     inf = jnp.full_like(lo, jnp.inf)
     state = (jnp.zeros((), jnp.int32), lo, hi, inf, r0, r0, r0, inf)
     i, a, b, g_last, x, nxt, best, g_best = jax.lax.while_loop(cond, body, state)
-    # a search that stopped on a short model step ends at that step's point (the model's error
-    # there is the square of a step already below STOP_RTOL); one stopped by the step count or
-    # at a kink, at the point of least |g'| seen
-    settled = jnp.abs(nxt - x) <= STOP_RTOL * (1.0 + jnp.abs(x))
-    x = jnp.where(settled & (nxt >= a) & (nxt <= b), nxt, best)
+    # a search that stopped on a short model step ends at that step's point (the model steps
+    # contract, so its error is a fraction of that step, already below STOP_RTOL); one stopped
+    # by the step count or at a kink, at the point of least |g'| seen
+    x = jnp.where(settled(x, nxt) & (nxt >= a) & (nxt <= b), nxt, best)
     radius = jnp.where(g_lo >= 0, lo, jnp.where(g_hi <= 0, hi, x))
     return Design(jax.lax.stop_gradient(radius), width)
 
