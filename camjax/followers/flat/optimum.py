@@ -61,8 +61,10 @@ def polish(problem: Problem, weights: Weights, design: Design) -> Design:
                      problem.upper.base_radius_mm)
     hi = problem.upper.base_radius_mm
 
-    def peak(r):  # (sigma*, d sigma*/dR) at R = r, the slope by the envelope theorem
-        return jax.value_and_grad(lambda x: exact_peak_stress(problem, Design(x, width), POLISH_ITERATIONS).value)(r)
+    def peak_stress(r):
+        return exact_peak_stress(problem, Design(r, width), POLISH_ITERATIONS).value
+
+    peak = jax.value_and_grad(peak_stress)  # (sigma*, d sigma*/dR), the slope by the envelope theorem
 
     def slope(peak_slope):
         return weights.alpha / problem.size_norm_mm + weights.gamma * peak_slope / problem.sigma_max_MPa
