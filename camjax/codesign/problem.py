@@ -82,9 +82,11 @@ class Inner(NamedTuple):
 class Codesign:
     """The static data of one co-design and its compiled pieces (see the module docstring)."""
 
-    def __init__(self, scene, samples: int | None = None, controls=None):
+    def __init__(self, scene, samples: int | None = None, controls=None, builtin_cache: dict | None = None):
         """``samples``: the search grid (default the scene's); ``controls``: the normalized control
-        values the scene's designed segments move by (default their starting laws)."""
+        values the scene's designed segments move by (default their starting laws);
+        ``builtin_cache``: the built-in laws' kinematics and residuals of another co-design of the
+        same motion and grid (they do not depend on [design]'s weights; shared by a sweep)."""
         from camjax.scene.designed import starting_control
 
         if scene.design is None:
@@ -143,7 +145,7 @@ class Codesign:
         self._local = jax.jit(self._local_fn)
         self._spring_at = jax.jit(self._spring_fn)
         self.evaluations = 0
-        self.builtin_cache: dict = {}
+        self.builtin_cache: dict = {} if builtin_cache is None else builtin_cache
 
     # ------------------------------------------------------------------ pure pieces
 
