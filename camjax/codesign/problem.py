@@ -79,6 +79,28 @@ class Inner(NamedTuple):
     spring: tuple[float, float] | None = None  # (rate N/m, preload N) the geometry was solved with
 
 
+def check_scene(scene) -> dict[str, float]:
+    """What the co-design cannot take, as :class:`CodesignError` naming the scene field (a missing
+    [design], a pointwise mode, a peak [synthesis] term, a residual term without [dynamics], a
+    spring it cannot design); returns the [synthesis] terms' weights. Python, cheap: no solve."""
+    if scene.design is None:
+        raise CodesignError("design", "co-design needs a [design] section")
+    if scene.design.mode != "global":
+        raise CodesignError("design.mode", f"'{scene.design.mode}': co-design designs one cam for "
+                            "the whole turn (allowed: 'global')")
+    terms = dict(scene.synthesis.objective) if scene.synthesis is not None else {}
+    for name in terms:
+        if name not in SUPPORTED:
+            raise CodesignError(f"synthesis.objective.{name}", "a peak term is not supported by "
+                                "camjax design's co-design (it is not smooth in the laws; allowed: "
+                                f"{', '.join(SUPPORTED)}; camjax synthesize takes it)")
+    if "residual_vibration" in terms and scene.dynamics is None:
+        raise CodesignError("dynamics", "synthesis.objective.residual_vibration needs the follower "
+                            "train: a [dynamics] section (I3, c3, k23)")
+    spring_mod.spring_box(scene, CodesignError)
+    return terms
+
+
 class Codesign:
     """The static data of one co-design and its compiled pieces (see the module docstring)."""
 
@@ -89,20 +111,7 @@ class Codesign:
         same motion and grid (they do not depend on [design]'s weights; shared by a sweep)."""
         from camjax.scene.designed import starting_control
 
-        if scene.design is None:
-            raise CodesignError("design", "co-design needs a [design] section")
-        if scene.design.mode != "global":
-            raise CodesignError("design.mode", f"'{scene.design.mode}': co-design designs one cam for "
-                                "the whole turn (allowed: 'global')")
-        terms = dict(scene.synthesis.objective) if scene.synthesis is not None else {}
-        for name in terms:
-            if name not in SUPPORTED:
-                raise CodesignError(f"synthesis.objective.{name}", "a peak term is not supported by "
-                                    "camjax design's co-design (it is not smooth in the laws; allowed: "
-                                    f"{', '.join(SUPPORTED)}; camjax synthesize takes it)")
-        if "residual_vibration" in terms and scene.dynamics is None:
-            raise CodesignError("dynamics", "synthesis.objective.residual_vibration needs the follower "
-                                "train: a [dynamics] section (I3, c3, k23)")
+        terms = check_scene(scene)
         self.scene = scene
         self.law_weights = terms
         self.samples = int(scene.motion.samples if samples is None else samples)

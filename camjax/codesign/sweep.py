@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from camjax.codesign.problem import Codesign
+from camjax.codesign.problem import Codesign, check_scene
 from camjax.codesign.search import MAX_ITERATIONS, Outcome, codesign_outcome
 
 
@@ -57,6 +57,7 @@ def codesign_sweep(scene, alphas, gammas, *, samples: int | None = None, progres
     if a.size == 0:
         raise ValueError("alpha, gamma: the sweep needs at least one weighting")
     check_weights(a, g)
+    check_scene(scene)  # what the co-design refuses, before the first weighting's work
     d = scene.design
     cache: dict = {}  # the built-in laws' kinematics and residuals: the same at every weighting
     rows = []
