@@ -123,8 +123,8 @@ def _setup_sweep(p: argparse.ArgumentParser):
               f"{feasible} feasible, {front} on the non-dominated front")
         if codesign:
             chosen = sum(r["codesign"]["chosen"] == "codesign" for r in recs)
-            print(f"co-designed laws chosen at {chosen} of {len(recs)} weightings (the best built-in "
-                  "combination at the others)")
+            rest = "" if chosen == len(recs) else " (the best built-in combination at the others)"
+            print(f"co-designed laws chosen at {chosen} of {len(recs)} weightings{rest}")
         print(f"wrote pareto.json, pareto.png to {args.out}")
         return 0
 
