@@ -10,7 +10,8 @@ Data flows one way and each step is a pure function of the one before:
 :func:`run_design` returns that run, typed (the follower family's ``DesignRun`` or ``RockerRun``);
 :func:`camjax.output.report.analyse` adds the report dict. :func:`sweep_scene` solves the
 [design] problem for many weightings in this process (the CLI hands blocks to
-``camjax.scaleout`` instead when asked). Nothing here formats, draws or writes files
+``camjax.scaleout`` instead when asked; a scene with designed laws co-designs them at every
+weighting, :mod:`camjax.codesign.sweep`). Nothing here formats, draws or writes files
 (:mod:`camjax.output` and :mod:`camjax.cli` do).
 """
 
@@ -49,8 +50,17 @@ def sweep_scene(scene: Scene, alphas, gammas, *, mode: str, solver: str, seed: i
                 chunk_size: int = 128):
     """Solve the scene's [design] problem for every (alpha, gamma) pair of two lists, in this process.
 
+    A scene with designed segments (``design = true``) co-designs its laws with the geometry at
+    every weighting (:func:`camjax.codesign.sweep.codesign_sweep`, one weighting at a time:
+    ``chunk_size`` does not apply; ``mode`` must be "global").
+
     Returns :class:`camjax.solvers.sweep.SweepResult` (its ``records()`` are the JSON rows).
     """
+    if scene.motion.designed:
+        from camjax.codesign.sweep import codesign_sweep
+        from camjax.scene import with_design
+
+        return codesign_sweep(with_design(scene, mode=mode, solver=solver, seed=seed), alphas, gammas)
     from camjax.solvers.sweep import sweep
 
     problem = design_problem(scene)

@@ -67,7 +67,7 @@ def test_nnls_matches_scipy():
 
 
 @pytest.mark.parametrize("edit, field", [
-    (("l2_jerk = 1e-6", "peak_accel = 1.0"), "synthesis.objective.peak_accel"),
+    (("l2_jerk = 1e-6", "peak_force = 1.0"), "dynamics"),  # the train's force needs the train
     (('mode = "global"', 'mode = "pointwise"'), "design.mode"),
 ])
 @pytest.mark.slow
@@ -187,20 +187,14 @@ def test_design_codesign_end_to_end_and_fed_back(tmp_path):
 
 
 def test_commands_that_do_not_design_laws_warn_that_they_run_the_starting_laws(capsys):
-    """A scene with design = true segments: sweep and dynamics move them by their starting laws
-    and say so on stderr, naming the segments (nothing designed is silently replaced)."""
+    """A scene with design = true segments: dynamics moves them by their starting laws and says so
+    on stderr, naming the segments (nothing designed is silently replaced; camjax sweep co-designs
+    them, tests/test_codesign_sweep.py)."""
     from camjax.cli.common import warn_starting_laws
 
-    warn_starting_laws(load_scene("codesign"), "sweep")
+    warn_starting_laws(load_scene("codesign"), "dynamics")
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "camjax sweep: warning:" in err
+    assert err.count("\n") == 1 and "camjax dynamics: warning:" in err
     assert "motion.segments[1], motion.segments[3] have design = true" in err
-    warn_starting_laws(load_scene("default"), "sweep")  # nothing designed: nothing said
+    warn_starting_laws(load_scene("default"), "dynamics")  # nothing designed: nothing said
     assert capsys.readouterr().err == ""
-
-
-@pytest.mark.slow
-def test_a_sweep_of_a_scene_with_designed_laws_warns(tmp_path, capsys):
-    assert main(["sweep", "codesign", "--alpha", "1", "--gamma", "1", "--samples", "90",
-                 "--out", str(tmp_path / "out")]) == 0
-    assert "have design = true: this command moves them by their starting laws" in capsys.readouterr().err

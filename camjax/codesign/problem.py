@@ -82,28 +82,47 @@ class Inner(NamedTuple):
     spring: tuple[float, float] | None = None  # (rate N/m, preload N) the geometry was solved with
 
 
+def check_scene(scene) -> dict[str, float]:
+    """What the co-design cannot take, as :class:`CodesignError` naming the scene field (a missing
+    [design], a pointwise mode, a train term without [dynamics], peak_force with a designed spring,
+    a spring it cannot design); returns the [synthesis] terms' weights. Python, cheap: no solve."""
+    if scene.design is None:
+        raise CodesignError("design", "co-design needs a [design] section")
+    if scene.design.mode != "global":
+        raise CodesignError("design.mode", f"'{scene.design.mode}': co-design designs one cam for "
+                            "the whole turn (allowed: 'global')")
+    terms = dict(scene.synthesis.objective) if scene.synthesis is not None else {}
+    for name in terms:
+        if name not in SUPPORTED:
+            raise CodesignError(f"synthesis.objective.{name}", "not a term of the co-design "
+                                f"(allowed: {', '.join(SUPPORTED)})")
+    for name in ("residual_vibration", "peak_force"):
+        if name in terms and scene.dynamics is None:
+            raise CodesignError("dynamics", f"synthesis.objective.{name} needs the follower "
+                                "train: a [dynamics] section (I3, c3, k23)")
+    box = spring_mod.spring_box(scene, CodesignError)
+    if "peak_force" in terms:
+        if scene.dynamics.spring_rate is None:
+            raise CodesignError("dynamics", "synthesis.objective.peak_force needs the follower "
+                                "train's spring (the contact force: give [dynamics]' spring)")
+        if box is not None:
+            raise CodesignError("synthesis.objective.peak_force", "not taken with a designed spring "
+                                "(the train's force is [dynamics]' spring's; allowed: a fixed spring, "
+                                "or drop peak_force)")
+    return terms
+
+
 class Codesign:
     """The static data of one co-design and its compiled pieces (see the module docstring)."""
 
-    def __init__(self, scene, samples: int | None = None, controls=None):
+    def __init__(self, scene, samples: int | None = None, controls=None, builtin_cache: dict | None = None):
         """``samples``: the search grid (default the scene's); ``controls``: the normalized control
-        values the scene's designed segments move by (default their starting laws)."""
+        values the scene's designed segments move by (default their starting laws);
+        ``builtin_cache``: the built-in laws' kinematics and residuals of another co-design of the
+        same motion and grid (they do not depend on [design]'s weights; shared by a sweep)."""
         from camjax.scene.designed import starting_control
 
-        if scene.design is None:
-            raise CodesignError("design", "co-design needs a [design] section")
-        if scene.design.mode != "global":
-            raise CodesignError("design.mode", f"'{scene.design.mode}': co-design designs one cam for "
-                                "the whole turn (allowed: 'global')")
-        terms = dict(scene.synthesis.objective) if scene.synthesis is not None else {}
-        for name in terms:
-            if name not in SUPPORTED:
-                raise CodesignError(f"synthesis.objective.{name}", "not a term of the co-design "
-                                    f"(allowed: {', '.join(SUPPORTED)})")
-        for name in ("residual_vibration", "peak_force"):
-            if name in terms and scene.dynamics is None:
-                raise CodesignError("dynamics", f"synthesis.objective.{name} needs the follower "
-                                    "train: a [dynamics] section (I3, c3, k23)")
+        terms = check_scene(scene)
         self.scene = scene
         self.law_weights = terms
         self.samples = int(scene.motion.samples if samples is None else samples)
@@ -127,14 +146,6 @@ class Codesign:
             from camjax.dynamics.context import synthesis_train
 
             self.train = synthesis_train(scene)
-        if "peak_force" in terms:
-            if self.train.spring_rate is None:
-                raise CodesignError("dynamics", "synthesis.objective.peak_force needs the follower "
-                                    "train's spring (the contact force: give [dynamics]' spring)")
-            if self.spring is not None:
-                raise CodesignError("synthesis.objective.peak_force", "not taken with a designed spring "
-                                    "(the train's force is [dynamics]' spring's; allowed: a fixed spring, "
-                                    "or drop peak_force)")
         per_span = scene.synthesis.samples_per_span if scene.synthesis is not None else 8
         self.peaks = peaks_mod.peak_terms(self.lin, self.designed, terms, per_span, self.train)
         self.taus = None  # the smoothing of the peak terms (None: their exact maxima)
@@ -157,7 +168,7 @@ class Codesign:
         self._local = jax.jit(self._local_fn)
         self._spring_at = jax.jit(self._spring_fn)
         self.evaluations = 0
-        self.builtin_cache: dict = {}
+        self.builtin_cache: dict = {} if builtin_cache is None else builtin_cache
 
     # ------------------------------------------------------------------ pure pieces
 

@@ -139,9 +139,15 @@ def codesign_scene(scene, samples: int | None = None, max_iterations: int = MAX_
 
     Raises :class:`CodesignError` (naming the scene field) for what the co-design does not take.
     """
+    return codesign_outcome(Codesign(scene, samples), max_iterations)
+
+
+def codesign_outcome(cd: Codesign, max_iterations: int = MAX_ITERATIONS) -> Outcome:
+    """The co-design of ``cd``'s scene at its current weighting (:func:`codesign_scene` with a
+    :class:`Codesign` built already: ``camjax sweep`` reweights one, :meth:`Codesign.set_weights`)."""
     from camjax.synthesis.segments import synthesize_segments
 
-    cd = Codesign(scene, samples)
+    scene = cd.scene
     builtin = best_builtin_combination(cd)
     starts = []
     if builtin is not None:
