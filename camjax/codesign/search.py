@@ -18,6 +18,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+import camjax.codesign.helical as helical
 import camjax.codesign.spring as spring_mod
 from camjax.codesign.builtin import (
     best_builtin_combination,
@@ -115,6 +116,7 @@ def codesign_scene(scene, samples: int | None = None, max_iterations: int = MAX_
     """
     from camjax.synthesis.segments import synthesize_segments
 
+    helical.check_scene(scene, CodesignError)
     cd = Codesign(scene, samples)
     builtin = best_builtin_combination(cd)
     starts = []
@@ -160,7 +162,8 @@ def codesign_scene(scene, samples: int | None = None, max_iterations: int = MAX_
                    None if builtin is None else (builtin[0], builtin[1]),
                    0 if best is None else best.iterations, "" if best is None else best.start,
                    cd.evaluations, [] if best is None else best.history, law_f, tables, cd.samples,
-                   segment_results(cd, controls), spring_report(cd, fixed, inner.spring), cd.train)
+                   segment_results(cd, controls),
+                   helical.with_helical(scene, fixed, spring_report(cd, fixed, inner.spring)), cd.train)
 
 
 def residual_train(cd: Codesign):
