@@ -289,7 +289,11 @@ def helical_report(scene, fixed) -> dict:
               "shear_modulus_GPa": spec.shear_modulus_GPa, "density_kg_m3": spec.density_kg_m3}
     if not sz.feasible:
         broken = {n: v for n, v in slack.items() if v is not None and v < 0.0}
-        return {"status": "infeasible", **data, **limits, "broken": broken,
+        lower, _ = _bounds(p, jnp.asarray(sz.index))
+        least = {"index": sz.index, "wire_mm": 1e3 * sz.wire_m, "coil_mm": 1e3 * sz.coil_m,
+                 "active_coils": sz.active_coils, "shear_MPa": 1e-6 * sz.shear_Pa, "surge_hz": sz.surge_hz,
+                 "wire_set_by": LOWER[int(np.argmax(np.asarray(lower)))]}
+        return {"status": "infeasible", **data, **limits, "broken": broken, "least_infeasible": least,
                 "message": infeasible_message(p, sz, slack)}
     solid = sz.wire_m * (sz.active_coils + p.end_coils)
     travel = p.force_max_N / p.rate_N_per_m  # compression at the largest lift, m
