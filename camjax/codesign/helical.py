@@ -207,7 +207,8 @@ def sizing_at(p: HelicalProblem, C) -> Sizing:
 
 def significant_harmonic(s, tail: float) -> jax.Array:
     """H: the least harmonic such that the harmonics above it hold at most ``tail`` of the spectral
-    energy of ``s`` (samples over one revolution, equally spaced, shape (N,)); an int array."""
+    energy of ``s`` (samples over one revolution, equally spaced, shape (N,)); an int array
+    (``jit``/``vmap``; an integer has no gradient)."""
     c = jnp.fft.rfft(s - jnp.mean(s))[1:]
     energy = jnp.abs(c) ** 2
     total = jnp.sum(energy)
