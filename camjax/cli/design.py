@@ -181,12 +181,13 @@ def _write_design(args, out, scene, result, workers, progress, extra=None) -> in
         b = c["best_builtin"]
         best = "" if b is None else f"; best built-in ({', '.join(b['law'])}): {b['objective']:.5f}"
         print(f"co-design: laws {c['chosen']}, objective {c['objective']:.5f} on the search grid{best}")
-        if c.get("spring") is not None:
+        if c.get("spring") is not None and c["spring"].get("designed", True):
             sp = c["spring"]
             least = sp["min_contact_force_at_overspeed_N"]
             print(f"co-design spring: {sp['rate_N_per_m']:.6g} N/m, preload {sp['preload_N']:.6g} N "
                   f"({sp['preload_mm']:.6g} mm); least contact force {least:.6g} N at {sp['overspeed']:g} x "
                   f"rpm (margin {sp['min_contact_force_N']:g} N, binds: {sp['binding']})")
+        _print_helical((c.get("spring") or {}).get("helical"))
     width = follower.drawn_summary(d)
     state = f"INFEASIBLE ({', '.join(broken)})" if broken else "feasible"
     print(f"files drawn at R_b = {at['base_radius_mm']:.4f} mm{width} ({at['source']}): {state}")
@@ -195,6 +196,21 @@ def _write_design(args, out, scene, result, workers, progress, extra=None) -> in
         print(f"camjax design: warning: the geometry written breaks {v['constraint']}: {v['message']}",
               file=sys.stderr)
     return STRICT_EXIT if broken and args.strict else 0
+
+
+def _print_helical(h) -> None:
+    """The helical spring sized for the co-design's spring (synthesis.codesign.spring.helical): one
+    line, or a warning on stderr where no spring in the ranges works."""
+    if h is None:
+        return
+    if h["status"] != "optimal":
+        print(f"camjax design: warning: synthesis.helical_spring: {h['message']}", file=sys.stderr)
+        return
+    print(f"helical spring: wire {h['wire_mm']:.4g} mm, mean coil {h['coil_mm']:.4g} mm, "
+          f"{h['active_coils']:.4g} active coils (C = {h['index']:.4g}), {1e3 * h['mass_kg']:.4g} g; "
+          f"shear {h['shear_MPa']:.4g} MPa, surge {h['surge_hz']:.4g} Hz "
+          f"(>= {h['required_surge_hz']:.4g} Hz); "
+          f"binds: {', '.join(h['binding']) or 'none'}")
 
 
 def _import_drawing_modules() -> None:

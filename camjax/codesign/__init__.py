@@ -5,7 +5,8 @@ on a scene with [design] and ``design = true`` segments); see docs/synthesis.md.
 - :mod:`camjax.codesign.builtin`: the built-in laws of each joint class, each with its own geometry;
 - :mod:`camjax.codesign.search`: the BFGS search and the scene with the chosen laws fixed;
 - :mod:`camjax.codesign.spring`: the spring's rate and preload as variables, contact kept at an overspeed;
-- :mod:`camjax.codesign.sweep`: ``camjax sweep`` of such a scene, the laws co-designed at every weighting.
+- :mod:`camjax.codesign.sweep`: ``camjax sweep`` of such a scene, the laws co-designed at every weighting;
+- :mod:`camjax.codesign.helical`: a helical compression spring sized for that spring (stress, surge).
 
 The pipeline's layer: it runs the solvers and imports no output.
 """

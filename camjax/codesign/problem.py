@@ -50,6 +50,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+import camjax.codesign.helical as helical
 import camjax.codesign.peaks as peaks_mod
 import camjax.codesign.spring as spring_mod
 from camjax.evaluate import arrays_from_kinematics, scene_arrays
@@ -101,6 +102,7 @@ def check_scene(scene) -> dict[str, float]:
             raise CodesignError("dynamics", f"synthesis.objective.{name} needs the follower "
                                 "train: a [dynamics] section (I3, c3, k23)")
     box = spring_mod.spring_box(scene, CodesignError)
+    helical.check_scene(scene, CodesignError)
     if "peak_force" in terms:
         if scene.dynamics.spring_rate is None:
             raise CodesignError("dynamics", "synthesis.objective.peak_force needs the follower "

@@ -19,6 +19,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 import camjax.codesign.peaks as peaks_mod
+import camjax.codesign.helical as helical
 import camjax.codesign.spring as spring_mod
 from camjax.codesign.builtin import (
     best_builtin_combination,
@@ -192,7 +193,8 @@ def codesign_outcome(cd: Codesign, max_iterations: int = MAX_ITERATIONS) -> Outc
                    None if builtin is None else (builtin[0], builtin[1]),
                    0 if best is None else best.iterations, "" if best is None else best.start,
                    cd.evaluations, [] if best is None else best.history, law_f, tables, cd.samples,
-                   segment_results(cd, controls), spring_report(cd, fixed, inner.spring), cd.train)
+                   segment_results(cd, controls),
+                   helical.with_helical(scene, fixed, spring_report(cd, fixed, inner.spring)), cd.train)
 
 
 def law_train(cd: Codesign):

@@ -21,6 +21,7 @@ import numpy as np
 from camjax.errors import MISSING, SceneError
 from camjax.program.conditions import DERIVATIVES, FREE, MATCH, Plan, end_values
 from camjax.scene.conditions import parse_conditions
+from camjax.scene.helical import parse_helical
 from camjax.scene.reader import TableReader
 from camjax.scene.spec import SpringSpec, SynthesisSpec
 
@@ -168,18 +169,21 @@ def law_from_control(ds: DesignedSegment, control):
 
 def parse_synthesis(r: TableReader, designed: tuple[DesignedSegment, ...]) -> SynthesisSpec:
     """[synthesis]: objective = {name = weight, ...}, samples_per_span, speed_band, speed_count and
-    the spring keys (:data:`SPRING_KEYS`)."""
+    the spring keys (:data:`SPRING_KEYS`) and the ``helical_spring`` sub-table
+    (:func:`camjax.scene.helical.parse_helical`)."""
     from camjax.synthesis import L2_OBJECTIVES, OBJECTIVES, PEAK_OBJECTIVES
     from camjax.synthesis.problem import ALL_OBJECTIVES
 
-    r.check_keys(("objective", "samples_per_span", "speed_band", "speed_count", *SPRING_KEYS))
+    r.check_keys(("objective", "samples_per_span", "speed_band", "speed_count", *SPRING_KEYS,
+                  "helical_spring"))
     spring = parse_spring(r)
+    helical = parse_helical(r.sub("helical_spring")) if r.has("helical_spring") else None
     if not designed:
         raise r.error("objective", r.table.get("objective", MISSING), "no segment of [motion] has "
                       "design = true: there is no law to synthesize")
-    if spring is not None and not r.has("objective"):  # a co-design of the spring and geometry only
+    if (spring or helical) is not None and not r.has("objective"):  # the spring and geometry only
         return SynthesisSpec((), int(r.number("samples_per_span", 8, low=1, high=256, integer=True)),
-                             spring=spring)
+                             spring=spring, helical=helical)
     o = r.sub("objective")
     if not o.table:
         raise r.error("objective", o.table, "needs at least one term", ", ".join(OBJECTIVES))
@@ -205,7 +209,7 @@ def parse_synthesis(r: TableReader, designed: tuple[DesignedSegment, ...]) -> Sy
     count = int(r.number("speed_count", 5 if band > 0.0 else 1, low=1, high=64, integer=True))
     if band > 0.0 and count < 2:
         raise r.error("speed_count", count, "a speed band needs at least 2 speeds", ">= 2")
-    return SynthesisSpec(terms, per_span, band, count, spring)
+    return SynthesisSpec(terms, per_span, band, count, spring, helical)
 
 
 def check_train(synthesis: SynthesisSpec | None, dynamics, source=None) -> None:

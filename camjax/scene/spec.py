@@ -148,6 +148,25 @@ class SpringSpec:
 
 
 @dataclass(frozen=True)
+class HelicalSpec:
+    """[synthesis.helical_spring]: size a helical compression spring for the co-design's spring
+    (camjax.codesign.helical). SI-ish scene units as named; ``harmonics`` None: from the lift's
+    spectrum (the least harmonic below which all but ``spectrum_tail`` of its energy lies)."""
+
+    allowable_shear_MPa: float
+    wire_mm: tuple[float, float]  # wire diameter d, [low, high]
+    coil_mm: tuple[float, float]  # mean coil diameter D, [low, high]
+    shear_modulus_GPa: float = 79.3  # G, steel
+    density_kg_m3: float = 7850.0  # rho, steel
+    surge_ratio: float = 1.2  # f_n >= surge_ratio x the highest significant harmonic's frequency
+    harmonics: int | None = None  # the highest significant harmonic of the cam's motion, or None
+    spectrum_tail: float = 1e-5  # energy of the lift's spectrum above that harmonic (fraction)
+    index: tuple[float, float] = (4.0, 12.0)  # spring index C = D / d, [low, high]
+    active_coils: tuple[float, float] = (3.0, 15.0)  # n_a, [low, high]
+    end_coils: float = 2.0  # inactive coils (squared and ground ends): mass and solid height
+
+
+@dataclass(frozen=True)
 class SynthesisSpec:
     """[synthesis]: the objective of the designed laws (weights of the terms of
     :data:`camjax.synthesis.OBJECTIVES`, zero weights left out) and the sampling of sampled peaks."""
@@ -157,6 +176,7 @@ class SynthesisSpec:
     speed_band: float = 0.0  # residual_vibration over speeds (1 +- speed_band) x the cam speed
     speed_count: int = 1  # speeds of that band, equally spaced (1: the cam speed alone)
     spring: SpringSpec | None = None  # the spring designed with the laws (co-design only)
+    helical: HelicalSpec | None = None  # the helical spring sized for it (co-design only)
 
 
 @dataclass(frozen=True)
