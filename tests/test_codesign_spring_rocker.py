@@ -308,3 +308,16 @@ def test_design_of_a_rocker_with_a_free_spring_end_to_end(tmp_path, capsys):
     assert np.min(run.curves.contact_force_N) > 0.0
     again = design_report(scene)
     assert again["design"]["objective"] == pytest.approx(res["design"]["objective"], rel=1e-9)
+
+
+@pytest.mark.slow
+def test_no_torsion_spring_in_the_box_keeps_contact_says_by_how_much():
+    """M_min = 100 N m: at the dwell at s = 0 (280 ... 360 deg: s = s' = s'' = 0) the moment is the
+    preload alone, at most the box's 20 N m, so the box's best spring falls short by 80 N m or more."""
+    data = rocker_data(min_contact_torque_N_m=100.0)
+    with pytest.raises(CodesignError) as exc:
+        codesign_scene(scene_from_dict(data, "infeasible"), SAMPLES, max_iterations=2)
+    msg = str(exc.value)
+    assert exc.value.field == "synthesis.min_contact_torque_N_m" and "binds" in msg, msg
+    short = float(msg.split(" N m short")[0].rsplit(", ", 1)[1])
+    assert short >= 100.0 - PRELOAD[1] - 1e-9, msg
