@@ -63,18 +63,21 @@ def builtin_law_value(cd: Codesign, names) -> float:
         m = dict(_builtin_measures(name, ds.kind))
         if "residual_vibration" in cd.law_weights:
             m["residual_vibration"] = builtin_residual(cd, name, ds)["residual_vibration"]
+        if "peak_force" in cd.law_weights:
+            m["peak_force"] = builtin_residual(cd, name, ds, force=True)["peak_force"]
         total += sum(w * term_value(term, m[term]) for term, w in cd.law_weights.items())
     return total
 
 
-def builtin_residual(cd: Codesign, name: str, ds) -> dict:
+def builtin_residual(cd: Codesign, name: str, ds, force: bool = False) -> dict:
     """The residual vibration of the built-in law ``name`` played as designed segment ``ds`` on the
     co-design's follower train (:func:`camjax.synthesis.vibration.builtin_train_measures`: RMS over
-    the speeds, per lift, and its values per speed), cached per law and segment."""
-    key = ("residual", name, ds.index)
+    the speeds, per lift, and its values per speed), cached per law and segment; ``force``: its
+    peak contact force (N) too, with the train's spring."""
+    key = ("residual", name, ds.index, force)
     if key not in cd.builtin_cache:
         q_of = functools.partial(builtin_q, LAWS[name], ds.kind)
-        train = cd.train._replace(spring_rate=None)  # the residual alone (no force)
+        train = cd.train if force else cd.train._replace(spring_rate=None)  # the residual alone: no force
         cd.builtin_cache[key] = builtin_train_measures(q_of, train, ds)
     return cd.builtin_cache[key]
 

@@ -12,9 +12,11 @@ sample grid (the kinematics affine in z, loads and contact coefficient computed 
 :func:`camjax.evaluate.arrays_from_kinematics`), law(z) the [synthesis] terms that are quadratics
 in z: the squared-derivative terms and the mean square residual vibration of the follower train
 (:func:`train_quadratics`: the map of :mod:`camjax.synthesis.vibration`, with the scene's
-[dynamics] and [synthesis]'s speed band, the same term ``camjax synthesize`` weighs). The peak
-terms (``peak_velocity``, ``peak_accel``, ``peak_jerk``, ``peak_force``) are refused: non-smooth
-in z.
+[dynamics] and [synthesis]'s speed band, the same term ``camjax synthesize`` weighs), and the peak
+terms (``peak_velocity``, ``peak_accel``, ``peak_jerk``, ``peak_force``: maxima of affine
+functions of z, not smooth), which the search takes as smooth maxima sharpened by a continuation
+(:mod:`camjax.codesign.peaks`: :attr:`Codesign.taus` set, their gradient added; the exact maxima
+when it is None).
 
 - **Inner**: the registered gradient solver on the grid (``extrema = "grid"``: the problem is a
   pytree of arrays whose kinematic fields are functions of z; one compiled program for every z).
@@ -50,17 +52,18 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+import camjax.codesign.peaks as peaks_mod
 import camjax.codesign.spring as spring_mod
 from camjax.evaluate import arrays_from_kinematics, scene_arrays
 from camjax.family import weights_of
 from camjax.program import Kinematics
 from camjax.solvers.base import family_of, problem_from_scene, solve_one
 from camjax.synthesis.linear import law_quadratics, linear_kinematics
-from camjax.synthesis.problem import L2_OBJECTIVES
+from camjax.synthesis.problem import ALL_OBJECTIVES, L2_OBJECTIVES
 from camjax.synthesis.vibration import residual_maps
 
-# the [synthesis] terms the co-design takes: quadratics in z (the peaks are not smooth in z)
-SUPPORTED = (*L2_OBJECTIVES, "residual_vibration")
+# the [synthesis] terms the co-design takes: quadratics in z, and the peaks as smooth maxima
+SUPPORTED = ALL_OBJECTIVES
 ACTIVE_RTOL = 1e-7  # a constraint is active within this fraction of the problem's size norm
 
 
@@ -97,12 +100,12 @@ class Codesign:
         terms = dict(scene.synthesis.objective) if scene.synthesis is not None else {}
         for name in terms:
             if name not in SUPPORTED:
-                raise CodesignError(f"synthesis.objective.{name}", "a peak term is not supported by "
-                                    "camjax design's co-design (it is not smooth in the laws; allowed: "
-                                    f"{', '.join(SUPPORTED)}; camjax synthesize takes it)")
-        if "residual_vibration" in terms and scene.dynamics is None:
-            raise CodesignError("dynamics", "synthesis.objective.residual_vibration needs the follower "
-                                "train: a [dynamics] section (I3, c3, k23)")
+                raise CodesignError(f"synthesis.objective.{name}", "not a term of the co-design "
+                                    f"(allowed: {', '.join(SUPPORTED)})")
+        for name in ("residual_vibration", "peak_force"):
+            if name in terms and scene.dynamics is None:
+                raise CodesignError("dynamics", f"synthesis.objective.{name} needs the follower "
+                                    "train: a [dynamics] section (I3, c3, k23)")
         self.scene = scene
         self.law_weights = terms
         self.samples = int(scene.motion.samples if samples is None else samples)
@@ -126,6 +129,17 @@ class Codesign:
             from camjax.dynamics.context import synthesis_train
 
             self.train = synthesis_train(scene)
+        if "peak_force" in terms:
+            if self.train.spring_rate is None:
+                raise CodesignError("dynamics", "synthesis.objective.peak_force needs the follower "
+                                    "train's spring (the contact force: give [dynamics]' spring)")
+            if self.spring is not None:
+                raise CodesignError("synthesis.objective.peak_force", "not taken with a designed spring "
+                                    "(the train's force is [dynamics]' spring's; allowed: a fixed spring, "
+                                    "or drop peak_force)")
+        per_span = scene.synthesis.samples_per_span if scene.synthesis is not None else 8
+        self.peaks = peaks_mod.peak_terms(self.lin, self.designed, terms, per_span, self.train)
+        self.taus = None  # the smoothing of the peak terms (None: their exact maxima)
         # per designed segment: (rows, Q) of its residual vibration (None without the train)
         self.residual = ([residual_maps(ds.basis(), self.train, ds) for ds in self.designed]
                          if self.train is not None else None)
@@ -225,6 +239,9 @@ class Codesign:
         if self.residual_weight > 0.0:
             for control, (rows, _) in zip(self.lin.control(z), self.residual, strict=True):
                 value += self.residual_weight * float(np.mean(np.sum((rows @ control) ** 2, axis=1)))
+        if self.peaks is not None:
+            value += (peaks_mod.exact_value(self.peaks, z) if self.taus is None else
+                      peaks_mod.smooth_value(self.peaks, z, self.taus)[0])
         return value
 
     def inner(self, kin4, u=None) -> Inner:
@@ -261,7 +278,11 @@ class Codesign:
         else:  # x's rate and the preload it implies too
             g = np.asarray(self._lagrangian_grad(jnp.asarray(x), inner.design, jnp.asarray(lam)))
         # (g + P z) + q: the order of the sums as ever (the search's path is sensitive to rounding)
-        return np.concatenate([g[: self.nz] + self.law_P @ x[: self.nz] + self.law_q, g[self.nz:]])
+        gz = g[: self.nz] + self.law_P @ x[: self.nz] + self.law_q
+        if self.peaks is not None:  # the smooth peaks' (the last stage's smoothing where none is set)
+            taus = self.taus if self.taus is not None else peaks_mod.schedule(self.peaks, x[: self.nz])[-1]
+            gz = gz + peaks_mod.smooth_value(self.peaks, x[: self.nz], taus)[1]
+        return np.concatenate([gz, g[self.nz:]])
 
     def best_rate(self, kin4, count: int = 9, refine: int = 12) -> tuple[float, Inner]:
         """The rate (as u) with the least objective on fixed kinematics ``kin4``: ``count`` rates

@@ -18,6 +18,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+import camjax.codesign.peaks as peaks_mod
 import camjax.codesign.spring as spring_mod
 from camjax.codesign.builtin import (
     best_builtin_combination,
@@ -87,6 +88,31 @@ def bfgs(cd: Codesign, z0, f0: float, inner0: Inner, max_iterations: int = MAX_I
     return z, f, inner, len(history) - 1, history
 
 
+def search(cd: Codesign, x0, f0: float, inner0: Inner, max_iterations: int = MAX_ITERATIONS):
+    """:func:`bfgs` from x0; with peak terms (:mod:`camjax.codesign.peaks`) a continuation: one BFGS
+    per stage of the smoothing's schedule, each from the last one's answer; the answer is the start
+    or a stage's answer with the least F with the exact maxima (the same returns as :func:`bfgs`;
+    the iterations and history of every stage, the history in the stages' smoothed F)."""
+    if cd.peaks is None:
+        return bfgs(cd, x0, f0, inner0, max_iterations)
+    x, inner, iterations, history = np.asarray(x0, dtype=np.float64), inner0, 0, []
+    best = (f0, x, inner)  # the least F with the exact maxima: the start, then each stage's answer
+    try:
+        for taus in peaks_mod.schedule(cd.peaks, x[: cd.nz]):
+            cd.taus = taus
+            f = inner.objective + cd.law_value(x)  # the same inner optimum, the stage's smoothing
+            x, f, inner, it, hist = bfgs(cd, x, f, inner, max_iterations)
+            iterations += it
+            history += hist
+            cd.taus = None
+            exact = inner.objective + cd.law_value(x)
+            if exact < best[0]:
+                best = (exact, x, inner)
+    finally:
+        cd.taus = None
+    return best[1], best[0], best[2], iterations, history
+
+
 class Outcome(NamedTuple):
     """A co-design: the scene to run the normal design on, and what the report says of it."""
 
@@ -122,8 +148,8 @@ def codesign_scene(scene, samples: int | None = None, max_iterations: int = MAX_
         starts.append(("builtin_fit", fitted_coordinates(cd, builtin[0])))
     if cd.law_weights:
         spec = scene.synthesis
-        law_only = synthesize_segments(cd.designed, cd.law_weights, spec.samples_per_span,
-                                       residual_train(cd) if "residual_vibration" in cd.law_weights else None)
+        train = law_train(cd) if set(cd.law_weights) & {"peak_force", "residual_vibration"} else None
+        law_only = synthesize_segments(cd.designed, cd.law_weights, spec.samples_per_span, train)
         starts.append(("synthesis", cd.lin.coordinates([r.control for r in law_only])))
     else:
         starts.append(("starting_law", cd.lin.z0))
@@ -136,7 +162,7 @@ def codesign_scene(scene, samples: int | None = None, max_iterations: int = MAX_
             x0, f0 = np.append(z0, u), inner0.objective + cd.law_value(z0)
         if not np.isfinite(f0):
             continue
-        z, f, inner, it, hist = bfgs(cd, x0, f0, inner0, max_iterations)
+        z, f, inner, it, hist = search(cd, x0, f0, inner0, max_iterations)
         if best is None or f < best.objective:
             best = SearchResult(z, f, inner, it, name, hist)
     if best is None and (builtin is None or not np.isfinite(builtin[1])):
@@ -163,29 +189,37 @@ def codesign_scene(scene, samples: int | None = None, max_iterations: int = MAX_
                    segment_results(cd, controls), spring_report(cd, fixed, inner.spring), cd.train)
 
 
-def residual_train(cd: Codesign):
-    """The co-design's follower train for the residual vibration alone (no spring: no force
-    figures; the co-design's spring may differ from [dynamics]'), or None without [dynamics]."""
-    return None if cd.train is None else cd.train._replace(spring_rate=None)
+def law_train(cd: Codesign):
+    """The co-design's follower train for the law terms and figures, or None without [dynamics]:
+    with ``peak_force`` the train with [dynamics]' spring (a designed spring is refused with it),
+    else for the residual vibration alone (no spring: no force figures; the co-design's spring may
+    differ from [dynamics'])."""
+    if cd.train is None or "peak_force" in cd.law_weights:
+        return cd.train
+    return cd.train._replace(spring_rate=None)
 
 
 def segment_results(cd: Codesign, controls) -> list:
     """Each designed B-spline's figures as ``camjax synthesize`` reports them (normalized measures,
     with [dynamics] the residual vibration, its [synthesis] terms, the best built-in law of its
     class for those terms alone)."""
-    from camjax.synthesis.problem import OBJECTIVES, build_problem
+    from camjax.synthesis.basis import span_points
+    from camjax.synthesis.problem import MEASURE_PER_SPAN, OBJECTIVES, build_problem
     from camjax.synthesis.segments import ORDERS, SegmentSynthesis, best_builtin, term_value
     from camjax.synthesis.solve import measures
-    from camjax.synthesis.vibration import residual_figures
+    from camjax.synthesis.vibration import force_matrix, residual_figures
 
     out = []
-    train = residual_train(cd)
+    train = law_train(cd)
     for k, (ds, c) in enumerate(zip(cd.designed, controls, strict=True)):
         basis = ds.basis()
         m = measures(build_problem(basis, ds.conditions, ()), c)
         meas = {n: (float(getattr(m, n)) if ORDERS[n] <= ds.degree else None) for n in OBJECTIVES}
         if cd.residual is not None:
             meas.update(residual_figures(np.linalg.norm(cd.residual[k][0] @ np.asarray(c), axis=1)))
+        if "peak_force" in cd.law_weights:  # the train's contact force on the reported points
+            dense = force_matrix(basis, cd.train, ds, span_points(basis, MEASURE_PER_SPAN))
+            meas["peak_force"] = float(np.max(np.abs(dense @ np.asarray(c))))
         law_f = sum(w * term_value(n, meas[n]) for n, w in cd.law_weights.items())
         out.append(SegmentSynthesis(ds, basis.knots, np.asarray(c), meas, law_f, law_f, True, 0.0,
                                     best_builtin(ds, cd.law_weights, train) if cd.law_weights else None))
