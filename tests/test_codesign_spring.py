@@ -260,16 +260,18 @@ def test_the_envelope_gradient_in_the_rate_matches_central_differences(cd):
     assert np.linalg.norm(g - fd) <= 1e-6 * max(1.0, np.linalg.norm(fd)), (g, fd)
 
 
-def test_a_rocker_spring_is_refused_naming_the_field():
+def test_a_translating_spring_key_on_a_rocker_is_refused_naming_the_field():
+    """A rocker's spring is a torsion spring (tests/test_codesign_spring_rocker.py): its keys are
+    spring_N_m_per_rad, preload_N_m and min_contact_torque_N_m, not a translating follower's."""
     data = tomllib.loads(builtin_scene_text("oscillating-roller"))
     for i in (0, 2):
         seg = data["motion"]["segments"][i]
         data["motion"]["segments"][i] = {k: seg[k] for k in ("kind", "angle_deg", "lift_deg")} | {
             "law": "bspline", "degree": 3, "control_count": 8, "design": True}
     data["synthesis"] = {"objective": {"l2_jerk": 1e-6}, "spring_N_per_m": [10.0, 40.0]}
-    with pytest.raises(CodesignError) as exc:
-        Codesign(scene_from_dict(data, "rocker"), SAMPLES)
-    assert exc.value.field == "synthesis.spring_N_per_m" and "translating" in str(exc.value)
+    with pytest.raises(SceneError) as exc:
+        scene_from_dict(data, "rocker")
+    assert exc.value.field == "synthesis.spring_N_per_m" and "spring_N_m_per_rad" in str(exc.value)
 
 
 @pytest.mark.slow

@@ -182,11 +182,7 @@ def _write_design(args, out, scene, result, workers, progress, extra=None) -> in
         best = "" if b is None else f"; best built-in ({', '.join(b['law'])}): {b['objective']:.5f}"
         print(f"co-design: laws {c['chosen']}, objective {c['objective']:.5f} on the search grid{best}")
         if c.get("spring") is not None and c["spring"].get("designed", True):
-            sp = c["spring"]
-            least = sp["min_contact_force_at_overspeed_N"]
-            print(f"co-design spring: {sp['rate_N_per_m']:.6g} N/m, preload {sp['preload_N']:.6g} N "
-                  f"({sp['preload_mm']:.6g} mm); least contact force {least:.6g} N at {sp['overspeed']:g} x "
-                  f"rpm (margin {sp['min_contact_force_N']:g} N, binds: {sp['binding']})")
+            print(_spring_line(c["spring"]))
         _print_helical((c.get("spring") or {}).get("helical"))
     width = follower.drawn_summary(d)
     state = f"INFEASIBLE ({', '.join(broken)})" if broken else "feasible"
@@ -211,6 +207,22 @@ def _print_helical(h) -> None:
           f"shear {h['shear_MPa']:.4g} MPa, surge {h['surge_hz']:.4g} Hz "
           f"(>= {h['required_surge_hz']:.4g} Hz); "
           f"binds: {', '.join(h['binding']) or 'none'}")
+
+
+def _spring_line(sp: dict) -> str:
+    """The co-design's designed spring (result.json's ``synthesis.codesign.spring``) in one line: a
+    translating follower's in N/m and N, a rocker's (a torsion spring) in N m/rad and N m."""
+    at = f"{sp['overspeed']:g} x rpm"
+    if "rate_N_m_per_rad" in sp:
+        least = sp["min_contact_torque_at_overspeed_N_m"]
+        return (f"co-design spring: {sp['rate_N_m_per_rad']:.6g} N m/rad, preload "
+                f"{sp['preload_N_m']:.6g} N m ({sp['preload_rad']:.6g} rad); least contact torque "
+                f"{least:.6g} N m at {at} (margin "
+                f"{sp['min_contact_torque_N_m']:g} N m, binds: {sp['binding']})")
+    least = sp["min_contact_force_at_overspeed_N"]
+    return (f"co-design spring: {sp['rate_N_per_m']:.6g} N/m, preload {sp['preload_N']:.6g} N "
+            f"({sp['preload_mm']:.6g} mm); least contact force {least:.6g} N at {at} "
+            f"(margin {sp['min_contact_force_N']:g} N, binds: {sp['binding']})")
 
 
 def _import_drawing_modules() -> None:

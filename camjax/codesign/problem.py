@@ -28,8 +28,10 @@ when it is None).
   checks it against central differences of F.
 - **Spring** (:mod:`camjax.codesign.spring`, where [synthesis] gives spring keys): the preload is
   eliminated in closed form (the least keeping contact at the overspeed: exact, the objective
-  grows with it), the rate is one more outer coordinate u (box transform) after z; the problem is
-  built with that spring, and the envelope gradient differentiates through both.
+  grows with it; a rocker's is a moment, its condition on the moment about the pivot), the rate is
+  one more outer coordinate u (box transform) after z; the problem is built with that spring (the
+  follower train replaced, translating or rocker), and the envelope gradient differentiates
+  through both.
 - **Outer**: BFGS on z with a backtracking (Armijo) line search, in NumPy (z has tens of
   coordinates); an infeasible inner optimum counts as +inf.
 - **Never worse than choosing**: every combination of the built-in laws that meet each designed
@@ -80,7 +82,7 @@ class Inner(NamedTuple):
     objective: float  # the family's objective at its optimum (+inf if infeasible)
     design: Any
     feasible: bool
-    spring: tuple[float, float] | None = None  # (rate N/m, preload N) the geometry was solved with
+    spring: tuple[float, float] | None = None  # (rate, preload) solved with: N/m, N (a rocker's N m/rad, N m)
 
 
 def check_scene(scene) -> dict[str, float]:
@@ -177,7 +179,7 @@ class Codesign:
     def _start_rate(self) -> float:
         """u of the scene's rate, or of the box's geometric middle where the scene's is outside."""
         lo, hi = self.spring.rate
-        k0 = float(self.spring.train.spring_N_per_m)
+        k0 = self.spring.scene_rate
         return spring_mod.u_of(self.spring, k0 if lo < k0 < hi else math.sqrt(lo * hi))
 
     @property
@@ -191,7 +193,8 @@ class Codesign:
 
     def problem(self, kin4, spring=None):
         """The family's problem on kinematics ``kin4`` (4, samples): s, s', s'', s''' (traceable);
-        ``spring``: (rate N/m, preload N) replacing the scene's (a designed spring)."""
+        ``spring``: (rate, preload) replacing the scene's (a designed spring: N/m and N, or a rocker's
+        N m/rad and N m)."""
         kin = Kinematics(self.theta, kin4[0], kin4[1], kin4[2], kin4[3])
         scene = self.grid_scene
         if spring is not None:

@@ -294,46 +294,54 @@ def spring_infeasible(cd: Codesign, starts, builtin) -> CodesignError:
     if builtin is not None:
         kins.append(builtin_kinematics(cd, builtin[0]))
     box = cd.spring
+    n = box.units
     deficit, k, at = min(spring_mod.contact_deficit(box, kin4) for kin4 in kins)
     rpm = cd.scene.motion.rpm * box.overspeed
     if deficit <= 0.0:
         return CodesignError("design", "no start of the co-design has a feasible geometry within [design]'s "
-                             f"bounds with a spring that keeps contact (spring_N_per_m = {k:g}, preload_N "
+                             f"bounds with a spring that keeps contact ({n.rate} = {k:g}, {n.preload} "
                              f"<= {box.preload[1]:g})")
     deg = at * 360.0 / cd.samples  # the grid's sample angles
-    return CodesignError("synthesis.min_contact_force_N", (
-        f"{box.min_force:g} N: no spring in the box keeps contact at {box.overspeed:g} x rpm = {rpm:g} rpm: "
-        f"the constraint contact force >= {box.min_force:g} N binds at {deg:.4g} deg, where the best "
-        f"spring for it (spring_N_per_m = {k:g}, preload_N = {box.preload[1]:g}) gives "
-        f"{box.min_force - deficit:.4g} N, {deficit:.4g} N short (allowed: larger spring_N_per_m or "
-        "preload_N bounds, a smaller min_contact_force_N or overspeed)"))
+    u = n.load_unit
+    return CodesignError(f"synthesis.{n.margin}", (
+        f"{box.min_force:g} {u}: no spring in the box keeps contact at {box.overspeed:g} x rpm = {rpm:g} "
+        "rpm: "
+        f"the constraint {n.load} >= {box.min_force:g} {u} binds at {deg:.4g} deg, where the best "
+        f"spring for it ({n.rate} = {k:g}, {n.preload} = {box.preload[1]:g}) gives "
+        f"{box.min_force - deficit:.4g} {u}, {deficit:.4g} {u} short (allowed: larger {n.rate} or "
+        f"{n.preload} bounds, a smaller {n.margin} or overspeed)"))
 
 
 def spring_report(cd: Codesign, fixed, spring) -> dict | None:
     """result.json's ``synthesis.codesign.spring``: the designed rate and preload, and the least
-    contact force of the chosen design at the overspeed by the loads model of ``fixed`` (the scene
-    the design is written from) on the search grid, with where it is reached and what binds."""
+    contact load of the chosen design at the overspeed by the loads model of ``fixed`` (the scene
+    the design is written from) on the search grid, with where it is reached and what binds. A
+    translating follower's keys are in N/m and N (the contact force), a rocker's in N m/rad and
+    N m (the moment about the pivot; the preload also as the wind-up in rad)."""
     if spring is None:
         return None
-    from camjax.evaluate import scene_arrays
-
     box = cd.spring
     rpm = fixed.motion.rpm * box.overspeed
-    fast = dataclasses.replace(fixed, motion=dataclasses.replace(fixed.motion, rpm=rpm))
-    arrays = scene_arrays(fast, samples=cd.samples, extrema="grid")
-    force = np.asarray(arrays.force_N)
+    theta_deg, load = spring_mod.scene_load(box, fixed, cd.samples)
     k, p = spring
-    need = box.min_force - float(force.min()) + p  # the least preload keeping the margin
+    need = box.min_force - float(load.min()) + p  # the least preload keeping the margin
     binding = ("contact" if abs(p - need) <= 1e-6 * max(1.0, abs(p)) else
                "preload_low" if box.preload[1] > box.preload[0] else "none")
+    at_bound = ("low" if k <= box.rate[0] * (1 + 1e-4) else "high" if k >= box.rate[1] * (1 - 1e-4)
+                else None) if box.free_rate else "fixed"
+    least, where = float(load.min()), float(theta_deg[int(np.argmin(load))])
+    if box.rocking:
+        return {
+            "rate_N_m_per_rad": k, "preload_N_m": p, "preload_rad": p / k,
+            "rate_bounds_N_m_per_rad": list(box.rate), "preload_bounds_N_m": list(box.preload),
+            "min_contact_torque_N_m": box.min_force, "overspeed": box.overspeed, "rpm_overspeed": rpm,
+            "min_contact_torque_at_overspeed_N_m": least, "min_contact_torque_at_overspeed_deg": where,
+            "binding": binding, "rate_at_bound": at_bound,
+        }
     return {
         "rate_N_per_m": k, "preload_N": p, "preload_mm": 1e3 * p / k,
         "rate_bounds_N_per_m": list(box.rate), "preload_bounds_N": list(box.preload),
         "min_contact_force_N": box.min_force, "overspeed": box.overspeed, "rpm_overspeed": rpm,
-        "min_contact_force_at_overspeed_N": float(force.min()),
-        "min_contact_force_at_overspeed_deg": float(np.asarray(arrays.theta_deg)[int(np.argmin(force))]),
-        "binding": binding,
-        "rate_at_bound": ("low" if k <= box.rate[0] * (1 + 1e-4) else "high" if k >= box.rate[1] * (1 - 1e-4)
-                          else None) if box.free_rate else "fixed",
+        "min_contact_force_at_overspeed_N": least, "min_contact_force_at_overspeed_deg": where,
+        "binding": binding, "rate_at_bound": at_bound,
     }
-

@@ -94,7 +94,8 @@ def scene_from_dict(data: dict, name: str = "scene", source: str | None = None) 
                          "(follower.mass_kg and/or spring_N_per_m)", source=source)
     dynamics = (parse_dynamics(top.sub("dynamics"), motion, spec, follower.rocking) if "dynamics" in data
                 else None)
-    synthesis = parse_synthesis(top.sub("synthesis"), motion.designed) if "synthesis" in data else None
+    synthesis = (parse_synthesis(top.sub("synthesis"), motion.designed, follower.rocking)
+                 if "synthesis" in data else None)
     check_train(synthesis, dynamics, source)
     return Scene(name, motion, spec, contact, design, guide, dynamics, synthesis)
 

@@ -167,16 +167,17 @@ def law_from_control(ds: DesignedSegment, control):
     return law, scene_control
 
 
-def parse_synthesis(r: TableReader, designed: tuple[DesignedSegment, ...]) -> SynthesisSpec:
+def parse_synthesis(r: TableReader, designed: tuple[DesignedSegment, ...],
+                    rocking: bool = False) -> SynthesisSpec:
     """[synthesis]: objective = {name = weight, ...}, samples_per_span, speed_band, speed_count and
-    the spring keys (:data:`SPRING_KEYS`) and the ``helical_spring`` sub-table
-    (:func:`camjax.scene.helical.parse_helical`)."""
+    the spring keys (:data:`SPRING_KEYS`; ``rocking``: the follower is a rocker, its spring about
+    the pivot) and the ``helical_spring`` sub-table (:func:`camjax.scene.helical.parse_helical`)."""
     from camjax.synthesis import L2_OBJECTIVES, OBJECTIVES, PEAK_OBJECTIVES
     from camjax.synthesis.problem import ALL_OBJECTIVES
 
     r.check_keys(("objective", "samples_per_span", "speed_band", "speed_count", *SPRING_KEYS,
                   "helical_spring"))
-    spring = parse_spring(r)
+    spring = parse_spring(r, rocking)
     helical = parse_helical(r.sub("helical_spring")) if r.has("helical_spring") else None
     if not designed:
         raise r.error("objective", r.table.get("objective", MISSING), "no segment of [motion] has "
@@ -227,21 +228,40 @@ def check_train(synthesis: SynthesisSpec | None, dynamics, source=None) -> None:
                              "contact force's spring", "> 0 (or follower.spring_N_per_m)", source)
 
 
-SPRING_KEYS = ("spring_N_per_m", "preload_N", "min_contact_force_N", "overspeed")
+# [synthesis]'s spring keys of a translating follower (N/m, N, N) and of a rocker (about its pivot:
+# N m/rad, N m, N m), and the overspeed both take
+TRANSLATING_SPRING_KEYS = ("spring_N_per_m", "preload_N", "min_contact_force_N")
+ROCKER_SPRING_KEYS = ("spring_N_m_per_rad", "preload_N_m", "min_contact_torque_N_m")
+SPRING_KEYS = (*TRANSLATING_SPRING_KEYS, *ROCKER_SPRING_KEYS, "overspeed")
 
 
-def parse_spring(r: TableReader) -> SpringSpec | None:
-    """[synthesis]'s spring keys (camjax.codesign.spring): ``spring_N_per_m`` and ``preload_N``, a
-    number (fixed) or [low, high] (free, 0 < low <= high); ``min_contact_force_N`` >= 0 (default 0);
-    ``overspeed`` >= 1 (default 1). None when none is given."""
+def parse_spring(r: TableReader, rocking: bool = False) -> SpringSpec | None:
+    """[synthesis]'s spring keys (camjax.codesign.spring). A translating follower: ``spring_N_per_m``
+    and ``preload_N`` (the spring force at s = 0), ``min_contact_force_N``; a rocker (``rocking``):
+    ``spring_N_m_per_rad`` and ``preload_N_m`` (the spring's moment at s = 0), ``min_contact_torque_N_m``.
+    Rate and preload: a number (fixed) or [low, high] (free, 0 < low <= high); the margin >= 0
+    (default 0); ``overspeed`` >= 1 (default 1). The other kind's keys are refused. None when no
+    spring key is given."""
     from camjax.scene.reader import fixed_or_free
 
     if not any(r.has(k) for k in SPRING_KEYS):
         return None
-    rate = fixed_or_free(r, "spring_N_per_m") if r.has("spring_N_per_m") else None
-    preload = fixed_or_free(r, "preload_N") if r.has("preload_N") else None
-    return SpringSpec(rate, preload, r.number("min_contact_force_N", 0.0, low=0.0),
-                      r.number("overspeed", 1.0, low=1.0, high=100.0))
+    own, other = ((ROCKER_SPRING_KEYS, TRANSLATING_SPRING_KEYS) if rocking else
+                  (TRANSLATING_SPRING_KEYS, ROCKER_SPRING_KEYS))
+    for key in other:
+        if r.has(key):
+            raise r.error(key, r.table[key], f"is a {'translating' if rocking else 'rocker'} follower's "
+                          f"spring key; this follower is a {'rocker' if rocking else 'translating'} one",
+                          ", ".join((*own, "overspeed")))
+    rate_key, preload_key, margin_key = own
+    rate = fixed_or_free(r, rate_key) if r.has(rate_key) else None
+    preload = fixed_or_free(r, preload_key) if r.has(preload_key) else None
+    margin = r.number(margin_key, 0.0, low=0.0)
+    overspeed = r.number("overspeed", 1.0, low=1.0, high=100.0)
+    if rocking:
+        return SpringSpec(overspeed=overspeed, rate_N_m_per_rad=rate, preload_N_m=preload,
+                          min_contact_torque_N_m=margin, rocking=True)
+    return SpringSpec(rate, preload, margin, overspeed)
 
 
 def is_designed(table: dict) -> bool:

@@ -139,12 +139,18 @@ class DynamicsSpec:
 class SpringSpec:
     """[synthesis]'s spring of a co-design (camjax.codesign.spring): the rate (N/m) and the preload
     force at s = 0 (N) as (low, high) bounds (low == high: fixed; None: the [follower] train's), and
-    the contact kept: contact force >= ``min_contact_force_N`` at ``overspeed`` x [motion] rpm."""
+    the contact kept: contact force >= ``min_contact_force_N`` at ``overspeed`` x [motion] rpm. A
+    rocker's (``rocking``) is about its pivot: the rate (N m/rad), the preload moment at s = 0 (N m)
+    and the least moment the cam applies, ``min_contact_torque_N_m`` (its translating fields unused)."""
 
     rate_N_per_m: tuple[float, float] | None = None
     preload_N: tuple[float, float] | None = None
     min_contact_force_N: float = 0.0
     overspeed: float = 1.0
+    rate_N_m_per_rad: tuple[float, float] | None = None
+    preload_N_m: tuple[float, float] | None = None
+    min_contact_torque_N_m: float = 0.0
+    rocking: bool = False
 
 
 @dataclass(frozen=True)
