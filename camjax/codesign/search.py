@@ -18,8 +18,8 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-import camjax.codesign.peaks as peaks_mod
 import camjax.codesign.helical as helical
+import camjax.codesign.peaks as peaks_mod
 import camjax.codesign.spring as spring_mod
 from camjax.codesign.builtin import (
     best_builtin_combination,
