@@ -19,7 +19,7 @@ def _setup_synthesize(p: argparse.ArgumentParser):
 
     def run(args) -> int:
         from camjax import followers, runtime
-        from camjax.output.synthesis import synthesis_figure, synthesis_report, write_curves_csv
+        from camjax.output.synthesis import synthesis_figure, synthesis_report, train_report, write_curves_csv
         from camjax.scene import load_scene
         from camjax.scene.designed import law_from_control
         from camjax.synthesis.segments import synthesize_segments
@@ -67,16 +67,6 @@ def _setup_synthesize(p: argparse.ArgumentParser):
         return 0
 
     return run
-
-
-def train_report(train) -> dict:
-    """result.json's ``synthesis.train``: the follower train the residual vibration and the peak
-    force are measured on (camjax.synthesis.vibration)."""
-    import math
-
-    return {"natural_frequency_hz": train.natural_frequency_rad_s / (2 * math.pi),
-            "damping_ratio": train.damping_ratio, "cam_speed_hz": train.cam_speed_rad_s / (2 * math.pi),
-            "speed_factors": list(train.speed_factors), "spring": train.spring_rate is not None}
 
 
 def law_curves(results, builtin_names, note: str):

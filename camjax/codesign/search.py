@@ -132,7 +132,7 @@ class Outcome(NamedTuple):
     samples: int  # the search's grid
     segments: list  # camjax.synthesis.segments.SegmentSynthesis of the designed B-splines
     spring: dict | None = None  # the designed spring (spring_report), None when not designed
-    train: Any = None  # the follower train the residual vibration is measured on (vibration.Train), or None
+    train: Any = None  # the follower train the law terms are measured on (vibration.Train; law_train), or None
 
 
 def codesign_scene(scene, samples: int | None = None, max_iterations: int = MAX_ITERATIONS) -> Outcome:
@@ -194,7 +194,7 @@ def codesign_outcome(cd: Codesign, max_iterations: int = MAX_ITERATIONS) -> Outc
                    0 if best is None else best.iterations, "" if best is None else best.start,
                    cd.evaluations, [] if best is None else best.history, law_f, tables, cd.samples,
                    segment_results(cd, controls),
-                   helical.with_helical(scene, fixed, spring_report(cd, fixed, inner.spring)), cd.train)
+                   helical.with_helical(scene, fixed, spring_report(cd, fixed, inner.spring)), law_train(cd))
 
 
 def law_train(cd: Codesign):

@@ -75,7 +75,7 @@ def codesign_report(scene, outcome, data: dict) -> dict:
     design_f = data["design"]["objective"]
     best = outcome.best_builtin
     train = getattr(outcome, "train", None)
-    extra = {} if train is None else {"train": train_block(train)}
+    extra = {} if train is None else {"train": train_report(train)}
     return {
         "objective": weights,
         "segments": segments,
@@ -103,15 +103,15 @@ def codesign_report(scene, outcome, data: dict) -> dict:
     }
 
 
-def train_block(train) -> dict:
-    """``synthesis.train`` of the co-design: the follower train the segments' residual vibration is
-    measured on (the keys ``camjax synthesize`` writes, ``spring`` False: the co-design reports no
-    peak force)."""
+def train_report(train) -> dict:
+    """result.json's ``synthesis.train``: the follower train the residual vibration and the peak
+    force are measured on (camjax.synthesis.vibration; ``spring``: whether the peak force is, with
+    the train's spring), as ``camjax synthesize`` and the co-design write it."""
     import math
 
     return {"natural_frequency_hz": train.natural_frequency_rad_s / (2 * math.pi),
             "damping_ratio": train.damping_ratio, "cam_speed_hz": train.cam_speed_rad_s / (2 * math.pi),
-            "speed_factors": list(train.speed_factors), "spring": False}
+            "speed_factors": list(train.speed_factors), "spring": train.spring_rate is not None}
 
 
 def write_curves_csv(path: Path, curves: list[tuple[int, np.ndarray, tuple[np.ndarray, ...]]]) -> None:
