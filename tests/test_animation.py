@@ -81,6 +81,7 @@ def test_roller_poses_touch_the_roller_along_the_pressure_angle(roller_mechanism
     assert np.ptp(p.pressure_angle_deg) > 10.0  # the check is not vacuous: phi varies
 
 
+@pytest.mark.slow  # > 2 s (a compile of its own)
 @pytest.mark.parametrize("k", [0, 25, 50])
 def test_frame_artists_show_the_follower_at_s_of_theta(flat_mechanism, k):
     mf = motion_frames(flat_mechanism, 72)

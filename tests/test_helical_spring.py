@@ -160,6 +160,7 @@ def test_formula_gradients_against_central_differences():
 # ------------------------------------------------------------------------------ the sizing
 
 
+@pytest.mark.slow  # > 2 s (a compile of its own)
 @pytest.mark.parametrize("name", list(CASES))
 def test_sizing_matches_brute_force_and_slsqp(name):
     """The answer: k matched (1e-12), every constraint held (to 1e-12 relative: the binding ones are

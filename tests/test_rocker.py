@@ -218,6 +218,7 @@ def test_design_refuses_a_base_radius_the_rocker_cannot_close(tmp_path, capsys, 
     assert len(err) == 1 and "--base-radius" in err[0] and words in err[0]
 
 
+@pytest.mark.slow  # > 2 s (a compile of its own)
 def test_design_refuses_an_arm_swung_through_the_line_of_centres(tmp_path, capsys):
     # psi0 for R_p = 139 mm (d + l = 140) is ~173 deg: a 20 deg swing crosses the line of centres
     rc, out = _design(tmp_path, ROLLER_SCENE.replace("ROT", "ccw"), "--base-radius", "131")

@@ -85,6 +85,7 @@ def _convex_radii(scene, prime_radius_mm, samples=None):
     return rho_p[convex], np.asarray(arrays.theta_deg)[convex]
 
 
+@pytest.mark.slow  # > 2 s (a compile of its own)
 def test_undercut_binds_for_a_large_roller():
     text = _variant("roller_radius_mm = 5.0 ", "roller_radius_mm = 12.0 ")
     scene = dataclasses.replace(parse_scene(text, "big-roller"), design=None)
