@@ -19,6 +19,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 import camjax.codesign.helical as helical
+import camjax.codesign.joint as joint
 import camjax.codesign.peaks as peaks_mod
 import camjax.codesign.spring as spring_mod
 from camjax.codesign.builtin import (
@@ -133,6 +134,7 @@ class Outcome(NamedTuple):
     segments: list  # camjax.synthesis.segments.SegmentSynthesis of the designed B-splines
     spring: dict | None = None  # the designed spring (spring_report), None when not designed
     train: Any = None  # the follower train the law terms are measured on (vibration.Train; law_train), or None
+    method: str = "bilevel"  # "joint" (camjax.codesign.joint) or "bilevel" (BFGS on F(z), the envelope gradient)
 
 
 def codesign_scene(scene, samples: int | None = None, max_iterations: int = MAX_ITERATIONS) -> Outcome:
@@ -169,7 +171,10 @@ def codesign_outcome(cd: Codesign, max_iterations: int = MAX_ITERATIONS) -> Outc
             x0, f0 = np.append(z0, u), inner0.objective + cd.law_value(z0)
         if not np.isfinite(f0):
             continue
-        z, f, inner, it, hist = search(cd, x0, f0, inner0, max_iterations)
+        if joint.supports(cd):  # the laws and the geometry in one program (camjax.codesign.joint)
+            z, f, inner, it, hist = joint.search(cd, x0, f0, inner0)
+        else:
+            z, f, inner, it, hist = search(cd, x0, f0, inner0, max_iterations)
         if best is None or f < best.objective:
             best = SearchResult(z, f, inner, it, name, hist)
     if best is None and (builtin is None or not np.isfinite(builtin[1])):
@@ -194,7 +199,8 @@ def codesign_outcome(cd: Codesign, max_iterations: int = MAX_ITERATIONS) -> Outc
                    0 if best is None else best.iterations, "" if best is None else best.start,
                    cd.evaluations, [] if best is None else best.history, law_f, tables, cd.samples,
                    segment_results(cd, controls),
-                   helical.with_helical(scene, fixed, spring_report(cd, fixed, inner.spring)), law_train(cd))
+                   helical.with_helical(scene, fixed, spring_report(cd, fixed, inner.spring)), law_train(cd),
+                   "joint" if joint.supports(cd) else "bilevel")
 
 
 def law_train(cd: Codesign):

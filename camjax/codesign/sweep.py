@@ -121,6 +121,7 @@ def codesign_record(outcome: Outcome, design_objective: float, seconds: float) -
         "improvement": None if best is None else float((best[1] - outcome.objective) / best[1]),
         "iterations": int(outcome.iterations),
         "start": outcome.start,
+        "method": outcome.method,
         "inner_solves": int(outcome.evaluations),
         "samples": int(outcome.samples),
         "spring": outcome.spring,

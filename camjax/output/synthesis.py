@@ -95,7 +95,8 @@ def codesign_report(scene, outcome, data: dict) -> dict:
             "start": outcome.start,
             "inner_solves": outcome.evaluations,
             "samples": outcome.samples,
-            "gradient": "envelope",
+            # the search: "joint" (laws and geometry in one program) or "bilevel" (BFGS on F(z))
+            "method": getattr(outcome, "method", "bilevel"),
             # the designed spring (camjax.codesign.spring), None when [synthesis] designs none
             "spring": getattr(outcome, "spring", None),
             "history": [float(v) for v in outcome.history],

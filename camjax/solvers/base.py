@@ -76,7 +76,7 @@ from camjax.solvers.registry import (
 )
 
 __all__ = [
-    "Raw", "Settings", "Solution", "Timings", "family_of",
+    "Raw", "Settings", "Solution", "Timings", "family_of", "register_family",
     "in_mode", "problem_from_scene", "solve", "solve_batch", "solver_module", "weighting_keys",
 ]
 
@@ -85,6 +85,12 @@ __all__ = [
 
 
 _FAMILIES: dict[type, Any] = {}
+
+
+def register_family(problem_type: type, module) -> None:
+    """Register a problem family that is not a follower's (its ``Problem`` type and module): the
+    co-design's joint program of laws and geometry, :mod:`camjax.codesign.joint`."""
+    _FAMILIES[problem_type] = module
 
 
 def family_of(problem):
