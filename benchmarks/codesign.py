@@ -46,9 +46,9 @@ import jax.numpy as jnp
 import numpy as np
 
 import camjax  # noqa: F401  (x64)
+import camjax.codesign.joint as joint_mod
 from camjax.codesign import Codesign, best_builtin_combination
 from camjax.codesign.builtin import fitted_coordinates
-import camjax.codesign.joint as joint_mod
 from camjax.scene import builtin_scene_text, scene_from_dict
 from camjax.solvers.base import family_of
 
@@ -246,7 +246,8 @@ def run_slsqp(prep) -> dict:
     slsqp_s = time.perf_counter() - t0
     F_s, viol_s = joint.total(z_s, d_s)
     return {"seconds": slsqp_s, "compile_s": sp_compile, "objective": F_s, "max_violation": viol_s,
-            "feasible": bool(viol_s <= FEASIBLE_TOL), "success": bool(res.success), "message": str(res.message),
+            "feasible": bool(viol_s <= FEASIBLE_TOL), "success": bool(res.success),
+            "message": str(res.message),
             "iterations": int(res.nit), "evaluations": int(res.nfev), "jacobians": int(res.njev),
             # camjax's own bilevel F at SLSQP's laws (its inner geometry solve): equal to SLSQP's
             # objective when SLSQP's geometry is the inner optimum of its z: the same problem
@@ -328,8 +329,8 @@ def main(argv=None) -> dict:
         "camjax_infeasible": int(sum(not r["camjax"]["feasible"] for r in rows)),
         "slsqp_median_iterations": float(np.median([r["slsqp"]["iterations"] for r in rows])),
         "max_rel_difference_camjax_F_at_slsqp_laws": float(np.max(
-            [abs(r["slsqp"]["camjax_F_at_slsqp_laws"] - r["slsqp"]["objective"]) / abs(r["slsqp"]["objective"])
-             for r in rows])),
+            [abs(r["slsqp"]["camjax_F_at_slsqp_laws"] - r["slsqp"]["objective"])
+             / abs(r["slsqp"]["objective"]) for r in rows])),
         "slsqp_compile_median_s": float(np.median([r["slsqp"]["compile_s"] for r in rows])),
         "rel_gap_definition": "(F_slsqp - F_camjax) / |F_camjax|, both evaluated by the same function "
                               "(family objective, true max over the grid, + law terms); < 0: SLSQP lower",

@@ -87,7 +87,8 @@ def test_the_batch_gives_each_problems_single_solve(cases, solved):
     res, batch, starts = solved
     one = jax.jit(joint.solve)
     for k in range(len(cases)):
-        alone = jax.device_get(one(jax.tree.map(lambda x: x[k], batch), jax.tree.map(lambda x: x[k], starts)))
+        pick = lambda tree, k=k: jax.tree.map(lambda x: x[k], tree)  # noqa: E731
+        alone = jax.device_get(one(pick(batch), pick(starts)))
         # vmap changes the rounding of the solve's reductions; the path then differs in the last
         # bits: the same optimum to 1e-7 relative (the solver's tolerances are ~1e-11 in its box)
         assert float(alone.objective) == pytest.approx(float(res.objective[k]), rel=1e-7)

@@ -119,7 +119,8 @@ def joint_problem(cd, z_start, design_start) -> tuple[JointProblem, JointDesign]
     there), t the peak of f_i there. The laws' box is centred on the start, half-width
     max(:data:`Z_HALF_WIDTH`, 2 |z_start|_inf) in each coordinate."""
     if not supports(cd):
-        raise ValueError("the joint program takes quadratic law terms only (no peak terms, no designed spring)")
+        raise ValueError("the joint program takes quadratic law terms only "
+                         "(no peak terms, no designed spring)")
     z_start = np.asarray(z_start, dtype=np.float64)
     problem0 = cd.problem(cd.kinematics(z_start))
     family = family_of(problem0)
@@ -145,10 +146,12 @@ def stack(problems: list[JointProblem]) -> JointProblem:
     for p in problems[1:]:
         kin = p.kin0
         a, b = first.build(kin), p.build(kin)
-        same = jax.tree.all(jax.tree.map(lambda x, y: bool(np.array_equal(np.asarray(x), np.asarray(y))), a, b))
+        same = jax.tree.all(jax.tree.map(lambda x, y: bool(np.array_equal(np.asarray(x), np.asarray(y))),
+                                         a, b))
         if not same:
             raise ValueError("stack: the problems' families differ beyond their kinematics (not one batch)")
-    return jax.tree.map(lambda *xs: jnp.stack(xs), *[dataclasses.replace(p, build=first.build) for p in problems])
+    rebuilt = [dataclasses.replace(p, build=first.build) for p in problems]
+    return jax.tree.map(lambda *xs: jnp.stack(xs), *rebuilt)
 
 
 # ------------------------------------------------------------------------------ the family

@@ -133,8 +133,10 @@ class Outcome(NamedTuple):
     samples: int  # the search's grid
     segments: list  # camjax.synthesis.segments.SegmentSynthesis of the designed B-splines
     spring: dict | None = None  # the designed spring (spring_report), None when not designed
-    train: Any = None  # the follower train the law terms are measured on (vibration.Train; law_train), or None
-    method: str = "bilevel"  # "joint" (camjax.codesign.joint) or "bilevel" (BFGS on F(z), the envelope gradient)
+    # the follower train the law terms are measured on (vibration.Train; law_train), or None
+    train: Any = None
+    # "joint" (camjax.codesign.joint) or "bilevel" (BFGS on F(z), the envelope gradient)
+    method: str = "bilevel"
 
 
 def codesign_scene(scene, samples: int | None = None, max_iterations: int = MAX_ITERATIONS) -> Outcome:
