@@ -1,6 +1,6 @@
 """Tables and figures of the documentation, generated from the JSON that camjax's own commands write.
 
-Nine sources, all committed (:data:`SOURCES`):
+Ten sources, all committed (:data:`SOURCES`):
 
 - ``bench``, ``benchmarks/results/full.json``: ``python benchmarks/run.py --out
   benchmarks/results/full.json``;
@@ -19,7 +19,8 @@ Nine sources, all committed (:data:`SOURCES`):
 - ``followers``, ``benchmarks/results/followers.json``: ``python -m benchmarks.follower_sweep
   oscillating_roller oscillating_flat --out benchmarks/results/followers.json``;
 - ``extrema``, ``benchmarks/results/extrema.json``: ``python -m benchmarks.extrema_samples --out
-  benchmarks/results/extrema.json [FOLLOWER ...]``.
+  benchmarks/results/extrema.json [FOLLOWER ...]``;
+- ``codesign``, ``benchmarks/results/codesign.json``: ``python -m benchmarks.codesign``.
 
 A page asks for a table with a line ``{{ table: NAME }}`` (NAME one of :data:`TABLES`) and for a
 single figure with ``{{ SOURCE: dotted.path[*factor][:format] }}``, e.g.
@@ -51,6 +52,7 @@ SOURCES = {
     "exact": ROOT / "benchmarks" / "results" / "exact.json",
     "followers": ROOT / "benchmarks" / "results" / "followers.json",
     "extrema": ROOT / "benchmarks" / "results" / "extrema.json",
+    "codesign": ROOT / "benchmarks" / "results" / "codesign.json",
 }
 
 
