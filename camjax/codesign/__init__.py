@@ -2,6 +2,7 @@
 on a scene with [design] and ``design = true`` segments); see docs/synthesis.md.
 
 - :mod:`camjax.codesign.problem`: F(z), the inner geometry optimum and its envelope gradient;
+- :mod:`camjax.codesign.joint`: the laws and the geometry as one program (where no spring is designed);
 - :mod:`camjax.codesign.builtin`: the built-in laws of each joint class, each with its own geometry;
 - :mod:`camjax.codesign.search`: the BFGS search and the scene with the chosen laws fixed;
 - :mod:`camjax.codesign.spring`: the spring's rate and preload as variables, contact kept at an overspeed;
