@@ -22,6 +22,9 @@ import pytest
 
 pytest.importorskip("scipy.optimize")
 
+# every test needs the two co-designs' compiled pieces (about 20 s): none is for the quick loop
+pytestmark = pytest.mark.slow
+
 import camjax.codesign.joint as joint  # noqa: E402
 from benchmarks.codesign import ACCURACY_RTOL, prepare  # noqa: E402
 from camjax.solvers import gradient  # noqa: E402
@@ -65,7 +68,6 @@ def solved(cases):
     return jax.device_get(joint.solve_batch(batch, starts)), batch, starts
 
 
-@pytest.mark.slow
 def test_the_joint_solve_reaches_slsqps_optimum(cases, solved):
     res = solved[0]
     c = cases[0]
@@ -82,7 +84,6 @@ def test_the_joint_solve_reaches_slsqps_optimum(cases, solved):
     assert abs(F - F_s) <= ACCURACY_RTOL * abs(F_s)
 
 
-@pytest.mark.slow
 def test_the_batch_gives_each_problems_single_solve(cases, solved):
     res, batch, starts = solved
     one = jax.jit(joint.solve)
@@ -122,3 +123,20 @@ def test_the_lagrangians_gradient_is_finite_at_an_infeasible_point(cases):
     lam = jax.tree.map(lambda a: jnp.ones(a.shape, a.dtype), shapes)
     grad = jax.jit(jax.grad(lambda v: gradient.augmented_lagrangian(v, p, p.weights, lam, 1e3)[0]))(u)
     assert all(bool(jnp.all(jnp.isfinite(x))) for x in jax.tree.leaves(grad))
+
+
+def test_the_ga_and_the_hybrid_search_the_laws_too(cases, solved):
+    c = cases[0]
+    one = jax.jit(joint.solve, static_argnames=("settings", "solver", "ga_settings"))
+    key = jax.random.key(0)
+    ga = jax.device_get(one(c["problem"], c["start"], joint.SETTINGS, "ga", key))
+    hybrid = jax.device_get(one(c["problem"], c["start"], joint.SETTINGS, "hybrid", key))
+    # the GA's population holds the start (elitism): its laws' F is never above the start's
+    # (1e-12: the inner solve's rounding at the same laws)
+    assert bool(ga.feasible) and float(ga.objective) <= c["f0"] * (1 + 1e-12)
+    assert int(ga.iterations) == 200  # the GA's generations (its default settings)
+    # the hybrid ends at the gradient solve's optimum (within the issue's 0.5 %; measured: equal to
+    # 1e-9 on this problem) after the GA's generations and the gradient's evaluations
+    grad_f = float(solved[0].objective[0])
+    assert bool(hybrid.feasible) and abs(float(hybrid.objective) - grad_f) <= ACCURACY_RTOL * grad_f
+    assert int(hybrid.iterations) > 200

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 
 from camjax import runtime
 from camjax.cli.common import (
@@ -103,9 +104,13 @@ def _setup_sweep(p: argparse.ArgumentParser):
         data = {"scene": scene.name, "mode": mode, "solver": solver, "seed": seed,
                 "alphas": alphas, "gammas": gammas, "seconds": seconds, "records": result.records()}
         if codesign:  # what the laws' search used (each row's "codesign": the laws chosen there)
+            from camjax.codesign.joint import search_solver
+
+            search = search_solver(dataclasses.replace(scene, design=dataclasses.replace(scene.design,
+                                                                                         solver=solver)))
             terms = dict(scene.synthesis.objective) if scene.synthesis is not None else {}
             data["codesign"] = {"laws": [ds.path for ds in scene.motion.designed],
-                                "search_solver": "gradient", "synthesis_objective": terms}
+                                "search_solver": search, "synthesis_objective": terms}
         # replaced whole; a block sweep's checkpoint (written into --out as its blocks finished, for
         # --resume) is carried over, and nothing else of the folder: no earlier run's files
         keep = scaleout.CHECKPOINT if scaleout.requested(args) else ()
@@ -118,7 +123,7 @@ def _setup_sweep(p: argparse.ArgumentParser):
         recs = data["records"]
         feasible = sum(r["feasible"] for r in recs)
         front = sum(r["pareto"] for r in recs)
-        what = "co-design sweep (laws: gradient search; geometry: " if codesign else "sweep ("
+        what = f"co-design sweep (laws: {search} search; geometry: " if codesign else "sweep ("
         print(f"{what}{solver}, {mode}) of {len(recs)} weightings in {seconds:.2f} s: "
               f"{feasible} feasible, {front} on the non-dominated front")
         if codesign:

@@ -115,6 +115,19 @@ def supports(cd) -> bool:
     return cd.peaks is None and cd.spring is None
 
 
+def search_solver(scene) -> str:
+    """The solver of a co-design scene's laws: its [design] solver where the joint program takes it
+    (no peak terms, no designed spring: :func:`supports`), else the bilevel search's gradient solver
+    (Python; reads the scene only)."""
+    import camjax.codesign.spring as spring_mod
+    from camjax.synthesis.problem import PEAK_TERMS
+
+    terms = dict(scene.synthesis.objective) if scene.synthesis is not None else {}
+    peaks = any(terms.get(name, 0.0) > 0.0 for name in PEAK_TERMS)
+    designed_spring = spring_mod.spring_box(scene, ValueError) is not None
+    return "gradient" if peaks or designed_spring else scene.design.solver
+
+
 # ------------------------------------------------------------------------------ construction
 
 
@@ -238,15 +251,31 @@ class JointResult(NamedTuple):
     joint_objective: jax.Array  # the joint solve's own F at its (z, d)
 
 
-def solve(problem: JointProblem, start: JointDesign, settings=SETTINGS) -> JointResult:
-    """One joint co-design by the gradient solver from ``start``, then the geometry of its laws
+def solve(problem: JointProblem, start: JointDesign, settings=SETTINGS, solver: str = "gradient",
+          key: jax.Array | None = None, ga_settings=None) -> JointResult:
+    """One joint co-design from ``start`` by a registered solver, then the geometry of its laws
     solved as the bilevel search solves it (the registered gradient solver on P(z), global mode:
     what :meth:`camjax.codesign.Codesign.value` gives), so that F(z) is the co-design's own value
-    of those laws and the geometry meets the family's tolerances. Traceable; vmap it over a stack."""
+    of those laws and the geometry meets the family's tolerances. Traceable; vmap it over a stack.
+
+    ``solver``: ``gradient`` (the gradient solver's augmented-Lagrangian BFGS with ``settings``),
+    ``ga`` (the GA, ``ga_settings`` (default its own), PRNG ``key``, its population seeded with the
+    start: by elitism never worse than it) or ``hybrid`` (that GA, then the gradient solver from its
+    best). Iterations: the GA's generations plus the gradient solver's evaluations."""
+    from camjax.solvers import ga
     from camjax.solvers.base import solve_one
 
-    u = gradient.to_unit(problem, start)
-    design, steps, _ = gradient.refine_bfgs(problem, problem.weights, u, settings)
+    steps = jnp.asarray(0)
+    if solver in ("ga", "hybrid"):
+        found = ga.run(jax.random.key(0) if key is None else key, problem, problem.weights,
+                       ga.DEFAULT_SETTINGS if ga_settings is None else ga_settings, seed_design=start)
+        start, steps = found.design, found.iterations
+    if solver == "ga":
+        design = start
+    else:
+        u = gradient.to_unit(problem, start)
+        design, refine_steps, _ = gradient.refine_bfgs(problem, problem.weights, u, settings)
+        steps = steps + refine_steps
     joint_ev = evaluate(problem, problem.weights, design)
     base = base_problem(problem, design)
     inner = solve_one(base, problem.weights, jax.random.key(0), mode="global", solver="gradient")
@@ -263,20 +292,26 @@ def solve_batch(problems: JointProblem, starts: JointDesign, settings=SETTINGS) 
     return jax.vmap(lambda p, s: solve(p, s, settings))(problems, starts)
 
 
-_solve_one = jax.jit(solve, static_argnames="settings")
+_solve_one = jax.jit(solve, static_argnames=("settings", "solver", "ga_settings"))
 
 
 def search(cd, z0, f0: float, inner0, settings=SETTINGS):
     """The co-design ``cd`` (a :class:`camjax.codesign.Codesign` that :func:`supports`) from laws
-    ``z0`` with F(z0) = ``f0`` and inner optimum ``inner0``: one joint solve, then F and the inner
+    ``z0`` with F(z0) = ``f0`` and inner optimum ``inner0``: one joint solve by the scene's [design]
+    solver and seed (:func:`solve`; the key of the seed's first weighting, as ``camjax design``
+    draws it), then F and the inner
     optimum at its laws by ``cd`` itself (:meth:`~camjax.codesign.Codesign.value`, the solve that
     ends :func:`solve`, so the two agree). Returns what :func:`camjax.codesign.search.bfgs`
     returns: z, F, the inner optimum, the joint solve's evaluations and [F(z0), F(z)]; the start
     where the joint solve did not improve on it (Python: a driver of the jitted solve)."""
     import warnings
 
+    from camjax.solvers.base import weighting_keys
+
     problem, start = joint_problem(cd, z0, inner0.design)
-    res = jax.device_get(_solve_one(problem, start, settings))
+    design = cd.scene.design
+    res = jax.device_get(_solve_one(problem, start, settings, design.solver,
+                                    weighting_keys(design.seed, 1)[0]))
     z = np.asarray(res.laws, dtype=np.float64)
     if bool(res.at_box):
         warnings.warn("co-design: the laws' box of the joint solve stopped it (a coordinate at its bound); "

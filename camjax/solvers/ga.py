@@ -105,22 +105,28 @@ def check_settings(settings: GASettings) -> None:
 
 
 def _to_genes(problem: Problem, design: Design) -> jax.Array:
-    """Design (scalars, mm) -> genes (d,) in the unit box."""
-    return jnp.stack(jax.tree.leaves(to_unit(problem, design)), axis=-1)
+    """Design (one design, mm) -> genes (d,) in the unit box: its leaves raveled in order (a
+    family's design is scalars; the co-design's joint program has an array of the laws' coordinates)."""
+    return jnp.concatenate([jnp.ravel(v) for v in jax.tree.leaves(to_unit(problem, design))])
 
 
 def _from_genes(problem: Problem, genes: jax.Array) -> Design:
-    """Genes (..., d) -> design in mm (leaves of shape (...))."""
-    leaves = [genes[..., i] for i in range(genes.shape[-1])]
+    """Genes (..., d) -> design in mm (leaves of shape (...) + the leaf's own shape)."""
     lower = family_of(problem).bounds(problem)[0]
+    leaves, start = [], 0
+    for leaf in jax.tree.leaves(lower):
+        shape = jnp.shape(leaf)
+        size = math.prod(shape)
+        leaves.append(genes[..., start:start + size].reshape(genes.shape[:-1] + shape))
+        start += size
     return from_unit(problem, jax.tree.unflatten(jax.tree.structure(lower), leaves))
 
 
 def _gene_max(problem: Problem) -> jax.Array:
     """(d,) upper end of each gene: 1, or 0 for a variable fixed by lo == hi."""
     lower, upper = family_of(problem).bounds(problem)
-    return jnp.stack([jnp.where(hi > lo, 1.0, 0.0) for lo, hi in
-                      zip(jax.tree.leaves(lower), jax.tree.leaves(upper), strict=True)])
+    return jnp.concatenate([jnp.ravel(jnp.where(hi > lo, 1.0, 0.0)) for lo, hi in
+                            zip(jax.tree.leaves(lower), jax.tree.leaves(upper), strict=True)])
 
 
 # ----------------------------------------------------------------------------- fitness
