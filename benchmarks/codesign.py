@@ -310,8 +310,9 @@ def main(argv=None) -> dict:
                  "(both sides)",
         "camjax_method": "the joint program (camjax.codesign.joint: laws, geometry and an epigraph "
                          "variable in one augmented-Lagrangian BFGS, then the geometry of its laws "
-                         "solved as camjax design solves it), the problems stacked in one vmapped, "
-                         "jitted solve",
+                         "solved as camjax design solves it): each problem alone by one compiled "
+                         "single solve (slsqp_speedup), and the problems stacked in one vmapped, "
+                         "jitted solve (slsqp_speedup_batched)",
         "timing": "camjax: one timed run of the batch after a compiling run (seconds per problem = the "
                   "batch's / problems), and each problem alone by one compiled single solve; SLSQP: "
                   "minimize() alone, one problem at a time, its Jacobian compiled before the clock",
