@@ -28,6 +28,7 @@ pytestmark = pytest.mark.slow
 import camjax.codesign.joint as joint  # noqa: E402
 from benchmarks.codesign import ACCURACY_RTOL, prepare  # noqa: E402
 from camjax.solvers import gradient  # noqa: E402
+from camjax.solvers.ga import DEFAULT_SETTINGS as GA_DEFAULTS  # noqa: E402
 
 # the SLSQP test's co-design: a rise of 9 mm over 95 deg, a return over 85 deg, cubic B-splines of
 # 10 control values, 90 samples; and a second one with other weights and angles (one batch)
@@ -134,9 +135,11 @@ def test_the_ga_and_the_hybrid_search_the_laws_too(cases, solved):
     # the GA's population holds the start (elitism): its laws' F is never above the start's
     # (1e-12: the inner solve's rounding at the same laws)
     assert bool(ga.feasible) and float(ga.objective) <= c["f0"] * (1 + 1e-12)
-    assert int(ga.iterations) == 200  # the GA's generations (its default settings)
-    # the hybrid ends at the gradient solve's optimum (within the issue's 0.5 %; measured: equal to
-    # 1e-9 on this problem) after the GA's generations and the gradient's evaluations
+    generations = GA_DEFAULTS.generations
+    assert int(ga.iterations) == generations  # the GA's generations (its default settings)
+    # the hybrid ends at the gradient solve's optimum after the GA's generations and the gradient's
+    # evaluations: measured equal to 1e-9 on this problem; 1e-6 leaves room for the other path's
+    # rounding, and a hybrid stuck elsewhere (another local optimum, the GA's point) fails it
     grad_f = float(solved[0].objective[0])
-    assert bool(hybrid.feasible) and abs(float(hybrid.objective) - grad_f) <= ACCURACY_RTOL * grad_f
-    assert int(hybrid.iterations) > 200
+    assert bool(hybrid.feasible) and abs(float(hybrid.objective) - grad_f) <= 1e-6 * grad_f
+    assert int(hybrid.iterations) > generations

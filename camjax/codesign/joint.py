@@ -107,25 +107,29 @@ register_family(JointProblem, sys.modules[__name__])
 
 
 def supports(cd) -> bool:
-    """Whether a co-design fits this program: no peak terms and no designed spring (its preload is
-    eliminated per law by the bilevel search). Peak terms as epigraph rows (+-v_j(z) <= p_k, w_k p_k
-    in the objective) were tried: on the `codesign` scene at 180 samples with peak_accel 1e-3 the
-    solve ran to its cap and ended at 0.45165 (rows weighted by w_k) or 0.46552 (rows divided by
-    the start's peak), against 0.45060 for the bilevel search's continuation, so they stay there."""
-    return cd.peaks is None and cd.spring is None
+    """Whether a co-design (:class:`camjax.codesign.Codesign`) fits this program: :func:`takes` its scene."""
+    return takes(cd.scene)
 
 
-def search_solver(scene) -> str:
-    """The solver of a co-design scene's laws: its [design] solver where the joint program takes it
-    (no peak terms, no designed spring: :func:`supports`), else the bilevel search's gradient solver
-    (Python; reads the scene only)."""
+def takes(scene) -> bool:
+    """Whether the joint program takes a co-design scene: no peak terms and no designed spring (its
+    preload is eliminated per law by the bilevel search; Python, reads the scene only). Peak terms
+    as epigraph rows (+-v_j(z) <= p_k, w_k p_k in the objective) were tried: on the `codesign`
+    scene at 180 samples with peak_accel 1e-3 the solve ran to its cap and ended at 0.45165 (rows
+    weighted by w_k) or 0.46552 (rows divided by the start's peak), against 0.45060 for the bilevel
+    search's continuation, so they stay there."""
     import camjax.codesign.spring as spring_mod
     from camjax.synthesis.problem import PEAK_TERMS
 
     terms = dict(scene.synthesis.objective) if scene.synthesis is not None else {}
     peaks = any(terms.get(name, 0.0) > 0.0 for name in PEAK_TERMS)
-    designed_spring = spring_mod.spring_box(scene, ValueError) is not None
-    return "gradient" if peaks or designed_spring else scene.design.solver
+    return not peaks and spring_mod.spring_box(scene, ValueError) is None
+
+
+def search_solver(scene) -> str:
+    """The solver of a co-design scene's laws: its [design] solver where the joint program
+    :func:`takes` it, else the bilevel search's gradient solver."""
+    return scene.design.solver if takes(scene) else "gradient"
 
 
 # ------------------------------------------------------------------------------ construction
@@ -248,7 +252,6 @@ class JointResult(NamedTuple):
     objective: jax.Array  # F(z): the family's objective at that optimum + law(z)
     feasible: jax.Array  # bool: that geometry's feasibility
     iterations: jax.Array  # int: the joint solve's evaluations
-    joint_objective: jax.Array  # the joint solve's own F at its (z, d)
 
 
 def solve(problem: JointProblem, start: JointDesign, settings=SETTINGS, solver: str = "gradient",
@@ -276,14 +279,13 @@ def solve(problem: JointProblem, start: JointDesign, settings=SETTINGS, solver: 
         u = gradient.to_unit(problem, start)
         design, refine_steps, _ = gradient.refine_bfgs(problem, problem.weights, u, settings)
         steps = steps + refine_steps
-    joint_ev = evaluate(problem, problem.weights, design)
     base = base_problem(problem, design)
     inner = solve_one(base, problem.weights, jax.random.key(0), mode="global", solver="gradient")
     f = inner.objective + law_value(problem, design.laws)
     width = problem.upper.laws - problem.lower.laws
     at_box = jnp.any((design.laws - problem.lower.laws <= AT_BOX_RTOL * width)
                      | (problem.upper.laws - design.laws <= AT_BOX_RTOL * width))
-    return JointResult(design.laws, at_box, inner.design, f, inner.feasible, steps, joint_ev.objective)
+    return JointResult(design.laws, at_box, inner.design, f, inner.feasible, steps)
 
 
 @partial(jax.jit, static_argnames="settings")

@@ -96,7 +96,7 @@ def codesign_report(scene, outcome, data: dict) -> dict:
             "inner_solves": outcome.evaluations,
             "samples": outcome.samples,
             # the search: "joint" (laws and geometry in one program) or "bilevel" (BFGS on F(z))
-            "method": getattr(outcome, "method", "bilevel"),
+            "method": outcome.method,
             # the designed spring (camjax.codesign.spring), None when [synthesis] designs none
             "spring": getattr(outcome, "spring", None),
             "history": [float(v) for v in outcome.history],
