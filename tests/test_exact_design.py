@@ -14,6 +14,7 @@ from camjax.scene import builtin_scene_text, parse_scene
 from camjax.solvers.base import solve
 
 H = 5.0  # lift of the reference case, mm
+RHO_MIN = 1e-3  # the flat face's default min_curvature_radius_mm (the default scene sets none), mm
 
 
 def numpy_reference(theta_deg):
@@ -27,13 +28,31 @@ def test_report_min_base_radius_is_the_closed_form():
     """max -(s + s'') on the 60-deg cycloidal return, at cos 2 pi u = -1/35 (test_extrema derives it)."""
     a = math.acos(1.0 / 35.0)
     u = (math.pi + a) / (2 * math.pi)
-    need = -H * (u + math.sin(a) / (2 * math.pi) - 2 * math.pi / (math.pi / 3) ** 2 * math.sin(a))
+    need = RHO_MIN - H * (u + math.sin(a) / (2 * math.pi) - 2 * math.pi / (math.pi / 3) ** 2 * math.sin(a))
     report = camjax.design_report(camjax.load_scene())
     assert report["extrema"] == "exact"
     assert report["min_base_radius_mm"] == pytest.approx(need, rel=1e-12)
     assert report["min_base_radius_deg"] == pytest.approx(300 + 60 * (1 - u), abs=1e-7)
     # the face width is 2 max|s'| = 2 h 2 / beta on the return (x = 1/2 is a sample: exact either way)
     assert report["min_face_width_mm"] == pytest.approx(2 * H * 2 / (math.pi / 3), rel=1e-14)
+
+
+def test_min_base_radius_honours_the_scene_curvature_limit():
+    """A scene's min_curvature_radius_mm moves the smallest admissible R_b by exactly that limit
+    (rho = R_b + s + s'' >= rho_min), and the drawing at that + 1 mm keeps it (no violation)."""
+    text = builtin_scene_text("default")
+    text = text[:text.index("[design]")].replace("gravity_m_s2 = 9.81",
+                                                 "gravity_m_s2 = 9.81\nmin_curvature_radius_mm = 2.0")
+    a = math.acos(1.0 / 35.0)
+    u = (math.pi + a) / (2 * math.pi)
+    need = 2.0 - H * (u + math.sin(a) / (2 * math.pi) - 2 * math.pi / (math.pi / 3) ** 2 * math.sin(a))
+    report = camjax.design_report(parse_scene(text))
+    assert report["min_base_radius_mm"] == pytest.approx(need, rel=1e-12)  # closed form, as above
+    drawn = report["evaluated_at"]
+    assert drawn["base_radius_mm"] == math.ceil(need + 1.0)
+    assert drawn["feasible"] and not drawn["violations"]
+    # rho at the drawing radius: R_b - need + rho_min, its smallest value >= the limit
+    assert report["rho_mm"]["min"] == pytest.approx(drawn["base_radius_mm"] - need + 2.0, rel=1e-12)
 
 
 def test_grid_switch_keeps_the_samples():
@@ -43,7 +62,7 @@ def test_grid_switch_keeps_the_samples():
     report = camjax.design_report(scene)
     q, _ = numpy_reference(np.arange(360.0))
     assert report["extrema"] == "grid"
-    assert report["min_base_radius_mm"] == pytest.approx(-q.min(), rel=1e-12)  # 24.1021, a sample
+    assert report["min_base_radius_mm"] == pytest.approx(RHO_MIN - q.min(), rel=1e-12)  # 24.1031, a sample
     assert report["min_base_radius_deg"] == 315.0
 
 

@@ -200,8 +200,9 @@ def test_reported_extrema_are_at_least_the_sampled_ones(run):
             _check({"max": data["min_face_width_asymmetric_mm"]}, [np.ptp(ds)], "min_face_width_asym", checked)
             _check(data["rho_mm"], col["rho_mm"], "rho_mm", checked)
             _check({"min": design["rho_min_mm"]}, col["rho_mm"], "design.rho_min_mm", checked)
-            # the smallest admissible R_b keeps rho = R_b + s + s'' >= 0 at every sample
-            _check({"max": data["min_base_radius_mm"]}, -(col["s_mm"] + col["d2s_mm_per_rad2"]),
+            # the smallest admissible R_b keeps rho = R_b + s + s'' >= rho_min at every sample
+            rho_min = 1e-3  # the flat face's default follower.min_curvature_radius_mm (the scene sets none)
+            _check({"max": data["min_base_radius_mm"]}, rho_min - (col["s_mm"] + col["d2s_mm_per_rad2"]),
                    "min_base_radius_mm", checked)
         else:
             r = data["roller"]

@@ -79,13 +79,15 @@ class Flat(TranslatingFollower):
         return {"base_radius_mm": r.interval("base_radius_mm"), "face_width_mm": r.interval("face_width_mm")}
 
     def min_base_radius(self, scene, arrays) -> MinBaseRadius:
-        """Smallest R_b with rho >= 0: max_theta -(s + s''), refined off the grid with exact extrema
-        (``[motion] extrema``), else on the samples."""
+        """Smallest R_b with rho >= rho_min (``min_curvature_radius_mm``) at every angle:
+        max_theta rho_min - (s + s''), refined off the grid with exact extrema (``[motion]
+        extrema``), else on the samples. The same limit the design and the drawing's check use."""
+        rho_min = float(scene.follower.min_curvature_radius_mm)
         if arrays.model is not None:
             q = curve_extremes(scene, arrays, ("q",))["q"]
-            return MinBaseRadius(-q.min, q.min_deg, "curvature")
+            return MinBaseRadius(rho_min - q.min, q.min_deg, "curvature")
         t = np.asarray(arrays.theta_deg)
-        r, i = jax.jit(flat_geo.flat_min_base_radius)(arrays.kin)
+        r, i = jax.jit(flat_geo.flat_min_base_radius)(arrays.kin, rho_min)
         # + 0.0: -0.0 (s = s'' = 0 somewhere, e.g. uniform laws) reads as 0
         return MinBaseRadius(_f(r) + 0.0, _f(t[int(i)]), "curvature")
 

@@ -13,11 +13,12 @@ from camjax.output.report import extrema, scaled, trough
 
 
 def min_base_radius_block(follower, minimum, exact: bool = False) -> dict[str, Any]:
-    """Smallest admissible base radius (mm), the cam angle (deg) where rho = 0 binds, and the rule;
-    ``exact``: refined off the grid (every cam angle, not every sample)."""
+    """Smallest admissible base radius (mm), the cam angle (deg) where rho = rho_min binds, and the
+    rule; ``exact``: refined off the grid (every cam angle, not every sample)."""
     out = {"min_base_radius_mm": minimum.radius_mm, "min_base_radius_deg": minimum.angle_deg}
     where = "cam angle" if exact else "sample"
-    return {**out, "min_base_radius_rule": f"flat face: rho = R_b + s + s'' >= 0 at every {where}"}
+    rule = f"flat face: rho = R_b + s + s'' >= {follower.min_curvature_radius_mm:g} mm at every {where}"
+    return {**out, "min_base_radius_rule": rule}
 
 
 def design_sentences(spec, solution, out) -> dict[str, str]:
