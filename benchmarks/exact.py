@@ -3,7 +3,7 @@
 ``exact.time_ratio``: steady-state time of the exact path over the grid path (both warm, the
 same 360-sample grid; the two alternate call by call, ``exact.ratio_rounds`` the ratio of each
 round, so that both see the same load of a shared machine) for the report
-(``camjax.output.report.design_report``), the pointwise design (problem + solve) and a
+(``camjax.pipeline.design_report``), the pointwise design (problem + solve) and a
 100-weighting global sweep. ``exact.max_rel_error``: the exact path's largest relative error at
 360 samples over four figures against independent references: the smallest flat-face base radius
 (closed form, cos 2 pi u = -1/35), the peak force, the peak stress at the optimum and the alpha
@@ -28,7 +28,7 @@ from scipy.optimize import brentq, minimize_scalar
 import camjax
 from benchmarks.harness import environment, time_python
 from camjax.followers.flat import problem as P
-from camjax.output.report import design_report
+from camjax.pipeline import design_report
 from camjax.solvers.base import solve
 from camjax.solvers.sweep import sweep
 

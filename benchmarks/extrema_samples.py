@@ -3,7 +3,7 @@
 For each registered follower type (:func:`camjax.followers.names`) its example scene
 (``Follower.example_scene``) is analysed without its [design] section at one fixed base radius
 (the one the reference run draws at), so that the figures are those of one cam and no solver runs:
-:func:`camjax.output.report.design_report` at N = 90, 360, 3600 and 36 000 samples with
+:func:`camjax.pipeline.design_report` at N = 90, 360, 3600 and 36 000 samples with
 ``extrema = "grid"`` (the sampled max / min) and ``extrema = "exact"`` (refined between the
 samples).
 
@@ -43,7 +43,7 @@ from pathlib import Path
 import camjax
 from benchmarks.harness import environment, time_python
 from camjax import followers
-from camjax.output.report import design_report
+from camjax.pipeline import design_report
 
 SAMPLES = (90, 360, 3600, 36_000)
 REFERENCE_SAMPLES = 1_000_000

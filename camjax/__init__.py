@@ -3,74 +3,60 @@
 Importing camjax turns on JAX's 64-bit mode (``jax_enable_x64``): cam geometry near the
 curvature limit needs it. Ask for float32 per call (``dtype=jnp.float32``) where speed matters
 more than the last digits; the documentation's "Accuracy and limits" page says what that costs.
+
+The package itself is light: importing it loads no JAX and no model, so a process that needs one
+module (a figure worker, the command line before its first computation) imports that module
+alone. The names below load on first use (``camjax.load_scene``, ``camjax.design_report``, ...).
 """
 
+import importlib as _importlib
 import os as _os
 import sys as _sys
 
-if _os.path.basename(_sys.argv[0]) == "camjax" or "camjax.cli" in _sys.orig_argv[1:3]:
-    # the command line is starting: an interrupt during the imports below is one line, not a traceback
-    from camjax.runtime import quiet_startup_interrupts
-
-    quiet_startup_interrupts()
-
-import jax  # noqa: E402
-
-jax.config.update("jax_enable_x64", True)
-
-from camjax import (  # noqa: E402
-    contact,
-    evaluate,
-    family,
-    followers,
-    laws,
-    loads,
-    numerics,
-    output,
-    pipeline,
-    program,
-    runtime,
-)
-from camjax.contact import Material, hertz_line_stress  # noqa: E402
-from camjax.evaluate import SceneArrays, scene_arrays  # noqa: E402
-from camjax.family import Weights  # noqa: E402
-from camjax.laws import (  # noqa: E402
-    LAWS,
-    FourierSeries,
-    Law,
-    LawValues,
-    fourier_law,
-    get_law,
-    polynomial_law,
-    stepped_law,
-)
-from camjax.loads import FollowerTrain, Guide, RockerTrain  # noqa: E402
-from camjax.output import report  # noqa: E402
-from camjax.output.report import Report, analyse, design_report  # noqa: E402
-from camjax.pipeline import run_design  # noqa: E402
-from camjax.program import Kinematics, MotionProgram, Segment, joints  # noqa: E402
-from camjax.scene import Scene, SceneError, load_scene, parse_scene  # noqa: E402
+# 64-bit mode, whether JAX is imported before camjax or after it (JAX reads the variable once, at
+# its import; a JAX already imported is switched directly).
+_os.environ["JAX_ENABLE_X64"] = "1"
+if "jax" in _sys.modules:
+    _sys.modules["jax"].config.update("jax_enable_x64", True)
 
 __version__ = "0.1.0"
 
-__all__ = [
-    "LAWS", "FollowerTrain", "FourierSeries", "Guide", "Kinematics", "Law", "LawValues",
-    "Material", "MotionProgram", "Scene", "SceneArrays", "SceneError", "Segment", "contact",
-    "fourier_law", "get_law", "hertz_line_stress", "joints", "laws", "load_scene",
-    "loads", "numerics", "parse_scene", "polynomial_law", "program", "scene_arrays",
-    "stepped_law", "design_report", "report", "Report", "analyse", "run_design", "evaluate", "output",
-    "pipeline", "runtime", "Weights", "family", "followers", "problem_from_scene", "solvers", "RockerTrain",
-]
+# public name -> the module that defines it (loaded on first use)
+_NAMES = {
+    "Material": "camjax.contact", "hertz_line_stress": "camjax.contact",
+    "SceneArrays": "camjax.evaluate", "scene_arrays": "camjax.evaluate",
+    "Weights": "camjax.family",
+    "LAWS": "camjax.laws", "FourierSeries": "camjax.laws", "Law": "camjax.laws",
+    "LawValues": "camjax.laws", "fourier_law": "camjax.laws", "get_law": "camjax.laws",
+    "polynomial_law": "camjax.laws", "stepped_law": "camjax.laws",
+    "FollowerTrain": "camjax.loads", "Guide": "camjax.loads", "RockerTrain": "camjax.loads",
+    "Report": "camjax.pipeline", "analyse": "camjax.pipeline", "design_report": "camjax.pipeline",
+    "run_design": "camjax.pipeline",
+    "Kinematics": "camjax.program", "MotionProgram": "camjax.program", "Segment": "camjax.program",
+    "joints": "camjax.program",
+    "Scene": "camjax.scene", "SceneError": "camjax.scene", "load_scene": "camjax.scene",
+    "parse_scene": "camjax.scene",
+    "problem_from_scene": "camjax.solvers.base",
+}
+# subpackages and modules reachable as attributes (camjax.laws, camjax.solvers, ...)
+_MODULES = ("contact", "dynamics", "evaluate", "family", "followers", "laws", "loads", "numerics",
+            "output", "pipeline", "program", "runtime", "solvers")
+
+__all__ = sorted([*_NAMES, *_MODULES, "report"])
 
 
 def __getattr__(name):
-    # camjax.dynamics loads lazily: a scene without [dynamics] never imports its models (or optax)
-    if name in ("dynamics", "solvers"):  # solvers: optax loads only when a solver is used
-        import importlib
+    if name in _NAMES:
+        value = getattr(_importlib.import_module(_NAMES[name]), name)
+    elif name in _MODULES:
+        value = _importlib.import_module(f"camjax.{name}")
+    elif name == "report":  # the result.json blocks every follower shares
+        value = _importlib.import_module("camjax.output.report")
+    else:
+        raise AttributeError(f"module 'camjax' has no attribute {name!r}")
+    globals()[name] = value
+    return value
 
-        return importlib.import_module(f"camjax.{name}")
-    if name == "problem_from_scene":  # the design problem of any follower type (camjax.solvers.base)
-        from camjax.solvers.base import problem_from_scene
 
-        return problem_from_scene
-    raise AttributeError(f"module 'camjax' has no attribute {name!r}")
+def __dir__():
+    return sorted({*globals(), *__all__})

@@ -8,7 +8,8 @@ Data flows one way and each step is a pure function of the one before:
    radius the cam is drawn at, the curves there and the constraints they break.
 
 :func:`run_design` returns that run, typed (the follower family's ``DesignRun`` or ``RockerRun``);
-:func:`camjax.output.report.analyse` adds the report dict. :func:`sweep_scene` solves the
+:func:`analyse` adds the report dict its follower's ``report.py`` formats (:func:`design_report`:
+the dict alone). :func:`sweep_scene` solves the
 [design] problem for many weightings in this process (the CLI hands blocks to
 ``camjax.scaleout`` instead when asked; a scene with designed laws co-designs them at every
 weighting, :mod:`camjax.codesign.sweep`). Nothing here formats, draws or writes files
@@ -16,6 +17,8 @@ weighting, :mod:`camjax.codesign.sweep`). Nothing here formats, draws or writes 
 """
 
 from __future__ import annotations
+
+from typing import Any, NamedTuple
 
 from camjax import followers
 from camjax.evaluate import SceneArrays
@@ -44,6 +47,29 @@ def run_design(scene: Scene, arrays: SceneArrays | None = None, *,
       formats the whole run).
     """
     return followers.of(scene).run(scene, arrays, base_radius_mm=base_radius_mm, dtype=dtype)
+
+
+class Report(NamedTuple):
+    """A scene's report (JSON-ready dict) with the curves and arrays behind it."""
+
+    data: dict[str, Any]
+    curves: Any  # the follower family's curves (what its drawing module draws)
+    arrays: SceneArrays
+
+
+def analyse(scene: Scene, arrays: SceneArrays | None = None, *, base_radius_mm: float | None = None,
+            dtype=None) -> Report:
+    """:func:`run_design` and its report dict, formatted by the follower's ``report.py`` (see
+    :func:`run_design` for the arguments)."""
+    run = run_design(scene, arrays, base_radius_mm=base_radius_mm, dtype=dtype)
+    return Report(followers.of(scene).report(scene, run), run.curves, run.arrays)
+
+
+def design_report(scene: Scene, arrays: SceneArrays | None = None, *,
+                  base_radius_mm: float | None = None, dtype=None) -> dict[str, Any]:
+    """The report of a scene as a plain, JSON-ready dict (see :func:`run_design` for the
+    arguments)."""
+    return analyse(scene, arrays, base_radius_mm=base_radius_mm, dtype=dtype).data
 
 
 def sweep_scene(scene: Scene, alphas, gammas, *, mode: str, solver: str, seed: int = 0,

@@ -18,7 +18,7 @@ from camjax.codesign.builtin import fitted_coordinates
 from camjax.codesign.problem import nnls
 from camjax.evaluate import scene_arrays
 from camjax.laws import LAWS
-from camjax.output.report import design_report
+from camjax.pipeline import design_report
 from camjax.scene import builtin_scene_text, load_scene, scene_from_dict
 from camjax.scene.designed import law_from_control
 from camjax.solvers.base import problem_from_scene, solve

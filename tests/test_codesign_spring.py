@@ -278,7 +278,7 @@ def test_a_translating_spring_key_on_a_rocker_is_refused_naming_the_field():
 def test_design_with_a_free_spring_end_to_end_and_fed_back(tmp_path):
     """`camjax design` writes the designed spring; the designed laws and spring fed back as a plain
     scene (no [synthesis]) keep contact at the overspeed and give the same design."""
-    from camjax.output.report import design_report
+    from camjax.pipeline import design_report
 
     path = tmp_path / "spring.toml"
     text = builtin_scene_text("codesign").replace("samples = 360", f"samples = {SAMPLES}")

@@ -280,7 +280,7 @@ def test_design_of_a_rocker_with_a_free_spring_end_to_end(tmp_path, capsys):
     """`camjax design` writes the rocker's designed spring; its laws and spring fed back as a plain
     scene keep M >= M_min at the overspeed (by the follower's own curves there) and give the same design."""
     from camjax import followers
-    from camjax.output.report import design_report
+    from camjax.pipeline import design_report
 
     data = rocker_data()
     path = tmp_path / "rocker.toml"

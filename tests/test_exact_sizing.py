@@ -26,7 +26,7 @@ from camjax.followers.curved_face import geometry as curved_geo
 from camjax.followers.oscillating_curved_face import geometry as rocker_curved_geo
 from camjax.followers.oscillating_flat import geometry as rocker_flat_geo
 from camjax.followers.oscillating_roller import geometry as rocker_roller_geo
-from camjax.output.report import design_report
+from camjax.pipeline import design_report
 
 DENSE = 1_000_000
 DENSE_TOL = 1e-9  # relative; the 10^6-sample grid's own error is ~1e-10 (module docstring)

@@ -334,7 +334,7 @@ def test_a_bad_environment_is_one_line_and_changes_nothing(name, place, capsys, 
     for key, value in variables.items():
         monkeypatch.setenv(key, _argv([value], place)[0])
     calls = []  # no work starts: neither a design nor a sweep is computed
-    monkeypatch.setattr("camjax.output.report.analyse", lambda *a, **k: calls.append(a))
+    monkeypatch.setattr("camjax.pipeline.analyse", lambda *a, **k: calls.append(a))
     monkeypatch.setattr("camjax.pipeline.sweep_scene", lambda *a, **k: calls.append(a))
     before = {p.name: snapshot(p) for p in place.iterdir()}
     rc, out, err = run(_argv(template, place), capsys)
@@ -444,7 +444,7 @@ def test_an_unwritable_output_folder_is_refused_before_any_work(place, capsys, m
     monkeypatch.setattr(output_folder.os, "access",
                         lambda p, mode, **kw: False if Path(p) == target else real(p, mode, **kw))
     calls = []
-    monkeypatch.setattr("camjax.output.report.analyse", lambda *a, **k: calls.append(a))
+    monkeypatch.setattr("camjax.pipeline.analyse", lambda *a, **k: calls.append(a))
     before = snapshot(target)
     rc, _, err = run(["design", "--out", str(target)], capsys)
     assert rc == 2 and "--out" in err and "permission denied" in err and err.count("\n") == 1
@@ -452,7 +452,7 @@ def test_an_unwritable_output_folder_is_refused_before_any_work(place, capsys, m
 
 
 WRITERS = {  # every command that writes, with the computation that must not start
-    "design": (["design", "--out", "{dir}"], "camjax.output.report.analyse"),
+    "design": (["design", "--out", "{dir}"], "camjax.pipeline.analyse"),
     "sweep": (["sweep", "--alpha", "1", "--gamma", "1", "--out", "{dir}"], "camjax.pipeline.sweep_scene"),
     "block_sweep": (["sweep", "--alpha", "1", "--gamma", "1", "--backend", "sequential", "--out", "{dir}"],
                     "camjax.scaleout.driver.sweep_blocks"),
@@ -502,7 +502,7 @@ def test_an_unexpected_error_is_one_line(place, capsys, monkeypatch):
     def broken(*args, **kwargs):
         raise ZeroDivisionError("x" * 10_000)
 
-    monkeypatch.setattr("camjax.output.report.analyse", broken)
+    monkeypatch.setattr("camjax.pipeline.analyse", broken)
     rc, _, err = run(["design", "--out", str(place / "out")], capsys)
     assert rc == 1 and err.count("\n") == 1 and "ZeroDivisionError" in err and len(err) < 600
 

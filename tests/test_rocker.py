@@ -299,7 +299,7 @@ def test_reported_follower_dimensions_are_the_designs_and_the_scenes_stay_visibl
 
 @pytest.fixture(scope="module")
 def rocker_report():
-    from camjax.output.report import analyse
+    from camjax.pipeline import analyse
 
     return analyse(parse_scene(ROLLER_SCENE.replace("ROT", "cw"), "rocker"))
 

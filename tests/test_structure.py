@@ -156,52 +156,102 @@ def test_folders_compare_file_by_file(compare, tmp_path, capsys):
 # ------------------------------------------------------------------------------- the package
 
 
-def _module_imports(path: Path) -> set[str]:
-    """camjax modules a file imports when it is imported (its top level, not inside functions)."""
+MODULES = {}  # dotted name -> path, of every module of the package
+
+
+def _package_modules() -> dict[str, Path]:
+    if not MODULES:
+        MODULES.update({_module_name(p): p for p in PACKAGE.rglob("*.py")})
+    return MODULES
+
+
+def _module_imports(path: Path, modules: dict[str, Path] | None = None) -> set[str]:
+    """camjax modules a file imports, at its top level or inside a function (an import a function
+    makes when it runs is a dependency all the same; ``if TYPE_CHECKING:`` blocks are not).
+
+    ``from camjax.pkg import name`` depends on the module ``camjax.pkg.name`` where that is one,
+    else on ``camjax.pkg``; relative imports are resolved against the file's package.
+    """
+    modules = _package_modules() if modules is None else modules
+    name = next((n for n, p in modules.items() if p == path), None) or _module_name(path)
+    package = name if path.name == "__init__.py" else name.rpartition(".")[0]
     tree = ast.parse(path.read_text())
-    names = set()
-    for node in tree.body:
+    skip = set()
+    for node in ast.walk(tree):
         if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test):
+            skip.update(id(n) for n in ast.walk(node))
+    names = set()
+    for node in ast.walk(tree):
+        if id(node) in skip:
             continue
-        for sub in ast.walk(node) if isinstance(node, (ast.If, ast.Try)) else [node]:
-            if isinstance(sub, ast.Import):
-                names.update(a.name for a in sub.names)
-            elif isinstance(sub, ast.ImportFrom) and sub.module and sub.level == 0:
-                names.add(sub.module)
-                names.update(f"{sub.module}.{a.name}" for a in sub.names)
-    # "from camjax import x" imports the submodule x: the bare package name is not an edge of its own
+        if isinstance(node, ast.Import):
+            names.update(a.name for a in node.names)
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                parts = package.split(".")
+                base = ".".join(parts[:len(parts) - node.level + 1] + ([base] if base else []))
+            for a in node.names:
+                names.add(f"{base}.{a.name}" if f"{base}.{a.name}" in modules else base)
     return {n for n in names if n.startswith("camjax.")}
 
 
-def test_no_import_circle():
-    """The import graph of the package's modules (what each imports when it is imported) has no
-    cycle: every module can be imported on its own, and the layers stay one-way."""
-    modules = {_module_name(p): p for p in PACKAGE.rglob("*.py")}
-    # the root package (camjax/__init__.py) imports the public modules to re-export them: not a node
-    graph = {name: {m for m in _module_imports(path) if m in modules and m not in (name, "camjax")}
-             for name, path in modules.items() if name != "camjax"}
+def _import_graph(modules: dict[str, Path]) -> dict[str, set[str]]:
+    """module -> the package's modules it imports (the root package, camjax/__init__.py, loads its
+    names on first use and is not a node)."""
+    return {name: {m for m in _module_imports(path, modules) if m in modules and m not in (name, "camjax")}
+            for name, path in modules.items() if name != "camjax"}
+
+
+def _find_circle(graph: dict[str, set[str]]) -> list[str] | None:
     state: dict[str, int] = {}
 
     def visit(node, stack):
         state[node] = 1
         for nxt in sorted(graph[node]):
             if state.get(nxt) == 1:
-                cycle = stack[stack.index(nxt):] + [nxt]
-                raise AssertionError("import circle: " + " -> ".join(cycle))
-            if nxt not in state:
-                visit(nxt, stack + [nxt])
+                return stack[stack.index(nxt):] + [nxt]
+            if nxt not in state and (found := visit(nxt, stack + [nxt])):
+                return found
         state[node] = 2
+        return None
 
     for name in sorted(graph):
-        if name not in state:
-            visit(name, [name])
+        if name not in state and (found := visit(name, [name])):
+            return found
+    return None
+
+
+def test_no_import_circle():
+    """The import graph of the package's modules, function-level imports counted, has no cycle:
+    every module can be imported on its own, and the layers stay one-way."""
+    circle = _find_circle(_import_graph(_package_modules()))
+    assert circle is None, "import circle: " + " -> ".join(circle)
 
 
 def test_the_circle_check_finds_a_circle(tmp_path):
-    a, b = tmp_path / "a.py", tmp_path / "b.py"
+    # one edge at the top level, the other inside a function: a circle all the same
+    a, b = tmp_path / "camjax" / "a.py", tmp_path / "camjax" / "b.py"
+    a.parent.mkdir()
     a.write_text("import camjax.b\n")
-    b.write_text("from camjax import a\n")
-    assert "camjax.b" in _module_imports(a) and "camjax.a" in _module_imports(b)
+    b.write_text("def f():\n    from camjax import a\n")
+    modules = {"camjax.a": a, "camjax.b": b}
+    assert _module_imports(a, modules) == {"camjax.b"} and _module_imports(b, modules) == {"camjax.a"}
+    assert _find_circle({"camjax.a": {"camjax.b"}, "camjax.b": {"camjax.a"}}) == ["camjax.a", "camjax.b", "camjax.a"]
+
+
+def test_import_camjax_loads_no_jax():
+    """``import camjax`` is the same for every program and light: no JAX, no model, no command
+    line set-up (that belongs to the ``camjax`` entry point), and 64-bit mode on for JAX."""
+    import subprocess
+
+    code = ("import sys, camjax; assert 'jax' not in sys.modules, 'jax'; "
+            "assert not [m for m in sys.modules if m.startswith('camjax.')], 'submodules'; "
+            "import jax; print(jax.config.jax_enable_x64)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip() == "True"
+    assert "argv" not in (PACKAGE / "__init__.py").read_text()
 
 
 def test_no_module_over_600_lines():

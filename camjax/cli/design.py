@@ -44,7 +44,7 @@ def _setup_design(p: argparse.ArgumentParser):
 
     def run(args) -> int:
         from camjax import followers
-        from camjax.output.report import analyse
+        from camjax.pipeline import analyse
         from camjax.scene import load_scene
 
         out = check_output_dir(args.out)

@@ -22,10 +22,10 @@ import sys
 import types
 from pathlib import Path
 
-# A worker: the camjax package as a bare namespace (its __init__ imports JAX), then serve(k, n).
-ENTER_PACKAGE = ("import sys, types; package = types.ModuleType('camjax'); package.__path__ = [sys.argv[1]]; "
-                 "sys.modules['camjax'] = package; ")
-_BOOT = ENTER_PACKAGE + "from camjax.output.drawing import serve; serve(int(sys.argv[2]), int(sys.argv[3]))"
+# A worker: this very camjax first on its path (``import camjax`` loads no JAX, so the figure
+# modules are all it imports), then serve(k, n).
+_BOOT = ("import sys; sys.path.insert(0, sys.argv[1]); from camjax.output.drawing import serve; "
+         "serve(int(sys.argv[2]), int(sys.argv[3]))")
 PACKAGE_DIR = Path(__file__).resolve().parent.parent
 DEFAULT_PROCESSES = 2  # on 2 cores: two figures drawn at a time once the computation is done
 MAX_PROCESSES = 16
@@ -48,7 +48,7 @@ class DrawingWorkers:
         try:
             for k in range(count):
                 self._procs.append(subprocess.Popen(
-                    [sys.executable, "-c", _BOOT, str(PACKAGE_DIR), str(k), str(count)],
+                    [sys.executable, "-c", _BOOT, str(PACKAGE_DIR.parent), str(k), str(count)],
                     stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
                     start_new_session=True))
         except OSError:

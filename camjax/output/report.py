@@ -2,19 +2,18 @@
 
 The blocks every follower's result.json shares (header, motion, FLCD, loads, feasibility, the
 scene's own dimensions) are here; each follower's ``report.py`` (:mod:`camjax.followers`) adds its
-own and assembles the whole, which :func:`build_report` asks it for. Formatting only: every block
-condenses arrays the run already computed into plain values (degrees, SI or the unit in the key)
-with no NaN or infinity, so that a report can be written as strict JSON. :func:`analyse` runs the
-pipeline and builds the report in one call.
+own and assembles the whole (:func:`camjax.pipeline.analyse` runs the pipeline and asks the
+follower for it). Formatting only: every block condenses arrays the run already computed into
+plain values (degrees, SI or the unit in the key) with no NaN or infinity, so that a report can be
+written as strict JSON.
 """
 
 from __future__ import annotations
 
-from typing import Any, NamedTuple
+from typing import Any
 
 import numpy as np
 
-from camjax import followers
 from camjax.evaluate import SceneArrays
 from camjax.program import joints
 from camjax.results import Extremes
@@ -197,33 +196,3 @@ def follower_scene_block(follower, spec: FollowerSpec) -> dict[str, float]:
     face: its width is a [design] variable only).
     """
     return {k: getattr(spec, k) for k in follower.variables if k != "base_radius_mm" and hasattr(spec, k)}
-
-
-class Report(NamedTuple):
-    """A scene's report (JSON-ready dict) with the curves and arrays behind it."""
-
-    data: dict[str, Any]
-    curves: Any  # the follower family's curves (what its drawing module draws)
-    arrays: SceneArrays
-
-
-def build_report(scene: Scene, run) -> dict[str, Any]:
-    """The report of a scene's design run (:func:`camjax.pipeline.run_design`) as a plain,
-    JSON-ready dict: the follower's ``report.py`` formats it."""
-    return followers.of(scene).report(scene, run)
-
-
-def analyse(scene: Scene, arrays: SceneArrays | None = None, *, base_radius_mm: float | None = None,
-            dtype=None) -> Report:
-    """:func:`camjax.pipeline.run_design` and its report dict (see there for the arguments)."""
-    from camjax.pipeline import run_design
-
-    run = run_design(scene, arrays, base_radius_mm=base_radius_mm, dtype=dtype)
-    return Report(build_report(scene, run), run.curves, run.arrays)
-
-
-def design_report(scene: Scene, arrays: SceneArrays | None = None, *,
-                  base_radius_mm: float | None = None, dtype=None) -> dict[str, Any]:
-    """The report of a scene as a plain, JSON-ready dict (see :func:`camjax.pipeline.run_design`
-    for the arguments)."""
-    return analyse(scene, arrays, base_radius_mm=base_radius_mm, dtype=dtype).data

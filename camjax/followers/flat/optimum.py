@@ -17,7 +17,7 @@ from camjax.contact import stress_from_coefficient
 from camjax.family import (
     Weights,
 )
-from camjax.followers.flat.problem import (
+from camjax.followers.flat.needs import (
     Design,
     Problem,
     exact_peak_stress,
