@@ -7,17 +7,15 @@ import gc
 import os
 
 # XLA compiles are most of the suite's time, and the tests' programs are small (a few thousand
-# samples): compile them with LLVM's -O0 and XLA's classic loop emitters instead of the CPU fusion
-# emitters. Measured on 2 cores: the default scene's design compiles in 8.5 s instead of 22.5 s,
-# tests/test_knife_edge.py takes 38 s of CPU instead of 79 s. Numbers are the same to the tests'
-# tolerances (the operations and their order are XLA's either way; only code generation changes).
-# Set before JAX starts its backend, so the tests' subprocesses (the CLI, process pools) inherit
-# it; CAMJAX_TEST_XLA_FLAGS=0 runs the suite with XLA's defaults.
-TEST_XLA_FLAGS = ("--xla_backend_optimization_level=0", "--xla_cpu_use_fusion_emitters=false")
-if os.environ.get("CAMJAX_TEST_XLA_FLAGS") != "0":
-    _flags = os.environ.get("XLA_FLAGS", "").split()
-    os.environ["XLA_FLAGS"] = " ".join(_flags + [f for f in TEST_XLA_FLAGS
-                                                 if f.split("=")[0] not in {g.split("=")[0] for g in _flags}])
+# samples): compile them as the command line does (camjax.runtime.CPU_XLA_FLAGS: XLA's loop
+# emitters, not its CPU fusion emitters) and with LLVM's -O0. Measured on 2 cores: the default
+# scene's design compiles in 8.5 s instead of 22.5 s; tests/test_knife_edge.py takes 38 s of CPU
+# instead of 79 s. The operations are XLA's either way, only their code generation changes;
+# results agree to the tests' tolerances. Set before JAX starts its backend, so the tests'
+# subprocesses (the CLI, process pools) inherit it; CAMJAX_XLA_FLAGS=0 runs with XLA's defaults.
+from camjax.runtime import CPU_XLA_FLAGS, use_cpu_xla_flags  # noqa: E402  (loads no JAX)
+
+use_cpu_xla_flags((*CPU_XLA_FLAGS, "--xla_backend_optimization_level=0"))
 
 import jax  # noqa: E402
 import pytest  # noqa: E402

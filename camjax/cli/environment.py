@@ -11,6 +11,7 @@ variable                       allowed
 ``CAMJAX_PROGRAM_CACHE_VERIFY``  ``1`` trace every saved program again and compare, ``0`` or unset
 ``CAMJAX_COMPILATION_CACHE``   ``0`` or empty (off), or a folder path (not an existing file)
 ``CAMJAX_PROGRAM_CACHE``       ``0`` or empty (off), or a folder path (not an existing file)
+``CAMJAX_XLA_FLAGS``           ``0`` XLA_FLAGS left as set, ``1`` or unset: camjax's CPU flags added
 ``JAX_PLATFORMS``              platforms JAX can start on this machine (e.g. ``cpu``), or unset
 =============================  ===================================================================
 """
@@ -23,7 +24,7 @@ import sys
 from camjax.cli.common import UsageError
 from camjax.scene import cut, quote
 
-FLAGS = ("CAMJAX_PROGRESS", "CAMJAX_DEBUG", "CAMJAX_PROGRAM_CACHE_VERIFY")
+FLAGS = ("CAMJAX_PROGRESS", "CAMJAX_DEBUG", "CAMJAX_PROGRAM_CACHE_VERIFY", "CAMJAX_XLA_FLAGS")
 FOLDERS = ("CAMJAX_COMPILATION_CACHE", "CAMJAX_PROGRAM_CACHE")
 PLATFORMS = "JAX_PLATFORMS"
 
