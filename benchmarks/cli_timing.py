@@ -4,7 +4,9 @@
 ``cli.import_jax_s`` (median of the import runs) and, per command, ``cli.<name>_s`` and
 ``cli.<name>_over_import`` (median of warm runs / median import time), with the per-phase
 lines the command printed on stderr timed as they arrived (``cli.<name>_phases_s``). Each
-command runs once untimed first so that the compilation cache is warm. CPU time (user + sys of
+command runs once untimed first so that the compilation cache is warm; ``cold`` instead runs
+``camjax design`` of every built-in scene once in a fresh process with empty caches
+(``cli.cold.<scene>_s``; ``python benchmarks/cli_timing.py cold`` alone). CPU time (user + sys of
 the child) is reported beside the wall time (``cli.<name>_cpu_s``): on a shared machine the wall
 time also measures the other processes.
 
@@ -108,7 +110,41 @@ def laws(runs: int, reference: dict) -> dict:
             "cli.laws_cpu_over_import": r["cpu_s"] / reference["cli.import_jax_cpu_s"]}
 
 
-COMMANDS = {"dynamics": dynamics, "design": design, "laws": laws}
+def _builtin_scenes() -> list[str]:
+    return sorted(p.stem for p in (ROOT / "camjax" / "scenes").glob("*.toml"))
+
+
+def cold(runs: int, reference: dict, scenes: list[str] | None = None) -> dict:
+    """``camjax design SCENE`` of every built-in scene (``scenes``: those), each in a fresh process
+    with empty caches (a new compilation cache and program cache folder per run, nothing compiled
+    before): the first run a user ever makes. Once per scene (``runs`` does not apply: a cold run
+    cannot be repeated in one folder); wall and CPU seconds, the phases as in :func:`design`, and
+    the wall over ``import jax``.
+    """
+    out: dict = {}
+    walls = []
+    for scene in scenes or _builtin_scenes():
+        with tempfile.TemporaryDirectory(prefix="camjax-cli-cold-") as tmp:
+            env = {**os.environ, "CAMJAX_PROGRESS": "1", "CAMJAX_COMPILATION_CACHE": str(Path(tmp) / "xla"),
+                   "CAMJAX_PROGRAM_CACHE": str(Path(tmp) / "programs")}
+            wall, cpu, lines = _run([sys.executable, "-m", "camjax.cli", "design", scene, "--out",
+                                     str(Path(tmp) / "out")], env)
+        names = {"computing": "compute", "figures": "plots", "files": "files"}
+        marks = [(0.0, "import"), *((t, names.get(line.removeprefix("camjax design: "), line))
+                                    for t, line in lines if line.startswith("camjax design: ")), (wall, "")]
+        out[f"cli.cold.{scene}_s"] = wall
+        walls.append(wall)
+        out[f"cli.cold.{scene}_cpu_s"] = cpu
+        out[f"cli.cold.{scene}_over_import"] = wall / reference["cli.import_jax_s"]
+        out[f"cli.cold.{scene}_phases_s"] = {name: round(t_next - t, 3) for (t, name), (t_next, _)
+                                             in zip(marks[:-1], marks[1:], strict=True)}
+        print(f"cold {scene}: {wall:.1f} s", file=sys.stderr)
+    out["cli.cold_max_s"] = max(walls)
+    out["cli.cold_median_s"] = statistics.median(walls)
+    return out
+
+
+COMMANDS = {"dynamics": dynamics, "design": design, "laws": laws, "cold": cold}
 
 
 def main(argv: list[str] | None = None) -> int:

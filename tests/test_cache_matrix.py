@@ -19,6 +19,7 @@ read no saved program); everything the JSON holds is computed as the command com
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 import pytest
@@ -207,12 +208,42 @@ def test_flat_face_mode_solver_and_seed_never_reuse_another_runs_program(tmp_pat
     _check_sequence(runs, tmp_path, monkeypatch)
 
 
+def _example_runs(follower: str, tmp: Path) -> list[list[str]]:
+    """A follower type without a sequence of its own: its built-in example scene at 90 samples, each
+    mode and solver, another seed and weighting, the other rotation and the grid's extrema."""
+    from camjax import followers
+    from camjax.scene import builtin_scene_text
+
+    text = builtin_scene_text(followers.get(follower).example_scene)
+    text = re.sub(r"(?m)^samples = \d+", "samples = 90", text)
+    base = tmp / f"{follower}.toml"
+    base.write_text(text)
+    runs = [["design", str(base), *opts] for opts in
+            ([], ["--mode", "pointwise"], ["--solver", "ga", "--seed", "7"], ["--alpha", "3", "--gamma", "1"])]
+    rotation = re.search(r'(?m)^rotation = "(\w+)"', text)
+    other = 'rotation = "cw"' if rotation is None or rotation.group(1) == "ccw" else 'rotation = "ccw"'
+    for k, edited_text in enumerate((re.sub(r'(?m)^rotation = "\w+"', "", text).replace(
+            "samples = 90", f"samples = 90\n{other}"), text.replace("samples = 90", 'samples = 90\nextrema = "grid"'))):
+        edited = tmp / f"{follower}-edit{k}.toml"
+        edited.write_text(edited_text)
+        runs.append(["design", str(edited)])
+    return runs
+
+
+def _follower_names() -> list[str]:
+    from camjax import followers
+
+    return followers.names()
+
+
 @pytest.mark.slow
-@pytest.mark.parametrize("follower", list(SCENES))
+@pytest.mark.parametrize("follower", _follower_names())
 def test_every_option_and_scene_edit_gives_the_cache_off_result(follower, tmp_path, quiet_files, monkeypatch):
-    # one pass in order: every program saved by an earlier run of the sequence is loaded by the
+    # every registered follower type: its own sequence where it has one, else its example scene's.
+    # One pass in order: every program saved by an earlier run of the sequence is loaded by the
     # later runs that share its key (the quick test above adds the reverse, all-warm pass)
-    _check_sequence(_runs(follower, tmp_path), tmp_path, monkeypatch, warm_pass=False)
+    runs = _runs(follower, tmp_path) if follower in SCENES else _example_runs(follower, tmp_path)
+    _check_sequence(runs, tmp_path, monkeypatch, warm_pass=False)
 
 
 @pytest.mark.slow
