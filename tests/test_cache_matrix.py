@@ -219,7 +219,7 @@ def _example_runs(follower: str, tmp: Path) -> list[list[str]]:
     base = tmp / f"{follower}.toml"
     base.write_text(text)
     runs = [["design", str(base), *opts] for opts in
-            ([], ["--mode", "pointwise"], ["--solver", "ga", "--seed", "7"], ["--alpha", "3", "--gamma", "1"])]
+            ([], ["--mode", "pointwise"], ["--solver", "ga", "--seed", "7"], ["--alpha", "3"])]
     rotation = re.search(r'(?m)^rotation = "(\w+)"', text)
     other = 'rotation = "cw"' if rotation is None or rotation.group(1) == "ccw" else 'rotation = "ccw"'
     for k, edited_text in enumerate((re.sub(r'(?m)^rotation = "\w+"', "", text).replace(

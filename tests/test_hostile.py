@@ -715,8 +715,11 @@ def _start(args: list[str], tmp_path: Path, **variables: str) -> subprocess.Pope
     path = os.pathsep.join([root, *filter(None, [os.environ.get("PYTHONPATH")])])
     env = {**os.environ, "CAMJAX_COMPILATION_CACHE": "0", "PYTHONUNBUFFERED": "1", "PYTHONPATH": path,
            **variables}
+    # started as from a shell: SIGINT at its default (a test runner's worker may ignore it, and an
+    # ignored signal is inherited, and stays ignored by camjax's design)
     return subprocess.Popen([sys.executable, "-m", "camjax.cli", *args], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True, env=env, cwd=tmp_path)
+                            stderr=subprocess.PIPE, text=True, env=env, cwd=tmp_path,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
 
 
 def _wait_for_import(proc: subprocess.Popen, seconds: float) -> None:

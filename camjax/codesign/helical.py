@@ -60,6 +60,7 @@ import numpy as np
 GRID = 257  # points of each zoom of the search over ln C
 ZOOMS = 6  # zooms onto the best point's two neighbours: ln(3) / 256 x (2 / 256)^5 ~ 1e-13 in ln C
 BIND_TOL = 1e-6  # a constraint with relative slack below this binds
+BROKEN_TOL = 1e-12  # a relative slack above -this is the constraint at its limit to rounding: not broken
 CLASH = 0.15  # fractional overrun to closure of the free length reported (Shigley: xi >= 0.15)
 SPECTRUM_SAMPLES = 2048  # lift samples over a revolution for the spectrum (1024 harmonics)
 _INFEASIBLE = 1e4  # rank of an infeasible index over any ln(mass / kg) of a real spring
@@ -289,7 +290,7 @@ def helical_report(scene, fixed) -> dict:
               "active_coils_bounds": list(spec.active_coils), "end_coils": spec.end_coils,
               "shear_modulus_GPa": spec.shear_modulus_GPa, "density_kg_m3": spec.density_kg_m3}
     if not sz.feasible:
-        broken = {n: v for n, v in slack.items() if v is not None and v < 0.0}
+        broken = {n: v for n, v in slack.items() if v is not None and v < -BROKEN_TOL}
         lower, _ = _bounds(p, jnp.asarray(sz.index))
         least = {"index": sz.index, "wire_mm": 1e3 * sz.wire_m, "coil_mm": 1e3 * sz.coil_m,
                  "active_coils": sz.active_coils, "shear_MPa": 1e-6 * sz.shear_Pa, "surge_hz": sz.surge_hz,
