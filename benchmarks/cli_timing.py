@@ -139,6 +139,7 @@ def cold(runs: int, reference: dict, scenes: list[str] | None = None) -> dict:
         out[f"cli.cold.{scene}_phases_s"] = {name: round(t_next - t, 3) for (t, name), (t_next, _)
                                              in zip(marks[:-1], marks[1:], strict=True)}
         print(f"cold {scene}: {wall:.1f} s", file=sys.stderr)
+    out["cli.cold_count"] = len(walls)
     out["cli.cold_max_s"] = max(walls)
     out["cli.cold_median_s"] = statistics.median(walls)
     return out
