@@ -128,7 +128,7 @@ def cam_surface(scene, design: dict | None, base_radius_mm: float, samples: int)
     if not np.all(np.isfinite(p)) or not np.all(speed > 0):
         bad = int(np.argmin(np.where(np.isfinite(speed), speed, -1.0)))
         raise SceneError("manufacture", float(theta[bad]), "the cam surface is not a smooth curve at "
-                         f"this cam angle (deg): its outline has a cusp or is not finite; it cannot be cut")
+                         "this cam angle (deg): its outline has a cusp or is not finite; it cannot be cut")
     area2 = float(np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y))  # twice the signed area
     orient = 1.0 if area2 > 0 else -1.0  # +1: increasing angle runs counter-clockwise
     tx, ty = dx / speed, dy / speed
@@ -454,7 +454,8 @@ def gcode_lines(program: Program, tp: ToolPath, *, feed_mm_per_min: float, width
         f"{unit_name} cutter round the cam)",
         "(frame: profile.csv, cam centre X0 Y0, cam at angle 0; top face Z0)",
         f"({program.arcs} arcs, {program.lines} lines; largest deviation from the exact path "
-        f"{program.max_deviation_mm * k:.3g} {unit_name}, tolerance {program.tolerance_mm * k:.3g} {unit_name})",
+        f"{program.max_deviation_mm * k:.3g} {unit_name}, tolerance {program.tolerance_mm * k:.3g} "
+        f"{unit_name})",
         "(G2 clockwise, G3 counter-clockwise; I J incremental from the arc start; start spindle first)",
         f"{unit_word} G90 G17 G40 G94",
         f"G0 Z{f(SAFE_Z_MM)}",

@@ -53,7 +53,8 @@ def _builtin_scenes() -> dict[str, str]:
 
 BUILTIN_SCENES = _builtin_scenes()
 
-SECTIONS = ("motion", "follower", "contact", "design", "guide", "dynamics", "synthesis", "manufacture", "export")
+SECTIONS = ("motion", "follower", "contact", "design", "guide", "dynamics", "synthesis", "manufacture",
+            "export")
 
 
 def scene_from_dict(data: dict, name: str = "scene", source: str | None = None) -> Scene:
@@ -102,7 +103,8 @@ def scene_from_dict(data: dict, name: str = "scene", source: str | None = None) 
         from camjax.scene.manufacture import parse_export, parse_manufacture
 
         if "manufacture" in data:
-            manufacture = parse_manufacture(top.sub("manufacture"), None if contact is None else contact.cam_width_mm)
+            width = None if contact is None else contact.cam_width_mm
+            manufacture = parse_manufacture(top.sub("manufacture"), width)
         if "export" in data:
             export = parse_export(top.sub("export"), follower.rocking)
     return Scene(name, motion, spec, contact, design, guide, dynamics, synthesis, manufacture, export)

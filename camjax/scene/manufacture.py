@@ -51,7 +51,8 @@ def parse_export(r: TableReader, rocking: bool) -> ExportSpec:
     r.check_keys(("cam_table_points", f"tolerance_{unit}"))
     return build(
         ExportSpec,
-        cam_table_points=r.number("cam_table_points", DEFAULT, low=2, high=CAM_TABLE_POINTS_MAX, integer=True),
-        tolerance=r.number(f"tolerance_{unit}", DEFAULT, low=1e-9, low_open=False, high=1e3),
+        cam_table_points=r.number("cam_table_points", DEFAULT, low=2, high=CAM_TABLE_POINTS_MAX,
+                                  integer=True),
+        tolerance=r.number(f"tolerance_{unit}", DEFAULT, low=1e-9, high=1e3),
     )
 
