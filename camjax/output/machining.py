@@ -89,8 +89,23 @@ def profile_function(scene, design: dict | None, base_radius_mm: float):
     prog = jax.tree_util.tree_map(lambda v: jnp.asarray(v, jnp.float64), scene.motion.program)
     radius = float(base_radius_mm)
 
+    bounds = program.segment_bounds_deg(prog)
+
+    def motion(theta_deg):
+        # each segment's closed form, selected by angle as program.motion_at does, but without its
+        # clip: jax.jvp then differentiates the segment's formula also at a sample on its joint
+        # (the clip's derivative there is halved)
+        outs = None
+        for i, (lo, hi) in enumerate(bounds):
+            inside = theta_deg >= lo if i == len(bounds) - 1 else (theta_deg >= lo) & (theta_deg < hi)
+            k = program.segment_motion(prog, i, theta_deg)
+            if outs is not None:
+                k = type(k)(*(jnp.where(inside, v, o) for v, o in zip(k, outs, strict=True)))
+            outs = k
+        return outs
+
     def profile(theta_deg):
-        kin = program.motion_at(prog, theta_deg)
+        kin = motion(theta_deg)
         if kind.rocking:
             g = kind.geometry(replace(scene, follower=drawn), kin, radius)
         else:
@@ -132,6 +147,12 @@ def cam_surface(scene, design: dict | None, base_radius_mm: float, samples: int)
     area2 = float(np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y))  # twice the signed area
     orient = 1.0 if area2 > 0 else -1.0  # +1: increasing angle runs counter-clockwise
     tx, ty = dx / speed, dy / speed
+    turn = tx * np.roll(tx, -1) + ty * np.roll(ty, -1)
+    if np.any(turn < 0):  # the tangent reverses between two dense samples: a cusp
+        bad = int(np.argmin(turn))
+        raise SceneError("manufacture", float(theta[bad]), "the cam outline has a cusp near this cam angle "
+                         "(deg): it folds back on itself (its radius of curvature passes through 0) and "
+                         "cannot be cut; draw it at a larger base radius")
     kappa = (dx * ddy - dy * ddx) / speed**3 * orient  # 1/mm per deg^0: deg cancels; > 0 convex
     with np.errstate(divide="ignore"):
         rho = 1.0 / kappa
