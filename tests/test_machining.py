@@ -424,3 +424,26 @@ def _arc_points(p):
     sweep = (a1 - a0) % (2 * math.pi) if p.ccw else -((a0 - a1) % (2 * math.pi))
     a = a0 + sweep * np.linspace(0, 1, max(2, int(abs(sweep) * r / STEP_MM)))
     return c + r * np.column_stack([np.cos(a), np.sin(a)])
+
+
+@pytest.mark.parametrize("units", ["mm", "in"])
+def test_a_circle_is_cut_as_arcs_of_its_radius_in_either_unit(units):
+    """A circular path of radius 20 mm (the surface a 15 mm circle, the cutter 5 mm): the program
+    (G21 or G20, read back in mm here) lies on the circle to the rounding of its decimals, is
+    nothing but arcs, and its largest deviation is what result.json would report."""
+    from camjax.output import machining
+
+    t = np.radians(np.arange(7200) * 0.05)
+    surf = machining.Surface(np.degrees(t), 15 * np.sin(t), 15 * np.cos(t), np.cos(t), -np.sin(t),
+                             np.sin(t), np.cos(t), np.full(len(t), 15.0))
+    tp = machining.tool_path(surf, 5.0)
+    prog = machining.plan_program(tp, 1e-3, units)
+    lines = machining.gcode_lines(prog, tp, feed_mm_per_min=100.0, width_mm=8.0, cutter_diameter_mm=10.0,
+                                  units=units)
+    moves, words = parse_gcode("\n".join(lines))
+    assert (20 if units == "in" else 21) in words
+    pts = np.vstack([p for _, p, _ in contour(moves)])
+    resolution = 10.0 ** -prog.decimals * (25.4 if units == "in" else 1.0)
+    assert np.max(np.abs(np.hypot(*pts.T) - 20.0)) <= 2 * resolution
+    assert prog.lines == 0 and prog.arcs >= 2 and prog.max_deviation_mm <= 2 * resolution
+    assert min(p[2] for p in moves) == pytest.approx(-8.0, abs=resolution)

@@ -325,9 +325,10 @@ class ArcFit(NamedTuple):
 def fit_biarcs(points: np.ndarray, tangents: np.ndarray, tolerance_mm: float) -> ArcFit:
     """Biarcs through a closed sequence of points (K, 2) with unit tangents (K, 2), every point
     within ``tolerance_mm`` of the arcs; greedy: each biarc reaches as far along the points as the
-    tolerance allows (found by doubling then bisection; a candidate is kept only when every point it
-    stands for lies within the tolerance and the arcs are no longer than those points' polyline, so
-    that no arc loops between two points). The path ends where it starts."""
+    tolerance allows, at most half the path (found by doubling then bisection; a candidate is kept
+    only when every point it stands for lies within the tolerance and the arcs are no longer than
+    those points' polyline, so that no arc loops between two points); a biarc straight to within
+    :data:`LINE_SAG` of the tolerance is one line. The path ends where it starts."""
     pts = np.vstack([points, points[:1]])
     tans = np.vstack([tangents, tangents[:1]])
     seg = np.hypot(*np.diff(pts, axis=0).T)
@@ -339,32 +340,36 @@ def fit_biarcs(points: np.ndarray, tangents: np.ndarray, tolerance_mm: float) ->
         arcs = biarc(pts[i], tans[i], pts[j], tans[j], line_sag)
         if arcs is None:
             return None
+        if all(a.centre is None for a in arcs):  # straight: one line
+            arcs = [Primitive(pts[i], pts[j], None)]
         length = sum(primitive_length(a) for a in arcs)
         if length > (cum[j] - cum[i]) * (1 + 1e-3) + 10 * tolerance_mm:
             return None
         if j > i + 1:
             inner = pts[i + 1:j]
-            dev = np.minimum(distance_to(arcs[0], inner), distance_to(arcs[1], inner))
+            dev = np.min([distance_to(a, inner) for a in arcs], axis=0)
             if float(dev.max()) > tolerance_mm:
                 return None
         return arcs
 
     prims, spans, i, step = [], [], 0, 8
+    longest = max(1, last // 2)  # a biarc spans at most half the path (a whole turn has none)
     while i < last:
         good_j, good = i + 1, candidate(i, i + 1)
         if good is None:  # two neighbouring samples: a line at worst
             good = [Primitive(pts[i], pts[i + 1], None)]
         bad_j = None
-        j = min(i + step, last)
+        end = min(i + longest, last)
+        j = min(i + step, end)
         while j > good_j:  # doubling
             arcs = candidate(i, j)
             if arcs is None:
                 bad_j = j
                 break
             good_j, good = j, arcs
-            if j == last:
+            if j == end:
                 break
-            j = min(i + 2 * (j - i), last)
+            j = min(i + 2 * (j - i), end)
         while bad_j is not None and bad_j - good_j > 1:  # bisection
             mid = (good_j + bad_j) // 2
             arcs = candidate(i, mid)
