@@ -447,3 +447,26 @@ def test_a_circle_is_cut_as_arcs_of_its_radius_in_either_unit(units):
     assert np.max(np.abs(np.hypot(*pts.T) - 20.0)) <= 2 * resolution
     assert prog.lines == 0 and prog.arcs >= 2 and prog.max_deviation_mm <= 2 * resolution
     assert min(p[2] for p in moves) == pytest.approx(-8.0, abs=resolution)
+
+
+def test_writers_speak_inches(tmp_path):
+    """units = "in": the cam table's positions, velocities, accelerations and the cutter path's and
+    the STL's lengths are the millimetre values / 25.4 (the cam table of the manufacture scene's
+    law, 36 points; a unit square plate for the STL)."""
+    from camjax.output import cam_table, machining, solid
+
+    scene = parse_scene(builtin_scene_text("manufacture"))
+    mm, inch = cam_table.Law(scene, "mm"), cam_table.Law(scene, "in")
+    master = np.arange(36) * 10.0
+    for a, b in zip(mm(master), inch(master), strict=True):
+        assert np.allclose(b, a / 25.4, rtol=1e-15, atol=0)
+    t = np.radians(np.arange(8) * 45.0)
+    surf = machining.Surface(np.degrees(t), np.sin(t), np.cos(t), np.cos(t), -np.sin(t), np.sin(t),
+                             np.cos(t), np.ones(8))
+    machining.write_cutter_path_csv(tmp_path / "p.csv", machining.tool_path(surf, 1.0), "in")
+    table = read_csv(tmp_path / "p.csv")
+    assert np.allclose(np.hypot(table["x_in"], table["y_in"]), 2.0 / 25.4)
+    tris = solid.solid_triangles(np.array([[1.0, -1.0], [1.0, 1.0], [-1.0, 1.0], [-1.0, -1.0]]), 25.4, None)
+    solid.write_stl(tmp_path / "c.stl", tris, "in")
+    back = read_stl(tmp_path / "c.stl")
+    assert back[:, :, 2].max() == pytest.approx(1.0) and np.abs(back[:, :, 0]).max() == pytest.approx(1 / 25.4)
