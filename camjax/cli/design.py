@@ -40,6 +40,9 @@ def _setup_design(p: argparse.ArgumentParser):
     p.add_argument("--animate", action="store_true",
                    help="also write motion.gif: one turn of the cam with the follower, the contact "
                         "point and the pressure angle (a broken constraint is named and drawn red)")
+    p.add_argument("--cam-table-points", type=int, default=None, metavar="N",
+                   help="also write cam_table.csv and cam_table.json: the motion at N equally spaced master "
+                        "angles for a servo drive (overrides [export] cam_table_points)")
     add_design_options(p)
 
     def run(args) -> int:
@@ -53,6 +56,9 @@ def _setup_design(p: argparse.ArgumentParser):
             raise UsageError(f"--base-radius = {r!r}: out of range (allowed: a number > 0 and "
                              f"<= {MAX_BASE_RADIUS_MM:g}, mm)")
         check_dpi(args.dpi)
+        n = args.cam_table_points
+        if n is not None and not 2 <= n <= 1_000_000:
+            raise UsageError(f"--cam-table-points = {n}: out of range (allowed: 2 to 1000000)")
         scene = apply_design_options(apply_samples(load_scene(args.scene), args), args)
         rad_lifts = scene.dynamics is not None and scene.dynamics.follower == "oscillating"
         if rad_lifts and not followers.of(scene).rocking:
@@ -95,6 +101,7 @@ def _setup_design(p: argparse.ArgumentParser):
                 preload.join()
             if codesign is not None:
                 extra = _law_files(codesign, args.dpi)
+            extra = _shop_files(scene if codesign is None else codesign.scene, result, args, extra)
             return _write_design(args, out, scene, result, workers, progress, extra)
 
     return run
@@ -110,6 +117,26 @@ def _codesign(scene, progress):
         return runtime.interruptible(codesign_scene, scene)
     except CodesignError as exc:
         raise UsageError(f"scene {scene.name}: {exc}") from None
+
+
+def _shop_files(scene, result, args, extra):
+    """The cutter path, G-code, solid and cam table of a scene with [manufacture] or a cam table
+    (:mod:`camjax.output.shop`), computed now (a cutter that gouges exits 2 before anything is
+    written) and written by the returned ``write(folder) -> names`` after ``extra``'s files; their
+    result.json blocks are added to ``result.data``. ``extra`` unchanged when there is nothing."""
+    points = args.cam_table_points
+    if scene.manufacture is None and points is None and (scene.export is None or
+                                                          scene.export.cam_table_points is None):
+        return extra
+    from camjax.output import shop
+
+    shop_plan = runtime.interruptible(shop.plan, scene, result.data, result.curves, cam_table_points=points)
+    result.data.update(shop_plan.report)
+
+    def write(folder) -> list[str]:
+        return (extra(folder) if extra is not None else []) + shop.write(folder, shop_plan)
+
+    return write
 
 
 def _drawing_workers(stack):

@@ -53,7 +53,8 @@ def _builtin_scenes() -> dict[str, str]:
 
 BUILTIN_SCENES = _builtin_scenes()
 
-SECTIONS = ("motion", "follower", "contact", "design", "guide", "dynamics", "synthesis")
+SECTIONS = ("motion", "follower", "contact", "design", "guide", "dynamics", "synthesis", "manufacture",
+            "export")
 
 
 def scene_from_dict(data: dict, name: str = "scene", source: str | None = None) -> Scene:
@@ -97,7 +98,16 @@ def scene_from_dict(data: dict, name: str = "scene", source: str | None = None) 
     synthesis = (parse_synthesis(top.sub("synthesis"), motion.designed, follower.rocking)
                  if "synthesis" in data else None)
     check_train(synthesis, dynamics, source)
-    return Scene(name, motion, spec, contact, design, guide, dynamics, synthesis)
+    manufacture = export = None
+    if "manufacture" in data or "export" in data:  # how the cam is cut; a drive's cam table
+        from camjax.scene.manufacture import parse_export, parse_manufacture
+
+        if "manufacture" in data:
+            width = None if contact is None else contact.cam_width_mm
+            manufacture = parse_manufacture(top.sub("manufacture"), width)
+        if "export" in data:
+            export = parse_export(top.sub("export"), follower.rocking)
+    return Scene(name, motion, spec, contact, design, guide, dynamics, synthesis, manufacture, export)
 
 
 def with_design(scene: Scene, **overrides) -> Scene:

@@ -185,6 +185,30 @@ class SynthesisSpec:
     helical: HelicalSpec | None = None  # the helical spring sized for it (co-design only)
 
 
+MACHINE_PROGRAMS = ("gcode",)  # [manufacture] program: what cam.nc is written as
+
+
+@dataclass(frozen=True)
+class ManufactureSpec:
+    """[manufacture]: the cutter (or grinding wheel) that cuts the cam and the solid's bore
+    (:mod:`camjax.output.machining`). Lengths mm, feed mm/min."""
+
+    cutter_diameter_mm: float  # > 0: the tool centre runs on the surface offset by half of it
+    feed_mm_per_min: float  # > 0: the contour's feed (F word)
+    tolerance_mm: float = 0.001  # largest distance of the G-code's arcs from the exact tool path
+    bore_diameter_mm: float | None = None  # the solid's shaft bore (None: a solid plate)
+    program: str = "gcode"  # of MACHINE_PROGRAMS
+    cam_width_mm: float | None = None  # the plate's width where the scene has no [contact]
+
+
+@dataclass(frozen=True)
+class ExportSpec:
+    """[export]: a servo drive's cam table (:mod:`camjax.output.cam_table`)."""
+
+    cam_table_points: int | None = None  # N equally spaced master angles (None: no table)
+    tolerance: float | None = None  # position tolerance of the interpolation figures (mm or deg)
+
+
 @dataclass(frozen=True)
 class Scene:
     """A validated scene. Optional sections are None when absent: their models are not run."""
@@ -197,6 +221,8 @@ class Scene:
     guide: Guide | None = None
     dynamics: DynamicsSpec | None = None
     synthesis: SynthesisSpec | None = None
+    manufacture: ManufactureSpec | None = None
+    export: ExportSpec | None = None
 
     def needs(self) -> frozenset[str]:
         """The models this scene requires (kinematics and geometry always)."""
