@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import builtins
 import sys
 import threading
 from contextlib import ExitStack
@@ -31,7 +32,8 @@ def _setup_design(p: argparse.ArgumentParser):
                    help="scene TOML file or built-in scene name (default: the embedded default scene)")
     p.add_argument("--out", required=True, metavar="DIR", help=OUT_HELP)
     p.add_argument("--base-radius", type=float, default=None, metavar="MM",
-                   help="evaluate and draw at this base radius instead of the design's")
+                   help="evaluate and draw at this base radius instead of the design's (in the "
+                   "scene's units: mm, or inches for a scene with units = \"in\")")
     p.add_argument("--dpi", type=int, default=100, help="resolution of the PNG figures (default 100)")
     add_samples_option(p)
     p.add_argument("--strict", action="store_true",
@@ -46,6 +48,7 @@ def _setup_design(p: argparse.ArgumentParser):
         from camjax import followers
         from camjax.pipeline import analyse
         from camjax.scene import load_scene
+        from camjax.units import length_scale
 
         out = check_output_dir(args.out)
         r = args.base_radius
@@ -54,6 +57,8 @@ def _setup_design(p: argparse.ArgumentParser):
                              f"<= {MAX_BASE_RADIUS_MM:g}, mm)")
         check_dpi(args.dpi)
         scene = apply_design_options(apply_samples(load_scene(args.scene), args), args)
+        if r is not None:  # given in the scene's units (camjax.units)
+            r = r * length_scale(scene.units)
         rad_lifts = scene.dynamics is not None and scene.dynamics.follower == "oscillating"
         if rad_lifts and not followers.of(scene).rocking:
             rocking = " or ".join(repr(f.name) for f in followers.all_followers() if f.rocking)
@@ -153,6 +158,12 @@ def _write_design(args, out, scene, result, workers, progress, extra=None) -> in
     from camjax.output.animation import UndrawableGeometry, check_drawable
     from camjax.output.export import write_design_files
     from camjax.output.titles import title_block
+    from camjax.units import convert_text, report_to
+
+    units = scene.units
+
+    def print(text, **kw):  # every line in the scene's units (numbers written with a unit converted)
+        builtins.print(convert_text(text, units), **kw)
 
     try:  # before anything is written: figures and animation need a finite outline
         check_drawable(result.curves)
@@ -165,9 +176,10 @@ def _write_design(args, out, scene, result, workers, progress, extra=None) -> in
     banner = (f"INFEASIBLE GEOMETRY at R_b = {at['base_radius_mm']:.4g} mm: "
               f"{', '.join(broken)} violated" if broken else None)
     with replaced_folder(out) as tmp:
-        write_json(tmp / "result.json", d)
-        written = write_design_files(tmp, result.curves, args.dpi, banner, title_block(d),
-                                     animate=args.animate, progress=progress, workers=workers)
+        write_json(tmp / "result.json", report_to(d, units))
+        written = write_design_files(tmp, result.curves, args.dpi, convert_text(banner, units),
+                                     convert_text(title_block(d), units), animate=args.animate,
+                                     progress=progress, workers=workers, units=units)
         names = ["result.json"] + [p.name for p in written] + (extra(tmp) if extra is not None else [])
     print(f"scene {d['scene']}: min base radius {d['min_base_radius_mm']:.4f} mm at "
           f"{d['min_base_radius_deg']:g} deg")
