@@ -127,6 +127,17 @@ def _scale(value: Any, factor: float) -> Any:
     return value
 
 
+def _round15(value: Any) -> Any:
+    """Every float of ``value`` to 15 significant digits (a number as the scene wrote it)."""
+    if isinstance(value, float):
+        return float(f"{value:.15g}")
+    if isinstance(value, list | tuple):
+        return type(value)(_round15(v) for v in value)
+    if isinstance(value, dict):
+        return {k: _round15(v) for k, v in value.items()}
+    return value
+
+
 def _unitless(key: Any) -> bool:
     return isinstance(key, str) and key.endswith(UNITLESS_SUFFIXES)
 
@@ -252,8 +263,9 @@ def scene_error_to(exc: SceneError, units: str) -> SceneError:
     factor = si_factor(key)
     field = exc.field if factor is None else (f"{head}." if head else "") + inch_key(key)
     value = exc.value
-    if factor is not None and value is not MISSING:
+    if factor is not None and value is not MISSING:  # as written (15 digits: x * f / f rounds)
         value = _scale(value, 1.0 / factor)
+        value = _round15(value)
     out = SceneError(field, value, convert_text(exc.problem, units),
                      None if exc.allowed is None else convert_text(exc.allowed, units), exc.source)
     return out

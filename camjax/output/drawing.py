@@ -144,7 +144,8 @@ def serve(k: int = 0, n: int = 1) -> None:
                                       job["units"])
             written.append((i, str(path)))
         if writes_dxf:
-            written.append((len(figures), str(export.write_profile_dxf(folder / DXF_NAME, curves, job["units"]))))
+            dxf = export.write_profile_dxf(folder / DXF_NAME, curves, job["units"])
+            written.append((len(figures), str(dxf)))
         reply = {"written": written}
     except BaseException as exc:  # reported to the caller as one line
         reply = {"error": f"{type(exc).__name__}: {exc}"[:300]}
