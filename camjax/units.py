@@ -60,6 +60,9 @@ SUFFIXES = SCENE_SUFFIXES + OUTPUT_SUFFIXES
 # suffixes that say "no unit to convert" under a converted key (``max_deg`` beside ``max``)
 UNITLESS_SUFFIXES = ("_deg", "_rad", "_hz", "_rad_s", "_rad_s2", "_rad_s3", "_rpm", "_per_rad")
 
+# report keys whose text is a name, never converted (a scene called "5 mm cam" stays so)
+VERBATIM = ("scene", "file", "law", "kind", "type", "source", "solver", "mode", "camjax_version")
+
 _BY_SI = sorted(SUFFIXES, key=lambda s: -len(s[0]))
 _SCENE_BY_SI = sorted(SCENE_SUFFIXES, key=lambda s: -len(s[0]))
 _SCENE_BY_IN = sorted(SCENE_SUFFIXES, key=lambda s: -len(s[1]))
@@ -304,7 +307,9 @@ def _report(value: Any, factor: float | None) -> Any:
         out = {}
         for key, v in value.items():
             m = _si_match(key) if isinstance(key, str) else None
-            if m is not None:
+            if key in VERBATIM:
+                out[key] = v
+            elif m is not None:
                 out[key[: -len(m[0])] + m[1]] = _report(v, m[2])
             elif _unitless(key):
                 out[key] = _report(v, None)

@@ -195,7 +195,7 @@ def _write_design(args, out, scene, result, workers, progress, extra=None) -> in
         print(f"co-design: laws {c['chosen']}, objective {c['objective']:.5f} on the search grid{best}")
         if c.get("spring") is not None and c["spring"].get("designed", True):
             print(_spring_line(c["spring"]))
-        _print_helical((c.get("spring") or {}).get("helical"))
+        _print_helical((c.get("spring") or {}).get("helical"), units)
     width = follower.drawn_summary(d)
     state = f"INFEASIBLE ({', '.join(broken)})" if broken else "feasible"
     print(f"files drawn at R_b = {at['base_radius_mm']:.4f} mm{width} ({at['source']}): {state}")
@@ -206,11 +206,16 @@ def _write_design(args, out, scene, result, workers, progress, extra=None) -> in
     return STRICT_EXIT if broken and args.strict else 0
 
 
-def _print_helical(h) -> None:
+def _print_helical(h, units: str = "mm") -> None:
     """The helical spring sized for the co-design's spring (synthesis.codesign.spring.helical): one
-    line, or a warning on stderr where no spring in the ranges works."""
+    line, or a warning on stderr where no spring in the ranges works (in the scene's ``units``)."""
+    from camjax.units import convert_text
+
     if h is None:
         return
+
+    def print(text, **kw):
+        builtins.print(convert_text(text, units), **kw)
     if h["status"] != "optimal":
         print(f"camjax design: warning: synthesis.helical_spring: {h['message']}", file=sys.stderr)
         return
