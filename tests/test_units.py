@@ -336,3 +336,34 @@ def test_joint_conditions_and_text_are_converted():
     assert convert_unit_word("a (m/s²)") == "a (in/s²)"
     assert convert_unit_word("σ (MPa), x_mm") == "σ (psi), x_mm"
     assert math.isclose(LBF, 4.4482216152605, rel_tol=1e-15)
+
+
+@pytest.mark.slow
+def test_figures_speak_inches(pair):
+    """The default scene's figures drawn from its curves in inches: every text names inch units
+    (no mm, MPa, N, N·m, m/s left) and the outline's axes span the mm outline / 25.4."""
+    from matplotlib.text import Text
+
+    from camjax import followers
+    from camjax.pipeline import analyse
+    from camjax.scene import load_scene
+    from camjax.units import curves_to, relabel
+
+    curves = analyse(load_scene("default")).curves  # compiled by the pair's runs
+    inch = curves_to(curves, "in")
+    np.testing.assert_allclose(inch.profile_x_mm * IN, curves.profile_x_mm, rtol=1e-15, atol=1e-15)
+    np.testing.assert_allclose(inch.stress_MPa * PSI, curves.stress_MPa, rtol=1e-15)
+    texts = []
+    for name, build in followers.drawing("flat").figure_builders(inch).items():
+        fig = build(inch, "R_b = 1.118 in")
+        relabel(fig, "in")
+        texts += [t.get_text() for t in fig.findobj(Text) if t.get_text()]
+        if name == "profile.png":
+            ax = next(a for a in fig.axes if a.get_xlabel() == "X (in)")
+            r = float(np.max(np.hypot(curves.profile_x_mm, curves.profile_y_mm))) / IN
+            assert r <= max(abs(v) for v in ax.get_xlim()) < 2 * r
+    joined = "\n".join(texts)
+    for word in ("(in)", "in/s", "(lbf)", "lbf·in", "(psi)"):
+        assert word in joined, word
+    for word in (r"\bmm\b", r"MPa", r"\(N\)", r"N·m", r"\bm/s"):
+        assert not re.search(word, joined), (word, [t for t in texts if re.search(word, t)])
