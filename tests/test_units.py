@@ -164,8 +164,10 @@ def test_result_json_is_the_same_design(pair):
         scale[kind] = max(scale.get(kind, 0.0), abs(a))
     worst = 0.0
     for path, a, b, f in pairs:
+        if path.endswith(".iterations"):  # the solver's steps, not the design: rounding may change
+            continue  # them (the oscillating roller: 1068 and 1054 steps to the same design)
         if isinstance(a, int) and isinstance(b, int) and f == 1.0:
-            assert a == b, path  # counts, samples, iterations
+            assert a == b, path  # counts, samples, segment numbers
             continue
         tol = RTOL * max(abs(a), 1e-3 * scale[re.sub(r"\[\d+\]", "", path)]) + 1e-300
         if re.search(r"\.(max|min)\w*_deg$", path):
