@@ -369,3 +369,19 @@ def test_figures_speak_inches(pair):
         assert word in joined, word
     for word in (r"\bmm\b", r"MPa", r"\(N\)", r"N·m", r"\bm/s"):
         assert not re.search(word, joined), (word, [t for t in texts if re.search(word, t)])
+
+
+@pytest.mark.slow
+def test_base_radius_option_and_summary_in_inches(pair, tmp_path, capsys):
+    """--base-radius is read in the scene's units; the summary on stdout speaks them."""
+    path = tmp_path / "inch.toml"
+    doc = _inch_default()
+    path.write_text(toml_text(doc))
+    out = tmp_path / "out"
+    capsys.readouterr()
+    assert cli.main(["design", str(path), "--out", str(out), "--dpi", "30", "--base-radius", "1.2"]) == 0
+    at = json.loads((out / "result.json").read_text())["evaluated_at"]
+    assert at["base_radius_in"] == pytest.approx(1.2, rel=1e-15) and "--base-radius" in at["source"]
+    text = capsys.readouterr().out
+    assert "files drawn at R_b = 1.2 in" in text, text
+    assert " mm" not in text
