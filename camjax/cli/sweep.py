@@ -48,8 +48,8 @@ def _setup_sweep(p: argparse.ArgumentParser):
 
         from camjax.pipeline import sweep_scene
         from camjax.scene import load_scene
-        from camjax.units import report_to
         from camjax.solvers.sweep import plot_pareto
+        from camjax.units import report_to
 
         out = check_output_dir(args.out)
         alphas = parse_float_list("--alpha", args.alpha)
@@ -119,7 +119,7 @@ def _setup_sweep(p: argparse.ArgumentParser):
             write_json(tmp / "pareto.json", report_to(data, scene.units))  # camjax.units
             title = (f"Size vs stress over {len(data['records'])} weightings, laws co-designed at each "
                      f"({solver}, {mode})") if codesign else None
-            fig = plot_pareto(result, title=title)
+            fig = plot_pareto(result, title=title, units=scene.units)
             fig.savefig(tmp / "pareto.png", dpi=args.dpi)
         recs = data["records"]
         feasible = sum(r["feasible"] for r in recs)

@@ -21,9 +21,9 @@ def _setup_synthesize(p: argparse.ArgumentParser):
         from camjax import followers, runtime
         from camjax.output.synthesis import synthesis_figure, synthesis_report, train_report, write_curves_csv
         from camjax.scene import load_scene
-        from camjax.units import report_to
         from camjax.scene.designed import law_from_control
         from camjax.synthesis.segments import synthesize_segments
+        from camjax.units import report_to
 
         out = check_output_dir(args.out)
         check_dpi(args.dpi)

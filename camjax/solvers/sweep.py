@@ -188,8 +188,10 @@ def place_labels(anchors_px, sizes_px, obstacles_px=(), bounds_px=None, gap_px: 
     return out
 
 
-def plot_pareto(sweep_result: SweepResult, path=None, *, max_labels: int = 24, title: str | None = None):
-    """Cam size (R_b + L, mm) against peak contact stress (MPa), one point per weighting.
+def plot_pareto(sweep_result: SweepResult, path=None, *, max_labels: int = 24, title: str | None = None,
+                units: str = "mm"):
+    """Cam size (R_b + L, mm) against peak contact stress (MPa), one point per weighting (``units``
+    "in": in inches and psi, :mod:`camjax.units`).
 
     Points are coloured by log10(alpha / gamma) and labelled "alpha/gamma" (every point of the
     non-dominated front first, others thinned to about ``max_labels`` labels; "(+n)" counts the
@@ -202,7 +204,10 @@ def plot_pareto(sweep_result: SweepResult, path=None, *, max_labels: int = 24, t
     from matplotlib.lines import Line2D
 
     r = sweep_result
-    size, stress = r.column("size_mm"), r.column("stress_max_MPa")
+    from camjax.units import MPA_PER_PSI, length_scale, relabel
+
+    size = r.column("size_mm") / length_scale(units)
+    stress = r.column("stress_max_MPa") / (MPA_PER_PSI if units == "in" else 1.0)
     alpha, gamma = r.column("alpha"), r.column("gamma")
     feasible, front = r.column("feasible", bool), np.asarray(sweep_result.pareto, bool)
     with np.errstate(divide="ignore"):
@@ -260,6 +265,7 @@ def plot_pareto(sweep_result: SweepResult, path=None, *, max_labels: int = 24, t
     if left_out:
         handles.append(Line2D([], [], linestyle="", label=f"{left_out} label(s) left out: no free place"))
     ax.legend(handles=handles, loc="upper right", fontsize=7, handlelength=1.2)
+    relabel(fig, units)
     if path is not None:
         fig.savefig(path, dpi=120)
     return fig
