@@ -217,7 +217,8 @@ def plot_pareto(sweep_result: SweepResult, path=None, *, max_labels: int = 24, t
     colour = np.clip(np.where(finite, ratio, span[1]), *span) if span[0] < span[1] else np.zeros_like(ratio)
 
     fig = Figure(figsize=(8.0, 5.8), dpi=100)
-    ax = fig.add_axes((0.09, 0.1, 0.74, 0.8))
+    left = 0.11 if units == "in" else 0.09  # room for psi's five-digit ticks
+    ax = fig.add_axes((left, 0.1, 0.83 - left, 0.8))
     cax = fig.add_axes((0.85, 0.1, 0.02, 0.8))
     sc = ax.scatter(size[feasible], stress[feasible], c=colour[feasible], cmap="viridis", s=28,
                     vmin=span[0], vmax=max(span[1], span[0] + 1e-9), zorder=3)
