@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import builtins
 import sys
 import threading
 from contextlib import ExitStack
@@ -31,7 +32,8 @@ def _setup_design(p: argparse.ArgumentParser):
                    help="scene TOML file or built-in scene name (default: the embedded default scene)")
     p.add_argument("--out", required=True, metavar="DIR", help=OUT_HELP)
     p.add_argument("--base-radius", type=float, default=None, metavar="MM",
-                   help="evaluate and draw at this base radius instead of the design's")
+                   help="evaluate and draw at this base radius instead of the design's (in the "
+                   "scene's units: mm, or inches for a scene with units = \"in\")")
     p.add_argument("--dpi", type=int, default=100, help="resolution of the PNG figures (default 100)")
     add_samples_option(p)
     p.add_argument("--strict", action="store_true",
@@ -49,6 +51,7 @@ def _setup_design(p: argparse.ArgumentParser):
         from camjax import followers
         from camjax.pipeline import analyse
         from camjax.scene import load_scene
+        from camjax.units import length_scale
 
         out = check_output_dir(args.out)
         r = args.base_radius
@@ -60,6 +63,8 @@ def _setup_design(p: argparse.ArgumentParser):
         if n is not None and not 2 <= n <= 1_000_000:
             raise UsageError(f"--cam-table-points = {n}: out of range (allowed: 2 to 1000000)")
         scene = apply_design_options(apply_samples(load_scene(args.scene), args), args)
+        if r is not None:  # given in the scene's units (camjax.units)
+            r = r * length_scale(scene.units)
         rad_lifts = scene.dynamics is not None and scene.dynamics.follower == "oscillating"
         if rad_lifts and not followers.of(scene).rocking:
             rocking = " or ".join(repr(f.name) for f in followers.all_followers() if f.rocking)
@@ -130,7 +135,8 @@ def _shop_files(scene, result, args, extra):
         return extra
     from camjax.output import shop
 
-    shop_plan = runtime.interruptible(shop.plan, scene, result.data, result.curves, cam_table_points=points)
+    shop_plan = runtime.interruptible(shop.plan, scene, result.data, result.curves, cam_table_points=points,
+                                     units=scene.units)
     result.data.update(shop_plan.report)
 
     def write(folder) -> list[str]:
@@ -180,6 +186,12 @@ def _write_design(args, out, scene, result, workers, progress, extra=None) -> in
     from camjax.output.animation import UndrawableGeometry, check_drawable
     from camjax.output.export import write_design_files
     from camjax.output.titles import title_block
+    from camjax.units import convert_text, report_to
+
+    units = scene.units
+
+    def print(text, **kw):  # every line in the scene's units (numbers written with a unit converted)
+        builtins.print(convert_text(text, units), **kw)
 
     try:  # before anything is written: figures and animation need a finite outline
         check_drawable(result.curves)
@@ -192,9 +204,10 @@ def _write_design(args, out, scene, result, workers, progress, extra=None) -> in
     banner = (f"INFEASIBLE GEOMETRY at R_b = {at['base_radius_mm']:.4g} mm: "
               f"{', '.join(broken)} violated" if broken else None)
     with replaced_folder(out) as tmp:
-        write_json(tmp / "result.json", d)
-        written = write_design_files(tmp, result.curves, args.dpi, banner, title_block(d),
-                                     animate=args.animate, progress=progress, workers=workers)
+        write_json(tmp / "result.json", report_to(d, units))
+        written = write_design_files(tmp, result.curves, args.dpi, convert_text(banner, units),
+                                     convert_text(title_block(d), units), animate=args.animate,
+                                     progress=progress, workers=workers, units=units)
         names = ["result.json"] + [p.name for p in written] + (extra(tmp) if extra is not None else [])
     print(f"scene {d['scene']}: min base radius {d['min_base_radius_mm']:.4f} mm at "
           f"{d['min_base_radius_deg']:g} deg")
@@ -210,7 +223,7 @@ def _write_design(args, out, scene, result, workers, progress, extra=None) -> in
         print(f"co-design: laws {c['chosen']}, objective {c['objective']:.5f} on the search grid{best}")
         if c.get("spring") is not None and c["spring"].get("designed", True):
             print(_spring_line(c["spring"]))
-        _print_helical((c.get("spring") or {}).get("helical"))
+        _print_helical((c.get("spring") or {}).get("helical"), units)
     width = follower.drawn_summary(d)
     state = f"INFEASIBLE ({', '.join(broken)})" if broken else "feasible"
     print(f"files drawn at R_b = {at['base_radius_mm']:.4f} mm{width} ({at['source']}): {state}")
@@ -221,11 +234,16 @@ def _write_design(args, out, scene, result, workers, progress, extra=None) -> in
     return STRICT_EXIT if broken and args.strict else 0
 
 
-def _print_helical(h) -> None:
+def _print_helical(h, units: str = "mm") -> None:
     """The helical spring sized for the co-design's spring (synthesis.codesign.spring.helical): one
-    line, or a warning on stderr where no spring in the ranges works."""
+    line, or a warning on stderr where no spring in the ranges works (in the scene's ``units``)."""
+    from camjax.units import convert_text
+
     if h is None:
         return
+
+    def print(text, **kw):
+        builtins.print(convert_text(text, units), **kw)
     if h["status"] != "optimal":
         print(f"camjax design: warning: synthesis.helical_spring: {h['message']}", file=sys.stderr)
         return

@@ -49,6 +49,7 @@ def _setup_sweep(p: argparse.ArgumentParser):
         from camjax.pipeline import sweep_scene
         from camjax.scene import load_scene
         from camjax.solvers.sweep import plot_pareto
+        from camjax.units import report_to
 
         out = check_output_dir(args.out)
         alphas = parse_float_list("--alpha", args.alpha)
@@ -115,10 +116,10 @@ def _setup_sweep(p: argparse.ArgumentParser):
         # --resume) is carried over, and nothing else of the folder: no earlier run's files
         keep = scaleout.CHECKPOINT if scaleout.requested(args) else ()
         with replaced_folder(out, keep) as tmp:
-            write_json(tmp / "pareto.json", data)
+            write_json(tmp / "pareto.json", report_to(data, scene.units))  # camjax.units
             title = (f"Size vs stress over {len(data['records'])} weightings, laws co-designed at each "
                      f"({solver}, {mode})") if codesign else None
-            fig = plot_pareto(result, title=title)
+            fig = plot_pareto(result, title=title, units=scene.units)
             fig.savefig(tmp / "pareto.png", dpi=args.dpi)
         recs = data["records"]
         feasible = sum(r["feasible"] for r in recs)

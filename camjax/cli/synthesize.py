@@ -23,6 +23,7 @@ def _setup_synthesize(p: argparse.ArgumentParser):
         from camjax.scene import load_scene
         from camjax.scene.designed import law_from_control
         from camjax.synthesis.segments import synthesize_segments
+        from camjax.units import report_to
 
         out = check_output_dir(args.out)
         check_dpi(args.dpi)
@@ -56,7 +57,7 @@ def _setup_synthesize(p: argparse.ArgumentParser):
                                     "best built-in")
         fig = synthesis_figure(panels)
         with replaced_folder(out) as tmp:
-            write_json(tmp / "result.json", report)
+            write_json(tmp / "result.json", report_to(report, scene.units))  # camjax.units
             write_curves_csv(tmp / "synthesis.csv", curves)
             fig.savefig(tmp / "svaj.png", dpi=args.dpi)
         for r in results:

@@ -326,9 +326,13 @@ def _blitting_pillow_writer(moving, fps: int):
 
 
 def write_motion_gif(path: str | Path, m: Mechanism, frames: int = 72, fps: int = 18,
-                     dpi: int = 72) -> Path:
-    """motion.gif of one turn (matplotlib's Pillow writer, loops forever); returns the path."""
+                     dpi: int = 72, units: str = "mm") -> Path:
+    """motion.gif of one turn (matplotlib's Pillow writer, loops forever); returns the path.
+    ``units``: those of the mechanism's lengths, which its labels then name."""
+    from camjax.units import relabel
+
     mf = motion_frames(m, frames)
+    relabel(mf.figure, units)
     path = Path(path)
     writer = _blitting_pillow_writer(mf.artists["moving"], fps)
     with writer.saving(mf.figure, path, dpi):

@@ -56,13 +56,14 @@ class DrawingWorkers:
             raise
 
     def draw(self, folder: str | Path, curves, dpi: int = 100, banner: str | None = None,
-             title: str = "") -> None:
+             title: str = "", units: str = "mm") -> None:
         """Send the job: worker k of n draws figures k, k + n, ... and the last one also writes
         profile.dxf, of the curves into ``folder`` (``curves``: a follower family's curves, e.g. :class:`camjax.followers._translating.DesignCurves`; the
-        rest as :func:`camjax.output.export.write_figures`)."""
+        rest as :func:`camjax.output.export.write_figures`; ``units``: the curves', which the
+        figures and the DXF then name)."""
         fields = {k: _plain(v) for k, v in curves._asdict().items()}
         job = pickle.dumps({"folder": str(folder), "curves": fields, "dpi": dpi, "banner": banner,
-                            "title": title})
+                            "title": title, "units": units})
         for proc in self._procs:
             try:
                 proc.stdin.write(job)
@@ -139,10 +140,12 @@ def serve(k: int = 0, n: int = 1) -> None:
         for i, (name, build) in enumerate(figures):
             if i % n != k:
                 continue
-            path = export.save_figure(build(curves, job["title"]), folder / name, job["dpi"], job["banner"])
+            path = export.save_figure(build(curves, job["title"]), folder / name, job["dpi"], job["banner"],
+                                      job["units"])
             written.append((i, str(path)))
         if writes_dxf:
-            written.append((len(figures), str(export.write_profile_dxf(folder / DXF_NAME, curves))))
+            dxf = export.write_profile_dxf(folder / DXF_NAME, curves, job["units"])
+            written.append((len(figures), str(dxf)))
         reply = {"written": written}
     except BaseException as exc:  # reported to the caller as one line
         reply = {"error": f"{type(exc).__name__}: {exc}"[:300]}

@@ -16,25 +16,31 @@ from pathlib import Path
 import numpy as np
 
 from camjax import followers
+from camjax import units as scene_units
 
 CSV_FORMAT = "%.12f"  # 1e-12 mm: far below any machining tolerance, round-trips the geometry
 
 
-def write_profile_csv(path: Path, curves) -> Path:
+def write_profile_csv(path: Path, curves, units: str = "mm") -> Path:
     """The follower's profile table (its drawing module's ``profile_table``) as CSV with one header
-    line."""
+    line; ``units`` "in": ``curves`` are in inches (:func:`camjax.units.curves_to`) and the column
+    names say so (``x_in``, ``stress_psi``)."""
     names, table = followers.drawing(curves.follower_type).profile_table(curves)
+    names = scene_units.column_names(names, units)
     np.savetxt(path, table, delimiter=",", header=",".join(names), comments="", fmt=CSV_FORMAT)
     return path
 
 
-def centre_mark_half_mm(curves) -> float:
-    """Half length of the centre-mark arms: a tenth of the largest radius, at least 1 mm."""
-    return max(1.0, 0.1 * float(np.max(np.hypot(curves.profile_x_mm, curves.profile_y_mm))))
+def centre_mark_half_mm(curves, units: str = "mm") -> float:
+    """Half length of the centre-mark arms: a tenth of the largest radius, at least 1 mm (in the
+    curves' ``units``)."""
+    least = 1.0 / scene_units.length_scale(units)
+    return max(least, 0.1 * float(np.max(np.hypot(curves.profile_x_mm, curves.profile_y_mm))))
 
 
-def write_profile_dxf(path: Path, curves) -> Path:
-    """Cam outline as one closed LWPOLYLINE on layer CAM_PROFILE, drawing units mm.
+def write_profile_dxf(path: Path, curves, units: str = "mm") -> Path:
+    """Cam outline as one closed LWPOLYLINE on layer CAM_PROFILE, drawing units mm (``units``
+    "in": inches, $INSUNITS 1 and $MEASUREMENT 0, from curves in inches).
 
     One vertex per sample (the scene's ``samples``); raise ``samples`` for a finer polyline
     (with 360 samples the chord error on a 30 mm cam is about 1 micrometre). ezdxf writes the
@@ -49,13 +55,15 @@ def write_profile_dxf(path: Path, curves) -> Path:
     from ezdxf import zoom
 
     xy = np.column_stack([curves.profile_x_mm, curves.profile_y_mm])
-    doc = ezdxf.new("R2010", units=ezdxf.units.MM, setup=["linetypes"])  # CENTER linetype
-    doc.header["$MEASUREMENT"] = 1  # metric
+    inch = scene_units.check_units(units) == "in"
+    doc = ezdxf.new("R2010", units=ezdxf.units.IN if inch else ezdxf.units.MM,
+                    setup=["linetypes"])  # CENTER linetype
+    doc.header["$MEASUREMENT"] = 0 if inch else 1  # imperial or metric
     doc.layers.add("CAM_PROFILE", color=7)
     doc.layers.add("CENTER", color=1, linetype="CENTER")
     msp = doc.modelspace()
     msp.add_lwpolyline(xy[:1].tolist(), format="xy", close=True, dxfattribs={"layer": "CAM_PROFILE"})
-    c = centre_mark_half_mm(curves)
+    c = centre_mark_half_mm(curves, units)
     msp.add_line((-c, 0.0), (c, 0.0), dxfattribs={"layer": "CENTER"})
     msp.add_line((0.0, -c), (0.0, c), dxfattribs={"layer": "CENTER"})
     lo = np.minimum(xy.min(axis=0), -c)
@@ -80,18 +88,23 @@ def write_profile_dxf(path: Path, curves) -> Path:
 
 
 def write_figures(folder: Path, curves, dpi: int = 100, banner: str | None = None,
-                  title: str = "") -> list[Path]:
+                  title: str = "", units: str = "mm") -> list[Path]:
     """PNG of every figure the scene declares (the follower's ``figure_builders``).
 
     ``banner``: text of a red banner stamped on every figure (the constraints the geometry breaks);
-    ``title``: the run's title block (:func:`camjax.output.titles.title_block`).
+    ``title``: the run's title block (:func:`camjax.output.titles.title_block`); ``units``: those
+    of ``curves`` (:func:`camjax.units.curves_to`), which the figures' labels then name.
     """
     builders = followers.drawing(curves.follower_type).figure_builders(curves)
-    return [save_figure(build(curves, title), folder / name, dpi, banner) for name, build in builders.items()]
+    return [save_figure(build(curves, title), folder / name, dpi, banner, units)
+            for name, build in builders.items()]
 
 
-def save_figure(fig, path: Path, dpi: int = 100, banner: str | None = None) -> Path:
-    """Write one figure as PNG, first stamped with ``banner`` in red when given; the path."""
+def save_figure(fig, path: Path, dpi: int = 100, banner: str | None = None, units: str = "mm") -> Path:
+    """Write one figure as PNG, first stamped with ``banner`` in red when given; the path.
+    ``units`` "in": the figure was drawn from curves in inches, and its labels say so
+    (:func:`camjax.units.relabel`)."""
+    scene_units.relabel(fig, units)
     if banner:
         from camjax.output.plots import stamp_banner
 
@@ -100,40 +113,47 @@ def save_figure(fig, path: Path, dpi: int = 100, banner: str | None = None) -> P
     return path
 
 
-def write_animation(path: Path, curves, title: str = "", banner: str | None = None) -> Path:
+def write_animation(path: Path, curves, title: str = "", banner: str | None = None,
+                    units: str = "mm") -> Path:
     """motion.gif: one turn of the mechanism; ``banner`` (the broken constraints) above it in red
-    and the outline where it breaks them drawn red."""
+    and the outline where it breaks them drawn red; ``units``: those of ``curves``."""
     from camjax.output.animation import write_motion_gif
 
-    return write_motion_gif(path, followers.drawing(curves.follower_type).mechanism(curves, title, banner))
+    return write_motion_gif(path, followers.drawing(curves.follower_type).mechanism(curves, title, banner),
+                            units=units)
 
 
 def write_design_files(folder: str | Path, curves, dpi: int = 100, banner: str | None = None,
-                       title: str = "", animate: bool = False, progress=None, workers=None) -> list[Path]:
+                       title: str = "", animate: bool = False, progress=None, workers=None,
+                       units: str = "mm") -> list[Path]:
     """Figures, profile.csv and profile.dxf (and motion.gif when ``animate``) into ``folder``
     (created if needed); the written paths. ``banner`` and ``title`` as in :func:`write_figures`;
     ``progress(phase)`` (optional) is told "figures", "files" and "animation" as each starts.
 
     ``workers``: started :class:`camjax.output.drawing.DrawingWorkers` draw the figures and the
     DXF in their processes while this one writes the CSV (the same files as without them).
+
+    ``units``: the scene's ("mm" or "in", :mod:`camjax.units`); ``curves`` are always in mm and
+    are converted here, so that every file speaks ``units`` (``banner`` and ``title`` come in them).
     """
+    curves = scene_units.curves_to(curves, units)
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     say = progress or (lambda phase: None)
     if workers is not None:  # they draw while the CSV is written here; "figures": waiting for them
-        workers.draw(folder, curves, dpi, banner, title)
+        workers.draw(folder, curves, dpi, banner, title, units)
         say("files")
-        csv = write_profile_csv(folder / "profile.csv", curves)
+        csv = write_profile_csv(folder / "profile.csv", curves, units)
         say("figures")
         *paths, dxf = workers.wait()
         paths += [csv, dxf]
     else:
         say("figures")
-        paths = write_figures(folder, curves, dpi, banner, title)
+        paths = write_figures(folder, curves, dpi, banner, title, units)
         say("files")
-        paths += [write_profile_csv(folder / "profile.csv", curves),
-                  write_profile_dxf(folder / "profile.dxf", curves)]
+        paths += [write_profile_csv(folder / "profile.csv", curves, units),
+                  write_profile_dxf(folder / "profile.dxf", curves, units)]
     if animate:
         say("animation")
-        paths.append(write_animation(folder / "motion.gif", curves, title, banner))
+        paths.append(write_animation(folder / "motion.gif", curves, title, banner, units))
     return paths

@@ -58,11 +58,31 @@ SECTIONS = ("motion", "follower", "contact", "design", "guide", "dynamics", "syn
 
 
 def scene_from_dict(data: dict, name: str = "scene", source: str | None = None) -> Scene:
-    """Validate a parsed TOML document. Raises :class:`SceneError`."""
+    """Validate a parsed TOML document. Raises :class:`SceneError`.
+
+    A scene with ``units = "in"`` at the top is read in inch units (:mod:`camjax.units`): it is
+    translated once to the internal mm/MPa/N/kg spelling, and the scene keeps ``units``.
+    """
+    from camjax import followers
+    from camjax.units import scene_error_to, scene_to_internal
+
+    follower_table = data.get("follower") if isinstance(data, dict) else None
+    ftype = follower_table.get("type") if isinstance(follower_table, dict) else None
+    rocking = isinstance(ftype, str) and ftype in followers.names() and followers.get(ftype).rocking
+    data, units = scene_to_internal(data, rocking, source)
+    try:
+        scene = _scene_from_dict(data, name, source)
+    except SceneError as exc:
+        raise scene_error_to(exc, units) from None
+    return scene if units == "mm" else replace(scene, units=units)
+
+
+def _scene_from_dict(data: dict, name: str, source: str | None) -> Scene:
+    """:func:`scene_from_dict` of a scene in the internal units."""
     from camjax import followers
 
     top = TableReader(data, "", source)
-    top.check_keys(SECTIONS)
+    top.check_keys((*SECTIONS, "units"))
     if "motion" not in data:
         raise SceneError("motion", MISSING, "section [motion] is required", source=source)
     if "follower" not in data:

@@ -223,6 +223,9 @@ class Scene:
     synthesis: SynthesisSpec | None = None
     manufacture: ManufactureSpec | None = None
     export: ExportSpec | None = None
+    # the units the scene is written in ("mm" or "in", camjax.units): every value above is in the
+    # internal mm/MPa/N/kg whatever they are; the outputs speak them
+    units: str = "mm"
 
     def needs(self) -> frozenset[str]:
         """The models this scene requires (kinematics and geometry always)."""

@@ -188,8 +188,10 @@ def place_labels(anchors_px, sizes_px, obstacles_px=(), bounds_px=None, gap_px: 
     return out
 
 
-def plot_pareto(sweep_result: SweepResult, path=None, *, max_labels: int = 24, title: str | None = None):
-    """Cam size (R_b + L, mm) against peak contact stress (MPa), one point per weighting.
+def plot_pareto(sweep_result: SweepResult, path=None, *, max_labels: int = 24, title: str | None = None,
+                units: str = "mm"):
+    """Cam size (R_b + L, mm) against peak contact stress (MPa), one point per weighting (``units``
+    "in": in inches and psi, :mod:`camjax.units`).
 
     Points are coloured by log10(alpha / gamma) and labelled "alpha/gamma" (every point of the
     non-dominated front first, others thinned to about ``max_labels`` labels; "(+n)" counts the
@@ -202,7 +204,10 @@ def plot_pareto(sweep_result: SweepResult, path=None, *, max_labels: int = 24, t
     from matplotlib.lines import Line2D
 
     r = sweep_result
-    size, stress = r.column("size_mm"), r.column("stress_max_MPa")
+    from camjax.units import MPA_PER_PSI, length_scale, relabel
+
+    size = r.column("size_mm") / length_scale(units)
+    stress = r.column("stress_max_MPa") / (MPA_PER_PSI if units == "in" else 1.0)
     alpha, gamma = r.column("alpha"), r.column("gamma")
     feasible, front = r.column("feasible", bool), np.asarray(sweep_result.pareto, bool)
     with np.errstate(divide="ignore"):
@@ -212,7 +217,8 @@ def plot_pareto(sweep_result: SweepResult, path=None, *, max_labels: int = 24, t
     colour = np.clip(np.where(finite, ratio, span[1]), *span) if span[0] < span[1] else np.zeros_like(ratio)
 
     fig = Figure(figsize=(8.0, 5.8), dpi=100)
-    ax = fig.add_axes((0.09, 0.1, 0.74, 0.8))
+    left = 0.11 if units == "in" else 0.09  # room for psi's five-digit ticks
+    ax = fig.add_axes((left, 0.1, 0.83 - left, 0.8))
     cax = fig.add_axes((0.85, 0.1, 0.02, 0.8))
     sc = ax.scatter(size[feasible], stress[feasible], c=colour[feasible], cmap="viridis", s=28,
                     vmin=span[0], vmax=max(span[1], span[0] + 1e-9), zorder=3)
@@ -260,6 +266,7 @@ def plot_pareto(sweep_result: SweepResult, path=None, *, max_labels: int = 24, t
     if left_out:
         handles.append(Line2D([], [], linestyle="", label=f"{left_out} label(s) left out: no free place"))
     ax.legend(handles=handles, loc="upper right", fontsize=7, handlelength=1.2)
+    relabel(fig, units)
     if path is not None:
         fig.savefig(path, dpi=120)
     return fig
