@@ -56,6 +56,7 @@ OUTPUT_SUFFIXES: tuple[tuple[str, str, float], ...] = (
     ("_m_s3", "_in_s3", M_PER_IN),
     ("_mm_per_rad", "_in_per_rad", MM_PER_IN),
     ("_mm_per_rad2", "_in_per_rad2", MM_PER_IN),
+    ("_mm3", "_in3", MM_PER_IN**3),  # a volume (the solid's)
 )
 SUFFIXES = SCENE_SUFFIXES + OUTPUT_SUFFIXES
 # suffixes that say "no unit to convert" under a converted key (``max_deg`` beside ``max``)

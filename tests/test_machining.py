@@ -470,3 +470,44 @@ def test_writers_speak_inches(tmp_path):
     solid.write_stl(tmp_path / "c.stl", tris, "in")
     back = read_stl(tmp_path / "c.stl")
     assert back[:, :, 2].max() == pytest.approx(1.0) and np.abs(back[:, :, 0]).max() == pytest.approx(1 / 25.4)
+
+
+# the manufacture scene's keys and their inch spellings, with the exact factors (1 in = 25.4 mm,
+# 1 lbf = 4.4482216152605 N, 1 lb = 0.45359237 kg), written here independently of camjax.units
+_INCH = {"_mm_per_min": ("_in_per_min", 25.4), "_N_per_m": ("_lbf_per_in", 4.4482216152605 / 0.0254),
+         "_MPa": ("_psi", 4.4482216152605 / 25.4**2), "_kg": ("_lb", 0.45359237), "_mm": ("_in", 25.4)}
+
+
+def _inch_scene_text(text: str) -> str:
+    def convert(m):
+        new, factor = _INCH[m.group(2)]
+        return f"{m.group(1)}{new} = {float(m.group(3)) / factor!r}"
+
+    text = re.sub(r"#.*", "", text)
+    return 'units = "in"\n' + re.sub(r"(\w+?)(_mm_per_min|_N_per_m|_mm|_kg|_MPa) = ([-\d.e+]+)", convert, text)
+
+
+@pytest.mark.slow  # one more analysis of the manufacture scene (no [design]: the sizing only)
+def test_the_inch_manufacture_scene_writes_the_mm_scenes_files_in_inches(runs, tmp_path):
+    """The built-in manufacture scene written in inches: cutter path, cam table (and its tolerance,
+    the scene's 1 um) and the reported fit equal the mm scene's divided by 25.4 (to 1e-9 relative:
+    both fits run the same biarc search on values a factor apart, rounded to 5 and 6 decimals), the
+    G-code says G20, the fewest points agree."""
+    scene = tmp_path / "manufacture_in.toml"
+    scene.write_text(_inch_scene_text(builtin_scene_text("manufacture")))
+    out = tmp_path / "in"
+    assert cli.main(["design", str(scene), "--out", str(out), "--dpi", "20"]) == 0
+    mm_res, _, mm_path, _ = _load(runs["roller"])
+    in_res, _, in_path, gcode = _load(out)
+    assert "G20" in gcode and "G21" not in gcode
+    for a, b in (("x_mm", "x_in"), ("y_mm", "y_in")):
+        np.testing.assert_allclose(in_path[b], mm_path[a] / 25.4, rtol=0, atol=1e-11)
+    mt, it = mm_res["cam_table"], in_res["cam_table"]
+    assert it["position_unit"] == "in" and it["tolerance"] == pytest.approx(mt["tolerance"] / 25.4, rel=1e-12)
+    assert it["fewest_points"] == mt["fewest_points"]
+    for method, err in mt["max_error"].items():
+        assert it["max_error"][method] == pytest.approx(err / 25.4, rel=1e-6, abs=1e-15)
+    m, i = mm_res["manufacture"], in_res["manufacture"]
+    assert i["cutter_diameter_in"] == pytest.approx(m["cutter_diameter_mm"] / 25.4, rel=1e-12)
+    assert i["solid"]["volume_in3"] == pytest.approx(m["solid"]["volume_mm3"] / 25.4**3, rel=1e-6)
+    assert i["fit"]["max_deviation_in"] <= i["tolerance_in"] * (1 + 1e-9)

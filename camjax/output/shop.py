@@ -72,10 +72,14 @@ def plan(scene, data: dict, curves, *, cam_table_points: int | None = None, unit
         points = scene.export.cam_table_points
     tab = None
     if points is not None:
+        from camjax.units import length_scale
+
+        rocking = table_mod.Law(scene).unit == "deg"
         tol = scene.export.tolerance if scene.export is not None else None
         if tol is None:
-            rocking = table_mod.Law(scene).unit == "deg"
             tol = m.tolerance_mm if m is not None and not rocking else DEFAULT_TABLE_TOLERANCE
+        if not rocking:  # mm (an inch scene's tolerance_in was read into mm) -> the table's unit
+            tol = tol / length_scale(units)
         tab = table_mod.cam_table(scene, int(points), float(tol), units)
         report["cam_table"] = tab.report
     return ShopPlan(scene.name, units, m, width, path, program, gcode, triangles, tab, report)
