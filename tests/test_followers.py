@@ -297,23 +297,5 @@ def test_the_figures_profile_and_dxf_are_written(name, runs, written):
     assert table.shape == (data["samples"], len(names)) and np.all(np.isfinite(table))
 
 
-@pytest.mark.slow
-@pytest.mark.parametrize("name", NAMES)
-def test_the_saved_program_cache_gives_the_cache_off_result(name, tmp_path, monkeypatch):
-    from camjax import runtime
-    from validation.compare_results import differences
-
-    scene = followers.get(name).example_scene
-    monkeypatch.setenv("CAMJAX_DRAWING_PROCESSES", "0")
-    results = []
-    for k, cache in enumerate((None, tmp_path / "programs", tmp_path / "programs")):
-        runtime.use_program_cache(None)
-        monkeypatch.setenv("CAMJAX_PROGRAM_CACHE", "0" if cache is None else str(cache))
-        monkeypatch.setenv("CAMJAX_PROGRAM_CACHE_VERIFY", "1")
-        try:
-            assert cli.main(["design", scene, "--out", str(tmp_path / f"run{k}"), "--dpi", "30"]) in (0, 3)
-        finally:
-            runtime.use_program_cache(None)
-        results.append(json.loads((tmp_path / f"run{k}" / "result.json").read_text()))
-    off, cold, warm = results
-    assert not differences(off, cold) and not differences(off, warm), name
+# The saved-program cache against the cache off, for every follower type: tests/test_cache_matrix.py
+# (each type's sequence of runs, cold and warm, in verify mode).
