@@ -8,7 +8,9 @@ and write nothing."""
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
+import io
 import json
 import math
 import tomllib
@@ -226,10 +228,34 @@ def test_the_objective_grows_with_the_preload(name):
 
 
 @pytest.fixture(scope="module")
-def codesigns():
-    """The free co-design of the roller rocker, and two with the spring fixed inside the box: the
-    scene's own (20 N m/rad, 6 N m) and its rate with the preload free."""
-    free = codesign_scene(scene_from_dict(rocker_data(), "free"), SAMPLES, max_iterations=ITERATIONS)
+def command_run(tmp_path_factory):
+    """`camjax design` of the free rocker (its 90 samples, the command's 400 steps), and the
+    co-design it computed on the way (camjax.codesign.codesign_scene's outcome, kept as it returns):
+    one co-design serves the end-to-end test and the comparisons with fixed springs."""
+    import camjax.codesign
+
+    folder = tmp_path_factory.mktemp("rocker")
+    path = folder / "rocker.toml"
+    path.write_text(toml_of(rocker_data()))
+    outcomes = []
+
+    def kept(scene, *args, **kwargs):
+        outcomes.append(codesign_scene(scene, *args, **kwargs))
+        return outcomes[-1]
+
+    stdout = io.StringIO()
+    with pytest.MonkeyPatch.context() as mp, contextlib.redirect_stdout(stdout):
+        mp.setattr(camjax.codesign, "codesign_scene", kept)
+        assert main(["design", str(path), "--out", str(folder / "out")]) == 0
+    assert len(outcomes) == 1 and outcomes[0].scene.motion.samples == SAMPLES
+    return folder / "out", outcomes[0], stdout.getvalue()
+
+
+@pytest.fixture(scope="module")
+def codesigns(command_run):
+    """The free co-design of the roller rocker (the command's), and two with the spring fixed inside
+    the box: the scene's own (20 N m/rad, 6 N m) and its rate with the preload free."""
+    free = command_run[1]
     fixed = [codesign_scene(scene_from_dict(rocker_data(**case), "fixed"), SAMPLES, max_iterations=ITERATIONS)
              for case in (dict(spring_N_m_per_rad=20.0, preload_N_m=6.0), dict(spring_N_m_per_rad=20.0))]
     return free, fixed
@@ -276,18 +302,15 @@ def test_the_moment_holds_at_the_overspeed_on_the_design_written(codesigns):
 
 
 @pytest.mark.slow
-def test_design_of_a_rocker_with_a_free_spring_end_to_end(tmp_path, capsys):
+def test_design_of_a_rocker_with_a_free_spring_end_to_end(command_run):
     """`camjax design` writes the rocker's designed spring; its laws and spring fed back as a plain
     scene keep M >= M_min at the overspeed (by the follower's own curves there) and give the same design."""
     from camjax import followers
     from camjax.pipeline import design_report
 
     data = rocker_data()
-    path = tmp_path / "rocker.toml"
-    path.write_text(toml_of(data))
-    out = tmp_path / "out"
-    assert main(["design", str(path), "--out", str(out)]) == 0
-    assert "N m/rad" in capsys.readouterr().out
+    out = command_run[0]
+    assert "N m/rad" in command_run[2]
     res = json.loads((out / "result.json").read_text())
     sp = res["synthesis"]["codesign"]["spring"]
     assert set(sp) == {"rate_N_m_per_rad", "preload_N_m", "preload_rad", "rate_bounds_N_m_per_rad",
