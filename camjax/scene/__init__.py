@@ -53,7 +53,7 @@ def _builtin_scenes() -> dict[str, str]:
 
 BUILTIN_SCENES = _builtin_scenes()
 
-SECTIONS = ("motion", "follower", "contact", "design", "guide", "dynamics", "synthesis")
+SECTIONS = ("motion", "follower", "contact", "design", "guide", "dynamics", "synthesis", "tolerances")
 
 
 def scene_from_dict(data: dict, name: str = "scene", source: str | None = None) -> Scene:
@@ -97,7 +97,12 @@ def scene_from_dict(data: dict, name: str = "scene", source: str | None = None) 
     synthesis = (parse_synthesis(top.sub("synthesis"), motion.designed, follower.rocking)
                  if "synthesis" in data else None)
     check_train(synthesis, dynamics, source)
-    return Scene(name, motion, spec, contact, design, guide, dynamics, synthesis)
+    scene = Scene(name, motion, spec, contact, design, guide, dynamics, synthesis)
+    if "tolerances" in data:  # camjax.robust: what camjax robust samples (other commands ignore it)
+        from camjax.robust.tolerances import parse_tolerances
+
+        scene = replace(scene, tolerances=parse_tolerances(top.sub("tolerances"), scene))
+    return scene
 
 
 def with_design(scene: Scene, **overrides) -> Scene:

@@ -7,6 +7,7 @@ read them.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 from camjax.contact import Material
 from camjax.loads import FollowerTrain, Guide, RockerTrain
@@ -197,6 +198,7 @@ class Scene:
     guide: Guide | None = None
     dynamics: DynamicsSpec | None = None
     synthesis: SynthesisSpec | None = None
+    tolerances: Any = None  # [tolerances]: camjax.robust.tolerances.Tolerances (camjax robust only)
 
     def needs(self) -> frozenset[str]:
         """The models this scene requires (kinematics and geometry always)."""
