@@ -21,6 +21,7 @@ from camjax.family import weights_of
 from camjax.program import Kinematics
 from camjax.robust import evaluate as rev
 from camjax.robust import report
+from camjax.robust.tolerances import draw
 from camjax.scene import SceneError, builtin_scene_text, load_scene, scene_from_dict
 
 # the robust scene's nominal optimum (camjax design robust; the size-only design does not depend
@@ -175,7 +176,6 @@ def test_samples_without_form_error_match_camjax_design(cli_run, tmp_path):
     """``camjax design``'s report (design block and loads) of written scenes with the drawn values and
     the design fixed: the batch's outputs without the form error, to 1e-9."""
     data, _ = cli_run
-    scene0 = load_scene(str(tmp_path.parent / "robust.toml")) if False else None  # noqa: F841
     base = scene_from_dict(robust_data(), "robust")
     nom = rev.nominal(base, base.tolerances._replace(profile=None), DESIGN)
     for s in data["first_samples"][:3]:
@@ -232,8 +232,6 @@ def test_probabilities_within_a_binomial_bound_of_a_larger_independent_sample(cl
 
 
 def test_draws_are_seeded_and_prefix_stable():
-    from camjax.robust.tolerances import draw
-
     scene = scene_from_dict(robust_data(), "robust")
     a = draw(scene.tolerances, 50, 3)
     b = draw(scene.tolerances, 20, 3)
@@ -292,14 +290,14 @@ def test_scenes_without_tolerances_are_unchanged():
 @pytest.mark.slow
 @pytest.mark.parametrize("name", followers.names())
 def test_every_follower_type_through_the_contract(name, tmp_path):
-    """Each type's example scene with rpm and every design variable toleranced: 8 samples in one
-    batch, finite outputs; the zero-variate sample equals the family's evaluation of the scene
+    """Each type's example scene (on 90 samples) with rpm and every design variable toleranced: 8
+    samples in one batch, finite outputs; the zero-variate sample equals the family's evaluation of the scene
     read from a file with the nominal values (the design at the middle of the [design] box)."""
     kind = followers.get(name)
     scene = load_scene(kind.example_scene)
     d = tomllib.loads(builtin_scene_text(kind.example_scene))
     d["motion"]["extrema"] = "grid"
-    d["motion"]["samples"] = 90 if scene.motion.samples % 90 == 0 or True else scene.motion.samples
+    d["motion"]["samples"] = 90  # a coarse grid: the check is the plumbing, not the resolution
     design = {v: float(np.mean(scene.design.bounds(v))) for v in kind.variables}
     tol = {"rpm": {"sd_percent": 2}}
     tol.update({v: {"sd_percent": 0.5} for v in kind.variables})
@@ -308,9 +306,9 @@ def test_every_follower_type_through_the_contract(name, tmp_path):
         scene = scene_from_dict(d, name)
     except SceneError as exc:  # a coarser grid than the scene's shortest segment allows
         pytest.skip(str(exc))
-    run = report.run(scene, 8, 0, design=design)
-    assert np.all(np.isfinite(run.outputs))
     nom = rev.nominal(scene, scene.tolerances, design)
+    draws = draw(scene.tolerances, 8, 0)
+    assert np.all(np.isfinite(rev.batch(nom, draws.unit, draws.phases).outputs))
     got = np.asarray(rev.sample(nom, np.asarray(nom.values), np.zeros(0)).outputs)
     fam = kind.problem_module()
     d.pop("tolerances")
@@ -319,8 +317,8 @@ def test_every_follower_type_through_the_contract(name, tmp_path):
     ev = fam.evaluate(pipeline.design_problem(plain, arrays), weights_of(plain.design.alpha, plain.design.gamma),
                       fam.Design(**{k: np.float64(design[k]) for k in fam.Design._fields}))
     names = rev.output_names(scene, scene.tolerances)
-    assert got[names.index("peak_stress_MPa")] == pytest.approx(float(ev.stress_max_MPa), rel=RTOL, abs=1e-9) \
-        if "peak_stress_MPa" in names else True
+    if "peak_stress_MPa" in names:
+        assert got[names.index("peak_stress_MPa")] == pytest.approx(float(ev.stress_max_MPa), rel=RTOL, abs=1e-9)
     if "peak_pressure_angle_deg" in names:
         assert got[names.index("peak_pressure_angle_deg")] == pytest.approx(float(ev.pressure_angle_max_deg), rel=RTOL)
     curv = next(f for f in rev.CURVATURE_FIELDS if f in ev._fields)
