@@ -95,15 +95,19 @@ def perturbed_scene(nom: Nominal, values) -> tuple[Any, dict[str, Any]]:
 
 def form_error(profile, phases, theta_rad, dtype):
     """eps and its first three derivatives in theta (mm, mm/rad^k) of the form error: sum over the
-    harmonics h of a cos(h theta + phi_h); shapes of ``theta_rad``."""
+    harmonics h of a cos(h theta + phi_h); shapes of ``theta_rad``. Written as
+    a (cos phi_h cos h theta - sin phi_h sin h theta): the angle's harmonics are constants of a
+    batch (one pass of trigonometry), a sample costs multiply-adds."""
     if profile is None:
         z = jnp.zeros_like(theta_rad)
         return z, z, z, z
     h = jnp.asarray(profile.harmonics, dtype)[:, None]
-    arg = h * theta_rad[None, :] + phases[:, None]
+    ch, sh = jnp.cos(h * theta_rad[None, :]), jnp.sin(h * theta_rad[None, :])
     a = jnp.asarray(profile.amplitude_mm, dtype)
-    c, s = jnp.cos(arg), jnp.sin(arg)
-    return (a * c.sum(0), -a * (h * s).sum(0), -a * (h**2 * c).sum(0), a * (h**3 * s).sum(0))
+    cp, sp = a * jnp.cos(phases)[:, None], a * jnp.sin(phases)[:, None]
+    c = cp * ch - sp * sh  # a cos(h theta + phi)
+    s = sp * ch + cp * sh  # a sin(h theta + phi)
+    return c.sum(0), -(h * s).sum(0), -(h**2 * c).sum(0), (h**3 * s).sum(0)
 
 
 def output_names(scene, tolerances: Tolerances) -> tuple[str, ...]:
@@ -254,14 +258,16 @@ def batch(nom: Nominal, unit, phases, *, chunk: int = 8192, curves: int = 2048):
             accels.append(np.asarray(s.accel)[:size])
             loads_.append(np.asarray(s.load)[:size])
         start += size
-    cat = np.concatenate
-    return Sample(cat(outs), cat(broken), cat(lifts)[:curves], cat(accels)[:curves], cat(loads_)[:curves])
+    def cat(parts):
+        return np.concatenate(parts)[:curves] if parts else None
+    return Sample(np.concatenate(outs), np.concatenate(broken), cat(lifts), cat(accels), cat(loads_))
 
 
 def sensitivities(nom: Nominal) -> tuple[np.ndarray, np.ndarray]:
     """d(output)/d(value) at the nominal cam (no form error) by forward-mode autodiff, shape
-    (n_out, k), and, with a form error, d(output)/d(amplitude) at amplitude 0 with every phase 0,
-    shape (n_out,) (else empty). The outputs are maxima/minima over the grid: their derivatives are
+    (n_out, k), and, with a form error, d(output)/d(amplitude) at the scene's amplitude with every
+    phase 0, shape (n_out,) (else empty; at amplitude 0 the dwell error max |eps| has no
+    derivative). The outputs are maxima/minima over the grid: their derivatives are
     those of the curve at the extremal sample."""
     k = len(nom.values)
     n_out = len(output_names(nom.scene, nom.tolerances))
@@ -282,5 +288,5 @@ def sensitivities(nom: Nominal) -> tuple[np.ndarray, np.ndarray]:
         def scaled(a):
             n2 = nom._replace(tolerances=nom.tolerances._replace(profile=profile._replace(amplitude_mm=a)))
             return sample(n2, x0, jnp.zeros((h,))).outputs
-        prof = np.asarray(jax.jit(jax.jacfwd(scaled))(jnp.asarray(0.0, float)))
+        prof = np.asarray(jax.jit(jax.jacfwd(scaled))(jnp.asarray(profile.amplitude_mm, float)))
     return np.asarray(jac), prof
