@@ -93,20 +93,41 @@ def perturbed_scene(nom: Nominal, values) -> tuple[Any, dict[str, Any]]:
     return dataclasses.replace(scene, motion=motion, follower=spec, contact=contact), design
 
 
-def form_error(profile, phases, theta_rad, dtype):
-    """eps and its first three derivatives in theta (mm, mm/rad^k) of the form error: sum over the
-    harmonics h of a cos(h theta + phi_h); shapes of ``theta_rad``. Written as
-    a (cos phi_h cos h theta - sin phi_h sin h theta): the angle's harmonics are constants of a
-    batch (one pass of trigonometry), a sample costs multiply-adds."""
+class Grid(NamedTuple):
+    """What every sample shares on the angle grid: the nominal kinematics and the form error's
+    harmonics cos(h theta), sin(h theta) ((H, N); (0, N) without one). Passed to the batch as
+    arguments, so XLA computes them once instead of inside every sample's fusion."""
+
+    kin: Kinematics
+    cos_h: jax.Array
+    sin_h: jax.Array
+
+
+def grid(nom: Nominal, dtype=None) -> Grid:
+    """The :class:`Grid` of a nominal (traceable; a jitted call computes it once)."""
+    dtype = dtype or jnp.result_type(float)
+    scene = nom.scene
+    prog = jax.tree_util.tree_map(lambda x: jnp.asarray(x, dtype), scene.motion.program)
+    kin0 = program.evaluate(prog, scene.motion.samples)
+    profile = nom.tolerances.profile
+    harmonics = () if profile is None else profile.harmonics
+    h = jnp.asarray(harmonics, dtype).reshape(-1, 1)
+    theta = jnp.deg2rad(program.sample_angles_deg(scene.motion.samples, dtype))[None, :]
+    return Grid(kin0, jnp.cos(h * theta), jnp.sin(h * theta))
+
+
+def form_error(profile, phases, g: Grid, dtype):
+    """eps and its first three derivatives in theta (mm, mm/rad^k) of the form error on the grid:
+    sum over the harmonics h of a cos(h theta + phi_h), written as
+    a (cos phi_h cos h theta - sin phi_h sin h theta) with the angle's harmonics from ``g``."""
     if profile is None:
-        z = jnp.zeros_like(theta_rad)
+        z = jnp.zeros_like(g.kin.s)
         return z, z, z, z
     h = jnp.asarray(profile.harmonics, dtype)[:, None]
-    ch, sh = jnp.cos(h * theta_rad[None, :]), jnp.sin(h * theta_rad[None, :])
     a = jnp.asarray(profile.amplitude_mm, dtype)
     cp, sp = a * jnp.cos(phases)[:, None], a * jnp.sin(phases)[:, None]
-    c = cp * ch - sp * sh  # a cos(h theta + phi)
-    s = sp * ch + cp * sh  # a sin(h theta + phi)
+    c = cp * g.cos_h - sp * g.sin_h  # a cos(h theta + phi)
+    s = sp * g.cos_h + cp * g.sin_h  # a sin(h theta + phi)
     return c.sum(0), -(h * s).sum(0), -(h**2 * c).sum(0), (h**3 * s).sum(0)
 
 
@@ -151,9 +172,10 @@ class Sample(NamedTuple):
     load: jax.Array  # (N,) contact force N (rocking: moment N m); zeros without loads
 
 
-def sample(nom: Nominal, values, phases) -> Sample:
+def sample(nom: Nominal, values, phases, g: Grid | None = None) -> Sample:
     """Evaluate the nominal design with toleranced ``values`` ((k,) array) and form-error
-    ``phases`` ((H,), rad). Pure JAX: jit/vmap/grad over ``values`` (and ``phases``)."""
+    ``phases`` ((H,), rad); ``g``: the nominal's :func:`grid` (computed here when None). Pure JAX:
+    jit/vmap/grad over ``values`` (and ``phases``)."""
     from camjax import loads
 
     scene0 = nom.scene
@@ -162,10 +184,9 @@ def sample(nom: Nominal, values, phases) -> Sample:
     dtype = jnp.result_type(float)
     scene, design = perturbed_scene(nom, [values[i] for i in range(len(nom.values))])
     n = scene0.motion.samples
-    prog = jax.tree_util.tree_map(lambda x: jnp.asarray(x, dtype), scene0.motion.program)
-    kin0 = program.evaluate(prog, n)
-    theta_deg = program.sample_angles_deg(n, dtype)
-    eps = form_error(nom.tolerances.profile, phases, jnp.deg2rad(theta_deg), dtype)
+    g = grid(nom, dtype) if g is None else g
+    eps = form_error(nom.tolerances.profile, phases, g, dtype)
+    kin0 = g.kin
     kin = Kinematics(kin0.theta, *(a + e for a, e in zip(kin0[1:], eps, strict=True)))
     arrays = arrays_from_kinematics(scene, kin)
     problem = fam.problem_from_scene(scene, arrays)
@@ -228,10 +249,10 @@ def values_of(nom: Nominal, unit):
 
 def _program(nom: Nominal, keep_curves: bool):
     """The jitted, vmapped evaluation of a batch of (unit variates, phases)."""
-    def one(u, p):
-        s = sample(nom, values_of(nom, u), p)
+    def one(u, p, g):
+        s = sample(nom, values_of(nom, u), p, g)
         return s if keep_curves else s._replace(lift=None, accel=None, load=None)
-    return jax.jit(jax.vmap(one))
+    return jax.jit(jax.vmap(one, in_axes=(0, 0, None)))
 
 
 def batch(nom: Nominal, unit, phases, *, chunk: int = 8192, curves: int = 2048):
@@ -242,6 +263,7 @@ def batch(nom: Nominal, unit, phases, *, chunk: int = 8192, curves: int = 2048):
     total = unit.shape[0]
     outs, broken, lifts, accels, loads_ = [], [], [], [], []
     programs = {keep: _program(nom, keep) for keep in (True, False)}
+    g = jax.jit(lambda: grid(nom))()
     start = 0
     while start < total:
         size = min(chunk, total - start)
@@ -250,7 +272,7 @@ def batch(nom: Nominal, unit, phases, *, chunk: int = 8192, curves: int = 2048):
             u = np.concatenate([u, np.zeros((chunk - size, u.shape[1]))])
             p = np.concatenate([p, np.zeros((chunk - size, p.shape[1]))])
         keep = start < curves
-        s = programs[keep](jnp.asarray(u), jnp.asarray(p))
+        s = programs[keep](jnp.asarray(u), jnp.asarray(p), g)
         outs.append(np.asarray(s.outputs)[:size])
         broken.append(np.asarray(s.broken)[:size])
         if keep:
