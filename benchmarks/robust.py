@@ -9,8 +9,10 @@ the samples (one (n,)-grid evaluation each; timed on ``LOOP_SAMPLES`` samples an
 and one vectorized over (chunk, n) arrays; both are checked against the batch's outputs
 (``max_rel_diff``) before their times count. Ratios: ``numpy_loop_ratio`` and
 ``numpy_vectorized_ratio`` (NumPy time / batch time, same run, medians). ``cli_wall_s``: the wall
-time of ``camjax robust SCENE --samples N --out DIR`` in a fresh process, cold (first) and warm
-(the median of the next runs: the compilation cache filled), figures included.
+time of ``camjax robust SCENE --samples N --out DIR`` in a fresh process, first and warm (the
+median of the next runs: the compilation cache filled), figures included: it solves the
+[design] first. ``cli_given_design_wall_s``: the same with ``--design`` (the nominal design
+given, no solve).
 
 The machine is a shared 2-core CPU: other processes run beside it (``environment``'s load
 average), so the figures are medians, and ratios come from the same run.
@@ -99,14 +101,14 @@ def numpy_outputs(ctx, values, phases):
                      np.where(ctx["dwell"], np.abs(eps), 0.0).max(1), np.abs(accel).max(1)], axis=1)
 
 
-def cli_wall(path: str, samples: int, runs: int) -> list[float]:
+def cli_wall(path: str, samples: int, runs: int, extra: tuple[str, ...] = ()) -> list[float]:
     out = []
     env = dict(os.environ, PYTHONPATH=str(Path(__file__).resolve().parent.parent))
     for _ in range(runs):
         with tempfile.TemporaryDirectory() as tmp:
             t0 = time.perf_counter()
             subprocess.run([sys.executable, "-m", "camjax.cli", "robust", path, "--samples", str(samples),
-                            "--out", str(Path(tmp) / "o")], check=True, env=env, capture_output=True)
+                            "--out", str(Path(tmp) / "o"), *extra], check=True, env=env, capture_output=True)
             out.append(time.perf_counter() - t0)
     return out
 
@@ -153,6 +155,9 @@ def run(samples: int = 100_000, repeats: int = 3, cli_runs: int = 3) -> dict:
         path = str(Path(tmp) / "default-tolerances.toml")
         Path(path).write_text(scene_text())
         walls = cli_wall(path, samples, cli_runs)
+        given = str(Path(tmp) / "design.json")
+        Path(given).write_text(json.dumps({"follower_type": "flat", "design": design}))
+        walls_given = cli_wall(path, samples, cli_runs, ("--design", given))
     return {
         "samples": samples,
         "grid": scene.motion.samples,
@@ -170,7 +175,12 @@ def run(samples: int = 100_000, repeats: int = 3, cli_runs: int = 3) -> dict:
         "max_rel_diff_numpy_loop": diff_loop,
         "cli_wall_s": {"cold_first": walls[0], "warm": walls[1:], "warm_median": statistics.median(walls[1:])
                        if len(walls) > 1 else None},
+        "cli_given_design_wall_s": {"first": walls_given[0], "next": walls_given[1:],
+                                    "next_median": statistics.median(walls_given[1:]) if len(walls_given) > 1
+                                    else None},
         "cli_command": f"camjax robust <default + [tolerances]> --samples {samples} --out DIR",
+        "cli_given_design_command": f"camjax robust <default + [tolerances]> --samples {samples} --out DIR "
+                                    "--design <the nominal design's JSON>",
         "target_warm_s": 10.0,
     }
 
@@ -186,7 +196,8 @@ def main(argv=None) -> int:
     r = data["robust"]
     print(f"batch {r['batch_median_s']:.3f} s for {r['samples']} samples ({r['samples_per_s']:.3g}/s); "
           f"NumPy vectorized x{r['numpy_vectorized_ratio']:.2f}, loop x{r['numpy_loop_ratio']:.1f}; "
-          f"CLI warm {r['cli_wall_s']['warm_median']} s, cold {r['cli_wall_s']['cold_first']:.1f} s")
+          f"CLI warm {r['cli_wall_s']['warm_median']} s, cold {r['cli_wall_s']['cold_first']:.1f} s; "
+          f"with --design: {r['cli_given_design_wall_s']['next_median']} s")
     return 0
 
 

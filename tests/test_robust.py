@@ -231,6 +231,24 @@ def test_probabilities_within_a_binomial_bound_of_a_larger_independent_sample(cl
     assert big.data["limits"]["contact_lost"]["probability"] >= 0.05
 
 
+@pytest.mark.slow
+def test_a_given_design_and_the_seed_reproduce_the_run(cli_run, tmp_path, capsys):
+    """--design robust.json (no solve) with the same seed: the same outputs, bit for bit; a file
+    without a design exits 2 naming --design."""
+    data, out = cli_run
+    scene = out.parent / "robust.toml"
+    again = tmp_path / "again"
+    assert main(["robust", str(scene), "--samples", str(SAMPLES), "--seed", str(SEED), "--no-figures",
+                 "--design", str(out / "robust.json"), "--out", str(again)]) == 0
+    rerun = json.loads((again / "robust.json").read_text())
+    assert rerun["outputs"] == data["outputs"] and rerun["first_samples"] == data["first_samples"]
+    assert not (again / "robust.png").exists()
+    bad = tmp_path / "bad.json"
+    bad.write_text('{"design": {"base_radius_mm": 3.0}}')
+    assert main(["robust", str(scene), "--samples", "10", "--design", str(bad), "--out", str(tmp_path / "b")]) == 2
+    assert "--design" in capsys.readouterr().err
+
+
 def test_draws_are_seeded_and_prefix_stable():
     scene = scene_from_dict(robust_data(), "robust")
     a = draw(scene.tolerances, 50, 3)

@@ -18,6 +18,9 @@ def _setup_robust(p: argparse.ArgumentParser):
     p.add_argument("--out", required=True, metavar="DIR", help=OUT_HELP)
     p.add_argument("--dpi", type=int, default=100, help="resolution of the PNG figures (default 100)")
     p.add_argument("--no-figures", action="store_true", help="write robust.json and robust.txt only")
+    p.add_argument("--design", metavar="RESULT_JSON", default=None,
+                   help="take the nominal design from this result.json of `camjax design` (or a robust.json) "
+                   "instead of solving the scene's [design]")
 
     def run(args) -> int:
         from camjax import runtime
@@ -40,7 +43,8 @@ def _setup_robust(p: argparse.ArgumentParser):
         if scene.tolerances is None or not (scene.tolerances.values or scene.tolerances.profile):
             raise SceneError("tolerances", MISSING, "nothing to sample: add a [tolerances] section",
                              "e.g. rpm = { sd_percent = 2 }")
-        result = runtime.interruptible(report.run, scene, args.samples, args.seed)
+        design = None if args.design is None else _design_from(args.design, scene)
+        result = runtime.interruptible(report.run, scene, args.samples, args.seed, design=design)
         with replaced_folder(out) as tmp:
             write_json(tmp / "robust.json", result.data)
             (tmp / "robust.txt").write_text(report.text(result.data))
@@ -54,3 +58,31 @@ def _setup_robust(p: argparse.ArgumentParser):
         return 0
 
     return run
+
+
+def _design_from(path: str, scene) -> dict[str, float]:
+    """The design variables of the scene's follower type from a result.json (its ``design`` block)
+    or a robust.json (its ``design``); UsageError naming --design when they are not there."""
+    import json
+    import math
+    from pathlib import Path
+
+    from camjax import followers
+
+    try:
+        data = json.loads(Path(path).read_text())
+    except (OSError, ValueError) as exc:
+        raise UsageError(f"--design: {path}: cannot be read as JSON ({type(exc).__name__})") from None
+    block = data.get("design") if isinstance(data, dict) else None
+    names = followers.of(scene).problem_module().Design._fields
+    if not isinstance(block, dict) or data.get("follower_type", scene.follower.type) != scene.follower.type:
+        raise UsageError(f"--design: {path} holds no design of a {scene.follower.type} follower "
+                         f"(allowed: a result.json of camjax design of such a scene, or a robust.json)")
+    out = {}
+    for name in names:
+        v = block.get(name)
+        if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
+            raise UsageError(f"--design: {path}: design.{name} = {v!r} is not a finite number "
+                             f"(allowed: the variables {', '.join(names)})")
+        out[name] = float(v)
+    return out
