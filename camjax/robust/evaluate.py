@@ -247,42 +247,45 @@ def values_of(nom: Nominal, unit):
     return jnp.asarray(nom.values) + jnp.asarray(nom.scales) * unit
 
 
-def _program(nom: Nominal, keep_curves: bool):
-    """The jitted, vmapped evaluation of a batch of (unit variates, phases)."""
-    def one(u, p, g):
-        s = sample(nom, values_of(nom, u), p, g)
-        return s if keep_curves else s._replace(lift=None, accel=None, load=None)
-    return jax.jit(jax.vmap(one, in_axes=(0, 0, None)))
+# samples vmapped at once inside the batch program: (block, N) intermediates that stay in the CPU's
+# cache (measured on the default scene, N = 360: 38-45 us/sample at 256-512, 75-95 at 2048-8192)
+BLOCK = 256
 
 
-def batch(nom: Nominal, unit, phases, *, chunk: int = 8192, curves: int = 2048):
-    """Every sample's :class:`Sample` (NumPy, leading axis N): chunks of ``chunk`` samples through
-    one compiled program; curves are kept for the first ``curves`` samples only (their lift,
-    accel, load; the envelope's), to bound memory."""
+def _outputs_program(nom: Nominal, block: int):
+    """One jitted program for every sample: ``lax.map`` over blocks of ``block`` vmapped samples
+    (outputs and broken limits only)."""
+    def one(x, g):
+        s = sample(nom, values_of(nom, x[0]), x[1], g)
+        return s.outputs, s.broken
+    return jax.jit(lambda u, p, g: jax.lax.map(lambda x: one(x, g), (u, p), batch_size=block))
+
+
+def _curves_program(nom: Nominal):
+    """The jitted, vmapped evaluation of a batch with its curves (lift, acceleration, load)."""
+    return jax.jit(jax.vmap(lambda u, p, g: sample(nom, values_of(nom, u), p, g), in_axes=(0, 0, None)))
+
+
+def batch(nom: Nominal, unit, phases, *, chunk: int = 131072, curves: int = 2048, block: int = BLOCK):
+    """Every sample's :class:`Sample` (NumPy, leading axis N): the outputs and broken limits of
+    ``chunk`` samples at a time through one compiled program (blocks of ``block`` vmapped samples
+    in a ``lax.map``); the curves (lift, accel, load; the envelope's) of the first ``curves``
+    samples only, to bound memory (None when ``curves`` is 0)."""
     unit, phases = np.asarray(unit), np.asarray(phases)
     total = unit.shape[0]
-    outs, broken, lifts, accels, loads_ = [], [], [], [], []
-    programs = {keep: _program(nom, keep) for keep in (True, False)}
     g = jax.jit(lambda: grid(nom))()
-    start = 0
-    while start < total:
-        size = min(chunk, total - start)
-        u, p = unit[start:start + size], phases[start:start + size]
-        if size < chunk and total > chunk:  # pad the last chunk: one program shape
-            u = np.concatenate([u, np.zeros((chunk - size, u.shape[1]))])
-            p = np.concatenate([p, np.zeros((chunk - size, p.shape[1]))])
-        keep = start < curves
-        s = programs[keep](jnp.asarray(u), jnp.asarray(p), g)
-        outs.append(np.asarray(s.outputs)[:size])
-        broken.append(np.asarray(s.broken)[:size])
-        if keep:
-            lifts.append(np.asarray(s.lift)[:size])
-            accels.append(np.asarray(s.accel)[:size])
-            loads_.append(np.asarray(s.load)[:size])
-        start += size
-    def cat(parts):
-        return np.concatenate(parts)[:curves] if parts else None
-    return Sample(np.concatenate(outs), np.concatenate(broken), cat(lifts), cat(accels), cat(loads_))
+    program = _outputs_program(nom, block)
+    outs, broken = [], []
+    for start in range(0, total, chunk):
+        o, b = program(jnp.asarray(unit[start:start + chunk]), jnp.asarray(phases[start:start + chunk]), g)
+        outs.append(np.asarray(o))
+        broken.append(np.asarray(b))
+    lift = accel = load = None
+    if curves:
+        m = min(curves, total)
+        c = _curves_program(nom)(jnp.asarray(unit[:m]), jnp.asarray(phases[:m]), g)
+        lift, accel, load = np.asarray(c.lift), np.asarray(c.accel), np.asarray(c.load)
+    return Sample(np.concatenate(outs), np.concatenate(broken), lift, accel, load)
 
 
 def sensitivities(nom: Nominal) -> tuple[np.ndarray, np.ndarray]:

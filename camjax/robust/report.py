@@ -50,7 +50,7 @@ def nominal_design(scene) -> tuple[dict[str, float], dict[str, Any]]:
 
 
 def run(scene, samples: int, seed: int, *, tolerances: Tolerances | None = None,
-        design: dict[str, float] | None = None, chunk: int = 8192) -> RobustRun:
+        design: dict[str, float] | None = None) -> RobustRun:
     """Sample the scene's [tolerances] (or ``tolerances``) ``samples`` times with ``seed`` and
     evaluate its nominal design (``design``: solved here when None) for every sample."""
     t0 = time.perf_counter()
@@ -60,7 +60,7 @@ def run(scene, samples: int, seed: int, *, tolerances: Tolerances | None = None,
     t_design = time.perf_counter()
     nom = ev.nominal(scene, tol, design)
     draws = draw(tol, samples, seed)
-    res = ev.batch(nom, draws.unit, draws.phases, chunk=chunk, curves=ENVELOPE_SAMPLES)
+    res = ev.batch(nom, draws.unit, draws.phases, curves=ENVELOPE_SAMPLES)
     t_batch = time.perf_counter()
     jac, prof = ev.sensitivities(nom)
     t_sens = time.perf_counter()
