@@ -252,6 +252,22 @@ def values_of(nom: Nominal, unit):
 BLOCK = 256
 
 
+_PROGRAMS: dict = {}  # (what, content of the nominal, ...) -> jitted function, newest last
+_PROGRAMS_KEPT = 8
+
+
+def _cached(what: str, nom: Nominal, make, *extra):
+    """The jitted program ``make()`` of a nominal, reused by any nominal of the same content (the
+    scene's repr, its tolerances, the design), so that a second run in a process (a scene read
+    again, another seed or sample count of the same shape) compiles nothing."""
+    key = (what, repr(nom.scene), nom.tolerances, tuple(sorted(nom.design.items())), *extra)
+    fn = _PROGRAMS.pop(key, None) or make()
+    _PROGRAMS[key] = fn
+    while len(_PROGRAMS) > _PROGRAMS_KEPT:
+        _PROGRAMS.pop(next(iter(_PROGRAMS)))
+    return fn
+
+
 def _outputs_program(nom: Nominal, block: int):
     """One jitted program for every sample: ``lax.map`` over blocks of ``block`` vmapped samples
     (outputs and broken limits only)."""
@@ -273,8 +289,8 @@ def batch(nom: Nominal, unit, phases, *, chunk: int = 131072, curves: int = 2048
     samples only, to bound memory (None when ``curves`` is 0)."""
     unit, phases = np.asarray(unit), np.asarray(phases)
     total = unit.shape[0]
-    g = jax.jit(lambda: grid(nom))()
-    program = _outputs_program(nom, block)
+    g = _cached("grid", nom, lambda: jax.jit(lambda: grid(nom)))()
+    program = _cached("outputs", nom, lambda: _outputs_program(nom, block), block)
     outs, broken = [], []
     for start in range(0, total, chunk):
         o, b = program(jnp.asarray(unit[start:start + chunk]), jnp.asarray(phases[start:start + chunk]), g)
@@ -283,7 +299,8 @@ def batch(nom: Nominal, unit, phases, *, chunk: int = 131072, curves: int = 2048
     lift = accel = load = None
     if curves:
         m = min(curves, total)
-        c = _curves_program(nom)(jnp.asarray(unit[:m]), jnp.asarray(phases[:m]), g)
+        curves_of = _cached("curves", nom, lambda: _curves_program(nom))
+        c = curves_of(jnp.asarray(unit[:m]), jnp.asarray(phases[:m]), g)
         lift, accel, load = np.asarray(c.lift), np.asarray(c.accel), np.asarray(c.load)
     return Sample(np.concatenate(outs), np.concatenate(broken), lift, accel, load)
 
@@ -305,7 +322,8 @@ def sensitivities(nom: Nominal) -> tuple[np.ndarray, np.ndarray]:
     def values_only(x):
         out = sample(clean, x, jnp.zeros((0,))).outputs
         return out if not drop else jnp.insert(out, drop[0], 0.0)  # no form error: no dwell error
-    jac = jax.jit(jax.jacfwd(values_only))(x0) if k else jnp.zeros((n_out, 0))
+    jacobian = _cached("jacobian", nom, lambda: jax.jit(jax.jacfwd(values_only)))
+    jac = jacobian(x0) if k else jnp.zeros((n_out, 0))
     prof = np.zeros((0,))
     if profile is not None:
         h = len(profile.harmonics)
@@ -313,5 +331,6 @@ def sensitivities(nom: Nominal) -> tuple[np.ndarray, np.ndarray]:
         def scaled(a):
             n2 = nom._replace(tolerances=nom.tolerances._replace(profile=profile._replace(amplitude_mm=a)))
             return sample(n2, x0, jnp.zeros((h,))).outputs
-        prof = np.asarray(jax.jit(jax.jacfwd(scaled))(jnp.asarray(profile.amplitude_mm, float)))
+        d_amplitude = _cached("d_amplitude", nom, lambda: jax.jit(jax.jacfwd(scaled)))
+        prof = np.asarray(d_amplitude(jnp.asarray(profile.amplitude_mm, float)))
     return np.asarray(jac), prof

@@ -23,6 +23,7 @@ samples of a run are the same whatever the sample count (reproducible, prefix-st
 
 from __future__ import annotations
 
+import functools
 import math
 from typing import NamedTuple
 
@@ -186,19 +187,37 @@ class Draws(NamedTuple):
     phases: jax.Array  # (N, H): phases of the form error's harmonics, rad in [0, 2 pi)
 
 
+DRAW_BLOCK = 4096  # samples drawn per call of one compiled program (any N shares it)
+
+
 def draw(tolerances: Tolerances, samples: int, seed: int, dtype=None) -> Draws:
     """``samples`` seeded draws (sample i from ``fold_in(PRNGKey(seed), i)``: prefix-stable)."""
     dtype = dtype or jnp.result_type(float)
-    uniform = jnp.asarray([t.dist == "uniform" for t in tolerances.values], bool)
     k = len(tolerances.values)
     h = 0 if tolerances.profile is None else len(tolerances.profile.harmonics)
+    uniform = tuple(t.dist == "uniform" for t in tolerances.values)
+    program = _draw_program(uniform, h, jnp.dtype(dtype).name)
     base = jax.random.PRNGKey(int(seed))
+    units, phases = [], []
+    for start in range(0, int(samples), DRAW_BLOCK):
+        u, p = program(base, jnp.arange(start, start + DRAW_BLOCK))
+        units.append(u)
+        phases.append(p)
+    if not units:
+        return Draws(jnp.zeros((0, k), dtype), jnp.zeros((0, h), dtype))
+    return Draws(jnp.concatenate(units)[:samples], jnp.concatenate(phases)[:samples])
 
-    def one(i):
+
+@functools.lru_cache(maxsize=16)
+def _draw_program(uniform: tuple[bool, ...], h: int, dtype: str):
+    """The jitted draw of a block of sample indices (one per distribution pattern and dtype)."""
+    k = len(uniform)
+    mask = jnp.asarray(uniform, bool)
+
+    def one(base, i):
         kv, ku, kp = jax.random.split(jax.random.fold_in(base, i), 3)
-        z = jnp.where(uniform, jax.random.uniform(ku, (k,), dtype, -1.0, 1.0),
+        z = jnp.where(mask, jax.random.uniform(ku, (k,), dtype, -1.0, 1.0),
                       jax.random.normal(kv, (k,), dtype))
         return z, jax.random.uniform(kp, (h,), dtype, 0.0, 2.0 * jnp.pi)
 
-    unit, phases = jax.jit(jax.vmap(one))(jnp.arange(int(samples)))
-    return Draws(unit, phases)
+    return jax.jit(jax.vmap(one, in_axes=(None, 0)))
