@@ -36,6 +36,7 @@ def _setup_robust(p: argparse.ArgumentParser):
             raise UsageError(f"--seed: {args.seed} is out of range (allowed: 0..{2**32 - 1})")
         check_dpi(args.dpi)
         out = check_output_dir(args.out)
+        runtime.enable_caches()  # compiled programs kept between runs, as camjax design does
         scene = load_scene(args.scene)
         if scene.design is None:
             raise SceneError("design", MISSING, "camjax robust evaluates the design of a [design] section; "
