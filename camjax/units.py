@@ -173,6 +173,10 @@ def scene_to_internal(data: dict, follower_rocking: bool, source: str | None = N
         raise SceneError("dynamics", MISSING, "[dynamics] takes SI values without a unit suffix and "
                          "is not available in an inch scene (units = \"in\")",
                          "a mm scene for camjax dynamics", source)
+    if "tolerances" in body:
+        raise SceneError("tolerances", MISSING, "[tolerances] spreads (sd, half_width) are read in the "
+                         "scene's mm: not available in an inch scene (units = \"in\") yet",
+                         "a mm scene for camjax robust", source)
     motion = body.get("motion")
     if isinstance(motion, dict) and "table" in motion:
         raise SceneError("motion.table", motion["table"], "table files are read in mm: a table law "

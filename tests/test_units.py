@@ -319,6 +319,13 @@ def test_dynamics_is_refused_in_an_inch_scene(tmp_path, capsys):
     assert "dynamics" in err and "inch scene" in err
 
 
+def test_tolerances_are_refused_in_an_inch_scene(tmp_path, capsys):
+    doc = _inch_default()
+    doc["tolerances"] = {"rpm": {"sd": 1.0}}
+    err = _bad(tmp_path, capsys, toml_text(doc))
+    assert "tolerances" in err and "inch scene" in err
+
+
 def test_joint_conditions_and_text_are_converted():
     """Unsuffixed numbers of a translating follower's joint conditions (mm per deg^k) are scaled;
     numbers with a unit in text are converted, unit words relabelled."""

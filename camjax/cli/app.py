@@ -15,7 +15,7 @@ import camjax  # noqa: F401  (turns on x64 before any array is made)
 from camjax import runtime
 
 # the commands register themselves, in the order of `camjax --help`
-from camjax.cli import check_extremes, design, dynamics, laws, sweep, synthesize  # noqa: F401
+from camjax.cli import check_extremes, design, dynamics, laws, robust, sweep, synthesize  # noqa: F401
 from camjax.cli.common import COMMANDS, STRICT_EXIT, UsageError
 from camjax.cli.environment import check_environment
 from camjax.numerics import NonFiniteError
@@ -23,7 +23,7 @@ from camjax.output.folder import OutputError
 from camjax.scene import SceneError, cut
 
 # as `camjax --help` lists them
-HELP_ORDER = ("laws", "design", "synthesize", "sweep", "check-extremes", "dynamics")
+HELP_ORDER = ("laws", "design", "synthesize", "sweep", "check-extremes", "dynamics", "robust")
 
 __all__ = ["COMMANDS", "STRICT_EXIT", "UsageError", "build_parser", "entry", "main"]
 

@@ -37,7 +37,8 @@ OLD = "camjax-old"
 PROBE = "camjax-probe"  # the empty folder made and removed to learn that a place is writable
 # A folder holding one of these was written by camjax (or is empty) and may be replaced whole;
 # any other non-empty folder is refused rather than deleted (e.g. --out ~ or --out .).
-OUTPUT_MARKERS = ("result.json", "pareto.json", "extremes.json", "dynamics.json", "manifest.json")
+OUTPUT_MARKERS = ("result.json", "pareto.json", "extremes.json", "dynamics.json", "manifest.json",
+                  "robust.json")
 
 
 class OutputError(ValueError):

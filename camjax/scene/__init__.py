@@ -54,7 +54,7 @@ def _builtin_scenes() -> dict[str, str]:
 BUILTIN_SCENES = _builtin_scenes()
 
 SECTIONS = ("motion", "follower", "contact", "design", "guide", "dynamics", "synthesis", "manufacture",
-            "export")
+            "export", "tolerances")
 
 
 def scene_from_dict(data: dict, name: str = "scene", source: str | None = None) -> Scene:
@@ -127,7 +127,12 @@ def _scene_from_dict(data: dict, name: str, source: str | None) -> Scene:
             manufacture = parse_manufacture(top.sub("manufacture"), width)
         if "export" in data:
             export = parse_export(top.sub("export"), follower.rocking)
-    return Scene(name, motion, spec, contact, design, guide, dynamics, synthesis, manufacture, export)
+    scene = Scene(name, motion, spec, contact, design, guide, dynamics, synthesis, manufacture, export)
+    if "tolerances" in data:  # camjax.robust: what camjax robust samples (other commands ignore it)
+        from camjax.robust.tolerances import parse_tolerances
+
+        scene = replace(scene, tolerances=parse_tolerances(top.sub("tolerances"), scene))
+    return scene
 
 
 def with_design(scene: Scene, **overrides) -> Scene:

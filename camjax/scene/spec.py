@@ -7,6 +7,7 @@ read them.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 from camjax.contact import Material
 from camjax.loads import FollowerTrain, Guide, RockerTrain
@@ -223,6 +224,7 @@ class Scene:
     synthesis: SynthesisSpec | None = None
     manufacture: ManufactureSpec | None = None
     export: ExportSpec | None = None
+    tolerances: Any = None  # [tolerances]: camjax.robust.tolerances.Tolerances (camjax robust only)
     # the units the scene is written in ("mm" or "in", camjax.units): every value above is in the
     # internal mm/MPa/N/kg whatever they are; the outputs speak them
     units: str = "mm"

@@ -1,0 +1,3 @@
+"""Robust cams: a scene's [tolerances] sampled, the nominal design evaluated for every sample in one
+batched program, sensitivities by autodiff (:mod:`camjax.robust.tolerances`,
+:mod:`camjax.robust.evaluate`, :mod:`camjax.robust.report`; the command is ``camjax robust``)."""
