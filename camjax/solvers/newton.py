@@ -27,7 +27,7 @@ positive definite (eigenvalues of the small system). Steps keep s, y > 0 by the
 fraction-to-boundary rule (tau = max(0.99, 1 - mu)); the primal step length is found by a
 backtracking search with a filter-type acceptance (barrier objective or infeasibility ||c + s||_1 must fall; Armijo on the barrier objective once nearly feasible), its 30 trial
 lengths evaluated at once (one ``vmap``: no inner loop). The barrier parameter falls
-superlinearly, mu <- max(tol / 10, min(0.2 mu, mu^1.5)), each time the barrier problem is solved
+superlinearly, mu <- max(tol / 100, min(0.2 mu, mu^1.5)), each time the barrier problem is solved
 to 10 mu. The box rows are linear and start with s = -c, so every iterate stays strictly inside
 the box, where the families' physics is defined.
 
@@ -259,7 +259,7 @@ def _step(state: NewtonState, fns: _Functions, settings: NewtonSettings) -> Newt
     y_new = jnp.clip(y_new, mu / (1e10 * s_new), 1e10 * mu / s_new)
     # barrier update: after the barrier problem is solved to kappa_eps mu
     e_mu = kkt_residuals(fns, z_new, y_new, s_new, mu).error
-    mu_next = jnp.maximum(settings.tol / 10.0, jnp.minimum(settings.kappa_mu * mu, mu**settings.theta_mu))
+    mu_next = jnp.maximum(settings.tol / 100.0, jnp.minimum(settings.kappa_mu * mu, mu**settings.theta_mu))
     mu_new = jnp.where(e_mu <= settings.kappa_eps * mu, mu_next, mu)
     error = kkt_residuals(fns, z_new, y_new).error
     done = error <= settings.tol
