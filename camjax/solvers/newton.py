@@ -25,15 +25,16 @@ on the condensed system (H + J^T S^-1 Y J) dz = ... of size (m + 1)^2 (m free va
 exact Hessian of the Lagrangian from ``jax.hessian``, shifted by a multiple of I where it is not
 positive definite (eigenvalues of the small system). Steps keep s, y > 0 by the
 fraction-to-boundary rule (tau = max(0.99, 1 - mu)); the primal step length is found by a
-backtracking search with a filter-type acceptance (barrier objective or infeasibility ||c + s||_1 must fall; Armijo on the barrier objective once nearly feasible), its 30 trial
+backtracking search with a filter-type acceptance (the barrier objective or the infeasibility
+||c + s||_1 must fall; Armijo on the barrier objective once nearly feasible), its 30 trial
 lengths evaluated at once (one ``vmap``: no inner loop). The barrier parameter falls
 superlinearly, mu <- max(tol / 100, min(0.2 mu, mu^1.5)), each time the barrier problem is solved
 to 10 mu. The box rows are linear and start with s = -c, so every iterate stays strictly inside
 the box, where the families' physics is defined.
 
 Stopping rule: the scaled KKT residual (IPOPT's: stationarity ||grad phi + J^T y||_inf / s_d,
-primal infeasibility max(c, 0), complementarity ||S y||_inf / s_d with s_d = max(1, ||y||_1 /
-(100 rows)) ... see :func:`kkt_residuals`) <= ``tol`` (1e-9); ``max_iterations`` is a safeguard
+primal infeasibility max(c, 0), complementarity max |c_i| y_i / s_d with s_d = max(100,
+||y||_1 / rows) / 100, :func:`kkt_residuals`) <= ``tol`` (1e-9); ``max_iterations`` is a safeguard
 only. Gradients stay finite from infeasible starts: the families' functions are written with safe
 square roots and divisions, and a trial step with a non-finite merit is rejected.
 
@@ -127,8 +128,8 @@ def _functions(problem, weights: Weights) -> _Functions:
 
     shapes = jax.eval_shape(lambda: family.constraints(problem, from_unit(problem, u_max_tree)))
     n = problem.theta_deg.shape[-1]
-    kinds = (("objective", n), *((name, int(np.prod(s.shape))) for name, s in zip(shapes._fields, shapes)),
-             ("lower_bound", m), ("upper_bound", m))
+    blocks = ((name, int(np.prod(s.shape))) for name, s in zip(shapes._fields, shapes, strict=True))
+    kinds = (("objective", n), *blocks, ("lower_bound", m), ("upper_bound", m))
     return _Functions(phi, rows, unravel, free, u_max, n, kinds)
 
 
@@ -201,7 +202,6 @@ def _start(problem, fns: _Functions, design, settings: NewtonSettings, mu0):
 def _step(state: NewtonState, fns: _Functions, settings: NewtonSettings) -> NewtonState:
     z, s, y, mu = state.z, state.s, state.y, state.mu
     dtype = z.dtype
-    count = s.shape[0]
     free = fns.free
     c, jac = fns.rows(z), jax.jacfwd(fns.rows)(z)
     grad = jax.grad(fns.phi)(z)
@@ -386,7 +386,8 @@ def certify(problem: Problem, weights: Weights, init_design: Design | None = Non
     sens = {}
     for key, setter in _limits(problem).items():
         value = limit_values(problem)[key]
-        moved = jax.jacfwd(lambda v, setter=setter: _functions(setter(problem, v), weights).rows(res.z))(value)
+        moved = jax.jacfwd(
+            lambda v, setter=setter: _functions(setter(problem, v), weights).rows(res.z))(value)
         sens[key] = scale * res.multipliers * moved
     m = fns.u_max.shape[0]
     x, unravel = ravel_pytree(res.design)
@@ -429,14 +430,14 @@ def certificate_json(problem, cert: Certificate, *, active_tol: float = 1e-6) ->
                 side = "lower" if kind == "lower_bound" else "upper"
                 active.append({"kind": "bound", "limit": f"{variables[j][:-3]}_bounds_mm ({side})",
                                "variable": variables[j], "theta_deg": None,
-                               "multiplier": scale * y[i], "dF_dlimit": float(bound_sens[k])})
+                               "multiplier": float(scale * y[i]), "dF_dlimit": float(bound_sens[k])})
                 continue
             if kind == "objective" and float(cert.gamma) == 0.0:
                 continue  # without a stress weight the epigraph rows are the size term's, not a limit
             name = "stress" if kind == "objective" else kind
             key = keys.get(name)
             entry = {"kind": name, "limit": key, "theta_deg": float(theta[j % theta.size]),
-                     "multiplier": scale * y[i]}
+                     "multiplier": float(scale * y[i])}
             if key in sens:
                 entry["dF_dlimit"] = float(sens[key][i])
             active.append(entry)
