@@ -107,7 +107,7 @@ def test_registry_imports_neither_jax_nor_numpy():
         "import importlib.util, sys\n"
         f"spec = importlib.util.spec_from_file_location('registry', {str(REGISTRY_FILE)!r})\n"
         "m = importlib.util.module_from_spec(spec); spec.loader.exec_module(m)\n"
-        "assert m.SOLVERS == ('gradient', 'ga', 'hybrid'), m.SOLVERS\n"
+        "assert m.SOLVERS == ('gradient', 'ga', 'hybrid', 'newton'), m.SOLVERS\n"
         "print(sorted(k for k in ('jax', 'optax', 'numpy') if k in sys.modules))\n"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)

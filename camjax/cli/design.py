@@ -216,6 +216,10 @@ def _write_design(args, out, scene, result, workers, progress, extra=None) -> in
         g = d["design"]
         print(f"design ({g['solver']}): R_b = {g['base_radius_mm']:.4f} mm, {follower.summary(g)}, "
               f"objective {g['objective']:.5f}, feasible {g['feasible']}")
+        if "certificate" in g:  # the newton solver's
+            c = g["certificate"]
+            print(f"{c['limited_by']} (KKT residuals {c['stationarity']:.1e}, {c['primal_feasibility']:.1e}, "
+                  f"{c['complementarity']:.1e} after {c['iterations']} iterations)")
     if "synthesis" in d:
         c = d["synthesis"]["codesign"]
         b = c["best_builtin"]

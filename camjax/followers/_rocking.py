@@ -377,6 +377,10 @@ class RockingFollower(Follower):
             d = scene.design
             problem = problem_from_scene(scene, arrays)
             design = solve(problem, (d.alpha, d.gamma), mode=d.mode, solver=d.solver, seed=d.seed).to_json(problem)
+            if d.solver == "newton" and d.mode == "global":  # the KKT certificate (other solvers: unchanged)
+                from camjax.solvers.newton import certificate_block
+
+                design["certificate"] = certificate_block(problem, d.alpha, d.gamma)
         kin, w, drawn = arrays.kin, arrays.cam_speed_rad_s, scene
         program = None if arrays.model is None else arrays.model.program
         if design is not None:

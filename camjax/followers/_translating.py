@@ -302,6 +302,10 @@ class TranslatingFollower(Follower):
         d = scene.design
         problem = problem_from_scene(scene, arrays)
         out = solve(problem, (d.alpha, d.gamma), mode=d.mode, solver=d.solver, seed=d.seed).to_json(problem)
+        if d.solver == "newton" and d.mode == "global":  # the KKT certificate (other solvers: unchanged)
+            from camjax.solvers.newton import certificate_block
+
+            out["certificate"] = certificate_block(problem, d.alpha, d.gamma)
         return self.design_solution(scene, arrays, out, problem)
 
     def curves(self, scene, arrays: SceneArrays, base_radius_mm: float, follower=None,

@@ -1,0 +1,491 @@
+"""Newton solver: a primal-dual interior-point method on the smooth epigraph form, in one ``lax.while_loop``.
+
+Formulation (one problem, one weighting; every registered problem family, through its protocol
+only, :mod:`camjax.solvers.base`). The design is mapped to the unit box, u = (x - lo) / (hi - lo)
+(a family's own ``to_unit``/``from_unit`` where it has them, :mod:`camjax.solvers.gradient`), and
+an epigraph variable t stands for the max over angles of the objective:
+
+    minimize    t  (+ 1e-9 size_term when alpha = 0, the gradient solver's tie-break)
+    subject to  f_i(u) - t  <= 0      one row per angle i: f_i = F of the one-angle problem
+                                       (:func:`per_angle`), i.e. (alpha size + gamma sigma_i /
+                                       sigma_max) / (alpha + gamma)
+                g_k,i(u) / N <= 0     every constraint row of ``family.constraints``
+                0 <= u <= u_max       the box (u_max = 0 fixes a variable; it is left out)
+
+which is smooth (the kink of the max over angles is gone) and has the same minimizer as the
+family's objective on the grid: min_u max_i f_i(u) = min_u F(u) / (alpha + gamma). Every family's
+objective is alpha size + gamma (peak stress) / sigma_max with the peak a max over angles, so
+f_i needs nothing but ``per_angle`` and ``objective``: the split is generic (a family without
+stress has f_i = alpha size for every i, n equal rows).
+
+Method (Nocedal & Wright, Numerical Optimization, 2nd ed., Algorithm 19.2; the barrier update of
+IPOPT, Waechter & Biegler 2006). Slacks s > 0 turn every row into c(z) + s = 0 (z = (u, t)); the
+barrier KKT conditions grad phi + J^T y = 0, c + s = 0, S y = mu e are solved by Newton steps
+on the condensed system (H + J^T S^-1 Y J) dz = ... of size (m + 1)^2 (m free variables), H the
+exact Hessian of the Lagrangian from ``jax.hessian``, shifted by a multiple of I where it is not
+positive definite (eigenvalues of the small system). Steps keep s, y > 0 by the
+fraction-to-boundary rule (tau = max(0.99, 1 - mu)); the primal step length is found by a
+backtracking search with a filter-type acceptance (the barrier objective or the infeasibility
+||c + s||_1 must fall; Armijo on the barrier objective once nearly feasible), its 30 trial
+lengths evaluated at once (one ``vmap``: no inner loop). The barrier parameter falls
+superlinearly, mu <- max(tol / 100, min(0.2 mu, mu^1.5)), each time the barrier problem is solved
+to 10 mu. The box rows are linear and start with s = -c, so every iterate stays strictly inside
+the box, where the families' physics is defined.
+
+Stopping rule: the scaled KKT residual (IPOPT's: stationarity ||grad phi + J^T y||_inf / s_d,
+primal infeasibility max(c, 0), complementarity max |c_i| y_i / s_d with s_d = max(100,
+||y||_1 / rows) / 100, :func:`kkt_residuals`) <= ``tol`` (1e-9); ``max_iterations`` is a safeguard
+only. Gradients stay finite from infeasible starts: the families' functions are written with safe
+square roots and divisions, and a trial step with a non-finite merit is rejected.
+
+:func:`certificate` reports the KKT residuals at the answer, the iterations and the active rows
+with their multipliers and the sensitivity dF*/d(limit) of the optimal objective to the limits
+of the scene (envelope theorem: the derivative of the Lagrangian in the problem's limit fields).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import partial
+from typing import Any, NamedTuple
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jax.flatten_util import ravel_pytree
+
+from camjax.family import Design, Problem, Weights
+from camjax.solvers.base import Raw, family_of
+from camjax.solvers.gradient import TIE_BREAK, from_unit, midpoint, to_unit
+
+
+@dataclass(frozen=True)
+class NewtonSettings:
+    """Static configuration of the interior-point solver (hashable: a ``jit`` static argument).
+
+    The objective is normalized to O(1) (F / (alpha + gamma)), the rows to O(1) (g / N), the
+    variables to the unit box: the tolerances are dimensionless.
+    """
+
+    tol: float = 1e-9  # scaled KKT residual ending the solve
+    max_iterations: int = 200  # a safeguard only: the solve stops on ``tol``
+    mu0: float = 0.1  # first barrier parameter
+    kappa_mu: float = 0.2  # mu <- min(kappa_mu mu, mu^theta_mu) ...
+    theta_mu: float = 1.5
+    kappa_eps: float = 10.0  # ... once the barrier problem is solved to kappa_eps mu
+    interior: float = 1e-2  # the start's distance from the box's faces (unit box) and least slack
+    line_search_trials: int = 30  # step lengths alpha_max 2^-k, k < trials, tried at once
+    armijo: float = 1e-4
+
+
+DEFAULT_SETTINGS = NewtonSettings()
+S_MAX = 100.0  # IPOPT's s_max: multipliers larger than this on average scale the dual residuals
+
+
+def _unit_box(problem):
+    lower, upper = family_of(problem).bounds(problem)
+    return jax.tree.map(lambda lo, hi: jnp.where(hi > lo, 1.0, 0.0).astype(lo.dtype), lower, upper)
+
+
+class _Functions(NamedTuple):
+    phi: Any  # z -> () objective
+    rows: Any  # z -> (M,) c(z) <= 0, every row
+    unravel: Any  # (m,) -> unit-box Design
+    free: jax.Array  # (m + 1,) 1 free, 0 fixed (t free)
+    u_max: jax.Array  # (m,)
+    n_angles: int
+    kinds: tuple  # ((name, count), ...) the row blocks in order: "objective", each constraint, bounds
+
+
+def _functions(problem, weights: Weights) -> _Functions:
+    family = family_of(problem)
+    u_max_tree = _unit_box(problem)
+    u_max, unravel = ravel_pytree(u_max_tree)
+    m = u_max.shape[0]
+    dtype = u_max.dtype
+    free_u = (u_max > 0).astype(dtype)
+    free = jnp.concatenate([free_u, jnp.ones(1, dtype)])
+    per = family.per_angle(problem)
+    total = weights.alpha + weights.gamma
+    scale = jnp.where(total > 0, total, 1.0)
+    tie = jnp.where(weights.alpha > 0, 0.0, TIE_BREAK)
+    norm = family.size_norm(problem)
+
+    def design_of(z):
+        return from_unit(problem, unravel(z[:m]))
+
+    def phi(z):
+        return z[m] + tie * family.size_term(problem, design_of(z))
+
+    def rows(z):
+        design = design_of(z)
+        f = jax.vmap(lambda p: family.objective(p, weights, design))(per) / scale
+        g = family.constraints(problem, design)
+        u = z[:m]
+        box_lo = jnp.where(free_u > 0, -u, -1.0)
+        box_hi = jnp.where(free_u > 0, u - u_max, -1.0)
+        return jnp.concatenate([(f - z[m]).astype(dtype), *[jnp.ravel(v) / norm for v in g], box_lo, box_hi])
+
+    shapes = jax.eval_shape(lambda: family.constraints(problem, from_unit(problem, u_max_tree)))
+    n = problem.theta_deg.shape[-1]
+    blocks = ((name, int(np.prod(s.shape))) for name, s in zip(shapes._fields, shapes, strict=True))
+    kinds = (("objective", n), *blocks, ("lower_bound", m), ("upper_bound", m))
+    return _Functions(phi, rows, unravel, free, u_max, n, kinds)
+
+
+class NewtonState(NamedTuple):
+    """Loop state (one problem; vmapped: leading axes)."""
+
+    z: jax.Array  # (m + 1,) unit-box variables and t
+    s: jax.Array  # (M,) slacks > 0
+    y: jax.Array  # (M,) multipliers > 0
+    mu: jax.Array  # () barrier parameter
+    nu: jax.Array  # () merit penalty
+    iteration: jax.Array  # () int
+    error: jax.Array  # () scaled KKT residual at z (mu = 0)
+    done: jax.Array  # () bool
+
+
+class KKT(NamedTuple):
+    """Scaled KKT residuals (dimensionless; the solver's normalized objective and rows)."""
+
+    stationarity: jax.Array  # ||grad phi + J^T y||_inf / s_d (free variables)
+    primal: jax.Array  # max(max_i c_i, 0): the largest violated row (g / N, f_i - t)
+    complementarity: jax.Array  # max_i |c_i| y_i / s_d at the answer (slack-free: c, not s)
+    error: jax.Array  # the largest of the three
+
+
+def _scaled(y, count):
+    return jnp.maximum(S_MAX, jnp.sum(y) / count) / S_MAX
+
+
+def kkt_residuals(fns: _Functions, z, y, slack=None, mu=0.0) -> KKT:
+    """The scaled KKT residuals at (z, y); with ``slack`` the barrier problem's (c + s, S y - mu)."""
+    c, jac = fns.rows(z), jax.jacfwd(fns.rows)(z)
+    grad = jax.grad(fns.phi)(z)
+    sd = _scaled(y, y.shape[0])
+    stat = jnp.max(jnp.abs((grad + jac.T @ y) * fns.free)) / sd
+    if slack is None:
+        primal = jnp.maximum(jnp.max(c), 0.0)
+        comp = jnp.max(jnp.abs(jnp.minimum(c, 0.0)) * y) / sd
+    else:
+        primal = jnp.max(jnp.abs(c + slack))
+        comp = jnp.max(jnp.abs(slack * y - mu)) / sd
+    return KKT(stat, primal, comp, jnp.maximum(jnp.maximum(stat, primal), comp))
+
+
+def _start(problem, fns: _Functions, design, settings: NewtonSettings, mu0):
+    if design is None:
+        design = getattr(family_of(problem), "start", midpoint)(problem)
+    dtype = fns.u_max.dtype
+    u = ravel_pytree(jax.tree.map(lambda x: jnp.asarray(x, dtype), to_unit(problem, design)))[0]
+    a = settings.interior
+    u = jnp.where(fns.u_max > 0, jnp.clip(u, a * fns.u_max, (1.0 - a) * fns.u_max), 0.0)
+    z0 = jnp.concatenate([u, jnp.zeros(1, dtype)])
+    n = fns.n_angles
+    f0 = fns.rows(z0)[:n]
+    t0 = jnp.max(f0) + 0.1 * (1.0 + jnp.abs(jnp.max(f0)))  # epigraph rows strictly feasible
+    z0 = z0.at[-1].set(t0)
+    c0 = fns.rows(z0)
+    s0 = jnp.maximum(-c0, a)
+    m = u.shape[0]
+    # the box rows are linear: their slack is their distance to the face, exactly
+    box = jnp.arange(c0.shape[0]) >= c0.shape[0] - 2 * m
+    s0 = jnp.where(box, -c0, s0)
+    mu0 = jnp.asarray(mu0, dtype)
+    # multipliers: the epigraph rows share the objective's unit weight (sum y = 1 where t is
+    # stationary), every other row mu / s
+    y0 = jnp.where(jnp.arange(c0.shape[0]) < n, 1.0 / n, mu0 / s0)
+    return z0, s0, y0, mu0
+
+
+def _step(state: NewtonState, fns: _Functions, settings: NewtonSettings) -> NewtonState:
+    z, s, y, mu = state.z, state.s, state.y, state.mu
+    dtype = z.dtype
+    free = fns.free
+    c, jac = fns.rows(z), jax.jacfwd(fns.rows)(z)
+    grad = jax.grad(fns.phi)(z)
+    hess = jax.hessian(lambda v: fns.phi(v) + y @ fns.rows(v))(z)
+    jac = jac * free  # fixed variables take no step
+    sigma = y / s
+    rd = (grad + jac.T @ y) * free
+    rp = c + s
+    rc_s = y - mu / s  # S^-1 (S y - mu)
+    a = hess * jnp.outer(free, free) + (jac.T * sigma) @ jac
+    a = a + jnp.diag(1.0 - free)  # a fixed variable's row: dz_j = 0
+    a = 0.5 * (a + a.T)
+    w = jnp.linalg.eigvalsh(a)
+    big = jnp.maximum(jnp.max(jnp.abs(w)), 1.0)
+    shift = jnp.maximum(0.0, 1e-10 * big - w[0])
+    a = a + shift * jnp.eye(a.shape[0], dtype=dtype)
+    rhs = -rd - jac.T @ (sigma * rp - rc_s)
+    dz = jnp.linalg.solve(a, rhs) * free
+    dy = sigma * (jac @ dz + rp) - rc_s
+    ds = -rp - jac @ dz
+    # fraction to the boundary
+    tau = jnp.maximum(0.99, 1.0 - mu)
+
+    def max_step(v, dv):
+        ratio = jnp.where(dv < 0, -tau * v / jnp.where(dv < 0, dv, -1.0), jnp.inf)
+        return jnp.minimum(1.0, jnp.min(ratio))
+
+    alpha_s, alpha_y = max_step(s, ds), max_step(y, dy)
+    # filter-type acceptance (Waechter & Biegler's switching rule, without the filter's memory):
+    # barrier objective psi = phi - mu sum log s, infeasibility theta = ||c + s||_1, the slacks
+    # reset to s >= -c (a row more feasible than its slack says). An l1 merit would stall where a
+    # family's rows have kinks (|s' - e| at a dwell): its penalty sees them at first order.
+
+    def measures(zv, sv):
+        cv = fns.rows(zv)
+        sv = jnp.maximum(sv, -cv)
+        return fns.phi(zv) - mu * jnp.sum(jnp.log(sv)), jnp.sum(jnp.abs(cv + sv))
+
+    psi0, theta0 = measures(z, s)
+    slope = grad @ dz - mu * jnp.sum(ds / s)
+    lengths = alpha_s * 0.5 ** jnp.arange(settings.line_search_trials, dtype=dtype)
+    psi_t, theta_t = jax.vmap(lambda al: measures(z + al * dz, s + al * ds))(lengths)
+    theta_max = 1e4 * jnp.maximum(1.0, theta0)
+    switching = (slope < 0) & (theta0 <= 1e-4)
+    armijo = psi_t <= psi0 + settings.armijo * lengths * slope
+    progress = (theta_t <= (1.0 - 1e-5) * theta0) | (psi_t <= psi0 - 1e-5 * theta0)
+    ok = jnp.isfinite(psi_t) & jnp.isfinite(theta_t) & (theta_t <= theta_max) & jnp.where(
+        switching, armijo, progress | armijo)
+    first = jnp.argmax(ok)
+    length = jnp.where(jnp.any(ok), lengths[first], lengths[-1])
+    z_new = z + length * dz
+    s_new = jnp.maximum(s + length * ds, -fns.rows(z_new))
+    y_new = y + alpha_y * dy
+    # IPOPT's safeguard: y_i within [mu / (k s_i), k mu / s_i], k = 1e10
+    y_new = jnp.clip(y_new, mu / (1e10 * s_new), 1e10 * mu / s_new)
+    # barrier update: after the barrier problem is solved to kappa_eps mu
+    e_mu = kkt_residuals(fns, z_new, y_new, s_new, mu).error
+    mu_next = jnp.maximum(settings.tol / 100.0, jnp.minimum(settings.kappa_mu * mu, mu**settings.theta_mu))
+    mu_new = jnp.where(e_mu <= settings.kappa_eps * mu, mu_next, mu)
+    error = kkt_residuals(fns, z_new, y_new).error
+    done = error <= settings.tol
+    keep = state.done
+    pick = lambda a_, b_: jnp.where(keep, a_, b_)  # noqa: E731
+    return NewtonState(pick(z, z_new), pick(s, s_new), pick(y, y_new), pick(mu, mu_new), state.nu,
+                       state.iteration + jnp.where(keep, 0, 1), pick(state.error, error), keep | done)
+
+
+class NewtonResult(NamedTuple):
+    """Outcome of one solve (shape () each for one problem, except the arrays noted)."""
+
+    design: Design  # mm
+    iterations: jax.Array  # int: Newton steps
+    converged: jax.Array  # bool: the KKT residual reached ``tol``
+    z: jax.Array  # (m + 1,) unit-box variables and t at the answer
+    multipliers: jax.Array  # (M,) y, one per row of the epigraph form
+    kkt: KKT  # scaled residuals at the answer
+
+
+def minimize(problem: Problem, weights: Weights, init_design: Design | None = None,
+             settings: NewtonSettings = DEFAULT_SETTINGS) -> NewtonResult:
+    """Solve one problem (global over its angle grid) for one weighting; traceable, vmappable.
+
+    ``init_design``: the start (mm); default the family's ``start(problem)`` where it has one,
+    else the centre of the box (pulled ``settings.interior`` inside the box's faces).
+    """
+    fns = _functions(problem, weights)
+
+    def solve_from(mu0):
+        z0, s0, y0, mu0 = _start(problem, fns, init_design, settings, mu0)
+        error0 = kkt_residuals(fns, z0, y0).error
+        state = NewtonState(z0, s0, y0, mu0, jnp.asarray(1.0, z0.dtype), jnp.asarray(0), error0,
+                            jnp.asarray(False))
+        return jax.lax.while_loop(lambda st: ~st.done & (st.iteration < settings.max_iterations),
+                                  partial(_step, fns=fns, settings=settings), state)
+
+    # two central paths at once (one vmapped loop): mu0 and mu0 / n. The path keeps t - f_i ~ n mu
+    # on the n epigraph rows, so the first starts far above the objective and the second close to
+    # it; neither reaches the optimum on every family (measured: the oscillating roller needs the
+    # second, the roller the first). The converged one is kept, the lower objective of two.
+    ends = jax.vmap(solve_from)(jnp.stack([jnp.asarray(settings.mu0), settings.mu0 / fns.n_angles]))
+    first, second = jax.tree.map(lambda x: x[0], ends), jax.tree.map(lambda x: x[1], ends)
+    take_second = (second.done & ~first.done) | ((second.done == first.done) & jnp.where(
+        first.done, second.z[-1] < first.z[-1], second.error < first.error))
+    end = jax.tree.map(lambda a, b: jnp.where(take_second, b, a), first, second)
+    m = fns.u_max.shape[0]
+    design = from_unit(problem, fns.unravel(end.z[:m]))
+    kkt = kkt_residuals(fns, end.z, end.y)
+    return NewtonResult(design, end.iteration, end.done, end.z, end.y, kkt)
+
+
+def run_one(problem: Problem, weights: Weights, key: jax.Array, settings, init: Design | None = None) -> Raw:
+    """The solver protocol of :mod:`camjax.solvers.base`: :func:`minimize` with ``settings.of("newton")``.
+
+    ``key`` is unused (deterministic). Converged when the scaled KKT residual reached ``tol``.
+    """
+    res = minimize(problem, weights, init, settings.of("newton"))
+    return Raw(res.design, res.iterations, res.converged)
+
+
+# --------------------------------------------------------------------------- certificate
+
+
+def _limits(problem) -> dict:
+    """The scene's limits a problem carries: scene key -> (problem, value) -> problem with that
+    limit set to ``value`` (in the scene's units), every field derived from it moved with it."""
+    fields = set(problem._fields)
+    has_stress = "stress" in jax.eval_shape(
+        lambda: family_of(problem).constraints(problem, family_of(problem).bounds(problem)[0]))._fields
+    out = {}
+    if "sigma_max_MPa" in fields and has_stress:
+        out["sigma_max_MPa"] = lambda p, v: p._replace(sigma_max_MPa=v)
+    if "tan_max_pressure_angle" in fields:
+        def pressure(p, v):
+            extra = {"max_pressure_angle_deg": v} if "max_pressure_angle_deg" in fields else {}
+            return p._replace(tan_max_pressure_angle=jnp.tan(jnp.radians(v)), **extra)
+        out["max_pressure_angle_deg"] = pressure
+    for name in ("min_curvature_radius_mm", "rho_min_mm"):
+        if name in fields:
+            out["min_curvature_radius_mm"] = lambda p, v, name=name: p._replace(**{name: v})
+    return out
+
+
+def limit_values(problem) -> dict:
+    """The current value of each limit of :func:`_limits` (scene units), () arrays."""
+    values = {}
+    for key in _limits(problem):
+        if key == "max_pressure_angle_deg":
+            values[key] = (problem.max_pressure_angle_deg if "max_pressure_angle_deg" in problem._fields
+                           else jnp.degrees(jnp.arctan(problem.tan_max_pressure_angle)))
+        elif key == "min_curvature_radius_mm":
+            values[key] = getattr(problem, "min_curvature_radius_mm", getattr(problem, "rho_min_mm", None))
+        else:
+            values[key] = getattr(problem, key)
+    return values
+
+
+class Certificate(NamedTuple):
+    """What :func:`certify` returns for one problem and weighting (traceable; arrays)."""
+
+    result: NewtonResult
+    rows: jax.Array  # (M,) c at the answer (<= 0 feasible)
+    scale: jax.Array  # () alpha + gamma: F = scale * (solver objective)
+    sensitivity: dict  # limit key -> (M,) per-row dF*/d limit (scene units); the sum is the total
+    bound_sensitivity: jax.Array  # (2m,) dF*/d bound (mm) of each bound row (lower, then upper)
+    gamma: jax.Array  # () the stress weight (0: the epigraph rows carry the size only)
+
+
+def certify(problem: Problem, weights: Weights, init_design: Design | None = None,
+            settings: NewtonSettings = DEFAULT_SETTINGS) -> Certificate:
+    """Solve (:func:`minimize`) and certify the answer: rows, multipliers and the sensitivities of the
+    optimal objective F* to each limit of the scene, by the envelope theorem,
+    dF*/dp = (alpha + gamma) sum_i y_i dc_i/dp at the answer (u, t fixed), split by row.
+
+    Bounds: dF*/d lo_j = (alpha + gamma) y_j du_j/dx_j (and minus that for an upper bound), with
+    the normalization N fixed. Traceable, vmappable.
+    """
+    res = minimize(problem, weights, init_design, settings)
+    total = weights.alpha + weights.gamma
+    scale = jnp.where(total > 0, total, 1.0)
+    fns = _functions(problem, weights)
+    rows = fns.rows(res.z)
+    sens = {}
+    for key, setter in _limits(problem).items():
+        value = limit_values(problem)[key]
+        moved = jax.jacfwd(
+            lambda v, setter=setter: _functions(setter(problem, v), weights).rows(res.z))(value)
+        sens[key] = scale * res.multipliers * moved
+    m = fns.u_max.shape[0]
+    x, unravel = ravel_pytree(res.design)
+    diag = jnp.diagonal(jax.jacfwd(lambda v: ravel_pytree(to_unit(problem, unravel(v)))[0])(x))
+    y_box = res.multipliers[-2 * m:]
+    bound = scale * y_box * jnp.concatenate([diag, -diag])
+    return Certificate(res, rows, scale, sens, bound, weights.gamma)
+
+
+def certificate_json(problem, cert: Certificate, *, active_tol: float = 1e-6) -> dict:
+    """result.json's ``certificate`` block of one certified answer (Python, concrete values).
+
+    ``kkt``: the scaled residuals; ``iterations``, ``converged``; ``active``: every row whose
+    multiplier times (alpha + gamma) exceeds ``active_tol`` (the rows of one kind and angle
+    merged), each with its kind (a constraint's field name, ``stress`` for the objective's
+    stress rows, ``lower_bound``/``upper_bound``), the scene key of its limit, the cam angle (deg;
+    None for a bound), the variable (bounds), its multiplier and dF*/d limit (scene units).
+    """
+    res = cert.result
+    y = np.asarray(res.multipliers, float)
+    scale = float(cert.scale)
+    fns = _functions(problem, Weights(jnp.asarray(1.0), jnp.asarray(1.0)))
+    theta = np.asarray(problem.theta_deg, float).reshape(-1)
+    lower = family_of(problem).bounds(problem)[0]
+    variables = list(lower._fields)
+    keys = {"pressure_angle": "max_pressure_angle_deg", "stress": "sigma_max_MPa",
+            "undercut": "min_curvature_radius_mm", "curvature": "min_curvature_radius_mm"}
+    sens = {k: np.asarray(v, float) for k, v in cert.sensitivity.items()}
+    bound_sens = np.asarray(cert.bound_sensitivity, float)
+    active = []
+    start = 0
+    m = len(variables)
+    for kind, count in fns.kinds:
+        for j in range(count):
+            i = start + j
+            if scale * y[i] <= active_tol:
+                continue
+            if kind in ("lower_bound", "upper_bound"):
+                k = j + (m if kind == "upper_bound" else 0)
+                side = "lower" if kind == "lower_bound" else "upper"
+                active.append({"kind": "bound", "limit": f"{variables[j][:-3]}_bounds_mm ({side})",
+                               "variable": variables[j], "theta_deg": None,
+                               "multiplier": float(scale * y[i]), "dF_dlimit": float(bound_sens[k])})
+                continue
+            if kind == "objective" and float(cert.gamma) == 0.0:
+                continue  # without a stress weight the epigraph rows are the size term's, not a limit
+            name = "stress" if kind == "objective" else kind
+            key = keys.get(name)
+            entry = {"kind": name, "limit": key, "theta_deg": float(theta[j % theta.size]),
+                     "multiplier": float(scale * y[i])}
+            if key in sens:
+                entry["dF_dlimit"] = float(sens[key][i])
+            active.append(entry)
+        start += count
+    # merge the rows of one kind at one angle (the stress in the objective and as a constraint)
+    merged: dict = {}
+    for e in active:
+        k = (e["kind"], e["theta_deg"], e.get("variable"))
+        if k in merged:
+            merged[k]["multiplier"] += e["multiplier"]
+            if "dF_dlimit" in e:
+                merged[k]["dF_dlimit"] = merged[k].get("dF_dlimit", 0.0) + e["dF_dlimit"]
+        else:
+            merged[k] = dict(e)
+    kkt = res.kkt
+    return {
+        "method": "newton: primal-dual interior point, epigraph form (scaled KKT residuals)",
+        "stationarity": float(kkt.stationarity), "primal_feasibility": float(kkt.primal),
+        "complementarity": float(kkt.complementarity), "iterations": int(res.iterations),
+        "converged": bool(res.converged),
+        "dF_dlimit": {k: float(np.sum(v)) for k, v in sens.items()},
+        "active": sorted(merged.values(), key=lambda e: -e["multiplier"]),
+    }
+
+
+def limited_by(certificate: dict, top: int = 3) -> str:
+    """The text summary's "limited by ..." line of a certificate block (its largest multipliers)."""
+    parts = []
+    for e in certificate["active"][:top]:
+        if e["kind"] == "bound":
+            parts.append(f"the {e['limit']}")
+        else:
+            parts.append(f"the {e['kind'].replace('_', ' ')} at {e['theta_deg']:.1f} deg")
+    return "limited by " + (" and ".join(parts) if parts else "nothing (an interior optimum)")
+
+
+_certify_jit = jax.jit(certify)
+
+
+def certificate_block(problem, alpha: float, gamma: float) -> dict:
+    """result.json's ``certificate`` (:func:`certificate_json`) of a global-mode newton design of one
+    weighting (Python). The solve is run again with :func:`certify` (its multipliers are not part of
+    a :class:`~camjax.solvers.base.Solution`); it certifies the solver's grid optimum, before any
+    family ``polish`` moves the design off the grid's samples (by ~1e-6 relative)."""
+    from camjax.family import weights_of
+
+    dtype = jax.tree.leaves(family_of(problem).bounds(problem)[0])[0].dtype
+    cert = _certify_jit(problem, weights_of(alpha, gamma, dtype))
+    block = certificate_json(problem, cert)
+    block["limited_by"] = limited_by(block)
+    return block
