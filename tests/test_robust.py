@@ -343,3 +343,17 @@ def test_every_follower_type_through_the_contract(name, tmp_path):
         assert got[names.index("peak_pressure_angle_deg")] == pytest.approx(float(ev.pressure_angle_max_deg), rel=RTOL)
     curv = next(f for f in rev.CURVATURE_FIELDS if f in ev._fields)
     assert got[names.index("least_curvature_radius_mm")] == pytest.approx(float(getattr(ev, curv)), rel=RTOL, abs=1e-9)
+
+
+@pytest.mark.parametrize("options, field", [
+    (["--samples", "0"], "--samples"), (["--samples", "-5"], "--samples"), (["--seed", "-1"], "--seed"),
+    (["--design", "{tmp}/missing.json"], "--design"), (["--design", "{tmp}/not.json"], "--design"),
+])
+def test_bad_options_exit_2_with_one_line_naming_the_option(tmp_path, capsys, options, field):
+    (tmp_path / "not.json").write_text("{not json")
+    out = tmp_path / "o"
+    argv = ["robust", "robust", "--out", str(out)] + [o.format(tmp=tmp_path) for o in options]
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and field in err[0] and "Traceback" not in err[0], err
+    assert not out.exists()
