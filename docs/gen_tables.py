@@ -366,8 +366,58 @@ class PlaceholderError(ValueError):
     """A placeholder names a table or a JSON key that does not exist."""
 
 
+# ------------------------------------------------------------------------------------ lists
+
+# ``{{ list: NAME }}``: a list the code keeps (follower types, built-in scenes, solvers), written
+# from its registry when the site is built, so a new follower folder or scene file appears on every
+# page that lists them without editing prose.
+
+
+def _and(items: list[str]) -> str:
+    return items[0] if len(items) == 1 else ", ".join(items[:-1]) + " and " + items[-1]
+
+
+def _followers(rocking: bool | None = None) -> list:
+    from camjax import followers
+
+    return [f for f in followers.all_followers() if rocking is None or bool(f.rocking) == rocking]
+
+
+def _follower_titles(rocking: bool | None = None) -> str:
+    return _and([f.title for f in _followers(rocking)])
+
+
+def _follower_folders(rocking: bool) -> str:
+    return ", ".join(f"`{f.name}/`" for f in _followers(rocking))
+
+
+def _scenes() -> str:
+    from camjax.scene import BUILTIN_SCENES
+
+    return ", ".join(f"`{name}`" for name in BUILTIN_SCENES)
+
+
+def _solvers() -> str:
+    from camjax.solvers.registry import SOLVERS
+
+    return ", ".join(f"`{name}`" for name in SOLVERS)
+
+
+LISTS: dict[str, Callable[[], str]] = {
+    "followers": _follower_titles,  # "curved-face, flat-face, ... and roller"
+    "followers_count": lambda: str(len(_followers())),
+    "translating_followers": lambda: _follower_titles(False),
+    "rocking_followers": lambda: _follower_titles(True),
+    "translating_folders": lambda: _follower_folders(False),  # "`flat/`, `roller/`, ..."
+    "rocking_folders": lambda: _follower_folders(True),
+    "scenes": _scenes,  # "`default`, `codesign`, ..." (the embedded default first)
+    "solvers": _solvers,
+}
+_LIST = re.compile(r"(?<!\\)\{\{\s*list:\s*(\w+)\s*\}\}")
+
+
 def render(markdown: str, page: str = "<page>") -> str:
-    """``markdown`` with every ``{{ table: NAME }}`` and ``{{ SOURCE: path }}`` replaced."""
+    """``markdown`` with every ``{{ table: NAME }}``, ``{{ SOURCE: path }}`` and ``{{ list: NAME }}`` replaced."""
     cache: dict[str, dict] = {}
 
     def data(source: str) -> dict:
@@ -395,8 +445,13 @@ def render(markdown: str, page: str = "<page>") -> str:
         except (TypeError, ValueError) as e:
             raise PlaceholderError(f"{page}: {source} {path!r} = {v!r} does not format as {spec!r}") from e
 
+    def listed(m: re.Match) -> str:
+        if m.group(1) not in LISTS:
+            raise PlaceholderError(f"{page}: unknown list {m.group(1)!r} (known: {', '.join(LISTS)})")
+        return LISTS[m.group(1)]()
+
     # "\\{{" is a literal "{{" (a page that shows the syntax)
-    return _VALUE.sub(value, _TABLE.sub(table, markdown)).replace("\\{{", "{{")
+    return _LIST.sub(listed, _VALUE.sub(value, _TABLE.sub(table, markdown))).replace("\\{{", "{{")
 
 
 def main(argv: list[str]) -> int:

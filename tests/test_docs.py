@@ -68,7 +68,7 @@ def test_every_docs_placeholder_resolves():
     for page in pages:
         text = re.sub(r"\\\{\{.*?\}\}", "", page.read_text())  # escaped examples stay literal
         out = gen.render(text, str(page))
-        assert not re.search(r"\{\{\s*(table|" + "|".join(gen.SOURCES) + "):", out), page
+        assert not re.search(r"\{\{\s*(table|list|" + "|".join(gen.SOURCES) + "):", out), page
 
 
 def test_unknown_placeholder_is_an_error():
@@ -77,6 +77,26 @@ def test_unknown_placeholder_is_an_error():
         gen.render("{{ bench: no.such.key }}")
     with pytest.raises(gen.PlaceholderError):
         gen.render("{{ table: no_such_table }}")
+    with pytest.raises(gen.PlaceholderError):
+        gen.render("{{ list: no_such_list }}")
+
+
+@pytest.mark.parametrize("page, names", [
+    ("index.md", "followers"), ("extending.md", "folders"), ("architecture.md", "folders"),
+    ("cli.md", "scenes"), ("scenes.md", "scenes"),
+])
+def test_pages_that_list_followers_or_scenes_name_every_registered_one(page, names):
+    """The lists come from the registries when the site is built: every follower type (its title,
+    or its folder) and every built-in scene file is named on the rendered page."""
+    from camjax import followers
+    from camjax.scene import BUILTIN_SCENES
+
+    out = _gen_tables().render((ROOT / "docs" / page).read_text(), page)
+    expected = {"followers": [f.title for f in followers.all_followers()],
+                "folders": [f"`{name}/`" for name in followers.names()],
+                "scenes": [f"`{name}`" for name in BUILTIN_SCENES]}[names]
+    missing = [name for name in expected if name not in out]
+    assert not missing, f"{page} does not name {missing}"
 
 
 def test_extremes_tables_account_for_every_case():
