@@ -251,5 +251,5 @@ def test_mode_and_solver_names_come_from_the_registry():
     design = build_parser()._subparsers._group_actions[0].choices["design"]
     choices = {a.dest: a.choices for a in design._actions if a.dest in ("mode", "solver")}
     assert choices == {"mode": registry.MODES, "solver": registry.SOLVERS}
-    with pytest.raises(ValueError, match="solver: 'newton' is not allowed; use gradient, ga, hybrid"):
-        SweepSpec(solver="newton")
+    with pytest.raises(ValueError, match="solver: 'bfgs' is not allowed; use gradient, ga, hybrid, newton"):
+        SweepSpec(solver="bfgs")
