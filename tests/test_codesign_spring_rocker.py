@@ -17,6 +17,7 @@ import tomllib
 
 import numpy as np
 import pytest
+from scene_text import toml_of
 
 from camjax.cli import main
 from camjax.codesign import Codesign, CodesignError, codesign_scene
@@ -66,23 +67,6 @@ def moment(train, kin, rpm: float) -> np.ndarray:
 
 def kinematics_of(scene, samples: int):
     return scene_arrays(scene, samples=samples, extrema="grid").kin
-
-
-def toml_of(data: dict) -> str:
-    """A scene dict as TOML (numbers, strings, lists and inline tables: what the scenes hold)."""
-    def value(v):
-        if isinstance(v, bool):
-            return "true" if v else "false"
-        if isinstance(v, str):
-            return json.dumps(v)
-        if isinstance(v, dict):
-            return "{ " + ", ".join(f"{k} = {value(x)}" for k, x in v.items()) + " }"
-        if isinstance(v, list):
-            return "[" + ", ".join(value(x) for x in v) + "]"
-        return repr(v)
-
-    return "\n".join(f"[{name}]\n" + "\n".join(f"{k} = {value(v)}" for k, v in table.items()) + "\n"
-                     for name, table in data.items())
 
 
 # ------------------------------------------------------------------------------ quick

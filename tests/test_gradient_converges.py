@@ -102,12 +102,11 @@ def test_gradient_matches_the_hybrid_over_a_sweep_of_the_oscillating_flat_face()
     saturated, no gradient) and two ended infeasible at the box's edge; from the family's start alone
     (R_b raised until rho >= rho_min) one ended in a worse local optimum (0.93 against 0.60). Solved
     from both, every weighting is feasible and within 1e-6 relative of the hybrid (GA + polish)."""
+    import camjax
     from camjax.family import weights_of
     from camjax.followers.oscillating_flat import problem as FP
     from camjax.scene import with_samples
     from camjax.solvers.base import solve_batch, weighting_keys
-
-    import camjax
 
     scene = with_samples(parse_scene(builtin_scene_text("oscillating-flat")), 120)
     problem = problem_from_scene(scene, camjax.scene_arrays(scene, extrema="grid"))

@@ -12,6 +12,7 @@ import tomllib
 
 import numpy as np
 import pytest
+from scene_text import toml_of
 
 import camjax
 from camjax import followers, pipeline
@@ -31,23 +32,6 @@ SAMPLES, SEED = 300, 7
 # same models, same float64 operations in another order (a traced scene vs a scene read from a
 # file): agreement to rounding, stated as the issue's 1e-9 relative
 RTOL = 1e-9
-
-
-def toml_of(data: dict) -> str:
-    """A scene dict as TOML (numbers, strings, lists and inline tables: what the scenes hold)."""
-    def value(v):
-        if isinstance(v, bool):
-            return "true" if v else "false"
-        if isinstance(v, str):
-            return json.dumps(v)
-        if isinstance(v, dict):
-            return "{ " + ", ".join(f"{k} = {value(x)}" for k, x in v.items()) + " }"
-        if isinstance(v, list):
-            return "[" + ", ".join(value(x) for x in v) + "]"
-        return repr(v)
-
-    return "\n".join(f"[{name}]\n" + "\n".join(f"{k} = {value(v)}" for k, v in table.items()) + "\n"
-                     for name, table in data.items())
 
 
 def robust_data() -> dict:
