@@ -83,18 +83,20 @@ def test_unknown_placeholder_is_an_error():
 
 @pytest.mark.parametrize("page, names", [
     ("index.md", "followers"), ("extending.md", "folders"), ("architecture.md", "folders"),
-    ("cli.md", "scenes"), ("scenes.md", "scenes"),
+    ("cli.md", "scenes"), ("scenes.md", "scenes"), ("index.md", "solvers"),
 ])
 def test_pages_that_list_followers_or_scenes_name_every_registered_one(page, names):
     """The lists come from the registries when the site is built: every follower type (its title,
-    or its folder) and every built-in scene file is named on the rendered page."""
+    or its folder), every built-in scene file and every solver is named on the rendered page."""
     from camjax import followers
     from camjax.scene import BUILTIN_SCENES
+    from camjax.solvers.registry import SOLVERS
 
     out = _gen_tables().render((ROOT / "docs" / page).read_text(), page)
     expected = {"followers": [f.title for f in followers.all_followers()],
                 "folders": [f"`{name}/`" for name in followers.names()],
-                "scenes": [f"`{name}`" for name in BUILTIN_SCENES]}[names]
+                "scenes": [f"`{name}`" for name in BUILTIN_SCENES],
+                "solvers": [f"`{name}`" for name in SOLVERS]}[names]
     missing = [name for name in expected if name not in out]
     assert not missing, f"{page} does not name {missing}"
 
