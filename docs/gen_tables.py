@@ -336,7 +336,23 @@ def extremes_failures(extremes: dict) -> str:
     return "\n".join(lines)
 
 
+def cli_cold(data: dict) -> str:
+    """Every built-in scene's cold ``camjax design`` (benchmarks/cli_timing.py ``cold``): wall and
+    CPU seconds, the wall over ``import jax``, its compute phase, against the 10 s target."""
+    scenes = sorted(k[len("cli.cold."):-len("_s")] for k in data
+                    if k.startswith("cli.cold.") and k.endswith("_s") and not k.endswith(("_cpu_s", "_phases_s")))
+    rows = ["| scene | wall s | CPU s | × import jax | compute s | ≤ 10 s |", "|---|---|---|---|---|---|"]
+    for scene in scenes:
+        wall = data[f"cli.cold.{scene}_s"]
+        compute = data.get(f"cli.cold.{scene}_phases_s", {}).get("compute")
+        rows.append(f"| `{scene}` | {wall:.1f} | {data[f'cli.cold.{scene}_cpu_s']:.1f} | "
+                    f"{data[f'cli.cold.{scene}_over_import']:.1f} | "
+                    f"{'' if compute is None else f'{compute:.1f}'} | {'yes' if wall <= 10.0 else '**no**'} |")
+    return "\n".join(rows)
+
+
 TABLES: dict[str, tuple[str, Callable[[dict], str]]] = {
+    "cli_cold": ("cli", cli_cold),
     "bench_provenance": ("bench", bench_provenance),
     "bench_targets": ("bench", bench_targets),
     "bench_fitness": ("bench", bench_fitness),
