@@ -392,3 +392,18 @@ def test_base_radius_option_and_summary_in_inches(pair, tmp_path, capsys):
     text = capsys.readouterr().out
     assert "files drawn at R_b = 1.2 in" in text, text
     assert " mm" not in text
+
+
+def test_base_radius_option_limit_holds_in_mm(tmp_path, capsys):
+    """--base-radius beyond the command's 1e6 mm in an inch scene (1e6 in = 25.4 km) exits 2 naming
+    the option and the limit in inches; nothing is written."""
+    from camjax.cli.common import MAX_BASE_RADIUS_MM
+
+    path = tmp_path / "inch.toml"
+    path.write_text(toml_text(_inch_default()))
+    out = tmp_path / "out"
+    capsys.readouterr()
+    assert cli.main(["design", str(path), "--out", str(out), "--base-radius", "1e6"]) == 2
+    err = capsys.readouterr().err
+    assert "--base-radius" in err and f"{MAX_BASE_RADIUS_MM / 25.4:g}, in" in err, err
+    assert not out.exists()

@@ -51,20 +51,24 @@ def _setup_design(p: argparse.ArgumentParser):
         from camjax import followers
         from camjax.pipeline import analyse
         from camjax.scene import load_scene
+        from camjax.scene.manufacture import CAM_TABLE_POINTS_MAX
         from camjax.units import length_scale
 
         out = check_output_dir(args.out)
         r = args.base_radius
-        if r is not None and not (r == r and 0 < r <= MAX_BASE_RADIUS_MM):
-            raise UsageError(f"--base-radius = {r!r}: out of range (allowed: a number > 0 and "
-                             f"<= {MAX_BASE_RADIUS_MM:g}, mm)")
+        if r is not None and not (r == r and r > 0):
+            raise UsageError(f"--base-radius = {r!r}: out of range (allowed: a number > 0)")
         check_dpi(args.dpi)
         n = args.cam_table_points
-        if n is not None and not 2 <= n <= 1_000_000:
-            raise UsageError(f"--cam-table-points = {n}: out of range (allowed: 2 to 1000000)")
+        if n is not None and not 2 <= n <= CAM_TABLE_POINTS_MAX:
+            raise UsageError(f"--cam-table-points = {n}: out of range (allowed: 2 to {CAM_TABLE_POINTS_MAX})")
         scene = apply_design_options(apply_samples(load_scene(args.scene), args), args)
-        if r is not None:  # given in the scene's units (camjax.units)
-            r = r * length_scale(scene.units)
+        if r is not None:  # given in the scene's units (camjax.units): the limit holds in mm
+            scale = length_scale(scene.units)
+            if r * scale > MAX_BASE_RADIUS_MM:
+                raise UsageError(f"--base-radius = {r!r}: out of range (allowed: a number > 0 and "
+                                 f"<= {MAX_BASE_RADIUS_MM / scale:g}, {scene.units})")
+            r = r * scale
         rad_lifts = scene.dynamics is not None and scene.dynamics.follower == "oscillating"
         if rad_lifts and not followers.of(scene).rocking:
             rocking = " or ".join(repr(f.name) for f in followers.all_followers() if f.rocking)

@@ -24,10 +24,11 @@ from typing import NamedTuple
 import numpy as np
 
 from camjax.output.machining import unit_scale
+from camjax.scene.manufacture import CAM_TABLE_POINTS_MAX
 
 BATCH = 1 << 16  # master angles per call of the exact law (one compiled shape)
 CHECKS_PER_INTERVAL = 16  # where the interpolation error is measured between two points
-POINTS_MAX = 1_000_000
+POINTS_MAX = CAM_TABLE_POINTS_MAX  # the largest table a scene may ask for
 METHODS = ("linear", "cubic_hermite", "quintic")
 
 

@@ -25,9 +25,8 @@ from typing import NamedTuple
 import numpy as np
 
 from camjax.errors import SceneError
+from camjax.output.export import CSV_FORMAT
 
-MM_PER_IN = 25.4
-UNITS = ("mm", "in")
 DENSE_SAMPLES_MIN = 7200  # at least 0.05 deg between the dense samples of the surface
 DENSE_SPACING_MM = 0.05  # and at most about this far apart along the outline
 DENSE_SAMPLES_MAX = 400_000
@@ -37,10 +36,12 @@ LINE_SAG = 1e-3  # an arc whose sagitta is below LINE_SAG * tolerance is written
 
 
 def unit_scale(units: str) -> float:
-    """Factor from mm to ``units`` ("mm": 1, "in": 1/25.4)."""
+    """Factor from mm to ``units`` ("mm": 1, "in": 1/25.4; :func:`camjax.units.length_scale`'s inverse)."""
+    from camjax.units import UNITS, length_scale
+
     if units not in UNITS:
         raise ValueError(f"units: {units!r} is not one of {', '.join(UNITS)}")
-    return 1.0 if units == "mm" else 1.0 / MM_PER_IN
+    return 1.0 / length_scale(units)
 
 
 # ------------------------------------------------------------------------------ the exact surface
@@ -175,15 +176,17 @@ def largest_cutter(surface: Surface) -> tuple[float, float | None]:
     return 2.0 * float(radii[k]), float(surface.theta_deg[k])
 
 
-def gouge_check(surface: Surface, cutter_diameter_mm: float) -> None:
-    """Raise :class:`SceneError` naming ``manufacture.cutter_diameter_mm``, the largest diameter
-    that fits and the cam angle when the cutter is too large for a concave stretch (its centre
-    path would fold back: the cutter would cut into the cam there)."""
+def gouge_check(surface: Surface, cutter_diameter_mm: float) -> tuple[float, float | None]:
+    """:func:`largest_cutter` of the surface; raise :class:`SceneError` naming
+    ``manufacture.cutter_diameter_mm``, the largest diameter that fits and the cam angle when the
+    cutter is too large for a concave stretch (its centre path would fold back: the cutter would
+    cut into the cam there)."""
     largest, at = largest_cutter(surface)
     if cutter_diameter_mm > largest:
         raise SceneError("manufacture.cutter_diameter_mm", cutter_diameter_mm,
                          f"the cutter would gouge the concave stretch at cam angle {at:.4g} deg "
                          f"(radius {largest / 2:.6g} mm)", f"a diameter <= {largest:.6g} mm")
+    return largest, at
 
 
 class ToolPath(NamedTuple):
@@ -217,7 +220,7 @@ def write_cutter_path_csv(path: Path, tp: ToolPath, units: str = "mm") -> Path:
     names = ["theta_deg", f"x_{u}", f"y_{u}", f"surface_x_{u}", f"surface_y_{u}", "normal_x", "normal_y"]
     table = np.column_stack([tp.theta_deg, k * tp.x_mm, k * tp.y_mm, k * tp.surface_x_mm,
                              k * tp.surface_y_mm, tp.nx, tp.ny])
-    np.savetxt(path, table, delimiter=",", header=",".join(names), comments="", fmt="%.12f")
+    np.savetxt(path, table, delimiter=",", header=",".join(names), comments="", fmt=CSV_FORMAT)
     return path
 
 

@@ -12,6 +12,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any, NamedTuple
 
+from camjax import followers
 from camjax.output import cam_table as table_mod
 from camjax.output import machining, solid
 
@@ -25,9 +26,7 @@ class ShopPlan(NamedTuple):
     scene_name: str
     units: str
     spec: Any  # ManufactureSpec or None
-    width_mm: float | None
     path: machining.ToolPath | None
-    program: machining.Program | None
     gcode: list[str] | None
     triangles: Any  # (T, 3, 3) mm or None
     table: table_mod.CamTable | None
@@ -44,7 +43,7 @@ def plan(scene, data: dict, curves, *, cam_table_points: int | None = None, unit
         width = m.cam_width_mm if m.cam_width_mm is not None else scene.contact.cam_width_mm
         dense = machining.dense_samples(scene.motion.samples, curves.profile_x_mm, curves.profile_y_mm)
         surface = machining.cam_surface(scene, data.get("design"), curves.base_radius_mm, dense)
-        machining.gouge_check(surface, m.cutter_diameter_mm)
+        largest, at = machining.gouge_check(surface, m.cutter_diameter_mm)
         path = machining.tool_path(surface, m.cutter_diameter_mm / 2)
         program = machining.plan_program(path, m.tolerance_mm, units)
         triangles = solid.solid_triangles(solid.solid_outline(surface, m.tolerance_mm), width,
@@ -52,7 +51,6 @@ def plan(scene, data: dict, curves, *, cam_table_points: int | None = None, unit
         gcode = machining.gcode_lines(program, path, feed_mm_per_min=m.feed_mm_per_min, width_mm=width,
                                       cutter_diameter_mm=m.cutter_diameter_mm, scene_name=scene.name,
                                       units=units)
-        largest, at = machining.largest_cutter(surface)
         report["manufacture"] = {
             "cutter_diameter_mm": m.cutter_diameter_mm, "tolerance_mm": m.tolerance_mm,
             "feed_mm_per_min": m.feed_mm_per_min, "cam_width_mm": width,
@@ -74,7 +72,7 @@ def plan(scene, data: dict, curves, *, cam_table_points: int | None = None, unit
     if points is not None:
         from camjax.units import length_scale
 
-        rocking = table_mod.Law(scene).unit == "deg"
+        rocking = followers.of(scene).rocking
         tol = scene.export.tolerance if scene.export is not None else None
         if tol is None:
             tol = m.tolerance_mm if m is not None and not rocking else DEFAULT_TABLE_TOLERANCE
@@ -82,7 +80,7 @@ def plan(scene, data: dict, curves, *, cam_table_points: int | None = None, unit
             tol = tol / length_scale(units)
         tab = table_mod.cam_table(scene, int(points), float(tol), units)
         report["cam_table"] = tab.report
-    return ShopPlan(scene.name, units, m, width, path, program, gcode, triangles, tab, report)
+    return ShopPlan(scene.name, units, m, path, gcode, triangles, tab, report)
 
 
 def solid_volume(triangles) -> float:
