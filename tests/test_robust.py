@@ -321,6 +321,9 @@ def test_every_follower_type_through_the_contract(name, tmp_path):
     ev = fam.evaluate(pipeline.design_problem(plain, arrays), weights_of(plain.design.alpha, plain.design.gamma),
                       fam.Design(**{k: np.float64(design[k]) for k in fam.Design._fields}))
     names = rev.output_names(scene, scene.tolerances)
+    # an output is reported exactly when the family evaluates it (a missing one would skip its check)
+    assert ("peak_stress_MPa" in names) == (plain.contact is not None and "stress_max_MPa" in ev._fields)
+    assert ("peak_pressure_angle_deg" in names) == ("pressure_angle_max_deg" in ev._fields)
     if "peak_stress_MPa" in names:
         assert got[names.index("peak_stress_MPa")] == pytest.approx(float(ev.stress_max_MPa), rel=RTOL, abs=1e-9)
     if "peak_pressure_angle_deg" in names:
