@@ -89,3 +89,31 @@ def test_sigma_max_sensitivity_matches_finite_difference():
     fd = (optimum(sigma + h) - optimum(sigma - h)) / (2 * h)
     assert derivative < 0  # a larger allowable stress never makes the optimum worse
     np.testing.assert_allclose(derivative, fd, rtol=1e-5)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("scene_name", ["roller", "oscillating-flat"])
+def test_design_with_newton_writes_the_certificate_and_names_what_limits(scene_name, tmp_path, capsys):
+    """`camjax design --solver newton` (a translating and a rocking follower, the grid's 90
+    samples as above): result.json's design block holds the certificate of a converged solve, its
+    residuals within the stopping rule, every active row named with its scene key and angle, and
+    the summary says what limits the design."""
+    import json
+    import re
+
+    from camjax.cli import main
+    from camjax.scene import builtin_scene_text
+
+    text = re.sub(r"(?m)^samples = \d+", f'samples = {SAMPLES}\nextrema = "grid"', builtin_scene_text(scene_name))
+    path = tmp_path / "scene.toml"
+    path.write_text(text)
+    assert main(["design", str(path), "--solver", "newton", "--out", str(tmp_path / "out"), "--dpi", "20"]) == 0
+    cert = json.loads((tmp_path / "out" / "result.json").read_text())["design"]["certificate"]
+    assert cert["converged"] and cert["active"]
+    assert max(cert["stationarity"], cert["primal_feasibility"], cert["complementarity"]) <= 1e-9
+    for row in cert["active"]:
+        # a bound has no angle; every other row binds at one cam angle
+        assert row["limit"] and row["multiplier"] > 0.0, row
+        assert (row["theta_deg"] is None) == ("bound" in row["kind"]), row
+        assert row["theta_deg"] is None or 0.0 <= row["theta_deg"] < 360.0, row
+    assert cert["limited_by"] in capsys.readouterr().out

@@ -46,15 +46,16 @@ def _setup_robust(p: argparse.ArgumentParser):
                              "e.g. rpm = { sd_percent = 2 }")
         design = None if args.design is None else _design_from(args.design, scene)
         result = runtime.interruptible(report.run, scene, args.samples, args.seed, design=design)
+        text = report.text(result.data)
         with replaced_folder(out) as tmp:
             write_json(tmp / "robust.json", result.data)
-            (tmp / "robust.txt").write_text(report.text(result.data))
+            (tmp / "robust.txt").write_text(text)
             if not args.no_figures:
                 from camjax.robust.drawing import figures
 
                 figures(result.data, result.outputs, result.envelope, tmp, args.dpi)
         d = result.data
-        print(report.text(d).split("\n\n")[2].strip())
+        print(text.split("\n\n")[2].strip())
         print(f"wrote {out / 'robust.json'} ({d['samples']} samples in {d['timings_s']['samples']:.2f} s)")
         return 0
 

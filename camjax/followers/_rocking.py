@@ -372,15 +372,12 @@ class RockingFollower(Follower):
         arrays = scene_arrays(scene, dtype=dtype) if arrays is None else arrays
         design = None
         if scene.design is not None:
-            from camjax.solvers.base import problem_from_scene, solve
+            from camjax.solvers.base import problem_from_scene
+            from camjax.solvers.newton import design_json
 
             d = scene.design
             problem = problem_from_scene(scene, arrays)
-            design = solve(problem, (d.alpha, d.gamma), mode=d.mode, solver=d.solver, seed=d.seed).to_json(problem)
-            if d.solver == "newton" and d.mode == "global":  # the KKT certificate (other solvers: unchanged)
-                from camjax.solvers.newton import certificate_block
-
-                design["certificate"] = certificate_block(problem, d.alpha, d.gamma)
+            design = design_json(problem, d)
         kin, w, drawn = arrays.kin, arrays.cam_speed_rad_s, scene
         program = None if arrays.model is None else arrays.model.program
         if design is not None:

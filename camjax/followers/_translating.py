@@ -297,15 +297,12 @@ class TranslatingFollower(Follower):
         """
         if scene.design is None:
             return None
-        from camjax.solvers.base import problem_from_scene, solve
+        from camjax.solvers.base import problem_from_scene
+        from camjax.solvers.newton import design_json
 
         d = scene.design
         problem = problem_from_scene(scene, arrays)
-        out = solve(problem, (d.alpha, d.gamma), mode=d.mode, solver=d.solver, seed=d.seed).to_json(problem)
-        if d.solver == "newton" and d.mode == "global":  # the KKT certificate (other solvers: unchanged)
-            from camjax.solvers.newton import certificate_block
-
-            out["certificate"] = certificate_block(problem, d.alpha, d.gamma)
+        out = design_json(problem, d)
         return self.design_solution(scene, arrays, out, problem)
 
     def curves(self, scene, arrays: SceneArrays, base_radius_mm: float, follower=None,

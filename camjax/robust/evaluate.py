@@ -312,11 +312,11 @@ def sensitivities(nom: Nominal) -> tuple[np.ndarray, np.ndarray]:
     derivative). The outputs are maxima/minima over the grid: their derivatives are
     those of the curve at the extremal sample."""
     k = len(nom.values)
-    n_out = len(output_names(nom.scene, nom.tolerances))
+    names = output_names(nom.scene, nom.tolerances)
+    n_out = len(names)
     x0 = jnp.asarray(nom.values, float)
     profile = nom.tolerances.profile
     clean = nom._replace(tolerances=nom.tolerances._replace(profile=None))
-    names = output_names(nom.scene, nom.tolerances)
     drop = [j for j, n in enumerate(names) if n == "dwell_position_error_mm"]
 
     def values_only(x):

@@ -72,10 +72,6 @@ class Tolerances(NamedTuple):
     values: tuple[Tolerance, ...]
     profile: ProfileError | None = None
 
-    @property
-    def names(self) -> tuple[str, ...]:
-        return tuple(t.name for t in self.values)
-
 
 def value_names(scene) -> dict[str, str]:
     """The toleranceable values of a scene, name -> section (see the module docstring)."""

@@ -181,7 +181,7 @@ def _span(problem: Problem) -> Design:
     return jax.tree.map(lambda lo, hi: jnp.where(hi > lo, hi - lo, 1.0), *family_of(problem).bounds(problem))
 
 
-def _u_max(problem: Problem) -> Design:
+def u_max_of(problem: Problem) -> Design:
     """1 for a variable with a proper range, 0 for one fixed by lo == hi."""
     return jax.tree.map(lambda lo, hi: jnp.where(hi > lo, 1.0, 0.0).astype(lo.dtype),
                         *family_of(problem).bounds(problem))
@@ -211,7 +211,7 @@ def from_unit(problem: Problem, u: Design) -> Design:
 
 
 def _clip_unit(problem: Problem, u: Design) -> Design:
-    return jax.tree.map(lambda v, top: jnp.clip(v, 0.0, top), u, _u_max(problem))
+    return jax.tree.map(lambda v, top: jnp.clip(v, 0.0, top), u, u_max_of(problem))
 
 
 def midpoint(problem: Problem) -> Design:
@@ -263,7 +263,7 @@ def _projected_gradient(problem: Problem, u: Design, grad: Design) -> Design:
     """Zero the components that would push a variable at a bound out of the box."""
     return jax.tree.map(
         lambda v, gr, top: jnp.where(((v <= 0) & (gr > 0)) | ((v >= top) & (gr < 0)), 0.0, gr),
-        u, grad, _u_max(problem))
+        u, grad, u_max_of(problem))
 
 
 def _tree_max_abs(tree) -> jax.Array:
@@ -364,11 +364,11 @@ def _to_angle(problem: Problem, u: Design) -> Design:
     """Unit box -> unbounded angles z, u = u_max (1 - cos z) / 2 (the inverse on [0, pi])."""
     return jax.tree.map(
         lambda v, top: jnp.arccos(jnp.clip(1.0 - 2.0 * v / jnp.where(top > 0, top, 1.0), -1.0, 1.0)),
-        u, _u_max(problem))
+        u, u_max_of(problem))
 
 
 def _from_angle(problem: Problem, z: Design) -> Design:
-    return jax.tree.map(lambda v, top: top * (0.5 - 0.5 * jnp.cos(v)), z, _u_max(problem))
+    return jax.tree.map(lambda v, top: top * (0.5 - 0.5 * jnp.cos(v)), z, u_max_of(problem))
 
 
 class _BfgsState(NamedTuple):

@@ -55,8 +55,8 @@ import numpy as np
 from jax.flatten_util import ravel_pytree
 
 from camjax.family import Design, Problem, Weights
-from camjax.solvers.base import Raw, family_of
-from camjax.solvers.gradient import TIE_BREAK, from_unit, midpoint, to_unit
+from camjax.solvers.base import Raw, family_of, solve
+from camjax.solvers.gradient import TIE_BREAK, from_unit, midpoint, problem_dtype, to_unit, u_max_of
 
 
 @dataclass(frozen=True)
@@ -82,11 +82,6 @@ DEFAULT_SETTINGS = NewtonSettings()
 S_MAX = 100.0  # IPOPT's s_max: multipliers larger than this on average scale the dual residuals
 
 
-def _unit_box(problem):
-    lower, upper = family_of(problem).bounds(problem)
-    return jax.tree.map(lambda lo, hi: jnp.where(hi > lo, 1.0, 0.0).astype(lo.dtype), lower, upper)
-
-
 class _Functions(NamedTuple):
     phi: Any  # z -> () objective
     rows: Any  # z -> (M,) c(z) <= 0, every row
@@ -99,7 +94,7 @@ class _Functions(NamedTuple):
 
 def _functions(problem, weights: Weights) -> _Functions:
     family = family_of(problem)
-    u_max_tree = _unit_box(problem)
+    u_max_tree = u_max_of(problem)
     u_max, unravel = ravel_pytree(u_max_tree)
     m = u_max.shape[0]
     dtype = u_max.dtype
@@ -140,7 +135,6 @@ class NewtonState(NamedTuple):
     s: jax.Array  # (M,) slacks > 0
     y: jax.Array  # (M,) multipliers > 0
     mu: jax.Array  # () barrier parameter
-    nu: jax.Array  # () merit penalty
     iteration: jax.Array  # () int
     error: jax.Array  # () scaled KKT residual at z (mu = 0)
     done: jax.Array  # () bool
@@ -265,7 +259,7 @@ def _step(state: NewtonState, fns: _Functions, settings: NewtonSettings) -> Newt
     done = error <= settings.tol
     keep = state.done
     pick = lambda a_, b_: jnp.where(keep, a_, b_)  # noqa: E731
-    return NewtonState(pick(z, z_new), pick(s, s_new), pick(y, y_new), pick(mu, mu_new), state.nu,
+    return NewtonState(pick(z, z_new), pick(s, s_new), pick(y, y_new), pick(mu, mu_new),
                        state.iteration + jnp.where(keep, 0, 1), pick(state.error, error), keep | done)
 
 
@@ -292,7 +286,7 @@ def minimize(problem: Problem, weights: Weights, init_design: Design | None = No
     def solve_from(mu0):
         z0, s0, y0, mu0 = _start(problem, fns, init_design, settings, mu0)
         error0 = kkt_residuals(fns, z0, y0).error
-        state = NewtonState(z0, s0, y0, mu0, jnp.asarray(1.0, z0.dtype), jnp.asarray(0), error0,
+        state = NewtonState(z0, s0, y0, mu0, jnp.asarray(0), error0,
                             jnp.asarray(False))
         return jax.lax.while_loop(lambda st: ~st.done & (st.iteration < settings.max_iterations),
                                   partial(_step, fns=fns, settings=settings), state)
@@ -384,8 +378,9 @@ def certify(problem: Problem, weights: Weights, init_design: Design | None = Non
     fns = _functions(problem, weights)
     rows = fns.rows(res.z)
     sens = {}
+    values = limit_values(problem)
     for key, setter in _limits(problem).items():
-        value = limit_values(problem)[key]
+        value = values[key]
         moved = jax.jacfwd(
             lambda v, setter=setter: _functions(setter(problem, v), weights).rows(res.z))(value)
         sens[key] = scale * res.multipliers * moved
@@ -484,8 +479,20 @@ def certificate_block(problem, alpha: float, gamma: float) -> dict:
     family ``polish`` moves the design off the grid's samples (by ~1e-6 relative)."""
     from camjax.family import weights_of
 
-    dtype = jax.tree.leaves(family_of(problem).bounds(problem)[0])[0].dtype
+    dtype = problem_dtype(problem)
     cert = _certify_jit(problem, weights_of(alpha, gamma, dtype))
     block = certificate_json(problem, cert)
     block["limited_by"] = limited_by(block)
     return block
+
+
+def design_json(problem, spec) -> dict:
+    """result.json's design block of a scene's [design] ``spec`` (alpha, gamma, mode, solver, seed):
+    one weighting solved, as JSON, and for the ``newton`` solver in global mode its KKT
+    certificate (:func:`certificate_block`) under ``certificate``; :func:`camjax.solvers.base.solve`
+    otherwise."""
+    out = solve(problem, (spec.alpha, spec.gamma), mode=spec.mode, solver=spec.solver,
+                seed=spec.seed).to_json(problem)
+    if spec.solver == "newton" and spec.mode == "global":
+        out["certificate"] = certificate_block(problem, spec.alpha, spec.gamma)
+    return out
