@@ -35,6 +35,11 @@ APPROACH_MM = 2.0  # the lead-in starts this far outside the path, along its nor
 LINE_SAG = 1e-3  # an arc whose sagitta is below LINE_SAG * tolerance is written as a line (G1)
 
 
+def signed_area2(x: np.ndarray, y: np.ndarray) -> float:
+    """Twice the signed area of the closed polygon through (x, y) (shoelace; > 0 counter-clockwise)."""
+    return float(np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y))
+
+
 def unit_scale(units: str) -> float:
     """Factor from mm to ``units`` ("mm": 1, "in": 1/25.4; :func:`camjax.units.length_scale`'s inverse)."""
     from camjax.units import UNITS, length_scale
@@ -145,7 +150,7 @@ def cam_surface(scene, design: dict | None, base_radius_mm: float, samples: int)
         bad = int(np.argmin(np.where(np.isfinite(speed), speed, -1.0)))
         raise SceneError("manufacture", float(theta[bad]), "the cam surface is not a smooth curve at "
                          "this cam angle (deg): its outline has a cusp or is not finite; it cannot be cut")
-    area2 = float(np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y))  # twice the signed area
+    area2 = signed_area2(x, y)
     orient = 1.0 if area2 > 0 else -1.0  # +1: increasing angle runs counter-clockwise
     tx, ty = dx / speed, dy / speed
     turn = tx * np.roll(tx, -1) + ty * np.roll(ty, -1)
@@ -445,7 +450,7 @@ def plan_program(tp: ToolPath, tolerance_mm: float, units: str = "mm") -> Progra
     t = np.column_stack([tp.tx, tp.ty])
     start = int(np.argmax(np.hypot(tp.x_mm, tp.y_mm)))
     order = np.roll(np.arange(len(xy)), -start)
-    area2 = float(np.sum(xy[:, 0] * np.roll(xy[:, 1], -1) - np.roll(xy[:, 0], -1) * xy[:, 1]))
+    area2 = signed_area2(xy[:, 0], xy[:, 1])
     if area2 > 0:  # counter-clockwise by increasing angle: run it backwards
         order = np.concatenate([order[:1], order[1:][::-1]])
         t = -t

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from camjax.errors import SceneError
-from camjax.output.machining import Surface, unit_scale
+from camjax.output.machining import Surface, signed_area2, unit_scale
 
 
 def solid_outline(surface: Surface, tolerance_mm: float) -> np.ndarray:
@@ -29,7 +29,7 @@ def solid_outline(surface: Surface, tolerance_mm: float) -> np.ndarray:
     tightest = float(np.min(np.abs(surface.rho_mm)))
     stride = int(max(1, min(len(xy) // 720, math.sqrt(8.0 * tightest * tolerance_mm) // step)))
     out = xy[::stride]
-    area2 = float(np.sum(out[:, 0] * np.roll(out[:, 1], -1) - np.roll(out[:, 0], -1) * out[:, 1]))
+    area2 = signed_area2(out[:, 0], out[:, 1])
     return out if area2 > 0 else out[::-1]
 
 
