@@ -419,7 +419,74 @@ def _solvers() -> str:
     return ", ".join(f"`{name}`" for name in SOLVERS)
 
 
+GALLERY = ROOT / "docs" / "gallery"
+
+# one line on each follower type for the home page (a type not named here shows its title alone)
+FOLLOWER_BLURBS = {
+    "flat": "a flat face sliding on a straight stem; sized by the cam's curvature and contact stress",
+    "roller": "a roller on a sliding stem, offset or in line; sized by pressure angle and undercut",
+    "knife_edge": "a sharp tip riding the profile itself; pressure angle and crest radius",
+    "curved_face": "a crowned (mushroom) face on a sliding stem",
+    "oscillating_roller": "a roller on an arm swinging about a pivot",
+    "oscillating_flat": "a flat face on an arm swinging about a pivot",
+    "oscillating_curved_face": "a crowned face on an arm swinging about a pivot",
+}
+
+
+def _follower_types() -> str:
+    """The follower types as a row of thumbnails (each type's example scene's profile from the
+    gallery, docs/gen_gallery.py) with the type, its motion and its built-in example scene; for a
+    page at the top of docs/ (the image paths are relative to it)."""
+    cells = []
+    for f in _followers():
+        image = GALLERY / f"{f.example_scene}-profile.png"
+        img = (f'<img src="gallery/{image.name}" alt="{f.title} follower: the {f.example_scene} scene\'s cam" '
+               'loading="lazy">') if image.exists() else ""
+        motion = "rocking" if f.rocking else "translating"
+        blurb = FOLLOWER_BLURBS.get(f.name, "")
+        cells.append(f'<figure>{img}<figcaption><strong>{f.title}</strong> ({motion}, <code>type = "{f.name}"</code>)'
+                     f'{": " + blurb if blurb else ""}; example scene <code>{f.example_scene}</code></figcaption></figure>')
+    return '<div class="figure-row thumbs" markdown="0">\n' + "\n".join(cells) + "\n</div>"
+
+
+GALLERY_FIGURES = {"profile": "the cam and its follower", "svaj": "s, v, a, j over one turn",
+                   "loads": "contact force and cam torque"}
+"""The gallery's figures per scene, in docs/gen_gallery.py's file names (``SCENE-NAME.png``)."""
+
+
+def gallery_missing() -> dict[str, str]:
+    """Built-in scene -> the command that draws its gallery figures, for each scene without them."""
+    from camjax.scene import BUILTIN_SCENES
+
+    return {name: f"python docs/gen_gallery.py --scene {name}" for name in BUILTIN_SCENES
+            if not (GALLERY / f"{name}-profile.png").exists()}
+
+
+def _gallery() -> str:
+    """Every built-in scene (from the registry): its TOML beside its committed figures. The build
+    only shows the images docs/gen_gallery.py drew; a scene without them says how to draw them."""
+    from camjax.scene import BUILTIN_SCENES, builtin_scene_text
+
+    parts = []
+    for name in BUILTIN_SCENES:
+        text = builtin_scene_text(name)
+        kind = next((line.split("=", 1)[1].split("#")[0].strip().strip('"') for line in text.splitlines()
+                     if line.strip().startswith("type")), "")
+        figures = [f"![{name}: {what}](gallery/{name}-{fig}.png)" for fig, what in GALLERY_FIGURES.items()
+                   if (GALLERY / f"{name}-{fig}.png").exists()]
+        if not figures:
+            figures = [f"No figures yet: `python docs/gen_gallery.py --scene {name}` draws them."]
+        parts.append(
+            f"## `{name}` {{ #{name} }}\n\n`camjax design {name} --out out/`"
+            + (f" · follower `{kind}`" if kind else "") + "\n\n"
+            f'<div class="gallery-scene" markdown>\n<div markdown>\n\n```toml\n{text.rstrip()}\n```\n\n</div>\n'
+            f'<div markdown>\n\n' + "\n\n".join(figures) + "\n\n</div>\n</div>\n")
+    return "\n".join(parts)
+
+
 LISTS: dict[str, Callable[[], str]] = {
+    "gallery": _gallery,  # every built-in scene: TOML beside its figures (docs/gallery.md)
+    "follower_types": _follower_types,  # thumbnails and one line per type (home page)
     "followers": _follower_titles,  # "curved-face, flat-face, ... and roller"
     "followers_count": lambda: str(len(_followers())),
     "translating_followers": lambda: _follower_titles(False),

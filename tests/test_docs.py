@@ -83,7 +83,7 @@ def test_unknown_placeholder_is_an_error():
 
 @pytest.mark.parametrize("page, names", [
     ("index.md", "followers"), ("extending.md", "folders"), ("architecture.md", "folders"),
-    ("cli.md", "scenes"), ("scenes.md", "scenes"), ("index.md", "solvers"),
+    ("cli.md", "scenes"), ("scenes.md", "scenes"), ("optimize.md", "solvers"), ("gallery.md", "scenes"),
 ])
 def test_pages_that_list_followers_or_scenes_name_every_registered_one(page, names):
     """The lists come from the registries when the site is built: every follower type (its title,

@@ -1,0 +1,83 @@
+"""Draw the gallery's figures: every built-in scene designed by ``camjax design``, its figures kept small.
+
+``python docs/gen_gallery.py`` designs every built-in scene (``camjax.scene.BUILTIN_SCENES``);
+``python docs/gen_gallery.py --scene NAME [--scene NAME ...]`` designs only those. Each run writes
+``docs/gallery/NAME-profile.png``, ``NAME-svaj.png`` and, where the scene has loads,
+``NAME-loads.png`` (PNG at :data:`DPI` dpi, a few tens of KB each), replacing the scene's old
+figures. The site's build does not run this (it takes a minute or so per scene): it shows the
+committed images beside each scene's TOML (``{{ gallery }}`` in docs/gallery.md, written by
+docs/gen_tables.py), and ``tests/test_docs.py`` fails when a built-in scene has no image yet.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+GALLERY = ROOT / "docs" / "gallery"
+DPI = 90
+FIGURES = ("profile", "svaj", "loads")
+"""The figures kept, in the order the gallery shows them (``loads`` only where the scene has loads)."""
+
+
+def builtin_scenes() -> list[str]:
+    """Every built-in scene's name, read from the package's registry."""
+    sys.path.insert(0, str(ROOT))
+    from camjax.scene import BUILTIN_SCENES
+
+    return list(BUILTIN_SCENES)
+
+
+def figure_paths(scene: str) -> dict[str, Path]:
+    """Figure name -> the gallery file it is kept in, for one scene."""
+    return {name: GALLERY / f"{scene}-{name}.png" for name in FIGURES}
+
+
+def draw(scene: str, dpi: int = DPI) -> list[Path]:
+    """Run ``camjax design SCENE --dpi DPI`` into a temporary folder and keep its figures."""
+    GALLERY.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "out"
+        cmd = [sys.executable, "-m", "camjax.cli", "design", scene, "--out", str(out), "--dpi", str(dpi)]
+        run = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True,
+                             env={**os.environ, "PYTHONPATH": str(ROOT)})
+        if run.returncode != 0:
+            raise SystemExit(f"{' '.join(cmd[1:])} failed (exit {run.returncode}):\n{run.stderr}")
+        kept = []
+        for name, dest in figure_paths(scene).items():
+            src = out / f"{name}.png"
+            dest.unlink(missing_ok=True)
+            if src.exists():
+                shutil.copyfile(src, dest)
+                kept.append(dest)
+    return kept
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--scene", action="append", metavar="NAME",
+                        help="a built-in scene to draw (repeatable; default: every built-in scene)")
+    parser.add_argument("--dpi", type=int, default=DPI, help=f"resolution of the figures (default {DPI})")
+    args = parser.parse_args(argv)
+    known = builtin_scenes()
+    scenes = args.scene or known
+    unknown = [s for s in scenes if s not in known]
+    if unknown:
+        parser.error(f"unknown built-in scene(s) {', '.join(unknown)}; known: {', '.join(known)}")
+    for scene in scenes:
+        kept = draw(scene, args.dpi)
+        size = sum(p.stat().st_size for p in kept) / 1024
+        print(f"{scene}: {', '.join(p.name for p in kept)} ({size:.0f} KB)", flush=True)
+    total = sum(p.stat().st_size for p in GALLERY.glob("*.png")) / 2**20
+    print(f"docs/gallery: {total:.2f} MB in all")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
