@@ -140,3 +140,37 @@ def test_every_public_module_is_on_one_api_page_in_the_nav():
         assert len(blocks.get(name, [])) == 1, f"{name} is on {blocks.get(name, [])} (one API page wanted)"
     unknown = [n for n in blocks if importlib.util.find_spec(n) is None]
     assert not unknown, f"API pages name modules that do not exist: {unknown}"
+
+
+def test_every_builtin_scene_has_gallery_figures():
+    """The gallery page shows committed images (the build does not run ``camjax design``): each
+    built-in scene needs its profile and s/v/a/j figures, drawn by docs/gen_gallery.py."""
+    from camjax.scene import BUILTIN_SCENES
+
+    gallery = ROOT / "docs" / "gallery"
+    missing = [f"{name} (run: python docs/gen_gallery.py --scene {name})" for name in BUILTIN_SCENES
+               if not all((gallery / f"{name}-{fig}.png").exists() for fig in ("profile", "svaj"))]
+    assert not missing, "built-in scenes without gallery figures: " + "; ".join(missing)
+    assert _gen_tables().gallery_missing() == {}
+    # the gallery stays small enough to commit: PNGs at low dpi, ~0.2 MB a scene
+    total = sum(p.stat().st_size for p in gallery.glob("*"))
+    assert total < 6 * 2**20, f"docs/gallery holds {total / 2**20:.1f} MB (budget 6 MB)"
+    stale = sorted({p.name.rsplit("-", 1)[0] for p in gallery.glob("*.png")} - set(BUILTIN_SCENES))
+    assert not stale, f"gallery figures of scenes that are not built in: {stale}"
+
+
+def test_gallery_page_shows_each_scene_file_beside_its_figures():
+    from camjax.scene import BUILTIN_SCENES, builtin_scene_text
+
+    out = _gen_tables().render((ROOT / "docs" / "gallery.md").read_text(), "gallery.md")
+    for name in BUILTIN_SCENES:
+        section = out.split(f"## `{name}`", 1)[1].split("\n## ", 1)[0]
+        assert builtin_scene_text(name).splitlines()[1] in section, name
+        assert f"(gallery/{name}-profile.png)" in section, name
+
+
+def test_gallery_generator_refuses_an_unknown_scene():
+    run = subprocess.run([sys.executable, str(ROOT / "docs" / "gen_gallery.py"), "--scene", "no-such-scene"],
+                         capture_output=True, text=True, timeout=120, env={**os.environ, "PYTHONPATH": str(ROOT)})
+    assert run.returncode == 2
+    assert "no-such-scene" in run.stderr and "default" in run.stderr  # names the known scenes
