@@ -1,6 +1,6 @@
 """Tables and figures of the documentation, generated from the JSON that camjax's own commands write.
 
-Ten sources, all committed (:data:`SOURCES`):
+The sources, all committed (:data:`SOURCES`):
 
 - ``bench``, ``benchmarks/results/full.json``: ``python benchmarks/run.py --out
   benchmarks/results/full.json``;
@@ -20,7 +20,15 @@ Ten sources, all committed (:data:`SOURCES`):
   oscillating_roller oscillating_flat --out benchmarks/results/followers.json``;
 - ``extrema``, ``benchmarks/results/extrema.json``: ``python -m benchmarks.extrema_samples --out
   benchmarks/results/extrema.json [FOLLOWER ...]``;
-- ``codesign``, ``benchmarks/results/codesign.json``: ``python -m benchmarks.codesign``.
+- ``codesign``, ``benchmarks/results/codesign.json``: ``python -m benchmarks.codesign``;
+- ``synthesis``, ``benchmarks/results/synthesis.json``: ``python -m benchmarks.synthesis --out FILE``
+  (``synthesis_device``, ``synthesis_device.json``: the same on a GPU machine, then on its CPU);
+- ``robust``, ``benchmarks/results/robust.json``: ``python -m benchmarks.robust --samples 100000
+  --out benchmarks/results/robust.json``.
+
+``{{ table: performance }}`` is every target of every benchmark in one table (:func:`targets`:
+goal, measured, machine, status); ``{{ status: KEY }}`` writes one target's status (``met`` or
+``missed``) in prose, so a page that names a figure cannot call it otherwise.
 
 A page asks for a table with a line ``{{ table: NAME }}`` (NAME one of :data:`TABLES`) and for a
 single figure with ``{{ SOURCE: dotted.path[*factor][:format] }}``, e.g.
@@ -53,6 +61,9 @@ SOURCES = {
     "followers": ROOT / "benchmarks" / "results" / "followers.json",
     "extrema": ROOT / "benchmarks" / "results" / "extrema.json",
     "codesign": ROOT / "benchmarks" / "results" / "codesign.json",
+    "synthesis": ROOT / "benchmarks" / "results" / "synthesis.json",
+    "synthesis_device": ROOT / "benchmarks" / "results" / "synthesis_device.json",
+    "robust": ROOT / "benchmarks" / "results" / "robust.json",
 }
 
 
@@ -181,37 +192,46 @@ def _yes(flag) -> str:
 def _sweeps(followers: dict) -> dict[str, dict]:
     """The 100-weighting sweep of each follower that has one: the flat face (full.json ``sweep``),
     the roller (roller.json) and the rockers (followers.json)."""
-    out = {name: {**v, "_file": "followers.json"} for name, v in followers.items()
+    envs = followers.get("environment", {})
+    out = {name: {**v, "_file": "followers.json", "_env": envs.get(name)} for name, v in followers.items()
            if isinstance(v, dict) and "gradient_speedup" in v}
     for source, key, name in (("roller", "roller", "roller"), ("bench", "sweep", "flat")):
         try:
-            out.setdefault(name, {**load(source)[key], "_file": SOURCES[source].name})
+            data = load(source)
+            env = data["environment"]
+            out.setdefault(name, {**data[key], "_file": SOURCES[source].name,
+                                  "_env": env.get(name, env) if name in env else env})
         except (OSError, KeyError):
             pass
     return out
 
 
+def machine(env: dict | None) -> str:
+    """A short name of the machine a benchmark ran on: cores, CPU maker, JAX version."""
+    if not env:
+        return "not recorded"
+    text = env.get("machine", "")
+    maker = next((m for m in ("AMD EPYC", "Xeon", "Apple") if m in text), "")
+    cores = f"{env['cpu_count']}-core " if env.get("cpu_count") else ""
+    jax = f", JAX {env['jax']}" if env.get("jax") else ""
+    return f"{cores}{maker + ' ' if maker else ''}CPU{jax}"
+
+
 def follower_speed(followers: dict) -> str:
-    """A row per registered follower: the sweep speed-ups against SciPy at matched accuracy, the
-    gradient solver's largest iteration count, and the exact report's time over the grid one at 360
-    samples, with the goals; a follower not measured says so."""
+    """A row per registered follower: the sweep speed-ups against SciPy at matched accuracy and the
+    gradient solver's largest iteration count, with the goals and the machine of that follower's
+    run (one machine per row); a follower not measured says so."""
     sweeps = _sweeps(followers)
-    try:
-        extrema = load("extrema")["followers"]
-    except OSError:
-        extrema = {}
     lines = [
         f"| follower | gradient vs SLSQP (goal ≥ {SWEEP_GOALS['gradient_speedup']:g}×) | matched | "
         f"GA or hybrid vs differential evolution (goal ≥ {SWEEP_GOALS['ga_speedup']:g}×) | matched | "
-        f"gradient steps (max) | exact / grid report, N = 360 (goal ≤ {EXACT_GOAL:g}×) | sweep from |",
-        "|---|---|---|---|---|---:|---|---|",
+        "gradient steps (max) | machine |",
+        "|---|---|---|---|---|---:|---|",
     ]
     for name in _follower_names():
         s = sweeps.get(name)
-        e = extrema.get(name, {})
-        exact = _ratio_cell(e.get("exact_over_grid_time_360"), EXACT_GOAL, at_least=False)
         if s is None:
-            lines.append(f"| `{name}` | no sweep benchmark | | no sweep benchmark | | – | {exact} | |")
+            lines.append(f"| `{name}` | no sweep benchmark | | no sweep benchmark | | – | |")
             continue
         gradient = s.get("methods", {}).get("camjax_gradient", {})
         steps = gradient.get("iterations_max")
@@ -222,7 +242,7 @@ def follower_speed(followers: dict) -> str:
                               matched=s.get("ga_accuracy_matched"))
         lines.append(
             f"| `{name}` | {gradient_cell} | {_yes(s.get('gradient_accuracy_matched'))} | {ga_cell} "
-            f"({via}) | {_yes(s.get('ga_accuracy_matched'))} | {_g(steps)} | {exact} | `{s['_file']}` |"
+            f"({via}) | {_yes(s.get('ga_accuracy_matched'))} | {_g(steps)} | {machine(s.get('_env'))} |"
         )
     return "\n".join(lines)
 
@@ -351,7 +371,113 @@ def cli_cold(data: dict) -> str:
     return "\n".join(rows)
 
 
+# ------------------------------------------------------------------------------------ targets
+
+DETAILS = "benchmarks.md"
+
+
+def _figure(value: float) -> str:
+    """A measured figure for the targets table: whole numbers from 100 up, else 3 digits."""
+    return f"{value:,.0f}" if 100 <= abs(value) < 1e6 else f"{value:.3g}"
+
+
+def _target(key, what, goal, value, at_least, env, anchor, unit="×", matched=None) -> dict:
+    met = None if value is None else (value >= goal if at_least else value <= goal)
+    if met and matched is False:
+        met = False
+    return {"key": key, "what": what, "goal": f"{'≥' if at_least else '≤'} {goal:g}{unit}",
+            "measured": "not measured" if value is None else f"{_figure(value)}{unit}",
+            "machine": machine(env) if isinstance(env, dict) else env, "met": met,
+            "note": "accuracy not matched" if matched is False else "", "details": f"{DETAILS}#{anchor}"}
+
+
+def targets() -> list[dict]:
+    """Every target of every benchmark, one row per measurement (one machine per row): ``key``,
+    ``what``, ``goal``, ``measured``, ``machine``, ``met`` (None where not measured), ``note`` and
+    ``details`` (the benchmark page's section). The one list the performance table and the
+    ``{{ status: KEY }}`` placeholders read, so a figure has the same status wherever it appears."""
+    rows = []
+    bench = load("bench")
+    for t in bench["targets"]:
+        op, goal = t["target"].split()
+        unit = "×" if t["description"].endswith("(x)") else ""
+        what = ("flat-face " if t["key"].startswith("sweep.") else "") + t["description"].removesuffix(" (x)")
+        rows.append({**_target(t["key"], what, float(goal), t["measured"],
+                               op == ">=", bench["environment"], "last-full-run", unit=unit),
+                     "met": t["status"] == "pass"})
+    followers = load("followers")
+    sweeps = _sweeps(followers)
+    for name in _follower_names():
+        s = sweeps.get(name)
+        if s is None or name == "flat":  # the flat face's sweep is full.json's sweep.* above
+            continue
+        for figure, solver in (("gradient_speedup", "gradient vs SLSQP"), ("ga_speedup", "GA or hybrid vs "
+                                                                           "differential evolution")):
+            kind = "gradient" if figure.startswith("gradient") else "ga"
+            rows.append(_target(f"{name}.{figure}", f"{name} sweep, {solver}", SWEEP_GOALS[figure],
+                                s.get(figure), True, s.get("_env"), "follower-speed",
+                                matched=s.get(f"{kind}_accuracy_matched")))
+    exact = load("exact")
+    rows.append(_target("exact.time_ratio.sweep", "exact extrema: 100-weighting sweep time / grid's", EXACT_GOAL,
+                        exact["exact"]["time_ratio"]["sweep"], False, exact["environment"], "extrema-per-follower"))
+    extrema = load("extrema")
+    worst = max(extrema["followers"], key=lambda n: extrema["followers"][n].get("exact_over_grid_time_360") or 0)
+    rows.append(_target("extrema.exact_over_grid_time_360", f"exact / grid report time, N = 360 (worst: {worst})",
+                        EXACT_GOAL, extrema["followers"][worst].get("exact_over_grid_time_360"), False,
+                        extrema["environment"][worst], "extrema-per-follower"))
+    cli = load("cli")
+    cli_machine = f"{cli['cpu_count']}-core CPU"
+    for key, what, goal in (("cli.design_over_import", "`camjax design` warm / `import jax`", 2.0),
+                            ("cli.dynamics_over_import", "`camjax dynamics` warm / `import jax`", 8.0),
+                            ("cli.laws_over_import", "`camjax laws` / `import jax`", 1.5)):
+        rows.append(_target(key, what, goal, cli.get(key), False, cli_machine, "the-cli"))
+    rows.append(_target("cli.cold_max_s", "`camjax design` cold, slowest built-in scene", 10.0,
+                        cli.get("cli.cold_max_s"), False, cli_machine, "the-cli", unit=" s"))
+    codesign = load("codesign")
+    rows.append(_target("codesign.slsqp_speedup", "co-design vs SciPy SLSQP (median)", 10.0,
+                        codesign["codesign"]["slsqp_speedup"], True, codesign["environment"], "notes-on-the-targets"))
+    synthesis = load("synthesis")["synthesis"]
+    rows.append(_target("synthesis.linprog_speedup", "256 law syntheses vs SciPy linprog (HiGHS)", 10.0,
+                        synthesis["linprog_speedup"], True, "shared 2-core CPU",  # not in its JSON
+                        "law-synthesis"))
+    device = load("synthesis_device")
+    rows.append(_target("synthesis_device.gpu.linprog_speedup", "the same, JAX on a GPU", 10.0,
+                        device["gpu"]["linprog_speedup"], True, f"{device['gpu']['device']} GPU", "law-synthesis"))
+    rows.append(_target("synthesis_device.cpu_16_cores.linprog_speedup", "the same, on that machine's CPU", 10.0,
+                        device["cpu_16_cores"]["linprog_speedup"], True, "16-core CPU, JAX 0.11.2", "law-synthesis"))
+    robust = load("robust")
+    rows.append(_target("robust.cli_wall_s.warm_median", "`camjax robust`, 100000 samples, warm", 10.0,
+                        robust["robust"]["cli_wall_s"]["warm_median"], False, robust["environment"], "robust",
+                        unit=" s"))
+    return rows
+
+
+def _status(row: dict) -> str:
+    if row["met"] is None:
+        return "not measured"
+    return ("met" if row["met"] else "**missed**") + (f" ({row['note']})" if row["note"] else "")
+
+
+def performance(_: dict | None = None) -> str:
+    """Every target in one table: what, goal, measured, machine, status, where it is detailed."""
+    lines = ["| target | goal | measured | machine | status |", "|---|---|---|---|---|"]
+    for r in targets():
+        lines.append(f"| [{r['what']}]({r['details']}) | {r['goal']} | {r['measured']} | {r['machine']} | "
+                     f"{_status(r)} |")
+    return "\n".join(lines)
+
+
+def status(key: str) -> str:
+    """``met`` or ``missed`` for the target ``key`` (as the performance table says it)."""
+    rows = {r["key"]: r for r in targets()}
+    if key not in rows:
+        raise PlaceholderError(f"unknown target {key!r} (known: {', '.join(rows)})")
+    r = rows[key]
+    return "not measured" if r["met"] is None else ("met" if r["met"] else "missed")
+
+
 TABLES: dict[str, tuple[str, Callable[[dict], str]]] = {
+    "performance": ("bench", performance),
     "cli_cold": ("cli", cli_cold),
     "bench_provenance": ("bench", bench_provenance),
     "bench_targets": ("bench", bench_targets),
@@ -497,6 +623,7 @@ LISTS: dict[str, Callable[[], str]] = {
     "solvers": _solvers,
 }
 _LIST = re.compile(r"(?<!\\)\{\{\s*list:\s*(\w+)\s*\}\}")
+_STATUS = re.compile(r"(?<!\\)\{\{\s*status:\s*([\w.]+)\s*\}\}")
 
 
 def render(markdown: str, page: str = "<page>") -> str:
@@ -534,7 +661,14 @@ def render(markdown: str, page: str = "<page>") -> str:
         return LISTS[m.group(1)]()
 
     # "\\{{" is a literal "{{" (a page that shows the syntax)
-    return _LIST.sub(listed, _VALUE.sub(value, _TABLE.sub(table, markdown))).replace("\\{{", "{{")
+    def target_status(m: re.Match) -> str:
+        try:
+            return status(m.group(1))
+        except PlaceholderError as e:
+            raise PlaceholderError(f"{page}: {e}") from e
+
+    out = _LIST.sub(listed, _VALUE.sub(value, _TABLE.sub(table, markdown)))
+    return _STATUS.sub(target_status, out).replace("\\{{", "{{")
 
 
 def main(argv: list[str]) -> int:

@@ -174,3 +174,25 @@ def test_gallery_generator_refuses_an_unknown_scene():
                          capture_output=True, text=True, timeout=120, env={**os.environ, "PYTHONPATH": str(ROOT)})
     assert run.returncode == 2
     assert "no-such-scene" in run.stderr and "default" in run.stderr  # names the known scenes
+
+
+def test_performance_table_gives_each_target_one_machine_and_the_status_its_figures_give():
+    """One row per measurement: a goal, a measured figure, one machine, and the status that
+    follows from them (a speed-up whose accuracy is not matched is a miss); ``{{ status: KEY }}``
+    on any page says what the table says."""
+    gen = _gen_tables()
+    rows = gen.targets()
+    assert len({r["key"] for r in rows}) == len(rows)
+    number = lambda text: float(re.sub(r"[^0-9.e+-]", "", text.replace(",", "")))  # noqa: E731
+    for r in rows:
+        assert r["machine"] and r["machine"] != "not recorded" and " and " not in r["machine"], r
+        if r["met"] is None:
+            continue
+        goal, measured = number(r["goal"]), number(r["measured"])
+        ok = measured >= goal if r["goal"].startswith("≥") else measured <= goal
+        assert r["met"] == (ok and r["note"] != "accuracy not matched"), r
+        assert gen.render("{{ status: " + r["key"] + " }}") == ("met" if r["met"] else "missed")
+    table = gen.render("{{ table: performance }}")
+    assert len(table.splitlines()) == len(rows) + 2
+    with pytest.raises(gen.PlaceholderError):
+        gen.render("{{ status: no.such.target }}")
