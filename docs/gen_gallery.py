@@ -4,7 +4,8 @@
 ``python docs/gen_gallery.py --scene NAME [--scene NAME ...]`` designs only those. Each run writes
 ``docs/gallery/NAME-profile.png``, ``NAME-svaj.png`` and, where the scene has loads,
 ``NAME-loads.png`` (PNG at :data:`DPI` dpi, a few tens of KB each), replacing the scene's old
-figures. The site's build does not run this (it takes a minute or so per scene): it shows the
+figures, and ``NAME.json``: the title block the figures carry (``camjax.output.titles``), which
+the docs tests hold against what the pages say of the same design. The site's build does not run this (it takes a minute or so per scene): it shows the
 committed images beside each scene's TOML (``{{ gallery }}`` in docs/gallery.md, written by
 docs/gen_tables.py), and ``tests/test_docs.py`` fails when a built-in scene has no image yet.
 """
@@ -12,6 +13,7 @@ docs/gen_tables.py), and ``tests/test_docs.py`` fails when a built-in scene has 
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import shutil
 import subprocess
@@ -21,6 +23,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 GALLERY = ROOT / "docs" / "gallery"
+sys.path.insert(0, str(ROOT))  # the checkout's camjax, as the docs build imports it
 DPI = 90
 FIGURES = ("profile", "svaj", "loads")
 """The figures kept, in the order the gallery shows them (``loads`` only where the scene has loads)."""
@@ -28,7 +31,6 @@ FIGURES = ("profile", "svaj", "loads")
 
 def builtin_scenes() -> list[str]:
     """Every built-in scene's name, read from the package's registry."""
-    sys.path.insert(0, str(ROOT))
     from camjax.scene import BUILTIN_SCENES
 
     return list(BUILTIN_SCENES)
@@ -49,7 +51,13 @@ def draw(scene: str, dpi: int = DPI) -> list[Path]:
                              env={**os.environ, "PYTHONPATH": str(ROOT)})
         if run.returncode != 0:
             raise SystemExit(f"{' '.join(cmd[1:])} failed (exit {run.returncode}):\n{run.stderr}")
-        kept = []
+        from camjax.output.titles import title_block
+
+        result = json.loads((out / "result.json").read_text())
+        meta = GALLERY / f"{scene}.json"
+        meta.write_text(json.dumps({"scene": scene, "command": f"camjax design {scene} --dpi {dpi}",
+                                    "title_block": title_block(result)}, indent=1) + "\n")
+        kept = [meta]
         for name, dest in figure_paths(scene).items():
             src = out / f"{name}.png"
             dest.unlink(missing_ok=True)
@@ -74,7 +82,7 @@ def main(argv: list[str] | None = None) -> int:
         kept = draw(scene, args.dpi)
         size = sum(p.stat().st_size for p in kept) / 1024
         print(f"{scene}: {', '.join(p.name for p in kept)} ({size:.0f} KB)", flush=True)
-    total = sum(p.stat().st_size for p in GALLERY.glob("*.png")) / 2**20
+    total = sum(p.stat().st_size for p in GALLERY.glob("*")) / 2**20
     print(f"docs/gallery: {total:.2f} MB in all")
     return 0
 

@@ -114,7 +114,8 @@ def bench_targets(bench: dict) -> str:
     lines = ["| target | goal | measured | |", "|---|---|---|---|"]
     for t in bench["targets"]:
         lines.append(
-            f"| {t['description']} (`{t['key']}`) | {t['target']} | {_g(t['measured'])} | {t['status']} |"
+            f"| {t['description']} (`{t['key']}`) | {t['target']} | {_g(t['measured'])} | "
+            f"{'pass' if t['status'] == 'pass' else '**miss**'} |"
         )
     return "\n".join(lines)
 
@@ -185,8 +186,9 @@ def _ratio_cell(value, goal: float, at_least: bool = True, matched: bool | None 
     return f"{value:.1f}× ({'pass' if ok else '**miss**'})"
 
 
-def _yes(flag) -> str:
-    return "–" if flag is None else ("yes" if flag else "**no**")
+def _matched(cell: str, matched: bool | None) -> str:
+    """A speed-up cell that says so when its accuracy is not matched (a miss either way)."""
+    return cell if matched is not False or "accuracy not matched" in cell else cell + ", accuracy not matched"
 
 
 def _sweeps(followers: dict) -> dict[str, dict]:
@@ -223,15 +225,15 @@ def follower_speed(followers: dict) -> str:
     run (one machine per row); a follower not measured says so."""
     sweeps = _sweeps(followers)
     lines = [
-        f"| follower | gradient vs SLSQP (goal ≥ {SWEEP_GOALS['gradient_speedup']:g}×) | matched | "
-        f"GA or hybrid vs differential evolution (goal ≥ {SWEEP_GOALS['ga_speedup']:g}×) | matched | "
+        f"| follower | gradient vs SLSQP (goal ≥ {SWEEP_GOALS['gradient_speedup']:g}×) | "
+        f"GA or hybrid vs differential evolution (goal ≥ {SWEEP_GOALS['ga_speedup']:g}×) | "
         "gradient steps (max) | machine |",
-        "|---|---|---|---|---|---:|---|",
+        "|---|---|---|---:|---|",
     ]
     for name in _follower_names():
         s = sweeps.get(name)
         if s is None:
-            lines.append(f"| `{name}` | no sweep benchmark | | no sweep benchmark | | – | |")
+            lines.append(f"| `{name}` | no sweep benchmark | no sweep benchmark | – | |")
             continue
         gradient = s.get("methods", {}).get("camjax_gradient", {})
         steps = gradient.get("iterations_max")
@@ -241,25 +243,27 @@ def follower_speed(followers: dict) -> str:
         ga_cell = _ratio_cell(s["ga_speedup"], SWEEP_GOALS["ga_speedup"],
                               matched=s.get("ga_accuracy_matched"))
         lines.append(
-            f"| `{name}` | {gradient_cell} | {_yes(s.get('gradient_accuracy_matched'))} | {ga_cell} "
-            f"({via}) | {_yes(s.get('ga_accuracy_matched'))} | {_g(steps)} | {machine(s.get('_env'))} |"
+            f"| `{name}` | {_matched(gradient_cell, s.get('gradient_accuracy_matched'))} | "
+            f"{_matched(ga_cell, s.get('ga_accuracy_matched'))} ({via}) | {_g(steps)} | {machine(s.get('_env'))} |"
         )
     return "\n".join(lines)
 
 
 def follower_sweeps(followers: dict) -> str:
-    """Every method of each rocker's sweep: time for all weightings, worst gap, infeasible results."""
-    lines = ["| follower | method | time, 100 weightings (s) | weightings measured | worst rel. gap | "
-             "infeasible | steps (max) |", "|---|---|---:|---:|---:|---:|---:|"]
+    """Every method of each rocker's sweep, a table per follower: time for all weightings, worst
+    gap, infeasible results, steps."""
+    parts = []
     for name, s in followers.items():
         if not isinstance(s, dict) or "methods" not in s:
             continue
+        lines = [f"**`{name}`**", "", "| method | time, 100 weightings (s) | weightings measured | "
+                 "worst rel. gap | infeasible | steps (max) |", "|---|---:|---:|---:|---:|---:|"]
         for method, m in s["methods"].items():
             extra = " (extrapolated)" if m.get("extrapolated") else ""
-            lines.append(f"| `{name}` | `{method}` | {_g(m['time_s'])}{extra} | {m['weightings']} | "
-                         f"{m['max_rel_objective_gap']:.1e} | {m['infeasible']} | "
-                         f"{_g(m.get('iterations_max'))} |")
-    return "\n".join(lines)
+            lines.append(f"| `{method}` | {_g(m['time_s'])}{extra} | {m['weightings']} | "
+                         f"{m['max_rel_objective_gap']:.1e} | {m['infeasible']} | {_g(m.get('iterations_max'))} |")
+        parts.append("\n".join(lines))
+    return "\n\n".join(parts)
 
 
 def extrema_provenance(extrema: dict) -> str:
@@ -276,18 +280,20 @@ def extrema_provenance(extrema: dict) -> str:
 
 
 def extrema_table(extrema: dict) -> str:
-    """A row per follower and sample count: time and largest relative error of the grid and the exact
-    extrema against the dense reference."""
-    lines = ["| follower | N | grid: time (s) | grid: max rel. error | exact: time (s) "
-             "| exact: max rel. error | worst figure (exact) |", "|---|---:|---:|---:|---:|---:|---|"]
+    """A table per follower, a row per sample count: time and largest relative error of the grid
+    and the exact extrema against the dense reference."""
+    parts = []
     for name, f in extrema["followers"].items():
+        lines = [f"**`{name}`**", "", "| N | grid: time (s) | grid: max rel. error | exact: time (s) "
+                 "| exact: max rel. error | worst figure (exact) |", "|---:|---:|---:|---:|---:|---|"]
         by = {(r["samples"], r["extrema"]): r for r in f["rows"]}
         for n in sorted({r["samples"] for r in f["rows"]}):
             g, e = by.get((n, "grid"), {}), by.get((n, "exact"), {})
             err = lambda r: f"{r['max_rel_error']:.1e}" if r else "–"  # noqa: E731
-            lines.append(f"| `{name}` | {n:,} | {_g(g.get('time_s'))} | {err(g)} | {_g(e.get('time_s'))} | "
+            lines.append(f"| {n:,} | {_g(g.get('time_s'))} | {err(g)} | {_g(e.get('time_s'))} | "
                          f"{err(e)} | {e.get('worst_figure', '–')} |")
-    return "\n".join(lines)
+        parts.append("\n".join(lines))
+    return "\n\n".join(parts)
 
 
 # ------------------------------------------------------------------------------------ extremes
@@ -455,7 +461,7 @@ def targets() -> list[dict]:
 def _status(row: dict) -> str:
     if row["met"] is None:
         return "not measured"
-    return ("met" if row["met"] else "**missed**") + (f" ({row['note']})" if row["note"] else "")
+    return ("pass" if row["met"] else "**miss**") + (f" ({row['note']})" if row["note"] else "")
 
 
 def performance(_: dict | None = None) -> str:
@@ -468,7 +474,7 @@ def performance(_: dict | None = None) -> str:
 
 
 def status(key: str) -> str:
-    """``met`` or ``missed`` for the target ``key`` (as the performance table says it)."""
+    """``met`` or ``missed`` for the target ``key`` (the performance table's pass or miss), for prose."""
     rows = {r["key"]: r for r in targets()}
     if key not in rows:
         raise PlaceholderError(f"unknown target {key!r} (known: {', '.join(rows)})")

@@ -3,6 +3,7 @@ generated figures (every placeholder resolves against the committed JSON)."""
 
 import ast
 import importlib.util
+import json
 import math
 import os
 import re
@@ -196,3 +197,142 @@ def test_performance_table_gives_each_target_one_machine_and_the_status_its_figu
     assert len(table.splitlines()) == len(rows) + 2
     with pytest.raises(gen.PlaceholderError):
         gen.render("{{ status: no.such.target }}")
+
+
+# ------------------------------------------------------------------------ numbers that agree
+# The site states some quantities on several pages: the reference design's base radius (and the
+# figures of that design carry it in their title blocks), and each speed-up of the performance
+# table. The pages are rendered as the build renders them (placeholders filled), and every
+# statement of one quantity must agree with the others at the precision it is written to.
+
+# a statement of another variant of the quantity, not a contradiction: the sampled (grid) or
+# pointwise figure, or the source's
+OTHER_VARIANT = re.compile(r"grid|samples|source|pointwise|1°", re.I)
+NUMBER = r"([0-9][0-9,]*\.?[0-9]*)"
+
+
+def _rendered_pages(docs: Path) -> dict[str, str]:
+    """Every user-facing page of ``docs`` (not the API pages) rendered, code blocks removed."""
+    gen = _gen_tables()
+    pages = {}
+    for page in sorted(docs.glob("*.md")):
+        text = gen.render(page.read_text(), page.name)
+        pages[page.name] = re.sub(r"^```.*?^```", "", text, flags=re.S | re.M)
+    return pages
+
+
+def _cells(text: str):
+    """(context, text) for every table cell (context: the column's header and the row's label) and
+    every other line (context: the line itself)."""
+    header = None
+    for line in text.splitlines():
+        if not line.startswith("|"):
+            header = None
+            yield line, line
+            continue
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if header is None:
+            header = cells
+        elif not set(line) <= set("|-: "):
+            for i, cell in enumerate(cells):
+                yield f"{header[i] if i < len(header) else ''} {cells[0]}", cell
+
+
+def _agrees(stated: str, value: float) -> bool:
+    """``stated`` (a number as written) is ``value`` rounded to the digits written."""
+    decimals = len(stated.split(".")[1]) if "." in stated else 0
+    return abs(float(stated.replace(",", "")) - value) <= 0.5 * 10.0 ** -decimals * (1 + 1e-9)
+
+
+def reference_radius_statements(docs: Path) -> list[tuple[str, str]]:
+    """(where, number as written) for every statement of the reference design's optimal R_b
+    (α = γ = 1, exact extrema): numbers between 28.3 and 28.5 mm said of R_b, on a page or in the
+    title block of a gallery figure, leaving out the sampled, pointwise and source's figures."""
+    found = []
+    for name, text in _rendered_pages(docs).items():
+        for context, cell in _cells(text):
+            if "R_b" not in context and "R_b" not in cell:
+                continue
+            for m in re.finditer(r"(?<![\d.])(28\.[0-9]+)", cell):
+                before = cell[:m.start()].rsplit(". ", 1)[-1]  # the sentence up to the number
+                if 28.3 <= float(m.group(1)) < 28.5 and not OTHER_VARIANT.search(before) \
+                        and not (OTHER_VARIANT.search(context) and context != cell):
+                    found.append((name, m.group(1)))
+    meta = docs / "gallery" / "default.json"
+    if meta.exists():
+        title = json.loads(meta.read_text())["title_block"]
+        found += [(f"gallery/{meta.stem} figures' title block", v) for v in re.findall(r"R_b = ([0-9.]+) mm", title)]
+    return found
+
+
+def speedup_statements(docs: Path) -> dict[str, list[tuple[str, str]]]:
+    """Target key -> (page, number as written) wherever a page writes ``KEY`` = N (or a table
+    cell N beside ``KEY``), for every target of the performance table."""
+    keys = [r["key"] for r in _gen_tables().targets()]
+    found: dict[str, list[tuple[str, str]]] = {k: [] for k in keys}
+    for name, text in _rendered_pages(docs).items():
+        for key in keys:
+            for m in re.finditer(r"`" + re.escape(key) + r"`\s*(?:=|\|)\s*\**\s*" + NUMBER, text):
+                found[key].append((name, m.group(1).rstrip(".")))
+    return found
+
+
+def contradictions(docs: Path) -> list[str]:
+    """Every statement that disagrees with the measured value of its quantity, with where."""
+    gen = _gen_tables()
+    out = []
+    radius = gen.load("result")["design"]["base_radius_mm"]
+    out += [f"reference R_b: {where} says {v} mm, result.json {radius:.6f} mm"
+            for where, v in reference_radius_statements(docs) if not _agrees(v, radius)]
+    measured = {}
+    for r in gen.targets():
+        m = re.match(r"[0-9,.]+(?:e[+-]?\d+)?", r["measured"])
+        measured[r["key"]] = float(m.group(0).replace(",", "")) if m else None
+    exact = {k: gen.lookup(gen.load(src), path) for k, (src, path) in SPEEDUP_SOURCES.items()}
+    for key, statements in speedup_statements(docs).items():
+        value = exact.get(key, measured[key])
+        for where, v in statements:
+            if value is not None and not _agrees(v, value) and not _agrees(v, measured[key]):
+                out.append(f"{key}: {where} says {v}, the measurement is {value:.4g}")
+    return out
+
+
+# the unrounded measurement behind a performance-table row, where a page may write more digits
+SPEEDUP_SOURCES = {
+    "codesign.slsqp_speedup": ("codesign", "codesign.slsqp_speedup"),
+    "synthesis.linprog_speedup": ("synthesis", "synthesis.linprog_speedup"),
+    "roller.gradient_speedup": ("roller", "roller.gradient_speedup"),
+    "roller.ga_speedup": ("roller", "roller.ga_speedup"),
+    "cli.design_over_import": ("cli", "cli.design_over_import"),
+    "cli.dynamics_over_import": ("cli", "cli.dynamics_over_import"),
+    "cli.laws_over_import": ("cli", "cli.laws_over_import"),
+    "cli.cold_max_s": ("cli", "cli.cold_max_s"),
+}
+
+
+def test_the_site_states_each_quantity_once_over():
+    """The reference R_b is stated on several pages and in its figures' title blocks, each
+    speed-up wherever a page names it: all agree with the committed measurement."""
+    statements = reference_radius_statements(ROOT / "docs")
+    pages = {where for where, _ in statements}
+    assert {"getting-started.md", "optimize.md", "accuracy.md"} <= pages, pages  # the collector finds them
+    assert any("title block" in where for where in pages)
+    assert any(speedup_statements(ROOT / "docs").values())
+    assert contradictions(ROOT / "docs") == []
+
+
+@pytest.mark.parametrize("plant, expected", [
+    ("The reference cam has R_b = 28.397 mm.\n", "reference R_b: index.md says 28.397"),
+    ("Co-design: `codesign.slsqp_speedup` = 34.1 against SLSQP.\n", "codesign.slsqp_speedup: index.md says 34.1"),
+])
+def test_a_planted_contradiction_fails(tmp_path, plant, expected):
+    """The same check on a copy of docs/ with one contradicting sentence planted in the home page."""
+    import shutil
+
+    docs = tmp_path / "docs"
+    shutil.copytree(ROOT / "docs", docs, ignore=shutil.ignore_patterns("api", "*.png", "*.gif"))
+    (docs / "gallery").mkdir(exist_ok=True)
+    shutil.copy(ROOT / "docs" / "gallery" / "default.json", docs / "gallery")
+    (docs / "index.md").write_text((docs / "index.md").read_text() + "\n" + plant)
+    found = contradictions(docs)
+    assert any(line.startswith(expected) for line in found), found
