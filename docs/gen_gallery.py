@@ -1,13 +1,14 @@
-"""Draw the gallery's figures: every built-in scene designed by ``camjax design``, its figures kept small.
+"""Draw the gallery's figures: every built-in scene designed by ``camjax design``, kept small.
 
 ``python docs/gen_gallery.py`` designs every built-in scene (``camjax.scene.BUILTIN_SCENES``);
 ``python docs/gen_gallery.py --scene NAME [--scene NAME ...]`` designs only those. Each run writes
 ``docs/gallery/NAME-profile.png``, ``NAME-svaj.png`` and, where the scene has loads,
-``NAME-loads.png`` (PNG at :data:`DPI` dpi, a few tens of KB each), replacing the scene's old
-figures, and ``NAME.json``: the title block the figures carry (``camjax.output.titles``), which
-the docs tests hold against what the pages say of the same design. The site's build does not run this (it takes a minute or so per scene): it shows the
-committed images beside each scene's TOML (``{{ gallery }}`` in docs/gallery.md, written by
-docs/gen_tables.py), and ``tests/test_docs.py`` fails when a built-in scene has no image yet.
+``NAME-loads.png`` (PNG at :data:`DPI` dpi, about 70 KB each), replacing the scene's old figures,
+and ``NAME.json``: the title block the figures carry (``camjax.output.titles``), which the docs
+tests hold against what the pages say of the same design. The site's build does not run this
+(a scene takes seconds to a minute): it shows the committed images beside each scene's TOML
+(``{{ list: gallery }}`` in docs/gallery.md, written by docs/gen_tables.py), and
+``tests/test_docs.py`` fails when a built-in scene has no figures yet.
 """
 
 from __future__ import annotations

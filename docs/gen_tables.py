@@ -244,7 +244,8 @@ def follower_speed(followers: dict) -> str:
                               matched=s.get("ga_accuracy_matched"))
         lines.append(
             f"| `{name}` | {_matched(gradient_cell, s.get('gradient_accuracy_matched'))} | "
-            f"{_matched(ga_cell, s.get('ga_accuracy_matched'))} ({via}) | {_g(steps)} | {machine(s.get('_env'))} |"
+            f"{_matched(ga_cell, s.get('ga_accuracy_matched'))} ({via}) | {_g(steps)} | "
+            f"{machine(s.get('_env'))} |"
         )
     return "\n".join(lines)
 
@@ -261,7 +262,8 @@ def follower_sweeps(followers: dict) -> str:
         for method, m in s["methods"].items():
             extra = " (extrapolated)" if m.get("extrapolated") else ""
             lines.append(f"| `{method}` | {_g(m['time_s'])}{extra} | {m['weightings']} | "
-                         f"{m['max_rel_objective_gap']:.1e} | {m['infeasible']} | {_g(m.get('iterations_max'))} |")
+                         f"{m['max_rel_objective_gap']:.1e} | {m['infeasible']} | "
+                         f"{_g(m.get('iterations_max'))} |")
         parts.append("\n".join(lines))
     return "\n\n".join(parts)
 
@@ -365,15 +367,16 @@ def extremes_failures(extremes: dict) -> str:
 def cli_cold(data: dict) -> str:
     """Every built-in scene's cold ``camjax design`` (benchmarks/cli_timing.py ``cold``): wall and
     CPU seconds, the wall over ``import jax``, its compute phase, against the 10 s target."""
-    scenes = sorted(k[len("cli.cold."):-len("_s")] for k in data
-                    if k.startswith("cli.cold.") and k.endswith("_s") and not k.endswith(("_cpu_s", "_phases_s")))
+    scenes = sorted(k[len("cli.cold."):-len("_s")] for k in data if k.startswith("cli.cold.")
+                    and k.endswith("_s") and not k.endswith(("_cpu_s", "_phases_s")))
     rows = ["| scene | wall s | CPU s | × import jax | compute s | ≤ 10 s |", "|---|---|---|---|---|---|"]
     for scene in scenes:
         wall = data[f"cli.cold.{scene}_s"]
         compute = data.get(f"cli.cold.{scene}_phases_s", {}).get("compute")
         rows.append(f"| `{scene}` | {wall:.1f} | {data[f'cli.cold.{scene}_cpu_s']:.1f} | "
                     f"{data[f'cli.cold.{scene}_over_import']:.1f} | "
-                    f"{'' if compute is None else f'{compute:.1f}'} | {'yes' if wall <= 10.0 else '**no**'} |")
+                    f"{'' if compute is None else f'{compute:.1f}'} | "
+                    f"{'yes' if wall <= 10.0 else '**no**'} |")
     return "\n".join(rows)
 
 
@@ -424,11 +427,14 @@ def targets() -> list[dict]:
                                 s.get(figure), True, s.get("_env"), "follower-speed",
                                 matched=s.get(f"{kind}_accuracy_matched")))
     exact = load("exact")
-    rows.append(_target("exact.time_ratio.sweep", "exact extrema: 100-weighting sweep time / grid's", EXACT_GOAL,
-                        exact["exact"]["time_ratio"]["sweep"], False, exact["environment"], "extrema-per-follower"))
+    rows.append(_target("exact.time_ratio.sweep", "exact extrema: 100-weighting sweep time / grid's",
+                        EXACT_GOAL, exact["exact"]["time_ratio"]["sweep"], False, exact["environment"],
+                        "extrema-per-follower"))
     extrema = load("extrema")
-    worst = max(extrema["followers"], key=lambda n: extrema["followers"][n].get("exact_over_grid_time_360") or 0)
-    rows.append(_target("extrema.exact_over_grid_time_360", f"exact / grid report time, N = 360 (worst: {worst})",
+    ratio = {n: f.get("exact_over_grid_time_360") or 0.0 for n, f in extrema["followers"].items()}
+    worst = max(ratio, key=ratio.get)
+    rows.append(_target("extrema.exact_over_grid_time_360",
+                        f"exact / grid report time, N = 360 (worst: {worst})",
                         EXACT_GOAL, extrema["followers"][worst].get("exact_over_grid_time_360"), False,
                         extrema["environment"][worst], "extrema-per-follower"))
     cli = load("cli")
@@ -441,16 +447,20 @@ def targets() -> list[dict]:
                         cli.get("cli.cold_max_s"), False, cli_machine, "the-cli", unit=" s"))
     codesign = load("codesign")
     rows.append(_target("codesign.slsqp_speedup", "co-design vs SciPy SLSQP (median)", 10.0,
-                        codesign["codesign"]["slsqp_speedup"], True, codesign["environment"], "notes-on-the-targets"))
+                        codesign["codesign"]["slsqp_speedup"], True, codesign["environment"],
+                        "notes-on-the-targets"))
     synthesis = load("synthesis")["synthesis"]
     rows.append(_target("synthesis.linprog_speedup", "256 law syntheses vs SciPy linprog (HiGHS)", 10.0,
                         synthesis["linprog_speedup"], True, "shared 2-core CPU",  # not in its JSON
                         "law-synthesis"))
     device = load("synthesis_device")
     rows.append(_target("synthesis_device.gpu.linprog_speedup", "the same, JAX on a GPU", 10.0,
-                        device["gpu"]["linprog_speedup"], True, f"{device['gpu']['device']} GPU", "law-synthesis"))
-    rows.append(_target("synthesis_device.cpu_16_cores.linprog_speedup", "the same, on that machine's CPU", 10.0,
-                        device["cpu_16_cores"]["linprog_speedup"], True, "16-core CPU, JAX 0.11.2", "law-synthesis"))
+                        device["gpu"]["linprog_speedup"], True, f"{device['gpu']['device']} GPU",
+                        "law-synthesis"))
+    rows.append(_target("synthesis_device.cpu_16_cores.linprog_speedup", "the same, on that machine's CPU",
+                        10.0, device["cpu_16_cores"]["linprog_speedup"], True,
+                        "16-core CPU, JAX 0.11.2",  # the machine's line in the JSON
+                        "law-synthesis"))
     robust = load("robust")
     rows.append(_target("robust.cli_wall_s.warm_median", "`camjax robust`, 100000 samples, warm", 10.0,
                         robust["robust"]["cli_wall_s"]["warm_median"], False, robust["environment"], "robust",
@@ -572,12 +582,14 @@ def _follower_types() -> str:
     cells = []
     for f in _followers():
         image = GALLERY / f"{f.example_scene}-profile.png"
-        img = (f'<img src="gallery/{image.name}" alt="{f.title} follower: the {f.example_scene} scene\'s cam" '
-               'loading="lazy">') if image.exists() else ""
+        scene = f"gallery/#{f.example_scene}"
+        img = (f'<a href="{scene}"><img src="gallery/{image.name}" alt="{f.title} follower: the '
+               f'{f.example_scene} scene\'s cam" loading="lazy"></a>') if image.exists() else ""
         motion = "rocking" if f.rocking else "translating"
         blurb = FOLLOWER_BLURBS.get(f.name, "")
-        cells.append(f'<figure>{img}<figcaption><strong>{f.title}</strong> ({motion}, <code>type = "{f.name}"</code>)'
-                     f'{": " + blurb if blurb else ""}; example scene <code>{f.example_scene}</code></figcaption></figure>')
+        cells.append(f'<figure>{img}<figcaption><strong>{f.title}</strong> · {motion} · '
+                     f'<code>type = "{f.name}"</code><br>{blurb + ". " if blurb else ""}'
+                     f'Scene <a href="{scene}"><code>{f.example_scene}</code></a></figcaption></figure>')
     return '<div class="figure-row thumbs" markdown="0">\n' + "\n".join(cells) + "\n</div>"
 
 
@@ -611,7 +623,8 @@ def _gallery() -> str:
         parts.append(
             f"## `{name}` {{ #{name} }}\n\n`camjax design {name} --out out/`"
             + (f" · follower `{kind}`" if kind else "") + "\n\n"
-            f'<div class="gallery-scene" markdown>\n<div markdown>\n\n```toml\n{text.rstrip()}\n```\n\n</div>\n'
+            '<div class="gallery-scene" markdown>\n<div markdown>\n\n'
+            f'```toml\n{text.rstrip()}\n```\n\n</div>\n'
             f'<div markdown>\n\n' + "\n\n".join(figures) + "\n\n</div>\n</div>\n")
     return "\n".join(parts)
 
@@ -633,7 +646,8 @@ _STATUS = re.compile(r"(?<!\\)\{\{\s*status:\s*([\w.]+)\s*\}\}")
 
 
 def render(markdown: str, page: str = "<page>") -> str:
-    """``markdown`` with every ``{{ table: NAME }}``, ``{{ SOURCE: path }}`` and ``{{ list: NAME }}`` replaced."""
+    """``markdown`` with every ``{{ table: NAME }}``, ``{{ SOURCE: path }}``, ``{{ list: NAME }}``
+    and ``{{ status: KEY }}`` replaced."""
     cache: dict[str, dict] = {}
 
     def data(source: str) -> dict:

@@ -3,6 +3,7 @@ generated figures (every placeholder resolves against the committed JSON)."""
 
 import ast
 import importlib.util
+import itertools
 import json
 import math
 import os
@@ -336,3 +337,48 @@ def test_a_planted_contradiction_fails(tmp_path, plant, expected):
     (docs / "index.md").write_text((docs / "index.md").read_text() + "\n" + plant)
     found = contradictions(docs)
     assert any(line.startswith(expected) for line in found), found
+
+
+# ------------------------------------------------------------------------ readable at 1280 px
+# With the page's contents in the left sidebar (toc.integrate), the content column is about
+# 990 px wide in a 1280 px window. A table cell wraps at spaces, so a table cannot be narrower than
+# the sum of its columns' longest words: about 7.5 px a character at the tables' 0.64rem font
+# (code a little wider, counted the same) plus 2 x 12 px of cell padding. docs/screenshot.py
+# measures the built pages in Chromium; this is the check CI can afford.
+CONTENT_PX, CHAR_PX, PAD_PX, MAX_COLUMNS = 960, 7.5, 24, 6
+
+
+def _tables(text: str):
+    """(first header cell, rows as lists of cells) for every Markdown table of ``text``."""
+    lines = text.splitlines()
+    for k, line in enumerate(lines):
+        if k and re.match(r"^\|[-:| ]+\|$", line) and lines[k - 1].startswith("|"):
+            rows = [lines[k - 1]]
+            rows += [row for row in itertools.takewhile(lambda s: s.startswith("|"), lines[k + 1:])]
+            cells = [[c.strip() for c in re.split(r"(?<!\\)\|", r.strip().strip("|"))] for r in rows]
+            yield cells[0][0], cells
+
+
+def _min_width_px(rows: list[list[str]]) -> float:
+    columns = max(len(r) for r in rows)
+    longest = [0] * columns
+    for row in rows:
+        for i, cell in enumerate(row):
+            words = re.sub(r"\*\*|`|\\", "", re.sub(r"\[([^]]*)\]\([^)]*\)", r"\1", cell)).split()
+            longest[i] = max([longest[i]] + [len(w) for w in words])
+    return sum(n * CHAR_PX + PAD_PX for n in longest)
+
+
+def test_no_table_is_wider_than_the_content_column():
+    wide = []
+    for name, text in _rendered_pages(ROOT / "docs").items():
+        for head, rows in _tables(text):
+            columns, width = len(rows[0]), _min_width_px(rows)
+            if columns > MAX_COLUMNS or width > CONTENT_PX:
+                wide.append(f"{name}: table '{head}' has {columns} columns, at least {width:.0f} px")
+    assert not wide, "split or transpose: " + "; ".join(wide)
+
+
+def test_a_wide_table_is_caught():
+    rows = [[f"column {i}" for i in range(9)], ["a_rather_long_identifier_in_code"] * 9]
+    assert len(rows[0]) > MAX_COLUMNS and _min_width_px(rows) > CONTENT_PX
