@@ -1,6 +1,7 @@
 """Draw the gallery's figures: every built-in scene designed by ``camjax design``, kept small.
 
-``python docs/gen_gallery.py`` designs every built-in scene (``camjax.scene.BUILTIN_SCENES``);
+``python docs/gen_gallery.py`` designs every built-in scene (``camjax.scene.BUILTIN_SCENES``; a
+scene that only designs its laws is drawn by ``camjax synthesize``, :func:`command`);
 ``python docs/gen_gallery.py --scene NAME [--scene NAME ...]`` designs only those. Each run writes
 ``docs/gallery/NAME-profile.png``, ``NAME-svaj.png`` and, where the scene has loads,
 ``NAME-loads.png`` (PNG at :data:`DPI` dpi, about 70 KB each), replacing the scene's old figures,
@@ -30,6 +31,20 @@ FIGURES = ("profile", "svaj", "loads")
 """The figures kept, in the order the gallery shows them (``loads`` only where the scene has loads)."""
 
 
+def command(scene: str) -> str:
+    """The command whose figures show the scene: ``design``, or ``synthesize`` for a scene that
+    designs its laws and has no [design] section (``camjax design`` would draw the laws' starting
+    control values, not the designed laws; ``camjax synthesize`` draws the designed laws against
+    the best built-in ones)."""
+    import tomllib
+
+    from camjax.scene import builtin_scene_text
+
+    data = tomllib.loads(builtin_scene_text(scene))
+    designs_laws = any(seg.get("design") for seg in data.get("motion", {}).get("segments", []))
+    return "synthesize" if designs_laws and "design" not in data else "design"
+
+
 def builtin_scenes() -> list[str]:
     """Every built-in scene's name, read from the package's registry."""
     from camjax.scene import BUILTIN_SCENES
@@ -47,7 +62,8 @@ def draw(scene: str, dpi: int = DPI) -> list[Path]:
     GALLERY.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "out"
-        cmd = [sys.executable, "-m", "camjax.cli", "design", scene, "--out", str(out), "--dpi", str(dpi)]
+        verb = command(scene)
+        cmd = [sys.executable, "-m", "camjax.cli", verb, scene, "--out", str(out), "--dpi", str(dpi)]
         run = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True,
                              env={**os.environ, "PYTHONPATH": str(ROOT)})
         if run.returncode != 0:
@@ -56,8 +72,9 @@ def draw(scene: str, dpi: int = DPI) -> list[Path]:
 
         result = json.loads((out / "result.json").read_text())
         meta = GALLERY / f"{scene}.json"
-        meta.write_text(json.dumps({"scene": scene, "command": f"camjax design {scene} --dpi {dpi}",
-                                    "title_block": title_block(result)}, indent=1) + "\n")
+        meta.write_text(json.dumps({"scene": scene, "command": f"camjax {verb} {scene} --dpi {dpi}",
+                                    "title_block": title_block(result) if verb == "design" else None},
+                                   indent=1) + "\n")
         kept = [meta]
         for name, dest in figure_paths(scene).items():
             src = out / f"{name}.png"

@@ -599,11 +599,18 @@ GALLERY_FIGURES = {"profile": "the cam and its follower", "svaj": "s, v, a, j ov
 
 
 def gallery_missing() -> dict[str, str]:
-    """Built-in scene -> the command that draws its gallery figures, for each scene without them."""
+    """Built-in scene -> the command that draws its gallery figures, for each scene without them
+    (its s/v/a/j figure and its title block; the profile where ``camjax design`` drew it)."""
     from camjax.scene import BUILTIN_SCENES
 
-    return {name: f"python docs/gen_gallery.py --scene {name}" for name in BUILTIN_SCENES
-            if not (GALLERY / f"{name}-profile.png").exists()}
+    def drawn(name: str) -> bool:
+        meta = GALLERY / f"{name}.json"
+        if not meta.exists() or not (GALLERY / f"{name}-svaj.png").exists():
+            return False
+        designed = " design " in json.loads(meta.read_text())["command"]
+        return not designed or (GALLERY / f"{name}-profile.png").exists()
+
+    return {name: f"python docs/gen_gallery.py --scene {name}" for name in BUILTIN_SCENES if not drawn(name)}
 
 
 def _gallery() -> str:
@@ -616,12 +623,16 @@ def _gallery() -> str:
         text = builtin_scene_text(name)
         kind = next((line.split("=", 1)[1].split("#")[0].strip().strip('"') for line in text.splitlines()
                      if line.strip().startswith("type")), "")
-        figures = [f"![{name}: {what}](gallery/{name}-{fig}.png)" for fig, what in GALLERY_FIGURES.items()
+        meta = GALLERY / f"{name}.json"
+        verb = json.loads(meta.read_text())["command"].split()[1] if meta.exists() else "design"
+        captions = {**GALLERY_FIGURES, **({"svaj": "the designed laws against the best built-in ones"}
+                                          if verb == "synthesize" else {})}
+        figures = [f"![{name}: {what}](gallery/{name}-{fig}.png)" for fig, what in captions.items()
                    if (GALLERY / f"{name}-{fig}.png").exists()]
         if not figures:
             figures = [f"No figures yet: `python docs/gen_gallery.py --scene {name}` draws them."]
         parts.append(
-            f"## `{name}` {{ #{name} }}\n\n`camjax design {name} --out out/`"
+            f"## `{name}` {{ #{name} }}\n\n`camjax {verb} {name} --out out/`"
             + (f" · follower `{kind}`" if kind else "") + "\n\n"
             '<div class="gallery-scene" markdown>\n<div markdown>\n\n'
             f'```toml\n{text.rstrip()}\n```\n\n</div>\n'

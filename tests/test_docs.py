@@ -150,14 +150,14 @@ def test_every_builtin_scene_has_gallery_figures():
     from camjax.scene import BUILTIN_SCENES
 
     gallery = ROOT / "docs" / "gallery"
-    missing = [f"{name} (run: python docs/gen_gallery.py --scene {name})" for name in BUILTIN_SCENES
-               if not all((gallery / f"{name}-{fig}.png").exists() for fig in ("profile", "svaj"))]
+    missing = [f"{name} (run: {command})" for name, command in _gen_tables().gallery_missing().items()]
     assert not missing, "built-in scenes without gallery figures: " + "; ".join(missing)
-    assert _gen_tables().gallery_missing() == {}
+    assert all((gallery / f"{name}-svaj.png").exists() for name in BUILTIN_SCENES)
     # the gallery stays small enough to commit: PNGs at low dpi, ~0.2 MB a scene
     total = sum(p.stat().st_size for p in gallery.glob("*"))
     assert total < 6 * 2**20, f"docs/gallery holds {total / 2**20:.1f} MB (budget 6 MB)"
-    stale = sorted({p.name.rsplit("-", 1)[0] for p in gallery.glob("*.png")} - set(BUILTIN_SCENES))
+    drawn = {p.name.rsplit("-", 1)[0] for p in gallery.glob("*.png")} | {p.stem for p in gallery.glob("*.json")}
+    stale = sorted(drawn - set(BUILTIN_SCENES))
     assert not stale, f"gallery figures of scenes that are not built in: {stale}"
 
 
@@ -168,7 +168,7 @@ def test_gallery_page_shows_each_scene_file_beside_its_figures():
     for name in BUILTIN_SCENES:
         section = out.split(f"## `{name}`", 1)[1].split("\n## ", 1)[0]
         assert builtin_scene_text(name).splitlines()[1] in section, name
-        assert f"(gallery/{name}-profile.png)" in section, name
+        assert f"(gallery/{name}-svaj.png)" in section, name
 
 
 def test_gallery_generator_refuses_an_unknown_scene():
@@ -382,3 +382,38 @@ def test_no_table_is_wider_than_the_content_column():
 def test_a_wide_table_is_caught():
     rows = [[f"column {i}" for i in range(9)], ["a_rather_long_identifier_in_code"] * 9]
     assert len(rows[0]) > MAX_COLUMNS and _min_width_px(rows) > CONTENT_PX
+
+
+# ------------------------------------------------------------------------ user pages
+DEVELOPMENT_NOTES = re.compile(
+    r"tests/test_\w+|\bSPEC\b|\b[Cc]ommit `?[0-9a-f]{7}|[Ll]oad average|\b[Tt]he issue\b|\bPR #\d|git show")
+
+
+def _user_pages() -> list[str]:
+    """The pages of every nav section but "Developing camjax" (and the API pages, docstrings)."""
+    import yaml
+
+    nav = yaml.safe_load((ROOT / "mkdocs.yml").read_text())["nav"]
+
+    def walk(items):
+        for item in items:
+            for title, value in (item.items() if isinstance(item, dict) else [(None, item)]):
+                if title == "Developing camjax":
+                    continue
+                yield from (walk(value) if isinstance(value, list) else [value])
+
+    return [page for page in walk(nav) if not page.startswith("api/")]
+
+
+def test_user_pages_speak_of_camjax_not_of_its_development():
+    """Test file names, SPEC section numbers, commit hashes, load averages and issue talk belong
+    on the developing pages (architecture, development, benchmark details) or in the JSON."""
+    pages = _user_pages()
+    assert {"index.md", "getting-started.md", "performance.md", "scenes.md"} <= set(pages)
+    assert "benchmarks.md" not in pages and "development.md" not in pages
+    gen = _gen_tables()
+    found = []
+    for page in pages:  # prose only: the scene files the gallery shows are camjax's own text
+        text = re.sub(r"^```.*?^```", "", gen.render((ROOT / "docs" / page).read_text(), page), flags=re.S | re.M)
+        found += [f"{page}: {m.group(0)!r}" for m in DEVELOPMENT_NOTES.finditer(text)]
+    assert not found, found
