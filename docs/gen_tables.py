@@ -561,6 +561,50 @@ def _solvers() -> str:
     return ", ".join(f"`{name}`" for name in SOLVERS)
 
 
+def _laws() -> str:
+    from camjax.laws import LAWS
+
+    return ", ".join(f"`{name}`" for name in LAWS)
+
+
+def _commands() -> str:
+    """A table of the ``camjax`` commands, as ``camjax --help`` lists them (the CLI's registry)."""
+    from camjax.cli.app import COMMANDS, HELP_ORDER
+
+    order = sorted(COMMANDS, key=lambda n: HELP_ORDER.index(n) if n in HELP_ORDER else len(HELP_ORDER))
+    rows = ["| command | what it does |", "|---|---|"]
+    rows += [f"| [`camjax {name}`](#camjax-{name}) | {COMMANDS[name][0]} |" for name in order]
+    return "\n".join(rows)
+
+
+NAV_BLURBS = {"Getting started": "new to camjax: the first design, its files and figures, Python",
+              "Tasks": "a job to do", "Reference": "looking something up",
+              "How it works": "the models, the solvers, how exact and how fast",
+              "Developing camjax": "changing camjax"}
+
+
+def _nav() -> str:
+    """The site's sections and their pages, read from mkdocs.yml's nav (a page added there appears
+    here too), for the home page: one line per section, a nested section by its first page."""
+    import yaml
+
+    def first(value):
+        return value if isinstance(value, str) else first(next(iter(value[0].values())))
+
+    lines = []
+    for item in yaml.safe_load((ROOT / "mkdocs.yml").read_text())["nav"]:
+        (title, value), = item.items()
+        if value == "index.md":
+            continue
+        blurb = NAV_BLURBS.get(title, "")
+        if isinstance(value, str):
+            lines.append(f"- [{title}]({value}){': ' + blurb if blurb else ''}")
+            continue
+        links = [f"[{t}]({first(v)})" for entry in value for t, v in entry.items()]
+        lines.append(f"- **{title}**{' (' + blurb + ')' if blurb else ''}: " + " · ".join(links))
+    return "\n".join(lines)
+
+
 GALLERY = ROOT / "docs" / "gallery"
 
 # one line on each follower type for the home page (a type not named here shows its title alone)
@@ -651,6 +695,9 @@ LISTS: dict[str, Callable[[], str]] = {
     "rocking_folders": lambda: _follower_folders(True),
     "scenes": _scenes,  # "`default`, `codesign`, ..." (the embedded default first)
     "solvers": _solvers,
+    "nav": _nav,  # the site's sections and pages, from mkdocs.yml (home page)
+    "laws": _laws,  # the named laws, as scenes spell them
+    "commands": _commands,  # a table of the camjax commands (cli.md: links to its own sections)
 }
 _LIST = re.compile(r"(?<!\\)\{\{\s*list:\s*(\w+)\s*\}\}")
 _STATUS = re.compile(r"(?<!\\)\{\{\s*status:\s*([\w.]+)\s*\}\}")

@@ -86,11 +86,14 @@ def test_unknown_placeholder_is_an_error():
 @pytest.mark.parametrize("page, names", [
     ("index.md", "followers"), ("extending.md", "folders"), ("architecture.md", "folders"),
     ("cli.md", "scenes"), ("scenes.md", "scenes"), ("optimize.md", "solvers"), ("gallery.md", "scenes"),
+    ("cli.md", "commands"), ("laws.md", "laws"),
 ])
 def test_pages_that_list_followers_or_scenes_name_every_registered_one(page, names):
     """The lists come from the registries when the site is built: every follower type (its title,
     or its folder), every built-in scene file and every solver is named on the rendered page."""
     from camjax import followers
+    from camjax.cli.app import COMMANDS
+    from camjax.laws import LAWS
     from camjax.scene import BUILTIN_SCENES
     from camjax.solvers.registry import SOLVERS
 
@@ -98,7 +101,9 @@ def test_pages_that_list_followers_or_scenes_name_every_registered_one(page, nam
     expected = {"followers": [f.title for f in followers.all_followers()],
                 "folders": [f"`{name}/`" for name in followers.names()],
                 "scenes": [f"`{name}`" for name in BUILTIN_SCENES],
-                "solvers": [f"`{name}`" for name in SOLVERS]}[names]
+                "solvers": [f"`{name}`" for name in SOLVERS],
+                "commands": [f"`camjax {name}`" for name in COMMANDS],
+                "laws": [f"`{name}`" for name in LAWS]}[names]
     missing = [name for name in expected if name not in out]
     assert not missing, f"{page} does not name {missing}"
 
@@ -417,3 +422,17 @@ def test_user_pages_speak_of_camjax_not_of_its_development():
         text = re.sub(r"^```.*?^```", "", gen.render((ROOT / "docs" / page).read_text(), page), flags=re.S | re.M)
         found += [f"{page}: {m.group(0)!r}" for m in DEVELOPMENT_NOTES.finditer(text)]
     assert not found, found
+
+
+def test_the_home_page_links_every_section_and_task_of_the_nav():
+    """A reader on the home page reaches every task in one click (the list is read from the nav:
+    a task page added to mkdocs.yml appears there without editing the home page)."""
+    import yaml
+
+    out = _gen_tables().render((ROOT / "docs" / "index.md").read_text(), "index.md")
+    nav = yaml.safe_load((ROOT / "mkdocs.yml").read_text())["nav"]
+    tasks = next(item["Tasks"] for item in nav if "Tasks" in item)
+    for entry in tasks:
+        (title, page), = entry.items()
+        assert f"[{title}]({page})" in out, title
+    assert "(gallery.md)" in out and "(getting-started.md)" in out
