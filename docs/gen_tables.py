@@ -642,6 +642,16 @@ GALLERY_FIGURES = {"profile": "the cam and its follower", "svaj": "s, v, a, j ov
 """The gallery's figures per scene, in docs/gen_gallery.py's file names (``SCENE-NAME.png``)."""
 
 
+GALLERY_COLUMN_PX = 660
+"""About the width of the gallery's figure column beside the TOML in a 1280 px window (extra.css)."""
+
+
+def _png_width(path: Path) -> int:
+    """A PNG's width in pixels, from its header (the IHDR chunk)."""
+    with open(path, "rb") as f:
+        return int.from_bytes(f.read(24)[16:20], "big")
+
+
 def gallery_missing() -> dict[str, str]:
     """Built-in scene -> the command that draws its gallery figures, for each scene without them
     (its s/v/a/j figure and its title block; the profile where ``camjax design`` drew it)."""
@@ -671,16 +681,21 @@ def _gallery() -> str:
         verb = json.loads(meta.read_text())["command"].split()[1] if meta.exists() else "design"
         captions = {**GALLERY_FIGURES, **({"svaj": "the designed laws against the best built-in ones"}
                                           if verb == "synthesize" else {})}
-        figures = [f"![{name}: {what}](gallery/{name}-{fig}.png)" for fig, what in captions.items()
-                   if (GALLERY / f"{name}-{fig}.png").exists()]
-        if not figures:
+        drawn = [(fig, what) for fig, what in captions.items() if (GALLERY / f"{name}-{fig}.png").exists()]
+        # a figure wider than the column beside the TOML goes below it, at its own width
+        wide = [f"![{name}: {what}](gallery/{name}-{fig}.png)" for fig, what in drawn
+                if _png_width(GALLERY / f"{name}-{fig}.png") > GALLERY_COLUMN_PX]
+        figures = [f"![{name}: {what}](gallery/{name}-{fig}.png)" for fig, what in drawn]
+        figures = [f for f in figures if f not in wide]
+        if not drawn:
             figures = [f"No figures yet: `python docs/gen_gallery.py --scene {name}` draws them."]
         parts.append(
             f"## `{name}` {{ #{name} }}\n\n`camjax {verb} {name} --out out/`"
             + (f" · follower `{kind}`" if kind else "") + "\n\n"
             '<div class="gallery-scene" markdown>\n<div markdown>\n\n'
             f'```toml\n{text.rstrip()}\n```\n\n</div>\n'
-            f'<div markdown>\n\n' + "\n\n".join(figures) + "\n\n</div>\n</div>\n")
+            f'<div markdown>\n\n' + "\n\n".join(figures) + "\n\n</div>\n</div>\n"
+            + "".join(f"\n{f}\n" for f in wide))
     return "\n".join(parts)
 
 
