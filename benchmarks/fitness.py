@@ -92,7 +92,7 @@ def tiled_fitness(scene: FusedScene, weights: Weights, designs: Design, tile: in
     """The fused kernel with the angles reduced tile by tile (``lax.map``; N divisible by tile).
 
     Each tile is its own reduction of <= ``tile`` angles: this keeps XLA:CPU's YNNPACK reduce on
-    its fast path for long grids (it slows ~10x once a row passes ~16k angles; see docs/performance.md).
+    its fast path for long grids (it slows ~10x once a row passes ~16k angles; see docs/benchmarks.md).
     """
     n = scene.q_mm.shape[0]
     tile = min(tile, n)

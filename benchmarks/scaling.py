@@ -32,7 +32,7 @@ def blocked(fn, block: int = FUSED_BLOCK):
     """Evaluate a population fitness ``fn(scene, weights, designs)`` in blocks with ``lax.map``.
 
     XLA:CPU's YNNPACK reduce fusion slows down ~10x when elementwise work follows the reduction
-    and the population exceeds ~1e4 rows (measured; see docs/performance.md); blocks of ~2k designs keep
+    and the population exceeds ~1e4 rows (measured; see docs/benchmarks.md); blocks of ~2k designs keep
     it on its fast path. Pads the population to a multiple of the block with copies of design 0.
     """
 

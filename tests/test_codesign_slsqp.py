@@ -8,7 +8,7 @@ problem as camjax's bilevel co-design: on one small co-design, from the same sta
 - the two optima agree within the benchmark's acceptance tolerance (0.5 %, the issue's), and
   SLSQP's is not above camjax's: both descend the same function from the same start, SLSQP in
   epigraph form handles the maxima over the angles exactly where BFGS on F stops at a point it
-  cannot certify (docs/synthesis.md), and on the benchmark's 20 problems SLSQP ended lower or
+  cannot certify (docs/codesign.md), and on the benchmark's 20 problems SLSQP ended lower or
   equal every time.
 
 Measured on this problem: camjax's F at SLSQP's laws equals SLSQP's objective to 3e-11; SLSQP ends

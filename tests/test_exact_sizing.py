@@ -7,7 +7,7 @@ rocker's smallest cam-surface radius is 1/kappa - R at the refined max of its pi
 Each is checked against an independent brute force: the follower's own closed-form geometry on
 10^6 samples (``jax.jit``), the smallest radius where its limits hold found by bisection on it.
 
-Tolerances: a sampled extremum's error falls as N^-2 (docs/performance.md, "Grid or exact
+Tolerances: a sampled extremum's error falls as N^-2 (docs/benchmarks.md, "Grid or exact
 extrema"); the worst such figure at N = 360 is ~1e-3 relative, so on 10^6 samples it is
 ~1e-3 (360 / 10^6)^2 ~ 1e-10: the exact values must agree to DENSE_TOL = 1e-9 relative, and the
 grid's must miss by more (so that the check can tell the two apart).

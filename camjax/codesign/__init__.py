@@ -1,5 +1,5 @@
 """Co-design of a scene's designed laws and its cam's geometry (``camjax design`` and ``camjax sweep``
-on a scene with [design] and ``design = true`` segments); see docs/synthesis.md.
+on a scene with [design] and ``design = true`` segments); see docs/codesign.md.
 
 - :mod:`camjax.codesign.problem`: F(z), the inner geometry optimum and its envelope gradient;
 - :mod:`camjax.codesign.joint`: the laws and the geometry as one program (where no spring is designed);

@@ -8,7 +8,7 @@
 - :mod:`camjax.synthesis.vibration`: the follower train's residual vibration and contact force
   as exact linear maps of the control values (the terms ``residual_vibration``, ``peak_force``).
 
-See docs/synthesis.md.
+See docs/synthesis.md (law synthesis) and docs/codesign.md (co-design).
 """
 
 from camjax.synthesis.basis import Basis, make_basis
