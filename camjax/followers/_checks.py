@@ -44,3 +44,13 @@ def undercut(margin: float, deg: float) -> list[GeometryViolation]:
         return []
     return [GeometryViolation("undercut", f"undercut margin {margin:.4g} mm at {deg:g} deg <= 0: the roller "
                               "undercuts the cam")]
+
+
+def outer_flank(margin: float, deg: float) -> list[GeometryViolation]:
+    """A negative outer-flank margin (mm): a groove's outer flank is concave tighter than its roller
+    (the pitch curve's concavity radius below R_f + clearance + the smallest radius allowed)."""
+    if margin >= -FEASIBILITY_TOL_MM:
+        return []
+    return [GeometryViolation("outer_flank", f"outer-flank margin {margin:.4g} mm at {deg:g} deg <= 0: the "
+                              "pitch curve's concavity radius is below R_f + clearance, the groove's outer "
+                              "flank cannot be cut")]

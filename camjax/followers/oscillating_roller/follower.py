@@ -16,6 +16,8 @@ import numpy as np
 
 from camjax import contact, loads, runtime
 from camjax.errors import SceneError
+from camjax.followers import _closure
+from camjax.followers._closure import POSITIVE_CLOSURES, closure_keys, read_closure
 from camjax.followers._rocking import TRAIN_KEYS, RockerGeometry, RockerSizing, RockingFollower, read_train
 from camjax.followers.oscillating_roller import geometry as rocker_roller_geo
 from camjax.followers.roller import geometry as roller_geo
@@ -110,7 +112,8 @@ class OscillatingRoller(RockingFollower):
     name = "oscillating_roller"
     title = "oscillating roller"
     keys = ("pivot_distance_mm", "arm_length_mm", "roller_radius_mm", "max_pressure_angle_deg",
-            "min_curvature_radius_mm", *TRAIN_KEYS)
+            "min_curvature_radius_mm", *TRAIN_KEYS, *closure_keys(rocking=True))
+    closures = POSITIVE_CLOSURES
     example_scene = "oscillating-roller"
     variables = ("base_radius_mm", "roller_radius_mm", "pivot_distance_mm", "arm_length_mm")
 
@@ -123,9 +126,10 @@ class OscillatingRoller(RockingFollower):
         limit = r.number("max_pressure_angle_deg", DEFAULT, low=0.0, low_open=True)
         if limit is not DEFAULT and limit >= 90.0:
             raise r.error("max_pressure_angle_deg", limit, "out of range", "> 0 and < 90")
+        arm = r.number("arm_length_mm", low=0.0, low_open=True)
+        roller = r.number("roller_radius_mm", low=0.0, low_open=True)
         return build(OscillatingRollerSpec, type=self.name, train=train, pivot_distance_mm=pivot,
-                     arm_length_mm=r.number("arm_length_mm", low=0.0, low_open=True),
-                     roller_radius_mm=r.number("roller_radius_mm", low=0.0, low_open=True),
+                     arm_length_mm=arm, roller_radius_mm=roller, closure=read_closure(r, True, roller),
                      max_pressure_angle_deg=limit,
                      min_curvature_radius_mm=r.number("min_curvature_radius_mm", DEFAULT, low=0.0))
 
@@ -188,6 +192,18 @@ class OscillatingRoller(RockingFollower):
             rho_eq = roller_geo.roller_equivalent_radius(g.pitch_curvature, f.roller_radius_mm)
             stress = contact.roller_stress(coeff, g.pressure_angle, rho_eq)
         return force, stress
+
+    def closure_curves(self, scene, kin, base_radius_mm, g, moment):
+        """Both flanks of a groove (or the second cam of a conjugate pair), their margins and loads."""
+        f = scene.follower
+        path_force = None if moment is None else moment / (g.arm_length_mm * 1e-3)  # N along the path
+        if f.closure.kind == "groove":
+            return _closure.groove_curves(f.closure, g.pitch_x_mm, g.pitch_y_mm, g.profile_x_mm, g.profile_y_mm,
+                                          g.pitch_curvature, g.pressure_angle, f.roller_radius_mm,
+                                          f.min_curvature_radius_mm, path_force, _closure.hertz_of(scene))
+        return _closure.arm_curves(f.closure, f.pivot_distance_mm, f.arm_length_mm, f.roller_radius_mm,
+                                   base_radius_mm + f.roller_radius_mm, kin, scene.motion.rotation,
+                                   f.min_curvature_radius_mm, moment, _closure.hertz_of(scene))
 
     def summary(self, design) -> str:
         return (f"R_f = {design['roller_radius_mm']:.4f} mm, pivot {design['pivot_distance_mm']:.4f} mm, "

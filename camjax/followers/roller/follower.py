@@ -18,6 +18,8 @@ import numpy as np
 
 from camjax import contact, runtime
 from camjax.evaluate import curve_extremes
+from camjax.followers import _closure
+from camjax.followers._closure import POSITIVE_CLOSURES, closure_keys, read_closure
 from camjax.followers._pitch import rotation_sign
 from camjax.followers._translating import (
     TRAIN_KEYS,
@@ -100,7 +102,9 @@ def _f(x) -> float:
 class Roller(TranslatingFollower):
     name = "roller"
     title = "roller"
-    keys = (*TRAIN_KEYS, "roller_radius_mm", "offset_mm", "max_pressure_angle_deg", "min_curvature_radius_mm")
+    keys = (*TRAIN_KEYS, "roller_radius_mm", "offset_mm", "max_pressure_angle_deg", "min_curvature_radius_mm",
+            *closure_keys(rocking=False))
+    closures = POSITIVE_CLOSURES
     example_scene = "roller"
     variables = ("base_radius_mm", "roller_radius_mm", "offset_mm")
 
@@ -110,8 +114,9 @@ class Roller(TranslatingFollower):
         limit = r.number("max_pressure_angle_deg", DEFAULT, low=0.0, low_open=True)
         if limit is not DEFAULT and limit >= 90.0:
             raise r.error("max_pressure_angle_deg", limit, "out of range", "> 0 and < 90")
-        return build(RollerSpec, type=self.name, train=train,
-                     roller_radius_mm=r.number("roller_radius_mm", low=0.0, low_open=True),
+        roller = r.number("roller_radius_mm", low=0.0, low_open=True)
+        return build(RollerSpec, type=self.name, train=train, closure=read_closure(r, False, roller),
+                     roller_radius_mm=roller,
                      offset_mm=r.number("offset_mm", DEFAULT), max_pressure_angle_deg=limit,
                      min_curvature_radius_mm=r.number("min_curvature_radius_mm", DEFAULT, low=0.0))
 
@@ -190,6 +195,18 @@ class Roller(TranslatingFollower):
         return GeometryCurves(x, y, stress_MPa=stress, pitch_x_mm=pitch_x, pitch_y_mm=pitch_y,
                               pressure_angle_deg=jnp.rad2deg(g.pressure_angle),
                               pitch_rho_mm=g.pitch_radius_of_curvature, undercut_margin_mm=g.undercut_margin)
+
+    def closure_curves(self, scene, arrays, base_radius_mm, follower, geometry):
+        """Both flanks of a groove (or the second cam of a conjugate pair), their margins and loads."""
+        rf, e, rot = float(follower.roller_radius_mm), float(follower.offset_mm), scene.motion.rotation
+        g = roller_geo.roller_geometry(base_radius_mm, rf, e, arrays.kin, rot, follower.min_curvature_radius_mm)
+        if follower.closure.kind == "groove":
+            return _closure.groove_curves(follower.closure, geometry.pitch_x_mm, geometry.pitch_y_mm,
+                                          geometry.profile_x_mm, geometry.profile_y_mm, g.pitch_curvature,
+                                          g.pressure_angle, rf, follower.min_curvature_radius_mm, arrays.force_N,
+                                          _closure.hertz_of(scene))
+        return _closure.yoke_curves(follower.closure, base_radius_mm, rf, e, arrays.kin, rot,
+                                    follower.min_curvature_radius_mm, g, arrays.force_N, _closure.hertz_of(scene))
 
     def curve_dimensions(self, follower):
         return (float(follower.roller_radius_mm), float(follower.offset_mm),
