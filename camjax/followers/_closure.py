@@ -24,6 +24,7 @@ function is elementwise over the angle grid and jit/vmap/grad-safe.
 
 from __future__ import annotations
 
+import math
 from typing import NamedTuple
 
 import jax
@@ -168,12 +169,121 @@ def point_pitch(x, y, dx, dy, d2x, d2y, sign: float) -> PointPitch:
 
 
 def path_pressure_angle(normal_x, normal_y, path_x, path_y):
-    """Angle (rad) between the force the cam puts on a roller, along -(inward normal), and the
-    direction (path_x, path_y) it drives the roller's centre; in [0, pi]: < pi/2 where it pushes."""
-    along = -(normal_x * path_x + normal_y * path_y)
-    across = normal_x * path_y - normal_y * path_x
-    return jnp.arctan2(jnp.abs(across), along * capped_divide(jnp.ones_like(along),
-                                                               safe_sqrt(path_x**2 + path_y**2)) * safe_sqrt(path_x**2 + path_y**2))
+    """Angle (rad) between the force a cam puts on a roller, along -(inward normal), and the
+    direction (path_x, path_y) it drives the roller's centre (any length); signed, |.| < pi/2 where
+    the cam pushes the roller along that path, positive when the force leans to the path's right."""
+    return jnp.arctan2(normal_x * path_y - normal_y * path_x, -(normal_x * path_x + normal_y * path_y))
+
+
+def conjugate_cam(x, y, dx, dy, d2x, d2y, path_x, path_y, roller_radius_mm, theta, rotation: str,
+                  min_curvature_radius_mm=0.0) -> dict[str, jax.Array]:
+    """The second cam of a conjugate pair from its roller centre (x, y) in the follower frame, its
+    derivatives over the cam angle and the direction (path_x, path_y) that cam drives it along:
+    pitch curve and cam (the pitch curve moved towards the cam centre by the second roller's
+    radius) in cam coordinates, its pressure angle (deg, :func:`path_pressure_angle`), undercut
+    margin (mm, as the first cam's) and pitch curvature (1/mm), named as profile.csv's columns."""
+    from camjax.followers._pitch import rotation_sign, to_cam_frame
+    from camjax.followers.roller.geometry import roller_undercut_margin
+
+    pp = point_pitch(x, y, dx, dy, d2x, d2y, rotation_sign(rotation))
+    pitch_x, pitch_y = to_cam_frame(x, y, theta, rotation)
+    cam_x, cam_y = to_cam_frame(x + roller_radius_mm * pp.normal_x, y + roller_radius_mm * pp.normal_y,
+                                theta, rotation)
+    return {"conjugate_pitch_x_mm": pitch_x, "conjugate_pitch_y_mm": pitch_y, "conjugate_x_mm": cam_x,
+            "conjugate_y_mm": cam_y,
+            "conjugate_pressure_angle_deg": jnp.rad2deg(path_pressure_angle(pp.normal_x, pp.normal_y, path_x, path_y)),
+            "conjugate_margin_mm": roller_undercut_margin(pp.curvature, roller_radius_mm, min_curvature_radius_mm),
+            "conjugate_pitch_curvature": pp.curvature}
+
+
+def _with_loads(out, first_pressure_angle, first_curvature, first_radius_mm, second_radius_mm, path_force_N,
+                hertz):
+    """The conjugate pair's curves with each cam's normal force and stress (:func:`flank_loads`)."""
+    kappa2 = out.pop("conjugate_pitch_curvature")
+    if path_force_N is not None:
+        radii = (first_radius_mm * (1.0 - first_radius_mm * first_curvature),
+                 second_radius_mm * (1.0 - second_radius_mm * kappa2))
+        phi2 = jnp.deg2rad(out["conjugate_pressure_angle_deg"])
+        out.update(flank_loads(path_force_N, (first_pressure_angle, phi2), radii, hertz))
+    return out
+
+
+def _refuse(key: str, value, problem: str, allowed: str):
+    from camjax.errors import SceneError
+
+    raise SceneError(f"follower.{key}", value, problem, allowed)
+
+
+def yoke_curves(closure: ClosureSpec, base_radius_mm, roller_radius_mm, offset_mm, kin, rotation: str,
+                min_curvature_radius_mm, geometry, path_force_N=None, hertz=None) -> dict[str, jax.Array]:
+    """The second cam of a translating roller's yoke (Python: checks the span, a SceneError naming
+    ``follower.yoke_span_mm`` where the second roller would reach the shaft).
+
+    The second roller's centre sits on the follower axis ``yoke_span_mm`` L below the first, at
+    (e, w - L) in the follower frame (w = sqrt(R_p^2 - e^2) + s), on the far side of the shaft; its
+    cam pushes it away from the shaft, along -y, which pulls the follower back. ``geometry``: the
+    first cam's :class:`camjax.followers.roller.geometry.RollerGeometry`."""
+    from camjax.followers.roller.geometry import roller_pitch_height
+
+    import numpy as np
+
+    span, r2 = closure.yoke_span_mm, closure.second_roller_radius_mm
+    w = roller_pitch_height(base_radius_mm, roller_radius_mm, offset_mm, kin)
+    y2 = w - span
+    reach = float(np.max(np.asarray(w))) + math.sqrt(max(r2**2 - offset_mm**2, 0.0))
+    if span <= reach:
+        _refuse("yoke_span_mm", span, f"puts the second roller on the shaft: at R_b = {base_radius_mm:g} mm the "
+                f"first roller rises to {float(np.max(np.asarray(w))):g} mm above the centre", f"> {reach:g}")
+    zero = jnp.zeros_like(w)
+    out = conjugate_cam(offset_mm + zero, y2, zero, kin.ds, zero, kin.d2s, zero, -jnp.ones_like(w), r2,
+                        kin.theta, rotation, min_curvature_radius_mm)
+    return _with_loads(out, geometry.pressure_angle, geometry.pitch_curvature, roller_radius_mm, r2, path_force_N, hertz)
+
+
+def arm_curves(closure: ClosureSpec, pivot_distance_mm, arm_length_mm, roller_radius_mm, prime_radius_mm, kin,
+               rotation: str, min_curvature_radius_mm, moment_Nm=None, hertz=None) -> dict[str, jax.Array]:
+    """The second cam of a rocker's second arm (Python: checks the arm, SceneErrors naming
+    ``follower.second_arm_angle_deg`` or ``second_arm_length_mm``).
+
+    The second arm, ``second_arm_length_mm`` l2 long, sits ``second_arm_angle_deg`` beta from the
+    first, across the line of centres: its roller's centre is C2 = (d - l2 cos(psi - beta),
+    l2 sin(psi - beta)) in the follower frame (the first's: psi), and psi - beta must stay in
+    (-180, 0) deg, where pushing C2 away from the shaft swings the rocker back (|C2| falls as psi
+    grows). Loads: the pivot torque M > 0 is the first cam's, M < 0 the second's, whose force along
+    its roller's path is -M / l2."""
+    import numpy as np
+
+    from camjax.followers._swing import arm_angle
+    from camjax.followers.oscillating_roller import geometry as rocker_geo
+
+    l2, r2, beta = closure.second_arm_length_mm, closure.second_roller_radius_mm, math.radians(closure.second_arm_angle_deg)
+    psi0 = rocker_geo.arm_start_angle(prime_radius_mm, pivot_distance_mm, arm_length_mm)
+    psi = arm_angle(psi0, kin)
+    a = psi - beta
+    lo, hi = float(np.min(np.asarray(a))), float(np.max(np.asarray(a)))
+    if not (-math.pi < lo and hi < 0.0):
+        first = (math.degrees(float(np.min(np.asarray(psi)))), math.degrees(float(np.max(np.asarray(psi)))))
+        _refuse("second_arm_angle_deg", closure.second_arm_angle_deg,
+                f"must put the second arm across the line of centres from the first while it swings (the first "
+                f"arm swings from {first[0]:.4g} to {first[1]:.4g} deg)",
+                f"between {first[1]:.4g} and {first[0] + 180.0:.4g}")
+    c, sn = jnp.cos(a), jnp.sin(a)
+    x, y = pivot_distance_mm - l2 * c, l2 * sn
+    dcx, dcy = l2 * sn, l2 * c  # dC2/dpsi
+    ddx, ddy = l2 * c, -l2 * sn
+    near = float(np.min(np.asarray(jnp.hypot(x, y))))
+    if near <= r2:
+        _refuse("second_arm_length_mm", l2, f"brings the second roller onto the shaft (its centre comes within "
+                f"{near:.4g} mm of the cam centre, its radius is {r2:g} mm)", "a longer or shorter second arm")
+    out = conjugate_cam(x, y, kin.ds * dcx, kin.ds * dcy, kin.d2s * dcx + kin.ds**2 * ddx,
+                        kin.d2s * dcy + kin.ds**2 * ddy, -dcx, -dcy, r2, kin.theta, rotation, min_curvature_radius_mm)
+    first = rocker_geo.oscillating_roller_geometry(pivot_distance_mm, arm_length_mm, roller_radius_mm,
+                                                   prime_radius_mm, kin, rotation, min_curvature_radius_mm)
+    force = None
+    if moment_Nm is not None:  # along each roller's path: M / l for the first, -M / l2 for the second
+        split = jnp.where(moment_Nm >= 0, moment_Nm / (arm_length_mm * 1e-3), moment_Nm / (l2 * 1e-3))
+        force = split
+    return _with_loads(out, first.pressure_angle, first.pitch_curvature, roller_radius_mm, r2, force, hertz)
 
 
 # ------------------------------------------------------------------------------- loads

@@ -52,7 +52,7 @@ def switches(theta_deg, load, pressure_angle_deg, clearance_mm: float, names: tu
             frac = f[i] / (f[i] - f[j])
             angle, unloaded = (t[i] + frac * step) % 360.0, 0.0
         else:
-            angle, unloaded = t[(i + 1) % n], (gap - 1) * step
+            angle, unloaded = t[(i + 1) % n], (gap - 2) * step  # from the first unloaded sample to the last
         out.append({"angle_deg": float(angle), "to": names[0] if f[j] > 0 else names[1],
                     "load_rate_N_per_deg": float((f[j] - f[i]) / (gap * step)), "unloaded_deg": float(unloaded),
                     "free_travel_mm": float(clearance_mm / np.cos(np.radians(phi[i])))})

@@ -186,9 +186,8 @@ def rocker_violations(curves: RockerCurves, scene, extremes: dict[str, Extremes]
         out += _checks.curvature(*at(curves.rho_mm, np.argmin, "rho"), scene.follower.min_curvature_radius_mm)
     if curves.stress_MPa is not None and scene.design is not None and scene.design.sigma_max_MPa:
         out += _checks.stress(*at(curves.stress_MPa, np.argmax, "stress", "max"), scene.design.sigma_max_MPa)
-    own = curves.own_curves or {}
-    if "outer_margin_mm" in own:  # a groove's outer flank (sampled)
-        out += _checks.outer_flank(*at(own["outer_margin_mm"], np.argmin))
+    # a positive drive's second contact (sampled): outer flank, or second cam
+    out += _checks.closure(curves.own_curves or {}, t, curves.pressure_angle_limit_deg)
     if curves.contact_force_N is not None and curves.closure == "spring":  # positive drive: no spring to lose
         force, deg = at(curves.contact_force_N, np.argmin, "contact_force")
         if force < 0:

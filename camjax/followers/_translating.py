@@ -221,9 +221,8 @@ def geometry_violations(curves: DesignCurves, rho_min_mm: float = 0.0,
         out += _checks.pressure_angle(*phi, curves.pressure_angle_limit_deg)
     if curves.undercut_margin_mm is not None:
         out += _checks.undercut(*at(curves.undercut_margin_mm, np.argmin, "undercut_margin"))
-    own = curves.own_curves or {}
-    if "outer_margin_mm" in own:  # a groove's outer flank (sampled)
-        out += _checks.outer_flank(*at(own["outer_margin_mm"], np.argmin))
+    # a positive drive's second contact (sampled): outer flank, or second cam
+    out += _checks.closure(curves.own_curves or {}, t, curves.pressure_angle_limit_deg)
     if curves.force_N is not None and curves.closure == "spring":  # positive drive: no spring to lose
         force, deg = at(curves.force_N, np.argmin, "force")
         if force < 0:
