@@ -355,3 +355,130 @@ def hertz_of(scene):
     """(cam width mm, cam material, follower material) of a scene's [contact]; None without it."""
     c = scene.contact
     return None if c is None else (c.cam_width_mm, c.cam, c.follower)
+
+
+# ------------------------------------------------------------------------------ design
+
+
+class GrooveTerms(NamedTuple):
+    """A groove in a design problem (a pytree: the problem's ``closure`` field)."""
+
+    clearance_mm: jax.Array  # ()
+    second_coefficient: jax.Array  # (n,) Hertz coefficient of the outer flank's load, from max(-F, 0)
+
+
+class YokeTerms(NamedTuple):
+    """A translating roller's yoke in a design problem."""
+
+    span_mm: jax.Array  # () L, between the roller centres
+    roller_radius_mm: jax.Array  # () the second roller's
+    second_coefficient: jax.Array  # (n,) Hertz coefficient of the second cam's load, from max(-F, 0)
+
+
+class ArmTerms(NamedTuple):
+    """A rocker's second arm in a design problem."""
+
+    arm_length_mm: jax.Array  # () l2
+    angle_rad: jax.Array  # () beta, from the first arm to the second
+    roller_radius_mm: jax.Array  # () the second roller's
+    second_coefficient: jax.Array  # (n,) moment coefficient of the second cam's load, from max(-M, 0)
+
+
+def design_terms(scene, arrays, second_coefficient):
+    """The closure's terms of a design problem (None: spring-closed); ``second_coefficient`` the
+    (n,) Hertz coefficient of the load the second contact carries (zeros without [contact])."""
+    c = scene.follower.closure
+    dt = arrays.kin.s.dtype
+    as_ = lambda v: jnp.asarray(v, dt)  # noqa: E731
+    if c.kind == "groove":
+        return GrooveTerms(as_(c.clearance_mm), second_coefficient)
+    if c.kind == "conjugate" and c.yoke_span_mm is not None:
+        return YokeTerms(as_(c.yoke_span_mm), as_(c.second_roller_radius_mm), second_coefficient)
+    if c.kind == "conjugate":
+        return ArmTerms(as_(c.second_arm_length_mm), as_(math.radians(c.second_arm_angle_deg)),
+                        as_(c.second_roller_radius_mm), second_coefficient)
+    return None
+
+
+def reversed_coefficient(force_N, cam_width_mm, cam, follower):
+    """The Hertz coefficient of max(-F, 0): the second contact's (:func:`camjax.contact.stress_coefficient`)."""
+    from camjax import contact
+
+    return contact.stress_coefficient(jnp.maximum(-force_N, 0.0), cam_width_mm, cam, follower)
+
+
+class SecondContact(NamedTuple):
+    """The second contact's constraints of a design, g <= 0 per angle, to be maxed with the first's."""
+
+    pressure_angle: jax.Array  # mm (as the first's)
+    undercut: jax.Array  # mm
+    stress: jax.Array  # mm (C^2 / (sigma_max^2 cos phi) - rho_eq)
+    pressure_angle_rad: jax.Array  # |phi| of the second contact (the evaluation)
+    margin_mm: jax.Array  # the second contact's cut margin (mm; <= rho_min: violated)
+    stress_MPa: jax.Array  # the second contact's Hertz stress
+
+
+def _second(terms, tan_limit, sigma_max_MPa, coefficient, pressure_g, phi, undercut_g, margin, rho_eq):
+    from camjax.contact import roller_stress
+    from camjax.numerics import COS_FLOOR
+
+    cos_phi = jnp.maximum(jnp.cos(phi), COS_FLOOR)
+    need = coefficient**2 / (sigma_max_MPa**2 * cos_phi)
+    return SecondContact(pressure_g, undercut_g, need - rho_eq, jnp.abs(phi), margin,
+                         roller_stress(coefficient, phi, rho_eq))
+
+
+def groove_second(terms: GrooveTerms, kappa, roller_radius_mm, min_curvature_radius_mm, pressure_g, phi,
+                  tan_limit, sigma_max_MPa, coefficient=None) -> SecondContact:
+    """The outer flank: the first's pressure angle (shared normal), its concavity limit and its stress
+    (``coefficient``: the Hertz coefficient of the force along the roller's path, default the terms')."""
+    c = terms.clearance_mm
+    coefficient = terms.second_coefficient if coefficient is None else coefficient
+    return _second(terms, tan_limit, sigma_max_MPa, coefficient, pressure_g, phi,
+                   outer_flank_constraint(kappa, roller_radius_mm + c, min_curvature_radius_mm),
+                   outer_flank_margin(kappa, roller_radius_mm + c),
+                   outer_equivalent_radius(kappa, roller_radius_mm, c))
+
+
+def yoke_second(terms: YokeTerms, w, u, ds, d2s, signed_offset_mm, min_curvature_radius_mm, tan_limit,
+                sigma_max_MPa) -> SecondContact:
+    """The yoke's second cam (ccw formulas, e~ = sign e): its roller at depth D = L - w below the
+    centre on the axis, tan phi2 = |s' - e~| / D; curvature of the pitch curve of (e~, w - L); the
+    roller must stay off the shaft (D > R2, folded into the undercut). ``w``, ``u``: the first
+    roller's height and s' - e~ (mm)."""
+    from camjax.followers import _pitch as pitch
+    from camjax.followers.roller.geometry import roller_undercut_margin
+
+    r2, depth = terms.roller_radius_mm, terms.span_mm - w
+    reach = r2 + min_curvature_radius_mm
+    kappa2 = pitch.pitch_curvature(w - terms.span_mm, ds, d2s, signed_offset_mm)
+    undercut = jnp.maximum(reach * (kappa2 * reach - 1.0), r2 - depth)
+    phi2 = jnp.arctan2(jnp.abs(u), depth)
+    return _second(terms, tan_limit, sigma_max_MPa, terms.second_coefficient, jnp.abs(u) - tan_limit * depth, phi2,
+                   undercut, jnp.minimum(roller_undercut_margin(kappa2, r2), depth - r2),
+                   r2 * (1.0 - r2 * kappa2))
+
+
+def arm_second(terms: ArmTerms, pivot_distance_mm, psi, ds, d2s, sign, min_curvature_radius_mm, tan_limit,
+               sigma_max_MPa) -> SecondContact:
+    """A rocker's second cam: its roller at C2 = (d - l2 cos(psi - beta), l2 sin(psi - beta)) driven
+    along -dC2/dpsi (:func:`point_pitch`, :func:`path_pressure_angle`); the arm must stay across the
+    line of centres (sin(psi - beta) < 0, folded into the pressure angle as l2 sin(psi - beta))."""
+    from camjax.followers.roller.geometry import roller_undercut_margin
+
+    l2, r2 = terms.arm_length_mm, terms.roller_radius_mm
+    a = psi - terms.angle_rad
+    c, sn = jnp.cos(a), jnp.sin(a)
+    x, y = pivot_distance_mm - l2 * c, l2 * sn
+    dcx, dcy, ddx, ddy = l2 * sn, l2 * c, l2 * c, -l2 * sn
+    pp = point_pitch(x, y, ds * dcx, ds * dcy, d2s * dcx + ds**2 * ddx, d2s * dcy + ds**2 * ddy, sign)
+    along = pp.normal_x * dcx + pp.normal_y * dcy  # -(n . m), m = -dC2/dpsi; |m| = l2
+    across = -(pp.normal_x * dcy - pp.normal_y * dcx)
+    phi2 = jnp.arctan2(across, along)
+    reach = r2 + min_curvature_radius_mm
+    pressure = jnp.maximum(jnp.abs(across) - tan_limit * along, y)  # y = l2 sin(psi - beta) < 0
+    undercut = jnp.maximum(reach * (pp.curvature * reach - 1.0), r2 - jnp.hypot(x, y))
+    coefficient = terms.second_coefficient * jax.lax.rsqrt(l2 * 1e-3)  # of the force -M / l2 on its path
+    return _second(terms, tan_limit, sigma_max_MPa, coefficient, pressure, phi2, undercut,
+                   jnp.minimum(roller_undercut_margin(pp.curvature, r2), jnp.hypot(x, y) - r2),
+                   r2 * (1.0 - r2 * pp.curvature))
