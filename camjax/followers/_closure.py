@@ -223,9 +223,9 @@ def yoke_curves(closure: ClosureSpec, base_radius_mm, roller_radius_mm, offset_m
     (e, w - L) in the follower frame (w = sqrt(R_p^2 - e^2) + s), on the far side of the shaft; its
     cam pushes it away from the shaft, along -y, which pulls the follower back. ``geometry``: the
     first cam's :class:`camjax.followers.roller.geometry.RollerGeometry`."""
-    from camjax.followers.roller.geometry import roller_pitch_height
-
     import numpy as np
+
+    from camjax.followers.roller.geometry import roller_pitch_height
 
     span, r2 = closure.yoke_span_mm, closure.second_roller_radius_mm
     w = roller_pitch_height(base_radius_mm, roller_radius_mm, offset_mm, kin)

@@ -75,8 +75,10 @@ def closure_block(closure, curves, load_N, pressure_angle_deg) -> dict[str, Any]
                                       ("second_arm_length_mm", closure.second_arm_length_mm),
                                       ("second_arm_angle_deg", closure.second_arm_angle_deg)) if v is not None})
         out["second_roller_radius_mm"] = closure.second_roller_radius_mm
-        if "conjugate_span_mm" in own:
-            out["span_between_roller_centres_mm"] = _max(own["conjugate_span_mm"], t) | _min(own["conjugate_span_mm"], t)
+        # the distance between the two roller centres: the yoke's span, or the chord between the arms' ends
+        span = np.hypot(np.asarray(curves.pitch_x_mm) - own["conjugate_pitch_x_mm"],
+                        np.asarray(curves.pitch_y_mm) - own["conjugate_pitch_y_mm"])
+        out["roller_centre_distance_mm"] = {"max": float(np.max(span)), "min": float(np.min(span))}
     contacts: dict[str, Any] = {}
     for name in names:
         block: dict[str, Any] = {"carries": "load > 0 (pushes the follower away from the shaft)" if name == names[0]

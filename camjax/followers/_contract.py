@@ -66,7 +66,6 @@ class Follower(abc.ABC):
         """Refuse a [follower] key of another follower type (naming the types it belongs to) or of
         none, then any key this type does not take."""
         from camjax import followers
-
         from camjax.scene.spec import CLOSURES
 
         own = {"type", "closure", *self.keys}

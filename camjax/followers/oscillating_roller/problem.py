@@ -36,7 +36,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from camjax import family
-from camjax.contact import HERTZ_FACTOR, compliance, roller_stress
+from camjax.contact import roller_stress
 from camjax.family import (
     FEASIBILITY_RTOL_STRESS,
     FEASIBILITY_TOL_MM,
