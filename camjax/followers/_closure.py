@@ -482,3 +482,50 @@ def arm_second(terms: ArmTerms, pivot_distance_mm, psi, ds, d2s, sign, min_curva
     return _second(terms, tan_limit, sigma_max_MPa, coefficient, pressure, phi2, undercut,
                    jnp.minimum(roller_undercut_margin(pp.curvature, r2), jnp.hypot(x, y) - r2),
                    r2 * (1.0 - r2 * pp.curvature))
+
+
+# ------------------------------------------------------------------------------ sizing
+
+
+def second_limits(closure: ClosureSpec, kin, *, prime_radius_mm=None, signed_offset_mm=0.0, psi0=None,
+                  pivot_distance_mm=None, arm_length_mm=None, sign=1.0, roller_radius_mm, min_curvature_radius_mm,
+                  tan_limit):
+    """The second contact's limits at one cam size, g <= 0 where admissible (shape (2, n): pressure
+    angle, cut), from the design problems' closed forms: a translating roller at prime radius
+    ``prime_radius_mm`` (``signed_offset_mm``: sign e), a rocker at arm start angle ``psi0``."""
+    from camjax.followers import _pitch as pitch
+
+    zero = jnp.zeros_like(kin.s)
+    if closure.kind == "groove":
+        if psi0 is None:
+            w = pitch.pitch_height(prime_radius_mm, signed_offset_mm, kin.s)
+            kappa = pitch.pitch_curvature(w, kin.ds, kin.d2s, signed_offset_mm)
+        else:
+            from camjax.followers.oscillating_roller.geometry import swing_pitch_curvature
+
+            kappa = swing_pitch_curvature(pivot_distance_mm, arm_length_mm, psi0 + kin.s, 1.0 + sign * kin.ds,
+                                          kin.d2s)
+        return jnp.stack([zero - 1.0, outer_flank_constraint(kappa, roller_radius_mm + closure.clearance_mm,
+                                                             min_curvature_radius_mm)])
+    if psi0 is None:
+        terms = YokeTerms(closure.yoke_span_mm, closure.second_roller_radius_mm, zero)
+        w = pitch.pitch_height(prime_radius_mm, signed_offset_mm, kin.s)
+        second = yoke_second(terms, w, kin.ds - signed_offset_mm, kin.ds, kin.d2s, signed_offset_mm,
+                             min_curvature_radius_mm, tan_limit, 1.0)
+    else:
+        terms = ArmTerms(closure.second_arm_length_mm, math.radians(closure.second_arm_angle_deg),
+                         closure.second_roller_radius_mm, zero)
+        second = arm_second(terms, pivot_distance_mm, psi0 + kin.s, kin.ds, kin.d2s, sign, min_curvature_radius_mm,
+                            tan_limit, 1.0)
+    return jnp.stack([second.pressure_angle, second.undercut])
+
+
+def first_admissible_size(bad, x0, hi, samples: int):
+    """The smallest size x >= x0 (a prime radius, an arm start angle) where ``bad(x)`` is False:
+    x0 itself where it is admissible, else the first admissible point of (x0, hi) by a scan and a
+    bisection (:func:`camjax.followers._swing.first_admissible`). Returns (x, found)."""
+    from camjax.followers._swing import first_admissible
+
+    x, found = first_admissible(bad, x0, hi, samples)
+    ok0 = ~bad(x0)
+    return jnp.where(ok0, x0, x), ok0 | found

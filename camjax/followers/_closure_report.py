@@ -108,3 +108,16 @@ def closure_block(closure, curves, load_N, pressure_angle_deg) -> dict[str, Any]
 def positive_contact(closure) -> dict[str, Any]:
     """What replaces the contact-loss check of the loads block in a positive drive."""
     return {"lost": False, "closure": closure.kind, "note": NO_JUMP}
+
+
+def sizing_rules(follower) -> dict[str, str]:
+    """The smallest cam's rule where a positive drive's second contact binds (result.json's
+    ``min_base_radius_rule``), by the binding's name."""
+    f, c = follower, follower.closure
+    return {
+        "outer_flank": f"the groove's outer flank binds: the pitch curve's concavity radius >= R_f + clearance "
+                       f"({c.clearance_mm:g} mm) + {f.min_curvature_radius_mm:g} mm, and the first contact's "
+                       "pressure angle and undercut hold",
+        "conjugate": f"the conjugate cam binds: its |pressure angle| <= {f.max_pressure_angle_deg:g} deg and no "
+                     "undercut, and the first cam's hold",
+    }

@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 
@@ -147,8 +148,40 @@ class OscillatingRoller(RockingFollower):
         sampled, boundary = arm_sizing(kin, program, f.pivot_distance_mm, f.arm_length_mm, f.roller_radius_mm,
                                        math.radians(f.max_pressure_angle_deg), f.min_curvature_radius_mm,
                                        scene.motion.rotation)
-        return arm_sizing_result(kin, sampled, boundary, f, f.max_pressure_angle_deg, f.roller_radius_mm,
-                                 "pressure_angle", "without undercut")
+        first = arm_sizing_result(kin, sampled, boundary, f, f.max_pressure_angle_deg, f.roller_radius_mm,
+                                  "pressure_angle", "without undercut")
+        return first if not f.closure.positive else self._second_sizing(scene, kin, first)
+
+    def _second_sizing(self, scene, kin, first: RockerSizing) -> RockerSizing:
+        """The first contact's smallest cam raised, where the positive drive's second contact (outer
+        flank, second arm's cam) breaks its limits there, to the smallest arm start angle (prime
+        radius) where both contacts hold theirs (on the samples). Where none does the first's stays
+        and the drawn cam reports it."""
+        from camjax.followers._pitch import rotation_sign
+
+        f = scene.follower
+        d, l, rf = f.pivot_distance_mm, f.arm_length_mm, f.roller_radius_mm
+        sign, tan_lim = rotation_sign(scene.motion.rotation), math.tan(math.radians(f.max_pressure_angle_deg))
+        dt = kin.s.dtype
+        params = tuple(jnp.asarray(v, dt) for v in (d, l, sign, tan_lim, rf + f.min_curvature_radius_mm))
+
+        def limits(psi0):
+            second = _closure.second_limits(f.closure, kin, psi0=psi0, pivot_distance_mm=d, arm_length_mm=l,
+                                            sign=sign, roller_radius_mm=rf,
+                                            min_curvature_radius_mm=f.min_curvature_radius_mm, tan_limit=tan_lim)
+            return jnp.concatenate([rocker_roller_geo.sizing_limits(kin, psi0, params), second])
+
+        bad = lambda psi0: jnp.any(limits(psi0) > 0.0)  # noqa: E731
+        psi_first = rocker_roller_geo.arm_start_angle(jnp.asarray(first.min_prime_radius_mm, dt), d, l)
+        hi = jnp.asarray(math.pi, dt) - jnp.max(kin.s)
+        psi0, found = jax.jit(_closure.first_admissible_size, static_argnums=(0, 3))(bad, psi_first, hi,
+                                                                                     kin.s.shape[-1])
+        rp = _f(rocker_roller_geo.roller_centre_distance(d, l, psi0))
+        if not bool(found) or rp <= first.min_prime_radius_mm * (1.0 + 1e-12):
+            return first
+        g = np.asarray(limits(psi0))
+        deg = float(np.degrees(np.asarray(kin.theta))[int(np.argmax(np.max(g, axis=0)))])
+        return RockerSizing(rp - rf, rp, deg, "outer_flank" if f.closure.kind == "groove" else "conjugate")
 
     def closure_problem(self, scene, kin, base_radius_mm) -> str | None:
         """The prime radius R_p = R_b + R_f must lie strictly between |d - l| and d + l (the roller

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
+from functools import partial
 from typing import NamedTuple
 
 import jax
@@ -149,6 +150,12 @@ class Roller(TranslatingFollower):
         on the samples for the undercut, with exact extrema moved on to the root of its refined
         peak, :func:`exact_prime_radius`), minus R_f; the angle is where the binding limit is reached.
         """
+        first = self._first_min_base_radius(scene, arrays)
+        if not scene.follower.closure.positive:
+            return first
+        return self._second_min_base_radius(scene, arrays, first)
+
+    def _first_min_base_radius(self, scene, arrays) -> MinBaseRadius:
         f, t = scene.follower, np.asarray(arrays.theta_deg)
         sizing = _grid_sizing(arrays.kin, f.roller_radius_mm, f.offset_mm,
                               math.radians(f.max_pressure_angle_deg), f.min_curvature_radius_mm,
@@ -164,6 +171,27 @@ class Roller(TranslatingFollower):
             return MinBaseRadius(rp - f.roller_radius_mm, deg, binding, rp)
         return MinBaseRadius(rp - f.roller_radius_mm, _f(t[int(sizing.index)]),
                              "undercut" if bool(sizing.undercut_binds) else "pressure_angle", rp)
+
+    def _second_min_base_radius(self, scene, arrays, first: MinBaseRadius) -> MinBaseRadius:
+        """The first contact's smallest cam raised, where the positive drive's second contact (outer
+        flank, yoke's cam) breaks its limits there, to the smallest prime radius where it holds them
+        too (on the samples; the first's hold at every larger one). Where none does (a yoke's
+        second cam shrinks as the first grows) the first's stays and the drawn cam reports it."""
+        f, kin = scene.follower, arrays.kin
+        limits = partial(_closure.second_limits, f.closure, kin,
+                         signed_offset_mm=rotation_sign(scene.motion.rotation) * f.offset_mm,
+                         roller_radius_mm=f.roller_radius_mm, min_curvature_radius_mm=f.min_curvature_radius_mm,
+                         tan_limit=math.tan(math.radians(f.max_pressure_angle_deg)))
+        bad = lambda rp: jnp.any(limits(prime_radius_mm=rp) > 0.0)  # noqa: E731
+        rp0 = jnp.asarray(first.prime_radius_mm, kin.s.dtype)
+        rp, found = jax.jit(_closure.first_admissible_size, static_argnums=(0, 3))(
+            bad, rp0, 10.0 * rp0 + 10.0 * (f.roller_radius_mm + f.closure.clearance_mm), kin.s.shape[-1])
+        rp = _f(rp)
+        if not bool(found) or rp <= first.prime_radius_mm:
+            return first
+        g = np.asarray(limits(prime_radius_mm=rp))
+        deg = _f(np.asarray(arrays.theta_deg)[int(np.argmax(np.max(g, axis=0)))])
+        return MinBaseRadius(rp - f.roller_radius_mm, deg, "outer_flank" if f.closure.kind == "groove" else "conjugate", rp)
 
     def design_solution(self, scene, arrays, result, problem) -> DesignSolution:
         """A roller design's figures: its peak stress as the stress curve computes it, and the
