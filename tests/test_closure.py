@@ -260,10 +260,59 @@ def test_spring_scenes_parse_to_the_spring_closure():
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("scene", ["groove", "conjugate"])
+@pytest.mark.parametrize("scene", ["groove", "conjugate", "sharp_groove"])
 def test_design_and_sweep_run_on_both_closures(scene, tmp_path, capsys):
+    if scene == "sharp_groove":  # the outer flank binds the design
+        (tmp_path / "sharp.toml").write_text(SHARP)
+        scene = str(tmp_path / "sharp.toml")
     assert cli.main(["design", scene, "--out", str(tmp_path / "design")]) == 0
     data = json.loads((tmp_path / "design" / "result.json").read_text())
     assert data["closure"]["positive_drive"] and data["design"]["feasible"]
     assert data["evaluated_at"]["feasible"], data["evaluated_at"]["violations"]
+    table = np.loadtxt(tmp_path / "design" / "profile.csv", delimiter=",", skiprows=1)
+    names = (tmp_path / "design" / "profile.csv").read_text().splitlines()[0].split(",")
+    second = "outer_margin_mm" if data["closure"]["kind"] == "groove" else "conjugate_margin_mm"
+    assert np.min(table[:, names.index(second)]) > -1e-6  # the design keeps the second contact cuttable
     assert cli.main(["sweep", scene, "--out", str(tmp_path / "sweep"), "--alpha", "1", "--gamma", "0,0.1"]) == 0
+    pareto = json.loads((tmp_path / "sweep" / "pareto.json").read_text())
+    assert pareto
+
+SHARP = (builtin_scene_text("groove")
+         .replace('{ kind = "rise",   angle_deg = 90,  law = "cycloidal", lift_mm = 10.0 }',
+                  '{ kind = "rise",   angle_deg = 45,  law = "cycloidal", lift_mm = 10.0 }')
+         .replace('{ kind = "dwell",  angle_deg = 90 }', '{ kind = "dwell",  angle_deg = 135 }')
+         .replace("max_pressure_angle_deg = 30.0", "max_pressure_angle_deg = 45.0")
+         .replace("groove_clearance_mm = 0.02 ", "groove_clearance_mm = 3.0  "))
+
+
+def _turning_radii(x, y):
+    """Signed radius (mm) of the circle through each vertex and its two neighbours of a closed
+    polyline: > 0 where it turns left (counterclockwise)."""
+    ax, ay, bx, by = np.roll(x, 1) - x, np.roll(y, 1) - y, np.roll(x, -1) - x, np.roll(y, -1) - y
+    cross = ax * by - ay * bx
+    a, b, c = np.hypot(ax, ay), np.hypot(bx, by), np.hypot(bx - ax, by - ay)
+    return -a * b * c / (2.0 * cross)  # the polyline runs clockwise (a ccw cam): left turns are concave parts
+
+
+def test_the_smallest_groove_keeps_its_outer_flank_cuttable(tmp_path):
+    """A fast rise in a wide groove: the outer flank, not the first contact, sets the smallest cam.
+    There the outer flank's tightest convex bend (seen from the roller: where the pitch curve is
+    concave) is min_curvature_radius_mm, measured on the exported outline by three-point circles;
+    1 mm smaller and it is tighter and the run reports the broken outer flank."""
+    scene = with_samples(parse_scene(SHARP), SAMPLES)
+    scene = replace(scene, design=None, motion=replace(scene.motion, extrema="grid"))
+    run = camjax.run_design(scene)
+    minimum = run.min_base_radius
+    assert minimum.binding == "outer_flank"
+    rho_min = scene.follower.min_curvature_radius_mm
+
+    def tightest(radius):
+        r = camjax.run_design(scene, base_radius_mm=radius)
+        own = r.curves.own_curves
+        turning = _turning_radii(own["outer_x_mm"], own["outer_y_mm"])
+        return float(np.min(turning[turning > 0])), r.violations
+
+    at_min, ok = tightest(minimum.radius_mm)
+    assert at_min == pytest.approx(rho_min, abs=2e-4) and not ok  # three-point circles: O(h^2) ~ 1e-5 mm
+    smaller, broken = tightest(minimum.radius_mm - 1.0)
+    assert smaller < rho_min - 0.05 and [v.constraint for v in broken] == ["outer_flank"]
