@@ -316,3 +316,25 @@ def test_the_smallest_groove_keeps_its_outer_flank_cuttable(tmp_path):
     assert at_min == pytest.approx(rho_min, abs=2e-4) and not ok  # three-point circles: O(h^2) ~ 1e-5 mm
     smaller, broken = tightest(minimum.radius_mm - 1.0)
     assert smaller < rho_min - 0.05 and [v.constraint for v in broken] == ["outer_flank"]
+
+
+@pytest.mark.parametrize("case", ["groove", "yoke", "conjugate"])
+def test_closure_constraints_have_finite_gradients_inside_and_far_outside_the_box(case):
+    """The design problems' second-contact constraints: finite values and gradients for a design in
+    the box and for one far outside it (a tiny cam, the second roller on the shaft)."""
+    import jax
+    import jax.numpy as jnp
+
+    from camjax.solvers.base import problem_from_scene
+
+    text = {"groove": builtin_scene_text("groove"), "yoke": YOKE, "conjugate": builtin_scene_text("conjugate")}[case]
+    scene = parse_scene(text.replace("[motion]\n", '[motion]\nextrema = "grid"\n'))
+    problem = problem_from_scene(scene)
+    module = followers.of(scene).problem_module()
+    assert problem.closure is not None
+    mid = jax.tree.map(lambda lo, hi: 0.5 * (lo + hi), problem.lower, problem.upper)
+    far = jax.tree.map(lambda lo: 0.05 * lo, problem.lower)
+    total = jax.jit(jax.value_and_grad(lambda d: sum(jnp.sum(c) for c in module.constraints(problem, d))))
+    for design in (mid, far):
+        value, grad = total(design)
+        assert np.isfinite(float(value)) and all(np.isfinite(np.asarray(g)).all() for g in jax.tree.leaves(grad))
