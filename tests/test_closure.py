@@ -338,3 +338,10 @@ def test_closure_constraints_have_finite_gradients_inside_and_far_outside_the_bo
     for design in (mid, far):
         value, grad = total(design)
         assert np.isfinite(float(value)) and all(np.isfinite(np.asarray(g)).all() for g in jax.tree.leaves(grad))
+
+
+def test_a_positive_drive_has_no_jump_analysis():
+    text = builtin_scene_text("groove") + '\n[dynamics]\nfollower = "translating"\nI3 = 0.1\nc3 = 1.0\nk23 = 1e6\n' \
+        'compute = ["jump"]\nspring_rate = 1000.0\n'
+    with pytest.raises(SceneError, match=r"dynamics\.compute.*positive drive"):
+        parse_scene(text)
