@@ -17,6 +17,12 @@ One room for what a translating and a rocking roller share when no spring holds 
 - which contact carries the load: the force (torque) the follower needs is pushed by the first
   contact (inner flank, first cam) where it is > 0 and pulled by the second where it is < 0
   (:func:`split_load`).
+- the design problems' second contact (:class:`GrooveTerms`, :class:`YokeTerms`, :class:`ArmTerms`
+  and :func:`groove_second`, :func:`yoke_second`, :func:`arm_second`: g <= 0 per angle, maxed with
+  the first contact's) and the sizing's (:func:`second_limits`, :func:`first_admissible_size`).
+
+The report's block and the drawings are :mod:`camjax.followers._closure_report` and
+:mod:`camjax.followers._closure_drawing` (output layer, NumPy only).
 
 Frames, rotation and signs: :mod:`camjax.followers._pitch`. Lengths mm, angles rad; every
 function is elementwise over the angle grid and jit/vmap/grad-safe.
@@ -418,7 +424,9 @@ class SecondContact(NamedTuple):
     stress_MPa: jax.Array  # the second contact's Hertz stress
 
 
-def _second(terms, tan_limit, sigma_max_MPa, coefficient, pressure_g, phi, undercut_g, margin, rho_eq):
+def _second(sigma_max_MPa, coefficient, pressure_g, phi, undercut_g, margin, rho_eq) -> SecondContact:
+    """A second contact's constraints from its pressure-angle and cut constraints (mm), pressure angle
+    (rad), cut margin (mm), Hertz equivalent radius (mm) and the coefficient of its load."""
     from camjax.contact import roller_stress
     from camjax.numerics import COS_FLOOR
 
@@ -434,7 +442,7 @@ def groove_second(terms: GrooveTerms, kappa, roller_radius_mm, min_curvature_rad
     (``coefficient``: the Hertz coefficient of the force along the roller's path, default the terms')."""
     c = terms.clearance_mm
     coefficient = terms.second_coefficient if coefficient is None else coefficient
-    return _second(terms, tan_limit, sigma_max_MPa, coefficient, pressure_g, phi,
+    return _second(sigma_max_MPa, coefficient, pressure_g, phi,
                    outer_flank_constraint(kappa, roller_radius_mm + c, min_curvature_radius_mm),
                    outer_flank_margin(kappa, roller_radius_mm + c),
                    outer_equivalent_radius(kappa, roller_radius_mm, c))
@@ -454,7 +462,7 @@ def yoke_second(terms: YokeTerms, w, u, ds, d2s, signed_offset_mm, min_curvature
     kappa2 = pitch.pitch_curvature(w - terms.span_mm, ds, d2s, signed_offset_mm)
     undercut = jnp.maximum(reach * (kappa2 * reach - 1.0), r2 - depth)
     phi2 = jnp.arctan2(jnp.abs(u), depth)
-    return _second(terms, tan_limit, sigma_max_MPa, terms.second_coefficient, jnp.abs(u) - tan_limit * depth, phi2,
+    return _second(sigma_max_MPa, terms.second_coefficient, jnp.abs(u) - tan_limit * depth, phi2,
                    undercut, jnp.minimum(roller_undercut_margin(kappa2, r2), depth - r2),
                    r2 * (1.0 - r2 * kappa2))
 
@@ -479,7 +487,7 @@ def arm_second(terms: ArmTerms, pivot_distance_mm, psi, ds, d2s, sign, min_curva
     pressure = jnp.maximum(jnp.abs(across) - tan_limit * along, y)  # y = l2 sin(psi - beta) < 0
     undercut = jnp.maximum(reach * (pp.curvature * reach - 1.0), r2 - jnp.hypot(x, y))
     coefficient = terms.second_coefficient * jax.lax.rsqrt(l2 * 1e-3)  # of the force -M / l2 on its path
-    return _second(terms, tan_limit, sigma_max_MPa, coefficient, pressure, phi2, undercut,
+    return _second(sigma_max_MPa, coefficient, pressure, phi2, undercut,
                    jnp.minimum(roller_undercut_margin(pp.curvature, r2), jnp.hypot(x, y) - r2),
                    r2 * (1.0 - r2 * pp.curvature))
 
