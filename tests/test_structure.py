@@ -32,7 +32,7 @@ LATER = {
 # a follower folder's computing layers (and the families' shared maths) never reach the output layer;
 # its report.py and drawing.py (and the families' _*_report.py, _*_drawing.py) are that layer
 OUTPUT_LAYERS = ("report", "drawing", "_translating_report", "_translating_drawing", "_rocking_report",
-                 "_rocking_drawing")
+                 "_rocking_drawing", "_closure_report", "_closure_drawing")
 
 
 def _runtime_imports(path: Path) -> set[str]:

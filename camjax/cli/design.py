@@ -235,6 +235,11 @@ def _write_design(args, out, scene, result, workers, progress, extra=None) -> in
     width = follower.drawn_summary(d)
     state = f"INFEASIBLE ({', '.join(broken)})" if broken else "feasible"
     print(f"files drawn at R_b = {at['base_radius_mm']:.4f} mm{width} ({at['source']}): {state}")
+    if "closure" in d:  # a groove or conjugate cams
+        c = d["closure"]
+        switches = ", ".join(f"{a:.4g}" for a in c.get("switch_angles_deg", []))
+        print(f"positive drive ({c['kind']}): no spring, no jump analysis"
+              + (f"; the load changes contact at {switches} deg" if switches else ""))
     print(f"wrote {', '.join(names)} to {args.out}")
     for v in at["violations"]:
         print(f"camjax design: warning: the geometry written breaks {v['constraint']}: {v['message']}",

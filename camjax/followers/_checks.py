@@ -44,3 +44,37 @@ def undercut(margin: float, deg: float) -> list[GeometryViolation]:
         return []
     return [GeometryViolation("undercut", f"undercut margin {margin:.4g} mm at {deg:g} deg <= 0: the roller "
                               "undercuts the cam")]
+
+
+def outer_flank(margin: float, deg: float) -> list[GeometryViolation]:
+    """A negative outer-flank margin (mm): a groove's outer flank is concave tighter than its roller
+    (the pitch curve's concavity radius below R_f + clearance + the smallest radius allowed)."""
+    if margin >= -FEASIBILITY_TOL_MM:
+        return []
+    return [GeometryViolation("outer_flank", f"outer-flank margin {margin:.4g} mm at {deg:g} deg <= 0: the "
+                              "pitch curve's concavity radius is below R_f + clearance, the groove's outer "
+                              "flank cannot be cut")]
+
+
+def closure(own: dict, theta_deg, pressure_angle_limit_deg: float | None) -> list[GeometryViolation]:
+    """The second contact of a positive drive (:mod:`camjax.followers._closure`), on its samples: a
+    groove's outer flank that cannot be cut; a conjugate cam's pressure angle over the limit and its
+    undercut."""
+    import numpy as np
+
+    out: list[GeometryViolation] = []
+
+    def worst(values, pick):
+        i = int(pick(values))
+        return float(values[i]), float(theta_deg[i])
+
+    if "outer_margin_mm" in own:
+        out += outer_flank(*worst(own["outer_margin_mm"], np.argmin))
+    if "conjugate_margin_mm" in own:
+        for v in undercut(*worst(own["conjugate_margin_mm"], np.argmin)):
+            out.append(GeometryViolation("conjugate_undercut", v.message.replace("the roller undercuts the cam",
+                                                                                 "the second roller undercuts its cam")))
+    if "conjugate_pressure_angle_deg" in own and pressure_angle_limit_deg is not None:
+        for v in pressure_angle(*worst(np.abs(own["conjugate_pressure_angle_deg"]), np.argmax), pressure_angle_limit_deg):
+            out.append(GeometryViolation("conjugate_pressure_angle", "second cam: " + v.message))
+    return out

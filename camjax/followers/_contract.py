@@ -47,6 +47,9 @@ class Follower(abc.ABC):
     design_needs_contact: ClassVar[bool] = False  # a [design] needs [contact] (its objective is the stress)
     takes_contact: ClassVar[bool] = True  # a [contact] section (Hertz stress) is defined for it
     takes_guide: ClassVar[bool] = False  # a [guide] section (stem reactions, SPEC 4) applies to it
+    # the closures it runs with ([follower] closure, camjax.scene.spec.CLOSURES): "spring" for every
+    # type; "groove" and "conjugate" (positive drive) where its closure keys and geometry exist
+    closures: ClassVar[tuple[str, ...]] = ("spring",)
 
     # ----------------------------------------------------------------------------- scene
 
@@ -63,8 +66,17 @@ class Follower(abc.ABC):
         """Refuse a [follower] key of another follower type (naming the types it belongs to) or of
         none, then any key this type does not take."""
         from camjax import followers
+        from camjax.scene.spec import CLOSURES
 
-        own = {"type", *self.keys}
+        own = {"type", "closure", *self.keys}
+        if "closure" in r.table:
+            value = r.table["closure"]
+            if value not in CLOSURES:
+                raise r.error("closure", value, "is not allowed", ", ".join(self.closures))
+            if value not in self.closures:
+                owners = [f.name for f in followers.all_followers() if value in f.closures]
+                raise r.error("closure", value, f"a {self.title} follower cannot run in a {value} closure "
+                              f"(only type = {' or '.join(map(repr, owners))})", ", ".join(self.closures))
         for key in r.table:
             if key in own:
                 continue
@@ -72,7 +84,7 @@ class Follower(abc.ABC):
             if owners:
                 raise r.error(key, r.table[key], f"only for type = {' or '.join(map(repr, owners))}, not "
                               f"type = {self.name!r}", ", ".join(self.keys))
-        r.check_keys(("type", *self.keys))
+        r.check_keys(("type", "closure", *self.keys))
 
     # ---------------------------------------------------------------------------- design
 

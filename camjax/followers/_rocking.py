@@ -128,6 +128,10 @@ class RockerCurves(NamedTuple):
     torque_Nm: np.ndarray | None  # cam shaft torque
     stress_MPa: np.ndarray | None  # Hertz contact stress
     pressure_angle_limit_deg: float | None = None  # roller: follower.max_pressure_angle_deg
+    # the follower's own per-sample curves, name -> (N,) (profile.csv columns after the shared ones):
+    # a positive-drive closure's flanks or second cam, margins and loads (camjax.followers._closure)
+    own_curves: dict[str, np.ndarray] | None = None
+    closure: str = "spring"  # [follower] closure
 
 
 class RockerRun(NamedTuple):
@@ -182,7 +186,9 @@ def rocker_violations(curves: RockerCurves, scene, extremes: dict[str, Extremes]
         out += _checks.curvature(*at(curves.rho_mm, np.argmin, "rho"), scene.follower.min_curvature_radius_mm)
     if curves.stress_MPa is not None and scene.design is not None and scene.design.sigma_max_MPa:
         out += _checks.stress(*at(curves.stress_MPa, np.argmax, "stress", "max"), scene.design.sigma_max_MPa)
-    if curves.contact_force_N is not None:
+    # a positive drive's second contact (sampled): outer flank, or second cam
+    out += _checks.closure(curves.own_curves or {}, t, curves.pressure_angle_limit_deg)
+    if curves.contact_force_N is not None and curves.closure == "spring":  # positive drive: no spring to lose
         force, deg = at(curves.contact_force_N, np.argmin, "contact_force")
         if force < 0:
             out.append(GeometryViolation(
@@ -252,6 +258,12 @@ class RockingFollower(Follower):
     def contact(self, scene, moment, g: RockerGeometry) -> tuple[Any, Any]:
         """(normal contact force (N), Hertz stress (MPa) or None without [contact]) from the torque
         ``moment`` (N m) the cam applies about the pivot."""
+
+    def closure_curves(self, scene, kin: Kinematics, base_radius_mm: float, g: RockerGeometry, moment):
+        """The curves of a positive-drive closure (:mod:`camjax.followers._closure`) at one base radius,
+        named as profile.csv's columns (``moment``: the pivot torque the follower needs, N m, or
+        None); only called for a follower whose ``closures`` has one."""
+        raise NotImplementedError(f"a {self.title} follower has no positive-drive closure")
 
     def drawn_follower(self, scene, result: dict):
         """The [follower] spec with a solved design's pivot, arm (or face) and roller (those the cam
@@ -345,6 +357,9 @@ class RockingFollower(Follower):
             moment = loads.rocker_torque(f.train, kin, w)
             torque = loads.rocker_cam_torque(moment, kin.ds)
             force, stress = self.contact(scene, moment, g)
+        own = None
+        if f.closure.positive:
+            own = {k: np.asarray(v) for k, v in self.closure_curves(scene, kin, base_radius_mm, g, moment).items()}
         arr = lambda v: None if v is None else np.asarray(v)  # noqa: E731
         return RockerCurves(
             theta_deg=np.degrees(np.asarray(kin.theta)), swing_deg=np.degrees(np.asarray(kin.s)),
@@ -362,7 +377,7 @@ class RockingFollower(Follower):
             pitch_rho_mm=arr(g.pitch_rho_mm), undercut_margin_mm=arr(g.undercut_margin_mm),
             contact_distance_mm=arr(g.contact_distance_mm), pivot_torque_Nm=arr(moment),
             contact_force_N=arr(force), torque_Nm=arr(torque), stress_MPa=arr(stress),
-            pressure_angle_limit_deg=g.pressure_angle_limit_deg,
+            pressure_angle_limit_deg=g.pressure_angle_limit_deg, own_curves=own, closure=f.closure.kind,
         )
 
     def run(self, scene, arrays: SceneArrays | None = None, *, base_radius_mm: float | None = None,

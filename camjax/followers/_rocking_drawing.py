@@ -15,6 +15,7 @@ from functools import partial
 import numpy as np
 from matplotlib.figure import Figure
 
+from camjax.followers._closure_drawing import draw_closure, second_outline
 from camjax.output import animation
 from camjax.output.animation import ANGLE_RTOL, LENGTH_TOL_MM, FollowerArtists, Mechanism
 from camjax.output.plots import clip_axis, closed, cycle_axis, mark_extremes, rho_axis_limit_mm, title_figure
@@ -110,6 +111,7 @@ def profile_figure(curves, title: str = "", draw_follower=None) -> Figure:
     theta = np.deg2rad(c.theta_deg)
     psi = np.deg2rad(c.arm_angle_deg)
     px, py = draw_follower(ax, c, theta, psi)
+    draw_closure(ax, c)
     ax.plot([px], [py], "o", color="k", markersize=6, markerfacecolor="w",
             label=f"pivot, d = {c.pivot_distance_mm:g} mm")
     ax.set_aspect("equal")
@@ -160,6 +162,9 @@ def profile_table(curves) -> tuple[list[str], np.ndarray]:
         if values is not None:
             names.append(name)
             cols.append(values)
+    for name, values in (getattr(c, "own_curves", None) or {}).items():  # the follower's own
+        names.append(name)
+        cols.append(values)
     return names, np.column_stack(cols)
 
 
@@ -266,6 +271,7 @@ def mechanism(curves, title: str = "", violation: str | None = None, bad=None) -
         arm_length_mm=curves.arm_length_mm if roller else None,
         face_offset_mm=None if roller else curves.face_offset_mm,
         arm_start_angle_deg=float(curves.arm_start_angle_deg), swing_deg=np.asarray(curves.swing_deg),
+        second_outline=second_outline(curves),
     )
 
 

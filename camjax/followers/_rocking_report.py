@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 
 from camjax import followers
+from camjax.followers import _closure_report
 from camjax.output.report import (
     extrema,
     feasibility_block,
@@ -123,4 +124,9 @@ def report(scene, run, blocks) -> dict[str, Any]:
     if run.design is not None:
         out["design"] = run.design
         out["follower_scene"] = follower_scene_block(followers.of(scene), f)
+    if f.closure.positive:  # a groove or conjugate cams: no spring to lose, the load changes contact
+        load = None if c.pivot_torque_Nm is None else c.pivot_torque_Nm / (c.arm_length_mm * 1e-3)
+        out["closure"] = _closure_report.closure_block(f.closure, c, load, c.pressure_angle_deg)
+        if "loads" in out:
+            out["loads"]["contact"] = _closure_report.positive_contact(f.closure)
     return out

@@ -96,6 +96,17 @@ def moment_model(scene, arrays) -> MomentModel | None:
                        as_(c.cam_width_mm * compliance(c.cam, c.follower)))
 
 
+def second_moment_coefficient_at(model: MomentModel, kin: Kinematics) -> jax.Array:
+    """:func:`moment_coefficient_at` of max(-M, 0): the pivot torque a positive drive's second contact
+    carries (camjax.followers._closure)."""
+    from camjax.contact import HERTZ_FACTOR
+    from camjax.loads import rocker_torque
+    from camjax.numerics import safe_sqrt
+
+    moment = rocker_torque(model.train, kin, model.cam_speed_rad_s)
+    return HERTZ_FACTOR * safe_sqrt(jnp.maximum(-moment, 0.0) / model.width_compliance)
+
+
 def moment_coefficient_at(model: MomentModel, kin: Kinematics) -> jax.Array:
     """C_M = 0.564 sqrt(M / (w K)) at the angles of ``kin`` (MPa mm^0.5 m^0.5), M (N m) the torque
     about the pivot (:func:`camjax.loads.rocker_torque`); divided by the root of the contact
@@ -124,7 +135,12 @@ def polish_design(problem, design, constraints, names: tuple[str, ...]):
         kin = program_mod.segment_motion(program, segment, theta_deg)
         model = getattr(problem, "moment_model", None)
         coefficient = jnp.zeros_like(kin.s) if model is None else moment_coefficient_at(model, kin)
-        return problem._replace(theta_deg=jnp.degrees(kin.theta), s_rad=kin.s, ds=kin.ds, d2s=kin.d2s,
-                                moment_coefficient=coefficient)
+        at = problem._replace(theta_deg=jnp.degrees(kin.theta), s_rad=kin.s, ds=kin.ds, d2s=kin.d2s,
+                              moment_coefficient=coefficient)
+        closure = getattr(problem, "closure", None)
+        if closure is not None:  # a positive drive's second contact: the load it carries, max(-M, 0)
+            second = jnp.zeros_like(kin.s) if model is None else second_moment_coefficient_at(model, kin)
+            at = at._replace(closure=closure._replace(second_coefficient=second))
+        return at
 
     return _polish.polish_design(problem, design, constraints, names, program=program, at=at)

@@ -118,6 +118,7 @@ class DesignCurves(NamedTuple):
     # "face_travel_mm", where the contact sits on the face off its axis, is what the face width must
     # cover (a crowned face's R_c sin phi; without it, a flat face's s')
     own_curves: dict[str, np.ndarray] | None = None
+    closure: str = "spring"  # [follower] closure: "groove" and "conjugate" add their curves to own_curves
 
 
 def least_abs_offset(bounds: tuple[float, float]) -> float:
@@ -220,7 +221,9 @@ def geometry_violations(curves: DesignCurves, rho_min_mm: float = 0.0,
         out += _checks.pressure_angle(*phi, curves.pressure_angle_limit_deg)
     if curves.undercut_margin_mm is not None:
         out += _checks.undercut(*at(curves.undercut_margin_mm, np.argmin, "undercut_margin"))
-    if curves.force_N is not None:
+    # a positive drive's second contact (sampled): outer flank, or second cam
+    out += _checks.closure(curves.own_curves or {}, t, curves.pressure_angle_limit_deg)
+    if curves.force_N is not None and curves.closure == "spring":  # positive drive: no spring to lose
         force, deg = at(curves.force_N, np.argmin, "force")
         if force < 0:
             lost = float(np.mean(curves.force_N < 0)) * 360.0
@@ -272,6 +275,11 @@ class TranslatingFollower(Follower):
         default: none."""
         return None
 
+    def closure_curves(self, scene, arrays: SceneArrays, base_radius_mm, follower, geometry: GeometryCurves):
+        """The curves of a positive-drive closure (:mod:`camjax.followers._closure`) at one base radius,
+        named as profile.csv's columns; only called for a follower whose ``closures`` has one."""
+        raise NotImplementedError(f"a {self.title} follower has no positive-drive closure")
+
     def curve_names(self, scene, arrays: SceneArrays) -> tuple[str, ...]:
         """Names of the follower's own curves whose extrema the report takes (see :meth:`curve`)."""
         return ()
@@ -317,6 +325,9 @@ class TranslatingFollower(Follower):
         rot = scene.motion.rotation
         g = jax.jit(lambda a, r: self.geometry(follower, rot, a, r))(arrays, base_radius_mm)
         face_width_mm = self.drawn_face_width(face_width_mm, g.face_width_mm)
+        own = g.own_curves
+        if follower.closure.positive:
+            own = {**(own or {}), **self.closure_curves(scene, arrays, base_radius_mm, follower, g)}
         radius, offset, limit = self.curve_dimensions(follower)
         kin, m = arrays.kin, arrays.motion
         parts = None
@@ -332,7 +343,7 @@ class TranslatingFollower(Follower):
             _np(arrays.torque_Nm), _np(g.stress_MPa),
             None if scene.design is None else scene.design.sigma_max_MPa, radius, offset, _np(g.pitch_x_mm), _np(g.pitch_y_mm), _np(g.pressure_angle_deg), _np(g.pitch_rho_mm),
             _np(g.undercut_margin_mm), limit, rot, parts,
-            None if g.own_curves is None else {k: np.asarray(v) for k, v in g.own_curves.items()},
+            None if own is None else {k: np.asarray(v) for k, v in own.items()}, follower.closure.kind,
         )
 
     def run(self, scene, arrays: SceneArrays | None = None, *, base_radius_mm: float | None = None,

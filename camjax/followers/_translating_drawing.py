@@ -16,6 +16,7 @@ from typing import NamedTuple
 import numpy as np
 from matplotlib.figure import Figure
 
+from camjax.followers._closure_drawing import draw_closure, second_outline
 from camjax.output import animation
 from camjax.output.animation import ANGLE_RTOL, LENGTH_TOL_MM, FollowerArtists, Mechanism
 from camjax.output.plots import (
@@ -95,7 +96,7 @@ def profile_figure(curves, title: str = "", draw_follower=None) -> Figure:
     radius = np.hypot(x, y)
     reach = float(np.max(radius))
     drawn = draw_follower(ax, curves, theta, sign)
-    reach = max(reach, drawn.reach_mm)
+    reach = max(reach, drawn.reach_mm, draw_closure(ax, curves))
     bad, bad_label = drawn.bad, drawn.bad_label
     if bad.any():
         ax.plot(np.where(bad, x, np.nan), np.where(bad, y, np.nan), color="C3", linewidth=2.5,
@@ -333,6 +334,7 @@ def mechanism(curves, title: str = "", violation: str | None = None, bad=None) -
         curves.face_width_mm, curves.roller_radius_mm, float(curves.offset_mm or 0.0),
         None if curves.pressure_angle_deg is None else np.asarray(curves.pressure_angle_deg),
         title, violation, violation_samples(curves) if bad is None else bad, curves.rotation,
+        second_outline=second_outline(curves),
     )
 
 

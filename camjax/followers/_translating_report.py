@@ -18,6 +18,7 @@ from typing import Any
 
 from camjax import followers
 from camjax.evaluate import curve_extremes, curve_names
+from camjax.followers import _closure_report
 from camjax.output.report import feasibility_block, follower_scene_block, header_block, loads_block
 
 
@@ -96,4 +97,10 @@ def report(scene, run, blocks) -> dict[str, Any]:
                             **feasibility_block(run.violations)}
     data.update(evaluated_block(run.curves, extremes))
     data.update(blocks.evaluated_block(run.curves, extremes))
+    closure = scene.follower.closure
+    if closure.positive:  # a groove or conjugate cams: no spring to lose, the load changes contact
+        c = run.curves
+        data["closure"] = _closure_report.closure_block(closure, c, c.force_N, c.pressure_angle_deg)
+        if "loads" in data:
+            data["loads"]["contact"] = _closure_report.positive_contact(closure)
     return data

@@ -64,6 +64,8 @@ class Mechanism(NamedTuple):
       arm_start_angle_deg: psi0, the arm's angle from the line of centres at s = 0, deg
         (oscillating only).
       swing_deg: (N,) the arm's swing s(theta) from psi0, deg (oscillating only): psi = psi0 + s.
+      second_outline: a positive drive's second flank or cam (X, Y), cam coordinates, turning with
+        the first (:func:`camjax.followers._closure_drawing.second_outline`); None: spring-closed.
     """
 
     theta_deg: np.ndarray
@@ -85,6 +87,7 @@ class Mechanism(NamedTuple):
     face_offset_mm: float | None = None
     arm_start_angle_deg: float | None = None
     swing_deg: np.ndarray | None = None
+    second_outline: tuple[np.ndarray, np.ndarray] | None = None
 
     @property
     def oscillating(self) -> bool:
@@ -190,6 +193,10 @@ def motion_frames(m: Mechanism, frames: int = 72) -> MotionFrames:
     poses = frame_poses(m, frames)
     x, y = np.asarray(m.profile_x_mm), np.asarray(m.profile_y_mm)
     r_max = float(np.max(np.hypot(x, y)))
+    x2 = y2 = None
+    if m.second_outline is not None:  # a groove's outer flank or a conjugate cam
+        x2, y2 = (np.asarray(v) for v in m.second_outline)
+        r_max = max(r_max, float(np.max(np.hypot(x2, y2))))
     s, s_label = m.motion()
 
     fig = Figure(figsize=(7.2, 5.0), layout="constrained")
@@ -205,6 +212,8 @@ def motion_frames(m: Mechanism, frames: int = 72) -> MotionFrames:
     ax.plot([0.0], [0.0], "+", color="k", markersize=8)
     cam_fill = ax.fill(x, y, color="C0", alpha=0.18, label="cam")[0]
     (cam_line,) = ax.plot(x, y, color="C0", linewidth=1.4)
+    (second_line,) = ax.plot([], [], color="C4", linewidth=1.4,
+                             **({"label": "second flank or cam"} if x2 is not None else {}))
     bad = np.zeros(len(x), bool) if m.bad is None else np.asarray(m.bad, bool)
     (bad_line,) = ax.plot([], [], color="C3", linewidth=2.2, label="outline breaking a constraint")
     (key,) = ax.plot([0.0, 0.0], [0.0, 0.6 * m.base_radius_mm], color="C0", linewidth=2.0)
@@ -243,6 +252,8 @@ def motion_frames(m: Mechanism, frames: int = 72) -> MotionFrames:
         xr, yr = rotate(x, y, th)
         cam_line.set_data(xr, yr)
         cam_fill.set_xy(np.column_stack([xr, yr]))
+        if x2 is not None:
+            second_line.set_data(*rotate(x2, y2, th))
         bad_line.set_data(np.where(bad, xr, np.nan), np.where(bad, yr, np.nan))
         key.set_data(*rotate(np.array([0.0, 0.0]), np.array([0.0, 0.6 * m.base_radius_mm]), th))
         moved = follower.update(i)
@@ -256,14 +267,14 @@ def motion_frames(m: Mechanism, frames: int = 72) -> MotionFrames:
                  else f"s = {s[k]:6.3f} mm")
         label.set_text(f"θ = {poses.theta_deg[i]:5.1f}°\n{where}\npressure angle φ = {phi:5.1f}°")
         marker.set_data([poses.theta_deg[i]], [s[k]])
-        return cam_line, cam_fill, bad_line, key, *moved, contact, normal, label, marker
+        return cam_line, cam_fill, second_line, bad_line, key, *moved, contact, normal, label, marker
 
     ax.set_xlim(*follower.xlim)
     ax.set_ylim(*follower.ylim)
     update(0)
     artists = {"cam": cam_line, "bad": bad_line, "contact": contact, "normal": normal, "label": label,
                "marker": marker, **follower.artists,
-               "moving": [cam_fill, cam_line, bad_line, key, *follower.moving, contact, normal, label,
+               "moving": [cam_fill, cam_line, second_line, bad_line, key, *follower.moving, contact, normal, label,
                           marker]}
     return MotionFrames(fig, update, poses, artists)
 

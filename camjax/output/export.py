@@ -40,50 +40,59 @@ def centre_mark_half_mm(curves, units: str = "mm") -> float:
 
 def write_profile_dxf(path: Path, curves, units: str = "mm") -> Path:
     """Cam outline as one closed LWPOLYLINE on layer CAM_PROFILE, drawing units mm (``units``
-    "in": inches, $INSUNITS 1 and $MEASUREMENT 0, from curves in inches).
+    "in": inches, $INSUNITS 1 and $MEASUREMENT 0, from curves in inches). A positive drive draws
+    each flank or cam on its own layer (GROOVE_INNER and GROOVE_OUTER; CAM_PROFILE and
+    CONJUGATE_CAM: :func:`camjax.followers._closure_output.outlines`).
 
     One vertex per sample (the scene's ``samples``); raise ``samples`` for a finer polyline
     (with 360 samples the chord error on a 30 mm cam is about 1 micrometre). ezdxf writes the
-    document; the polyline's vertices are formatted from the array in one call, since ezdxf adds
-    and writes them one by one (quadratic: 30 s for 5e4 vertices; this way 1e6 take seconds).
-    The shaft centre is a cross of two LINEs on layer CENTER; $EXTMIN/$EXTMAX bound both and the
-    active viewport shows them.
+    document; the polylines' vertices are formatted from the arrays in one call each, since ezdxf
+    adds and writes them one by one (quadratic: 30 s for 5e4 vertices; this way 1e6 take seconds).
+    The shaft centre is a cross of two LINEs on layer CENTER; $EXTMIN/$EXTMAX bound all of them and
+    the active viewport shows them.
     """
     import io
 
     import ezdxf  # imported here: only the DXF export needs it
     from ezdxf import zoom
 
-    xy = np.column_stack([curves.profile_x_mm, curves.profile_y_mm])
+    from camjax.followers._closure_drawing import outlines
+
+    shapes = [(layer, np.column_stack([x, y])) for layer, x, y in outlines(curves)]
     inch = scene_units.check_units(units) == "in"
     doc = ezdxf.new("R2010", units=ezdxf.units.IN if inch else ezdxf.units.MM,
                     setup=["linetypes"])  # CENTER linetype
     doc.header["$MEASUREMENT"] = 0 if inch else 1  # imperial or metric
-    doc.layers.add("CAM_PROFILE", color=7)
+    for layer, _ in shapes:
+        doc.layers.add(layer, color=7)
     doc.layers.add("CENTER", color=1, linetype="CENTER")
     msp = doc.modelspace()
-    msp.add_lwpolyline(xy[:1].tolist(), format="xy", close=True, dxfattribs={"layer": "CAM_PROFILE"})
+    for layer, xy in shapes:
+        msp.add_lwpolyline(xy[:1].tolist(), format="xy", close=True, dxfattribs={"layer": layer})
     c = centre_mark_half_mm(curves, units)
     msp.add_line((-c, 0.0), (c, 0.0), dxfattribs={"layer": "CENTER"})
     msp.add_line((0.0, -c), (0.0, c), dxfattribs={"layer": "CENTER"})
-    lo = np.minimum(xy.min(axis=0), -c)
-    hi = np.maximum(xy.max(axis=0), c)
+    every = np.vstack([xy for _, xy in shapes])
+    lo = np.minimum(every.min(axis=0), -c)
+    hi = np.maximum(every.max(axis=0), c)
     # ezdxf copies the layout's extents into $EXTMIN/$EXTMAX when it writes
     msp.dxf.extmin = (float(lo[0]), float(lo[1]), 0.0)
     msp.dxf.extmax = (float(hi[0]), float(hi[1]), 0.0)
     zoom.window(msp, msp.dxf.extmin, msp.dxf.extmax)  # open framed on the cam
     stream = io.StringIO()
     doc.write(stream)
-    head, marker, tail = stream.getvalue().partition("AcDbPolyline\n 90\n1\n 70\n1\n")
-    if not marker:
-        raise RuntimeError("ezdxf wrote the polyline in an unexpected layout")
-    vertices = io.StringIO()
-    np.savetxt(vertices, xy, fmt=" 10\n%.12f\n 20\n%.12f")  # group codes 10/20: vertex x, y
-    rest = tail[tail.index("  0\n"):]  # from the next entity (after the placeholder vertex)
+    text, marker = stream.getvalue(), "AcDbPolyline\n 90\n1\n 70\n1\n"
     with open(path, "w", encoding=doc.output_encoding, newline="\n") as f:
-        f.write(f"{head}AcDbPolyline\n 90\n{len(xy)}\n 70\n1\n")
-        f.write(vertices.getvalue())
-        f.write(rest)
+        for _, xy in shapes:
+            head, found, tail = text.partition(marker)
+            if not found:
+                raise RuntimeError("ezdxf wrote the polyline in an unexpected layout")
+            vertices = io.StringIO()
+            np.savetxt(vertices, xy, fmt=" 10\n%.12f\n 20\n%.12f")  # group codes 10/20: vertex x, y
+            f.write(f"{head}AcDbPolyline\n 90\n{len(xy)}\n 70\n1\n")
+            f.write(vertices.getvalue())
+            text = tail[tail.index("  0\n"):]  # from the next entity (after the placeholder vertex)
+        f.write(text)
     return path
 
 

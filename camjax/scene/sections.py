@@ -140,6 +140,10 @@ def parse_dynamics(r: TableReader, motion: MotionSpec, follower: FollowerSpec, r
             kw[key] = r.number(key, low=low)
     if r.has("spring_rate"):
         kw["spring_rate"] = r.number("spring_rate", low=0.0, low_open=True)
+    if "jump" in compute and follower.closure.positive:
+        raise r.error("compute", compute, f"'jump' is not defined for a positive drive (follower.closure = "
+                      f"{follower.closure.kind!r} holds the follower on its cam both ways)",
+                      ", ".join(c for c in DYNAMICS_COMPUTE if c != "jump"))
     if "jump" in compute and kw.get("spring_rate") is None:
         raise r.error("compute", compute, "'jump' needs a force-closure spring: give spring_rate "
                       "(or follower.spring_N_per_m for a translating follower)")

@@ -40,6 +40,37 @@ class MotionSpec:
     designed: tuple = ()
 
 
+CLOSURES = ("spring", "groove", "conjugate")  # how the follower is held on its cam ([follower] closure)
+
+
+@dataclass(frozen=True)
+class ClosureSpec:
+    """How a follower is held on its cam ([follower] ``closure`` and its keys; lengths mm, angles deg).
+
+    ``"spring"``: by its spring (or gravity), the default. Positive drive, without a spring:
+    ``"groove"``, a roller in a groove whose outer flank lies ``clearance_mm`` farther out than the
+    roller; ``"conjugate"``, a second cam on the same shaft driving a second roller of the same
+    follower (a yoke of ``yoke_span_mm`` on a translating follower, a second arm of
+    ``second_arm_length_mm`` at ``second_arm_angle_deg`` from the first on a rocker).
+    :mod:`camjax.followers._closure` holds the geometry.
+    """
+
+    kind: str = "spring"  # of CLOSURES
+    clearance_mm: float = 0.0  # groove: outer flank at R_f + clearance from the pitch curve
+    yoke_span_mm: float | None = None  # conjugate, translating: between the two roller centres
+    second_roller_radius_mm: float | None = None  # conjugate: None = the first roller's
+    second_arm_length_mm: float | None = None  # conjugate, rocking: pivot to the second roller
+    second_arm_angle_deg: float | None = None  # conjugate, rocking: from the first arm to the second
+
+    @property
+    def positive(self) -> bool:
+        """Positive drive (no spring needed): a groove or conjugate cams."""
+        return self.kind != "spring"
+
+
+SPRING = ClosureSpec()
+
+
 @dataclass(frozen=True, kw_only=True)
 class FollowerSpec:
     """[follower]: what every follower type's section holds; each type's own dataclass (in its
@@ -53,6 +84,7 @@ class FollowerSpec:
     type: str  # the registered follower type (camjax.followers.names())
     train: FollowerTrain | RockerTrain | None = None  # loads: None when the scene gives no mass/spring
     min_curvature_radius_mm: float = 0.0  # smallest admissible radius of curvature of the cam surface
+    closure: ClosureSpec = SPRING  # how it is held on the cam (spring, groove, conjugate)
 
 
 @dataclass(frozen=True)

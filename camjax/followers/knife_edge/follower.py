@@ -56,6 +56,7 @@ class KnifeEdge(Roller):
     example_scene = "knife-edge"
     variables = ("base_radius_mm", "offset_mm")
     takes_contact = False  # a point contact of zero radius: the Hertz stress is unbounded
+    closures = ("spring",)  # a groove or a second cam needs a roller of some radius
 
     def parse(self, r) -> KnifeEdgeSpec:
         self.check_keys(r)

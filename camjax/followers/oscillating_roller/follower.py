@@ -11,11 +11,14 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 
 from camjax import contact, loads, runtime
 from camjax.errors import SceneError
+from camjax.followers import _closure
+from camjax.followers._closure import POSITIVE_CLOSURES, closure_keys, read_closure
 from camjax.followers._rocking import TRAIN_KEYS, RockerGeometry, RockerSizing, RockingFollower, read_train
 from camjax.followers.oscillating_roller import geometry as rocker_roller_geo
 from camjax.followers.roller import geometry as roller_geo
@@ -110,7 +113,8 @@ class OscillatingRoller(RockingFollower):
     name = "oscillating_roller"
     title = "oscillating roller"
     keys = ("pivot_distance_mm", "arm_length_mm", "roller_radius_mm", "max_pressure_angle_deg",
-            "min_curvature_radius_mm", *TRAIN_KEYS)
+            "min_curvature_radius_mm", *TRAIN_KEYS, *closure_keys(rocking=True))
+    closures = POSITIVE_CLOSURES
     example_scene = "oscillating-roller"
     variables = ("base_radius_mm", "roller_radius_mm", "pivot_distance_mm", "arm_length_mm")
 
@@ -123,9 +127,10 @@ class OscillatingRoller(RockingFollower):
         limit = r.number("max_pressure_angle_deg", DEFAULT, low=0.0, low_open=True)
         if limit is not DEFAULT and limit >= 90.0:
             raise r.error("max_pressure_angle_deg", limit, "out of range", "> 0 and < 90")
+        arm = r.number("arm_length_mm", low=0.0, low_open=True)
+        roller = r.number("roller_radius_mm", low=0.0, low_open=True)
         return build(OscillatingRollerSpec, type=self.name, train=train, pivot_distance_mm=pivot,
-                     arm_length_mm=r.number("arm_length_mm", low=0.0, low_open=True),
-                     roller_radius_mm=r.number("roller_radius_mm", low=0.0, low_open=True),
+                     arm_length_mm=arm, roller_radius_mm=roller, closure=read_closure(r, True, roller),
                      max_pressure_angle_deg=limit,
                      min_curvature_radius_mm=r.number("min_curvature_radius_mm", DEFAULT, low=0.0))
 
@@ -143,8 +148,40 @@ class OscillatingRoller(RockingFollower):
         sampled, boundary = arm_sizing(kin, program, f.pivot_distance_mm, f.arm_length_mm, f.roller_radius_mm,
                                        math.radians(f.max_pressure_angle_deg), f.min_curvature_radius_mm,
                                        scene.motion.rotation)
-        return arm_sizing_result(kin, sampled, boundary, f, f.max_pressure_angle_deg, f.roller_radius_mm,
-                                 "pressure_angle", "without undercut")
+        first = arm_sizing_result(kin, sampled, boundary, f, f.max_pressure_angle_deg, f.roller_radius_mm,
+                                  "pressure_angle", "without undercut")
+        return first if not f.closure.positive else self._second_sizing(scene, kin, first)
+
+    def _second_sizing(self, scene, kin, first: RockerSizing) -> RockerSizing:
+        """The first contact's smallest cam raised, where the positive drive's second contact (outer
+        flank, second arm's cam) breaks its limits there, to the smallest arm start angle (prime
+        radius) where both contacts hold theirs (on the samples). Where none does the first's stays
+        and the drawn cam reports it."""
+        from camjax.followers._pitch import rotation_sign
+
+        f = scene.follower
+        d, l, rf = f.pivot_distance_mm, f.arm_length_mm, f.roller_radius_mm
+        sign, tan_lim = rotation_sign(scene.motion.rotation), math.tan(math.radians(f.max_pressure_angle_deg))
+        dt = kin.s.dtype
+        params = tuple(jnp.asarray(v, dt) for v in (d, l, sign, tan_lim, rf + f.min_curvature_radius_mm))
+
+        def limits(psi0):
+            second = _closure.second_limits(f.closure, kin, psi0=psi0, pivot_distance_mm=d, arm_length_mm=l,
+                                            sign=sign, roller_radius_mm=rf,
+                                            min_curvature_radius_mm=f.min_curvature_radius_mm, tan_limit=tan_lim)
+            return jnp.concatenate([rocker_roller_geo.sizing_limits(kin, psi0, params), second])
+
+        bad = lambda psi0: jnp.any(limits(psi0) > 0.0)  # noqa: E731
+        psi_first = rocker_roller_geo.arm_start_angle(jnp.asarray(first.min_prime_radius_mm, dt), d, l)
+        hi = jnp.asarray(math.pi, dt) - jnp.max(kin.s)
+        psi0, found = jax.jit(_closure.first_admissible_size, static_argnums=(0, 3))(bad, psi_first, hi,
+                                                                                     kin.s.shape[-1])
+        rp = _f(rocker_roller_geo.roller_centre_distance(d, l, psi0))
+        if not bool(found) or rp <= first.min_prime_radius_mm * (1.0 + 1e-12):
+            return first
+        g = np.asarray(limits(psi0))
+        deg = float(np.degrees(np.asarray(kin.theta))[int(np.argmax(np.max(g, axis=0)))])
+        return RockerSizing(rp - rf, rp, deg, "outer_flank" if f.closure.kind == "groove" else "conjugate")
 
     def closure_problem(self, scene, kin, base_radius_mm) -> str | None:
         """The prime radius R_p = R_b + R_f must lie strictly between |d - l| and d + l (the roller
@@ -188,6 +225,18 @@ class OscillatingRoller(RockingFollower):
             rho_eq = roller_geo.roller_equivalent_radius(g.pitch_curvature, f.roller_radius_mm)
             stress = contact.roller_stress(coeff, g.pressure_angle, rho_eq)
         return force, stress
+
+    def closure_curves(self, scene, kin, base_radius_mm, g, moment):
+        """Both flanks of a groove (or the second cam of a conjugate pair), their margins and loads."""
+        f = scene.follower
+        path_force = None if moment is None else moment / (g.arm_length_mm * 1e-3)  # N along the path
+        if f.closure.kind == "groove":
+            return _closure.groove_curves(f.closure, g.pitch_x_mm, g.pitch_y_mm, g.profile_x_mm, g.profile_y_mm,
+                                          g.pitch_curvature, g.pressure_angle, f.roller_radius_mm,
+                                          f.min_curvature_radius_mm, path_force, _closure.hertz_of(scene))
+        return _closure.arm_curves(f.closure, f.pivot_distance_mm, f.arm_length_mm, f.roller_radius_mm,
+                                   base_radius_mm + f.roller_radius_mm, kin, scene.motion.rotation,
+                                   f.min_curvature_radius_mm, moment, _closure.hertz_of(scene))
 
     def summary(self, design) -> str:
         return (f"R_f = {design['roller_radius_mm']:.4f} mm, pivot {design['pivot_distance_mm']:.4f} mm, "

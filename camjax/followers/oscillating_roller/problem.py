@@ -36,7 +36,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from camjax import family
-from camjax.contact import HERTZ_FACTOR, compliance, roller_stress
+from camjax.contact import roller_stress
 from camjax.family import (
     FEASIBILITY_RTOL_STRESS,
     FEASIBILITY_TOL_MM,
@@ -49,6 +49,7 @@ from camjax.family import (
 # re-exported: this family's protocol functions, written once for every family
 from camjax.family import bounds as bounds
 from camjax.family import bounds_violation as bounds_violation
+from camjax.followers import _closure
 from camjax.followers import _pitch as pitch
 from camjax.followers._swing import moment_coefficient_at, moment_model, polish_design
 from camjax.followers.oscillating_roller import geometry as rocker_roller_geo
@@ -87,6 +88,9 @@ class Problem(NamedTuple):
     # the motion program (as arrays) behind the grid when extrema are exact: :func:`polish`
     program: Any = None
     moment_model: Any = None  # camjax.followers._swing.MomentModel: C_M between the samples (the polish)
+    # a positive drive's second contact (camjax.followers._closure: GrooveTerms or ArmTerms), whose
+    # constraints are maxed with the first's; None: spring-closed
+    closure: Any = None
 
 
 class Constraints(NamedTuple):
@@ -150,7 +154,21 @@ def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=
         rotation_sign=as_(pitch.rotation_sign(scene.motion.rotation)),
         program=None if arrays.model is None else arrays.model.program,
         moment_model=None if arrays.model is None else moment_model(scene, arrays),
+        closure=_closure.design_terms(scene, arrays, _second_moment_coefficient(scene, arrays)),
     )
+
+
+def _second_moment_coefficient(scene, arrays) -> jax.Array:
+    """C_M of the pivot torque a positive drive's second contact carries, max(-M, 0) (as
+    :func:`moment_coefficient`, zeros without loads or [contact])."""
+    from camjax import loads
+    from camjax.contact import HERTZ_FACTOR, compliance
+
+    f, c, kin = scene.follower, scene.contact, arrays.kin
+    if f.train is None or c is None:
+        return jnp.zeros_like(kin.s)
+    moment = loads.rocker_torque(f.train, kin, arrays.cam_speed_rad_s)
+    return HERTZ_FACTOR * safe_sqrt(jnp.maximum(-moment, 0.0) / (c.cam_width_mm * compliance(c.cam, c.follower)))
 
 
 def moment_coefficient(scene, arrays) -> jax.Array:
@@ -243,13 +261,34 @@ def constraints(problem: Problem, design: Design) -> Constraints:
     reach_r = design.roller_radius_mm + problem.min_curvature_radius_mm
     rho_eq = roller_geo.roller_equivalent_radius(g.kappa, design.roller_radius_mm)
     need = _axial_coefficient(problem, design) ** 2 / (problem.sigma_max_MPa**2 * _cos_phi(g))
-    return Constraints(
+    first = Constraints(
         reach=jnp.broadcast_to(g.reach, g.kappa.shape),
         pressure_angle=jnp.abs(g.along) - problem.tan_max_pressure_angle * g.across,
         undercut=reach_r * roller_geo.roller_undercut_constraint(g.kappa, design.roller_radius_mm,
                                                                problem.min_curvature_radius_mm),
         stress=need - rho_eq,
     )
+    if problem.closure is None:
+        return first
+    second = _second_contact(problem, design, g)
+    return first._replace(pressure_angle=jnp.maximum(first.pressure_angle, second.pressure_angle),
+                          undercut=jnp.maximum(first.undercut, second.undercut),
+                          stress=jnp.maximum(first.stress, second.stress))
+
+
+def _second_contact(problem: Problem, design: Design, g: _Geometry) -> _closure.SecondContact:
+    """The positive drive's second contact (the groove's outer flank, the second arm's cam)."""
+    t = problem.closure
+    if isinstance(t, _closure.GrooveTerms):
+        coefficient = t.second_coefficient * jax.lax.rsqrt(design.arm_length_mm * 1e-3)
+        return _closure.groove_second(t, g.kappa, design.roller_radius_mm, problem.min_curvature_radius_mm,
+                                      jnp.abs(g.along) - problem.tan_max_pressure_angle * g.across,
+                                      jnp.arctan2(g.along, g.across), problem.tan_max_pressure_angle,
+                                      problem.sigma_max_MPa, coefficient)
+    rp = design.base_radius_mm + design.roller_radius_mm
+    psi = rocker_roller_geo.arm_start_angle(rp, design.pivot_distance_mm, design.arm_length_mm) + problem.s_rad
+    return _closure.arm_second(t, design.pivot_distance_mm, psi, problem.ds, problem.d2s, problem.rotation_sign,
+                               problem.min_curvature_radius_mm, problem.tan_max_pressure_angle, problem.sigma_max_MPa)
 
 
 def polish(problem: Problem, weights: Weights, design: Design) -> Design:
@@ -275,7 +314,13 @@ def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
     sigma = stress(problem, design)
     phi = jnp.abs(jnp.arctan2(g.along, g.across))
     i, j = jnp.argmax(sigma), jnp.argmax(phi)
-    rho_c_min = jnp.min(roller_geo.roller_undercut_margin(g.kappa, design.roller_radius_mm, 0.0))
+    margin = roller_geo.roller_undercut_margin(g.kappa, design.roller_radius_mm, 0.0)
+    if problem.closure is not None:  # a positive drive: the second contact's limits too
+        second = _second_contact(problem, design, g)
+        sigma, phi, margin = (jnp.maximum(sigma, second.stress_MPa), jnp.maximum(phi, second.pressure_angle_rad),
+                              jnp.minimum(margin, second.margin_mm))
+        i, j = jnp.argmax(sigma), jnp.argmax(phi)
+    rho_c_min = jnp.min(margin)
     v = Violation(
         reach=positive_part(g.reach),
         pressure_angle=positive_part(phi[j] - jnp.arctan(problem.tan_max_pressure_angle)),

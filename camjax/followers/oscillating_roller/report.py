@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from camjax.followers import _rocking_report
+from camjax.followers import _closure_report, _rocking_report
 
 
 def _f(x) -> float:
@@ -26,6 +26,7 @@ def min_base_radius_rule(follower, binding: str) -> str:
         "pressure_angle": f"|pressure angle| <= {f.max_pressure_angle_deg:g} deg (binding) and no undercut",
         "undercut": f"no undercut (binding; cam-surface radius >= {f.min_curvature_radius_mm:g} mm) and "
                     f"|pressure angle| <= {f.max_pressure_angle_deg:g} deg",
+        **_closure_report.sizing_rules(f),
     }[binding]
 
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
+from functools import partial
 from typing import NamedTuple
 
 import jax
@@ -18,6 +19,8 @@ import numpy as np
 
 from camjax import contact, runtime
 from camjax.evaluate import curve_extremes
+from camjax.followers import _closure
+from camjax.followers._closure import POSITIVE_CLOSURES, closure_keys, read_closure
 from camjax.followers._pitch import rotation_sign
 from camjax.followers._translating import (
     TRAIN_KEYS,
@@ -100,7 +103,9 @@ def _f(x) -> float:
 class Roller(TranslatingFollower):
     name = "roller"
     title = "roller"
-    keys = (*TRAIN_KEYS, "roller_radius_mm", "offset_mm", "max_pressure_angle_deg", "min_curvature_radius_mm")
+    keys = (*TRAIN_KEYS, "roller_radius_mm", "offset_mm", "max_pressure_angle_deg", "min_curvature_radius_mm",
+            *closure_keys(rocking=False))
+    closures = POSITIVE_CLOSURES
     example_scene = "roller"
     variables = ("base_radius_mm", "roller_radius_mm", "offset_mm")
 
@@ -110,8 +115,9 @@ class Roller(TranslatingFollower):
         limit = r.number("max_pressure_angle_deg", DEFAULT, low=0.0, low_open=True)
         if limit is not DEFAULT and limit >= 90.0:
             raise r.error("max_pressure_angle_deg", limit, "out of range", "> 0 and < 90")
-        return build(RollerSpec, type=self.name, train=train,
-                     roller_radius_mm=r.number("roller_radius_mm", low=0.0, low_open=True),
+        roller = r.number("roller_radius_mm", low=0.0, low_open=True)
+        return build(RollerSpec, type=self.name, train=train, closure=read_closure(r, False, roller),
+                     roller_radius_mm=roller,
                      offset_mm=r.number("offset_mm", DEFAULT), max_pressure_angle_deg=limit,
                      min_curvature_radius_mm=r.number("min_curvature_radius_mm", DEFAULT, low=0.0))
 
@@ -144,6 +150,12 @@ class Roller(TranslatingFollower):
         on the samples for the undercut, with exact extrema moved on to the root of its refined
         peak, :func:`exact_prime_radius`), minus R_f; the angle is where the binding limit is reached.
         """
+        first = self._first_min_base_radius(scene, arrays)
+        if not scene.follower.closure.positive:
+            return first
+        return self._second_min_base_radius(scene, arrays, first)
+
+    def _first_min_base_radius(self, scene, arrays) -> MinBaseRadius:
         f, t = scene.follower, np.asarray(arrays.theta_deg)
         sizing = _grid_sizing(arrays.kin, f.roller_radius_mm, f.offset_mm,
                               math.radians(f.max_pressure_angle_deg), f.min_curvature_radius_mm,
@@ -159,6 +171,27 @@ class Roller(TranslatingFollower):
             return MinBaseRadius(rp - f.roller_radius_mm, deg, binding, rp)
         return MinBaseRadius(rp - f.roller_radius_mm, _f(t[int(sizing.index)]),
                              "undercut" if bool(sizing.undercut_binds) else "pressure_angle", rp)
+
+    def _second_min_base_radius(self, scene, arrays, first: MinBaseRadius) -> MinBaseRadius:
+        """The first contact's smallest cam raised, where the positive drive's second contact (outer
+        flank, yoke's cam) breaks its limits there, to the smallest prime radius where it holds them
+        too (on the samples; the first's hold at every larger one). Where none does (a yoke's
+        second cam shrinks as the first grows) the first's stays and the drawn cam reports it."""
+        f, kin = scene.follower, arrays.kin
+        limits = partial(_closure.second_limits, f.closure, kin,
+                         signed_offset_mm=rotation_sign(scene.motion.rotation) * f.offset_mm,
+                         roller_radius_mm=f.roller_radius_mm, min_curvature_radius_mm=f.min_curvature_radius_mm,
+                         tan_limit=math.tan(math.radians(f.max_pressure_angle_deg)))
+        bad = lambda rp: jnp.any(limits(prime_radius_mm=rp) > 0.0)  # noqa: E731
+        rp0 = jnp.asarray(first.prime_radius_mm, kin.s.dtype)
+        rp, found = jax.jit(_closure.first_admissible_size, static_argnums=(0, 3))(
+            bad, rp0, 10.0 * rp0 + 10.0 * (f.roller_radius_mm + f.closure.clearance_mm), kin.s.shape[-1])
+        rp = _f(rp)
+        if not bool(found) or rp <= first.prime_radius_mm:
+            return first
+        g = np.asarray(limits(prime_radius_mm=rp))
+        deg = _f(np.asarray(arrays.theta_deg)[int(np.argmax(np.max(g, axis=0)))])
+        return MinBaseRadius(rp - f.roller_radius_mm, deg, "outer_flank" if f.closure.kind == "groove" else "conjugate", rp)
 
     def design_solution(self, scene, arrays, result, problem) -> DesignSolution:
         """A roller design's figures: its peak stress as the stress curve computes it, and the
@@ -190,6 +223,18 @@ class Roller(TranslatingFollower):
         return GeometryCurves(x, y, stress_MPa=stress, pitch_x_mm=pitch_x, pitch_y_mm=pitch_y,
                               pressure_angle_deg=jnp.rad2deg(g.pressure_angle),
                               pitch_rho_mm=g.pitch_radius_of_curvature, undercut_margin_mm=g.undercut_margin)
+
+    def closure_curves(self, scene, arrays, base_radius_mm, follower, geometry):
+        """Both flanks of a groove (or the second cam of a conjugate pair), their margins and loads."""
+        rf, e, rot = float(follower.roller_radius_mm), float(follower.offset_mm), scene.motion.rotation
+        g = roller_geo.roller_geometry(base_radius_mm, rf, e, arrays.kin, rot, follower.min_curvature_radius_mm)
+        if follower.closure.kind == "groove":
+            return _closure.groove_curves(follower.closure, geometry.pitch_x_mm, geometry.pitch_y_mm,
+                                          geometry.profile_x_mm, geometry.profile_y_mm, g.pitch_curvature,
+                                          g.pressure_angle, rf, follower.min_curvature_radius_mm, arrays.force_N,
+                                          _closure.hertz_of(scene))
+        return _closure.yoke_curves(follower.closure, base_radius_mm, rf, e, arrays.kin, rot,
+                                    follower.min_curvature_radius_mm, g, arrays.force_N, _closure.hertz_of(scene))
 
     def curve_dimensions(self, follower):
         return (float(follower.roller_radius_mm), float(follower.offset_mm),

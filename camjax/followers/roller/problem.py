@@ -49,6 +49,7 @@ from camjax.family import FEASIBILITY_RTOL_STRESS, FEASIBILITY_TOL_MM, Weights, 
 from camjax.family import FEASIBILITY_TOL_RAD as FEASIBILITY_TOL_RAD
 from camjax.family import bounds as bounds
 from camjax.family import bounds_violation as bounds_violation
+from camjax.followers import _closure
 from camjax.followers import _pitch as pitch
 from camjax.followers.roller import geometry as roller_geo
 from camjax.numerics import COS_FLOOR, RHO_FLOOR_MM, finite_float, floor_positive, positive_part, safe_sqrt
@@ -84,6 +85,9 @@ class Problem(NamedTuple):
     # the scene's closed forms (camjax.evaluate.SceneModel) behind the grid when extrema are
     # exact: :func:`polish` keeps every constraint between the samples too; None: the grid's
     model: Any = None
+    # a positive drive's second contact (camjax.followers._closure: GrooveTerms or YokeTerms), whose
+    # constraints are maxed with the first's; None: spring-closed
+    closure: Any = None
 
 
 class Constraints(NamedTuple):
@@ -157,7 +161,15 @@ def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=
         min_curvature_radius_mm=as_(f.min_curvature_radius_mm),
         rotation_sign=as_(pitch.rotation_sign(scene.motion.rotation)),
         model=arrays.model,
+        closure=_closure.design_terms(scene, arrays, _second_coefficient(scene.contact, arrays.force_N, kin.s)),
     )
+
+
+def _second_coefficient(contact, force_N, like) -> jax.Array:
+    """Hertz coefficient of the load a positive drive's second contact carries, max(-F, 0)."""
+    if contact is None or force_N is None:
+        return jnp.zeros_like(like)
+    return _closure.reversed_coefficient(force_N, contact.cam_width_mm, contact.cam, contact.follower)
 
 
 def per_angle(problem: Problem) -> Problem:
@@ -239,12 +251,27 @@ def constraints(problem: Problem, design: Design) -> Constraints:
     x = _terms(problem, design)
     reach = design.roller_radius_mm + problem.min_curvature_radius_mm
     need = problem.stress_coefficient**2 * x.inv_cos / problem.sigma_max_MPa**2
-    return Constraints(
+    first = Constraints(
         pressure_angle=jnp.abs(x.u) - problem.tan_max_pressure_angle * x.w,
         undercut=reach * roller_geo.roller_undercut_constraint(x.kappa, design.roller_radius_mm,
                                                              problem.min_curvature_radius_mm),
         stress=need - x.rho_eq,
     )
+    if problem.closure is None:
+        return first
+    second = _second_contact(problem, design, x)
+    return Constraints(*(jnp.maximum(a, b) for a, b in zip(first, second[:3], strict=True)))
+
+
+def _second_contact(problem: Problem, design: Design, x: _Terms) -> _closure.SecondContact:
+    """The positive drive's second contact (the groove's outer flank, the yoke's second cam)."""
+    t = problem.closure
+    if isinstance(t, _closure.GrooveTerms):
+        return _closure.groove_second(t, x.kappa, design.roller_radius_mm, problem.min_curvature_radius_mm,
+                                      jnp.abs(x.u) - problem.tan_max_pressure_angle * x.w, jnp.arctan2(x.u, x.w),
+                                      problem.tan_max_pressure_angle, problem.sigma_max_MPa)
+    return _closure.yoke_second(t, x.w, x.u, problem.ds_mm, problem.d2s_mm, problem.rotation_sign * design.offset_mm,
+                                problem.min_curvature_radius_mm, problem.tan_max_pressure_angle, problem.sigma_max_MPa)
 
 
 def constraint_maxima(problem: Problem, design: Design) -> Constraints:
@@ -349,8 +376,14 @@ def problem_at(problem: Problem, segment: int, theta_deg: jax.Array) -> Problem:
 
     p = model_at(problem.model, segment, theta_deg)
     coefficient = jnp.zeros_like(p.kin.s) if p.stress_coefficient is None else p.stress_coefficient
+    closure = problem.closure
+    if closure is not None:
+        m = problem.model
+        second = (jnp.zeros_like(p.kin.s) if m.cam_width_mm is None or p.force_N is None else
+                  _closure.reversed_coefficient(p.force_N, m.cam_width_mm, m.cam, m.follower))
+        closure = closure._replace(second_coefficient=second)
     return problem._replace(theta_deg=theta_deg, s_mm=p.kin.s, ds_mm=p.kin.ds, d2s_mm=p.kin.d2s,
-                            stress_coefficient=coefficient)
+                            stress_coefficient=coefficient, closure=closure)
 
 
 def exact_constraints(problem: Problem) -> tuple[str, ...]:
@@ -396,6 +429,11 @@ def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
     phi = jnp.abs(jnp.arctan2(x.u, x.w))
     i, j = jnp.argmax(sigma), jnp.argmax(phi)
     margin = roller_geo.roller_undercut_margin(kappa, design.roller_radius_mm, 0.0)  # rho_c, convex parts
+    if problem.closure is not None:  # a positive drive: the second contact's limits too
+        second = _second_contact(problem, design, x)
+        sigma, phi, margin = (jnp.maximum(sigma, second.stress_MPa), jnp.maximum(phi, second.pressure_angle_rad),
+                              jnp.minimum(margin, second.margin_mm))
+        i, j = jnp.argmax(sigma), jnp.argmax(phi)
     rho_c_min = jnp.min(margin)
     v = Violation(
         pressure_angle=positive_part(phi[j] - jnp.deg2rad(problem.max_pressure_angle_deg)),

@@ -9,7 +9,7 @@ from typing import Any
 import numpy as np
 
 from camjax.family import FEASIBILITY_TOL_RAD
-from camjax.followers import _translating_report
+from camjax.followers import _closure_report, _translating_report
 
 
 def min_base_radius_block(follower, minimum, exact: bool = False) -> dict[str, Any]:
@@ -20,9 +20,13 @@ def min_base_radius_block(follower, minimum, exact: bool = False) -> dict[str, A
     f = follower
     limits = {"pressure_angle": f"pressure angle |phi| <= {f.max_pressure_angle_deg:g} deg",
               "undercut": f"no undercut (convex cam-surface radius >= {f.min_curvature_radius_mm:g} mm)"}
-    other = next(k for k in limits if k != minimum.binding)
-    rule = (f"roller: {limits[minimum.binding]} binds at {minimum.angle_deg:g} deg "
-            f"(R_f = {f.roller_radius_mm:g} mm, offset {f.offset_mm:g} mm; {limits[other]} holds)")
+    if minimum.binding in limits:
+        other = next(k for k in limits if k != minimum.binding)
+        rule = (f"roller: {limits[minimum.binding]} binds at {minimum.angle_deg:g} deg "
+                f"(R_f = {f.roller_radius_mm:g} mm, offset {f.offset_mm:g} mm; {limits[other]} holds)")
+    else:  # a positive drive's second contact binds
+        rule = (f"roller: {_closure_report.sizing_rules(f)[minimum.binding]} at {minimum.angle_deg:g} deg "
+                f"(R_f = {f.roller_radius_mm:g} mm, offset {f.offset_mm:g} mm)")
     return {**out, "min_prime_radius_mm": minimum.prime_radius_mm, "min_base_radius_rule": rule,
             "min_base_radius_binding": minimum.binding}
 

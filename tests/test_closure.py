@@ -1,0 +1,347 @@
+"""Positive drive (groove and conjugate cams) of both roller followers, against independent checks.
+
+Every check reads the files camjax writes (profile.csv, profile.dxf, result.json) and recomputes from
+positions only: the rollers ride the exported flanks and cams (brute-force distance from each roller
+centre to the whole closed polyline), the yoke and the two-arm rocker stay rigid, and the load's
+sign switches match a finite-difference acceleration of the exported motion.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+import camjax
+from camjax import cli, followers
+from camjax.errors import SceneError
+from camjax.output import export
+from camjax.scene import builtin_scene_text, parse_scene, with_samples
+
+SAMPLES = 7200
+# riding tolerance: the polyline's chords cut inside a convex flank by at most (arc step)^2 / (8 rho):
+# (2 pi 60 mm / 7200)^2 / (8 x 10 mm) ~ 3e-6 mm at the smallest radii here, far below 1 um
+RIDE_TOL_MM = 1e-3
+
+
+def _scene_text(name: str, old: str, new: str, drop: tuple[str, ...] = ()) -> str:
+    text = builtin_scene_text(name)
+    assert old in text
+    text = text.replace(old, new)
+    for line in drop:
+        assert line in text
+        text = text.replace(line + "\n", "")
+    return text
+
+
+ROCKER_GROOVE = _scene_text("oscillating-roller", 'type = "oscillating_roller"\n',
+                            'type = "oscillating_roller"\nclosure = "groove"\ngroove_clearance_mm = 0.05\n',
+                            ("spring_N_m_per_rad = 20.0", "preload_rad = 0.3"))
+YOKE = _scene_text("groove", 'closure = "groove"', 'closure = "conjugate"', ()).replace(
+    "groove_clearance_mm = 0.02    # the outer flank lies R_f + this from the pitch curve",
+    "yoke_span_mm = 70.0\nsecond_roller_radius_mm = 5.0")
+CASES = {"groove": builtin_scene_text("groove"), "rocker_groove": ROCKER_GROOVE, "yoke": YOKE,
+         "conjugate": builtin_scene_text("conjugate")}
+
+
+def _run(text: str, folder):
+    """The scene without [design] on 7200 samples (grid extrema: the files' samples are what is
+    checked), its report and profile.csv/DXF written and read back."""
+    scene = with_samples(parse_scene(text), SAMPLES)
+    scene = replace(scene, design=None, motion=replace(scene.motion, extrema="grid"))
+    run = camjax.run_design(scene)
+    data = followers.of(scene).report(scene, run)
+    export.write_profile_csv(folder / "profile.csv", run.curves)
+    export.write_profile_dxf(folder / "profile.dxf", run.curves)
+    with open(folder / "profile.csv") as f:
+        names = f.readline().strip().split(",")
+    table = np.loadtxt(folder / "profile.csv", delimiter=",", skiprows=1)
+    return scene, data, {n: table[:, k] for k, n in enumerate(names)}
+
+
+@pytest.fixture(scope="module")
+def exported(tmp_path_factory):
+    out = {}
+    for name, text in CASES.items():
+        folder = tmp_path_factory.mktemp(name)
+        out[name] = _run(text, folder) + (folder,)
+    return out
+
+
+def _distances(cx, cy, px, py, chunk=400):
+    """Distance (mm) from each centre (cx, cy) to the closed polyline (px, py), brute force over
+    every segment."""
+    ax, ay = px, py
+    bx, by = np.roll(px, -1), np.roll(py, -1)
+    dx, dy = bx - ax, by - ay
+    length2 = dx * dx + dy * dy
+    out = np.empty(len(cx))
+    for k in range(0, len(cx), chunk):
+        x, y = cx[k:k + chunk, None], cy[k:k + chunk, None]
+        u = np.clip(((x - ax) * dx + (y - ay) * dy) / length2, 0.0, 1.0)
+        out[k:k + chunk] = np.min(np.hypot(x - ax - u * dx, y - ay - u * dy), axis=1)
+    return out
+
+
+def _pivot(scene, theta_deg):
+    """The rocker's pivot (d, 0) of the follower frame in cam coordinates (rotation by -sign theta)."""
+    sign = 1.0 if scene.motion.rotation == "ccw" else -1.0
+    t = np.radians(theta_deg)
+    d = scene.follower.pivot_distance_mm
+    return d * np.cos(t), -sign * d * np.sin(t)
+
+
+@pytest.mark.parametrize("case", ["groove", "rocker_groove"])
+def test_the_roller_rides_both_exported_flanks(exported, case):
+    scene, data, col, _ = exported[case]
+    rf, c = scene.follower.roller_radius_mm, scene.follower.closure.clearance_mm
+    assert c > 0
+    px, py = col["pitch_x_mm"], col["pitch_y_mm"]
+    inner = _distances(px, py, col["inner_x_mm"], col["inner_y_mm"])
+    outer = _distances(px, py, col["outer_x_mm"], col["outer_y_mm"])
+    # the roller touches the inner flank and clears the outer one by exactly the clearance
+    assert np.max(np.abs(inner - rf)) < RIDE_TOL_MM
+    assert np.max(np.abs(outer - (rf + c))) < RIDE_TOL_MM
+    assert np.array_equal(col["inner_x_mm"], col["x_mm"])  # the inner flank is the cam profile
+    assert data["closure"]["kind"] == "groove" and data["evaluated_at"]["feasible"]
+
+
+@pytest.mark.parametrize("case", ["yoke", "conjugate"])
+def test_both_rollers_ride_their_exported_cams(exported, case):
+    scene, data, col, _ = exported[case]
+    r1, r2 = scene.follower.roller_radius_mm, scene.follower.closure.second_roller_radius_mm
+    first = _distances(col["pitch_x_mm"], col["pitch_y_mm"], col["x_mm"], col["y_mm"])
+    second = _distances(col["conjugate_pitch_x_mm"], col["conjugate_pitch_y_mm"], col["conjugate_x_mm"],
+                        col["conjugate_y_mm"])
+    assert np.max(np.abs(first - r1)) < RIDE_TOL_MM
+    assert np.max(np.abs(second - r2)) < RIDE_TOL_MM
+    assert data["closure"]["kind"] == "conjugate"
+
+
+def test_the_yoke_is_rigid_on_the_exported_pitch_curves(exported):
+    scene, _, col, _ = exported["yoke"]
+    span = np.hypot(col["pitch_x_mm"] - col["conjugate_pitch_x_mm"], col["pitch_y_mm"] - col["conjugate_pitch_y_mm"])
+    assert np.max(np.abs(span - scene.follower.closure.yoke_span_mm)) < 1e-9
+    # and the two centres stay on one line through the follower axis' direction: the axis at theta
+    theta = np.radians(col["theta_deg"])
+    axis = np.stack([np.sin(theta), np.cos(theta)])  # +Y of the follower frame seen from a ccw cam
+    along = ((col["pitch_x_mm"] - col["conjugate_pitch_x_mm"]) * axis[0]
+             + (col["pitch_y_mm"] - col["conjugate_pitch_y_mm"]) * axis[1])
+    assert np.max(np.abs(along - scene.follower.closure.yoke_span_mm)) < 1e-9
+
+
+def test_the_two_arm_rocker_is_rigid_on_the_exported_pitch_curves(exported):
+    scene, _, col, _ = exported["conjugate"]
+    f, cl = scene.follower, scene.follower.closure
+    ax, ay = _pivot(scene, col["theta_deg"])
+    l1 = np.hypot(col["pitch_x_mm"] - ax, col["pitch_y_mm"] - ay)
+    l2 = np.hypot(col["conjugate_pitch_x_mm"] - ax, col["conjugate_pitch_y_mm"] - ay)
+    chord = np.hypot(col["pitch_x_mm"] - col["conjugate_pitch_x_mm"], col["pitch_y_mm"] - col["conjugate_pitch_y_mm"])
+    beta = math.radians(cl.second_arm_angle_deg)
+    assert np.max(np.abs(l1 - f.arm_length_mm)) < 1e-9
+    assert np.max(np.abs(l2 - cl.second_arm_length_mm)) < 1e-9
+    want = math.sqrt(f.arm_length_mm**2 + cl.second_arm_length_mm**2
+                     - 2 * f.arm_length_mm * cl.second_arm_length_mm * math.cos(beta))
+    assert np.max(np.abs(chord - want)) < 1e-9
+
+
+def _sign_changes(theta_deg, load):
+    """Angles (deg) where a sampled load changes sign, linear between samples (cyclic), skipping
+    exact zeros."""
+    keep = np.flatnonzero(np.abs(load) > 1e-9 * np.max(np.abs(load)))
+    out = []
+    for i, j in zip(keep, np.roll(keep, -1), strict=True):
+        if np.sign(load[i]) != np.sign(load[j]):
+            step = ((theta_deg[j] - theta_deg[i]) % 360.0)
+            out.append((theta_deg[i] + step * load[i] / (load[i] - load[j])) % 360.0)
+    return np.sort(out)
+
+
+@pytest.mark.parametrize("case", ["groove", "yoke"])
+def test_translating_switches_match_a_finite_difference_acceleration(exported, case):
+    scene, data, col, _ = exported[case]
+    train = scene.follower.train
+    omega = scene.motion.rpm * 2.0 * math.pi / 60.0
+    h = math.radians(360.0 / SAMPLES)
+    s = col["s_mm"] * 1e-3
+    v = (np.roll(s, -1) - np.roll(s, 1)) / (2 * h) * omega
+    a = (np.roll(s, -1) - 2 * s + np.roll(s, 1)) / h**2 * omega**2
+    load = train.mass_kg * (a + train.gravity_m_s2) + train.damping_Ns_per_m * v
+    want = _sign_changes(col["theta_deg"], load)
+    got = np.array(data["closure"]["switch_angles_deg"])
+    assert len(got) == len(want) >= 2
+    # the FD acceleration is O(h^2) off: its zero moves by far less than one sample (0.05 deg)
+    assert np.max(np.abs(got - want)) < 0.01
+    for sw in data["closure"]["switches"]:  # the contact that takes over carries the load's sign
+        i = int(round(sw["angle_deg"] / (360.0 / SAMPLES)) + 2) % SAMPLES
+        assert (load[i] > 0) == (sw["to"] in ("inner", "first"))
+        assert np.sign(sw["load_rate_N_per_deg"]) == np.sign(load[i])
+
+
+@pytest.mark.parametrize("case", ["rocker_groove", "conjugate"])
+def test_rocker_switches_match_a_finite_difference_acceleration(exported, case):
+    scene, data, col, _ = exported[case]
+    h = math.radians(360.0 / SAMPLES)
+    psi = np.radians(col["swing_deg"])
+    moment = scene.follower.train.inertia_kg_m2 * (np.roll(psi, -1) - 2 * psi + np.roll(psi, 1)) / h**2
+    want = _sign_changes(col["theta_deg"], moment)
+    got = np.array(data["closure"]["switch_angles_deg"])
+    assert len(got) == len(want) >= 2
+    assert np.max(np.abs(got - want)) < 0.06  # a zero on a dwell's edge: within a sample
+
+
+def test_each_flank_and_cam_is_a_dxf_layer(exported):
+    import ezdxf
+
+    for case, layers in (("groove", ("GROOVE_INNER", "GROOVE_OUTER")), ("conjugate", ("CAM_PROFILE", "CONJUGATE_CAM"))):
+        _, _, col, folder = exported[case]
+        doc = ezdxf.readfile(folder / "profile.dxf")
+        polylines = {p.dxf.layer: np.array(p.get_points("xy")) for p in doc.modelspace().query("LWPOLYLINE")}
+        assert set(polylines) == set(layers)
+        names = {"GROOVE_INNER": "inner", "GROOVE_OUTER": "outer", "CAM_PROFILE": "", "CONJUGATE_CAM": "conjugate"}
+        for layer, xy in polylines.items():
+            prefix = names[layer] + "_" if names[layer] else ""
+            assert np.max(np.abs(xy - np.column_stack([col[f"{prefix}x_mm"], col[f"{prefix}y_mm"]]))) < 1e-9
+
+
+def test_the_outer_flank_limit_is_the_pitch_curves_concavity():
+    """The outer flank's margin is |rho_pitch| - R_f - c on concave parts: a concave pitch curve of
+    radius rho (a circle seen from outside) against a roller of R_f + c, closed form."""
+    from camjax.followers import _closure
+
+    kappa = np.array([-1 / 10.0, -1 / 6.0, 0.0, 1 / 8.0])
+    margin = np.asarray(_closure.outer_flank_margin(kappa, 6.0 + 0.5))
+    assert margin[0] == pytest.approx(10.0 - 6.5) and margin[1] == pytest.approx(6.0 - 6.5)
+    assert margin[2] > 1e300 and margin[3] > 1e300
+    g = np.asarray(_closure.outer_flank_constraint(kappa, 6.5))
+    assert np.all((g <= 0) == (np.minimum(margin, 1e9) >= 0))
+    # the equivalent radius on the outer flank: 1 / (1/R_f - 1/(rho + R_f + c)), rho = 8 (convex pitch)
+    rho_eq = float(_closure.outer_equivalent_radius(1 / 8.0, 6.0, 0.5))
+    assert rho_eq == pytest.approx(1.0 / (1 / 6.0 - 1 / (8.0 + 6.5)), rel=1e-12)
+
+
+BAD = {
+    "flat_groove": ("default", "[follower]\n", '[follower]\nclosure = "groove"\n', "follower.closure"),
+    "negative_clearance": ("groove", "groove_clearance_mm = 0.02", "groove_clearance_mm = -0.1",
+                           "follower.groove_clearance_mm"),
+    "clearance_on_spring": ("roller", "offset_mm = 0.0", "offset_mm = 0.0\ngroove_clearance_mm = 0.1",
+                            "follower.groove_clearance_mm"),
+    "span_inside_shaft": (YOKE, "yoke_span_mm = 70.0", "yoke_span_mm = 20.0", "follower.yoke_span_mm"),
+    "arm_on_the_same_side": ("conjugate", "second_arm_angle_deg = 80.0", "second_arm_angle_deg = 10.0",
+                             "follower.second_arm_angle_deg"),
+    "yoke_on_a_rocker": ("conjugate", "second_arm_length_mm = 60.0", "yoke_span_mm = 60.0",
+                         "follower.yoke_span_mm"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(BAD))
+def test_bad_closures_exit_2_naming_the_field(case, tmp_path, capsys):
+    name, old, new, field = BAD[case]
+    text = builtin_scene_text(name) if "\n" not in name else name
+    assert old in text
+    bad = tmp_path / "bad.toml"
+    # without [design], on the samples: the span and the second arm are judged where the cam's size
+    # is known, after its sizing
+    text = text.replace(old, new, 1).split("\n[design]")[0].replace("[motion]\n", '[motion]\nextrema = "grid"\n')
+    bad.write_text(text)
+    assert cli.main(["design", str(bad), "--out", str(tmp_path / "out"), "--samples", "360"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and f" {field}" in err[0], err
+
+
+def test_spring_scenes_parse_to_the_spring_closure():
+    for name in ("roller", "oscillating-roller", "default"):
+        assert camjax.load_scene(name).follower.closure.kind == "spring"
+    with pytest.raises(SceneError, match="follower.closure"):
+        parse_scene(builtin_scene_text("roller").replace('type = "roller"', 'type = "roller"\nclosure = "box"'))
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("scene", ["groove", "conjugate", "sharp_groove"])
+def test_design_and_sweep_run_on_both_closures(scene, tmp_path, capsys):
+    if scene == "sharp_groove":  # the outer flank binds the design
+        (tmp_path / "sharp.toml").write_text(SHARP)
+        scene = str(tmp_path / "sharp.toml")
+    assert cli.main(["design", scene, "--out", str(tmp_path / "design")]) == 0
+    data = json.loads((tmp_path / "design" / "result.json").read_text())
+    assert data["closure"]["positive_drive"] and data["design"]["feasible"]
+    assert data["evaluated_at"]["feasible"], data["evaluated_at"]["violations"]
+    table = np.loadtxt(tmp_path / "design" / "profile.csv", delimiter=",", skiprows=1)
+    names = (tmp_path / "design" / "profile.csv").read_text().splitlines()[0].split(",")
+    second = "outer_margin_mm" if data["closure"]["kind"] == "groove" else "conjugate_margin_mm"
+    assert np.min(table[:, names.index(second)]) > -1e-6  # the design keeps the second contact cuttable
+    assert cli.main(["sweep", scene, "--out", str(tmp_path / "sweep"), "--alpha", "1", "--gamma", "0,0.1"]) == 0
+    pareto = json.loads((tmp_path / "sweep" / "pareto.json").read_text())
+    assert pareto
+
+SHARP = (builtin_scene_text("groove")
+         .replace('{ kind = "rise",   angle_deg = 90,  law = "cycloidal", lift_mm = 10.0 }',
+                  '{ kind = "rise",   angle_deg = 45,  law = "cycloidal", lift_mm = 10.0 }')
+         .replace('{ kind = "dwell",  angle_deg = 90 }', '{ kind = "dwell",  angle_deg = 135 }')
+         .replace("max_pressure_angle_deg = 30.0", "max_pressure_angle_deg = 45.0")
+         .replace("groove_clearance_mm = 0.02 ", "groove_clearance_mm = 3.0  "))
+
+
+def _turning_radii(x, y):
+    """Signed radius (mm) of the circle through each vertex and its two neighbours of a closed
+    polyline: > 0 where it turns left (counterclockwise)."""
+    ax, ay, bx, by = np.roll(x, 1) - x, np.roll(y, 1) - y, np.roll(x, -1) - x, np.roll(y, -1) - y
+    cross = ax * by - ay * bx
+    a, b, c = np.hypot(ax, ay), np.hypot(bx, by), np.hypot(bx - ax, by - ay)
+    return -a * b * c / (2.0 * cross)  # the polyline runs clockwise (a ccw cam): left turns are concave parts
+
+
+def test_the_smallest_groove_keeps_its_outer_flank_cuttable(tmp_path):
+    """A fast rise in a wide groove: the outer flank, not the first contact, sets the smallest cam.
+    There the outer flank's tightest convex bend (seen from the roller: where the pitch curve is
+    concave) is min_curvature_radius_mm, measured on the exported outline by three-point circles;
+    1 mm smaller and it is tighter and the run reports the broken outer flank."""
+    scene = with_samples(parse_scene(SHARP), SAMPLES)
+    scene = replace(scene, design=None, motion=replace(scene.motion, extrema="grid"))
+    run = camjax.run_design(scene)
+    minimum = run.min_base_radius
+    assert minimum.binding == "outer_flank"
+    rho_min = scene.follower.min_curvature_radius_mm
+
+    def tightest(radius):
+        r = camjax.run_design(scene, base_radius_mm=radius)
+        own = r.curves.own_curves
+        turning = _turning_radii(own["outer_x_mm"], own["outer_y_mm"])
+        return float(np.min(turning[turning > 0])), r.violations
+
+    at_min, ok = tightest(minimum.radius_mm)
+    assert at_min == pytest.approx(rho_min, abs=2e-4) and not ok  # three-point circles: O(h^2) ~ 1e-5 mm
+    smaller, broken = tightest(minimum.radius_mm - 1.0)
+    assert smaller < rho_min - 0.05 and [v.constraint for v in broken] == ["outer_flank"]
+
+
+@pytest.mark.parametrize("case", ["groove", "yoke", "conjugate"])
+def test_closure_constraints_have_finite_gradients_inside_and_far_outside_the_box(case):
+    """The design problems' second-contact constraints: finite values and gradients for a design in
+    the box and for one far outside it (a tiny cam, the second roller on the shaft)."""
+    import jax
+    import jax.numpy as jnp
+
+    from camjax.solvers.base import problem_from_scene
+
+    text = {"groove": builtin_scene_text("groove"), "yoke": YOKE, "conjugate": builtin_scene_text("conjugate")}[case]
+    scene = parse_scene(text.replace("[motion]\n", '[motion]\nextrema = "grid"\n'))
+    problem = problem_from_scene(scene)
+    module = followers.of(scene).problem_module()
+    assert problem.closure is not None
+    mid = jax.tree.map(lambda lo, hi: 0.5 * (lo + hi), problem.lower, problem.upper)
+    far = jax.tree.map(lambda lo: 0.05 * lo, problem.lower)
+    total = jax.jit(jax.value_and_grad(lambda d: sum(jnp.sum(c) for c in module.constraints(problem, d))))
+    for design in (mid, far):
+        value, grad = total(design)
+        assert np.isfinite(float(value)) and all(np.isfinite(np.asarray(g)).all() for g in jax.tree.leaves(grad))
+
+
+def test_a_positive_drive_has_no_jump_analysis():
+    text = builtin_scene_text("groove") + '\n[dynamics]\nfollower = "translating"\nI3 = 0.1\nc3 = 1.0\nk23 = 1e6\n' \
+        'compute = ["jump"]\nspring_rate = 1000.0\n'
+    with pytest.raises(SceneError, match=r"dynamics\.compute.*positive drive"):
+        parse_scene(text)
