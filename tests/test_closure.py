@@ -262,7 +262,8 @@ def test_spring_scenes_parse_to_the_spring_closure():
 @pytest.mark.slow
 @pytest.mark.parametrize("scene", ["groove", "conjugate", "sharp_groove"])
 def test_design_and_sweep_run_on_both_closures(scene, tmp_path, capsys):
-    if scene == "sharp_groove":  # the outer flank binds the design
+    sharp = scene == "sharp_groove"
+    if sharp:  # the outer flank binds the design
         (tmp_path / "sharp.toml").write_text(SHARP)
         scene = str(tmp_path / "sharp.toml")
     assert cli.main(["design", scene, "--out", str(tmp_path / "design")]) == 0
@@ -273,6 +274,8 @@ def test_design_and_sweep_run_on_both_closures(scene, tmp_path, capsys):
     names = (tmp_path / "design" / "profile.csv").read_text().splitlines()[0].split(",")
     second = "outer_margin_mm" if data["closure"]["kind"] == "groove" else "conjugate_margin_mm"
     assert np.min(table[:, names.index(second)]) > -1e-6  # the design keeps the second contact cuttable
+    if sharp:  # the sweep on a groove is the built-in groove's (the same program, another scene)
+        return
     assert cli.main(["sweep", scene, "--out", str(tmp_path / "sweep"), "--alpha", "1", "--gamma", "0,0.1"]) == 0
     pareto = json.loads((tmp_path / "sweep" / "pareto.json").read_text())
     assert pareto
