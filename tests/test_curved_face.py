@@ -20,6 +20,7 @@ import math
 import jax.numpy as jnp
 import numpy as np
 import pytest
+from reference import reference_motion
 
 import camjax
 from camjax import contact
@@ -308,6 +309,62 @@ def test_a_wide_face_leaves_the_smallest_cam_to_the_other_limits():
     assert rho_c_min(m.radius_mm - 0.2, 1) < -0.1
     # the face's edge is far: the contact stays well inside W/2 = 30 mm
     assert _max_travel_from_positions(m.radius_mm, 100.0, 0.0, scene.motion.program) < 20.0
+
+
+def _flat_rho_min_from_positions(rb, n=36_000):
+    """The flat-face cam's least radius of curvature (mm) at base radius ``rb``, from positions only:
+    the cam is the envelope of the face's lines n(theta) . P = R_b + s(theta), n = (sin, cos) (the
+    face at every cam angle, from the reference motion's s alone); consecutive lines meet at the
+    envelope's corners P_{i+1/2}, and the arc between two corners over the step h is rho(theta_i)
+    (signed along the line's direction t = (cos, -sin): a loop, rho < 0, runs backwards).
+    Rounding: corners to ~1e-11 mm (lines h = 0.01 deg apart), rho to ~1e-7 mm."""
+    th_deg = np.arange(n) * 360.0 / n
+    s, _, _ = reference_motion(th_deg)
+    th, h = np.radians(th_deg), 2 * np.pi / n
+    p = rb + s
+    sn, cs = np.sin(th), np.cos(th)
+    sn1, cs1, p1 = np.roll(sn, -1), np.roll(cs, -1), np.roll(p, -1)
+    det = sn * cs1 - cs * sn1  # lines i and i + 1: [[sin_i, cos_i], [sin_i+1, cos_i+1]] P = [p_i, p_i+1]
+    corner = np.stack([(p * cs1 - p1 * cs) / det, (sn * p1 - sn1 * p) / det])  # P_{i+1/2}
+    arc = corner - np.roll(corner, 1, axis=1)  # P_{i+1/2} - P_{i-1/2}
+    return float(np.min((arc[0] * cs - arc[1] * sn) / h))
+
+
+@pytest.mark.slow  # the curved face's sizing at three radii (the program the test above compiles)
+def test_the_flat_faces_smallest_cam_honours_its_curvature_limit_as_the_curved_face_does():
+    """min_curvature_radius_mm = 2 on the reference motion: the flat face's smallest admissible
+    R_b keeps the cam's radius of curvature >= 2 mm and no more, against (a) a root of the least
+    radius of curvature from positions (the envelope of the face's lines, reference motion's s
+    alone), within 1e-4 mm (measured 4e-6: the 0.01-deg grid misses the least value by up to
+    rho'' (h/2)^2 / 2 ~ 3e-5 mm, the corners' rounding ~1e-7 mm); (b) the curved face's at the same limit
+    as R_c grows: it approaches the flat face's as c / R_c (c ~ 808 mm^2 here), so Richardson's
+    extrapolation of R_c = 1e5 and 1e6 mm lands on the flat face's value to 1e-5 mm (the next
+    term, ~c' / R_c^2, and the sizings' tolerances), while R_c = 1e6 alone is 8e-4 mm short."""
+    from scipy.optimize import brentq
+
+    limit = "min_curvature_radius_mm = 2.0"
+    flat_text = _scene_text(extra=limit).replace('type = "curved_face"\nface_radius_mm = 100.0\n'
+                                                 'face_width_mm = 20.0\noffset_mm = 0.0\n', 'type = "flat"\n')
+    flat_text = flat_text[:flat_text.index("[design]")]
+    flat_scene = parse_scene(flat_text)
+    assert flat_scene.follower.type == "flat" and flat_scene.follower.min_curvature_radius_mm == 2.0
+    flat = camjax.followers.of(flat_scene).min_base_radius(flat_scene, camjax.evaluate.scene_arrays(flat_scene))
+    assert flat.binding == "curvature"
+    # (a) from positions: the R_b at which the least radius of curvature is the limit
+    brute = brentq(lambda rb: _flat_rho_min_from_positions(rb) - 2.0, 20.0, 35.0, xtol=1e-9)
+    assert abs(flat.radius_mm - brute) < 1e-4, (flat.radius_mm, brute)
+    assert _flat_rho_min_from_positions(flat.radius_mm) == pytest.approx(2.0, abs=1e-4)
+    # (b) the curved face at the same limit, its face wide enough that the limit binds
+    curved = {}
+    for rc in (1e5, 1e6):
+        scene = parse_scene(_scene_text(face_radius=rc, face_width=30.0, extra=limit))
+        m = camjax.followers.of(scene).min_base_radius(scene, camjax.evaluate.scene_arrays(scene))
+        assert m.binding == "undercut", m
+        curved[rc] = m.radius_mm
+    assert 1e-4 < flat.radius_mm - curved[1e6] < 1e-3  # short by c / R_c, ...
+    assert (flat.radius_mm - curved[1e5]) / (flat.radius_mm - curved[1e6]) == pytest.approx(10.0, rel=1e-2)
+    extrapolated = curved[1e6] + (curved[1e6] - curved[1e5]) / 9.0  # ... which Richardson removes
+    assert abs(extrapolated - flat.radius_mm) < 1e-5, (extrapolated, flat.radius_mm)
 
 
 @pytest.mark.slow  # a design run (compiles)

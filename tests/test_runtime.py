@@ -149,11 +149,14 @@ def test_design_solve_through_a_saved_program_matches(cache, default_scene, defa
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("command, scene, name", [("design", "roller", "result.json"),
-                                                  ("dynamics", "thesis-bench", "dynamics.json")])
+@pytest.mark.parametrize("command, scene, name", [("dynamics", "thesis-bench", "dynamics.json")])
 def test_cli_with_saved_programs_writes_what_it_writes_without(command, scene, name, tmp_path, monkeypatch):
-    """The command line as users run it (program cache on: first run exports, second loads)
-    against the same command with the cache off: the same JSON, value for value."""
+    """The command line as users run it (program cache on, verify mode off: first run exports,
+    second loads) against the same command with the cache off: the same JSON, value for value.
+
+    One command here: ``camjax design`` of every follower type, cold and loading saved programs,
+    against the cache off is tests/test_cache_matrix.py's (in verify mode, which runs the same
+    path and only adds the comparison with a fresh trace)."""
     import json
 
     from camjax import cli
