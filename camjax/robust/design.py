@@ -397,6 +397,9 @@ def design_json(scene, nominal_problem) -> dict:
         "expected_probability": 1.0 - (m + 1) / (spec.samples + 1),
         "check": {"samples": fresh, "seed": fresh_seed},
         **side,
+        "violations": [("a design variable is outside its bounds" if name == "bounds" else
+                        f"{name.replace('_', ' ')}: kept in fewer than {spec.probability:g} of the "
+                        f"{spec.samples} samples") for name in out["violated"]],
         "size_increase_percent": finite_float(100.0 * (size1 - size0) / size0) if size0 else None,
         "timings_s": {"nominal": t1 - t0, "samples": t2 - t1, "robust": t3 - t2, "check": t4 - t3},
     }
