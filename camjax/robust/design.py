@@ -11,19 +11,21 @@ plus ``shift`` (one per sample and variable: a spread in percent scales, one in 
 
 For a design x, sample s and constraint k of the follower's family, G_k,s = max over the grid of
 g_k(sample s, x_s) (mm, <= 0 where the sample keeps the limit). The robust constraint row k is the
-order statistic of the G_k,s that m samples may exceed, with
+order statistic of the G_k,s that m samples may exceed, with d free design variables,
 
-    m = floor((1 - p)(S + 1)) - 1,
+    m = floor((1 - p)(S + 1)) - d,
 
-so that a fresh sample exceeds it with probability (m + 1) / (S + 1) <= 1 - p on average (the
-order statistic's exceedance is Beta(m + 1, S - m) distributed for one limit), and no lower than
-the nominal's own row (the design keeps its limits at the nominal values too). A scene with loads
-adds ``contact_lost``: the order statistic of -min(contact load) / (peak nominal load) times the size
-norm; it does not depend on the geometry (the follower force is the train's), so a scene that loses
-contact too often has no robust design (reported infeasible, ``contact_lost`` violated). The
-objective is the nominal one. Gradients flow through the sort to the selected sample (a piecewise
-smooth row, as every constraint's max over the grid is); every solver and mode run unchanged. In
-pointwise mode each angle keeps its own order statistic.
+so that a fresh sample breaks the limit with probability at most (m + d) / (S + 1) <= 1 - p on
+average (the scenario approach with sampling and discarding: each of the d variables can fit one
+sample's value more), and no lower than the nominal's own row (the design keeps its limits at
+the nominal values too). A scene with loads adds ``contact_lost``: the order statistic of
+-min(contact load) / (peak nominal load) times the size norm; it does not depend on the
+geometry (the follower force is the train's), so a scene that loses contact too often has no
+robust design (reported infeasible, ``contact_lost`` violated). The objective is the nominal
+one. Gradients flow through the sort to the selected sample (a piecewise smooth row, as every
+constraint's max over the grid is); every solver and mode run unchanged. In pointwise mode each
+angle keeps its own order statistic (the fraction of samples that keep a limit at every angle
+can then be lower).
 
 :func:`design_json` solves the nominal and the robust problem with the scene's solver and mode and
 measures both designs on a fresh sample set (another seed) with :func:`camjax.robust.evaluate.batch`.
@@ -115,10 +117,17 @@ def _row_names(problem: Problem) -> tuple[str, ...]:
     return (*names, "contact_lost") if problem.contact is not None else names
 
 
-def rank_from_top(probability: float, count: int) -> int:
-    """m = floor((1 - p)(S + 1)) - 1: how many of ``count`` samples may exceed a robust row
-    (Python; at least 0)."""
-    return max(0, min(count - 1, math.floor((1.0 - probability) * (count + 1) + 1e-9) - 1))
+def rank_from_top(probability: float, count: int, free: int = 1) -> int:
+    """m = floor((1 - p)(S + 1)) - d: how many of ``count`` samples may exceed a robust row, with
+    d = ``free`` design variables (Python; at least 0). The scenario approach's bound
+    (sampling and discarding): a design fitted to S samples with m of them discarded breaks a fresh
+    sample with probability at most (m + d) / (S + 1) on average."""
+    return max(0, min(count - 1, math.floor((1.0 - probability) * (count + 1) + 1e-9) - max(free, 1)))
+
+
+def free_variables(bounds) -> int:
+    """d: the design variables free in their box (low < high), of (name, (low, high)) pairs."""
+    return sum(1 for _, (lo, hi) in bounds if hi > lo)
 
 
 def _order_statistic(values, rank):
@@ -318,7 +327,7 @@ def robust_problem(scene, nominal_problem, *, samples: int | None = None, seed: 
         contact = -loads / scale * base.size_norm(nominal_problem)
     as_design = lambda d: base.Design(**{k: jnp.asarray(d[k], dtype) for k in variables})  # noqa: E731
     return Problem(nominal_problem, probs, as_design(factor), as_design(shift), contact,
-                   jnp.asarray(rank_from_top(p, samples), jnp.int32))
+                   jnp.asarray(rank_from_top(p, samples, free_variables(scene.design.variables)), jnp.int32))
 
 
 def nominal_load(scene) -> jax.Array:
@@ -390,11 +399,12 @@ def design_json(scene, nominal_problem) -> dict:
                       "probability_kept": kept(scene, design, fresh, fresh_seed)}
     t4 = time.perf_counter()
     size0, size1 = side["nominal"]["size_mm"], side["robust"]["size_mm"]
-    m = rank_from_top(spec.probability, spec.samples)
+    free = free_variables(d.variables)
+    m = rank_from_top(spec.probability, spec.samples, free)
     out["robust"] = {
         "probability": spec.probability, "samples": spec.samples, "seed": spec.seed,
-        "samples_allowed_over": m, "rounds": rounds,
-        "expected_probability": 1.0 - (m + 1) / (spec.samples + 1),
+        "samples_allowed_over": m, "free_variables": free, "rounds": rounds,
+        "probability_bound": 1.0 - (m + free) / (spec.samples + 1),
         "check": {"samples": fresh, "seed": fresh_seed},
         **side,
         "violations": [("a design variable is outside its bounds" if name == "bounds" else

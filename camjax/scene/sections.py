@@ -74,7 +74,8 @@ def parse_design(r: TableReader, follower, spec: FollowerSpec, has_contact: bool
         seed=r.number("seed", DEFAULT, low=0, high=SEED_MAX, integer=True),
     )
     bounds = follower.design_bounds(r, spec)
-    robust = parse_robust(r.sub("robust")) if r.has("robust") else None
+    free = max(1, sum(1 for lo, hi in bounds.values() if hi > lo))
+    robust = parse_robust(r.sub("robust"), free) if r.has("robust") else None
     design = build(DesignSpec, variables=tuple((name, bounds[name]) for name in own),
                    sigma_max_MPa=sigma_max(r, has_contact, common), robust=robust, **common)
     if design.alpha == 0 and design.gamma == 0:
@@ -83,22 +84,24 @@ def parse_design(r: TableReader, follower, spec: FollowerSpec, has_contact: bool
     return design
 
 
-ROBUST_SAMPLES_MAX = 100_000  # design.robust.samples: every solver step evaluates all of them
+ROBUST_SAMPLES_MAX = 20_000  # design.robust.samples: each holds its problem on the grid (memory)
 
 
-def parse_robust(r: TableReader) -> RobustSpec:
-    """[design] robust = { probability, samples, seed }: a robust design's sample set. The
-    probability's quantile needs at least 1 / (1 - probability) samples (one may break a limit)."""
+def parse_robust(r: TableReader, free: int) -> RobustSpec:
+    """[design] robust = { probability, samples, seed }: a robust design's sample set, for a design
+    of ``free`` free variables (d): at least d / (1 - probability) - 1 samples (the order statistic
+    of :mod:`camjax.robust.design` then discards none)."""
     r.check_keys(("probability", "samples", "seed"))
     p = r.number("probability", low=0.0, low_open=True, high=1.0)
     if p >= 1.0:
         raise r.error("probability", p, "must be below 1 (no finite sample set keeps a limit surely)",
                       "0 < probability < 1")
     n = r.number("samples", low=1, high=ROBUST_SAMPLES_MAX, integer=True)
-    need = math.ceil(1.0 / (1.0 - p) - 1e-9)
+    need = math.ceil(free / (1.0 - p) - 1 - 1e-9)
     if n < need:
-        raise r.error("samples", n, f"too few for probability {p:g}: the quantile needs at least "
-                      f"1 / (1 - probability) = {need} samples", f"{need}..{ROBUST_SAMPLES_MAX}")
+        raise r.error("samples", n, f"too few for probability {p:g} with {free} free design variable"
+                      f"{'s' if free > 1 else ''}: at least d / (1 - probability) - 1 = {need}",
+                      f"{need}..{ROBUST_SAMPLES_MAX}")
     seed = r.number("seed", 0, low=0, high=2**32 - 1, integer=True)
     return RobustSpec(float(p), int(n), int(seed))
 
