@@ -148,7 +148,8 @@ def test_the_ga_runs_the_robust_problem(gradient_block):
 @pytest.mark.slow
 def test_a_rocking_follower_with_the_interior_point_solver():
     """An oscillating roller (its example scene, rpm and the roller's radius toleranced) solved by
-    the newton solver: feasible, robust rows <= 0 on the full set, at least the nominal's size."""
+    the newton solver: feasible, robust rows <= 0 on the full set, an objective no better than the
+    nominal optimum's (the robust problem's feasible set is inside the nominal's)."""
     from camjax import followers
 
     kind = followers.get("oscillating_roller")

@@ -63,6 +63,9 @@ class Problem(NamedTuple):
     shift: Any  # the family's Design, (S,) each, mm
     contact: jax.Array | None  # (S, n) -load / peak nominal load x size norm (mm); None without loads
     rank: jax.Array  # () int m: how many of the full sample set may exceed a robust row
+    # (rows, S) bool: the samples each row is kept over (the m it may exceed discarded, a solve's
+    # smooth form: a max over fixed samples); None: the order statistic itself
+    keep: jax.Array | None = None
 
     @property
     def theta_deg(self):
@@ -151,21 +154,34 @@ def sample_maxima(problem: Problem, design) -> dict[str, jax.Array]:
 
 
 def constraint_maxima(problem: Problem, design):
-    """The robust rows (mm, () each): each constraint's order statistic over the samples, no lower
-    than the nominal's own max over the grid."""
+    """The robust rows (mm, () each): each constraint's order statistic over the samples (with
+    ``keep``: its max over the kept samples), no lower than the nominal's own max over the grid."""
     base = _base(problem)
     nominal = base.constraint_maxima(problem.nominal, design)._asdict()
     rows = {}
-    for name, values in sample_maxima(problem, design).items():
-        q = _order_statistic(values, problem.rank)
+    for r, (name, values) in enumerate(sample_maxima(problem, design).items()):
+        if problem.keep is None:
+            q = _order_statistic(values, problem.rank)
+        else:
+            q = jnp.max(jnp.where(problem.keep[..., r, :], values, -1e30), axis=-1)
         rows[name] = jnp.maximum(q, nominal[name]) if name in nominal else q
     return _named("Constraints", tuple(rows))(**rows)
 
 
 def constraints(problem: Problem, design):
-    """The robust rows as the protocol's constraint arrays: one row each, shape (1,)."""
+    """The robust rows as the protocol's constraint arrays. With ``keep``: one row per sample, shape
+    (1 + S,) (the nominal's max over the grid, then each sample's; a discarded sample's row is
+    -1e30, never active), whose max is :func:`constraint_maxima`; without: the order statistic,
+    shape (1,)."""
     m = constraint_maxima(problem, design)
-    return type(m)(*(jnp.reshape(v, (1,)) for v in m))
+    if problem.keep is None:
+        return type(m)(*(jnp.reshape(v, (1,)) for v in m))
+    nominal = _base(problem).constraint_maxima(problem.nominal, design)._asdict()
+    rows = {}
+    for r, (name, values) in enumerate(sample_maxima(problem, design).items()):
+        kept = jnp.where(problem.keep[..., r, :], values, -1e30)
+        rows[name] = jnp.concatenate([jnp.reshape(nominal.get(name, -1e30), (1,)), kept], axis=-1)
+    return type(m)(**rows)
 
 
 # ---------------------------------------------------------- the family's own, at the nominal
@@ -222,7 +238,8 @@ def per_angle(problem: Problem) -> Problem:
     spread = lambda x: jnp.broadcast_to(x, (n, *x.shape))  # noqa: E731
     contact = None if problem.contact is None else jnp.moveaxis(problem.contact, -1, 0)[..., None]
     return Problem(nominal, samples, jax.tree.map(spread, problem.factor),
-                   jax.tree.map(spread, problem.shift), contact, jnp.broadcast_to(problem.rank, (n,)))
+                   jax.tree.map(spread, problem.shift), contact, jnp.broadcast_to(problem.rank, (n,)),
+                   None if problem.keep is None else spread(problem.keep))
 
 
 def condense_pointwise(problem: Problem, per_angle_design):
@@ -425,7 +442,8 @@ def take(problem: Problem, index) -> Problem:
     return problem._replace(samples=jax.tree.map(pick, problem.samples),
                             factor=jax.tree.map(pick, problem.factor),
                             shift=jax.tree.map(pick, problem.shift),
-                            contact=None if problem.contact is None else problem.contact[index])
+                            contact=None if problem.contact is None else problem.contact[index],
+                            keep=None if problem.keep is None else problem.keep[:, index])
 
 
 @jax.jit
@@ -437,38 +455,52 @@ def _critical(problem: Problem, design) -> jax.Array:
     return jnp.min(ranks, axis=0)
 
 
+@jax.jit
+def _sample_rows(problem: Problem, design) -> jax.Array:
+    """(rows, S) every sample's max over the grid of each robust row's constraint (mm)."""
+    return jnp.stack(list(sample_maxima(problem, design).values()))
+
+
 def solve_robust(problem: Problem, weights, *, mode: str, solver: str, seed: int, subset: int = SUBSET,
-                 rounds: int = 6):
+                 rounds: int = 8):
     """The robust design of ``problem`` (:func:`camjax.solvers.base.solve`), and the rounds it took.
 
-    A sample set larger than ``subset`` is solved on its ``subset`` samples nearest to breaking a
-    limit at the current design (at first the box's centre), then checked on the full set: where a
-    robust row of the full set differs from the subset's, the subset is chosen again at the new
-    design and solved again (at most ``rounds`` times). Every robust row is the full set's order
-    statistic either way: the returned solution is evaluated on the full set (a subset holds every
-    sample at or above the row it selects once the two agree). Pointwise mode solves the full set
-    (each angle has its own critical samples).
+    Global mode, by rounds: at the current design (at first the family's start) each row's m
+    largest samples are discarded and the row is the max over the others (a max over fixed samples,
+    as smooth as each family's max over the grid, where the order statistic switches samples);
+    a set larger than ``subset`` is solved on its ``subset`` samples nearest to breaking a limit.
+    The design is solved, and the rounds end when every row's order statistic over the full set
+    equals the row the solver kept (the discarded samples are the m largest at the design, and the
+    subset holds the rest of the top). The solution is judged on the full set's order statistics.
+    Pointwise mode solves the order statistics of the full set directly (each angle its own).
     """
+    from camjax.family import weights_of
     from camjax.results import Status
     from camjax.solvers.base import solve
 
     count = problem.factor[0].shape[0]
-    subset = max(subset, 4 * (int(problem.rank) + 1) + 64)
-    if mode != "global" or count <= subset:
+    m = int(problem.rank)
+    subset = max(subset, 4 * (m + 1) + 64)
+    if mode != "global":
         return solve(problem, weights, mode=mode, solver=solver, seed=seed), 1
     design, index, done = start(problem), None, 0
     while done < rounds:
         done += 1
-        order = np.argsort(np.asarray(_critical(problem, design)), kind="stable")
-        index = order[:subset] if index is None else _merge(index, order, subset)
-        sub = take(problem, jnp.asarray(np.sort(index)))
+        g = np.asarray(_sample_rows(problem, design))
+        keep = np.ones(g.shape, bool)
+        for r in range(g.shape[0]):
+            keep[r, np.argsort(-g[r], kind="stable")[:m]] = False
+        if count <= subset:
+            index = np.arange(count)
+        else:
+            order = np.argsort(np.asarray(_critical(problem, design)), kind="stable")
+            index = order[:subset] if index is None else _merge(index, order, subset)
+        sub = take(problem._replace(keep=jnp.asarray(keep)), jnp.asarray(np.sort(index)))
         sol = solve(sub, weights, mode=mode, solver=solver, seed=seed)
         design = sol.design
         full, kept_rows = np.asarray(_rows_at(problem, design)), np.asarray(_rows_at(sub, design))
         if np.allclose(full, kept_rows, rtol=0.0, atol=1e-12):
             break
-    from camjax.family import weights_of
-
     w = weights_of(sol.alpha, sol.gamma, problem.lower[0].dtype)
     full = jax.device_get(evaluate(problem, w, jax.tree.map(jnp.asarray, design)))
     converged = sol.converged
