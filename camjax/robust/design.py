@@ -22,10 +22,11 @@ the nominal values too). A scene with loads adds ``contact_lost``: the order sta
 -min(contact load) / (peak nominal load) times the size norm; it does not depend on the
 geometry (the follower force is the train's), so a scene that loses contact too often has no
 robust design (reported infeasible, ``contact_lost`` violated). The objective is the nominal
-one. Gradients flow through the sort to the selected sample (a piecewise smooth row, as every
-constraint's max over the grid is); every solver and mode run unchanged. In pointwise mode each
-angle keeps its own order statistic (the fraction of samples that keep a limit at every angle
-can then be lower).
+one; every solver and mode run the problem unchanged. A global solve goes by rounds
+(:func:`solve_robust`): each row is kept over the samples left when its m largest at the current
+design are discarded (one row per sample), until the order statistics agree. In pointwise mode
+each angle keeps its own order statistic (the fraction of samples that keep a limit at every
+angle can then be lower).
 
 :func:`design_json` solves the nominal and the robust problem with the scene's solver and mode and
 measures both designs on a fresh sample set (another seed) with :func:`camjax.robust.evaluate.batch`.
