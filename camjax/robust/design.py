@@ -339,6 +339,10 @@ def robust_problem(scene, nominal_problem, *, samples: int | None = None, seed: 
             factor[t.name] = 1.0 + t.spread / 100.0 * unit[:, j]
         else:
             shift[t.name] = t.spread * unit[:, j]
+    # the rows' tuple types exist before a saved program's output tree is read back (a fresh process)
+    names = (*base.Constraints._fields, *(("contact_lost",) if scene.follower.train is not None else ()))
+    _named("Constraints", names)
+    _named("Violation", (*names, "bounds"))
     contact = None
     if scene.follower.train is not None:
         scale = max(float(np.max(np.abs(np.asarray(nominal_load(scene))))), LOAD_FLOOR)
