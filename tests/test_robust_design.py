@@ -157,7 +157,7 @@ def test_a_rocking_follower_with_the_interior_point_solver():
     d["motion"]["samples"] = 90
     d["motion"]["extrema"] = "grid"
     d["design"]["solver"] = "newton"
-    d["design"]["robust"] = {"probability": 0.9, "samples": 40}
+    d["design"]["robust"] = {"probability": 0.95, "samples": 100}
     d["tolerances"] = {"rpm": {"sd_percent": 3}, "roller_radius_mm": {"sd": 0.05}}
     try:
         scene = scene_from_dict(d, "rocker")
