@@ -71,6 +71,18 @@ def test_robust_needs_tolerances():
     assert err.value.field == "design.robust" and "tolerances" in str(err.value)
 
 
+def test_the_robust_key_round_trips_through_scene_overrides():
+    """with_design (the CLI's overrides) re-reads [design] by the same rules: the robust set is kept,
+    and an override that leaves too few samples for its free variables is refused."""
+    from camjax.scene import with_design
+
+    scene = robust_scene()
+    assert with_design(scene, alpha=2.0).design.robust == scene.design.robust
+    with pytest.raises(SceneError) as err:
+        with_design(scene, robust={"probability": 0.999, "samples": 1000})
+    assert err.value.field == "design.robust.samples"
+
+
 @pytest.mark.slow
 def test_zero_tolerances_give_the_nominal_design():
     """Every spread 0: each sample is the nominal scene, the robust rows are the nominal rows, and
