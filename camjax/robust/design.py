@@ -460,6 +460,20 @@ def _critical(problem: Problem, design) -> jax.Array:
     return jnp.min(ranks, axis=0)
 
 
+def _settings():
+    """The gradient solver (and the hybrid's polish) with one multiplier per row (per kept sample):
+    its max over rows is not one variable minus a fixed term, as a family's max over the grid is."""
+    import dataclasses as dc
+
+    from camjax.solvers import gradient
+    from camjax.solvers.base import Settings
+
+    return Settings.of_solvers(gradient=dc.replace(gradient.DEFAULT_SETTINGS, aggregate_constraints=False))
+
+
+_SETTINGS = _settings()
+
+
 @jax.jit
 def _sample_rows(problem: Problem, design) -> jax.Array:
     """(rows, S) every sample's max over the grid of each robust row's constraint (mm)."""
@@ -501,7 +515,7 @@ def solve_robust(problem: Problem, weights, *, mode: str, solver: str, seed: int
             order = np.argsort(np.asarray(_critical(problem, design)), kind="stable")
             index = order[:subset] if index is None else _merge(index, order, subset)
         sub = take(problem._replace(keep=jnp.asarray(keep)), jnp.asarray(np.sort(index)))
-        sol = solve(sub, weights, mode=mode, solver=solver, seed=seed)
+        sol = solve(sub, weights, mode=mode, solver=solver, seed=seed, settings=_SETTINGS)
         design = sol.design
         full, kept_rows = np.asarray(_rows_at(problem, design)), np.asarray(_rows_at(sub, design))
         if np.allclose(full, kept_rows, rtol=0.0, atol=1e-12):
