@@ -6,6 +6,7 @@ bound from a larger independent sample, every follower type through the contract
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 import tomllib
@@ -38,6 +39,7 @@ def robust_data() -> dict:
     """The built-in robust scene as a dict, its design fixed at :data:`DESIGN`, grid extrema."""
     d = tomllib.loads(builtin_scene_text("robust"))
     d["design"].update(DESIGN)
+    d["design"].pop("robust")  # the nominal design, evaluated (tests/test_robust_design.py: the robust one)
     d["motion"]["extrema"] = "grid"
     return d
 
@@ -203,7 +205,7 @@ def test_sensitivities_against_central_differences_of_written_scenes(cli_run, tm
 def test_probabilities_within_a_binomial_bound_of_a_larger_independent_sample(cli_run):
     """P(limit broken) of the CLI's 300 samples against 4000 samples of another seed: |p - q| below
     4.5 standard deviations of the difference (sqrt(q (1 - q) (1/300 + 1/4000)), plus 1/300 for q
-    near 0 or 1); and the robust scene loses contact in >= 5 % of its cams."""
+    near 0 or 1); and the robust scene's nominal optimum breaks a limit in >= 5 % of its cams."""
     data, _ = cli_run
     scene = scene_from_dict(robust_data(), "robust")
     nom = rev.nominal(scene, scene.tolerances, DESIGN)
@@ -214,7 +216,7 @@ def test_probabilities_within_a_binomial_bound_of_a_larger_independent_sample(cl
         q = big[lim]
         bound = 4.5 * math.sqrt(q * (1 - q) * (1 / SAMPLES + 1 / 4000)) + 1 / SAMPLES
         assert abs(p["probability"] - q) <= bound, (lim, p["probability"], q)
-    assert big["contact_lost"] >= 0.05
+    assert max(big.values()) >= 0.05
 
 
 @pytest.mark.slow
@@ -285,9 +287,11 @@ def test_cli_exits_2_naming_the_key(tmp_path, capsys):
 def test_scenes_without_tolerances_are_unchanged():
     d = tomllib.loads(builtin_scene_text("robust"))
     d.pop("tolerances")
+    d["design"].pop("robust")  # a robust design samples the tolerances
     plain, toleranced = scene_from_dict(d, "x"), load_scene("robust")
     assert plain.tolerances is None and toleranced.tolerances is not None
-    assert plain.follower == toleranced.follower and plain.design == toleranced.design
+    assert plain.follower == toleranced.follower
+    assert plain.design == dataclasses.replace(toleranced.design, robust=None)
     assert camjax.load_scene("default").tolerances is None
 
 

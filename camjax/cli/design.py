@@ -224,6 +224,10 @@ def _write_design(args, out, scene, result, workers, progress, extra=None) -> in
             c = g["certificate"]
             print(f"{c['limited_by']} (KKT residuals {c['stationarity']:.1e}, {c['primal_feasibility']:.1e}, "
                   f"{c['complementarity']:.1e} after {c['iterations']} iterations)")
+        if "robust" in g:  # [design] robust: the nominal and the robust optimum on fresh samples
+            from camjax.robust.design import summary
+
+            print(summary(g["robust"]))
     if "synthesis" in d:
         c = d["synthesis"]["codesign"]
         b = c["best_builtin"]

@@ -392,7 +392,12 @@ class RockingFollower(Follower):
 
             d = scene.design
             problem = problem_from_scene(scene, arrays)
-            design = design_json(problem, d)
+            if d.robust is not None:  # kept over the samples of [tolerances], beside the nominal optimum
+                from camjax.robust.design import design_json as robust_design_json
+
+                design = robust_design_json(scene, problem)
+            else:
+                design = design_json(problem, d)
         kin, w, drawn = arrays.kin, arrays.cam_speed_rad_s, scene
         program = None if arrays.model is None else arrays.model.program
         if design is not None:

@@ -310,7 +310,12 @@ class TranslatingFollower(Follower):
 
         d = scene.design
         problem = problem_from_scene(scene, arrays)
-        out = design_json(problem, d)
+        if d.robust is not None:  # kept over the samples of [tolerances], beside the nominal optimum
+            from camjax.robust.design import design_json as robust_design_json
+
+            out = robust_design_json(scene, problem)
+        else:
+            out = design_json(problem, d)
         return self.design_solution(scene, arrays, out, problem)
 
     def curves(self, scene, arrays: SceneArrays, base_radius_mm: float, follower=None,

@@ -38,7 +38,8 @@ def design_block(spec, solution, sentences: dict[str, str]) -> dict[str, Any]:
         "bounds": "a design variable is outside its bounds",
         **sentences,
     }
-    violations = [messages[name] for name in out["violated"]]
+    violations = (list(out["robust"]["violations"]) if "robust" in out  # a robust design's rows
+                  else [messages[name] for name in out["violated"]])
     if required > rb_hi:
         violations.insert(0, f"base radius needs {required:.6g} mm > upper bound {rb_hi:g} mm")
     out.update({

@@ -172,35 +172,57 @@ class Sample(NamedTuple):
     load: jax.Array  # (N,) contact force N (rocking: moment N m); zeros without loads
 
 
-def sample(nom: Nominal, values, phases, g: Grid | None = None) -> Sample:
-    """Evaluate the nominal design with toleranced ``values`` ((k,) array) and form-error
-    ``phases`` ((H,), rad); ``g``: the nominal's :func:`grid` (computed here when None). Pure JAX:
-    jit/vmap/grad over ``values`` (and ``phases``)."""
-    from camjax import loads
+class Drawn(NamedTuple):
+    """One sample's scene and arrays: what the models see of it."""
 
-    scene0 = nom.scene
-    kind = followers.of(scene0)
-    fam = kind.problem_module()
+    scene: Any  # the scene with the drawn values (traced copy)
+    design: dict[str, Any]  # the design with its toleranced variables drawn
+    arrays: Any  # camjax.evaluate.SceneArrays of the drawn scene, form error included
+    eps: tuple  # the form error and its first three derivatives on the grid (mm, mm/rad^k)
+
+
+def drawn(nom: Nominal, values, phases, g: Grid | None = None) -> Drawn:
+    """The scene, design and arrays of one sample: toleranced ``values`` ((k,) array) and form-error
+    ``phases`` ((H,), rad); ``g``: the nominal's :func:`grid` (computed here when None). Traceable."""
     dtype = jnp.result_type(float)
     scene, design = perturbed_scene(nom, [values[i] for i in range(len(nom.values))])
-    n = scene0.motion.samples
     g = grid(nom, dtype) if g is None else g
     eps = form_error(nom.tolerances.profile, phases, g, dtype)
     kin0 = g.kin
     kin = Kinematics(kin0.theta, *(a + e for a, e in zip(kin0[1:], eps, strict=True)))
-    arrays = arrays_from_kinematics(scene, kin)
+    return Drawn(scene, design, arrays_from_kinematics(scene, kin), eps)
+
+
+def contact_load(scene, arrays) -> jax.Array:
+    """(N,) the load that holds the follower on the cam: a translating follower's contact force (N),
+    a rocker's moment about its pivot (N m); zeros without loads. Contact is lost where it is < 0."""
+    from camjax import loads
+
+    kin = arrays.kin
+    if followers.of(scene).rocking:
+        return (jnp.zeros_like(kin.s) if scene.follower.train is None
+                else loads.rocker_torque(scene.follower.train, kin, arrays.cam_speed_rad_s))
+    return jnp.zeros_like(kin.s) if arrays.force_N is None else arrays.force_N
+
+
+def sample(nom: Nominal, values, phases, g: Grid | None = None) -> Sample:
+    """Evaluate the nominal design with toleranced ``values`` ((k,) array) and form-error
+    ``phases`` ((H,), rad); ``g``: the nominal's :func:`grid` (computed here when None). Pure JAX:
+    jit/vmap/grad over ``values`` (and ``phases``)."""
+    scene0 = nom.scene
+    kind = followers.of(scene0)
+    fam = kind.problem_module()
+    dtype = jnp.result_type(float)
+    n = scene0.motion.samples
+    scene, design, arrays, eps = drawn(nom, values, phases, g)
+    kin = arrays.kin
     problem = fam.problem_from_scene(scene, arrays)
     d = fam.Design(**{k: jnp.asarray(design[k], dtype) for k in fam.Design._fields})
     weights = weights_of(scene0.design.alpha, scene0.design.gamma, dtype)
     ev = fam.evaluate(problem, weights, d)
     omega = arrays.cam_speed_rad_s
-    if kind.rocking:
-        load = (jnp.zeros_like(kin.s) if scene.follower.train is None
-                else loads.rocker_torque(scene.follower.train, kin, omega))
-        accel = kin.d2s * omega**2
-    else:
-        load = jnp.zeros_like(kin.s) if arrays.force_N is None else arrays.force_N
-        accel = arrays.motion.accel
+    load = contact_load(scene, arrays)
+    accel = kin.d2s * omega**2 if kind.rocking else arrays.motion.accel
     out = []
     names = output_names(scene0, nom.tolerances)
     for name in names:

@@ -132,7 +132,23 @@ def _scene_from_dict(data: dict, name: str, source: str | None) -> Scene:
         from camjax.robust.tolerances import parse_tolerances
 
         scene = replace(scene, tolerances=parse_tolerances(top.sub("tolerances"), scene))
+    if design is not None and design.robust is not None:  # camjax.robust.design: drawn from [tolerances]
+        _check_robust(scene, source)
     return scene
+
+
+def _check_robust(scene: Scene, source: str | None) -> None:
+    """A robust [design] samples the scene's [tolerances], of a scene whose laws are given."""
+    robust = scene.design.robust
+    tol = scene.tolerances
+    if tol is None or not (tol.values or tol.profile):
+        raise SceneError("design.robust", {"probability": robust.probability, "samples": robust.samples},
+                         "a robust design keeps its limits over samples of the scene's tolerances: add a "
+                         "[tolerances] section", "e.g. [tolerances] rpm = { sd_percent = 2 }", source)
+    if scene.motion.designed:
+        raise SceneError("design.robust", {"probability": robust.probability, "samples": robust.samples},
+                         "a robust design of designed laws (design = true in [motion]) is not supported",
+                         "laws given in [motion], or no robust key", source)
 
 
 def with_design(scene: Scene, **overrides) -> Scene:
@@ -147,7 +163,10 @@ def with_design(scene: Scene, **overrides) -> Scene:
         raise SceneError("design", MISSING, "the scene has no [design] section to override")
     d = scene.design
     table = {name: list(bounds) for name, bounds in d.variables}
-    table.update({f.name: getattr(d, f.name) for f in fields(DesignSpec) if f.name != "variables"})
+    table.update({f.name: getattr(d, f.name) for f in fields(DesignSpec)
+                  if f.name not in ("variables", "robust")})
+    if d.robust is not None:
+        table["robust"] = {f.name: getattr(d.robust, f.name) for f in fields(d.robust)}
     table = {k: v for k, v in table.items() if v is not None}
     design = parse_design(TableReader({**table, **overrides}, "design", None), followers.of(scene),
                           scene.follower, scene.contact is not None)

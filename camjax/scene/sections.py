@@ -20,6 +20,7 @@ from camjax.scene.spec import (
     DynamicsSpec,
     FollowerSpec,
     MotionSpec,
+    RobustSpec,
 )
 from camjax.solvers.registry import MODES, SOLVERS
 
@@ -63,7 +64,7 @@ def parse_design(r: TableReader, follower, spec: FollowerSpec, has_contact: bool
         if r.has(key):
             raise r.error(key, r.table[key], f"is not a design variable of a {follower.name} follower",
                           ", ".join(own))
-    r.check_keys(("mode", *own, "sigma_max_MPa", "alpha", "gamma", "solver", "seed"))
+    r.check_keys(("mode", *own, "sigma_max_MPa", "alpha", "gamma", "solver", "seed", "robust"))
     common = dict(
         mode=r.choice("mode", MODES, DEFAULT),
         alpha=r.number("alpha", DEFAULT, low=0.0),
@@ -73,12 +74,36 @@ def parse_design(r: TableReader, follower, spec: FollowerSpec, has_contact: bool
         seed=r.number("seed", DEFAULT, low=0, high=SEED_MAX, integer=True),
     )
     bounds = follower.design_bounds(r, spec)
+    free = max(1, sum(1 for lo, hi in bounds.values() if hi > lo))
+    robust = parse_robust(r.sub("robust"), free) if r.has("robust") else None
     design = build(DesignSpec, variables=tuple((name, bounds[name]) for name in own),
-                   sigma_max_MPa=sigma_max(r, has_contact, common), **common)
+                   sigma_max_MPa=sigma_max(r, has_contact, common), robust=robust, **common)
     if design.alpha == 0 and design.gamma == 0:
         raise r.error("alpha", 0.0, "alpha and gamma are both zero: nothing to minimize",
                       "alpha >= 0, gamma >= 0, not both 0")
     return design
+
+
+ROBUST_SAMPLES_MAX = 20_000  # design.robust.samples: each holds its problem on the grid (memory)
+
+
+def parse_robust(r: TableReader, free: int) -> RobustSpec:
+    """[design] robust = { probability, samples, seed }: a robust design's sample set, for a design
+    of ``free`` free variables (d): at least d / (1 - probability) - 1 samples (the order statistic
+    of :mod:`camjax.robust.design` then discards none)."""
+    r.check_keys(("probability", "samples", "seed"))
+    p = r.number("probability", low=0.0, low_open=True, high=1.0)
+    if p >= 1.0:
+        raise r.error("probability", p, "must be below 1 (no finite sample set keeps a limit surely)",
+                      "0 < probability < 1")
+    n = r.number("samples", low=1, high=ROBUST_SAMPLES_MAX, integer=True)
+    need = math.ceil(free / (1.0 - p) - 1 - 1e-9)
+    if n < need:
+        raise r.error("samples", n, f"too few for probability {p:g} with {free} free design variable"
+                      f"{'s' if free > 1 else ''}: at least d / (1 - probability) - 1 = {need}",
+                      f"{need}..{ROBUST_SAMPLES_MAX}")
+    seed = r.number("seed", 0, low=0, high=2**32 - 1, integer=True)
+    return RobustSpec(float(p), int(n), int(seed))
 
 
 def parse_guide(r: TableReader) -> Guide:

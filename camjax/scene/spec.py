@@ -97,6 +97,16 @@ class ContactSpec:
 
 
 @dataclass(frozen=True)
+class RobustSpec:
+    """[design] robust: keep each constraint over ``probability`` of a fixed set of ``samples``
+    draws of the scene's [tolerances] (seeded by ``seed``; :mod:`camjax.robust.design`)."""
+
+    probability: float  # in (0, 1)
+    samples: int  # draws the constraints are kept over
+    seed: int = 0
+
+
+@dataclass(frozen=True)
 class DesignSpec:
     """[design]: the optimal-design problem (SPEC 5) of any follower type.
 
@@ -112,6 +122,7 @@ class DesignSpec:
     gamma: float = 1.0  # weight of the stress term
     solver: str = "gradient"
     seed: int = 0
+    robust: RobustSpec | None = None  # a robust design (needs [tolerances]); None: the nominal one
 
     def bounds(self, name: str) -> tuple[float, float]:
         """(low, high) of design variable ``name`` (mm); KeyError for one this follower lacks."""
