@@ -155,6 +155,7 @@ class Raw(NamedTuple):
     design: Any  # the family's Design, mm
     iterations: jax.Array  # int: steps or generations
     converged: jax.Array | None  # bool: the stopping rule was met; None for a fixed-budget solver
+    certificate: Any = None  # the answer's KKT certificate (camjax.solvers.newton.Certificate), if any
 
 
 # ------------------------------------------------------------------------------ result
@@ -170,7 +171,7 @@ class Timings:
 
 @partial(jax.tree_util.register_dataclass,
          data_fields=["alpha", "gamma", "design", "objective", "violation", "feasible", "status",
-                      "iterations", "converged", "evaluation", "pointwise", "extras"],
+                      "iterations", "converged", "evaluation", "pointwise", "extras", "certificate"],
          meta_fields=["mode", "solver", "timings"])
 @dataclass(frozen=True)
 class Solution:
@@ -195,6 +196,7 @@ class Solution:
     evaluation: Any  # the family's Evaluation of ``design`` on the whole grid
     pointwise: Any = None  # pointwise mode: the per-angle designs, (n,) each
     extras: dict | None = None  # pointwise mode: the family's extra arrays (angles of the peaks, ...)
+    certificate: Any = None  # the solver's KKT certificate of its answer (pointwise: one per angle)
     timings: Timings | None = None  # filled in by :func:`solve`
 
     def __getattr__(self, name: str):
@@ -234,6 +236,11 @@ class Solution:
                "iterations": int(self.iterations),
                "converged": None if self.converged is None else bool(self.converged)}
         out.update(family_of(problem).solution_json(problem, self))
+        if self.certificate is not None:
+            from camjax.solvers.newton import certificate_json
+
+            out["certificate"] = certificate_json(problem, self.certificate, mode=self.mode,
+                                                  solver=self.solver)
         return out
 
     def record(self, problem) -> dict[str, Any]:
@@ -295,7 +302,7 @@ def _solution(problem, weights: Weights, raw: Raw, mode: str, solver: str) -> So
     ev = family.evaluate(problem, weights, design)
     return Solution(mode, solver, weights.alpha, weights.gamma, design, ev.objective, ev.violation,
                     ev.feasible, _status(ev.feasible, converged), iterations, converged, ev, per_angle,
-                    extras)
+                    extras, raw.certificate)
 
 
 def solve_one(problem, weights: Weights, key: jax.Array, *, mode: str = "global", solver: str = "gradient",

@@ -324,7 +324,10 @@ def run_one(problem: Problem, weights: Weights, key: jax.Array, settings, init: 
     """The solver protocol of :mod:`camjax.solvers.base`: :func:`run` with ``settings.of("ga")``.
 
     ``init`` (optional) seeds member 0 of the population. A fixed budget of generations: no
-    convergence flag (status max_steps when feasible).
+    convergence flag (status max_steps when feasible). The final point's KKT certificate
+    (:func:`camjax.solvers.newton.certify_point`) comes with it.
     """
+    from camjax.solvers.newton import certify_point
+
     res = run(key, problem, weights, settings.of("ga"), seed_design=init)
-    return Raw(res.design, res.iterations, None)
+    return Raw(res.design, res.iterations, None, certify_point(problem, weights, res.design, res.iterations))
