@@ -1,6 +1,6 @@
 """Tables and figures of the documentation, generated from the JSON that camjax's own commands write.
 
-Ten sources, all committed (:data:`SOURCES`):
+Eleven sources, all committed (:data:`SOURCES`):
 
 - ``bench``, ``benchmarks/results/full.json``: ``python benchmarks/run.py --out
   benchmarks/results/full.json``;
@@ -20,7 +20,9 @@ Ten sources, all committed (:data:`SOURCES`):
   oscillating_roller oscillating_flat --out benchmarks/results/followers.json``;
 - ``extrema``, ``benchmarks/results/extrema.json``: ``python -m benchmarks.extrema_samples --out
   benchmarks/results/extrema.json [FOLLOWER ...]``;
-- ``codesign``, ``benchmarks/results/codesign.json``: ``python -m benchmarks.codesign``.
+- ``codesign``, ``benchmarks/results/codesign.json``: ``python -m benchmarks.codesign``;
+- ``newton``, ``benchmarks/results/newton.json``: ``python -m benchmarks.newton --out
+  benchmarks/results/newton.json``.
 
 A page asks for a table with a line ``{{ table: NAME }}`` (NAME one of :data:`TABLES`) and for a
 single figure with ``{{ SOURCE: dotted.path[*factor][:format] }}``, e.g.
@@ -53,6 +55,7 @@ SOURCES = {
     "followers": ROOT / "benchmarks" / "results" / "followers.json",
     "extrema": ROOT / "benchmarks" / "results" / "extrema.json",
     "codesign": ROOT / "benchmarks" / "results" / "codesign.json",
+    "newton": ROOT / "benchmarks" / "results" / "newton.json",
 }
 
 
@@ -351,7 +354,25 @@ def cli_cold(data: dict) -> str:
     return "\n".join(rows)
 
 
+def newton_followers(data: dict) -> str:
+    """A row per follower type and weighting of benchmarks/newton.py: the newton solver's iterations,
+    KKT residual, time and gap to SciPy SLSQP (its iterations and time), and the design program's
+    compile time per follower type (on its first row)."""
+    rows = ["| follower | alpha, gamma | newton iterations | KKT residual | newton s | SLSQP iterations | "
+            "SLSQP s | gap to SLSQP | compile s |", "|---|---|---|---|---|---|---|---|---|"]
+    for name, f in data["followers"].items():
+        for i, r in enumerate(f["runs"]):
+            ok = r["newton_converged"] and r["newton_feasible"]
+            rows.append(f"| {'' if i else name} | {r['alpha']:g}, {r['gamma']:g} | "
+                        f"{r['newton_iterations']}{'' if ok else ' **(not converged)**'} | "
+                        f"{r['newton_kkt']:.1e} | {r['newton_s']:.3f} | {r['slsqp_iterations']} | "
+                        f"{r['slsqp_s']:.3f} | {r['relative_gap']:.1e} | "
+                        f"{'' if i else format(f['newton_compile_s'], '.1f')} |")
+    return "\n".join(rows)
+
+
 TABLES: dict[str, tuple[str, Callable[[dict], str]]] = {
+    "newton_followers": ("newton", newton_followers),
     "cli_cold": ("cli", cli_cold),
     "bench_provenance": ("bench", bench_provenance),
     "bench_targets": ("bench", bench_targets),
