@@ -62,28 +62,38 @@ def test_matches_slsqp(solved):
 
 
 def _moved(problem, key, value):
-    """The problem with one limit (a scene key of the certificate, or 'lower.<field>') set to value."""
-    if key.startswith("lower."):
-        field = key.split(".", 1)[1]
-        return problem._replace(lower=problem.lower._replace(**{field: jnp.asarray(value)}))
+    """The problem with one limit (a scene key of the certificate, or 'lower.<field>' / 'upper.<field>',
+    a bound) set to value."""
+    if key.startswith(("lower.", "upper.")):
+        side, field = key.split(".", 1)
+        box = getattr(problem, side)
+        return problem._replace(**{side: box._replace(**{field: jnp.asarray(value, problem.theta_deg.dtype)})})
     return newton._limits(problem)[key](problem, jnp.asarray(value, problem.theta_deg.dtype))
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("scene_name", ["roller", "oscillating-flat"])
-def test_sensitivities_match_finite_differences(scene_name):
+@pytest.mark.parametrize("scene_name,alpha,gamma", [("roller", 0.1, 0.9), ("oscillating-flat", 1.0, 1.0)])
+def test_sensitivities_match_finite_differences(scene_name, alpha, gamma):
     """Each reported dF*/d limit (envelope theorem) against a central difference of the optimum
     re-solved with that limit moved by +-h (all re-solves in one compiled program): sigma_max_MPa
-    (h = 1 MPa), max_pressure_angle_deg (h = 0.05 deg) and the lower bound of the base radius
-    (h = 0.01 mm; 0 where the bound is not active, then the difference must vanish too). F* is
+    (h = 1 MPa), max_pressure_angle_deg (h = 0.05 deg, where the follower has one) and the bound
+    with the largest reported sensitivity (h = 0.01 mm; it must be active: the roller's radius at
+    its upper bound, the rocker's pivot distance at its lower one at these weightings). F* is
     smooth in a limit while the active set stays the same; the truncation error is ~h^2 F''' and
     each optimum is within ~1e-9 of F*, so ~1e-9 / (2 h) in the derivative: rtol 1e-4 plus an atol
     of 1e-7 per unit of the limit leaves margin."""
     problem = _problem(scene_name)
-    w = weights_of(1.0, 1.0)
-    steps = {"sigma_max_MPa": 1.0, "max_pressure_angle_deg": 0.05, "lower.base_radius_mm": 0.01}
+    w = weights_of(alpha, gamma)
+    first = jax.jit(newton.certify)(problem, w)
+    fields = list(problem.lower._fields)
+    bound_sens = np.asarray(first.bound_sensitivity)
+    index = int(np.argmax(np.abs(bound_sens)))
+    assert abs(bound_sens[index]) > 1e-4, "no active bound to check"
+    side, field = ("lower", "upper")[index // len(fields)], fields[index % len(fields)]
+    bound_key = f"{side}.{field}"
+    steps = {"sigma_max_MPa": 1.0, "max_pressure_angle_deg": 0.05, bound_key: 0.01}
     values = {**{k: float(v) for k, v in newton.limit_values(problem).items()},
-              "lower.base_radius_mm": float(problem.lower.base_radius_mm)}
+              bound_key: float(getattr(getattr(problem, side), field))}
     keys = [k for k in steps if k in values]
     batch = [problem] + [_moved(problem, k, values[k] + sign * steps[k]) for k in keys for sign in (1, -1)]
     stacked = jax.tree.map(lambda *x: jnp.stack(x), *batch)
@@ -93,13 +103,10 @@ def test_sensitivities_match_finite_differences(scene_name):
                  for i, p in enumerate(batch)]
     base = jax.tree.map(lambda x: x[0], certs)
     block = newton.certificate_json(problem, base)
-    m = len(problem.lower)
     for j, key in enumerate(keys):
         fd = (objective[1 + 2 * j] - objective[2 + 2 * j]) / (2 * steps[key])
-        if key.startswith("lower."):
-            index = list(problem.lower._fields).index(key.split(".", 1)[1])
+        if key == bound_key:
             reported = float(np.asarray(base.bound_sensitivity)[index])
-            assert 0 <= index < m
         else:
             reported = block["dF_dlimit"][key]
         np.testing.assert_allclose(reported, fd, rtol=1e-4, atol=1e-7, err_msg=key)
