@@ -13,7 +13,9 @@ Solver protocol (a module named in :data:`camjax.solvers.registry.SOLVER_MODULES
   weighting, traceable and vmappable; ``settings`` is a :class:`Settings` (``settings.of(name)``
   gives a solver's own settings), ``key`` a PRNG key (ignored by deterministic solvers),
   ``init`` an optional start design. It must reach the problem only through its family module
-  (:func:`family_of`) and treat the design as a pytree (``jax.tree.map``).
+  (:func:`family_of`) and treat the design as a pytree (``jax.tree.map``);
+- where ``run_one`` gives a ``Raw.certificate``: ``certificate_json(problem, certificate, mode=,
+  solver=) -> dict``, result.json's ``certificate`` block (:mod:`camjax.solvers.newton`'s).
 
 Problem-family protocol (a follower folder's ``problem.py``, :mod:`camjax.followers`; the
 flat-face one is :mod:`camjax.followers.flat.problem`). It provides:
@@ -236,11 +238,9 @@ class Solution:
                "iterations": int(self.iterations),
                "converged": None if self.converged is None else bool(self.converged)}
         out.update(family_of(problem).solution_json(problem, self))
-        if self.certificate is not None:
-            from camjax.solvers.newton import certificate_json
-
-            out["certificate"] = certificate_json(problem, self.certificate, mode=self.mode,
-                                                  solver=self.solver)
+        if self.certificate is not None:  # the solver module renders its own certificate
+            out["certificate"] = solver_module(self.solver).certificate_json(
+                problem, self.certificate, mode=self.mode, solver=self.solver)
         return out
 
     def record(self, problem) -> dict[str, Any]:

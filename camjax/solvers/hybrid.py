@@ -11,6 +11,7 @@ import jax
 from camjax.family import Design, Weights
 from camjax.solvers import ga, gradient, newton
 from camjax.solvers.base import Raw
+from camjax.solvers.newton import certificate_json as certificate_json  # the final point's, in result.json
 
 DEFAULT_SETTINGS = None  # the hybrid has no settings of its own
 
