@@ -24,7 +24,9 @@ The sources, all committed (:data:`SOURCES`):
 - ``synthesis``, ``benchmarks/results/synthesis.json``: ``python -m benchmarks.synthesis --out FILE``
   (``synthesis_device``, ``synthesis_device.json``: the same on a GPU machine, then on its CPU);
 - ``robust``, ``benchmarks/results/robust.json``: ``python -m benchmarks.robust --samples 100000
-  --out benchmarks/results/robust.json``.
+  --out benchmarks/results/robust.json``;
+- ``newton``, ``benchmarks/results/newton.json``: ``python -m benchmarks.newton --out
+  benchmarks/results/newton.json``.
 
 ``{{ table: performance }}`` is every target of every benchmark in one table (:func:`targets`:
 goal, measured, machine, status); ``{{ status: KEY }}`` writes one target's status (``met`` or
@@ -64,6 +66,7 @@ SOURCES = {
     "synthesis": ROOT / "benchmarks" / "results" / "synthesis.json",
     "synthesis_device": ROOT / "benchmarks" / "results" / "synthesis_device.json",
     "robust": ROOT / "benchmarks" / "results" / "robust.json",
+    "newton": ROOT / "benchmarks" / "results" / "newton.json",
 }
 
 
@@ -492,8 +495,26 @@ def status(key: str) -> str:
     return "not measured" if r["met"] is None else ("met" if r["met"] else "missed")
 
 
+def newton_followers(data: dict) -> str:
+    """A row per follower type and weighting of benchmarks/newton.py: the newton solver's iterations,
+    KKT residual, time and gap to SciPy SLSQP (its iterations and time), and the design program's
+    compile time per follower type (on its first row)."""
+    rows = ["| follower | alpha, gamma | newton: iterations, KKT residual, s | SLSQP: iterations, s | "
+            "gap to SLSQP | compile s |", "|---|---|---|---|---|---|"]
+    for name, f in data["followers"].items():
+        for i, r in enumerate(f["runs"]):
+            ok = r["newton_converged"] and r["newton_feasible"]
+            rows.append(f"| {'' if i else name} | {r['alpha']:g}, {r['gamma']:g} | "
+                        f"{r['newton_iterations']}{'' if ok else ' **(not converged)**'}, "
+                        f"{r['newton_kkt']:.1e}, {r['newton_s']:.3f} | {r['slsqp_iterations']}, "
+                        f"{r['slsqp_s']:.3f} | {r['relative_gap']:.1e} | "
+                        f"{'' if i else format(f['newton_compile_s'], '.1f')} |")
+    return "\n".join(rows)
+
+
 TABLES: dict[str, tuple[str, Callable[[dict], str]]] = {
     "performance": ("bench", performance),
+    "newton_followers": ("newton", newton_followers),
     "cli_cold": ("cli", cli_cold),
     "bench_provenance": ("bench", bench_provenance),
     "bench_targets": ("bench", bench_targets),

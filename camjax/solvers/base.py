@@ -13,7 +13,9 @@ Solver protocol (a module named in :data:`camjax.solvers.registry.SOLVER_MODULES
   weighting, traceable and vmappable; ``settings`` is a :class:`Settings` (``settings.of(name)``
   gives a solver's own settings), ``key`` a PRNG key (ignored by deterministic solvers),
   ``init`` an optional start design. It must reach the problem only through its family module
-  (:func:`family_of`) and treat the design as a pytree (``jax.tree.map``).
+  (:func:`family_of`) and treat the design as a pytree (``jax.tree.map``);
+- where ``run_one`` gives a ``Raw.certificate``: ``certificate_json(problem, certificate, mode=,
+  solver=) -> dict``, result.json's ``certificate`` block (:mod:`camjax.solvers.newton`'s).
 
 Problem-family protocol (a follower folder's ``problem.py``, :mod:`camjax.followers`; the
 flat-face one is :mod:`camjax.followers.flat.problem`). It provides:
@@ -155,6 +157,7 @@ class Raw(NamedTuple):
     design: Any  # the family's Design, mm
     iterations: jax.Array  # int: steps or generations
     converged: jax.Array | None  # bool: the stopping rule was met; None for a fixed-budget solver
+    certificate: Any = None  # the answer's KKT certificate (camjax.solvers.newton.Certificate), if any
 
 
 # ------------------------------------------------------------------------------ result
@@ -170,7 +173,7 @@ class Timings:
 
 @partial(jax.tree_util.register_dataclass,
          data_fields=["alpha", "gamma", "design", "objective", "violation", "feasible", "status",
-                      "iterations", "converged", "evaluation", "pointwise", "extras"],
+                      "iterations", "converged", "evaluation", "pointwise", "extras", "certificate"],
          meta_fields=["mode", "solver", "timings"])
 @dataclass(frozen=True)
 class Solution:
@@ -195,6 +198,7 @@ class Solution:
     evaluation: Any  # the family's Evaluation of ``design`` on the whole grid
     pointwise: Any = None  # pointwise mode: the per-angle designs, (n,) each
     extras: dict | None = None  # pointwise mode: the family's extra arrays (angles of the peaks, ...)
+    certificate: Any = None  # the solver's KKT certificate of its answer (pointwise: one per angle)
     timings: Timings | None = None  # filled in by :func:`solve`
 
     def __getattr__(self, name: str):
@@ -234,6 +238,9 @@ class Solution:
                "iterations": int(self.iterations),
                "converged": None if self.converged is None else bool(self.converged)}
         out.update(family_of(problem).solution_json(problem, self))
+        if self.certificate is not None:  # the solver module renders its own certificate
+            out["certificate"] = solver_module(self.solver).certificate_json(
+                problem, self.certificate, mode=self.mode, solver=self.solver)
         return out
 
     def record(self, problem) -> dict[str, Any]:
@@ -295,7 +302,7 @@ def _solution(problem, weights: Weights, raw: Raw, mode: str, solver: str) -> So
     ev = family.evaluate(problem, weights, design)
     return Solution(mode, solver, weights.alpha, weights.gamma, design, ev.objective, ev.violation,
                     ev.feasible, _status(ev.feasible, converged), iterations, converged, ev, per_angle,
-                    extras)
+                    extras, raw.certificate)
 
 
 def solve_one(problem, weights: Weights, key: jax.Array, *, mode: str = "global", solver: str = "gradient",

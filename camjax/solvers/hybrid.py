@@ -9,8 +9,9 @@ from __future__ import annotations
 import jax
 
 from camjax.family import Design, Weights
-from camjax.solvers import ga, gradient
+from camjax.solvers import ga, gradient, newton
 from camjax.solvers.base import Raw
+from camjax.solvers.newton import certificate_json as certificate_json  # the final point's, in result.json
 
 DEFAULT_SETTINGS = None  # the hybrid has no settings of its own
 
@@ -18,8 +19,11 @@ DEFAULT_SETTINGS = None  # the hybrid has no settings of its own
 def run_one(problem, weights: Weights, key: jax.Array, settings, init: Design | None = None) -> Raw:
     """GA from ``init`` (if given), then the gradient solver from the GA's best design.
 
-    Iterations: generations + gradient steps; converged: the gradient stopping rule was met.
+    Iterations: generations + gradient steps; converged: the gradient stopping rule was met. The
+    final point's KKT certificate (:func:`camjax.solvers.newton.certify_point`) comes with it.
     """
     found = ga.run(key, problem, weights, settings.of("ga"), seed_design=init)
     polished = gradient.minimize(problem, weights, found.design, settings.of("gradient"))
-    return Raw(polished.design, found.iterations + polished.iterations, polished.converged)
+    iterations = found.iterations + polished.iterations
+    return Raw(polished.design, iterations, polished.converged,
+               newton.certify_point(problem, weights, polished.design, iterations))

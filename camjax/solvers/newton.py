@@ -18,29 +18,36 @@ objective is alpha size + gamma (peak stress) / sigma_max with the peak a max ov
 f_i needs nothing but ``per_angle`` and ``objective``: the split is generic (a family without
 stress has f_i = alpha size for every i, n equal rows).
 
-Method (Nocedal & Wright, Numerical Optimization, 2nd ed., Algorithm 19.2; the barrier update of
-IPOPT, Waechter & Biegler 2006). Slacks s > 0 turn every row into c(z) + s = 0 (z = (u, t)); the
-barrier KKT conditions grad phi + J^T y = 0, c + s = 0, S y = mu e are solved by Newton steps
-on the condensed system (H + J^T S^-1 Y J) dz = ... of size (m + 1)^2 (m free variables), H the
-exact Hessian of the Lagrangian from ``jax.hessian``, shifted by a multiple of I where it is not
-positive definite (eigenvalues of the small system). Steps keep s, y > 0 by the
-fraction-to-boundary rule (tau = max(0.99, 1 - mu)); the primal step length is found by a
-backtracking search with a filter-type acceptance (the barrier objective or the infeasibility
-||c + s||_1 must fall; Armijo on the barrier objective once nearly feasible), its 30 trial
-lengths evaluated at once (one ``vmap``: no inner loop). The barrier parameter falls
+Method (Nocedal & Wright, Numerical Optimization, 2nd ed., Algorithm 19.2; the barrier update and
+the filter line search of IPOPT, Waechter & Biegler 2006). Slacks s > 0 turn every row into
+c(z) + s = 0 (z = (u, t)); the barrier KKT conditions grad phi + J^T y = 0, c + s = 0, S y = mu e
+are solved by Newton steps on the condensed system (H + J^T S^-1 Y J) dz = ... of size (m + 1)^2
+(m free variables), H the exact Hessian of the Lagrangian from ``jax.hessian``; its inertia is
+corrected through its eigenvalues (a non-positive one flipped and floored at 1e-8: the system is
+tiny). Steps keep s, y > 0 by the fraction-to-boundary rule (tau = max(0.99, 1 - mu)); the primal
+step length is found by a backtracking search (Armijo on the barrier objective once nearly
+feasible, else progress in it or in the infeasibility ||c + s||_1, and, on the paths that keep
+one, a filter of earlier (infeasibility, barrier objective) pairs that forbids cycling), its 30
+trial lengths evaluated at once (one ``vmap``: no inner loop). The barrier parameter falls
 superlinearly, mu <- max(tol / 100, min(0.2 mu, mu^1.5)), each time the barrier problem is solved
 to 10 mu. The box rows are linear and start with s = -c, so every iterate stays strictly inside
-the box, where the families' physics is defined.
+the box, where the families' physics is defined. Four central paths run in one loop (mu0 and
+mu0 / n, each with and without the filter, :func:`minimize`); the loop ends when one converges.
 
 Stopping rule: the scaled KKT residual (IPOPT's: stationarity ||grad phi + J^T y||_inf / s_d,
 primal infeasibility max(c, 0), complementarity max |c_i| y_i / s_d with s_d = max(100,
-||y||_1 / rows) / 100, :func:`kkt_residuals`) <= ``tol`` (1e-9); ``max_iterations`` is a safeguard
+||y||_1 / rows) / 100, :func:`kkt_residuals`) <= ``tol`` (1e-9), evaluated at the top of each
+iteration from the rows, Jacobian and gradient the step uses; ``max_iterations`` is a safeguard
 only. Gradients stay finite from infeasible starts: the families' functions are written with safe
 square roots and divisions, and a trial step with a non-finite merit is rejected.
 
-:func:`certificate` reports the KKT residuals at the answer, the iterations and the active rows
-with their multipliers and the sensitivity dF*/d(limit) of the optimal objective to the limits
-of the scene (envelope theorem: the derivative of the Lagrangian in the problem's limit fields).
+:func:`run_one` returns with the answer its :class:`Certificate`, computed in the same program
+(no second solve): the KKT residuals, the iterations and the multipliers, and the sensitivity
+dF*/d(limit) of the optimal objective to the limits of the scene (envelope theorem: the
+derivative of the Lagrangian in the problem's limit fields); :func:`certificate_json` writes
+result.json's ``certificate`` block from it (pointwise mode: the critical angle's problem).
+:func:`certify_point` certifies any design (the GA's and the hybrid's final points): the same
+residuals with multipliers fitted on the active rows by least squares.
 """
 
 from __future__ import annotations
@@ -56,7 +63,7 @@ from jax.flatten_util import ravel_pytree
 
 from camjax.family import Design, Problem, Weights
 from camjax.solvers.base import Raw, family_of, solve
-from camjax.solvers.gradient import TIE_BREAK, from_unit, midpoint, problem_dtype, to_unit, u_max_of
+from camjax.solvers.gradient import TIE_BREAK, from_unit, midpoint, to_unit, u_max_of
 
 
 @dataclass(frozen=True)
@@ -79,6 +86,7 @@ class NewtonSettings:
 
 
 DEFAULT_SETTINGS = NewtonSettings()
+FILTER = 32  # entries of the line search's filter (a ring: the oldest is replaced)
 S_MAX = 100.0  # IPOPT's s_max: multipliers larger than this on average scale the dual residuals
 
 
@@ -128,18 +136,6 @@ def _functions(problem, weights: Weights) -> _Functions:
     return _Functions(phi, rows, unravel, free, u_max, n, kinds)
 
 
-class NewtonState(NamedTuple):
-    """Loop state (one problem; vmapped: leading axes)."""
-
-    z: jax.Array  # (m + 1,) unit-box variables and t
-    s: jax.Array  # (M,) slacks > 0
-    y: jax.Array  # (M,) multipliers > 0
-    mu: jax.Array  # () barrier parameter
-    iteration: jax.Array  # () int
-    error: jax.Array  # () scaled KKT residual at z (mu = 0)
-    done: jax.Array  # () bool
-
-
 class KKT(NamedTuple):
     """Scaled KKT residuals (dimensionless; the solver's normalized objective and rows)."""
 
@@ -149,23 +145,44 @@ class KKT(NamedTuple):
     error: jax.Array  # the largest of the three
 
 
+class NewtonState(NamedTuple):
+    """Loop state (one problem; vmapped: leading axes)."""
+
+    z: jax.Array  # (m + 1,) unit-box variables and t
+    s: jax.Array  # (M,) slacks > 0
+    y: jax.Array  # (M,) multipliers > 0
+    mu: jax.Array  # () barrier parameter
+    iteration: jax.Array  # () int
+    kkt: KKT  # scaled KKT residuals at (z, y) (mu = 0), evaluated at the top of each step
+    done: jax.Array  # () bool
+    filter: jax.Array  # (FILTER, 2) (theta, psi) pairs no trial may be worse than in both; inf: empty
+    filter_count: jax.Array  # () int: entries added since mu last changed (the oldest replaced)
+    use_filter: jax.Array  # () bool: this path's line search keeps the filter (else memoryless)
+
+
 def _scaled(y, count):
     return jnp.maximum(S_MAX, jnp.sum(y) / count) / S_MAX
 
 
-def kkt_residuals(fns: _Functions, z, y, slack=None, mu=0.0) -> KKT:
-    """The scaled KKT residuals at (z, y); with ``slack`` the barrier problem's (c + s, S y - mu)."""
-    c, jac = fns.rows(z), jax.jacfwd(fns.rows)(z)
-    grad = jax.grad(fns.phi)(z)
+def _residuals(grad, c, jac, y, free) -> KKT:
+    """:class:`KKT` from the objective's gradient, the rows c and their Jacobian at one point."""
     sd = _scaled(y, y.shape[0])
-    stat = jnp.max(jnp.abs((grad + jac.T @ y) * fns.free)) / sd
-    if slack is None:
-        primal = jnp.maximum(jnp.max(c), 0.0)
-        comp = jnp.max(jnp.abs(jnp.minimum(c, 0.0)) * y) / sd
-    else:
-        primal = jnp.max(jnp.abs(c + slack))
-        comp = jnp.max(jnp.abs(slack * y - mu)) / sd
+    stat = jnp.max(jnp.abs((grad + jac.T @ y) * free)) / sd
+    primal = jnp.maximum(jnp.max(c), 0.0)
+    comp = jnp.max(jnp.abs(jnp.minimum(c, 0.0)) * y) / sd
     return KKT(stat, primal, comp, jnp.maximum(jnp.maximum(stat, primal), comp))
+
+
+def _rows_and_jacobian(fns: _Functions, z):
+    """c(z) and its Jacobian from one forward-mode pass."""
+    jac, c = jax.jacfwd(lambda v: (fns.rows(v), fns.rows(v)), has_aux=True)(z)
+    return c, jac
+
+
+def kkt_residuals(fns: _Functions, z, y) -> KKT:
+    """The scaled KKT residuals of the epigraph form at z = (u, t) with multipliers y (one per row)."""
+    c, jac = _rows_and_jacobian(fns, z)
+    return _residuals(jax.grad(fns.phi)(z), c, jac, y, fns.free)
 
 
 def _start(problem, fns: _Functions, design, settings: NewtonSettings, mu0):
@@ -177,10 +194,11 @@ def _start(problem, fns: _Functions, design, settings: NewtonSettings, mu0):
     u = jnp.where(fns.u_max > 0, jnp.clip(u, a * fns.u_max, (1.0 - a) * fns.u_max), 0.0)
     z0 = jnp.concatenate([u, jnp.zeros(1, dtype)])
     n = fns.n_angles
-    f0 = fns.rows(z0)[:n]
-    t0 = jnp.max(f0) + 0.1 * (1.0 + jnp.abs(jnp.max(f0)))  # epigraph rows strictly feasible
+    rows0 = fns.rows(z0)  # t = 0: the epigraph rows are f_i
+    f_max = jnp.max(rows0[:n])
+    t0 = f_max + 0.1 * (1.0 + jnp.abs(f_max))  # epigraph rows strictly feasible
     z0 = z0.at[-1].set(t0)
-    c0 = fns.rows(z0)
+    c0 = rows0 - t0 * (jnp.arange(rows0.shape[0]) < n)  # t enters the epigraph rows linearly
     s0 = jnp.maximum(-c0, a)
     m = u.shape[0]
     # the box rows are linear: their slack is their distance to the face, exactly
@@ -194,11 +212,26 @@ def _start(problem, fns: _Functions, design, settings: NewtonSettings, mu0):
 
 
 def _step(state: NewtonState, fns: _Functions, settings: NewtonSettings) -> NewtonState:
+    """One iteration: the rows, their Jacobian and the gradient at z (one evaluation each); the
+    KKT residual there ends the loop (no step from a converged point); else the barrier update
+    (the barrier problem solved to ``kappa_eps`` mu) and one Newton step with its line search."""
     z, s, y, mu = state.z, state.s, state.y, state.mu
     dtype = z.dtype
     free = fns.free
-    c, jac = fns.rows(z), jax.jacfwd(fns.rows)(z)
+    c, jac = _rows_and_jacobian(fns, z)
     grad = jax.grad(fns.phi)(z)
+    kkt = _residuals(grad, c, jac, y, free)
+    done = kkt.error <= settings.tol
+    # barrier update (IPOPT's E_mu of the barrier problem: c + s = 0, S y = mu)
+    sd = _scaled(y, y.shape[0])
+    e_mu = jnp.maximum(jnp.maximum(kkt.stationarity, jnp.max(jnp.abs(c + s))),
+                       jnp.max(jnp.abs(s * y - mu)) / sd)
+    mu_next = jnp.maximum(settings.tol / 100.0, jnp.minimum(settings.kappa_mu * mu, mu**settings.theta_mu))
+    lower_mu = (e_mu <= settings.kappa_eps * mu) & (state.iteration > 0)
+    mu = jnp.where(lower_mu, mu_next, mu)
+    # the filter holds (theta, psi) of the barrier problem at one mu: emptied when mu changes
+    filt = jnp.where(lower_mu, jnp.inf, state.filter)
+    count = jnp.where(lower_mu, 0, state.filter_count)
     hess = jax.hessian(lambda v: fns.phi(v) + y @ fns.rows(v))(z)
     jac = jac * free  # fixed variables take no step
     sigma = y / s
@@ -208,12 +241,15 @@ def _step(state: NewtonState, fns: _Functions, settings: NewtonSettings) -> Newt
     a = hess * jnp.outer(free, free) + (jac.T * sigma) @ jac
     a = a + jnp.diag(1.0 - free)  # a fixed variable's row: dz_j = 0
     a = 0.5 * (a + a.T)
-    w = jnp.linalg.eigvalsh(a)
-    big = jnp.maximum(jnp.max(jnp.abs(w)), 1.0)
-    shift = jnp.maximum(0.0, 1e-10 * big - w[0])
-    a = a + shift * jnp.eye(a.shape[0], dtype=dtype)
+    # inertia correction by the eigenvalues (the matrix is (m + 1)^2): a non-positive curvature is
+    # flipped and floored at 1e-8 (the unit box and the normalized objective: absolute scales).
+    # A shift of the whole matrix instead would be relative to its largest eigenvalue, which
+    # grows as y / s ~ 1 / mu on the active rows: it would damp the steps along the active
+    # constraints' surface to a first-order method's near the optimum.
+    w, v = jnp.linalg.eigh(a)
+    w = jnp.maximum(jnp.abs(w), 1e-8)
     rhs = -rd - jac.T @ (sigma * rp - rc_s)
-    dz = jnp.linalg.solve(a, rhs) * free
+    dz = (v @ ((v.T @ rhs) / w)) * free
     dy = sigma * (jac @ dz + rp) - rc_s
     ds = -rp - jac @ dz
     # fraction to the boundary
@@ -224,43 +260,47 @@ def _step(state: NewtonState, fns: _Functions, settings: NewtonSettings) -> Newt
         return jnp.minimum(1.0, jnp.min(ratio))
 
     alpha_s, alpha_y = max_step(s, ds), max_step(y, dy)
-    # filter-type acceptance (Waechter & Biegler's switching rule, without the filter's memory):
-    # barrier objective psi = phi - mu sum log s, infeasibility theta = ||c + s||_1, the slacks
-    # reset to s >= -c (a row more feasible than its slack says). An l1 merit would stall where a
-    # family's rows have kinks (|s' - e| at a dwell): its penalty sees them at first order.
+    # filter line search (Waechter & Biegler 2006: the switching rule and a filter of the
+    # (theta, psi) pairs of earlier iterates, so that no pair of steps can cycle): barrier
+    # objective psi = phi - mu sum log s, infeasibility theta = ||c + s||_1, the slacks reset to
+    # s >= -c (a row more feasible than its slack says). An l1 merit would stall where a family's
+    # rows have kinks (|s' - e| at a dwell).
 
     def measures(zv, sv):
         cv = fns.rows(zv)
         sv = jnp.maximum(sv, -cv)
-        return fns.phi(zv) - mu * jnp.sum(jnp.log(sv)), jnp.sum(jnp.abs(cv + sv))
+        return fns.phi(zv) - mu * jnp.sum(jnp.log(sv)), jnp.sum(jnp.abs(cv + sv)), cv
 
-    psi0, theta0 = measures(z, s)
+    psi0, theta0, _ = measures(z, s)
     slope = grad @ dz - mu * jnp.sum(ds / s)
     lengths = alpha_s * 0.5 ** jnp.arange(settings.line_search_trials, dtype=dtype)
-    psi_t, theta_t = jax.vmap(lambda al: measures(z + al * dz, s + al * ds))(lengths)
+    psi_t, theta_t, c_t = jax.vmap(lambda al: measures(z + al * dz, s + al * ds))(lengths)
     theta_max = 1e4 * jnp.maximum(1.0, theta0)
     switching = (slope < 0) & (theta0 <= 1e-4)
-    armijo = psi_t <= psi0 + settings.armijo * lengths * slope
+    # Armijo's decrease, relaxed by the rounding of psi (IPOPT's 10 eps |psi|)
+    armijo = psi_t <= psi0 + settings.armijo * lengths * slope + 10.0 * jnp.finfo(dtype).eps * jnp.abs(psi0)
     progress = (theta_t <= (1.0 - 1e-5) * theta0) | (psi_t <= psi0 - 1e-5 * theta0)
+    in_filter = jnp.all((theta_t[:, None] <= (1.0 - 1e-5) * filt[None, :, 0])
+                        | (psi_t[:, None] <= filt[None, :, 1] - 1e-5 * filt[None, :, 0]), axis=1)
     ok = jnp.isfinite(psi_t) & jnp.isfinite(theta_t) & (theta_t <= theta_max) & jnp.where(
-        switching, armijo, progress | armijo)
-    first = jnp.argmax(ok)
-    length = jnp.where(jnp.any(ok), lengths[first], lengths[-1])
+        state.use_filter, in_filter & jnp.where(switching, armijo, progress),
+        jnp.where(switching, armijo, progress | armijo))
+    first = jnp.where(jnp.any(ok), jnp.argmax(ok), settings.line_search_trials - 1)
+    # a step that is not Armijo's on psi (an h-type step) adds the current pair to the filter
+    add = ~(switching & armijo[first]) & ~done
+    entry = jnp.stack([(1.0 - 1e-5) * theta0, psi0 - 1e-5 * theta0])
+    filt = jnp.where(add, filt.at[count % FILTER].set(entry), filt)
+    count = count + add
+    length, c_new = lengths[first], c_t[first]
     z_new = z + length * dz
-    s_new = jnp.maximum(s + length * ds, -fns.rows(z_new))
+    s_new = jnp.maximum(s + length * ds, -c_new)
     y_new = y + alpha_y * dy
     # IPOPT's safeguard: y_i within [mu / (k s_i), k mu / s_i], k = 1e10
     y_new = jnp.clip(y_new, mu / (1e10 * s_new), 1e10 * mu / s_new)
-    # barrier update: after the barrier problem is solved to kappa_eps mu
-    e_mu = kkt_residuals(fns, z_new, y_new, s_new, mu).error
-    mu_next = jnp.maximum(settings.tol / 100.0, jnp.minimum(settings.kappa_mu * mu, mu**settings.theta_mu))
-    mu_new = jnp.where(e_mu <= settings.kappa_eps * mu, mu_next, mu)
-    error = kkt_residuals(fns, z_new, y_new).error
-    done = error <= settings.tol
-    keep = state.done
-    pick = lambda a_, b_: jnp.where(keep, a_, b_)  # noqa: E731
-    return NewtonState(pick(z, z_new), pick(s, s_new), pick(y, y_new), pick(mu, mu_new),
-                       state.iteration + jnp.where(keep, 0, 1), pick(state.error, error), keep | done)
+    pick = lambda a_, b_: jnp.where(done, a_, b_)  # noqa: E731
+    return NewtonState(pick(z, z_new), pick(s, s_new), pick(y, y_new), pick(state.mu, mu),
+                       state.iteration + jnp.where(done, 0, 1), kkt, done, pick(state.filter, filt),
+                       pick(state.filter_count, count), state.use_filter)
 
 
 class NewtonResult(NamedTuple):
@@ -283,27 +323,31 @@ def minimize(problem: Problem, weights: Weights, init_design: Design | None = No
     """
     fns = _functions(problem, weights)
 
-    def solve_from(mu0):
+    def start(mu0, use_filter):
         z0, s0, y0, mu0 = _start(problem, fns, init_design, settings, mu0)
-        error0 = kkt_residuals(fns, z0, y0).error
-        state = NewtonState(z0, s0, y0, mu0, jnp.asarray(0), error0,
-                            jnp.asarray(False))
-        return jax.lax.while_loop(lambda st: ~st.done & (st.iteration < settings.max_iterations),
-                                  partial(_step, fns=fns, settings=settings), state)
+        inf = jnp.asarray(jnp.inf, z0.dtype)
+        return NewtonState(z0, s0, y0, mu0, jnp.asarray(0), KKT(inf, inf, inf, inf), jnp.asarray(False),
+                           jnp.full((FILTER, 2), jnp.inf, z0.dtype), jnp.asarray(0), use_filter)
 
-    # two central paths at once (one vmapped loop): mu0 and mu0 / n. The path keeps t - f_i ~ n mu
-    # on the n epigraph rows, so the first starts far above the objective and the second close to
-    # it; neither reaches the optimum on every family (measured: the oscillating roller needs the
-    # second, the roller the first). The converged one is kept, the lower objective of two.
-    ends = jax.vmap(solve_from)(jnp.stack([jnp.asarray(settings.mu0), settings.mu0 / fns.n_angles]))
-    first, second = jax.tree.map(lambda x: x[0], ends), jax.tree.map(lambda x: x[1], ends)
-    take_second = (second.done & ~first.done) | ((second.done == first.done) & jnp.where(
-        first.done, second.z[-1] < first.z[-1], second.error < first.error))
-    end = jax.tree.map(lambda a, b: jnp.where(take_second, b, a), first, second)
+    # PATHS central paths at once, one loop over all (each step vmapped): mu0 and mu0 / n, each
+    # with the filter line search and with the memoryless one. The path keeps t - f_i ~ n mu on
+    # the n epigraph rows, so mu0 starts far above the objective and mu0 / n close to it; the
+    # filter cannot cycle, the memoryless search crosses the kinks of a family's rows (|s' - e|
+    # at a dwell) that can hold a filter's iterates. Measured on the seven follower types: no one
+    # of the four reaches the optimum on all. The loop ends when one path has converged; of the
+    # converged ones the lowest objective is kept.
+    mu0s = jnp.asarray([settings.mu0, settings.mu0 / fns.n_angles] * 2)
+    filters = jnp.asarray([True, True, False, False])
+    states = jax.vmap(start)(mu0s, filters)
+    step = jax.vmap(partial(_step, fns=fns, settings=settings))
+    ends = jax.lax.while_loop(
+        lambda st: ~jnp.any(st.done) & (jnp.max(st.iteration) < settings.max_iterations), step, states)
+    objective = jnp.where(ends.done, ends.z[:, -1], jnp.inf)
+    best = jnp.where(jnp.any(ends.done), jnp.argmin(objective), jnp.argmin(ends.kkt.error))
+    end = jax.tree.map(lambda x: x[best], ends)
     m = fns.u_max.shape[0]
     design = from_unit(problem, fns.unravel(end.z[:m]))
-    kkt = kkt_residuals(fns, end.z, end.y)
-    return NewtonResult(design, end.iteration, end.done, end.z, end.y, kkt)
+    return NewtonResult(design, end.iteration, end.done, end.z, end.y, end.kkt)
 
 
 def run_one(problem: Problem, weights: Weights, key: jax.Array, settings, init: Design | None = None) -> Raw:
@@ -312,7 +356,7 @@ def run_one(problem: Problem, weights: Weights, key: jax.Array, settings, init: 
     ``key`` is unused (deterministic). Converged when the scaled KKT residual reached ``tol``.
     """
     res = minimize(problem, weights, init, settings.of("newton"))
-    return Raw(res.design, res.iterations, res.converged)
+    return Raw(res.design, res.iterations, res.converged, _certificate(problem, weights, res))
 
 
 # --------------------------------------------------------------------------- certificate
@@ -353,54 +397,69 @@ def limit_values(problem) -> dict:
 
 
 class Certificate(NamedTuple):
-    """What :func:`certify` returns for one problem and weighting (traceable; arrays)."""
+    """The KKT certificate of one answer (traceable; arrays): what ``run_one`` hands to result.json."""
 
-    result: NewtonResult
-    rows: jax.Array  # (M,) c at the answer (<= 0 feasible)
+    result: NewtonResult  # the answer, its multipliers and scaled residuals
     scale: jax.Array  # () alpha + gamma: F = scale * (solver objective)
     sensitivity: dict  # limit key -> (M,) per-row dF*/d limit (scene units); the sum is the total
     bound_sensitivity: jax.Array  # (2m,) dF*/d bound (mm) of each bound row (lower, then upper)
     gamma: jax.Array  # () the stress weight (0: the epigraph rows carry the size only)
 
 
-def certify(problem: Problem, weights: Weights, init_design: Design | None = None,
-            settings: NewtonSettings = DEFAULT_SETTINGS) -> Certificate:
-    """Solve (:func:`minimize`) and certify the answer: rows, multipliers and the sensitivities of the
-    optimal objective F* to each limit of the scene, by the envelope theorem,
-    dF*/dp = (alpha + gamma) sum_i y_i dc_i/dp at the answer (u, t fixed), split by row.
-
-    Bounds: dF*/d lo_j = (alpha + gamma) y_j du_j/dx_j (and minus that for an upper bound), with
-    the normalization N fixed. Traceable, vmappable.
-    """
-    res = minimize(problem, weights, init_design, settings)
+def _certificate(problem: Problem, weights: Weights, res: NewtonResult) -> Certificate:
+    """The sensitivities of the optimal objective F* to each limit of the scene at an answer with
+    its multipliers, by the envelope theorem, dF*/dp = (alpha + gamma) sum_i y_i dc_i/dp at the
+    answer (u, t fixed), split by row. Bounds: dF*/d lo_j = (alpha + gamma) y_j du_j/dx_j (and
+    minus that for an upper bound), with the normalization N fixed. No solve: traceable, vmappable."""
     total = weights.alpha + weights.gamma
     scale = jnp.where(total > 0, total, 1.0)
-    fns = _functions(problem, weights)
-    rows = fns.rows(res.z)
     sens = {}
     values = limit_values(problem)
     for key, setter in _limits(problem).items():
-        value = values[key]
         moved = jax.jacfwd(
-            lambda v, setter=setter: _functions(setter(problem, v), weights).rows(res.z))(value)
+            lambda v, setter=setter: _functions(setter(problem, v), weights).rows(res.z))(values[key])
         sens[key] = scale * res.multipliers * moved
-    m = fns.u_max.shape[0]
+    m = ravel_pytree(u_max_of(problem))[0].shape[0]
     x, unravel = ravel_pytree(res.design)
     diag = jnp.diagonal(jax.jacfwd(lambda v: ravel_pytree(to_unit(problem, unravel(v)))[0])(x))
     y_box = res.multipliers[-2 * m:]
     bound = scale * y_box * jnp.concatenate([diag, -diag])
-    return Certificate(res, rows, scale, sens, bound, weights.gamma)
+    return Certificate(res, scale, sens, bound, weights.gamma)
 
 
-def certificate_json(problem, cert: Certificate, *, active_tol: float = 1e-6) -> dict:
-    """result.json's ``certificate`` block of one certified answer (Python, concrete values).
+def certify(problem: Problem, weights: Weights, init_design: Design | None = None,
+            settings: NewtonSettings = DEFAULT_SETTINGS) -> Certificate:
+    """Solve (:func:`minimize`) and certify the answer (:func:`_certificate`); traceable, vmappable."""
+    return _certificate(problem, weights, minimize(problem, weights, init_design, settings))
 
-    ``kkt``: the scaled residuals; ``iterations``, ``converged``; ``active``: every row whose
-    multiplier times (alpha + gamma) exceeds ``active_tol`` (the rows of one kind and angle
-    merged), each with its kind (a constraint's field name, ``stress`` for the objective's
-    stress rows, ``lower_bound``/``upper_bound``), the scene key of its limit, the cam angle (deg;
-    None for a bound), the variable (bounds), its multiplier and dF*/d limit (scene units).
-    """
+
+def certify_point(problem: Problem, weights: Weights, design: Design, iterations=0, *,
+                  active_tol: float = 1e-6, tol: float = DEFAULT_SETTINGS.tol) -> Certificate:
+    """The certificate of any design (a GA's or a hybrid's final point): the epigraph form at
+    t = max_i f_i, the rows within ``active_tol`` of their limit taken as active, their multipliers
+    the least-squares fit of stationarity grad phi + J_A^T y_A = 0 (negative ones set to 0, which
+    leaves their share in the stationarity residual), the KKT residuals and sensitivities from
+    those. ``converged``: the residuals are within ``tol``. Traceable, vmappable."""
+    fns = _functions(problem, weights)
+    dtype = fns.u_max.dtype
+    u = ravel_pytree(jax.tree.map(lambda x: jnp.asarray(x, dtype), to_unit(problem, design)))[0]
+    u = jnp.where(fns.u_max > 0, u, 0.0)
+    n = fns.n_angles
+    rows0 = fns.rows(jnp.concatenate([u, jnp.zeros(1, dtype)]))
+    t = jnp.max(rows0[:n])
+    z = jnp.concatenate([u, t[None]])
+    c, jac = _rows_and_jacobian(fns, z)
+    grad = jax.grad(fns.phi)(z)
+    active = (c >= -active_tol).astype(dtype)
+    fit = jnp.linalg.lstsq((jac * fns.free).T * active, -grad * fns.free)[0]
+    y = jnp.maximum(fit, 0.0) * active
+    kkt = _residuals(grad, c, jac, y, fns.free)
+    res = NewtonResult(design, jnp.asarray(iterations), kkt.error <= tol, z, y, kkt)
+    return _certificate(problem, weights, res)
+
+
+def _block(problem, cert: Certificate, *, active_tol: float = 1e-6) -> dict:
+    """The residuals, sensitivities and merged active rows of :func:`certificate_json` (one answer)."""
     res = cert.result
     y = np.asarray(res.multipliers, float)
     scale = float(cert.scale)
@@ -409,7 +468,9 @@ def certificate_json(problem, cert: Certificate, *, active_tol: float = 1e-6) ->
     lower = family_of(problem).bounds(problem)[0]
     variables = list(lower._fields)
     keys = {"pressure_angle": "max_pressure_angle_deg", "stress": "sigma_max_MPa",
-            "undercut": "min_curvature_radius_mm", "curvature": "min_curvature_radius_mm"}
+            "undercut": "min_curvature_radius_mm", "curvature": "min_curvature_radius_mm",
+            # the face's own width (a design variable) is what these rows bind against
+            "face_width": "face_width_mm (design)", "face_travel": "face_width_mm (design)"}
     sens = {k: np.asarray(v, float) for k, v in cert.sensitivity.items()}
     bound_sens = np.asarray(cert.bound_sensitivity, float)
     active = []
@@ -449,7 +510,6 @@ def certificate_json(problem, cert: Certificate, *, active_tol: float = 1e-6) ->
             merged[k] = dict(e)
     kkt = res.kkt
     return {
-        "method": "newton: primal-dual interior point, epigraph form (scaled KKT residuals)",
         "stationarity": float(kkt.stationarity), "primal_feasibility": float(kkt.primal),
         "complementarity": float(kkt.complementarity), "iterations": int(res.iterations),
         "converged": bool(res.converged),
@@ -469,30 +529,39 @@ def limited_by(certificate: dict, top: int = 3) -> str:
     return "limited by " + (" and ".join(parts) if parts else "nothing (an interior optimum)")
 
 
-_certify_jit = jax.jit(certify)
+METHODS = {"newton": "primal-dual interior point on the epigraph form (scaled KKT residuals)",
+           "ga": "the final point's KKT residuals, multipliers fitted on its active rows (least squares)",
+           "hybrid": "the final point's KKT residuals, multipliers fitted on its active rows (least squares)"}
 
 
-def certificate_block(problem, alpha: float, gamma: float) -> dict:
-    """result.json's ``certificate`` (:func:`certificate_json`) of a global-mode newton design of one
-    weighting (Python). The solve is run again with :func:`certify` (its multipliers are not part of
-    a :class:`~camjax.solvers.base.Solution`); it certifies the solver's grid optimum, before any
-    family ``polish`` moves the design off the grid's samples (by ~1e-6 relative)."""
-    from camjax.family import weights_of
+def certificate_json(problem, cert: Certificate, *, mode: str = "global", solver: str = "newton",
+                     active_tol: float = 1e-6) -> dict:
+    """result.json's ``certificate`` block (Python, concrete values) of a solution's certificate.
 
-    dtype = problem_dtype(problem)
-    cert = _certify_jit(problem, weights_of(alpha, gamma, dtype))
-    block = certificate_json(problem, cert)
+    ``kkt``: the scaled residuals (``stationarity``, ``primal_feasibility``, ``complementarity``);
+    ``iterations``, ``converged`` (the residuals within the stopping rule); ``dF_dlimit``: the
+    optimal objective's sensitivity to each scene limit; ``active``: every row whose multiplier
+    times (alpha + gamma) exceeds ``active_tol`` (the rows of one kind and angle merged), each with
+    its kind (a constraint's field name, ``stress`` for the objective's stress rows, ``bound``),
+    the scene key of its limit, the cam angle (deg; None for a bound), the variable (bounds), its
+    multiplier and dF*/d limit (scene units); ``limited_by``: the summary's line. Pointwise mode:
+    the certificate of the critical angle's one-angle problem (the one whose optimum is the
+    largest), its angle under ``critical_angle_deg``.
+    """
+    extra = {}
+    if mode == "pointwise":
+        i = int(np.argmax(np.asarray(cert.result.z)[:, -1]))
+        cert = jax.tree.map(lambda x: np.asarray(x)[i], cert)
+        problem = jax.tree.map(lambda x: x[i], family_of(problem).per_angle(problem))
+        extra["critical_angle_deg"] = float(np.reshape(np.asarray(problem.theta_deg), -1)[0])
+    block = {"method": METHODS.get(solver, solver), **extra, **_block(problem, cert, active_tol=active_tol)}
     block["limited_by"] = limited_by(block)
     return block
 
 
 def design_json(problem, spec) -> dict:
     """result.json's design block of a scene's [design] ``spec`` (alpha, gamma, mode, solver, seed):
-    one weighting solved, as JSON, and for the ``newton`` solver in global mode its KKT
-    certificate (:func:`certificate_block`) under ``certificate``; :func:`camjax.solvers.base.solve`
-    otherwise."""
-    out = solve(problem, (spec.alpha, spec.gamma), mode=spec.mode, solver=spec.solver,
-                seed=spec.seed).to_json(problem)
-    if spec.solver == "newton" and spec.mode == "global":
-        out["certificate"] = certificate_block(problem, spec.alpha, spec.gamma)
-    return out
+    :func:`camjax.solvers.base.solve`'s one weighting as JSON, with the solver's certificate
+    (computed in the same compiled program) under ``certificate`` where it gives one."""
+    return solve(problem, (spec.alpha, spec.gamma), mode=spec.mode, solver=spec.solver,
+                 seed=spec.seed).to_json(problem)
