@@ -348,3 +348,34 @@ def test_a_positive_drive_has_no_jump_analysis():
         'compute = ["jump"]\nspring_rate = 1000.0\n'
     with pytest.raises(SceneError, match=r"dynamics\.compute.*positive drive"):
         parse_scene(text)
+
+
+ANIMATION_SAMPLES = 3600
+# a roller drawn on its cam's polyline: the chords cut inside a convex cam by at most
+# (arc step)^2 / (8 rho) ~ (2 pi 70 mm / 3600)^2 / (8 x 5 mm) ~ 4e-5 mm, far below 1e-3 mm
+
+
+@pytest.mark.parametrize("case", ["yoke", "conjugate"])
+def test_the_animation_draws_the_second_roller_on_its_cam_and_keeps_the_link_rigid(case):
+    """At every 9th frame of the animation: the second roller drawn touches the second cam as drawn
+    (distance from its centre to the drawn polyline = its radius, positions only) and the link that
+    carries it is rigid: the yoke's length is yoke_span_mm, the second arm's second_arm_length_mm."""
+    from camjax.output.animation import motion_frames
+
+    scene = with_samples(parse_scene(CASES[case]), ANIMATION_SAMPLES)
+    scene = replace(scene, design=None, motion=replace(scene.motion, extrema="grid"))
+    run = camjax.run_design(scene)
+    m = followers.drawing(scene.follower.type).mechanism(run.curves)
+    mf = motion_frames(m, 72)
+    closure = scene.follower.closure
+    link = closure.second_arm_length_mm if case == "conjugate" else closure.yoke_span_mm
+    for i in range(0, 72, 9):
+        mf.update(i)
+        circle = mf.artists["second_roller"]
+        (cx, cy), radius = circle.center, circle.radius
+        x2, y2 = (np.asarray(v) for v in mf.artists["second_cam"].get_data())
+        gap = _distances(np.array([cx]), np.array([cy]), x2, y2)[0]
+        assert gap == pytest.approx(radius, abs=1e-3), (i, gap, radius)
+        (x0, x1), (y0, y1) = mf.artists["second_link"].get_data()
+        assert (x1, y1) == (cx, cy)
+        assert math.hypot(x1 - x0, y1 - y0) == pytest.approx(link, abs=1e-6), i

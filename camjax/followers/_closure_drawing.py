@@ -61,3 +61,15 @@ def second_outline(curves) -> tuple[np.ndarray, np.ndarray] | None:
     if kind == "conjugate":
         return own["conjugate_x_mm"], own["conjugate_y_mm"]
     return None
+
+
+def second_roller(curves) -> tuple[np.ndarray, np.ndarray, float] | None:
+    """A conjugate pair's second roller for the animation: its centre's path (the second pitch
+    curve, cam coordinates) and its radius (the distance from that curve to the second cam, the
+    same at every sample), or None (a groove's one roller, a spring-closed follower)."""
+    own = getattr(curves, "own_curves", None) or {}
+    if closure_of(curves) != "conjugate":
+        return None
+    px, py = np.asarray(own["conjugate_pitch_x_mm"]), np.asarray(own["conjugate_pitch_y_mm"])
+    radius = float(np.hypot(own["conjugate_x_mm"][0] - px[0], own["conjugate_y_mm"][0] - py[0]))
+    return px, py, radius

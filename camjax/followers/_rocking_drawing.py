@@ -15,7 +15,7 @@ from functools import partial
 import numpy as np
 from matplotlib.figure import Figure
 
-from camjax.followers._closure_drawing import draw_closure, second_outline
+from camjax.followers._closure_drawing import draw_closure, second_outline, second_roller
 from camjax.output import animation
 from camjax.output.animation import ANGLE_RTOL, LENGTH_TOL_MM, FollowerArtists, Mechanism
 from camjax.output.plots import clip_axis, closed, cycle_axis, mark_extremes, rho_axis_limit_mm, title_figure
@@ -271,7 +271,7 @@ def mechanism(curves, title: str = "", violation: str | None = None, bad=None) -
         arm_length_mm=curves.arm_length_mm if roller else None,
         face_offset_mm=None if roller else curves.face_offset_mm,
         arm_start_angle_deg=float(curves.arm_start_angle_deg), swing_deg=np.asarray(curves.swing_deg),
-        second_outline=second_outline(curves),
+        second_outline=second_outline(curves), second_roller=second_roller(curves),
     )
 
 

@@ -16,7 +16,7 @@ from typing import NamedTuple
 import numpy as np
 from matplotlib.figure import Figure
 
-from camjax.followers._closure_drawing import draw_closure, second_outline
+from camjax.followers._closure_drawing import draw_closure, second_outline, second_roller
 from camjax.output import animation
 from camjax.output.animation import ANGLE_RTOL, LENGTH_TOL_MM, FollowerArtists, Mechanism
 from camjax.output.plots import (
@@ -334,7 +334,7 @@ def mechanism(curves, title: str = "", violation: str | None = None, bad=None) -
         curves.face_width_mm, curves.roller_radius_mm, float(curves.offset_mm or 0.0),
         None if curves.pressure_angle_deg is None else np.asarray(curves.pressure_angle_deg),
         title, violation, violation_samples(curves) if bad is None else bad, curves.rotation,
-        second_outline=second_outline(curves),
+        second_outline=second_outline(curves), second_roller=second_roller(curves),
     )
 
 

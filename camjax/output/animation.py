@@ -66,6 +66,8 @@ class Mechanism(NamedTuple):
       swing_deg: (N,) the arm's swing s(theta) from psi0, deg (oscillating only): psi = psi0 + s.
       second_outline: a positive drive's second flank or cam (X, Y), cam coordinates, turning with
         the first (:func:`camjax.followers._closure_drawing.second_outline`); None: spring-closed.
+      second_roller: a conjugate pair's second roller: its centre's path (X, Y), cam coordinates,
+        and its radius, mm (:func:`camjax.followers._closure_drawing.second_roller`); None: none.
     """
 
     theta_deg: np.ndarray
@@ -88,6 +90,7 @@ class Mechanism(NamedTuple):
     arm_start_angle_deg: float | None = None
     swing_deg: np.ndarray | None = None
     second_outline: tuple[np.ndarray, np.ndarray] | None = None
+    second_roller: tuple[np.ndarray, np.ndarray, float] | None = None
 
     @property
     def oscillating(self) -> bool:
@@ -225,6 +228,17 @@ def motion_frames(m: Mechanism, frames: int = 72) -> MotionFrames:
                                  mutation_scale=12, color="0.25", linewidth=1.2))
     ax.text(0.0, -0.62 * m.base_radius_mm, "ω", ha="center", va="center", fontsize=9, color="0.25")
     follower = followers.drawing(m.follower_type).artists(ax, m, poses, r_max)
+    # a conjugate pair's second roller, and the link that carries it: the yoke from the first
+    # roller's centre, or the rocker's second arm from the pivot
+    second = None
+    if m.second_roller is not None:
+        from matplotlib.patches import Circle
+
+        second_px, second_py, second_radius = m.second_roller
+        second = Circle((0.0, 0.0), second_radius, fill=False, color="C4", linewidth=1.4, label="second roller")
+        ax.add_patch(second)
+        (second_link,) = ax.plot([], [], color="C4", linewidth=2.0,
+                                 label="second arm" if m.oscillating else "yoke")
     (contact,) = ax.plot([], [], "o", color="C3", markersize=5, label="contact point")
     (normal,) = ax.plot([], [], color="C3", linewidth=1.0, linestyle="--",
                         label="contact normal (force line)")
@@ -257,6 +271,16 @@ def motion_frames(m: Mechanism, frames: int = 72) -> MotionFrames:
         bad_line.set_data(np.where(bad, xr, np.nan), np.where(bad, yr, np.nan))
         key.set_data(*rotate(np.array([0.0, 0.0]), np.array([0.0, 0.6 * m.base_radius_mm]), th))
         moved = follower.update(i)
+        extra = ()
+        if second is not None:
+            centre = rotate(np.array([second_px[poses.index[i]]]), np.array([second_py[poses.index[i]]]), th)
+            second.center = (float(centre[0][0]), float(centre[1][0]))
+            if m.oscillating:
+                (x0, _), (y0, _) = follower.artists["arm"].get_data()  # from the pivot
+            else:
+                x0, y0 = follower.artists["follower"].center  # from the first roller's centre
+            second_link.set_data([x0, second.center[0]], [y0, second.center[1]])
+            extra = (second, second_link)
         cx, cy = poses.contact_x_mm[i], poses.contact_y_mm[i]
         contact.set_data([cx], [cy])
         nx, ny = follower.normal(i)
@@ -267,15 +291,17 @@ def motion_frames(m: Mechanism, frames: int = 72) -> MotionFrames:
                  else f"s = {s[k]:6.3f} mm")
         label.set_text(f"θ = {poses.theta_deg[i]:5.1f}°\n{where}\npressure angle φ = {phi:5.1f}°")
         marker.set_data([poses.theta_deg[i]], [s[k]])
-        return cam_line, cam_fill, second_line, bad_line, key, *moved, contact, normal, label, marker
+        return cam_line, cam_fill, second_line, bad_line, key, *moved, *extra, contact, normal, label, marker
 
     ax.set_xlim(*follower.xlim)
     ax.set_ylim(*follower.ylim)
     update(0)
-    artists = {"cam": cam_line, "bad": bad_line, "contact": contact, "normal": normal, "label": label,
-               "marker": marker, **follower.artists,
-               "moving": [cam_fill, cam_line, second_line, bad_line, key, *follower.moving, contact, normal, label,
-                          marker]}
+    extra = [] if second is None else [second, second_link]
+    artists = {"cam": cam_line, "second_cam": second_line, "bad": bad_line, "contact": contact, "normal": normal,
+               "label": label, "marker": marker, **follower.artists,
+               **({} if second is None else {"second_roller": second, "second_link": second_link}),
+               "moving": [cam_fill, cam_line, second_line, bad_line, key, *follower.moving, *extra, contact, normal,
+                          label, marker]}
     return MotionFrames(fig, update, poses, artists)
 
 
