@@ -6,7 +6,8 @@ scene that only designs its laws is drawn by ``camjax synthesize``, :func:`comma
 ``docs/gallery/NAME-profile.png``, ``NAME-svaj.png`` and, where the scene has loads,
 ``NAME-loads.png`` (PNG at :data:`DPI` dpi, about 70 KB each), replacing the scene's old figures,
 and ``NAME.json``: the title block the figures carry (``camjax.output.titles``), which the docs
-tests hold against what the pages say of the same design. The site's build does not run this
+tests hold against what the pages say of the same design, and what the run wrote (its files,
+result.json's top-level keys, profile.csv's columns: ``{{ list: outputs }}`` on the CLI page). The site's build does not run this
 (a scene takes seconds to a minute): it shows the committed images beside each scene's TOML
 (``{{ list: gallery }}`` in docs/gallery.md, written by docs/gen_tables.py), and
 ``tests/test_docs.py`` fails when a built-in scene has no figures yet.
@@ -72,8 +73,13 @@ def draw(scene: str, dpi: int = DPI) -> list[Path]:
 
         result = json.loads((out / "result.json").read_text())
         meta = GALLERY / f"{scene}.json"
+        profile = out / "profile.csv"
         meta.write_text(json.dumps({"scene": scene, "command": f"camjax {verb} {scene} --dpi {dpi}",
-                                    "title_block": title_block(result) if verb == "design" else None},
+                                    "title_block": title_block(result) if verb == "design" else None,
+                                    "files": sorted(p.name for p in out.iterdir() if p.is_file()),
+                                    "result_keys": list(result),
+                                    "profile_columns": (profile.read_text().split("\n", 1)[0].split(",")
+                                                        if profile.exists() else [])},
                                    indent=1) + "\n")
         kept = [meta]
         for name, dest in figure_paths(scene).items():

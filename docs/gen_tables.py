@@ -675,14 +675,18 @@ def _png_width(path: Path) -> int:
 
 def gallery_missing() -> dict[str, str]:
     """Built-in scene -> the command that draws its gallery figures, for each scene without them
-    (its s/v/a/j figure and its title block; the profile where ``camjax design`` drew it)."""
+    (its s/v/a/j figure, its title block and what the run wrote; the profile where ``camjax design``
+    drew it)."""
     from camjax.scene import BUILTIN_SCENES
 
     def drawn(name: str) -> bool:
         meta = GALLERY / f"{name}.json"
         if not meta.exists() or not (GALLERY / f"{name}-svaj.png").exists():
             return False
-        designed = " design " in json.loads(meta.read_text())["command"]
+        record = json.loads(meta.read_text())
+        if "files" not in record:  # what the run wrote, for the CLI page (:func:`_outputs`)
+            return False
+        designed = " design " in record["command"]
         return not designed or (GALLERY / f"{name}-profile.png").exists()
 
     return {name: f"python docs/gen_gallery.py --scene {name}" for name in BUILTIN_SCENES if not drawn(name)}
@@ -720,7 +724,30 @@ def _gallery() -> str:
     return "\n".join(parts)
 
 
+def _outputs() -> str:
+    """What ``camjax design`` (or ``synthesize``) of each built-in scene wrote, as docs/gen_gallery.py
+    recorded it from the run: its files, result.json's top-level keys and profile.csv's columns.
+    A scene drawn before these were recorded says how to record them."""
+    from camjax.scene import BUILTIN_SCENES
+
+    parts = []
+    for name in BUILTIN_SCENES:
+        meta = GALLERY / f"{name}.json"
+        record = json.loads(meta.read_text()) if meta.exists() else {}
+        if "files" not in record:
+            parts.append(f"**`{name}`**: not recorded yet (`python docs/gen_gallery.py --scene {name}`).")
+            continue
+        cells = [f"**`{name}`** (`{record['command'].split(' --dpi')[0]}`)",
+                 "files: " + ", ".join(f"`{f}`" for f in record["files"]),
+                 "result.json: " + ", ".join(f"`{k}`" for k in record["result_keys"])]
+        if record["profile_columns"]:
+            cells.append("profile.csv: " + ", ".join(f"`{c}`" for c in record["profile_columns"]))
+        parts.append("\n".join(f"- {c}" if i else c for i, c in enumerate(cells)))
+    return "\n\n".join(parts)
+
+
 LISTS: dict[str, Callable[[], str]] = {
+    "outputs": _outputs,  # files, result.json keys, profile.csv columns per built-in scene (cli.md)
     "gallery": _gallery,  # every built-in scene: TOML beside its figures (docs/gallery.md)
     "follower_types": _follower_types,  # thumbnails and one line per type (home page)
     "followers": _follower_titles,  # "curved-face, flat-face, ... and roller"
