@@ -41,7 +41,6 @@ import jax.numpy as jnp
 import numpy as np
 
 from camjax import family
-from camjax.contact import roller_stress
 from camjax.family import FEASIBILITY_RTOL_STRESS, FEASIBILITY_TOL_MM, Weights, all_within, weighted_objective
 
 # re-exported: this family's protocol functions and tolerance, written once for every family
@@ -50,7 +49,8 @@ from camjax.family import bounds as bounds
 from camjax.family import bounds_violation as bounds_violation
 from camjax.followers import _pitch as pitch
 from camjax.followers.roller import geometry as roller_geo
-from camjax.numerics import COS_FLOOR, RHO_FLOOR_MM, finite_float, floor_positive, positive_part, safe_sqrt
+from camjax.followers.roller import problem as roller
+from camjax.numerics import RHO_FLOOR_MM, finite_float, floor_positive, positive_part
 
 CONSTRAINT_NAMES = ("pressure_angle", "undercut", "face_travel", "stress", "bounds")
 VARIABLES = ("base_radius_mm", "face_radius_mm", "face_width_mm", "offset_mm")
@@ -166,36 +166,24 @@ def per_angle(problem: Problem) -> Problem:
 # ---------------------------------------------------------------------------- physics
 
 
-class _Terms(NamedTuple):
-    """Per-angle quantities every function of a design shares (shape (n,) each)."""
-
-    w: jax.Array  # d + s, mm: the face centre's height on the follower axis
-    u: jax.Array  # s' - e~, mm: tan phi = u / w (up to the rotation's sign)
-    r: jax.Array  # sqrt(w^2 + u^2), mm: the face centre's distance from the instant centre
-    inv_cos: jax.Array  # 1 / cos phi = r / w, cos phi floored at COS_FLOOR
-    kappa: jax.Array  # pitch-curve curvature, 1/mm (convex > 0)
-    rho_eq: jax.Array  # Hertz equivalent radius 1 / (1/rho_c + 1/R_c), mm
+def _as_roller(design: Design) -> roller.Design:
+    """The roller with the crown's radius: the curved face's contact is the roller's circle on the
+    pitch curve of R_p = R_b + R_c (its terms, pressure angle, stress and circle constraints)."""
+    return roller.Design(design.base_radius_mm, design.face_radius_mm, design.offset_mm)
 
 
-def _terms(problem: Problem, design: Design) -> _Terms:
-    e = problem.rotation_sign * design.offset_mm
-    w = pitch.pitch_height(design.base_radius_mm + design.face_radius_mm, e, problem.s_mm)
-    u = problem.ds_mm - e
-    r = jnp.sqrt(w**2 + u**2)
-    kappa = pitch.pitch_curvature(w, problem.ds_mm, problem.d2s_mm, e)
-    return _Terms(w, u, r, r / jnp.maximum(w, COS_FLOOR * r), kappa,
-                  roller_geo.roller_equivalent_radius(kappa, design.face_radius_mm))
+def _terms(problem: Problem, design: Design) -> roller.CircleTerms:
+    return roller.circle_terms(problem, _as_roller(design))
 
 
-def _travel(x: _Terms, design: Design) -> jax.Array:
+def _travel(x: roller.CircleTerms, design: Design) -> jax.Array:
     """R_c |u| / r (mm): the contact's distance from the face's axis, per angle."""
     return design.face_radius_mm * jnp.abs(x.u) / floor_positive(x.r, RHO_FLOOR_MM)
 
 
 def pressure_angle(problem: Problem, design: Design) -> jax.Array:
     """phi (rad) per angle, signed as :func:`camjax.followers._pitch.pressure_angle`."""
-    x = _terms(problem, design)
-    return problem.rotation_sign * jnp.arctan2(x.u, x.w)
+    return roller.pressure_angle(problem, _as_roller(design))
 
 
 def face_width_need(problem: Problem, design: Design) -> jax.Array:
@@ -207,15 +195,12 @@ def face_width_need(problem: Problem, design: Design) -> jax.Array:
 
 def stress(problem: Problem, design: Design) -> jax.Array:
     """Hertz contact stress sigma(theta) (MPa), shape (n,); finite (saturated) at an undercut."""
-    x = _terms(problem, design)
-    return roller_stress(problem.stress_coefficient, jnp.arctan2(x.u, x.w), x.rho_eq)
+    return roller.stress(problem, _as_roller(design))
 
 
 def peak_stress(problem: Problem, design: Design) -> jax.Array:
     """max_theta sigma (MPa), shape (), as sqrt(max_theta C^2 / (cos phi rho_eq)): one root."""
-    x = _terms(problem, design)
-    ratio = problem.stress_coefficient**2 * x.inv_cos / floor_positive(x.rho_eq, RHO_FLOOR_MM)
-    return safe_sqrt(jnp.max(ratio))
+    return roller.peak_stress(problem, _as_roller(design))
 
 
 def size_term(problem: Problem, design: Design) -> jax.Array:
@@ -232,15 +217,9 @@ def objective(problem: Problem, weights: Weights, design: Design) -> jax.Array:
 def constraints(problem: Problem, design: Design) -> Constraints:
     """Every angle's constraints as g <= 0 (mm), shape (n,) each; finite for every design."""
     x = _terms(problem, design)
-    reach = design.face_radius_mm + problem.min_curvature_radius_mm
-    need = problem.stress_coefficient**2 * x.inv_cos / problem.sigma_max_MPa**2
-    return Constraints(
-        pressure_angle=jnp.abs(x.u) - problem.tan_max_pressure_angle * x.w,
-        undercut=reach * roller_geo.roller_undercut_constraint(x.kappa, design.face_radius_mm,
-                                                             problem.min_curvature_radius_mm),
-        face_travel=_travel(x, design) - 0.5 * design.face_width_mm,
-        stress=need - x.rho_eq,
-    )
+    circle = roller.circle_constraints(problem, _as_roller(design), x)
+    return Constraints(pressure_angle=circle.pressure_angle, undercut=circle.undercut,
+                       face_travel=_travel(x, design) - 0.5 * design.face_width_mm, stress=circle.stress)
 
 
 def constraint_maxima(problem: Problem, design: Design) -> Constraints:

@@ -189,18 +189,21 @@ class _Kin(NamedTuple):  # the geometry functions' view of the problem's grid (t
     d2s: jax.Array
 
 
-class _Terms(NamedTuple):
-    """Per-angle quantities every function of a design shares (shape (n,) each)."""
+class CircleTerms(NamedTuple):
+    """Per-angle quantities of a circle whose centre runs on the pitch curve (the roller, the
+    curved face's crown), which every function of a design shares (shape (n,) each)."""
 
-    w: jax.Array  # d + s, mm: the pitch point's height on the follower axis
+    w: jax.Array  # d + s, mm: the circle centre's height on the follower axis
     u: jax.Array  # s' - e~, mm: tan phi = u / w (up to the rotation's sign)
+    r: jax.Array  # sqrt(w^2 + u^2), mm: the circle centre's distance from the instant centre
     inv_cos: jax.Array  # 1 / cos phi = |(w, u)| / w, with cos phi floored at COS_FLOOR
     kappa: jax.Array  # pitch-curve curvature, 1/mm (convex > 0)
     rho_eq: jax.Array  # Hertz equivalent radius 1 / (1/rho_c + 1/R_f), mm
 
 
-def _terms(problem: Problem, design: Design) -> _Terms:
-    """The shared per-angle terms of a design.
+def circle_terms(problem: Problem, design: Design) -> CircleTerms:
+    """The shared per-angle terms of a design (any problem with the roller's grid fields and
+    ``rotation_sign``: the curved face passes its crown radius as R_f).
 
     The rotation enters only through e~ = sign e (geometry.pitch); with it every formula is the
     ccw one, and |phi|, cos phi and kappa are those of the true rotation. 1 / cos phi is written
@@ -212,25 +215,25 @@ def _terms(problem: Problem, design: Design) -> _Terms:
     u = kin.ds - e
     r = jnp.sqrt(w**2 + u**2)
     kappa = pitch.pitch_curvature(w, kin.ds, kin.d2s, e)
-    return _Terms(w, u, r / jnp.maximum(w, COS_FLOOR * r), kappa,
-                  roller_geo.roller_equivalent_radius(kappa, design.roller_radius_mm))
+    return CircleTerms(w, u, r, r / jnp.maximum(w, COS_FLOOR * r), kappa,
+                       roller_geo.roller_equivalent_radius(kappa, design.roller_radius_mm))
 
 
 def pressure_angle(problem: Problem, design: Design) -> jax.Array:
     """phi (rad) per angle, signed as :func:`camjax.followers._pitch.pressure_angle`."""
-    x = _terms(problem, design)
+    x = circle_terms(problem, design)
     return problem.rotation_sign * jnp.arctan2(x.u, x.w)
 
 
 def stress(problem: Problem, design: Design) -> jax.Array:
     """Hertz contact stress sigma(theta) (MPa), shape (n,); finite (saturated) at an undercut."""
-    x = _terms(problem, design)
+    x = circle_terms(problem, design)
     return roller_stress(problem.stress_coefficient, jnp.arctan2(x.u, x.w), x.rho_eq)
 
 
 def peak_stress(problem: Problem, design: Design) -> jax.Array:
     """max_theta sigma (MPa), shape (), as sqrt(max_theta C^2 / (cos phi rho_eq)): one root."""
-    x = _terms(problem, design)
+    x = circle_terms(problem, design)
     ratio = problem.stress_coefficient**2 * x.inv_cos / floor_positive(x.rho_eq, RHO_FLOOR_MM)
     return safe_sqrt(jnp.max(ratio))
 
@@ -248,22 +251,28 @@ def objective(problem: Problem, weights: Weights, design: Design) -> jax.Array:
 
 def constraints(problem: Problem, design: Design) -> Constraints:
     """Every angle's constraints as g <= 0 (mm), shape (n,) each; finite for every design."""
-    x = _terms(problem, design)
-    reach = design.roller_radius_mm + problem.min_curvature_radius_mm
-    need = problem.stress_coefficient**2 * x.inv_cos / problem.sigma_max_MPa**2
-    first = Constraints(
-        pressure_angle=jnp.abs(x.u) - problem.tan_max_pressure_angle * x.w,
-        undercut=reach * roller_geo.roller_undercut_constraint(x.kappa, design.roller_radius_mm,
-                                                             problem.min_curvature_radius_mm),
-        stress=need - x.rho_eq,
-    )
+    x = circle_terms(problem, design)
+    first = circle_constraints(problem, design, x)
     if problem.closure is None:
         return first
     second = _second_contact(problem, design, x)
     return Constraints(*(jnp.maximum(a, b) for a, b in zip(first, second[:3], strict=True)))
 
 
-def _second_contact(problem: Problem, design: Design, x: _Terms) -> _closure.SecondContact:
+def circle_constraints(problem: Problem, design: Design, x: CircleTerms) -> Constraints:
+    """The circle's own constraints as g <= 0 (mm), shape (n,) each, from its terms ``x``
+    (:func:`circle_terms`): the pressure angle, the undercut and the stress."""
+    reach = design.roller_radius_mm + problem.min_curvature_radius_mm
+    need = problem.stress_coefficient**2 * x.inv_cos / problem.sigma_max_MPa**2
+    return Constraints(
+        pressure_angle=jnp.abs(x.u) - problem.tan_max_pressure_angle * x.w,
+        undercut=reach * roller_geo.roller_undercut_constraint(x.kappa, design.roller_radius_mm,
+                                                             problem.min_curvature_radius_mm),
+        stress=need - x.rho_eq,
+    )
+
+
+def _second_contact(problem: Problem, design: Design, x: CircleTerms) -> _closure.SecondContact:
     """The positive drive's second contact (the groove's outer flank, the yoke's second cam)."""
     t = problem.closure
     if isinstance(t, _closure.GrooveTerms):
@@ -423,7 +432,7 @@ def polish_pointwise(problem: Problem, weights: Weights, design: Design, extras:
 
 def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
     """Objective, peak stress and pressure angle (and their angles), violations and feasibility."""
-    x = _terms(problem, design)
+    x = circle_terms(problem, design)
     kappa = x.kappa
     sigma = stress(problem, design)
     phi = jnp.abs(jnp.arctan2(x.u, x.w))
