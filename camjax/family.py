@@ -103,6 +103,60 @@ def violated(names, violation, tolerances: dict) -> list[str]:
     return [name for name in names if float(getattr(violation, name)) > tolerances[name]]
 
 
+def size_norm(problem) -> jax.Array:
+    """N (mm), shape (): the length the constraints are divided by (the family's ``size_norm_mm``,
+    the largest size its box allows)."""
+    return problem.size_norm_mm
+
+
+def stacked_maxima(constraints):
+    """max_theta of each per-angle constraint (a family's ``Constraints`` of (n,) arrays), shape ()
+    each, as one reduction over the stacked constraints: XLA then evaluates the shared terms once
+    per angle instead of once per constraint."""
+    return type(constraints)(*jnp.max(jnp.stack(constraints), axis=-1))
+
+
+def tolerances(names, sigma_max_MPa=None) -> dict:
+    """Each named constraint's feasibility tolerance: the pressure angle's in rad
+    (:data:`FEASIBILITY_TOL_RAD`), the stress's in MPa (:data:`FEASIBILITY_RTOL_STRESS` times
+    ``sigma_max_MPa``), every other's in mm (:data:`FEASIBILITY_TOL_MM`)."""
+    def one(name):
+        if name == "pressure_angle":
+            return FEASIBILITY_TOL_RAD
+        if name == "stress":
+            return FEASIBILITY_RTOL_STRESS * sigma_max_MPa
+        return FEASIBILITY_TOL_MM
+
+    return {name: one(name) for name in names}
+
+
+def violated_constraints(problem, violation, names) -> list[str]:
+    """The names (in the order of ``names``) whose violation exceeds its :func:`tolerances` (Python;
+    needs concrete values)."""
+    sigma_max = float(problem.sigma_max_MPa) if "stress" in names else None
+    return violated(names, violation, tolerances(names, sigma_max))
+
+
+def unit_coordinate(x, lo, hi):
+    """(x - lo) / (hi - lo): a variable over its bounds (x - lo for a fixed one, lo == hi)."""
+    return (x - lo) / jnp.where(hi > lo, hi - lo, 1.0)
+
+
+def from_unit_coordinate(v, lo, hi):
+    """lo + v (hi - lo): the inverse of :func:`unit_coordinate`."""
+    return lo + v * jnp.where(hi > lo, hi - lo, 1.0)
+
+
+def to_unit_box(problem, design):
+    """Design (mm) -> each variable over its bounds (:func:`unit_coordinate`; not clipped)."""
+    return jax.tree.map(unit_coordinate, design, problem.lower, problem.upper)
+
+
+def from_unit_box(problem, u):
+    """Unit-box coordinates -> design (mm): the inverse of :func:`to_unit_box`."""
+    return jax.tree.map(from_unit_coordinate, u, problem.lower, problem.upper)
+
+
 # -------------------------------------------------------------------------------- output
 
 

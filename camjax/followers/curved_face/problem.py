@@ -41,12 +41,13 @@ import jax.numpy as jnp
 import numpy as np
 
 from camjax import family
-from camjax.family import FEASIBILITY_RTOL_STRESS, FEASIBILITY_TOL_MM, Weights, all_within, weighted_objective
 
 # re-exported: this family's protocol functions and tolerance, written once for every family
 from camjax.family import FEASIBILITY_TOL_RAD as FEASIBILITY_TOL_RAD
+from camjax.family import Weights, all_within, weighted_objective
 from camjax.family import bounds as bounds
 from camjax.family import bounds_violation as bounds_violation
+from camjax.family import size_norm as size_norm
 from camjax.followers import _pitch as pitch
 from camjax.followers.roller import geometry as roller_geo
 from camjax.followers.roller import problem as roller
@@ -224,28 +225,15 @@ def constraints(problem: Problem, design: Design) -> Constraints:
 
 def constraint_maxima(problem: Problem, design: Design) -> Constraints:
     """max_theta of each constraint of :func:`constraints`, shape () each (one stacked reduction)."""
-    return Constraints(*jnp.max(jnp.stack(constraints(problem, design)), axis=-1))
-
-
-def size_norm(problem: Problem) -> jax.Array:
-    """N = R_b,max + W_max (mm): the length the constraints are divided by, shape ()."""
-    return problem.size_norm_mm
+    return family.stacked_maxima(constraints(problem, design))
 
 
 # ------------------------------------------------------------------ solver coordinates
 
 
-def _unit(x, lo, hi):
-    return (x - lo) / jnp.where(hi > lo, hi - lo, 1.0)
-
-
-def _from(v, lo, hi):
-    return lo + v * jnp.where(hi > lo, hi - lo, 1.0)
-
-
 def to_unit(problem: Problem, design: Design) -> Design:
     """Design (mm) -> the solvers' unit-box coordinates: each variable over its bounds."""
-    return jax.tree.map(_unit, design, problem.lower, problem.upper)
+    return family.to_unit_box(problem, design)
 
 
 def from_unit(problem: Problem, u: Design) -> Design:
@@ -255,7 +243,7 @@ def from_unit(problem: Problem, u: Design) -> Design:
     Below the floor W takes the floor's value and keeps the gradient of its own coordinate too
     (straight-through), so a weighting never finds a flat, zero-gradient stretch there.
     """
-    plain = jax.tree.map(_from, u, problem.lower, problem.upper)
+    plain = family.from_unit_box(problem, u)
     floor = jnp.minimum(face_width_need(problem, plain), problem.upper.face_width_mm)
     raw = plain.face_width_mm
     height = raw - jax.lax.stop_gradient(floor)
@@ -339,15 +327,13 @@ def polish_pointwise(problem: Problem, weights: Weights, design: Design, extras:
 
 
 def _tolerances(sigma_max_MPa) -> dict:
-    """Each constraint's feasibility tolerance (rad, mm; the stress's in MPa)."""
-    return {"pressure_angle": FEASIBILITY_TOL_RAD, "undercut": FEASIBILITY_TOL_MM,
-            "face_travel": FEASIBILITY_TOL_MM, "bounds": FEASIBILITY_TOL_MM,
-            "stress": FEASIBILITY_RTOL_STRESS * sigma_max_MPa}
+    """Each constraint's feasibility tolerance (:func:`camjax.family.tolerances`)."""
+    return family.tolerances(CONSTRAINT_NAMES, sigma_max_MPa)
 
 
 def violated_constraints(problem: Problem, v: Violation) -> list[str]:
     """Names of the violated constraints (Python; needs concrete values)."""
-    return family.violated(CONSTRAINT_NAMES, v, _tolerances(float(problem.sigma_max_MPa)))
+    return family.violated_constraints(problem, v, CONSTRAINT_NAMES)
 
 
 # ------------------------------------------------------------------------------- output

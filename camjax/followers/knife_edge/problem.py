@@ -31,12 +31,13 @@ import jax.numpy as jnp
 import numpy as np
 
 from camjax import family
-from camjax.family import FEASIBILITY_TOL_MM, Weights, all_within, weighted_objective
 
 # re-exported: this family's protocol functions and tolerance, written once for every family
 from camjax.family import FEASIBILITY_TOL_RAD as FEASIBILITY_TOL_RAD
+from camjax.family import Weights, all_within, weighted_objective
 from camjax.family import bounds as bounds
 from camjax.family import bounds_violation as bounds_violation
+from camjax.family import size_norm as size_norm
 from camjax.followers import _pitch as pitch
 from camjax.followers.roller import problem as roller
 
@@ -192,12 +193,7 @@ def constraints(problem: Problem, design: Design) -> Constraints:
 
 def constraint_maxima(problem: Problem, design: Design) -> Constraints:
     """max_theta of each constraint of :func:`constraints`, shape () each."""
-    return Constraints(*jnp.max(jnp.stack(constraints(problem, design)), axis=-1))
-
-
-def size_norm(problem: Problem) -> jax.Array:
-    """N = R_b,max (mm): the length the constraints are divided by, shape ()."""
-    return problem.size_norm_mm
+    return family.stacked_maxima(constraints(problem, design))
 
 
 # ------------------------------------------------------------------ solver coordinates
@@ -264,13 +260,12 @@ def condense_pointwise(problem: Problem, per_angle_design: Design) -> tuple[Desi
 
 
 # each constraint's feasibility tolerance (rad, mm)
-_TOLERANCES = {"pressure_angle": FEASIBILITY_TOL_RAD, "curvature": FEASIBILITY_TOL_MM,
-               "bounds": FEASIBILITY_TOL_MM}
+_TOLERANCES = family.tolerances(CONSTRAINT_NAMES)
 
 
 def violated_constraints(problem: Problem, v: Violation) -> list[str]:
     """Names of the violated constraints (Python; needs concrete values)."""
-    return family.violated(CONSTRAINT_NAMES, v, _TOLERANCES)
+    return family.violated_constraints(problem, v, CONSTRAINT_NAMES)
 
 
 # ------------------------------------------------------------------------------- output

@@ -49,9 +49,6 @@ import numpy as np
 from camjax import family
 from camjax.contact import roller_stress
 from camjax.family import (
-    FEASIBILITY_RTOL_STRESS,
-    FEASIBILITY_TOL_MM,
-    FEASIBILITY_TOL_RAD,
     Weights,
     all_within,
     weighted_objective,
@@ -60,6 +57,7 @@ from camjax.family import (
 # re-exported: this family's protocol functions, written once for every family
 from camjax.family import bounds as bounds
 from camjax.family import bounds_violation as bounds_violation
+from camjax.family import size_norm as size_norm
 from camjax.followers import _pitch as pitch
 from camjax.followers._swing import moment_model, polish_design
 from camjax.followers.oscillating_curved_face import geometry as curved_geo
@@ -281,12 +279,7 @@ def polish(problem: Problem, weights: Weights, design: Design) -> Design:
 
 def constraint_maxima(problem: Problem, design: Design) -> Constraints:
     """max_theta of each constraint of :func:`constraints`, shape () each (one stacked reduction)."""
-    return Constraints(*jnp.max(jnp.stack(constraints(problem, design)), axis=-1))
-
-
-def size_norm(problem: Problem) -> jax.Array:
-    """N = R_b,max + W_max (mm), shape ()."""
-    return problem.size_norm_mm
+    return family.stacked_maxima(constraints(problem, design))
 
 
 def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
@@ -326,15 +319,13 @@ def condense_pointwise(problem: Problem, per_angle_design: Design) -> tuple[Desi
 
 
 def _tolerances(sigma_max_MPa) -> dict:
-    """Each constraint's feasibility tolerance (mm, rad; the stress's in MPa)."""
-    return {"reach": FEASIBILITY_TOL_MM, "pressure_angle": FEASIBILITY_TOL_RAD,
-            "undercut": FEASIBILITY_TOL_MM, "face_travel": FEASIBILITY_TOL_MM, "bounds": FEASIBILITY_TOL_MM,
-            "stress": FEASIBILITY_RTOL_STRESS * sigma_max_MPa}
+    """Each constraint's feasibility tolerance (:func:`camjax.family.tolerances`)."""
+    return family.tolerances(CONSTRAINT_NAMES, sigma_max_MPa)
 
 
 def violated_constraints(problem: Problem, v: Violation) -> list[str]:
     """Names of the violated constraints (Python; needs concrete values)."""
-    return family.violated(CONSTRAINT_NAMES, v, _tolerances(float(problem.sigma_max_MPa)))
+    return family.violated_constraints(problem, v, CONSTRAINT_NAMES)
 
 
 # ------------------------------------------------------------------------------- output

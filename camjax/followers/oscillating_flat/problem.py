@@ -32,11 +32,12 @@ import jax.numpy as jnp
 
 from camjax import family
 from camjax.contact import stress_from_coefficient
-from camjax.family import FEASIBILITY_RTOL_STRESS, FEASIBILITY_TOL_MM, Weights, all_within, weighted_objective
+from camjax.family import Weights, all_within, weighted_objective
 
 # re-exported: this family's protocol functions, written once for every family
 from camjax.family import bounds as bounds
 from camjax.family import bounds_violation as bounds_violation
+from camjax.family import size_norm as size_norm
 from camjax.followers import _pitch as pitch
 from camjax.followers._swing import moment_model, polish_design
 from camjax.followers.oscillating_flat import geometry as rocker_flat_geo
@@ -233,11 +234,6 @@ def start(problem: Problem, steps: int = 60) -> Design:
     return centre._replace(base_radius_mm=rb)
 
 
-def size_norm(problem: Problem) -> jax.Array:
-    """R_b,max (mm), shape ()."""
-    return problem.size_norm_mm
-
-
 def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
     """Objective, peak stress, smallest curvature radius, face length, violations and feasibility."""
     g = _geometry(problem, design)
@@ -264,14 +260,13 @@ def condense_pointwise(problem: Problem, per_angle_design: Design) -> tuple[Desi
 
 
 def _tolerances(sigma_max_MPa) -> dict:
-    """Each constraint's feasibility tolerance (mm; the stress's in MPa)."""
-    return {**{name: FEASIBILITY_TOL_MM for name in CONSTRAINT_NAMES},
-            "stress": FEASIBILITY_RTOL_STRESS * sigma_max_MPa}
+    """Each constraint's feasibility tolerance (:func:`camjax.family.tolerances`)."""
+    return family.tolerances(CONSTRAINT_NAMES, sigma_max_MPa)
 
 
 def violated_constraints(problem: Problem, v: Violation) -> list[str]:
     """Names of the violated constraints (Python; needs concrete values)."""
-    return family.violated(CONSTRAINT_NAMES, v, _tolerances(float(problem.sigma_max_MPa)))
+    return family.violated_constraints(problem, v, CONSTRAINT_NAMES)
 
 
 _f = finite_float

@@ -43,12 +43,13 @@ import numpy as np
 
 from camjax import family
 from camjax.contact import roller_stress
-from camjax.family import FEASIBILITY_RTOL_STRESS, FEASIBILITY_TOL_MM, Weights, all_within, weighted_objective
 
 # re-exported: this family's protocol functions and tolerance, written once for every family
 from camjax.family import FEASIBILITY_TOL_RAD as FEASIBILITY_TOL_RAD
+from camjax.family import Weights, all_within, weighted_objective
 from camjax.family import bounds as bounds
 from camjax.family import bounds_violation as bounds_violation
+from camjax.family import size_norm as size_norm
 from camjax.followers import _closure
 from camjax.followers import _pitch as pitch
 from camjax.followers.roller import geometry as roller_geo
@@ -289,23 +290,10 @@ def constraint_maxima(problem: Problem, design: Design) -> Constraints:
     One reduction over the stacked constraints: XLA then evaluates the shared terms once per
     angle instead of once per constraint.
     """
-    return Constraints(*jnp.max(jnp.stack(constraints(problem, design)), axis=-1))
-
-
-def size_norm(problem: Problem) -> jax.Array:
-    """N = R_b,max + R_f,max (mm): the length the constraints are divided by, shape ()."""
-    return problem.size_norm_mm
+    return family.stacked_maxima(constraints(problem, design))
 
 
 # ------------------------------------------------------------------ solver coordinates
-
-
-def _unit(x, lo, hi):
-    return (x - lo) / jnp.where(hi > lo, hi - lo, 1.0)
-
-
-def _from(v, lo, hi):
-    return lo + v * jnp.where(hi > lo, hi - lo, 1.0)
 
 
 def _straight_through(x, clipped):
@@ -332,8 +320,8 @@ def to_unit(problem: Problem, design: Design) -> Design:
     its own bounds (as for every family).
     """
     p_lo, p_hi, rb_free = _prime_box(problem)
-    plain = jax.tree.map(_unit, design, problem.lower, problem.upper)
-    prime = _unit(design.base_radius_mm + design.roller_radius_mm, p_lo, p_hi)
+    plain = family.to_unit_box(problem, design)
+    prime = family.unit_coordinate(design.base_radius_mm + design.roller_radius_mm, p_lo, p_hi)
     return plain._replace(base_radius_mm=jnp.where(rb_free, prime, plain.base_radius_mm))
 
 
@@ -354,8 +342,8 @@ def from_unit(problem: Problem, u: Design) -> Design:
     """
     lo, hi = problem.lower, problem.upper
     p_lo, p_hi, rb_free = _prime_box(problem)
-    plain = jax.tree.map(_from, u, lo, hi)
-    raw = _from(u.base_radius_mm, p_lo, p_hi)
+    plain = family.from_unit_box(problem, u)
+    raw = family.from_unit_coordinate(u.base_radius_mm, p_lo, p_hi)
     floor = jnp.minimum(min_prime_radius_for_pressure_angle(problem, plain.offset_mm), p_hi)
     height = raw - jax.lax.stop_gradient(floor)  # the gradient of R_p in the first coordinate only
     prime = jnp.where(height > 0, raw, floor + _straight_through(height, jnp.zeros_like(height)))
@@ -473,14 +461,13 @@ def condense_pointwise(problem: Problem, per_angle_design: Design) -> tuple[Desi
 
 
 def _tolerances(sigma_max_MPa) -> dict:
-    """Each constraint's feasibility tolerance (rad, mm; the stress's in MPa)."""
-    return {"pressure_angle": FEASIBILITY_TOL_RAD, "undercut": FEASIBILITY_TOL_MM,
-            "bounds": FEASIBILITY_TOL_MM, "stress": FEASIBILITY_RTOL_STRESS * sigma_max_MPa}
+    """Each constraint's feasibility tolerance (:func:`camjax.family.tolerances`)."""
+    return family.tolerances(CONSTRAINT_NAMES, sigma_max_MPa)
 
 
 def violated_constraints(problem: Problem, v: Violation) -> list[str]:
     """Names of the violated constraints (Python; needs concrete values)."""
-    return family.violated(CONSTRAINT_NAMES, v, _tolerances(float(problem.sigma_max_MPa)))
+    return family.violated_constraints(problem, v, CONSTRAINT_NAMES)
 
 
 # ------------------------------------------------------------------------------- output
