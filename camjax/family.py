@@ -130,9 +130,16 @@ def tolerances(names, sigma_max_MPa=None) -> dict:
     return {name: one(name) for name in names}
 
 
-def violated_constraints(problem, violation, names) -> list[str]:
-    """The names (in the order of ``names``) whose violation exceeds its :func:`tolerances` (Python;
-    needs concrete values)."""
+def feasible(problem, violation) -> jax.Array:
+    """Whether every violation (a family's ``Violation``, one field per constraint) is within its
+    :func:`tolerances` (bool, traceable; the stress's relative to ``problem.sigma_max_MPa``)."""
+    return all_within(violation, tolerances(violation._fields, problem.sigma_max_MPa))
+
+
+def violated_constraints(problem, violation) -> list[str]:
+    """Names of the violated constraints, in the order of the ``Violation``'s fields, each judged by
+    its :func:`tolerances` (Python; needs concrete values)."""
+    names = violation._fields
     sigma_max = float(problem.sigma_max_MPa) if "stress" in names else None
     return violated(names, violation, tolerances(names, sigma_max))
 

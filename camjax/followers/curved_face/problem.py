@@ -44,10 +44,11 @@ from camjax import family
 
 # re-exported: this family's protocol functions and tolerance, written once for every family
 from camjax.family import FEASIBILITY_TOL_RAD as FEASIBILITY_TOL_RAD
-from camjax.family import Weights, all_within, weighted_objective
+from camjax.family import Weights, weighted_objective
 from camjax.family import bounds as bounds
 from camjax.family import bounds_violation as bounds_violation
 from camjax.family import size_norm as size_norm
+from camjax.family import violated_constraints as violated_constraints
 from camjax.followers import _pitch as pitch
 from camjax.followers.roller import geometry as roller_geo
 from camjax.followers.roller import problem as roller
@@ -306,7 +307,7 @@ def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
         stress_max_MPa=sigma[i], stress_max_deg=problem.theta_deg[i],
         pressure_angle_max_deg=jnp.rad2deg(phi[j]), pressure_angle_max_at_deg=problem.theta_deg[j],
         cam_rho_min_mm=rho_c_min, face_travel_max_mm=travel[k], face_travel_max_deg=problem.theta_deg[k],
-        violation=v, feasible=all_within(v, _tolerances(problem.sigma_max_MPa)),
+        violation=v, feasible=family.feasible(problem, v),
     )
 
 
@@ -324,16 +325,6 @@ def polish_pointwise(problem: Problem, weights: Weights, design: Design, extras:
     """The condensed pointwise design with R_b and W, the variables condensed by the largest-value
     rules, moved where a limit is passed between the samples (:func:`polish` with R_c and e held)."""
     return polish(problem, weights, design, free=("base_radius_mm", "face_width_mm")), extras
-
-
-def _tolerances(sigma_max_MPa) -> dict:
-    """Each constraint's feasibility tolerance (:func:`camjax.family.tolerances`)."""
-    return family.tolerances(CONSTRAINT_NAMES, sigma_max_MPa)
-
-
-def violated_constraints(problem: Problem, v: Violation) -> list[str]:
-    """Names of the violated constraints (Python; needs concrete values)."""
-    return family.violated_constraints(problem, v, CONSTRAINT_NAMES)
 
 
 # ------------------------------------------------------------------------------- output

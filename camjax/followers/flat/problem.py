@@ -45,7 +45,6 @@ import numpy as np
 from camjax import family, runtime
 from camjax.family import (
     Weights,
-    all_within,
     bounds_violation,
     weighted_objective,
 )
@@ -53,6 +52,7 @@ from camjax.family import (
 # re-exported: this family's protocol functions, written once for every family
 from camjax.family import bounds as bounds
 from camjax.family import size_norm as size_norm
+from camjax.family import violated_constraints as violated_constraints
 from camjax.followers.flat import optimum
 from camjax.followers.flat.needs import (  # noqa: F401  (the family's pytrees and per-angle needs, re-exported)
     Design,
@@ -295,14 +295,9 @@ def violation(problem: Problem, design: Design, peak_stress_MPa: jax.Array | Non
     )
 
 
-def _tolerances(sigma_max_MPa) -> dict:
-    """Each constraint's feasibility tolerance (:func:`camjax.family.tolerances`)."""
-    return family.tolerances(CONSTRAINT_NAMES, sigma_max_MPa)
-
-
 def is_feasible(problem: Problem, v: Violation) -> jax.Array:
     """All violations within the tolerances (FEASIBILITY_TOL_MM; stress relative to sigma_max)."""
-    return all_within(v, _tolerances(problem.sigma_max_MPa))
+    return family.feasible(problem, v)
 
 
 def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
@@ -328,11 +323,6 @@ def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
         violation=v,
         feasible=is_feasible(problem, v),
     )
-
-
-def violated_constraints(problem: Problem, v: Violation) -> list[str]:
-    """Names of the violated constraints (Python; needs concrete values)."""
-    return family.violated_constraints(problem, v, CONSTRAINT_NAMES)
 
 
 # ------------------------------------------------------------------------- references

@@ -34,10 +34,11 @@ from camjax import family
 
 # re-exported: this family's protocol functions and tolerance, written once for every family
 from camjax.family import FEASIBILITY_TOL_RAD as FEASIBILITY_TOL_RAD
-from camjax.family import Weights, all_within, weighted_objective
+from camjax.family import Weights, weighted_objective
 from camjax.family import bounds as bounds
 from camjax.family import bounds_violation as bounds_violation
 from camjax.family import size_norm as size_norm
+from camjax.family import violated_constraints as violated_constraints
 from camjax.followers import _pitch as pitch
 from camjax.followers.roller import problem as roller
 
@@ -248,7 +249,7 @@ def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
         objective=objective(problem, weights, design), size_mm=design.base_radius_mm,
         pressure_angle_max_deg=ev.pressure_angle_max_deg,
         pressure_angle_max_at_deg=ev.pressure_angle_max_at_deg,
-        profile_rho_min_mm=ev.cam_rho_min_mm, violation=v, feasible=all_within(v, _TOLERANCES),
+        profile_rho_min_mm=ev.cam_rho_min_mm, violation=v, feasible=family.feasible(problem, v),
         stress_max_MPa=zero, stress_max_deg=zero)
 
 
@@ -257,15 +258,6 @@ def condense_pointwise(problem: Problem, per_angle_design: Design) -> tuple[Desi
     (SPEC 5's rule); extras: that angle (``base_radius_deg``) and the grid."""
     return family.condense_at_largest(problem, per_angle_design, per_angle_design.base_radius_mm,
                                       "base_radius_deg")
-
-
-# each constraint's feasibility tolerance (rad, mm)
-_TOLERANCES = family.tolerances(CONSTRAINT_NAMES)
-
-
-def violated_constraints(problem: Problem, v: Violation) -> list[str]:
-    """Names of the violated constraints (Python; needs concrete values)."""
-    return family.violated_constraints(problem, v, CONSTRAINT_NAMES)
 
 
 # ------------------------------------------------------------------------------- output

@@ -50,7 +50,6 @@ from camjax import family
 from camjax.contact import roller_stress
 from camjax.family import (
     Weights,
-    all_within,
     weighted_objective,
 )
 
@@ -58,6 +57,7 @@ from camjax.family import (
 from camjax.family import bounds as bounds
 from camjax.family import bounds_violation as bounds_violation
 from camjax.family import size_norm as size_norm
+from camjax.family import violated_constraints as violated_constraints
 from camjax.followers import _pitch as pitch
 from camjax.followers._swing import moment_model, polish_design
 from camjax.followers.oscillating_curved_face import geometry as curved_geo
@@ -305,7 +305,7 @@ def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
         stress_max_MPa=sigma[i], stress_max_deg=problem.theta_deg[i],
         pressure_angle_max_deg=jnp.rad2deg(phi[j]), pressure_angle_max_at_deg=problem.theta_deg[j],
         cam_rho_min_mm=rho_c_min, face_travel_max_mm=travel[k], face_travel_max_deg=problem.theta_deg[k],
-        violation=v, feasible=all_within(v, _tolerances(problem.sigma_max_MPa)),
+        violation=v, feasible=family.feasible(problem, v),
     )
 
 
@@ -316,16 +316,6 @@ def condense_pointwise(problem: Problem, per_angle_design: Design) -> tuple[Desi
     size = per_angle_design.base_radius_mm + per_angle_design.face_radius_mm
     design, extras = family.condense_at_largest(problem, per_angle_design, size, "prime_radius_deg")
     return design._replace(face_width_mm=jnp.max(per_angle_design.face_width_mm)), extras
-
-
-def _tolerances(sigma_max_MPa) -> dict:
-    """Each constraint's feasibility tolerance (:func:`camjax.family.tolerances`)."""
-    return family.tolerances(CONSTRAINT_NAMES, sigma_max_MPa)
-
-
-def violated_constraints(problem: Problem, v: Violation) -> list[str]:
-    """Names of the violated constraints (Python; needs concrete values)."""
-    return family.violated_constraints(problem, v, CONSTRAINT_NAMES)
 
 
 # ------------------------------------------------------------------------------- output

@@ -32,12 +32,13 @@ import jax.numpy as jnp
 
 from camjax import family
 from camjax.contact import stress_from_coefficient
-from camjax.family import Weights, all_within, weighted_objective
+from camjax.family import Weights, weighted_objective
 
 # re-exported: this family's protocol functions, written once for every family
 from camjax.family import bounds as bounds
 from camjax.family import bounds_violation as bounds_violation
 from camjax.family import size_norm as size_norm
+from camjax.family import violated_constraints as violated_constraints
 from camjax.followers import _pitch as pitch
 from camjax.followers._swing import moment_model, polish_design
 from camjax.followers.oscillating_flat import geometry as rocker_flat_geo
@@ -244,7 +245,7 @@ def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
                   curvature=positive_part(c.curvature),
                   stress=positive_part(sigma[i] - problem.sigma_max_MPa),
                   bounds=bounds_violation(problem, design))
-    feasible = all_within(v, _tolerances(problem.sigma_max_MPa))
+    feasible = family.feasible(problem, v)
     return Evaluation(
         objective=objective(problem, weights, design), size_mm=design.base_radius_mm,
         stress_max_MPa=sigma[i], stress_max_deg=problem.theta_deg[i], rho_min_mm=g.rho[j],
@@ -257,16 +258,6 @@ def condense_pointwise(problem: Problem, per_angle_design: Design) -> tuple[Desi
     """The whole-cam design of a pointwise solve: the design of the angle with the largest R_b."""
     return family.condense_at_largest(problem, per_angle_design, per_angle_design.base_radius_mm,
                                       "base_radius_deg")
-
-
-def _tolerances(sigma_max_MPa) -> dict:
-    """Each constraint's feasibility tolerance (:func:`camjax.family.tolerances`)."""
-    return family.tolerances(CONSTRAINT_NAMES, sigma_max_MPa)
-
-
-def violated_constraints(problem: Problem, v: Violation) -> list[str]:
-    """Names of the violated constraints (Python; needs concrete values)."""
-    return family.violated_constraints(problem, v, CONSTRAINT_NAMES)
 
 
 _f = finite_float

@@ -46,10 +46,11 @@ from camjax.contact import roller_stress
 
 # re-exported: this family's protocol functions and tolerance, written once for every family
 from camjax.family import FEASIBILITY_TOL_RAD as FEASIBILITY_TOL_RAD
-from camjax.family import Weights, all_within, weighted_objective
+from camjax.family import Weights, weighted_objective
 from camjax.family import bounds as bounds
 from camjax.family import bounds_violation as bounds_violation
 from camjax.family import size_norm as size_norm
+from camjax.family import violated_constraints as violated_constraints
 from camjax.followers import _closure
 from camjax.followers import _pitch as pitch
 from camjax.followers.roller import geometry as roller_geo
@@ -438,7 +439,7 @@ def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
         stress=positive_part(sigma[i] - problem.sigma_max_MPa),
         bounds=bounds_violation(problem, design),
     )
-    feasible = all_within(v, _tolerances(problem.sigma_max_MPa))
+    feasible = family.feasible(problem, v)
     return Evaluation(
         objective=objective(problem, weights, design),
         size_mm=design.base_radius_mm + design.roller_radius_mm,
@@ -458,16 +459,6 @@ def condense_pointwise(problem: Problem, per_angle_design: Design) -> tuple[Desi
     """
     size = per_angle_design.base_radius_mm + per_angle_design.roller_radius_mm
     return family.condense_at_largest(problem, per_angle_design, size, "prime_radius_deg")
-
-
-def _tolerances(sigma_max_MPa) -> dict:
-    """Each constraint's feasibility tolerance (:func:`camjax.family.tolerances`)."""
-    return family.tolerances(CONSTRAINT_NAMES, sigma_max_MPa)
-
-
-def violated_constraints(problem: Problem, v: Violation) -> list[str]:
-    """Names of the violated constraints (Python; needs concrete values)."""
-    return family.violated_constraints(problem, v, CONSTRAINT_NAMES)
 
 
 # ------------------------------------------------------------------------------- output
