@@ -49,6 +49,33 @@ FEASIBILITY_TOL_RAD = 1e-7
 # ------------------------------------------------------------------------------ protocol
 
 
+def design_arrays(scene, follower_type: str, what: str, arrays=None, **options):
+    """A design problem's scene arrays and its dtype cast ``as_`` (Python, not traceable: reads the scene).
+
+    Refuses a scene without [design] or with another follower (ValueError; ``what`` names the
+    family's follower: "follower.type: 'x' is not <what>"). ``arrays``: the scene's
+    :class:`camjax.evaluate.SceneArrays` if already computed, else computed here with ``options``
+    (samples, dtype, extrema) passed to :func:`camjax.evaluate.scene_arrays`.
+    """
+    from camjax.evaluate import scene_arrays
+
+    if scene.design is None:
+        raise ValueError("scene has no [design] section: nothing to optimize")
+    if scene.follower.type != follower_type:
+        raise ValueError(f"follower.type: {scene.follower.type!r} is not {what}")
+    if arrays is None:
+        arrays = scene_arrays(scene, **options)
+    dt = arrays.kin.s.dtype
+    return arrays, lambda v: jnp.asarray(v, dt)
+
+
+def design_box(design_section, design_type, as_):
+    """(lower, upper): the [design] bounds of each field of ``design_type`` (a family's ``Design``),
+    mm, cast by ``as_``."""
+    box = [design_section.bounds(name) for name in design_type._fields]
+    return design_type(*(as_(b[0]) for b in box)), design_type(*(as_(b[1]) for b in box))
+
+
 def per_angle(problem, grid_fields):
     """The n pointwise problems: every leaf named in ``grid_fields`` (n,) -> (n, 1), every other
     leaf (scalars, the box) -> (n,).

@@ -110,21 +110,13 @@ def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=
 
     Arguments as :func:`camjax.followers.roller.problem.problem_from_scene`.
     """
-    from camjax.evaluate import scene_arrays
-
-    if scene.design is None:
-        raise ValueError("scene has no [design] section: nothing to optimize")
-    if scene.follower.type != "knife_edge":
-        raise ValueError(f"follower.type: {scene.follower.type!r} is not a knife-edge follower")
-    if arrays is None:
-        arrays = scene_arrays(scene, samples=samples, dtype=dtype, extrema=extrema)
+    arrays, as_ = family.design_arrays(scene, "knife_edge", "a knife-edge follower", arrays,
+                                       samples=samples, dtype=dtype, extrema=extrema)
     d, f, kin = scene.design, scene.follower, arrays.kin
-    dt = kin.s.dtype
-    as_ = lambda v: jnp.asarray(v, dt)  # noqa: E731
-    box = [d.bounds(name) for name in VARIABLES]
+    lower, upper = family.design_box(d, Design, as_)
     return Problem(
         theta_deg=as_(arrays.theta_deg), s_mm=kin.s, ds_mm=kin.ds, d2s_mm=kin.d2s,
-        lower=Design(*(as_(b[0]) for b in box)), upper=Design(*(as_(b[1]) for b in box)),
+        lower=lower, upper=upper,
         sigma_max_MPa=as_(1.0), size_norm_mm=as_(d.bounds("base_radius_mm")[1]),
         tan_max_pressure_angle=as_(np.tan(np.radians(f.max_pressure_angle_deg))),
         max_pressure_angle_deg=as_(f.max_pressure_angle_deg),

@@ -143,22 +143,14 @@ class Evaluation(NamedTuple):
 
 def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=None) -> Problem:
     """Problem of an oscillating curved-face scene with a [design] section (Python: reads the scene)."""
-    from camjax.evaluate import scene_arrays
-
-    if scene.design is None:
-        raise ValueError("scene has no [design] section: nothing to optimize")
-    if scene.follower.type != "oscillating_curved_face":
-        raise ValueError(f"follower.type: {scene.follower.type!r} is not an oscillating curved-face follower")
-    if arrays is None:
-        arrays = scene_arrays(scene, samples=samples, dtype=dtype)
+    arrays, as_ = family.design_arrays(scene, "oscillating_curved_face", "an oscillating curved-face follower",
+                                       arrays, samples=samples, dtype=dtype)
     d, f, kin = scene.design, scene.follower, arrays.kin
-    dt = kin.s.dtype
-    as_ = lambda v: jnp.asarray(v, dt)  # noqa: E731
-    box = [d.bounds(name) for name in VARIABLES]
+    lower, upper = family.design_box(d, Design, as_)
     return Problem(
         theta_deg=as_(arrays.theta_deg), s_rad=kin.s, ds=kin.ds, d2s=kin.d2s,
         moment_coefficient=as_(moment_coefficient(scene, arrays)),
-        lower=Design(*(as_(b[0]) for b in box)), upper=Design(*(as_(b[1]) for b in box)),
+        lower=lower, upper=upper,
         sigma_max_MPa=as_(d.sigma_max_MPa if d.sigma_max_MPa is not None else 1.0),
         size_norm_mm=as_(d.bounds("base_radius_mm")[1] + d.bounds("face_width_mm")[1]),
         tan_max_pressure_angle=as_(np.tan(np.radians(f.max_pressure_angle_deg))),

@@ -139,23 +139,15 @@ def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=
         scene's ``[motion] extrema``. Exact: the solvers' designs are polished so that every
         constraint holds between the samples too (:func:`polish`).
     """
-    from camjax.evaluate import scene_arrays
-
-    if scene.design is None:
-        raise ValueError("scene has no [design] section: nothing to optimize")
-    if scene.follower.type != "roller":
-        raise ValueError(f"follower.type: {scene.follower.type!r} is not a roller follower")
-    if arrays is None:
-        arrays = scene_arrays(scene, samples=samples, dtype=dtype, extrema=extrema)
+    arrays, as_ = family.design_arrays(scene, "roller", "a roller follower", arrays,
+                                       samples=samples, dtype=dtype, extrema=extrema)
     d, f, kin = scene.design, scene.follower, arrays.kin
-    dt = kin.s.dtype
-    as_ = lambda v: jnp.asarray(v, dt)  # noqa: E731
-    box = [d.bounds("base_radius_mm"), d.bounds("roller_radius_mm"), d.bounds("offset_mm")]
+    lower, upper = family.design_box(d, Design, as_)
     coeff = arrays.stress_coefficient
     return Problem(
         theta_deg=as_(arrays.theta_deg), s_mm=kin.s, ds_mm=kin.ds, d2s_mm=kin.d2s,
         stress_coefficient=jnp.zeros_like(kin.s) if coeff is None else as_(coeff),
-        lower=Design(*(as_(b[0]) for b in box)), upper=Design(*(as_(b[1]) for b in box)),
+        lower=lower, upper=upper,
         sigma_max_MPa=as_(d.sigma_max_MPa if d.sigma_max_MPa is not None else 1.0),
         size_norm_mm=as_(d.bounds("base_radius_mm")[1] + d.bounds("roller_radius_mm")[1]),
         tan_max_pressure_angle=as_(np.tan(np.radians(f.max_pressure_angle_deg))),
