@@ -336,11 +336,7 @@ def solution_json(problem: Problem, solution) -> dict:
         size_mm=d.base_radius_mm + d.face_width_mm,
         violation={"pressure_angle_deg": np.degrees(v.pressure_angle), "undercut_mm": v.undercut,
                    "face_travel_mm": v.face_travel, "stress_MPa": v.stress, "bounds_mm": v.bounds},
-        figures={"stress_max_MPa": ev.stress_max_MPa, "stress_max_deg": ev.stress_max_deg,
-                 "pressure_angle_max_deg": ev.pressure_angle_max_deg,
-                 "pressure_angle_max_at_deg": ev.pressure_angle_max_at_deg,
-                 "max_pressure_angle_deg": problem.max_pressure_angle_deg,
-                 "cam_rho_min_mm": ev.cam_rho_min_mm,
+        figures={**roller.roller_figures(ev, problem.max_pressure_angle_deg),
                  "face_travel_max_mm": ev.face_travel_max_mm, "face_travel_max_deg": ev.face_travel_max_deg},
         pointwise_angles=("base_radius_deg",))
 

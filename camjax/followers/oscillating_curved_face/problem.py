@@ -62,9 +62,10 @@ from camjax.followers import _pitch as pitch
 from camjax.followers._swing import moment_model, polish_design
 from camjax.followers.oscillating_curved_face import geometry as curved_geo
 from camjax.followers.oscillating_roller import geometry as rocker_roller_geo
-from camjax.followers.oscillating_roller.problem import moment_coefficient
+from camjax.followers.oscillating_roller.problem import axial_coefficient, cos_phi, moment_coefficient
 from camjax.followers.roller import geometry as roller_geo
-from camjax.numerics import COS_FLOOR, RHO_FLOOR_MM, finite_float, floor_positive, positive_part, safe_sqrt
+from camjax.followers.roller.problem import roller_figures
+from camjax.numerics import RHO_FLOOR_MM, finite_float, floor_positive, positive_part, safe_sqrt
 
 CONSTRAINT_NAMES = ("reach", "pressure_angle", "undercut", "face_travel", "stress", "bounds")
 VARIABLES = ("base_radius_mm", "face_radius_mm", "face_width_mm", "pivot_distance_mm", "arm_length_mm")
@@ -143,8 +144,9 @@ class Evaluation(NamedTuple):
 
 def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=None) -> Problem:
     """Problem of an oscillating curved-face scene with a [design] section (Python: reads the scene)."""
-    arrays, as_ = family.design_arrays(scene, "oscillating_curved_face", "an oscillating curved-face follower",
-                                       arrays, samples=samples, dtype=dtype)
+    what = "an oscillating curved-face follower"
+    arrays, as_ = family.design_arrays(scene, "oscillating_curved_face", what, arrays,
+                                       samples=samples, dtype=dtype)
     d, f, kin = scene.design, scene.follower, arrays.kin
     lower, upper = family.design_box(d, Design, as_)
     return Problem(
@@ -191,12 +193,6 @@ def _terms(problem: Problem, design: Design) -> _Terms:
                   rocker_roller_geo.oscillating_roller_reach_constraint(rp, d, l))
 
 
-def _cos_phi(x: _Terms) -> jax.Array:
-    g = x.legs
-    norm = floor_positive(g.along**2 + g.across**2, RHO_FLOOR_MM**2)
-    return floor_positive(g.across * jax.lax.rsqrt(norm), COS_FLOOR)
-
-
 def _travel(x: _Terms, design: Design) -> jax.Array:
     """R_c |sin phi| (mm): the contact's distance from the face's axis, per angle."""
     return jnp.abs(curved_geo.face_travel_of(x.legs, design.face_radius_mm))
@@ -216,22 +212,18 @@ def face_width_need(problem: Problem, design: Design) -> jax.Array:
     return 2.0 * jnp.max(_travel(_terms(problem, column), column), axis=-1)
 
 
-def _axial_coefficient(problem: Problem, design: Design) -> jax.Array:
-    """C = C_M / sqrt(l in m): the coefficient of the force along the path of the face's centre, M / l."""
-    return problem.moment_coefficient * jax.lax.rsqrt(design.arm_length_mm * 1e-3)
-
-
 def stress(problem: Problem, design: Design) -> jax.Array:
     """Hertz contact stress sigma(theta) (MPa), shape (n,); finite (saturated) at an undercut."""
     x = _terms(problem, design)
     phi = jnp.arctan2(x.legs.along, x.legs.across)
-    return roller_stress(_axial_coefficient(problem, design), phi, x.rho_eq)
+    return roller_stress(axial_coefficient(problem, design), phi, x.rho_eq)
 
 
 def peak_stress(problem: Problem, design: Design) -> jax.Array:
     """max_theta sigma (MPa), shape ()."""
     x = _terms(problem, design)
-    ratio = _axial_coefficient(problem, design) ** 2 / (_cos_phi(x) * floor_positive(x.rho_eq, RHO_FLOOR_MM))
+    coefficient = axial_coefficient(problem, design)
+    ratio = coefficient**2 / (cos_phi(x.legs) * floor_positive(x.rho_eq, RHO_FLOOR_MM))
     return safe_sqrt(jnp.max(ratio))
 
 
@@ -250,7 +242,7 @@ def constraints(problem: Problem, design: Design) -> Constraints:
     """Every angle's constraints as g <= 0 (mm), shape (n,) each; finite for every design."""
     x = _terms(problem, design)
     reach_r = design.face_radius_mm + problem.min_curvature_radius_mm
-    need = _axial_coefficient(problem, design) ** 2 / (problem.sigma_max_MPa**2 * _cos_phi(x))
+    need = axial_coefficient(problem, design) ** 2 / (problem.sigma_max_MPa**2 * cos_phi(x.legs))
     return Constraints(
         reach=jnp.broadcast_to(x.reach, x.kappa.shape),
         pressure_angle=jnp.abs(x.legs.along) - problem.tan_max_pressure_angle * x.legs.across,
@@ -329,10 +321,7 @@ def solution_json(problem: Problem, solution) -> dict:
         violation={"reach_mm": v.reach, "pressure_angle_deg": np.degrees(v.pressure_angle),
                    "undercut_mm": v.undercut, "face_travel_mm": v.face_travel, "stress_MPa": v.stress,
                    "bounds_mm": v.bounds},
-        figures={"stress_max_MPa": ev.stress_max_MPa, "stress_max_deg": ev.stress_max_deg,
-                 "pressure_angle_max_deg": ev.pressure_angle_max_deg,
-                 "pressure_angle_max_at_deg": ev.pressure_angle_max_at_deg,
-                 "max_pressure_angle_deg": limit_deg, "cam_rho_min_mm": ev.cam_rho_min_mm,
+        figures={**roller_figures(ev, limit_deg),
                  "face_travel_max_mm": ev.face_travel_max_mm, "face_travel_max_deg": ev.face_travel_max_deg},
         pointwise_angles=("prime_radius_deg",))
 

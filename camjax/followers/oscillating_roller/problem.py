@@ -203,7 +203,9 @@ def _geometry(problem: Problem, design: Design) -> _Geometry:
     return _Geometry(l * q - d * jnp.cos(psi), d * jnp.sin(psi), kappa, reach)
 
 
-def _cos_phi(g: _Geometry) -> jax.Array:
+def cos_phi(g) -> jax.Array:
+    """cos phi of the pressure-angle legs ``g`` (``along``, ``across``, mm), floored at COS_FLOOR (both
+    oscillating families)."""
     norm = floor_positive(g.along**2 + g.across**2, RHO_FLOOR_MM**2)
     return floor_positive(g.across * jax.lax.rsqrt(norm), COS_FLOOR)
 
@@ -214,8 +216,9 @@ def pressure_angle(problem: Problem, design: Design) -> jax.Array:
     return jnp.arctan2(g.along, g.across)
 
 
-def _axial_coefficient(problem: Problem, design: Design) -> jax.Array:
-    """C = C_M / sqrt(l in m): the coefficient of the force along the roller's path, M / l."""
+def axial_coefficient(problem: Problem, design: Design) -> jax.Array:
+    """C = C_M / sqrt(l in m): the coefficient of the force along the path of the roller's (or the
+    curved face's) centre, M / l."""
     return problem.moment_coefficient * jax.lax.rsqrt(design.arm_length_mm * 1e-3)
 
 
@@ -223,14 +226,14 @@ def stress(problem: Problem, design: Design) -> jax.Array:
     """Hertz contact stress sigma(theta) (MPa), shape (n,); finite (saturated) at an undercut."""
     g = _geometry(problem, design)
     rho_eq = roller_geo.roller_equivalent_radius(g.kappa, design.roller_radius_mm)
-    return roller_stress(_axial_coefficient(problem, design), jnp.arctan2(g.along, g.across), rho_eq)
+    return roller_stress(axial_coefficient(problem, design), jnp.arctan2(g.along, g.across), rho_eq)
 
 
 def peak_stress(problem: Problem, design: Design) -> jax.Array:
     """max_theta sigma (MPa), shape ()."""
     g = _geometry(problem, design)
     rho_eq = roller_geo.roller_equivalent_radius(g.kappa, design.roller_radius_mm)
-    ratio = _axial_coefficient(problem, design) ** 2 / (_cos_phi(g) * floor_positive(rho_eq, RHO_FLOOR_MM))
+    ratio = axial_coefficient(problem, design) ** 2 / (cos_phi(g) * floor_positive(rho_eq, RHO_FLOOR_MM))
     return safe_sqrt(jnp.max(ratio))
 
 
@@ -250,7 +253,7 @@ def constraints(problem: Problem, design: Design) -> Constraints:
     g = _geometry(problem, design)
     reach_r = design.roller_radius_mm + problem.min_curvature_radius_mm
     rho_eq = roller_geo.roller_equivalent_radius(g.kappa, design.roller_radius_mm)
-    need = _axial_coefficient(problem, design) ** 2 / (problem.sigma_max_MPa**2 * _cos_phi(g))
+    need = axial_coefficient(problem, design) ** 2 / (problem.sigma_max_MPa**2 * cos_phi(g))
     first = Constraints(
         reach=jnp.broadcast_to(g.reach, g.kappa.shape),
         pressure_angle=jnp.abs(g.along) - problem.tan_max_pressure_angle * g.across,
