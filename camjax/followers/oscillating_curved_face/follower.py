@@ -25,6 +25,7 @@ from camjax.followers._rocking import (
     RockerGeometry,
     RockerSizing,
     RockingFollower,
+    circle_arm_closure_problem,
     read_train,
 )
 from camjax.followers._swing import relative_rate
@@ -126,19 +127,8 @@ class OscillatingCurvedFace(RockingFollower):
     def closure_problem(self, scene, kin, base_radius_mm) -> str | None:
         """As the oscillating roller's with R_f = R_c: |d - l| < R_b + R_c < d + l and the arm stays
         off the line of centres while it swings."""
-        f = scene.follower
-        swing = float(np.max(np.asarray(kin.s)))
-        if base_radius_mm <= 0:
-            return "the base radius must be > 0"
-        d, l, rp = f.pivot_distance_mm, f.arm_length_mm, base_radius_mm + f.face_radius_mm
-        if not abs(d - l) < rp < d + l:
-            return (f"the face cannot reach the prime circle R_p = R_b + R_c = {rp:g} mm: needs |d - l| = "
-                    f"{abs(d - l):g} < R_p < d + l = {d + l:g}")
-        psi0 = math.acos((d * d + l * l - rp * rp) / (2 * d * l))
-        if psi0 + swing >= math.pi:
-            return (f"the arm starts {math.degrees(psi0):g} deg from the line of centres and the lift "
-                    f"({math.degrees(swing):g} deg) swings it through that line")
-        return None
+        return circle_arm_closure_problem(scene, kin, base_radius_mm, scene.follower.face_radius_mm,
+                                          "the face cannot reach the prime circle R_p = R_b + R_c")
 
     def geometry(self, scene, kin, base_radius_mm) -> RockerGeometry:
         f, rotation = scene.follower, scene.motion.rotation
