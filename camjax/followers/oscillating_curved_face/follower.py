@@ -19,6 +19,7 @@ import numpy as np
 
 from camjax import contact, loads
 from camjax.family import FEASIBILITY_TOL_MM
+from camjax.followers import _checks
 from camjax.followers._rocking import (
     TRAIN_KEYS,
     RockerCurves,
@@ -80,9 +81,7 @@ class OscillatingCurvedFace(RockingFollower):
         self.check_keys(r)
         train = read_train(r)
         pivot = r.number("pivot_distance_mm", low=0.0, low_open=True)
-        limit = r.number("max_pressure_angle_deg", DEFAULT, low=0.0, low_open=True)
-        if limit is not DEFAULT and limit >= 90.0:
-            raise r.error("max_pressure_angle_deg", limit, "out of range", "> 0 and < 90")
+        limit = _checks.read_max_pressure_angle(r)
         radius = r.number("face_radius_mm", low=0.0, low_open=True)
         width = r.number("face_width_mm", low=0.0, low_open=True)
         if width > 2.0 * radius:

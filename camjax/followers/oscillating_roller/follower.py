@@ -17,7 +17,7 @@ import numpy as np
 
 from camjax import contact, loads, runtime
 from camjax.errors import SceneError
-from camjax.followers import _closure
+from camjax.followers import _checks, _closure
 from camjax.followers._closure import POSITIVE_CLOSURES, closure_keys, read_closure
 from camjax.followers._rocking import (
     TRAIN_KEYS,
@@ -131,9 +131,7 @@ class OscillatingRoller(RockingFollower):
         self.check_keys(r)
         train = read_train(r)
         pivot = r.number("pivot_distance_mm", low=0.0, low_open=True)
-        limit = r.number("max_pressure_angle_deg", DEFAULT, low=0.0, low_open=True)
-        if limit is not DEFAULT and limit >= 90.0:
-            raise r.error("max_pressure_angle_deg", limit, "out of range", "> 0 and < 90")
+        limit = _checks.read_max_pressure_angle(r)
         arm = r.number("arm_length_mm", low=0.0, low_open=True)
         roller = r.number("roller_radius_mm", low=0.0, low_open=True)
         return build(OscillatingRollerSpec, type=self.name, train=train, pivot_distance_mm=pivot,
