@@ -49,7 +49,6 @@ from camjax.family import bounds as bounds
 from camjax.family import bounds_violation as bounds_violation
 from camjax.family import size_norm as size_norm
 from camjax.family import violated_constraints as violated_constraints
-from camjax.followers import _pitch as pitch
 from camjax.followers.roller import geometry as roller_geo
 from camjax.followers.roller import problem as roller
 from camjax.numerics import RHO_FLOOR_MM, finite_float, floor_positive, positive_part
@@ -135,21 +134,10 @@ def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=
     """
     arrays, as_ = family.design_arrays(scene, "curved_face", "a curved-face follower", arrays,
                                        samples=samples, dtype=dtype, extrema=extrema)
-    d, f, kin = scene.design, scene.follower, arrays.kin
+    d = scene.design
     lower, upper = family.design_box(d, Design, as_)
-    coeff = arrays.stress_coefficient
-    return Problem(
-        theta_deg=as_(arrays.theta_deg), s_mm=kin.s, ds_mm=kin.ds, d2s_mm=kin.d2s,
-        stress_coefficient=jnp.zeros_like(kin.s) if coeff is None else as_(coeff),
-        lower=lower, upper=upper,
-        sigma_max_MPa=as_(d.sigma_max_MPa if d.sigma_max_MPa is not None else 1.0),
-        size_norm_mm=as_(d.bounds("base_radius_mm")[1] + d.bounds("face_width_mm")[1]),
-        tan_max_pressure_angle=as_(np.tan(np.radians(f.max_pressure_angle_deg))),
-        max_pressure_angle_deg=as_(f.max_pressure_angle_deg),
-        min_curvature_radius_mm=as_(f.min_curvature_radius_mm),
-        rotation_sign=as_(pitch.rotation_sign(scene.motion.rotation)),
-        model=arrays.model,
-    )
+    return Problem(**roller.circle_scene_fields(scene, arrays, as_), lower=lower, upper=upper,
+                   size_norm_mm=as_(d.bounds("base_radius_mm")[1] + d.bounds("face_width_mm")[1]))
 
 
 def per_angle(problem: Problem) -> Problem:

@@ -141,21 +141,31 @@ def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=
     """
     arrays, as_ = family.design_arrays(scene, "roller", "a roller follower", arrays,
                                        samples=samples, dtype=dtype, extrema=extrema)
-    d, f, kin = scene.design, scene.follower, arrays.kin
+    d, kin = scene.design, arrays.kin
     lower, upper = family.design_box(d, Design, as_)
-    coeff = arrays.stress_coefficient
     return Problem(
+        **circle_scene_fields(scene, arrays, as_), lower=lower, upper=upper,
+        size_norm_mm=as_(d.bounds("base_radius_mm")[1] + d.bounds("roller_radius_mm")[1]),
+        closure=_closure.design_terms(scene, arrays, _second_coefficient(scene.contact, arrays.force_N, kin.s)),
+    )
+
+
+def circle_scene_fields(scene, arrays, as_) -> dict:
+    """The Problem fields of a translating circle on the cam (the roller, the curved face's crown)
+    that come from the scene alone: the grid (theta, s, s', s'', the Hertz coefficient C, zeros
+    without [contact]), the limits (sigma_max, tan phi_max, phi_max, rho_min), the rotation's sign
+    and the model behind the grid; ``as_`` casts to the problem's dtype (Python: reads the scene)."""
+    d, f, kin = scene.design, scene.follower, arrays.kin
+    coeff = arrays.stress_coefficient
+    return dict(
         theta_deg=as_(arrays.theta_deg), s_mm=kin.s, ds_mm=kin.ds, d2s_mm=kin.d2s,
         stress_coefficient=jnp.zeros_like(kin.s) if coeff is None else as_(coeff),
-        lower=lower, upper=upper,
         sigma_max_MPa=as_(d.sigma_max_MPa if d.sigma_max_MPa is not None else 1.0),
-        size_norm_mm=as_(d.bounds("base_radius_mm")[1] + d.bounds("roller_radius_mm")[1]),
         tan_max_pressure_angle=as_(np.tan(np.radians(f.max_pressure_angle_deg))),
         max_pressure_angle_deg=as_(f.max_pressure_angle_deg),
         min_curvature_radius_mm=as_(f.min_curvature_radius_mm),
         rotation_sign=as_(pitch.rotation_sign(scene.motion.rotation)),
         model=arrays.model,
-        closure=_closure.design_terms(scene, arrays, _second_coefficient(scene.contact, arrays.force_N, kin.s)),
     )
 
 
