@@ -49,6 +49,33 @@ FEASIBILITY_TOL_RAD = 1e-7
 # ------------------------------------------------------------------------------ protocol
 
 
+def design_arrays(scene, follower_type: str, what: str, arrays=None, **options):
+    """A design problem's scene arrays and its dtype cast ``as_`` (Python, not traceable: reads the scene).
+
+    Refuses a scene without [design] or with another follower (ValueError; ``what`` names the
+    family's follower: "follower.type: 'x' is not <what>"). ``arrays``: the scene's
+    :class:`camjax.evaluate.SceneArrays` if already computed, else computed here with ``options``
+    (samples, dtype, extrema) passed to :func:`camjax.evaluate.scene_arrays`.
+    """
+    from camjax.evaluate import scene_arrays
+
+    if scene.design is None:
+        raise ValueError("scene has no [design] section: nothing to optimize")
+    if scene.follower.type != follower_type:
+        raise ValueError(f"follower.type: {scene.follower.type!r} is not {what}")
+    if arrays is None:
+        arrays = scene_arrays(scene, **options)
+    dt = arrays.kin.s.dtype
+    return arrays, lambda v: jnp.asarray(v, dt)
+
+
+def design_box(design_section, design_type, as_):
+    """(lower, upper): the [design] bounds of each field of ``design_type`` (a family's ``Design``),
+    mm, cast by ``as_``."""
+    box = [design_section.bounds(name) for name in design_type._fields]
+    return design_type(*(as_(b[0]) for b in box)), design_type(*(as_(b[1]) for b in box))
+
+
 def per_angle(problem, grid_fields):
     """The n pointwise problems: every leaf named in ``grid_fields`` (n,) -> (n, 1), every other
     leaf (scalars, the box) -> (n,).
@@ -101,6 +128,67 @@ def all_within(violation, tolerances: dict) -> jax.Array:
 def violated(names, violation, tolerances: dict) -> list[str]:
     """The names (in the order of ``names``) whose violation exceeds its tolerance (Python)."""
     return [name for name in names if float(getattr(violation, name)) > tolerances[name]]
+
+
+def size_norm(problem) -> jax.Array:
+    """N (mm), shape (): the length the constraints are divided by (the family's ``size_norm_mm``,
+    the largest size its box allows)."""
+    return problem.size_norm_mm
+
+
+def stacked_maxima(constraints):
+    """max_theta of each per-angle constraint (a family's ``Constraints`` of (n,) arrays), shape ()
+    each, as one reduction over the stacked constraints: XLA then evaluates the shared terms once
+    per angle instead of once per constraint."""
+    return type(constraints)(*jnp.max(jnp.stack(constraints), axis=-1))
+
+
+def tolerances(names, sigma_max_MPa=None) -> dict:
+    """Each named constraint's feasibility tolerance: the pressure angle's in rad
+    (:data:`FEASIBILITY_TOL_RAD`), the stress's in MPa (:data:`FEASIBILITY_RTOL_STRESS` times
+    ``sigma_max_MPa``), every other's in mm (:data:`FEASIBILITY_TOL_MM`)."""
+    def one(name):
+        if name == "pressure_angle":
+            return FEASIBILITY_TOL_RAD
+        if name == "stress":
+            return FEASIBILITY_RTOL_STRESS * sigma_max_MPa
+        return FEASIBILITY_TOL_MM
+
+    return {name: one(name) for name in names}
+
+
+def feasible(problem, violation) -> jax.Array:
+    """Whether every violation (a family's ``Violation``, one field per constraint) is within its
+    :func:`tolerances` (bool, traceable; the stress's relative to ``problem.sigma_max_MPa``)."""
+    return all_within(violation, tolerances(violation._fields, problem.sigma_max_MPa))
+
+
+def violated_constraints(problem, violation) -> list[str]:
+    """Names of the violated constraints, in the order of the ``Violation``'s fields, each judged by
+    its :func:`tolerances` (Python; needs concrete values)."""
+    names = violation._fields
+    sigma_max = float(problem.sigma_max_MPa) if "stress" in names else None
+    return violated(names, violation, tolerances(names, sigma_max))
+
+
+def unit_coordinate(x, lo, hi):
+    """(x - lo) / (hi - lo): a variable over its bounds (x - lo for a fixed one, lo == hi)."""
+    return (x - lo) / jnp.where(hi > lo, hi - lo, 1.0)
+
+
+def from_unit_coordinate(v, lo, hi):
+    """lo + v (hi - lo): the inverse of :func:`unit_coordinate`."""
+    return lo + v * jnp.where(hi > lo, hi - lo, 1.0)
+
+
+def to_unit_box(problem, design):
+    """Design (mm) -> each variable over its bounds (:func:`unit_coordinate`; not clipped)."""
+    return jax.tree.map(unit_coordinate, design, problem.lower, problem.upper)
+
+
+def from_unit_box(problem, u):
+    """Unit-box coordinates -> design (mm): the inverse of :func:`to_unit_box`."""
+    return jax.tree.map(from_unit_coordinate, u, problem.lower, problem.upper)
 
 
 # -------------------------------------------------------------------------------- output

@@ -1,4 +1,5 @@
-"""The constraint checks both follower families apply to an evaluated geometry, each one sentence.
+"""The constraint checks both follower families apply to an evaluated geometry, each one sentence,
+and the [follower] and [design] checks several follower types share.
 
 Tolerances are the solvers' (:data:`camjax.family.FEASIBILITY_TOL_MM`, relative 1e-6 on the
 stress, :data:`camjax.family.FEASIBILITY_TOL_RAD` on the pressure angle), so a design a solver
@@ -11,6 +12,7 @@ import math
 
 from camjax.family import FEASIBILITY_RTOL_STRESS, FEASIBILITY_TOL_MM, FEASIBILITY_TOL_RAD
 from camjax.results import GeometryViolation
+from camjax.scene.reader import DEFAULT
 
 
 def curvature(rho: float, deg: float, rho_min_mm: float) -> list[GeometryViolation]:
@@ -78,3 +80,31 @@ def closure(own: dict, theta_deg, pressure_angle_limit_deg: float | None) -> lis
         for v in pressure_angle(*worst(np.abs(own["conjugate_pressure_angle_deg"]), np.argmax), pressure_angle_limit_deg):
             out.append(GeometryViolation("conjugate_pressure_angle", "second cam: " + v.message))
     return out
+
+
+# ------------------------------------------------------------------------------ scene checks
+
+
+def read_max_pressure_angle(r):
+    """[follower] max_pressure_angle_deg (deg, > 0 and < 90), or DEFAULT when the scene leaves it out."""
+    limit = r.number("max_pressure_angle_deg", DEFAULT, low=0.0, low_open=True)
+    if limit is not DEFAULT and limit >= 90.0:
+        raise r.error("max_pressure_angle_deg", limit, "out of range", "> 0 and < 90")
+    return limit
+
+
+def offset_cuts_prime_circle(r, offset: tuple[float, float], reach: float, prime: str) -> None:
+    """Refuses [design] offset bounds (mm) with |e| >= R_p for every design in the bounds: ``reach``
+    the largest prime radius the bounds allow (mm), ``prime`` its formula ("R_b + R_f"). |e| < R_p
+    is a constraint of the problem (its pressure-angle constraint holds only there)."""
+    if least_abs_offset(offset) >= reach:
+        raise r.error("offset_mm", list(offset) if offset[0] != offset[1] else offset[0],
+                      f"gives |e| >= R_p = {prime} for every design in the bounds (largest R_p: "
+                      f"{reach:g} mm): the follower axis must cut the prime circle",
+                      f"|e| < {reach:g} somewhere in the bounds")
+
+
+def least_abs_offset(bounds: tuple[float, float]) -> float:
+    """The smallest |e| (mm) in the offset's bounds (lo, hi): 0 when they straddle 0."""
+    lo, hi = bounds
+    return 0.0 if lo <= 0.0 <= hi else min(abs(lo), abs(hi))

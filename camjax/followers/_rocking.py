@@ -196,6 +196,28 @@ def rocker_violations(curves: RockerCurves, scene, extremes: dict[str, Extremes]
     return out
 
 
+def circle_arm_closure_problem(scene, kin, base_radius_mm: float, circle_radius_mm: float,
+                               cannot_reach: str) -> str | None:
+    """Why an arm carrying a circle of radius R (mm; the roller, the curved face's crown) cannot
+    drive the cam at base radius R_b (mm), or None: the prime radius R_p = R_b + R must lie
+    strictly between |d - l| and d + l (the circle reaches the prime circle) and the arm must stay
+    off the line of centres while it swings (psi0 + max s < pi). ``cannot_reach`` opens the first
+    message (e.g. "the roller cannot reach the prime circle R_p")."""
+    f = scene.follower
+    swing = float(np.max(np.asarray(kin.s)))
+    if base_radius_mm <= 0:
+        return "the base radius must be > 0"
+    d, l, rp = f.pivot_distance_mm, f.arm_length_mm, base_radius_mm + circle_radius_mm
+    if not abs(d - l) < rp < d + l:
+        return (f"{cannot_reach} = {rp:g} mm: needs |d - l| = "
+                f"{abs(d - l):g} < R_p < d + l = {d + l:g}")
+    psi0 = math.acos((d * d + l * l - rp * rp) / (2 * d * l))
+    if psi0 + swing >= math.pi:
+        return (f"the arm starts {math.degrees(psi0):g} deg from the line of centres and the lift "
+                f"({math.degrees(swing):g} deg) swings it through that line")
+    return None
+
+
 class _Motion(NamedTuple):
     rotation: str
 

@@ -28,6 +28,7 @@ from camjax import loads
 from camjax.evaluate import SceneArrays, curve_extremes, curve_names, scene_arrays
 from camjax.family import FEASIBILITY_TOL_MM
 from camjax.followers import _checks
+from camjax.followers._checks import least_abs_offset as least_abs_offset  # re-exported
 from camjax.followers._contract import Follower
 from camjax.loads import FollowerTrain
 from camjax.program import TimeKinematics
@@ -119,12 +120,6 @@ class DesignCurves(NamedTuple):
     # cover (a crowned face's R_c sin phi; without it, a flat face's s')
     own_curves: dict[str, np.ndarray] | None = None
     closure: str = "spring"  # [follower] closure: "groove" and "conjugate" add their curves to own_curves
-
-
-def least_abs_offset(bounds: tuple[float, float]) -> float:
-    """The smallest |e| (mm) in the offset's bounds (lo, hi): 0 when they straddle 0."""
-    lo, hi = bounds
-    return 0.0 if lo <= 0.0 <= hi else min(abs(lo), abs(hi))
 
 
 def _np(x):

@@ -19,13 +19,13 @@ import numpy as np
 
 from camjax import contact, program, runtime
 from camjax.evaluate import curve_extremes
+from camjax.followers import _checks
 from camjax.followers._pitch import rotation_sign
 from camjax.followers._translating import (
     TRAIN_KEYS,
     DesignSolution,
     GeometryCurves,
     TranslatingFollower,
-    least_abs_offset,
     read_train,
 )
 from camjax.followers.curved_face import geometry as curved_geo
@@ -95,9 +95,7 @@ class CurvedFace(TranslatingFollower):
     def parse(self, r) -> CurvedFaceSpec:
         self.check_keys(r)
         train = read_train(r)
-        limit = r.number("max_pressure_angle_deg", DEFAULT, low=0.0, low_open=True)
-        if limit is not DEFAULT and limit >= 90.0:
-            raise r.error("max_pressure_angle_deg", limit, "out of range", "> 0 and < 90")
+        limit = _checks.read_max_pressure_angle(r)
         radius = r.number("face_radius_mm", low=0.0, low_open=True)
         width = r.number("face_width_mm", low=0.0, low_open=True)
         if width > 2.0 * radius:
@@ -112,14 +110,8 @@ class CurvedFace(TranslatingFollower):
         radius = fixed_or_free(r, "face_radius_mm", (follower.face_radius_mm,) * 2)
         width = fixed_or_free(r, "face_width_mm", (follower.face_width_mm,) * 2)
         offset = fixed_or_free(r, "offset_mm", (follower.offset_mm,) * 2, positive=False)
-        # |e| < R_p is a constraint of the problem (its pressure-angle constraint holds only there):
-        # refused here only when no design in the bounds meets it
-        reach = base[1] + radius[1]  # the largest prime radius in the bounds
-        if least_abs_offset(offset) >= reach:
-            raise r.error("offset_mm", list(offset) if offset[0] != offset[1] else offset[0],
-                          f"gives |e| >= R_p = R_b + R_c for every design in the bounds (largest R_p: "
-                          f"{reach:g} mm): the follower axis must cut the prime circle",
-                          f"|e| < {reach:g} somewhere in the bounds")
+        # refused only when no design in the bounds has |e| < R_p
+        _checks.offset_cuts_prime_circle(r, offset, base[1] + radius[1], "R_b + R_c")
         if width[1] > 2.0 * radius[0]:
             raise r.error("face_width_mm", list(width) if width[0] != width[1] else width[0],
                           f"allows a face wider than its circle (2 R_c = {2.0 * radius[0]:g} mm at the "

@@ -41,16 +41,17 @@ import jax.numpy as jnp
 import numpy as np
 
 from camjax import family
-from camjax.contact import roller_stress
-from camjax.family import FEASIBILITY_RTOL_STRESS, FEASIBILITY_TOL_MM, Weights, all_within, weighted_objective
 
 # re-exported: this family's protocol functions and tolerance, written once for every family
 from camjax.family import FEASIBILITY_TOL_RAD as FEASIBILITY_TOL_RAD
+from camjax.family import Weights, weighted_objective
 from camjax.family import bounds as bounds
 from camjax.family import bounds_violation as bounds_violation
-from camjax.followers import _pitch as pitch
+from camjax.family import size_norm as size_norm
+from camjax.family import violated_constraints as violated_constraints
 from camjax.followers.roller import geometry as roller_geo
-from camjax.numerics import COS_FLOOR, RHO_FLOOR_MM, finite_float, floor_positive, positive_part, safe_sqrt
+from camjax.followers.roller import problem as roller
+from camjax.numerics import RHO_FLOOR_MM, finite_float, floor_positive, positive_part
 
 CONSTRAINT_NAMES = ("pressure_angle", "undercut", "face_travel", "stress", "bounds")
 VARIABLES = ("base_radius_mm", "face_radius_mm", "face_width_mm", "offset_mm")
@@ -131,31 +132,12 @@ def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=
 
     Arguments as :func:`camjax.followers.roller.problem.problem_from_scene`.
     """
-    from camjax.evaluate import scene_arrays
-
-    if scene.design is None:
-        raise ValueError("scene has no [design] section: nothing to optimize")
-    if scene.follower.type != "curved_face":
-        raise ValueError(f"follower.type: {scene.follower.type!r} is not a curved-face follower")
-    if arrays is None:
-        arrays = scene_arrays(scene, samples=samples, dtype=dtype, extrema=extrema)
-    d, f, kin = scene.design, scene.follower, arrays.kin
-    dt = kin.s.dtype
-    as_ = lambda v: jnp.asarray(v, dt)  # noqa: E731
-    box = [d.bounds(name) for name in VARIABLES]
-    coeff = arrays.stress_coefficient
-    return Problem(
-        theta_deg=as_(arrays.theta_deg), s_mm=kin.s, ds_mm=kin.ds, d2s_mm=kin.d2s,
-        stress_coefficient=jnp.zeros_like(kin.s) if coeff is None else as_(coeff),
-        lower=Design(*(as_(b[0]) for b in box)), upper=Design(*(as_(b[1]) for b in box)),
-        sigma_max_MPa=as_(d.sigma_max_MPa if d.sigma_max_MPa is not None else 1.0),
-        size_norm_mm=as_(d.bounds("base_radius_mm")[1] + d.bounds("face_width_mm")[1]),
-        tan_max_pressure_angle=as_(np.tan(np.radians(f.max_pressure_angle_deg))),
-        max_pressure_angle_deg=as_(f.max_pressure_angle_deg),
-        min_curvature_radius_mm=as_(f.min_curvature_radius_mm),
-        rotation_sign=as_(pitch.rotation_sign(scene.motion.rotation)),
-        model=arrays.model,
-    )
+    arrays, as_ = family.design_arrays(scene, "curved_face", "a curved-face follower", arrays,
+                                       samples=samples, dtype=dtype, extrema=extrema)
+    d = scene.design
+    lower, upper = family.design_box(d, Design, as_)
+    return Problem(**roller.circle_scene_fields(scene, arrays, as_), lower=lower, upper=upper,
+                   size_norm_mm=as_(d.bounds("base_radius_mm")[1] + d.bounds("face_width_mm")[1]))
 
 
 def per_angle(problem: Problem) -> Problem:
@@ -166,36 +148,24 @@ def per_angle(problem: Problem) -> Problem:
 # ---------------------------------------------------------------------------- physics
 
 
-class _Terms(NamedTuple):
-    """Per-angle quantities every function of a design shares (shape (n,) each)."""
-
-    w: jax.Array  # d + s, mm: the face centre's height on the follower axis
-    u: jax.Array  # s' - e~, mm: tan phi = u / w (up to the rotation's sign)
-    r: jax.Array  # sqrt(w^2 + u^2), mm: the face centre's distance from the instant centre
-    inv_cos: jax.Array  # 1 / cos phi = r / w, cos phi floored at COS_FLOOR
-    kappa: jax.Array  # pitch-curve curvature, 1/mm (convex > 0)
-    rho_eq: jax.Array  # Hertz equivalent radius 1 / (1/rho_c + 1/R_c), mm
+def _as_roller(design: Design) -> roller.Design:
+    """The roller with the crown's radius: the curved face's contact is the roller's circle on the
+    pitch curve of R_p = R_b + R_c (its terms, pressure angle, stress and circle constraints)."""
+    return roller.Design(design.base_radius_mm, design.face_radius_mm, design.offset_mm)
 
 
-def _terms(problem: Problem, design: Design) -> _Terms:
-    e = problem.rotation_sign * design.offset_mm
-    w = pitch.pitch_height(design.base_radius_mm + design.face_radius_mm, e, problem.s_mm)
-    u = problem.ds_mm - e
-    r = jnp.sqrt(w**2 + u**2)
-    kappa = pitch.pitch_curvature(w, problem.ds_mm, problem.d2s_mm, e)
-    return _Terms(w, u, r, r / jnp.maximum(w, COS_FLOOR * r), kappa,
-                  roller_geo.roller_equivalent_radius(kappa, design.face_radius_mm))
+def _terms(problem: Problem, design: Design) -> roller.CircleTerms:
+    return roller.circle_terms(problem, _as_roller(design))
 
 
-def _travel(x: _Terms, design: Design) -> jax.Array:
+def _travel(x: roller.CircleTerms, design: Design) -> jax.Array:
     """R_c |u| / r (mm): the contact's distance from the face's axis, per angle."""
     return design.face_radius_mm * jnp.abs(x.u) / floor_positive(x.r, RHO_FLOOR_MM)
 
 
 def pressure_angle(problem: Problem, design: Design) -> jax.Array:
     """phi (rad) per angle, signed as :func:`camjax.followers._pitch.pressure_angle`."""
-    x = _terms(problem, design)
-    return problem.rotation_sign * jnp.arctan2(x.u, x.w)
+    return roller.pressure_angle(problem, _as_roller(design))
 
 
 def face_width_need(problem: Problem, design: Design) -> jax.Array:
@@ -207,15 +177,12 @@ def face_width_need(problem: Problem, design: Design) -> jax.Array:
 
 def stress(problem: Problem, design: Design) -> jax.Array:
     """Hertz contact stress sigma(theta) (MPa), shape (n,); finite (saturated) at an undercut."""
-    x = _terms(problem, design)
-    return roller_stress(problem.stress_coefficient, jnp.arctan2(x.u, x.w), x.rho_eq)
+    return roller.stress(problem, _as_roller(design))
 
 
 def peak_stress(problem: Problem, design: Design) -> jax.Array:
     """max_theta sigma (MPa), shape (), as sqrt(max_theta C^2 / (cos phi rho_eq)): one root."""
-    x = _terms(problem, design)
-    ratio = problem.stress_coefficient**2 * x.inv_cos / floor_positive(x.rho_eq, RHO_FLOOR_MM)
-    return safe_sqrt(jnp.max(ratio))
+    return roller.peak_stress(problem, _as_roller(design))
 
 
 def size_term(problem: Problem, design: Design) -> jax.Array:
@@ -232,41 +199,22 @@ def objective(problem: Problem, weights: Weights, design: Design) -> jax.Array:
 def constraints(problem: Problem, design: Design) -> Constraints:
     """Every angle's constraints as g <= 0 (mm), shape (n,) each; finite for every design."""
     x = _terms(problem, design)
-    reach = design.face_radius_mm + problem.min_curvature_radius_mm
-    need = problem.stress_coefficient**2 * x.inv_cos / problem.sigma_max_MPa**2
-    return Constraints(
-        pressure_angle=jnp.abs(x.u) - problem.tan_max_pressure_angle * x.w,
-        undercut=reach * roller_geo.roller_undercut_constraint(x.kappa, design.face_radius_mm,
-                                                             problem.min_curvature_radius_mm),
-        face_travel=_travel(x, design) - 0.5 * design.face_width_mm,
-        stress=need - x.rho_eq,
-    )
+    circle = roller.circle_constraints(problem, _as_roller(design), x)
+    return Constraints(pressure_angle=circle.pressure_angle, undercut=circle.undercut,
+                       face_travel=_travel(x, design) - 0.5 * design.face_width_mm, stress=circle.stress)
 
 
 def constraint_maxima(problem: Problem, design: Design) -> Constraints:
     """max_theta of each constraint of :func:`constraints`, shape () each (one stacked reduction)."""
-    return Constraints(*jnp.max(jnp.stack(constraints(problem, design)), axis=-1))
-
-
-def size_norm(problem: Problem) -> jax.Array:
-    """N = R_b,max + W_max (mm): the length the constraints are divided by, shape ()."""
-    return problem.size_norm_mm
+    return family.stacked_maxima(constraints(problem, design))
 
 
 # ------------------------------------------------------------------ solver coordinates
 
 
-def _unit(x, lo, hi):
-    return (x - lo) / jnp.where(hi > lo, hi - lo, 1.0)
-
-
-def _from(v, lo, hi):
-    return lo + v * jnp.where(hi > lo, hi - lo, 1.0)
-
-
 def to_unit(problem: Problem, design: Design) -> Design:
     """Design (mm) -> the solvers' unit-box coordinates: each variable over its bounds."""
-    return jax.tree.map(_unit, design, problem.lower, problem.upper)
+    return family.to_unit_box(problem, design)
 
 
 def from_unit(problem: Problem, u: Design) -> Design:
@@ -276,7 +224,7 @@ def from_unit(problem: Problem, u: Design) -> Design:
     Below the floor W takes the floor's value and keeps the gradient of its own coordinate too
     (straight-through), so a weighting never finds a flat, zero-gradient stretch there.
     """
-    plain = jax.tree.map(_from, u, problem.lower, problem.upper)
+    plain = family.from_unit_box(problem, u)
     floor = jnp.minimum(face_width_need(problem, plain), problem.upper.face_width_mm)
     raw = plain.face_width_mm
     height = raw - jax.lax.stop_gradient(floor)
@@ -339,7 +287,7 @@ def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
         stress_max_MPa=sigma[i], stress_max_deg=problem.theta_deg[i],
         pressure_angle_max_deg=jnp.rad2deg(phi[j]), pressure_angle_max_at_deg=problem.theta_deg[j],
         cam_rho_min_mm=rho_c_min, face_travel_max_mm=travel[k], face_travel_max_deg=problem.theta_deg[k],
-        violation=v, feasible=all_within(v, _tolerances(problem.sigma_max_MPa)),
+        violation=v, feasible=family.feasible(problem, v),
     )
 
 
@@ -359,18 +307,6 @@ def polish_pointwise(problem: Problem, weights: Weights, design: Design, extras:
     return polish(problem, weights, design, free=("base_radius_mm", "face_width_mm")), extras
 
 
-def _tolerances(sigma_max_MPa) -> dict:
-    """Each constraint's feasibility tolerance (rad, mm; the stress's in MPa)."""
-    return {"pressure_angle": FEASIBILITY_TOL_RAD, "undercut": FEASIBILITY_TOL_MM,
-            "face_travel": FEASIBILITY_TOL_MM, "bounds": FEASIBILITY_TOL_MM,
-            "stress": FEASIBILITY_RTOL_STRESS * sigma_max_MPa}
-
-
-def violated_constraints(problem: Problem, v: Violation) -> list[str]:
-    """Names of the violated constraints (Python; needs concrete values)."""
-    return family.violated(CONSTRAINT_NAMES, v, _tolerances(float(problem.sigma_max_MPa)))
-
-
 # ------------------------------------------------------------------------------- output
 
 _f = finite_float
@@ -388,11 +324,7 @@ def solution_json(problem: Problem, solution) -> dict:
         size_mm=d.base_radius_mm + d.face_width_mm,
         violation={"pressure_angle_deg": np.degrees(v.pressure_angle), "undercut_mm": v.undercut,
                    "face_travel_mm": v.face_travel, "stress_MPa": v.stress, "bounds_mm": v.bounds},
-        figures={"stress_max_MPa": ev.stress_max_MPa, "stress_max_deg": ev.stress_max_deg,
-                 "pressure_angle_max_deg": ev.pressure_angle_max_deg,
-                 "pressure_angle_max_at_deg": ev.pressure_angle_max_at_deg,
-                 "max_pressure_angle_deg": problem.max_pressure_angle_deg,
-                 "cam_rho_min_mm": ev.cam_rho_min_mm,
+        figures={**roller.roller_figures(ev, problem.max_pressure_angle_deg),
                  "face_travel_max_mm": ev.face_travel_max_mm, "face_travel_max_deg": ev.face_travel_max_deg},
         pointwise_angles=("base_radius_deg",))
 

@@ -42,19 +42,17 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from camjax import runtime
+from camjax import family, runtime
 from camjax.family import (
-    FEASIBILITY_RTOL_STRESS,
-    FEASIBILITY_TOL_MM,
     Weights,
-    all_within,
     bounds_violation,
-    violated,
     weighted_objective,
 )
 
-# re-exported: this family's protocol function, written once for every family
+# re-exported: this family's protocol functions, written once for every family
 from camjax.family import bounds as bounds
+from camjax.family import size_norm as size_norm
+from camjax.family import violated_constraints as violated_constraints
 from camjax.followers.flat import optimum
 from camjax.followers.flat.needs import (  # noqa: F401  (the family's pytrees and per-angle needs, re-exported)
     Design,
@@ -297,15 +295,9 @@ def violation(problem: Problem, design: Design, peak_stress_MPa: jax.Array | Non
     )
 
 
-def _tolerances(sigma_max_MPa) -> dict:
-    """Each constraint's feasibility tolerance (mm; the stress's in MPa)."""
-    return {"curvature": FEASIBILITY_TOL_MM, "face_width": FEASIBILITY_TOL_MM, "bounds": FEASIBILITY_TOL_MM,
-            "stress": FEASIBILITY_RTOL_STRESS * sigma_max_MPa}
-
-
 def is_feasible(problem: Problem, v: Violation) -> jax.Array:
     """All violations within the tolerances (FEASIBILITY_TOL_MM; stress relative to sigma_max)."""
-    return all_within(v, _tolerances(problem.sigma_max_MPa))
+    return family.feasible(problem, v)
 
 
 def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
@@ -333,22 +325,12 @@ def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
     )
 
 
-def violated_constraints(problem: Problem, v: Violation) -> list[str]:
-    """Names of the violated constraints (Python; needs concrete values)."""
-    return violated(CONSTRAINT_NAMES, v, _tolerances(float(problem.sigma_max_MPa)))
-
-
 # ------------------------------------------------------------------------- references
 
 
 # Secant steps of :func:`polish` (superlinear from the solver's design: ~1e-3 -> 1e-15 in ~6),
 # and its second start point, beside the solver's R, as a fraction of the R_b interval.
 # ------------------------------------------------------------------- family protocol
-
-
-def size_norm(problem: Problem) -> jax.Array:
-    """N = R_b,max + L_max (mm): the length the constraints are divided by, shape ()."""
-    return problem.size_norm_mm
 
 
 def condense_pointwise(problem: Problem, per_angle_design: Design) -> tuple[Design, dict]:

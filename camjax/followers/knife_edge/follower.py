@@ -20,6 +20,7 @@ from dataclasses import dataclass, replace
 import jax.numpy as jnp
 import numpy as np
 
+from camjax.followers import _checks
 from camjax.followers._translating import (
     TRAIN_KEYS,
     DesignSolution,
@@ -61,9 +62,7 @@ class KnifeEdge(Roller):
     def parse(self, r) -> KnifeEdgeSpec:
         self.check_keys(r)
         train = read_train(r)
-        limit = r.number("max_pressure_angle_deg", DEFAULT, low=0.0, low_open=True)
-        if limit is not DEFAULT and limit >= 90.0:
-            raise r.error("max_pressure_angle_deg", limit, "out of range", "> 0 and < 90")
+        limit = _checks.read_max_pressure_angle(r)
         return build(KnifeEdgeSpec, type=self.name, train=train, offset_mm=r.number("offset_mm", DEFAULT),
                      max_pressure_angle_deg=limit,
                      min_curvature_radius_mm=r.number("min_curvature_radius_mm", DEFAULT, low=0.0))

@@ -31,12 +31,14 @@ import jax.numpy as jnp
 import numpy as np
 
 from camjax import family
-from camjax.family import FEASIBILITY_TOL_MM, Weights, all_within, weighted_objective
 
 # re-exported: this family's protocol functions and tolerance, written once for every family
 from camjax.family import FEASIBILITY_TOL_RAD as FEASIBILITY_TOL_RAD
+from camjax.family import Weights, weighted_objective
 from camjax.family import bounds as bounds
 from camjax.family import bounds_violation as bounds_violation
+from camjax.family import size_norm as size_norm
+from camjax.family import violated_constraints as violated_constraints
 from camjax.followers import _pitch as pitch
 from camjax.followers.roller import problem as roller
 
@@ -108,21 +110,13 @@ def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=
 
     Arguments as :func:`camjax.followers.roller.problem.problem_from_scene`.
     """
-    from camjax.evaluate import scene_arrays
-
-    if scene.design is None:
-        raise ValueError("scene has no [design] section: nothing to optimize")
-    if scene.follower.type != "knife_edge":
-        raise ValueError(f"follower.type: {scene.follower.type!r} is not a knife-edge follower")
-    if arrays is None:
-        arrays = scene_arrays(scene, samples=samples, dtype=dtype, extrema=extrema)
+    arrays, as_ = family.design_arrays(scene, "knife_edge", "a knife-edge follower", arrays,
+                                       samples=samples, dtype=dtype, extrema=extrema)
     d, f, kin = scene.design, scene.follower, arrays.kin
-    dt = kin.s.dtype
-    as_ = lambda v: jnp.asarray(v, dt)  # noqa: E731
-    box = [d.bounds(name) for name in VARIABLES]
+    lower, upper = family.design_box(d, Design, as_)
     return Problem(
         theta_deg=as_(arrays.theta_deg), s_mm=kin.s, ds_mm=kin.ds, d2s_mm=kin.d2s,
-        lower=Design(*(as_(b[0]) for b in box)), upper=Design(*(as_(b[1]) for b in box)),
+        lower=lower, upper=upper,
         sigma_max_MPa=as_(1.0), size_norm_mm=as_(d.bounds("base_radius_mm")[1]),
         tan_max_pressure_angle=as_(np.tan(np.radians(f.max_pressure_angle_deg))),
         max_pressure_angle_deg=as_(f.max_pressure_angle_deg),
@@ -192,12 +186,7 @@ def constraints(problem: Problem, design: Design) -> Constraints:
 
 def constraint_maxima(problem: Problem, design: Design) -> Constraints:
     """max_theta of each constraint of :func:`constraints`, shape () each."""
-    return Constraints(*jnp.max(jnp.stack(constraints(problem, design)), axis=-1))
-
-
-def size_norm(problem: Problem) -> jax.Array:
-    """N = R_b,max (mm): the length the constraints are divided by, shape ()."""
-    return problem.size_norm_mm
+    return family.stacked_maxima(constraints(problem, design))
 
 
 # ------------------------------------------------------------------ solver coordinates
@@ -252,7 +241,7 @@ def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
         objective=objective(problem, weights, design), size_mm=design.base_radius_mm,
         pressure_angle_max_deg=ev.pressure_angle_max_deg,
         pressure_angle_max_at_deg=ev.pressure_angle_max_at_deg,
-        profile_rho_min_mm=ev.cam_rho_min_mm, violation=v, feasible=all_within(v, _TOLERANCES),
+        profile_rho_min_mm=ev.cam_rho_min_mm, violation=v, feasible=family.feasible(problem, v),
         stress_max_MPa=zero, stress_max_deg=zero)
 
 
@@ -261,16 +250,6 @@ def condense_pointwise(problem: Problem, per_angle_design: Design) -> tuple[Desi
     (SPEC 5's rule); extras: that angle (``base_radius_deg``) and the grid."""
     return family.condense_at_largest(problem, per_angle_design, per_angle_design.base_radius_mm,
                                       "base_radius_deg")
-
-
-# each constraint's feasibility tolerance (rad, mm)
-_TOLERANCES = {"pressure_angle": FEASIBILITY_TOL_RAD, "curvature": FEASIBILITY_TOL_MM,
-               "bounds": FEASIBILITY_TOL_MM}
-
-
-def violated_constraints(problem: Problem, v: Violation) -> list[str]:
-    """Names of the violated constraints (Python; needs concrete values)."""
-    return family.violated(CONSTRAINT_NAMES, v, _TOLERANCES)
 
 
 # ------------------------------------------------------------------------------- output

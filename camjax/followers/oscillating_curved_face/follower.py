@@ -19,12 +19,14 @@ import numpy as np
 
 from camjax import contact, loads
 from camjax.family import FEASIBILITY_TOL_MM
+from camjax.followers import _checks
 from camjax.followers._rocking import (
     TRAIN_KEYS,
     RockerCurves,
     RockerGeometry,
     RockerSizing,
     RockingFollower,
+    circle_arm_closure_problem,
     read_train,
 )
 from camjax.followers._swing import relative_rate
@@ -79,9 +81,7 @@ class OscillatingCurvedFace(RockingFollower):
         self.check_keys(r)
         train = read_train(r)
         pivot = r.number("pivot_distance_mm", low=0.0, low_open=True)
-        limit = r.number("max_pressure_angle_deg", DEFAULT, low=0.0, low_open=True)
-        if limit is not DEFAULT and limit >= 90.0:
-            raise r.error("max_pressure_angle_deg", limit, "out of range", "> 0 and < 90")
+        limit = _checks.read_max_pressure_angle(r)
         radius = r.number("face_radius_mm", low=0.0, low_open=True)
         width = r.number("face_width_mm", low=0.0, low_open=True)
         if width > 2.0 * radius:
@@ -126,19 +126,8 @@ class OscillatingCurvedFace(RockingFollower):
     def closure_problem(self, scene, kin, base_radius_mm) -> str | None:
         """As the oscillating roller's with R_f = R_c: |d - l| < R_b + R_c < d + l and the arm stays
         off the line of centres while it swings."""
-        f = scene.follower
-        swing = float(np.max(np.asarray(kin.s)))
-        if base_radius_mm <= 0:
-            return "the base radius must be > 0"
-        d, l, rp = f.pivot_distance_mm, f.arm_length_mm, base_radius_mm + f.face_radius_mm
-        if not abs(d - l) < rp < d + l:
-            return (f"the face cannot reach the prime circle R_p = R_b + R_c = {rp:g} mm: needs |d - l| = "
-                    f"{abs(d - l):g} < R_p < d + l = {d + l:g}")
-        psi0 = math.acos((d * d + l * l - rp * rp) / (2 * d * l))
-        if psi0 + swing >= math.pi:
-            return (f"the arm starts {math.degrees(psi0):g} deg from the line of centres and the lift "
-                    f"({math.degrees(swing):g} deg) swings it through that line")
-        return None
+        return circle_arm_closure_problem(scene, kin, base_radius_mm, scene.follower.face_radius_mm,
+                                          "the face cannot reach the prime circle R_p = R_b + R_c")
 
     def geometry(self, scene, kin, base_radius_mm) -> RockerGeometry:
         f, rotation = scene.follower, scene.motion.rotation

@@ -49,24 +49,23 @@ import numpy as np
 from camjax import family
 from camjax.contact import roller_stress
 from camjax.family import (
-    FEASIBILITY_RTOL_STRESS,
-    FEASIBILITY_TOL_MM,
-    FEASIBILITY_TOL_RAD,
     Weights,
-    all_within,
     weighted_objective,
 )
 
 # re-exported: this family's protocol functions, written once for every family
 from camjax.family import bounds as bounds
 from camjax.family import bounds_violation as bounds_violation
+from camjax.family import size_norm as size_norm
+from camjax.family import violated_constraints as violated_constraints
 from camjax.followers import _pitch as pitch
 from camjax.followers._swing import moment_model, polish_design
 from camjax.followers.oscillating_curved_face import geometry as curved_geo
 from camjax.followers.oscillating_roller import geometry as rocker_roller_geo
-from camjax.followers.oscillating_roller.problem import moment_coefficient
+from camjax.followers.oscillating_roller.problem import axial_coefficient, cos_phi, moment_coefficient
 from camjax.followers.roller import geometry as roller_geo
-from camjax.numerics import COS_FLOOR, RHO_FLOOR_MM, finite_float, floor_positive, positive_part, safe_sqrt
+from camjax.followers.roller.problem import roller_figures
+from camjax.numerics import RHO_FLOOR_MM, finite_float, floor_positive, positive_part, safe_sqrt
 
 CONSTRAINT_NAMES = ("reach", "pressure_angle", "undercut", "face_travel", "stress", "bounds")
 VARIABLES = ("base_radius_mm", "face_radius_mm", "face_width_mm", "pivot_distance_mm", "arm_length_mm")
@@ -145,22 +144,15 @@ class Evaluation(NamedTuple):
 
 def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=None) -> Problem:
     """Problem of an oscillating curved-face scene with a [design] section (Python: reads the scene)."""
-    from camjax.evaluate import scene_arrays
-
-    if scene.design is None:
-        raise ValueError("scene has no [design] section: nothing to optimize")
-    if scene.follower.type != "oscillating_curved_face":
-        raise ValueError(f"follower.type: {scene.follower.type!r} is not an oscillating curved-face follower")
-    if arrays is None:
-        arrays = scene_arrays(scene, samples=samples, dtype=dtype)
+    what = "an oscillating curved-face follower"
+    arrays, as_ = family.design_arrays(scene, "oscillating_curved_face", what, arrays,
+                                       samples=samples, dtype=dtype)
     d, f, kin = scene.design, scene.follower, arrays.kin
-    dt = kin.s.dtype
-    as_ = lambda v: jnp.asarray(v, dt)  # noqa: E731
-    box = [d.bounds(name) for name in VARIABLES]
+    lower, upper = family.design_box(d, Design, as_)
     return Problem(
         theta_deg=as_(arrays.theta_deg), s_rad=kin.s, ds=kin.ds, d2s=kin.d2s,
         moment_coefficient=as_(moment_coefficient(scene, arrays)),
-        lower=Design(*(as_(b[0]) for b in box)), upper=Design(*(as_(b[1]) for b in box)),
+        lower=lower, upper=upper,
         sigma_max_MPa=as_(d.sigma_max_MPa if d.sigma_max_MPa is not None else 1.0),
         size_norm_mm=as_(d.bounds("base_radius_mm")[1] + d.bounds("face_width_mm")[1]),
         tan_max_pressure_angle=as_(np.tan(np.radians(f.max_pressure_angle_deg))),
@@ -201,12 +193,6 @@ def _terms(problem: Problem, design: Design) -> _Terms:
                   rocker_roller_geo.oscillating_roller_reach_constraint(rp, d, l))
 
 
-def _cos_phi(x: _Terms) -> jax.Array:
-    g = x.legs
-    norm = floor_positive(g.along**2 + g.across**2, RHO_FLOOR_MM**2)
-    return floor_positive(g.across * jax.lax.rsqrt(norm), COS_FLOOR)
-
-
 def _travel(x: _Terms, design: Design) -> jax.Array:
     """R_c |sin phi| (mm): the contact's distance from the face's axis, per angle."""
     return jnp.abs(curved_geo.face_travel_of(x.legs, design.face_radius_mm))
@@ -226,22 +212,18 @@ def face_width_need(problem: Problem, design: Design) -> jax.Array:
     return 2.0 * jnp.max(_travel(_terms(problem, column), column), axis=-1)
 
 
-def _axial_coefficient(problem: Problem, design: Design) -> jax.Array:
-    """C = C_M / sqrt(l in m): the coefficient of the force along the path of the face's centre, M / l."""
-    return problem.moment_coefficient * jax.lax.rsqrt(design.arm_length_mm * 1e-3)
-
-
 def stress(problem: Problem, design: Design) -> jax.Array:
     """Hertz contact stress sigma(theta) (MPa), shape (n,); finite (saturated) at an undercut."""
     x = _terms(problem, design)
     phi = jnp.arctan2(x.legs.along, x.legs.across)
-    return roller_stress(_axial_coefficient(problem, design), phi, x.rho_eq)
+    return roller_stress(axial_coefficient(problem, design), phi, x.rho_eq)
 
 
 def peak_stress(problem: Problem, design: Design) -> jax.Array:
     """max_theta sigma (MPa), shape ()."""
     x = _terms(problem, design)
-    ratio = _axial_coefficient(problem, design) ** 2 / (_cos_phi(x) * floor_positive(x.rho_eq, RHO_FLOOR_MM))
+    coefficient = axial_coefficient(problem, design)
+    ratio = coefficient**2 / (cos_phi(x.legs) * floor_positive(x.rho_eq, RHO_FLOOR_MM))
     return safe_sqrt(jnp.max(ratio))
 
 
@@ -260,7 +242,7 @@ def constraints(problem: Problem, design: Design) -> Constraints:
     """Every angle's constraints as g <= 0 (mm), shape (n,) each; finite for every design."""
     x = _terms(problem, design)
     reach_r = design.face_radius_mm + problem.min_curvature_radius_mm
-    need = _axial_coefficient(problem, design) ** 2 / (problem.sigma_max_MPa**2 * _cos_phi(x))
+    need = axial_coefficient(problem, design) ** 2 / (problem.sigma_max_MPa**2 * cos_phi(x.legs))
     return Constraints(
         reach=jnp.broadcast_to(x.reach, x.kappa.shape),
         pressure_angle=jnp.abs(x.legs.along) - problem.tan_max_pressure_angle * x.legs.across,
@@ -281,12 +263,7 @@ def polish(problem: Problem, weights: Weights, design: Design) -> Design:
 
 def constraint_maxima(problem: Problem, design: Design) -> Constraints:
     """max_theta of each constraint of :func:`constraints`, shape () each (one stacked reduction)."""
-    return Constraints(*jnp.max(jnp.stack(constraints(problem, design)), axis=-1))
-
-
-def size_norm(problem: Problem) -> jax.Array:
-    """N = R_b,max + W_max (mm), shape ()."""
-    return problem.size_norm_mm
+    return family.stacked_maxima(constraints(problem, design))
 
 
 def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
@@ -312,7 +289,7 @@ def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
         stress_max_MPa=sigma[i], stress_max_deg=problem.theta_deg[i],
         pressure_angle_max_deg=jnp.rad2deg(phi[j]), pressure_angle_max_at_deg=problem.theta_deg[j],
         cam_rho_min_mm=rho_c_min, face_travel_max_mm=travel[k], face_travel_max_deg=problem.theta_deg[k],
-        violation=v, feasible=all_within(v, _tolerances(problem.sigma_max_MPa)),
+        violation=v, feasible=family.feasible(problem, v),
     )
 
 
@@ -323,18 +300,6 @@ def condense_pointwise(problem: Problem, per_angle_design: Design) -> tuple[Desi
     size = per_angle_design.base_radius_mm + per_angle_design.face_radius_mm
     design, extras = family.condense_at_largest(problem, per_angle_design, size, "prime_radius_deg")
     return design._replace(face_width_mm=jnp.max(per_angle_design.face_width_mm)), extras
-
-
-def _tolerances(sigma_max_MPa) -> dict:
-    """Each constraint's feasibility tolerance (mm, rad; the stress's in MPa)."""
-    return {"reach": FEASIBILITY_TOL_MM, "pressure_angle": FEASIBILITY_TOL_RAD,
-            "undercut": FEASIBILITY_TOL_MM, "face_travel": FEASIBILITY_TOL_MM, "bounds": FEASIBILITY_TOL_MM,
-            "stress": FEASIBILITY_RTOL_STRESS * sigma_max_MPa}
-
-
-def violated_constraints(problem: Problem, v: Violation) -> list[str]:
-    """Names of the violated constraints (Python; needs concrete values)."""
-    return family.violated(CONSTRAINT_NAMES, v, _tolerances(float(problem.sigma_max_MPa)))
 
 
 # ------------------------------------------------------------------------------- output
@@ -356,10 +321,7 @@ def solution_json(problem: Problem, solution) -> dict:
         violation={"reach_mm": v.reach, "pressure_angle_deg": np.degrees(v.pressure_angle),
                    "undercut_mm": v.undercut, "face_travel_mm": v.face_travel, "stress_MPa": v.stress,
                    "bounds_mm": v.bounds},
-        figures={"stress_max_MPa": ev.stress_max_MPa, "stress_max_deg": ev.stress_max_deg,
-                 "pressure_angle_max_deg": ev.pressure_angle_max_deg,
-                 "pressure_angle_max_at_deg": ev.pressure_angle_max_at_deg,
-                 "max_pressure_angle_deg": limit_deg, "cam_rho_min_mm": ev.cam_rho_min_mm,
+        figures={**roller_figures(ev, limit_deg),
                  "face_travel_max_mm": ev.face_travel_max_mm, "face_travel_max_deg": ev.face_travel_max_deg},
         pointwise_angles=("prime_radius_deg",))
 

@@ -32,11 +32,13 @@ import jax.numpy as jnp
 
 from camjax import family
 from camjax.contact import stress_from_coefficient
-from camjax.family import FEASIBILITY_RTOL_STRESS, FEASIBILITY_TOL_MM, Weights, all_within, weighted_objective
+from camjax.family import Weights, weighted_objective
 
 # re-exported: this family's protocol functions, written once for every family
 from camjax.family import bounds as bounds
 from camjax.family import bounds_violation as bounds_violation
+from camjax.family import size_norm as size_norm
+from camjax.family import violated_constraints as violated_constraints
 from camjax.followers import _pitch as pitch
 from camjax.followers._swing import moment_model, polish_design
 from camjax.followers.oscillating_flat import geometry as rocker_flat_geo
@@ -109,21 +111,14 @@ class Evaluation(NamedTuple):
 
 def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=None) -> Problem:
     """Problem of an oscillating flat-face scene with a [design] section (Python: reads the scene)."""
-    from camjax.evaluate import scene_arrays
-
-    if scene.design is None:
-        raise ValueError("scene has no [design] section: nothing to optimize")
-    if scene.follower.type != "oscillating_flat":
-        raise ValueError(f"follower.type: {scene.follower.type!r} is not an oscillating flat face")
-    if arrays is None:
-        arrays = scene_arrays(scene, samples=samples, dtype=dtype)
+    arrays, as_ = family.design_arrays(scene, "oscillating_flat", "an oscillating flat face", arrays,
+                                       samples=samples, dtype=dtype)
     d, f, kin = scene.design, scene.follower, arrays.kin
-    as_ = lambda v: jnp.asarray(v, kin.s.dtype)  # noqa: E731
-    box = [d.bounds("base_radius_mm"), d.bounds("pivot_distance_mm"), d.bounds("face_offset_mm")]
+    lower, upper = family.design_box(d, Design, as_)
     return Problem(
         theta_deg=as_(arrays.theta_deg), s_rad=kin.s, ds=kin.ds, d2s=kin.d2s,
         moment_coefficient=as_(moment_coefficient(scene, arrays)),
-        lower=Design(*(as_(b[0]) for b in box)), upper=Design(*(as_(b[1]) for b in box)),
+        lower=lower, upper=upper,
         sigma_max_MPa=as_(d.sigma_max_MPa if d.sigma_max_MPa is not None else 1.0),
         size_norm_mm=as_(d.bounds("base_radius_mm")[1]), min_curvature_radius_mm=as_(f.min_curvature_radius_mm),
         rotation_sign=as_(pitch.rotation_sign(scene.motion.rotation)),
@@ -233,11 +228,6 @@ def start(problem: Problem, steps: int = 60) -> Design:
     return centre._replace(base_radius_mm=rb)
 
 
-def size_norm(problem: Problem) -> jax.Array:
-    """R_b,max (mm), shape ()."""
-    return problem.size_norm_mm
-
-
 def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
     """Objective, peak stress, smallest curvature radius, face length, violations and feasibility."""
     g = _geometry(problem, design)
@@ -248,7 +238,7 @@ def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
                   curvature=positive_part(c.curvature),
                   stress=positive_part(sigma[i] - problem.sigma_max_MPa),
                   bounds=bounds_violation(problem, design))
-    feasible = all_within(v, _tolerances(problem.sigma_max_MPa))
+    feasible = family.feasible(problem, v)
     return Evaluation(
         objective=objective(problem, weights, design), size_mm=design.base_radius_mm,
         stress_max_MPa=sigma[i], stress_max_deg=problem.theta_deg[i], rho_min_mm=g.rho[j],
@@ -261,17 +251,6 @@ def condense_pointwise(problem: Problem, per_angle_design: Design) -> tuple[Desi
     """The whole-cam design of a pointwise solve: the design of the angle with the largest R_b."""
     return family.condense_at_largest(problem, per_angle_design, per_angle_design.base_radius_mm,
                                       "base_radius_deg")
-
-
-def _tolerances(sigma_max_MPa) -> dict:
-    """Each constraint's feasibility tolerance (mm; the stress's in MPa)."""
-    return {**{name: FEASIBILITY_TOL_MM for name in CONSTRAINT_NAMES},
-            "stress": FEASIBILITY_RTOL_STRESS * sigma_max_MPa}
-
-
-def violated_constraints(problem: Problem, v: Violation) -> list[str]:
-    """Names of the violated constraints (Python; needs concrete values)."""
-    return family.violated(CONSTRAINT_NAMES, v, _tolerances(float(problem.sigma_max_MPa)))
 
 
 _f = finite_float

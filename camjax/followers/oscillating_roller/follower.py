@@ -17,9 +17,16 @@ import numpy as np
 
 from camjax import contact, loads, runtime
 from camjax.errors import SceneError
-from camjax.followers import _closure
+from camjax.followers import _checks, _closure
 from camjax.followers._closure import POSITIVE_CLOSURES, closure_keys, read_closure
-from camjax.followers._rocking import TRAIN_KEYS, RockerGeometry, RockerSizing, RockingFollower, read_train
+from camjax.followers._rocking import (
+    TRAIN_KEYS,
+    RockerGeometry,
+    RockerSizing,
+    RockingFollower,
+    circle_arm_closure_problem,
+    read_train,
+)
 from camjax.followers.oscillating_roller import geometry as rocker_roller_geo
 from camjax.followers.roller import geometry as roller_geo
 from camjax.followers.roller.geometry import ROLLER_MAX_PRESSURE_ANGLE_DEG, ROLLER_MIN_CURVATURE_RADIUS_MM
@@ -124,9 +131,7 @@ class OscillatingRoller(RockingFollower):
         self.check_keys(r)
         train = read_train(r)
         pivot = r.number("pivot_distance_mm", low=0.0, low_open=True)
-        limit = r.number("max_pressure_angle_deg", DEFAULT, low=0.0, low_open=True)
-        if limit is not DEFAULT and limit >= 90.0:
-            raise r.error("max_pressure_angle_deg", limit, "out of range", "> 0 and < 90")
+        limit = _checks.read_max_pressure_angle(r)
         arm = r.number("arm_length_mm", low=0.0, low_open=True)
         roller = r.number("roller_radius_mm", low=0.0, low_open=True)
         return build(OscillatingRollerSpec, type=self.name, train=train, pivot_distance_mm=pivot,
@@ -187,19 +192,8 @@ class OscillatingRoller(RockingFollower):
         """The prime radius R_p = R_b + R_f must lie strictly between |d - l| and d + l (the roller
         reaches the prime circle) and the arm must stay off the line of centres while it swings
         (psi0 + max s < pi)."""
-        f = scene.follower
-        swing = float(np.max(np.asarray(kin.s)))
-        if base_radius_mm <= 0:
-            return "the base radius must be > 0"
-        d, l, rp = f.pivot_distance_mm, f.arm_length_mm, base_radius_mm + f.roller_radius_mm
-        if not abs(d - l) < rp < d + l:
-            return (f"the roller cannot reach the prime circle R_p = {rp:g} mm: needs |d - l| = "
-                    f"{abs(d - l):g} < R_p < d + l = {d + l:g}")
-        psi0 = math.acos((d * d + l * l - rp * rp) / (2 * d * l))
-        if psi0 + swing >= math.pi:
-            return (f"the arm starts {math.degrees(psi0):g} deg from the line of centres and the lift "
-                    f"({math.degrees(swing):g} deg) swings it through that line")
-        return None
+        return circle_arm_closure_problem(scene, kin, base_radius_mm, scene.follower.roller_radius_mm,
+                                          "the roller cannot reach the prime circle R_p")
 
     def geometry(self, scene, kin, base_radius_mm) -> RockerGeometry:
         f, rotation = scene.follower, scene.motion.rotation

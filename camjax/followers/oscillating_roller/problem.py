@@ -38,17 +38,15 @@ import numpy as np
 from camjax import family
 from camjax.contact import roller_stress
 from camjax.family import (
-    FEASIBILITY_RTOL_STRESS,
-    FEASIBILITY_TOL_MM,
-    FEASIBILITY_TOL_RAD,
     Weights,
-    all_within,
     weighted_objective,
 )
 
 # re-exported: this family's protocol functions, written once for every family
 from camjax.family import bounds as bounds
 from camjax.family import bounds_violation as bounds_violation
+from camjax.family import size_norm as size_norm
+from camjax.family import violated_constraints as violated_constraints
 from camjax.followers import _closure
 from camjax.followers import _pitch as pitch
 from camjax.followers._swing import moment_coefficient_at, moment_model, polish_design
@@ -131,22 +129,14 @@ class Evaluation(NamedTuple):
 
 def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=None) -> Problem:
     """Problem of an oscillating-roller scene with a [design] section (Python: reads the scene)."""
-    from camjax.evaluate import scene_arrays
-
-    if scene.design is None:
-        raise ValueError("scene has no [design] section: nothing to optimize")
-    if scene.follower.type != "oscillating_roller":
-        raise ValueError(f"follower.type: {scene.follower.type!r} is not an oscillating roller")
-    if arrays is None:
-        arrays = scene_arrays(scene, samples=samples, dtype=dtype)
+    arrays, as_ = family.design_arrays(scene, "oscillating_roller", "an oscillating roller", arrays,
+                                       samples=samples, dtype=dtype)
     d, f, kin = scene.design, scene.follower, arrays.kin
-    dt = kin.s.dtype
-    as_ = lambda v: jnp.asarray(v, dt)  # noqa: E731
-    box = [d.bounds("base_radius_mm"), d.bounds("roller_radius_mm"), d.bounds("pivot_distance_mm"), d.bounds("arm_length_mm")]
+    lower, upper = family.design_box(d, Design, as_)
     return Problem(
         theta_deg=as_(arrays.theta_deg), s_rad=kin.s, ds=kin.ds, d2s=kin.d2s,
         moment_coefficient=as_(moment_coefficient(scene, arrays)),
-        lower=Design(*(as_(b[0]) for b in box)), upper=Design(*(as_(b[1]) for b in box)),
+        lower=lower, upper=upper,
         sigma_max_MPa=as_(d.sigma_max_MPa if d.sigma_max_MPa is not None else 1.0),
         size_norm_mm=as_(d.bounds("base_radius_mm")[1] + d.bounds("roller_radius_mm")[1]),
         tan_max_pressure_angle=as_(np.tan(np.radians(f.max_pressure_angle_deg))),
@@ -213,7 +203,9 @@ def _geometry(problem: Problem, design: Design) -> _Geometry:
     return _Geometry(l * q - d * jnp.cos(psi), d * jnp.sin(psi), kappa, reach)
 
 
-def _cos_phi(g: _Geometry) -> jax.Array:
+def cos_phi(g) -> jax.Array:
+    """cos phi of the pressure-angle legs ``g`` (``along``, ``across``, mm), floored at COS_FLOOR (both
+    oscillating families)."""
     norm = floor_positive(g.along**2 + g.across**2, RHO_FLOOR_MM**2)
     return floor_positive(g.across * jax.lax.rsqrt(norm), COS_FLOOR)
 
@@ -224,8 +216,9 @@ def pressure_angle(problem: Problem, design: Design) -> jax.Array:
     return jnp.arctan2(g.along, g.across)
 
 
-def _axial_coefficient(problem: Problem, design: Design) -> jax.Array:
-    """C = C_M / sqrt(l in m): the coefficient of the force along the roller's path, M / l."""
+def axial_coefficient(problem: Problem, design: Design) -> jax.Array:
+    """C = C_M / sqrt(l in m): the coefficient of the force along the path of the roller's (or the
+    curved face's) centre, M / l."""
     return problem.moment_coefficient * jax.lax.rsqrt(design.arm_length_mm * 1e-3)
 
 
@@ -233,14 +226,14 @@ def stress(problem: Problem, design: Design) -> jax.Array:
     """Hertz contact stress sigma(theta) (MPa), shape (n,); finite (saturated) at an undercut."""
     g = _geometry(problem, design)
     rho_eq = roller_geo.roller_equivalent_radius(g.kappa, design.roller_radius_mm)
-    return roller_stress(_axial_coefficient(problem, design), jnp.arctan2(g.along, g.across), rho_eq)
+    return roller_stress(axial_coefficient(problem, design), jnp.arctan2(g.along, g.across), rho_eq)
 
 
 def peak_stress(problem: Problem, design: Design) -> jax.Array:
     """max_theta sigma (MPa), shape ()."""
     g = _geometry(problem, design)
     rho_eq = roller_geo.roller_equivalent_radius(g.kappa, design.roller_radius_mm)
-    ratio = _axial_coefficient(problem, design) ** 2 / (_cos_phi(g) * floor_positive(rho_eq, RHO_FLOOR_MM))
+    ratio = axial_coefficient(problem, design) ** 2 / (cos_phi(g) * floor_positive(rho_eq, RHO_FLOOR_MM))
     return safe_sqrt(jnp.max(ratio))
 
 
@@ -260,7 +253,7 @@ def constraints(problem: Problem, design: Design) -> Constraints:
     g = _geometry(problem, design)
     reach_r = design.roller_radius_mm + problem.min_curvature_radius_mm
     rho_eq = roller_geo.roller_equivalent_radius(g.kappa, design.roller_radius_mm)
-    need = _axial_coefficient(problem, design) ** 2 / (problem.sigma_max_MPa**2 * _cos_phi(g))
+    need = axial_coefficient(problem, design) ** 2 / (problem.sigma_max_MPa**2 * cos_phi(g))
     first = Constraints(
         reach=jnp.broadcast_to(g.reach, g.kappa.shape),
         pressure_angle=jnp.abs(g.along) - problem.tan_max_pressure_angle * g.across,
@@ -303,11 +296,6 @@ def constraint_maxima(problem: Problem, design: Design) -> Constraints:
     return jax.tree.map(jnp.max, constraints(problem, design))
 
 
-def size_norm(problem: Problem) -> jax.Array:
-    """N = R_b,max + R_f,max (mm), shape ()."""
-    return problem.size_norm_mm
-
-
 def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
     """Objective, peak stress and pressure angle (and their angles), violations and feasibility."""
     g = _geometry(problem, design)
@@ -328,7 +316,7 @@ def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
         stress=positive_part(sigma[i] - problem.sigma_max_MPa),
         bounds=bounds_violation(problem, design),
     )
-    feasible = all_within(v, _tolerances(problem.sigma_max_MPa))
+    feasible = family.feasible(problem, v)
     return Evaluation(
         objective=objective(problem, weights, design),
         size_mm=design.base_radius_mm + design.roller_radius_mm,
@@ -342,18 +330,6 @@ def condense_pointwise(problem: Problem, per_angle_design: Design) -> tuple[Desi
     """The whole-cam design of a pointwise solve: the design of the angle with the largest R_b + R_f."""
     size = per_angle_design.base_radius_mm + per_angle_design.roller_radius_mm
     return family.condense_at_largest(problem, per_angle_design, size, "prime_radius_deg")
-
-
-def _tolerances(sigma_max_MPa) -> dict:
-    """Each constraint's feasibility tolerance (mm, rad; the stress's in MPa)."""
-    return {"reach": FEASIBILITY_TOL_MM, "pressure_angle": FEASIBILITY_TOL_RAD,
-            "undercut": FEASIBILITY_TOL_MM, "bounds": FEASIBILITY_TOL_MM,
-            "stress": FEASIBILITY_RTOL_STRESS * sigma_max_MPa}
-
-
-def violated_constraints(problem: Problem, v: Violation) -> list[str]:
-    """Names of the violated constraints (Python; needs concrete values)."""
-    return family.violated(CONSTRAINT_NAMES, v, _tolerances(float(problem.sigma_max_MPa)))
 
 
 # ------------------------------------------------------------------------------- output

@@ -19,7 +19,7 @@ import numpy as np
 
 from camjax import contact, runtime
 from camjax.evaluate import curve_extremes
-from camjax.followers import _closure
+from camjax.followers import _checks, _closure
 from camjax.followers._closure import POSITIVE_CLOSURES, closure_keys, read_closure
 from camjax.followers._pitch import rotation_sign
 from camjax.followers._translating import (
@@ -27,7 +27,6 @@ from camjax.followers._translating import (
     DesignSolution,
     GeometryCurves,
     TranslatingFollower,
-    least_abs_offset,
     read_train,
 )
 from camjax.followers.roller import geometry as roller_geo
@@ -112,9 +111,7 @@ class Roller(TranslatingFollower):
     def parse(self, r) -> RollerSpec:
         self.check_keys(r)
         train = read_train(r)
-        limit = r.number("max_pressure_angle_deg", DEFAULT, low=0.0, low_open=True)
-        if limit is not DEFAULT and limit >= 90.0:
-            raise r.error("max_pressure_angle_deg", limit, "out of range", "> 0 and < 90")
+        limit = _checks.read_max_pressure_angle(r)
         roller = r.number("roller_radius_mm", low=0.0, low_open=True)
         return build(RollerSpec, type=self.name, train=train, closure=read_closure(r, False, roller),
                      roller_radius_mm=roller,
@@ -125,14 +122,8 @@ class Roller(TranslatingFollower):
         base = fixed_or_free(r, "base_radius_mm")
         roller = fixed_or_free(r, "roller_radius_mm", (follower.roller_radius_mm,) * 2)
         offset = fixed_or_free(r, "offset_mm", (follower.offset_mm,) * 2, positive=False)
-        # |e| < R_p is a constraint of the problem (its pressure-angle constraint holds only there):
-        # refused here only when no design in the bounds meets it
-        reach = base[1] + roller[1]  # the largest prime radius in the bounds
-        if least_abs_offset(offset) >= reach:
-            raise r.error("offset_mm", list(offset) if offset[0] != offset[1] else offset[0],
-                          f"gives |e| >= R_p = R_b + R_f for every design in the bounds (largest R_p: "
-                          f"{reach:g} mm): the follower axis must cut the prime circle",
-                          f"|e| < {reach:g} somewhere in the bounds")
+        # refused only when no design in the bounds has |e| < R_p
+        _checks.offset_cuts_prime_circle(r, offset, base[1] + roller[1], "R_b + R_f")
         return {"base_radius_mm": base, "roller_radius_mm": roller, "offset_mm": offset}
 
     def drawn_follower(self, scene, result):

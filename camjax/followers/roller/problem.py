@@ -43,12 +43,14 @@ import numpy as np
 
 from camjax import family
 from camjax.contact import roller_stress
-from camjax.family import FEASIBILITY_RTOL_STRESS, FEASIBILITY_TOL_MM, Weights, all_within, weighted_objective
 
 # re-exported: this family's protocol functions and tolerance, written once for every family
 from camjax.family import FEASIBILITY_TOL_RAD as FEASIBILITY_TOL_RAD
+from camjax.family import Weights, weighted_objective
 from camjax.family import bounds as bounds
 from camjax.family import bounds_violation as bounds_violation
+from camjax.family import size_norm as size_norm
+from camjax.family import violated_constraints as violated_constraints
 from camjax.followers import _closure
 from camjax.followers import _pitch as pitch
 from camjax.followers.roller import geometry as roller_geo
@@ -137,31 +139,33 @@ def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=
         scene's ``[motion] extrema``. Exact: the solvers' designs are polished so that every
         constraint holds between the samples too (:func:`polish`).
     """
-    from camjax.evaluate import scene_arrays
-
-    if scene.design is None:
-        raise ValueError("scene has no [design] section: nothing to optimize")
-    if scene.follower.type != "roller":
-        raise ValueError(f"follower.type: {scene.follower.type!r} is not a roller follower")
-    if arrays is None:
-        arrays = scene_arrays(scene, samples=samples, dtype=dtype, extrema=extrema)
-    d, f, kin = scene.design, scene.follower, arrays.kin
-    dt = kin.s.dtype
-    as_ = lambda v: jnp.asarray(v, dt)  # noqa: E731
-    box = [d.bounds("base_radius_mm"), d.bounds("roller_radius_mm"), d.bounds("offset_mm")]
-    coeff = arrays.stress_coefficient
+    arrays, as_ = family.design_arrays(scene, "roller", "a roller follower", arrays,
+                                       samples=samples, dtype=dtype, extrema=extrema)
+    d, kin = scene.design, arrays.kin
+    lower, upper = family.design_box(d, Design, as_)
     return Problem(
+        **circle_scene_fields(scene, arrays, as_), lower=lower, upper=upper,
+        size_norm_mm=as_(d.bounds("base_radius_mm")[1] + d.bounds("roller_radius_mm")[1]),
+        closure=_closure.design_terms(scene, arrays, _second_coefficient(scene.contact, arrays.force_N, kin.s)),
+    )
+
+
+def circle_scene_fields(scene, arrays, as_) -> dict:
+    """The Problem fields of a translating circle on the cam (the roller, the curved face's crown)
+    that come from the scene alone: the grid (theta, s, s', s'', the Hertz coefficient C, zeros
+    without [contact]), the limits (sigma_max, tan phi_max, phi_max, rho_min), the rotation's sign
+    and the model behind the grid; ``as_`` casts to the problem's dtype (Python: reads the scene)."""
+    d, f, kin = scene.design, scene.follower, arrays.kin
+    coeff = arrays.stress_coefficient
+    return dict(
         theta_deg=as_(arrays.theta_deg), s_mm=kin.s, ds_mm=kin.ds, d2s_mm=kin.d2s,
         stress_coefficient=jnp.zeros_like(kin.s) if coeff is None else as_(coeff),
-        lower=Design(*(as_(b[0]) for b in box)), upper=Design(*(as_(b[1]) for b in box)),
         sigma_max_MPa=as_(d.sigma_max_MPa if d.sigma_max_MPa is not None else 1.0),
-        size_norm_mm=as_(d.bounds("base_radius_mm")[1] + d.bounds("roller_radius_mm")[1]),
         tan_max_pressure_angle=as_(np.tan(np.radians(f.max_pressure_angle_deg))),
         max_pressure_angle_deg=as_(f.max_pressure_angle_deg),
         min_curvature_radius_mm=as_(f.min_curvature_radius_mm),
         rotation_sign=as_(pitch.rotation_sign(scene.motion.rotation)),
         model=arrays.model,
-        closure=_closure.design_terms(scene, arrays, _second_coefficient(scene.contact, arrays.force_N, kin.s)),
     )
 
 
@@ -189,18 +193,21 @@ class _Kin(NamedTuple):  # the geometry functions' view of the problem's grid (t
     d2s: jax.Array
 
 
-class _Terms(NamedTuple):
-    """Per-angle quantities every function of a design shares (shape (n,) each)."""
+class CircleTerms(NamedTuple):
+    """Per-angle quantities of a circle whose centre runs on the pitch curve (the roller, the
+    curved face's crown), which every function of a design shares (shape (n,) each)."""
 
-    w: jax.Array  # d + s, mm: the pitch point's height on the follower axis
+    w: jax.Array  # d + s, mm: the circle centre's height on the follower axis
     u: jax.Array  # s' - e~, mm: tan phi = u / w (up to the rotation's sign)
+    r: jax.Array  # sqrt(w^2 + u^2), mm: the circle centre's distance from the instant centre
     inv_cos: jax.Array  # 1 / cos phi = |(w, u)| / w, with cos phi floored at COS_FLOOR
     kappa: jax.Array  # pitch-curve curvature, 1/mm (convex > 0)
     rho_eq: jax.Array  # Hertz equivalent radius 1 / (1/rho_c + 1/R_f), mm
 
 
-def _terms(problem: Problem, design: Design) -> _Terms:
-    """The shared per-angle terms of a design.
+def circle_terms(problem: Problem, design: Design) -> CircleTerms:
+    """The shared per-angle terms of a design (any problem with the roller's grid fields and
+    ``rotation_sign``: the curved face passes its crown radius as R_f).
 
     The rotation enters only through e~ = sign e (geometry.pitch); with it every formula is the
     ccw one, and |phi|, cos phi and kappa are those of the true rotation. 1 / cos phi is written
@@ -212,25 +219,25 @@ def _terms(problem: Problem, design: Design) -> _Terms:
     u = kin.ds - e
     r = jnp.sqrt(w**2 + u**2)
     kappa = pitch.pitch_curvature(w, kin.ds, kin.d2s, e)
-    return _Terms(w, u, r / jnp.maximum(w, COS_FLOOR * r), kappa,
-                  roller_geo.roller_equivalent_radius(kappa, design.roller_radius_mm))
+    return CircleTerms(w, u, r, r / jnp.maximum(w, COS_FLOOR * r), kappa,
+                       roller_geo.roller_equivalent_radius(kappa, design.roller_radius_mm))
 
 
 def pressure_angle(problem: Problem, design: Design) -> jax.Array:
     """phi (rad) per angle, signed as :func:`camjax.followers._pitch.pressure_angle`."""
-    x = _terms(problem, design)
+    x = circle_terms(problem, design)
     return problem.rotation_sign * jnp.arctan2(x.u, x.w)
 
 
 def stress(problem: Problem, design: Design) -> jax.Array:
     """Hertz contact stress sigma(theta) (MPa), shape (n,); finite (saturated) at an undercut."""
-    x = _terms(problem, design)
+    x = circle_terms(problem, design)
     return roller_stress(problem.stress_coefficient, jnp.arctan2(x.u, x.w), x.rho_eq)
 
 
 def peak_stress(problem: Problem, design: Design) -> jax.Array:
     """max_theta sigma (MPa), shape (), as sqrt(max_theta C^2 / (cos phi rho_eq)): one root."""
-    x = _terms(problem, design)
+    x = circle_terms(problem, design)
     ratio = problem.stress_coefficient**2 * x.inv_cos / floor_positive(x.rho_eq, RHO_FLOOR_MM)
     return safe_sqrt(jnp.max(ratio))
 
@@ -248,22 +255,28 @@ def objective(problem: Problem, weights: Weights, design: Design) -> jax.Array:
 
 def constraints(problem: Problem, design: Design) -> Constraints:
     """Every angle's constraints as g <= 0 (mm), shape (n,) each; finite for every design."""
-    x = _terms(problem, design)
-    reach = design.roller_radius_mm + problem.min_curvature_radius_mm
-    need = problem.stress_coefficient**2 * x.inv_cos / problem.sigma_max_MPa**2
-    first = Constraints(
-        pressure_angle=jnp.abs(x.u) - problem.tan_max_pressure_angle * x.w,
-        undercut=reach * roller_geo.roller_undercut_constraint(x.kappa, design.roller_radius_mm,
-                                                             problem.min_curvature_radius_mm),
-        stress=need - x.rho_eq,
-    )
+    x = circle_terms(problem, design)
+    first = circle_constraints(problem, design, x)
     if problem.closure is None:
         return first
     second = _second_contact(problem, design, x)
     return Constraints(*(jnp.maximum(a, b) for a, b in zip(first, second[:3], strict=True)))
 
 
-def _second_contact(problem: Problem, design: Design, x: _Terms) -> _closure.SecondContact:
+def circle_constraints(problem: Problem, design: Design, x: CircleTerms) -> Constraints:
+    """The circle's own constraints as g <= 0 (mm), shape (n,) each, from its terms ``x``
+    (:func:`circle_terms`): the pressure angle, the undercut and the stress."""
+    reach = design.roller_radius_mm + problem.min_curvature_radius_mm
+    need = problem.stress_coefficient**2 * x.inv_cos / problem.sigma_max_MPa**2
+    return Constraints(
+        pressure_angle=jnp.abs(x.u) - problem.tan_max_pressure_angle * x.w,
+        undercut=reach * roller_geo.roller_undercut_constraint(x.kappa, design.roller_radius_mm,
+                                                             problem.min_curvature_radius_mm),
+        stress=need - x.rho_eq,
+    )
+
+
+def _second_contact(problem: Problem, design: Design, x: CircleTerms) -> _closure.SecondContact:
     """The positive drive's second contact (the groove's outer flank, the yoke's second cam)."""
     t = problem.closure
     if isinstance(t, _closure.GrooveTerms):
@@ -280,23 +293,10 @@ def constraint_maxima(problem: Problem, design: Design) -> Constraints:
     One reduction over the stacked constraints: XLA then evaluates the shared terms once per
     angle instead of once per constraint.
     """
-    return Constraints(*jnp.max(jnp.stack(constraints(problem, design)), axis=-1))
-
-
-def size_norm(problem: Problem) -> jax.Array:
-    """N = R_b,max + R_f,max (mm): the length the constraints are divided by, shape ()."""
-    return problem.size_norm_mm
+    return family.stacked_maxima(constraints(problem, design))
 
 
 # ------------------------------------------------------------------ solver coordinates
-
-
-def _unit(x, lo, hi):
-    return (x - lo) / jnp.where(hi > lo, hi - lo, 1.0)
-
-
-def _from(v, lo, hi):
-    return lo + v * jnp.where(hi > lo, hi - lo, 1.0)
 
 
 def _straight_through(x, clipped):
@@ -323,8 +323,8 @@ def to_unit(problem: Problem, design: Design) -> Design:
     its own bounds (as for every family).
     """
     p_lo, p_hi, rb_free = _prime_box(problem)
-    plain = jax.tree.map(_unit, design, problem.lower, problem.upper)
-    prime = _unit(design.base_radius_mm + design.roller_radius_mm, p_lo, p_hi)
+    plain = family.to_unit_box(problem, design)
+    prime = family.unit_coordinate(design.base_radius_mm + design.roller_radius_mm, p_lo, p_hi)
     return plain._replace(base_radius_mm=jnp.where(rb_free, prime, plain.base_radius_mm))
 
 
@@ -345,8 +345,8 @@ def from_unit(problem: Problem, u: Design) -> Design:
     """
     lo, hi = problem.lower, problem.upper
     p_lo, p_hi, rb_free = _prime_box(problem)
-    plain = jax.tree.map(_from, u, lo, hi)
-    raw = _from(u.base_radius_mm, p_lo, p_hi)
+    plain = family.from_unit_box(problem, u)
+    raw = family.from_unit_coordinate(u.base_radius_mm, p_lo, p_hi)
     floor = jnp.minimum(min_prime_radius_for_pressure_angle(problem, plain.offset_mm), p_hi)
     height = raw - jax.lax.stop_gradient(floor)  # the gradient of R_p in the first coordinate only
     prime = jnp.where(height > 0, raw, floor + _straight_through(height, jnp.zeros_like(height)))
@@ -423,7 +423,7 @@ def polish_pointwise(problem: Problem, weights: Weights, design: Design, extras:
 
 def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
     """Objective, peak stress and pressure angle (and their angles), violations and feasibility."""
-    x = _terms(problem, design)
+    x = circle_terms(problem, design)
     kappa = x.kappa
     sigma = stress(problem, design)
     phi = jnp.abs(jnp.arctan2(x.u, x.w))
@@ -441,7 +441,7 @@ def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
         stress=positive_part(sigma[i] - problem.sigma_max_MPa),
         bounds=bounds_violation(problem, design),
     )
-    feasible = all_within(v, _tolerances(problem.sigma_max_MPa))
+    feasible = family.feasible(problem, v)
     return Evaluation(
         objective=objective(problem, weights, design),
         size_mm=design.base_radius_mm + design.roller_radius_mm,
@@ -461,17 +461,6 @@ def condense_pointwise(problem: Problem, per_angle_design: Design) -> tuple[Desi
     """
     size = per_angle_design.base_radius_mm + per_angle_design.roller_radius_mm
     return family.condense_at_largest(problem, per_angle_design, size, "prime_radius_deg")
-
-
-def _tolerances(sigma_max_MPa) -> dict:
-    """Each constraint's feasibility tolerance (rad, mm; the stress's in MPa)."""
-    return {"pressure_angle": FEASIBILITY_TOL_RAD, "undercut": FEASIBILITY_TOL_MM,
-            "bounds": FEASIBILITY_TOL_MM, "stress": FEASIBILITY_RTOL_STRESS * sigma_max_MPa}
-
-
-def violated_constraints(problem: Problem, v: Violation) -> list[str]:
-    """Names of the violated constraints (Python; needs concrete values)."""
-    return family.violated(CONSTRAINT_NAMES, v, _tolerances(float(problem.sigma_max_MPa)))
 
 
 # ------------------------------------------------------------------------------- output
