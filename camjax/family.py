@@ -1,7 +1,8 @@
 """What every problem family of :mod:`camjax.solvers.base` shares, written once.
 
-The families (:mod:`camjax.followers.flat.problem`, :mod:`camjax.followers.roller.problem`, :mod:`camjax.followers.oscillating_roller.problem`,
-:mod:`camjax.followers.oscillating_flat.problem`) differ in their design variables, physics and constraints.
+The families (each follower folder's ``problem.py``, registered by :mod:`camjax.followers`, and the
+robust wrapper of :mod:`camjax.robust.design`) differ in their design variables, physics and
+constraints.
 The pieces here reach a problem only through the fields every family's ``Problem`` has:
 ``theta_deg`` (n,), the box ``lower`` / ``upper`` (``Design`` pytrees, mm) and ``sigma_max_MPa``;
 a design only as a pytree of named variables (mm), a violation only through its field names.
