@@ -436,6 +436,13 @@ def _second(sigma_max_MPa, coefficient, pressure_g, phi, undercut_g, margin, rho
                          roller_stress(coefficient, phi, rho_eq))
 
 
+def worst_of_both(sigma, phi, margin, second: SecondContact):
+    """Per angle, the worse of the first contact's stress, |pressure angle| and undercut margin and the
+    second contact's (:class:`SecondContact`): what a positive drive's report judges."""
+    return (jnp.maximum(sigma, second.stress_MPa), jnp.maximum(phi, second.pressure_angle_rad),
+            jnp.minimum(margin, second.margin_mm))
+
+
 def groove_second(terms: GrooveTerms, kappa, roller_radius_mm, min_curvature_radius_mm, pressure_g, phi,
                   tan_limit, sigma_max_MPa, coefficient=None) -> SecondContact:
     """The outer flank: the first's pressure angle (shared normal), its concavity limit and its stress

@@ -301,13 +301,10 @@ def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
     g = _geometry(problem, design)
     sigma = stress(problem, design)
     phi = jnp.abs(jnp.arctan2(g.along, g.across))
-    i, j = jnp.argmax(sigma), jnp.argmax(phi)
     margin = roller_geo.roller_undercut_margin(g.kappa, design.roller_radius_mm, 0.0)
     if problem.closure is not None:  # a positive drive: the second contact's limits too
-        second = _second_contact(problem, design, g)
-        sigma, phi, margin = (jnp.maximum(sigma, second.stress_MPa), jnp.maximum(phi, second.pressure_angle_rad),
-                              jnp.minimum(margin, second.margin_mm))
-        i, j = jnp.argmax(sigma), jnp.argmax(phi)
+        sigma, phi, margin = _closure.worst_of_both(sigma, phi, margin, _second_contact(problem, design, g))
+    i, j = jnp.argmax(sigma), jnp.argmax(phi)
     rho_c_min = jnp.min(margin)
     v = Violation(
         reach=positive_part(g.reach),

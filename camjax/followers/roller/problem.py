@@ -427,13 +427,10 @@ def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
     kappa = x.kappa
     sigma = stress(problem, design)
     phi = jnp.abs(jnp.arctan2(x.u, x.w))
-    i, j = jnp.argmax(sigma), jnp.argmax(phi)
     margin = roller_geo.roller_undercut_margin(kappa, design.roller_radius_mm, 0.0)  # rho_c, convex parts
     if problem.closure is not None:  # a positive drive: the second contact's limits too
-        second = _second_contact(problem, design, x)
-        sigma, phi, margin = (jnp.maximum(sigma, second.stress_MPa), jnp.maximum(phi, second.pressure_angle_rad),
-                              jnp.minimum(margin, second.margin_mm))
-        i, j = jnp.argmax(sigma), jnp.argmax(phi)
+        sigma, phi, margin = _closure.worst_of_both(sigma, phi, margin, _second_contact(problem, design, x))
+    i, j = jnp.argmax(sigma), jnp.argmax(phi)
     rho_c_min = jnp.min(margin)
     v = Violation(
         pressure_angle=positive_part(phi[j] - jnp.deg2rad(problem.max_pressure_angle_deg)),
