@@ -4,7 +4,9 @@
 scene that only designs its laws is drawn by ``camjax synthesize``, :func:`command`);
 ``python docs/gen_gallery.py --scene NAME [--scene NAME ...]`` designs only those. Each run writes
 ``docs/gallery/NAME-profile.png``, ``NAME-svaj.png`` and, where the scene has loads,
-``NAME-loads.png`` (PNG at :data:`DPI` dpi, about 70 KB each), replacing the scene's old figures,
+``NAME-loads.png`` (PNG at :data:`DPI` dpi, about 70 KB each), and ``NAME-motion.gif`` (one turn
+of the mechanism, ``--animate``'s motion.gif with every :data:`GIF_STEP`-th frame kept, about 90 KB),
+replacing the scene's old figures,
 and ``NAME.json``: the title block the figures carry (``camjax.output.titles``), which the docs
 tests hold against what the pages say of the same design, and what the run wrote (its files,
 result.json's top-level keys, profile.csv's columns: ``{{ list: outputs }}`` on the CLI page). The site's build does not run this
@@ -30,6 +32,9 @@ sys.path.insert(0, str(ROOT))  # the checkout's camjax, as the docs build import
 DPI = 90
 FIGURES = ("profile", "svaj", "loads")
 """The figures kept, in the order the gallery shows them (``loads`` only where the scene has loads)."""
+GIF_STEP = 2
+"""The gallery's animation keeps every GIF_STEP-th frame of ``camjax design --animate``'s motion.gif
+(each shown GIF_STEP times as long: the same turn in the same time, at half the bytes)."""
 
 
 def command(scene: str) -> str:
@@ -58,13 +63,28 @@ def figure_paths(scene: str) -> dict[str, Path]:
     return {name: GALLERY / f"{scene}-{name}.png" for name in FIGURES}
 
 
+def thin_gif(src: Path, dest: Path, step: int = GIF_STEP) -> Path:
+    """Write ``src``'s every ``step``-th frame to ``dest``, each shown ``step`` times as long (the
+    same loop in the same time); the frames keep their palette."""
+    from PIL import Image, ImageSequence
+
+    with Image.open(src) as gif:
+        frames = [frame.copy() for frame in ImageSequence.Iterator(gif)][::step]
+        duration = gif.info.get("duration", 50) * step
+    frames[0].save(dest, save_all=True, append_images=frames[1:], duration=duration, loop=0,
+                   optimize=True)
+    return dest
+
+
 def draw(scene: str, dpi: int = DPI) -> list[Path]:
-    """Run ``camjax design SCENE --dpi DPI`` into a temporary folder and keep its figures."""
+    """Run ``camjax design SCENE --dpi DPI --animate`` into a temporary folder and keep its figures
+    and its animation (thinned, :func:`thin_gif`)."""
     GALLERY.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "out"
         verb = command(scene)
-        cmd = [sys.executable, "-m", "camjax.cli", verb, scene, "--out", str(out), "--dpi", str(dpi)]
+        cmd = [sys.executable, "-m", "camjax.cli", verb, scene, "--out", str(out), "--dpi", str(dpi),
+               *(["--animate"] if verb == "design" else [])]
         run = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True,
                              env={**os.environ, "PYTHONPATH": str(ROOT)})
         if run.returncode != 0:
@@ -76,7 +96,9 @@ def draw(scene: str, dpi: int = DPI) -> list[Path]:
         profile = out / "profile.csv"
         meta.write_text(json.dumps({"scene": scene, "command": f"camjax {verb} {scene} --dpi {dpi}",
                                     "title_block": title_block(result) if verb == "design" else None,
-                                    "files": sorted(p.name for p in out.iterdir() if p.is_file()),
+                                    # what the command writes without --animate (the CLI page's list)
+                                    "files": sorted(p.name for p in out.iterdir()
+                                                    if p.is_file() and p.name != "motion.gif"),
                                     "result_keys": list(result),
                                     "profile_columns": (profile.read_text().split("\n", 1)[0].split(",")
                                                         if profile.exists() else [])},
@@ -88,6 +110,10 @@ def draw(scene: str, dpi: int = DPI) -> list[Path]:
             if src.exists():
                 shutil.copyfile(src, dest)
                 kept.append(dest)
+        gif = GALLERY / f"{scene}-motion.gif"
+        gif.unlink(missing_ok=True)
+        if (out / "motion.gif").exists():
+            kept.append(thin_gif(out / "motion.gif", gif))
     return kept
 
 

@@ -661,6 +661,8 @@ def _follower_types() -> str:
 GALLERY_FIGURES = {"profile": "the cam and its follower", "svaj": "s, v, a, j over one turn",
                    "loads": "contact force and cam torque"}
 """The gallery's figures per scene, in docs/gen_gallery.py's file names (``SCENE-NAME.png``)."""
+GALLERY_ANIMATION = "one turn of the mechanism"
+"""The caption of a designed scene's animation (``SCENE-motion.gif``, docs/gen_gallery.py)."""
 
 
 GALLERY_COLUMN_PX = 660
@@ -675,8 +677,8 @@ def _png_width(path: Path) -> int:
 
 def gallery_missing() -> dict[str, str]:
     """Built-in scene -> the command that draws its gallery figures, for each scene without them
-    (its s/v/a/j figure, its title block and what the run wrote; the profile where ``camjax design``
-    drew it)."""
+    (its s/v/a/j figure, its title block and what the run wrote; the profile and the animation where
+    ``camjax design`` drew them)."""
     from camjax.scene import BUILTIN_SCENES
 
     def drawn(name: str) -> bool:
@@ -687,7 +689,7 @@ def gallery_missing() -> dict[str, str]:
         if "files" not in record:  # what the run wrote, for the CLI page (:func:`_outputs`)
             return False
         designed = " design " in record["command"]
-        return not designed or (GALLERY / f"{name}-profile.png").exists()
+        return not designed or all((GALLERY / f"{name}-{fig}").exists() for fig in ("profile.png", "motion.gif"))
 
     return {name: f"python docs/gen_gallery.py --scene {name}" for name in BUILTIN_SCENES if not drawn(name)}
 
@@ -712,6 +714,8 @@ def _gallery() -> str:
                 if _png_width(GALLERY / f"{name}-{fig}.png") > GALLERY_COLUMN_PX]
         figures = [f"![{name}: {what}](gallery/{name}-{fig}.png)" for fig, what in drawn]
         figures = [f for f in figures if f not in wide]
+        if (GALLERY / f"{name}-motion.gif").exists():
+            figures.append(f"![{name}: {GALLERY_ANIMATION}](gallery/{name}-motion.gif)")
         if not drawn:
             figures = [f"No figures yet: `python docs/gen_gallery.py --scene {name}` draws them."]
         parts.append(

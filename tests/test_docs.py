@@ -161,7 +161,8 @@ def test_every_builtin_scene_has_gallery_figures():
     # the gallery stays small enough to commit: PNGs at low dpi, ~0.2 MB a scene
     total = sum(p.stat().st_size for p in gallery.glob("*"))
     assert total < 6 * 2**20, f"docs/gallery holds {total / 2**20:.1f} MB (budget 6 MB)"
-    drawn = {p.name.rsplit("-", 1)[0] for p in gallery.glob("*.png")} | {p.stem for p in gallery.glob("*.json")}
+    drawn = ({p.name.rsplit("-", 1)[0] for pattern in ("*.png", "*.gif") for p in gallery.glob(pattern)}
+             | {p.stem for p in gallery.glob("*.json")})
     stale = sorted(drawn - set(BUILTIN_SCENES))
     assert not stale, f"gallery figures of scenes that are not built in: {stale}"
 
@@ -174,6 +175,8 @@ def test_gallery_page_shows_each_scene_file_beside_its_figures():
         section = out.split(f"## `{name}`", 1)[1].split("\n## ", 1)[0]
         assert builtin_scene_text(name).splitlines()[1] in section, name
         assert f"(gallery/{name}-svaj.png)" in section, name
+        if " design " in json.loads((ROOT / "docs" / "gallery" / f"{name}.json").read_text())["command"]:
+            assert f"(gallery/{name}-motion.gif)" in section, name  # the designed mechanism turning
 
 
 def test_gallery_generator_refuses_an_unknown_scene():
