@@ -58,6 +58,23 @@ def outer_flank(margin: float, deg: float) -> list[GeometryViolation]:
                               "flank cannot be cut")]
 
 
+def worst_of(theta_deg, extremes: dict | None = None):
+    """The function ``(values, pick, name=None, sense="min") -> (value, deg)`` that finds a curve's
+    worst value and its cam angle (deg): ``extremes[name]``'s min or max (``sense``) where the exact
+    extrema (:class:`camjax.results.Extremes` by curve name) have the curve, else the sample that
+    ``pick`` (``np.argmin``, ``np.argmax``) chooses among ``values`` on the grid ``theta_deg``."""
+    ex = extremes or {}
+
+    def at(values, pick, name=None, sense="min"):
+        if name in ex:
+            e = ex[name]
+            return (e.min, e.min_deg) if sense == "min" else (e.max, e.max_deg)
+        i = int(pick(values))
+        return float(values[i]), float(theta_deg[i])
+
+    return at
+
+
 def closure(own: dict, theta_deg, pressure_angle_limit_deg: float | None) -> list[GeometryViolation]:
     """The second contact of a positive drive (:mod:`camjax.followers._closure`), on its samples: a
     groove's outer flank that cannot be cut; a conjugate cam's pressure angle over the limit and its
@@ -65,10 +82,7 @@ def closure(own: dict, theta_deg, pressure_angle_limit_deg: float | None) -> lis
     import numpy as np
 
     out: list[GeometryViolation] = []
-
-    def worst(values, pick):
-        i = int(pick(values))
-        return float(values[i]), float(theta_deg[i])
+    worst = worst_of(theta_deg)
 
     if "outer_margin_mm" in own:
         out += outer_flank(*worst(own["outer_margin_mm"], np.argmin))

@@ -166,10 +166,8 @@ class CurvedFace(TranslatingFollower):
         x, y = curved_geo.profile(base_radius_mm, rc, e, kin, rotation)
         pitch_x, pitch_y = roller_geo.roller_pitch_curve(base_radius_mm, rc, e, kin, rotation)
         g = curved_geo.geometry(base_radius_mm, rc, e, kin, rotation, follower.min_curvature_radius_mm)
-        stress = None
-        if arrays.stress_coefficient is not None:
-            rho_eq = roller_geo.roller_equivalent_radius(g.pitch_curvature, rc)
-            stress = contact.roller_stress(arrays.stress_coefficient, g.pressure_angle, rho_eq)
+        coefficient = arrays.stress_coefficient
+        stress = roller_geo.roller_contact_stress(coefficient, g.pitch_curvature, g.pressure_angle, rc)
         own = {"face_travel_mm": curved_geo.face_travel(base_radius_mm, rc, e, kin, rotation),
                "sliding_speed_m_s": curved_geo.sliding_speed_m_s(base_radius_mm, rc, e, kin,
                                                                  arrays.cam_speed_rad_s, rotation)}

@@ -38,20 +38,19 @@ from typing import Any, NamedTuple
 
 import jax
 import jax.numpy as jnp
-import numpy as np
 
 from camjax import family
 
 # re-exported: this family's protocol functions and tolerance, written once for every family
 from camjax.family import FEASIBILITY_TOL_RAD as FEASIBILITY_TOL_RAD
-from camjax.family import Weights, weighted_objective
+from camjax.family import Weights
 from camjax.family import bounds as bounds
 from camjax.family import bounds_violation as bounds_violation
 from camjax.family import size_norm as size_norm
 from camjax.family import violated_constraints as violated_constraints
 from camjax.followers.roller import geometry as roller_geo
 from camjax.followers.roller import problem as roller
-from camjax.numerics import RHO_FLOOR_MM, finite_float, floor_positive, positive_part
+from camjax.numerics import RHO_FLOOR_MM, floor_positive, positive_part
 
 CONSTRAINT_NAMES = ("pressure_angle", "undercut", "face_travel", "stress", "bounds")
 VARIABLES = ("base_radius_mm", "face_radius_mm", "face_width_mm", "offset_mm")
@@ -192,8 +191,7 @@ def size_term(problem: Problem, design: Design) -> jax.Array:
 
 def objective(problem: Problem, weights: Weights, design: Design) -> jax.Array:
     """F = alpha (R_b + W) / N + gamma max_theta sigma / sigma_max (dimensionless, shape ())."""
-    return weighted_objective(weights, size_term(problem, design), peak_stress(problem, design),
-                              problem.sigma_max_MPa)
+    return family.sized_objective(size_term, peak_stress, problem, weights, design)
 
 
 def constraints(problem: Problem, design: Design) -> Constraints:
@@ -269,26 +267,29 @@ def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
     """Objective, peak stress, pressure angle and face travel (and their angles), violations and
     feasibility."""
     x = _terms(problem, design)
-    sigma = stress(problem, design)
     phi = jnp.abs(jnp.arctan2(x.u, x.w))
-    travel = _travel(x, design)
-    i, j, k = jnp.argmax(sigma), jnp.argmax(phi), jnp.argmax(travel)
-    rho_c_min = jnp.min(roller_geo.roller_undercut_margin(x.kappa, design.face_radius_mm, 0.0))
-    v = Violation(
-        pressure_angle=positive_part(phi[j] - jnp.deg2rad(problem.max_pressure_angle_deg)),
-        undercut=positive_part(problem.min_curvature_radius_mm - rho_c_min),
-        face_travel=positive_part(travel[k] - 0.5 * design.face_width_mm),
-        stress=positive_part(sigma[i] - problem.sigma_max_MPa),
-        bounds=bounds_violation(problem, design),
-    )
-    return Evaluation(
-        objective=objective(problem, weights, design),
+    return judged_on_face(Evaluation, Violation, problem, design, objective(problem, weights, design),
+                          stress(problem, design), phi, x.kappa, _travel(x, design),
+                          jnp.deg2rad(problem.max_pressure_angle_deg))
+
+
+def judged_on_face(evaluation_type, violation_type, problem, design, objective, sigma, phi, kappa, travel,
+                   limit_rad, **violations):
+    """The ``Evaluation`` of a curved face (translating or oscillating) from its per-angle curves
+    (n,): the stress ``sigma`` (MPa), ``phi`` the |pressure angle| (rad), the pitch curvature
+    ``kappa`` (1/mm) and ``travel`` the contact's distance from the face's axis (mm); the circle's
+    worst contact (:func:`camjax.family.worst_contact`, the cam radius that of the crown's pitch
+    curve), the largest travel and its angle, the ``face_travel`` violation against W / 2 and the
+    family's own ``violations``; size R_b + W."""
+    margin = roller_geo.roller_undercut_margin(kappa, design.face_radius_mm, 0.0)
+    figures, circle = family.worst_contact(problem, design, sigma, phi, margin, limit_rad)
+    k = jnp.argmax(travel)
+    off_face = positive_part(travel[k] - 0.5 * design.face_width_mm)
+    return family.judged(
+        evaluation_type, violation_type, problem, objective=objective,
         size_mm=design.base_radius_mm + design.face_width_mm,
-        stress_max_MPa=sigma[i], stress_max_deg=problem.theta_deg[i],
-        pressure_angle_max_deg=jnp.rad2deg(phi[j]), pressure_angle_max_at_deg=problem.theta_deg[j],
-        cam_rho_min_mm=rho_c_min, face_travel_max_mm=travel[k], face_travel_max_deg=problem.theta_deg[k],
-        violation=v, feasible=family.feasible(problem, v),
-    )
+        figures=dict(**figures, face_travel_max_mm=travel[k], face_travel_max_deg=problem.theta_deg[k]),
+        violations=dict(**violations, **circle, face_travel=off_face))
 
 
 def condense_pointwise(problem: Problem, per_angle_design: Design) -> tuple[Design, dict]:
@@ -309,27 +310,27 @@ def polish_pointwise(problem: Problem, weights: Weights, design: Design, extras:
 
 # ------------------------------------------------------------------------------- output
 
-_f = finite_float
-
-
-def _design_keys(d: Design) -> dict:
-    return {**family.design_json(d, VARIABLES), "prime_radius_mm": _f(d.base_radius_mm + d.face_radius_mm)}
-
-
 def solution_json(problem: Problem, solution) -> dict:
     """The curved-face keys of result.json's design block, for one :class:`camjax.solvers.base.Solution`."""
-    d, v, ev = solution.design, solution.violation, solution.evaluation
-    return family.solution_keys(
-        problem, solution, VARIABLES, design_keys=_design_keys(d),
-        size_mm=d.base_radius_mm + d.face_width_mm,
-        violation={"pressure_angle_deg": np.degrees(v.pressure_angle), "undercut_mm": v.undercut,
-                   "face_travel_mm": v.face_travel, "stress_MPa": v.stress, "bounds_mm": v.bounds},
-        figures={**roller.roller_figures(ev, problem.max_pressure_angle_deg),
-                 "face_travel_max_mm": ev.face_travel_max_mm, "face_travel_max_deg": ev.face_travel_max_deg},
-        pointwise_angles=("base_radius_deg",))
+    d = solution.design
+    return family.solution_keys(problem, solution, VARIABLES, size_mm=d.base_radius_mm + d.face_width_mm,
+                                prime_radius_mm=d.base_radius_mm + d.face_radius_mm,
+                                figures=face_figures(solution.evaluation, problem.max_pressure_angle_deg),
+                                pointwise_angles=("base_radius_deg",))
+
+
+def face_figures(evaluation, max_pressure_angle_deg) -> dict:
+    """result.json's figures of a curved face (either curved-face family's ``Evaluation``): the
+    roller's (:func:`camjax.followers.roller.problem.roller_figures`) and the contact's largest
+    travel off the face's axis (mm) and its angle (deg)."""
+    ev = evaluation
+    return {**roller.roller_figures(ev, max_pressure_angle_deg),
+            "face_travel_max_mm": ev.face_travel_max_mm, "face_travel_max_deg": ev.face_travel_max_deg}
 
 
 def record(solution) -> dict:
-    """The curved-face keys of a pareto.json row: the design, size R_b + W and peak stress."""
+    """The keys of a pareto.json row of a curved face (translating or oscillating): the design, its
+    prime radius R_b + R_c, the size R_b + W and the peak stress."""
     d = solution.design
-    return family.record_json(_design_keys(d), d.base_radius_mm + d.face_width_mm, solution.evaluation)
+    return family.record_json(solution, d.base_radius_mm + d.face_width_mm,
+                              prime_radius_mm=d.base_radius_mm + d.face_radius_mm)

@@ -258,11 +258,9 @@ def condense_pointwise(problem: Problem, per_angle_design: Design) -> tuple[Desi
 def solution_json(problem: Problem, solution) -> dict:
     """The knife edge's keys of result.json's design block, for one
     :class:`camjax.solvers.base.Solution` (no ``sigma_max_MPa``: no stress is modelled)."""
-    d, v, ev = solution.design, solution.violation, solution.evaluation
+    ev = solution.evaluation
     out = family.solution_keys(
-        problem, solution, VARIABLES, design_keys=family.design_json(d, VARIABLES), size_mm=d.base_radius_mm,
-        violation={"pressure_angle_deg": np.degrees(v.pressure_angle), "curvature_mm": v.curvature,
-                   "bounds_mm": v.bounds},
+        problem, solution, VARIABLES, size_mm=solution.design.base_radius_mm,
         figures={"pressure_angle_max_deg": ev.pressure_angle_max_deg,
                  "pressure_angle_max_at_deg": ev.pressure_angle_max_at_deg,
                  "max_pressure_angle_deg": problem.max_pressure_angle_deg,
@@ -274,8 +272,7 @@ def solution_json(problem: Problem, solution) -> dict:
 
 def record(solution) -> dict:
     """The knife edge's keys of a pareto.json row: the design, size R_b and a zero peak stress."""
-    d = solution.design
-    return family.record_json(family.design_json(d, VARIABLES), d.base_radius_mm, solution.evaluation)
+    return family.record_json(solution, solution.design.base_radius_mm)
 
 
 __all__ = [

@@ -17,7 +17,6 @@ from typing import NamedTuple
 
 import numpy as np
 
-from camjax import contact, loads
 from camjax.family import FEASIBILITY_TOL_MM
 from camjax.followers import _checks
 from camjax.followers._rocking import (
@@ -36,8 +35,12 @@ from camjax.followers.oscillating_curved_face.geometry import (
     CURVED_MIN_CURVATURE_RADIUS_MM,
 )
 from camjax.followers.oscillating_roller import geometry as rocker_roller_geo
-from camjax.followers.oscillating_roller.follower import arm_sizing, arm_sizing_result, check_rocker_closes
-from camjax.followers.roller import geometry as roller_geo
+from camjax.followers.oscillating_roller.follower import (
+    arm_sizing,
+    arm_sizing_result,
+    check_rocker_closes,
+    circle_contact,
+)
 from camjax.results import GeometryViolation
 from camjax.scene.reader import DEFAULT, build, fixed_or_free
 from camjax.scene.spec import FollowerSpec
@@ -145,15 +148,7 @@ class OscillatingCurvedFace(RockingFollower):
     def contact(self, scene, moment, g):
         """The oscillating roller's with R_f = R_c: the normal runs through the face's centre, so
         P = M / (l cos phi); Hertz line contact of the cam and the crowned face."""
-        force = loads.rocker_roller_contact_force(moment, g.arm_length_mm, g.pressure_angle)
-        stress = None
-        if scene.contact is not None:
-            c = scene.contact
-            along = moment / (g.arm_length_mm * 1e-3)  # the force along the path of the face's centre, M / l
-            coeff = contact.stress_coefficient(along, c.cam_width_mm, c.cam, c.follower)
-            rho_eq = roller_geo.roller_equivalent_radius(g.pitch_curvature, scene.follower.face_radius_mm)
-            stress = contact.roller_stress(coeff, g.pressure_angle, rho_eq)
-        return force, stress
+        return circle_contact(scene, moment, g, scene.follower.face_radius_mm)
 
     def face_curves(self, scene, kin, cam_speed_rad_s, psi) -> dict:
         """The face's own curves at arm angles psi (rad): ``face_travel`` (mm, R_c sin phi) and

@@ -47,29 +47,25 @@ import jax.numpy as jnp
 import numpy as np
 
 from camjax import family
-from camjax.contact import roller_stress
-from camjax.family import (
-    Weights,
-    weighted_objective,
-)
+from camjax.family import Weights
 
 # re-exported: this family's protocol functions, written once for every family
 from camjax.family import bounds as bounds
 from camjax.family import bounds_violation as bounds_violation
 from camjax.family import size_norm as size_norm
 from camjax.family import violated_constraints as violated_constraints
-from camjax.followers import _pitch as pitch
-from camjax.followers._swing import moment_model, polish_design
+from camjax.followers import _swing
+from camjax.followers._swing import per_angle as per_angle
+from camjax.followers._swing import polish_design
+from camjax.followers.curved_face.problem import face_figures, judged_on_face
+from camjax.followers.curved_face.problem import record as record  # as the translating face's
+from camjax.followers.curved_face.problem import size_term as size_term  # the translating twin's size
 from camjax.followers.oscillating_curved_face import geometry as curved_geo
-from camjax.followers.oscillating_roller import geometry as rocker_roller_geo
-from camjax.followers.oscillating_roller.problem import axial_coefficient, cos_phi, moment_coefficient
-from camjax.followers.roller import geometry as roller_geo
-from camjax.followers.roller.problem import roller_figures
-from camjax.numerics import RHO_FLOOR_MM, finite_float, floor_positive, positive_part, safe_sqrt
+from camjax.followers.oscillating_roller import problem as rocker
+from camjax.numerics import positive_part
 
 CONSTRAINT_NAMES = ("reach", "pressure_angle", "undercut", "face_travel", "stress", "bounds")
 VARIABLES = ("base_radius_mm", "face_radius_mm", "face_width_mm", "pivot_distance_mm", "arm_length_mm")
-GRID_FIELDS = frozenset({"theta_deg", "s_rad", "ds", "d2s", "moment_coefficient"})
 
 
 class Design(NamedTuple):
@@ -147,62 +143,38 @@ def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=
     what = "an oscillating curved-face follower"
     arrays, as_ = family.design_arrays(scene, "oscillating_curved_face", what, arrays,
                                        samples=samples, dtype=dtype)
-    d, f, kin = scene.design, scene.follower, arrays.kin
+    d = scene.design
     lower, upper = family.design_box(d, Design, as_)
     return Problem(
-        theta_deg=as_(arrays.theta_deg), s_rad=kin.s, ds=kin.ds, d2s=kin.d2s,
-        moment_coefficient=as_(moment_coefficient(scene, arrays)),
-        lower=lower, upper=upper,
-        sigma_max_MPa=as_(d.sigma_max_MPa if d.sigma_max_MPa is not None else 1.0),
+        **_swing.scene_fields(scene, arrays, as_), lower=lower, upper=upper,
         size_norm_mm=as_(d.bounds("base_radius_mm")[1] + d.bounds("face_width_mm")[1]),
-        tan_max_pressure_angle=as_(np.tan(np.radians(f.max_pressure_angle_deg))),
-        min_curvature_radius_mm=as_(f.min_curvature_radius_mm),
-        rotation_sign=as_(pitch.rotation_sign(scene.motion.rotation)),
-        program=None if arrays.model is None else arrays.model.program,
-        moment_model=None if arrays.model is None else moment_model(scene, arrays),
+        tan_max_pressure_angle=as_(np.tan(np.radians(scene.follower.max_pressure_angle_deg))),
     )
-
-
-def per_angle(problem: Problem) -> Problem:
-    """The n pointwise problems: every grid leaf (n,) -> (n, 1), every scalar leaf -> (n,)."""
-    return family.per_angle(problem._replace(program=None, moment_model=None), GRID_FIELDS)
 
 
 # ---------------------------------------------------------------------------- physics
 
 
-class _Terms(NamedTuple):
-    """Per-angle quantities every function of a design shares (shape (n,) each)."""
-
-    legs: curved_geo.Legs  # d sin psi, l Q - d cos psi (mm): |T| cos phi, |T| sin phi
-    kappa: jax.Array  # pitch curvature, 1/mm
-    rho_eq: jax.Array  # Hertz equivalent radius 1 / (1/rho_c + 1/R_c), mm
-    reach: jax.Array  # () closure, mm
+def _as_roller(design: Design) -> rocker.Design:
+    """The oscillating roller with the crown's radius: the face's contact is that roller's circle on
+    the pitch curve of R_p = R_b + R_c (its terms, pressure angle, stress and circle constraints)."""
+    return rocker.Design(design.base_radius_mm, design.face_radius_mm, design.pivot_distance_mm,
+                         design.arm_length_mm)
 
 
-def _terms(problem: Problem, design: Design) -> _Terms:
-    """The closed forms of :mod:`camjax.followers.oscillating_curved_face.geometry` with the
-    rotation as data: it enters through Q = 1 + sigma s' only."""
-    d, l = design.pivot_distance_mm, design.arm_length_mm
-    rp = design.base_radius_mm + design.face_radius_mm
-    psi = rocker_roller_geo.arm_start_angle(rp, d, l) + problem.s_rad
-    q = 1.0 + problem.rotation_sign * problem.ds
-    kappa = rocker_roller_geo.swing_pitch_curvature(d, l, psi, q, problem.d2s)
-    return _Terms(curved_geo.legs(d, l, psi, q), kappa,
-                  roller_geo.roller_equivalent_radius(kappa, design.face_radius_mm),
-                  rocker_roller_geo.oscillating_roller_reach_constraint(rp, d, l))
+def _terms(problem: Problem, design: Design) -> rocker.CircleTerms:
+    return rocker.circle_terms(problem, _as_roller(design))
 
 
-def _travel(x: _Terms, design: Design) -> jax.Array:
+def _travel(x: rocker.CircleTerms, design: Design) -> jax.Array:
     """R_c |sin phi| (mm): the contact's distance from the face's axis, per angle."""
-    return jnp.abs(curved_geo.face_travel_of(x.legs, design.face_radius_mm))
+    return jnp.abs(curved_geo.face_travel_of(x, design.face_radius_mm))
 
 
 def pressure_angle(problem: Problem, design: Design) -> jax.Array:
     """phi (rad) per angle, as
     :func:`camjax.followers.oscillating_roller.geometry.oscillating_roller_pressure_angle`."""
-    g = _terms(problem, design).legs
-    return jnp.arctan2(g.along, g.across)
+    return rocker.pressure_angle(problem, _as_roller(design))
 
 
 def face_width_need(problem: Problem, design: Design) -> jax.Array:
@@ -214,43 +186,25 @@ def face_width_need(problem: Problem, design: Design) -> jax.Array:
 
 def stress(problem: Problem, design: Design) -> jax.Array:
     """Hertz contact stress sigma(theta) (MPa), shape (n,); finite (saturated) at an undercut."""
-    x = _terms(problem, design)
-    phi = jnp.arctan2(x.legs.along, x.legs.across)
-    return roller_stress(axial_coefficient(problem, design), phi, x.rho_eq)
+    return rocker.stress(problem, _as_roller(design))
 
 
 def peak_stress(problem: Problem, design: Design) -> jax.Array:
     """max_theta sigma (MPa), shape ()."""
-    x = _terms(problem, design)
-    coefficient = axial_coefficient(problem, design)
-    ratio = coefficient**2 / (cos_phi(x.legs) * floor_positive(x.rho_eq, RHO_FLOOR_MM))
-    return safe_sqrt(jnp.max(ratio))
-
-
-def size_term(problem: Problem, design: Design) -> jax.Array:
-    """Normalized size (R_b + W) / N (dimensionless)."""
-    return (design.base_radius_mm + design.face_width_mm) / problem.size_norm_mm
+    return rocker.peak_stress(problem, _as_roller(design))
 
 
 def objective(problem: Problem, weights: Weights, design: Design) -> jax.Array:
     """F = alpha (R_b + W) / N + gamma max_theta sigma / sigma_max (dimensionless, shape ())."""
-    return weighted_objective(weights, size_term(problem, design), peak_stress(problem, design),
-                              problem.sigma_max_MPa)
+    return family.sized_objective(size_term, peak_stress, problem, weights, design)
 
 
 def constraints(problem: Problem, design: Design) -> Constraints:
     """Every angle's constraints as g <= 0 (mm), shape (n,) each; finite for every design."""
     x = _terms(problem, design)
-    reach_r = design.face_radius_mm + problem.min_curvature_radius_mm
-    need = axial_coefficient(problem, design) ** 2 / (problem.sigma_max_MPa**2 * cos_phi(x.legs))
-    return Constraints(
-        reach=jnp.broadcast_to(x.reach, x.kappa.shape),
-        pressure_angle=jnp.abs(x.legs.along) - problem.tan_max_pressure_angle * x.legs.across,
-        undercut=reach_r * roller_geo.roller_undercut_constraint(x.kappa, design.face_radius_mm,
-                                                               problem.min_curvature_radius_mm),
-        face_travel=_travel(x, design) - 0.5 * design.face_width_mm,
-        stress=need - x.rho_eq,
-    )
+    circle = rocker.circle_constraints(problem, _as_roller(design), x)
+    return Constraints(reach=circle.reach, pressure_angle=circle.pressure_angle, undercut=circle.undercut,
+                       face_travel=_travel(x, design) - 0.5 * design.face_width_mm, stress=circle.stress)
 
 
 def polish(problem: Problem, weights: Weights, design: Design) -> Design:
@@ -270,27 +224,10 @@ def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
     """Objective, peak stress, pressure angle and face travel (and their angles), violations and
     feasibility."""
     x = _terms(problem, design)
-    sigma = stress(problem, design)
-    phi = jnp.abs(jnp.arctan2(x.legs.along, x.legs.across))
-    travel = _travel(x, design)
-    i, j, k = jnp.argmax(sigma), jnp.argmax(phi), jnp.argmax(travel)
-    rho_c_min = jnp.min(roller_geo.roller_undercut_margin(x.kappa, design.face_radius_mm, 0.0))
-    v = Violation(
-        reach=positive_part(x.reach),
-        pressure_angle=positive_part(phi[j] - jnp.arctan(problem.tan_max_pressure_angle)),
-        undercut=positive_part(problem.min_curvature_radius_mm - rho_c_min),
-        face_travel=positive_part(travel[k] - 0.5 * design.face_width_mm),
-        stress=positive_part(sigma[i] - problem.sigma_max_MPa),
-        bounds=bounds_violation(problem, design),
-    )
-    return Evaluation(
-        objective=objective(problem, weights, design),
-        size_mm=design.base_radius_mm + design.face_width_mm,
-        stress_max_MPa=sigma[i], stress_max_deg=problem.theta_deg[i],
-        pressure_angle_max_deg=jnp.rad2deg(phi[j]), pressure_angle_max_at_deg=problem.theta_deg[j],
-        cam_rho_min_mm=rho_c_min, face_travel_max_mm=travel[k], face_travel_max_deg=problem.theta_deg[k],
-        violation=v, feasible=family.feasible(problem, v),
-    )
+    return judged_on_face(Evaluation, Violation, problem, design, objective(problem, weights, design),
+                          stress(problem, design), jnp.abs(jnp.arctan2(x.along, x.across)), x.kappa,
+                          _travel(x, design), jnp.arctan(problem.tan_max_pressure_angle),
+                          reach=positive_part(x.reach))
 
 
 def condense_pointwise(problem: Problem, per_angle_design: Design) -> tuple[Design, dict]:
@@ -304,29 +241,10 @@ def condense_pointwise(problem: Problem, per_angle_design: Design) -> tuple[Desi
 
 # ------------------------------------------------------------------------------- output
 
-_f = finite_float
-
-
-def _design_keys(d: Design) -> dict:
-    return {**family.design_json(d, VARIABLES), "prime_radius_mm": _f(d.base_radius_mm + d.face_radius_mm)}
-
-
 def solution_json(problem: Problem, solution) -> dict:
     """The oscillating curved-face keys of result.json's design block, for one Solution."""
-    d, v, ev = solution.design, solution.violation, solution.evaluation
-    limit_deg = np.degrees(np.arctan(problem.tan_max_pressure_angle))
-    return family.solution_keys(
-        problem, solution, VARIABLES, design_keys=_design_keys(d),
-        size_mm=d.base_radius_mm + d.face_width_mm,
-        violation={"reach_mm": v.reach, "pressure_angle_deg": np.degrees(v.pressure_angle),
-                   "undercut_mm": v.undercut, "face_travel_mm": v.face_travel, "stress_MPa": v.stress,
-                   "bounds_mm": v.bounds},
-        figures={**roller_figures(ev, limit_deg),
-                 "face_travel_max_mm": ev.face_travel_max_mm, "face_travel_max_deg": ev.face_travel_max_deg},
-        pointwise_angles=("prime_radius_deg",))
-
-
-def record(solution) -> dict:
-    """The oscillating curved-face keys of a pareto.json row: the design, size R_b + W and peak stress."""
-    d = solution.design
-    return family.record_json(_design_keys(d), d.base_radius_mm + d.face_width_mm, solution.evaluation)
+    d, limit_deg = solution.design, np.degrees(np.arctan(problem.tan_max_pressure_angle))
+    return family.solution_keys(problem, solution, VARIABLES, size_mm=d.base_radius_mm + d.face_width_mm,
+                                prime_radius_mm=d.base_radius_mm + d.face_radius_mm,
+                                figures=face_figures(solution.evaluation, limit_deg),
+                                pointwise_angles=("prime_radius_deg",))

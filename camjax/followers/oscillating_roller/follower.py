@@ -116,6 +116,22 @@ def arm_sizing_result(kin, sampled, boundary, follower, max_pressure_angle_deg: 
     return RockerSizing(rp - roller_radius_mm, rp, _f(boundary.angle_deg), binding)
 
 
+def circle_contact(scene, moment, g, radius_mm: float):
+    """The contact force (N) and Hertz stress (MPa, None without [contact]) of a circle of radius
+    ``radius_mm`` (the roller, the oscillating curved face's crown) at the arm's end, from the pivot
+    torque ``moment`` (N m) and the rocker geometry ``g``: the normal runs through the circle's
+    centre, so P = M / (l cos phi); the force along the centre's path, M / l, is the roller
+    formula's "axial" force."""
+    force = loads.rocker_roller_contact_force(moment, g.arm_length_mm, g.pressure_angle)
+    stress = None
+    if scene.contact is not None:
+        c = scene.contact
+        along = moment / (g.arm_length_mm * 1e-3)  # N
+        coeff = contact.stress_coefficient(along, c.cam_width_mm, c.cam, c.follower)
+        stress = roller_geo.roller_contact_stress(coeff, g.pitch_curvature, g.pressure_angle, radius_mm)
+    return force, stress
+
+
 class OscillatingRoller(RockingFollower):
     name = "oscillating_roller"
     title = "oscillating roller"
@@ -209,16 +225,7 @@ class OscillatingRoller(RockingFollower):
             pressure_angle_limit_deg=float(f.max_pressure_angle_deg))
 
     def contact(self, scene, moment, g):
-        f = scene.follower
-        force = loads.rocker_roller_contact_force(moment, g.arm_length_mm, g.pressure_angle)
-        stress = None
-        if scene.contact is not None:
-            c = scene.contact
-            # the force along the roller's path, M / l, is the roller formula's "axial" force
-            coeff = contact.stress_coefficient(moment / (g.arm_length_mm * 1e-3), c.cam_width_mm, c.cam, c.follower)
-            rho_eq = roller_geo.roller_equivalent_radius(g.pitch_curvature, f.roller_radius_mm)
-            stress = contact.roller_stress(coeff, g.pressure_angle, rho_eq)
-        return force, stress
+        return circle_contact(scene, moment, g, scene.follower.roller_radius_mm)
 
     def closure_curves(self, scene, kin, base_radius_mm, g, moment):
         """Both flanks of a groove (or the second cam of a conjugate pair), their margins and loads."""
