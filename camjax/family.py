@@ -10,6 +10,7 @@ a design only as a pytree of named variables (mm), a violation only through its 
 
 from __future__ import annotations
 
+import collections
 import functools
 import operator
 from typing import Any, NamedTuple
@@ -48,6 +49,25 @@ FEASIBILITY_RTOL_STRESS = 1e-6
 FEASIBILITY_TOL_RAD = 1e-7
 
 # ------------------------------------------------------------------------------ protocol
+
+
+def twin_type(name: str, twin, doc: str, module: str, *, drop=(), add=(), before: str | None = None):
+    """A family's own NamedTuple type ``name`` declared from its twin's (``twin``: a type of the
+    family whose physics it reuses, e.g. the roller's for the curved face): the twin's fields in
+    their order, less those named in ``drop``, with the names in ``add`` inserted before the field
+    ``before`` (at the end without it); the twin's defaults for the fields it keeps. The type is
+    distinct from the twin's (families are told apart by type) and belongs to ``module`` (the
+    declaring module's ``__name__``, so that it pickles); the twin's declaration documents the
+    fields."""
+    fields = [field for field in twin._fields if field not in drop]
+    at = fields.index(before) if before is not None else len(fields)
+    fields[at:at] = list(add)
+    defaults = [twin._field_defaults[f] for f in fields if f in twin._field_defaults]
+    if fields[len(fields) - len(defaults):] != [f for f in fields if f in twin._field_defaults]:
+        raise ValueError(f"{name}: the fields with defaults must come last")
+    cls = collections.namedtuple(name, fields, defaults=defaults, module=module)
+    cls.__doc__ = doc
+    return cls
 
 
 def design_arrays(scene, follower_type: str, what: str, arrays=None, **options):

@@ -34,7 +34,7 @@ flat face's rule for L).
 
 from __future__ import annotations
 
-from typing import Any, NamedTuple
+from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
@@ -66,25 +66,12 @@ class Design(NamedTuple):
     offset_mm: jax.Array  # e, mm (follower axis at x = e in the follower frame)
 
 
-class Problem(NamedTuple):
-    """Design-independent data of one curved-face design problem on an angle grid of n samples."""
-
-    theta_deg: jax.Array  # (n,) cam angle, degrees
-    s_mm: jax.Array  # (n,) s, mm
-    ds_mm: jax.Array  # (n,) s', mm/rad
-    d2s_mm: jax.Array  # (n,) s'', mm/rad^2
-    stress_coefficient: jax.Array  # (n,) C = 0.564 sqrt(F / (w K)), MPa mm^0.5 (0: no stress)
-    lower: Design  # lower bounds, mm
-    upper: Design  # upper bounds, mm
-    sigma_max_MPa: jax.Array  # () allowable contact stress
-    size_norm_mm: jax.Array  # () N = R_b,max + W_max
-    tan_max_pressure_angle: jax.Array  # () tan(phi_max)
-    max_pressure_angle_deg: jax.Array  # () phi_max, deg
-    min_curvature_radius_mm: jax.Array  # () smallest convex cam-surface radius allowed
-    rotation_sign: jax.Array  # () +1 ccw, -1 cw: e~ = sign e
-    # the scene's closed forms (camjax.evaluate.SceneModel) behind the grid when extrema are
-    # exact: :func:`polish` keeps every constraint between the samples too; None: the grid's
-    model: Any = None
+# the roller's Problem without a positive drive: the circle's grid, limits and model; here the
+# box is the curved face's Design and the size norm N = R_b,max + W_max
+Problem = family.twin_type(
+    "Problem", roller.Problem,
+    "Design-independent data of one curved-face design problem on an angle grid of n samples.", __name__,
+    drop=("closure",))
 
 
 class Constraints(NamedTuple):
@@ -106,20 +93,11 @@ class Violation(NamedTuple):
     bounds: jax.Array  # mm: largest distance outside the box
 
 
-class Evaluation(NamedTuple):
-    """A design judged on the whole grid (true maxima; shape () each)."""
-
-    objective: jax.Array  # F
-    size_mm: jax.Array  # R_b + W
-    stress_max_MPa: jax.Array  # max_theta sigma
-    stress_max_deg: jax.Array  # where it occurs
-    pressure_angle_max_deg: jax.Array  # max_theta |phi|
-    pressure_angle_max_at_deg: jax.Array  # where it occurs
-    cam_rho_min_mm: jax.Array  # smallest convex cam-surface radius rho_c (undercut at <= 0)
-    face_travel_max_mm: jax.Array  # max_theta R_c |sin phi|
-    face_travel_max_deg: jax.Array  # where it occurs
-    violation: Violation
-    feasible: jax.Array  # bool
+# the roller's Evaluation (size_mm: R_b + W) and the contact's largest travel off the face's axis,
+# max_theta R_c |sin phi| (mm), and where it occurs (deg)
+Evaluation = family.twin_type(
+    "Evaluation", roller.Evaluation, "A design judged on the whole grid (true maxima; shape () each).",
+    __name__, add=("face_travel_max_mm", "face_travel_max_deg"), before="violation")
 
 
 # ------------------------------------------------------------------------------ building

@@ -24,7 +24,7 @@ between the samples, and the modes are the roller's (:func:`to_unit`, :func:`fro
 
 from __future__ import annotations
 
-from typing import Any, NamedTuple
+from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
@@ -53,22 +53,13 @@ class Design(NamedTuple):
     offset_mm: jax.Array  # e, mm (follower axis at x = e in the follower frame)
 
 
-class Problem(NamedTuple):
-    """Design-independent data of one knife-edge design problem on an angle grid of n samples."""
-
-    theta_deg: jax.Array  # (n,) cam angle, degrees
-    s_mm: jax.Array  # (n,) s, mm
-    ds_mm: jax.Array  # (n,) s', mm/rad
-    d2s_mm: jax.Array  # (n,) s'', mm/rad^2
-    lower: Design  # lower bounds, mm
-    upper: Design  # upper bounds, mm
-    sigma_max_MPa: jax.Array  # () 1: the objective's unused stress scale (no stress is modelled)
-    size_norm_mm: jax.Array  # () N = R_b,max
-    tan_max_pressure_angle: jax.Array  # () tan(phi_max)
-    max_pressure_angle_deg: jax.Array  # () phi_max, deg (as the scene gives it)
-    min_curvature_radius_mm: jax.Array  # () smallest convex profile radius allowed
-    rotation_sign: jax.Array  # () +1 ccw, -1 cw (geometry.pitch): e~ = sign e
-    model: Any = None  # the scene's closed forms behind the grid when extrema are exact (:func:`polish`)
+# the roller's Problem without a stress coefficient and a positive drive (no stress is modelled:
+# sigma_max_MPa is 1, the objective's unused stress scale); the box is the knife edge's Design, the
+# size norm N = R_b,max and min_curvature_radius_mm the smallest convex profile radius allowed
+Problem = family.twin_type(
+    "Problem", roller.Problem,
+    "Design-independent data of one knife-edge design problem on an angle grid of n samples.", __name__,
+    drop=("stress_coefficient", "closure"))
 
 
 class Constraints(NamedTuple):

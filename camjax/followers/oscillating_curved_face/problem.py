@@ -40,7 +40,7 @@ design of the angle with the largest R_b + R_c with the largest W over the angle
 
 from __future__ import annotations
 
-from typing import Any, NamedTuple
+from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
@@ -78,24 +78,12 @@ class Design(NamedTuple):
     arm_length_mm: jax.Array  # l, mm: pivot to the centre of the face's circle
 
 
-class Problem(NamedTuple):
-    """Design-independent data of one oscillating curved-face design problem on n samples."""
-
-    theta_deg: jax.Array  # (n,) cam angle, degrees
-    s_rad: jax.Array  # (n,) arm swing s, rad
-    ds: jax.Array  # (n,) s', rad/rad
-    d2s: jax.Array  # (n,) s'', rad/rad^2
-    moment_coefficient: jax.Array  # (n,) C_M = 0.564 sqrt(M / (w K)), MPa mm^0.5 m^0.5 (0: no stress)
-    lower: Design  # lower bounds, mm
-    upper: Design  # upper bounds, mm
-    sigma_max_MPa: jax.Array  # () allowable contact stress
-    size_norm_mm: jax.Array  # () N = R_b,max + W_max
-    tan_max_pressure_angle: jax.Array  # () tan(phi_max)
-    min_curvature_radius_mm: jax.Array  # () smallest convex cam-surface radius allowed
-    rotation_sign: jax.Array  # () +1 ccw, -1 cw
-    # the motion program (as arrays) behind the grid when extrema are exact: :func:`polish`
-    program: Any = None
-    moment_model: Any = None  # camjax.followers._swing.MomentModel: C_M between the samples (the polish)
+# the oscillating roller's Problem without a positive drive: the grid, limits, program and moment
+# model; here the box is the curved face's Design and the size norm N = R_b,max + W_max
+Problem = family.twin_type(
+    "Problem", rocker.Problem,
+    "Design-independent data of one oscillating curved-face design problem on n samples.", __name__,
+    drop=("closure",))
 
 
 class Constraints(NamedTuple):
@@ -119,20 +107,11 @@ class Violation(NamedTuple):
     bounds: jax.Array  # mm
 
 
-class Evaluation(NamedTuple):
-    """A design judged on the whole grid (true maxima; shape () each)."""
-
-    objective: jax.Array
-    size_mm: jax.Array  # R_b + W
-    stress_max_MPa: jax.Array
-    stress_max_deg: jax.Array
-    pressure_angle_max_deg: jax.Array
-    pressure_angle_max_at_deg: jax.Array
-    cam_rho_min_mm: jax.Array  # smallest convex cam-surface radius
-    face_travel_max_mm: jax.Array  # max_theta R_c |sin phi|
-    face_travel_max_deg: jax.Array  # where it occurs
-    violation: Violation
-    feasible: jax.Array  # bool
+# the oscillating roller's Evaluation (size_mm: R_b + W) and the contact's largest travel off the
+# face's axis, max_theta R_c |sin phi| (mm), and where it occurs (deg)
+Evaluation = family.twin_type(
+    "Evaluation", rocker.Evaluation, "A design judged on the whole grid (true maxima; shape () each).",
+    __name__, add=("face_travel_max_mm", "face_travel_max_deg"), before="violation")
 
 
 # ------------------------------------------------------------------------------ building

@@ -25,7 +25,7 @@ The face length the contact needs (max xi - min xi) is reported with the design.
 from __future__ import annotations
 
 import math
-from typing import Any, NamedTuple
+from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
@@ -43,6 +43,7 @@ from camjax.followers import _swing
 from camjax.followers._swing import per_angle as per_angle
 from camjax.followers._swing import polish_design
 from camjax.followers.oscillating_flat import geometry as rocker_flat_geo
+from camjax.followers.oscillating_roller import problem as rocker_roller
 from camjax.numerics import RHO_FLOOR_MM, capped_divide, finite_float, floor_positive, positive_part
 
 CONSTRAINT_NAMES = ("reach", "swing", "curvature", "stress", "bounds")
@@ -57,23 +58,13 @@ class Design(NamedTuple):
     face_offset_mm: jax.Array  # f, mm
 
 
-class Problem(NamedTuple):
-    """Design-independent data of one oscillating flat-face design problem on n angles."""
-
-    theta_deg: jax.Array  # (n,) cam angle, degrees
-    s_rad: jax.Array  # (n,) arm swing s, rad
-    ds: jax.Array  # (n,) s', rad/rad
-    d2s: jax.Array  # (n,) s'', rad/rad^2
-    moment_coefficient: jax.Array  # (n,) C_M = 0.564 sqrt(M / (w K)) (0: no stress)
-    lower: Design
-    upper: Design
-    sigma_max_MPa: jax.Array  # ()
-    size_norm_mm: jax.Array  # () R_b,max
-    min_curvature_radius_mm: jax.Array  # ()
-    rotation_sign: jax.Array  # () +1 ccw, -1 cw
-    # the motion program (as arrays) behind the grid when extrema are exact: :func:`polish`
-    program: Any = None
-    moment_model: Any = None  # camjax.followers._swing.MomentModel: C_M between the samples (the polish)
+# the rocking grid, limits, program and moment model as the oscillating roller's Problem has them
+# (:func:`camjax.followers._swing.scene_fields`), without its pressure-angle limit and positive
+# drive; the box is the flat face's Design and the size norm N = R_b,max
+Problem = family.twin_type(
+    "Problem", rocker_roller.Problem,
+    "Design-independent data of one oscillating flat-face design problem on n angles.", __name__,
+    drop=("tan_max_pressure_angle", "closure"))
 
 
 class Constraints(NamedTuple):
