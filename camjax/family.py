@@ -132,6 +132,22 @@ def weighted_objective(weights, size_term, peak_stress_MPa, sigma_max_MPa) -> ja
     return weights.alpha * size_term + weights.gamma * peak_stress_MPa / sigma_max_MPa
 
 
+def through_twin(as_twin, *functions) -> tuple:
+    """Each of a twin family's ``functions`` (``f(problem, design)``, e.g. the roller's pressure angle)
+    for this family's designs, mapped onto the twin's by ``as_twin``: a family whose contact is its
+    twin's (the curved face's is the roller's with R_f = R_c) takes them as they are. Each keeps
+    the twin function's name and docstring."""
+    def through(function):
+        def of_design(problem, design):
+            return function(problem, as_twin(design))
+
+        of_design.__name__ = of_design.__qualname__ = function.__name__
+        of_design.__doc__ = function.__doc__
+        return of_design
+
+    return tuple(through(f) for f in functions)
+
+
 def sized_objective(size_term, peak_stress, problem, weights, design) -> jax.Array:
     """:func:`weighted_objective` of a family's ``size_term(problem, design)`` (dimensionless) and
     ``peak_stress(problem, design)`` (MPa), in that order."""

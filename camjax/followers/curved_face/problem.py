@@ -140,26 +140,23 @@ def _travel(x: roller.CircleTerms, design: Design) -> jax.Array:
     return design.face_radius_mm * jnp.abs(x.u) / floor_positive(x.r, RHO_FLOOR_MM)
 
 
-def pressure_angle(problem: Problem, design: Design) -> jax.Array:
-    """phi (rad) per angle, signed as :func:`camjax.followers._pitch.pressure_angle`."""
-    return roller.pressure_angle(problem, _as_roller(design))
+# the roller's at R_f = R_c: phi (rad) and sigma (MPa) per angle, and max_theta sigma (MPa)
+pressure_angle, stress, peak_stress = family.through_twin(_as_roller, roller.pressure_angle, roller.stress,
+                                                          roller.peak_stress)
 
 
 def face_width_need(problem: Problem, design: Design) -> jax.Array:
     """2 max_theta R_c |sin phi| (mm), the narrowest face that keeps the contact on it, shape ()
     (batched designs: over the last axis)."""
+    return width_need(lambda p, d: _travel(_terms(p, d), d), problem, design)
+
+
+def width_need(travel, problem, design) -> jax.Array:
+    """2 max_theta ``travel(problem, design)`` (mm) of a curved face (either family; ``travel`` its
+    contact's distance from the face's axis per angle), shape () (batched designs: over the last
+    axis)."""
     column = jax.tree.map(lambda x: jnp.expand_dims(x, -1), design)  # (..., 1) against the grid (n,)
-    return 2.0 * jnp.max(_travel(_terms(problem, column), column), axis=-1)
-
-
-def stress(problem: Problem, design: Design) -> jax.Array:
-    """Hertz contact stress sigma(theta) (MPa), shape (n,); finite (saturated) at an undercut."""
-    return roller.stress(problem, _as_roller(design))
-
-
-def peak_stress(problem: Problem, design: Design) -> jax.Array:
-    """max_theta sigma (MPa), shape (), as sqrt(max_theta C^2 / (cos phi rho_eq)): one root."""
-    return roller.peak_stress(problem, _as_roller(design))
+    return 2.0 * jnp.max(travel(problem, column), axis=-1)
 
 
 def size_term(problem: Problem, design: Design) -> jax.Array:

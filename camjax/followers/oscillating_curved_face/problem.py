@@ -57,7 +57,7 @@ from camjax.family import violated_constraints as violated_constraints
 from camjax.followers import _swing
 from camjax.followers._swing import per_angle as per_angle
 from camjax.followers._swing import polish_design
-from camjax.followers.curved_face.problem import face_figures, judged_on_face
+from camjax.followers.curved_face.problem import face_figures, judged_on_face, width_need
 from camjax.followers.curved_face.problem import record as record  # as the translating face's
 from camjax.followers.curved_face.problem import size_term as size_term  # the translating twin's size
 from camjax.followers.oscillating_curved_face import geometry as curved_geo
@@ -150,27 +150,15 @@ def _travel(x: rocker.CircleTerms, design: Design) -> jax.Array:
     return jnp.abs(curved_geo.face_travel_of(x, design.face_radius_mm))
 
 
-def pressure_angle(problem: Problem, design: Design) -> jax.Array:
-    """phi (rad) per angle, as
-    :func:`camjax.followers.oscillating_roller.geometry.oscillating_roller_pressure_angle`."""
-    return rocker.pressure_angle(problem, _as_roller(design))
+# the oscillating roller's at R_f = R_c: phi (rad) and sigma (MPa) per angle, and max_theta sigma (MPa)
+pressure_angle, stress, peak_stress = family.through_twin(_as_roller, rocker.pressure_angle, rocker.stress,
+                                                          rocker.peak_stress)
 
 
 def face_width_need(problem: Problem, design: Design) -> jax.Array:
     """2 max_theta R_c |sin phi| (mm), the narrowest face that keeps the contact on it, shape ()
-    (batched designs: over the last axis)."""
-    column = jax.tree.map(lambda x: jnp.expand_dims(x, -1), design)  # (..., 1) against the grid (n,)
-    return 2.0 * jnp.max(_travel(_terms(problem, column), column), axis=-1)
-
-
-def stress(problem: Problem, design: Design) -> jax.Array:
-    """Hertz contact stress sigma(theta) (MPa), shape (n,); finite (saturated) at an undercut."""
-    return rocker.stress(problem, _as_roller(design))
-
-
-def peak_stress(problem: Problem, design: Design) -> jax.Array:
-    """max_theta sigma (MPa), shape ()."""
-    return rocker.peak_stress(problem, _as_roller(design))
+    (batched designs: over the last axis; :func:`camjax.followers.curved_face.problem.width_need`)."""
+    return width_need(lambda p, d: _travel(_terms(p, d), d), problem, design)
 
 
 def objective(problem: Problem, weights: Weights, design: Design) -> jax.Array:
