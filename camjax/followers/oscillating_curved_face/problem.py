@@ -47,6 +47,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from camjax import family
+from camjax.contact import roller_stress
 from camjax.family import Weights
 
 # re-exported: this family's protocol functions, written once for every family
@@ -61,8 +62,11 @@ from camjax.followers.curved_face.problem import face_figures, judged_on_face, w
 from camjax.followers.curved_face.problem import record as record  # as the translating face's
 from camjax.followers.curved_face.problem import size_term as size_term  # the translating twin's size
 from camjax.followers.oscillating_curved_face import geometry as curved_geo
+from camjax.followers.oscillating_roller import geometry as rocker_roller_geo
 from camjax.followers.oscillating_roller import problem as rocker
-from camjax.numerics import positive_part
+from camjax.followers.oscillating_roller.problem import axial_coefficient, cos_phi
+from camjax.followers.roller import geometry as roller_geo
+from camjax.numerics import RHO_FLOOR_MM, floor_positive, positive_part, safe_sqrt
 
 CONSTRAINT_NAMES = ("reach", "pressure_angle", "undercut", "face_travel", "stress", "bounds")
 VARIABLES = ("base_radius_mm", "face_radius_mm", "face_width_mm", "pivot_distance_mm", "arm_length_mm")
@@ -134,31 +138,59 @@ def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=
 # ---------------------------------------------------------------------------- physics
 
 
-def _as_roller(design: Design) -> rocker.Design:
-    """The oscillating roller with the crown's radius: the face's contact is that roller's circle on
-    the pitch curve of R_p = R_b + R_c (its terms, pressure angle, stress and circle constraints)."""
-    return rocker.Design(design.base_radius_mm, design.face_radius_mm, design.pivot_distance_mm,
-                         design.arm_length_mm)
+class _Terms(NamedTuple):
+    """Per-angle quantities every function of a design shares (shape (n,) each)."""
+
+    legs: curved_geo.Legs  # d sin psi, l Q - d cos psi (mm): |T| cos phi, |T| sin phi
+    kappa: jax.Array  # pitch curvature, 1/mm
+    rho_eq: jax.Array  # Hertz equivalent radius 1 / (1/rho_c + 1/R_c), mm
+    reach: jax.Array  # () closure, mm
 
 
-def _terms(problem: Problem, design: Design) -> rocker.CircleTerms:
-    return rocker.circle_terms(problem, _as_roller(design))
+def _terms(problem: Problem, design: Design) -> _Terms:
+    """The closed forms of :mod:`camjax.followers.oscillating_curved_face.geometry` with the
+    rotation as data: it enters through Q = 1 + sigma s' only."""
+    d, l = design.pivot_distance_mm, design.arm_length_mm
+    rp = design.base_radius_mm + design.face_radius_mm
+    psi = rocker_roller_geo.arm_start_angle(rp, d, l) + problem.s_rad
+    q = 1.0 + problem.rotation_sign * problem.ds
+    kappa = rocker_roller_geo.swing_pitch_curvature(d, l, psi, q, problem.d2s)
+    return _Terms(curved_geo.legs(d, l, psi, q), kappa,
+                  roller_geo.roller_equivalent_radius(kappa, design.face_radius_mm),
+                  rocker_roller_geo.oscillating_roller_reach_constraint(rp, d, l))
 
 
-def _travel(x: rocker.CircleTerms, design: Design) -> jax.Array:
+def _travel(x: _Terms, design: Design) -> jax.Array:
     """R_c |sin phi| (mm): the contact's distance from the face's axis, per angle."""
-    return jnp.abs(curved_geo.face_travel_of(x, design.face_radius_mm))
+    return jnp.abs(curved_geo.face_travel_of(x.legs, design.face_radius_mm))
 
 
-# the oscillating roller's at R_f = R_c: phi (rad) and sigma (MPa) per angle, and max_theta sigma (MPa)
-pressure_angle, stress, peak_stress = family.through_twin(_as_roller, rocker.pressure_angle, rocker.stress,
-                                                          rocker.peak_stress)
+def pressure_angle(problem: Problem, design: Design) -> jax.Array:
+    """phi (rad) per angle, as
+    :func:`camjax.followers.oscillating_roller.geometry.oscillating_roller_pressure_angle`."""
+    g = _terms(problem, design).legs
+    return jnp.arctan2(g.along, g.across)
 
 
 def face_width_need(problem: Problem, design: Design) -> jax.Array:
     """2 max_theta R_c |sin phi| (mm), the narrowest face that keeps the contact on it, shape ()
     (batched designs: over the last axis; :func:`camjax.followers.curved_face.problem.width_need`)."""
     return width_need(lambda p, d: _travel(_terms(p, d), d), problem, design)
+
+
+def stress(problem: Problem, design: Design) -> jax.Array:
+    """Hertz contact stress sigma(theta) (MPa), shape (n,); finite (saturated) at an undercut."""
+    x = _terms(problem, design)
+    phi = jnp.arctan2(x.legs.along, x.legs.across)
+    return roller_stress(axial_coefficient(problem, design), phi, x.rho_eq)
+
+
+def peak_stress(problem: Problem, design: Design) -> jax.Array:
+    """max_theta sigma (MPa), shape ()."""
+    x = _terms(problem, design)
+    coefficient = axial_coefficient(problem, design)
+    ratio = coefficient**2 / (cos_phi(x.legs) * floor_positive(x.rho_eq, RHO_FLOOR_MM))
+    return safe_sqrt(jnp.max(ratio))
 
 
 def objective(problem: Problem, weights: Weights, design: Design) -> jax.Array:
@@ -169,9 +201,16 @@ def objective(problem: Problem, weights: Weights, design: Design) -> jax.Array:
 def constraints(problem: Problem, design: Design) -> Constraints:
     """Every angle's constraints as g <= 0 (mm), shape (n,) each; finite for every design."""
     x = _terms(problem, design)
-    circle = rocker.circle_constraints(problem, _as_roller(design), x)
-    return Constraints(reach=circle.reach, pressure_angle=circle.pressure_angle, undercut=circle.undercut,
-                       face_travel=_travel(x, design) - 0.5 * design.face_width_mm, stress=circle.stress)
+    reach_r = design.face_radius_mm + problem.min_curvature_radius_mm
+    need = axial_coefficient(problem, design) ** 2 / (problem.sigma_max_MPa**2 * cos_phi(x.legs))
+    return Constraints(
+        reach=jnp.broadcast_to(x.reach, x.kappa.shape),
+        pressure_angle=jnp.abs(x.legs.along) - problem.tan_max_pressure_angle * x.legs.across,
+        undercut=reach_r * roller_geo.roller_undercut_constraint(x.kappa, design.face_radius_mm,
+                                                               problem.min_curvature_radius_mm),
+        face_travel=_travel(x, design) - 0.5 * design.face_width_mm,
+        stress=need - x.rho_eq,
+    )
 
 
 def polish(problem: Problem, weights: Weights, design: Design) -> Design:
@@ -192,7 +231,7 @@ def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
     feasibility."""
     x = _terms(problem, design)
     return judged_on_face(Evaluation, Violation, problem, design, objective(problem, weights, design),
-                          stress(problem, design), jnp.abs(jnp.arctan2(x.along, x.across)), x.kappa,
+                          stress(problem, design), jnp.abs(jnp.arctan2(x.legs.along, x.legs.across)), x.kappa,
                           _travel(x, design), jnp.arctan(problem.tan_max_pressure_angle),
                           reach=positive_part(x.reach))
 

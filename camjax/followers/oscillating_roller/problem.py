@@ -157,19 +157,15 @@ def _second_moment_coefficient(scene, arrays) -> jax.Array:
 # ---------------------------------------------------------------------------- physics
 
 
-class CircleTerms(NamedTuple):
-    """Per-angle quantities of a circle whose centre swings on the arm (the roller, the oscillating
-    curved face's crown), which every function of a design shares (shape (n,) each)."""
-
+class _Geometry(NamedTuple):
     along: jax.Array  # l Q - d cos psi (mm): sin phi |T|
     across: jax.Array  # d sin psi (mm): cos phi |T|
     kappa: jax.Array  # pitch curvature, 1/mm
     reach: jax.Array  # () closure, mm
 
 
-def circle_terms(problem: Problem, design: Design) -> CircleTerms:
-    """Pressure-angle legs, pitch curvature and closure of a design (formulas of geometry.oscillating;
-    the oscillating curved face passes its crown radius as R_f).
+def _geometry(problem: Problem, design: Design) -> _Geometry:
+    """Pressure-angle legs, pitch curvature and closure of a design (formulas of geometry.oscillating).
 
     The rotation enters through Q = 1 + sigma s' only; sigma is data here (a rotation string
     is static in camjax.geometry), so the closed forms are called with Q.
@@ -180,7 +176,7 @@ def circle_terms(problem: Problem, design: Design) -> CircleTerms:
     q = 1.0 + problem.rotation_sign * problem.ds
     kappa = rocker_roller_geo.swing_pitch_curvature(d, l, psi, q, problem.d2s)
     reach = rocker_roller_geo.oscillating_roller_reach_constraint(rp, d, l)
-    return CircleTerms(l * q - d * jnp.cos(psi), d * jnp.sin(psi), kappa, reach)
+    return _Geometry(l * q - d * jnp.cos(psi), d * jnp.sin(psi), kappa, reach)
 
 
 def cos_phi(g) -> jax.Array:
@@ -192,7 +188,7 @@ def cos_phi(g) -> jax.Array:
 
 def pressure_angle(problem: Problem, design: Design) -> jax.Array:
     """phi (rad) per angle, as :func:`camjax.followers.oscillating_roller.geometry.oscillating_roller_pressure_angle`."""
-    g = circle_terms(problem, design)
+    g = _geometry(problem, design)
     return jnp.arctan2(g.along, g.across)
 
 
@@ -204,14 +200,14 @@ def axial_coefficient(problem: Problem, design: Design) -> jax.Array:
 
 def stress(problem: Problem, design: Design) -> jax.Array:
     """Hertz contact stress sigma(theta) (MPa), shape (n,); finite (saturated) at an undercut."""
-    g = circle_terms(problem, design)
+    g = _geometry(problem, design)
     rho_eq = roller_geo.roller_equivalent_radius(g.kappa, design.roller_radius_mm)
     return roller_stress(axial_coefficient(problem, design), jnp.arctan2(g.along, g.across), rho_eq)
 
 
 def peak_stress(problem: Problem, design: Design) -> jax.Array:
     """max_theta sigma (MPa), shape ()."""
-    g = circle_terms(problem, design)
+    g = _geometry(problem, design)
     rho_eq = roller_geo.roller_equivalent_radius(g.kappa, design.roller_radius_mm)
     ratio = axial_coefficient(problem, design) ** 2 / (cos_phi(g) * floor_positive(rho_eq, RHO_FLOOR_MM))
     return safe_sqrt(jnp.max(ratio))
@@ -222,25 +218,19 @@ def objective(problem: Problem, weights: Weights, design: Design) -> jax.Array:
     return family.sized_objective(size_term, peak_stress, problem, weights, design)
 
 
-def circle_constraints(problem: Problem, design: Design, g: CircleTerms) -> Constraints:
-    """The circle's own constraints as g <= 0 (mm), shape (n,) each, from its terms ``g``
-    (:func:`circle_terms`): the reach, the pressure angle, the undercut and the stress."""
+def constraints(problem: Problem, design: Design) -> Constraints:
+    """Every angle's constraints as g <= 0 (mm), shape (n,) each; finite for every design."""
+    g = _geometry(problem, design)
     reach_r = design.roller_radius_mm + problem.min_curvature_radius_mm
     rho_eq = roller_geo.roller_equivalent_radius(g.kappa, design.roller_radius_mm)
     need = axial_coefficient(problem, design) ** 2 / (problem.sigma_max_MPa**2 * cos_phi(g))
-    return Constraints(
+    first = Constraints(
         reach=jnp.broadcast_to(g.reach, g.kappa.shape),
         pressure_angle=jnp.abs(g.along) - problem.tan_max_pressure_angle * g.across,
         undercut=reach_r * roller_geo.roller_undercut_constraint(g.kappa, design.roller_radius_mm,
                                                                problem.min_curvature_radius_mm),
         stress=need - rho_eq,
     )
-
-
-def constraints(problem: Problem, design: Design) -> Constraints:
-    """Every angle's constraints as g <= 0 (mm), shape (n,) each; finite for every design."""
-    g = circle_terms(problem, design)
-    first = circle_constraints(problem, design, g)
     if problem.closure is None:
         return first
     second = _second_contact(problem, design, g)
@@ -249,7 +239,7 @@ def constraints(problem: Problem, design: Design) -> Constraints:
                           stress=jnp.maximum(first.stress, second.stress))
 
 
-def _second_contact(problem: Problem, design: Design, g: CircleTerms) -> _closure.SecondContact:
+def _second_contact(problem: Problem, design: Design, g: _Geometry) -> _closure.SecondContact:
     """The positive drive's second contact (the groove's outer flank, the second arm's cam)."""
     t = problem.closure
     if isinstance(t, _closure.GrooveTerms):
@@ -278,7 +268,7 @@ def constraint_maxima(problem: Problem, design: Design) -> Constraints:
 
 def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
     """Objective, peak stress and pressure angle (and their angles), violations and feasibility."""
-    g = circle_terms(problem, design)
+    g = _geometry(problem, design)
     sigma = stress(problem, design)
     phi = jnp.abs(jnp.arctan2(g.along, g.across))
     margin = roller_geo.roller_undercut_margin(g.kappa, design.roller_radius_mm, 0.0)
