@@ -138,6 +138,9 @@ def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=
 # ---------------------------------------------------------------------------- physics
 
 
+# The oscillating roller's circle terms at R_f = R_c give the same values, but a gradient through
+# them adds its terms in another order (the solved design would move by ~1e-9 mm): the face keeps
+# its own, in the order its results were established with.
 class _Terms(NamedTuple):
     """Per-angle quantities every function of a design shares (shape (n,) each)."""
 
