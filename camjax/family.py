@@ -10,6 +10,7 @@ a design only as a pytree of named variables (mm), a violation only through its 
 
 from __future__ import annotations
 
+import collections
 import functools
 import operator
 from typing import Any, NamedTuple
@@ -48,6 +49,25 @@ FEASIBILITY_RTOL_STRESS = 1e-6
 FEASIBILITY_TOL_RAD = 1e-7
 
 # ------------------------------------------------------------------------------ protocol
+
+
+def twin_type(name: str, twin, doc: str, module: str, *, drop=(), add=(), before: str | None = None):
+    """A family's own NamedTuple type ``name`` declared from its twin's (``twin``: a type of the
+    family whose physics it reuses, e.g. the roller's for the curved face): the twin's fields in
+    their order, less those named in ``drop``, with the names in ``add`` inserted before the field
+    ``before`` (at the end without it); the twin's defaults for the fields it keeps. The type is
+    distinct from the twin's (families are told apart by type) and belongs to ``module`` (the
+    declaring module's ``__name__``, so that it pickles); the twin's declaration documents the
+    fields."""
+    fields = [field for field in twin._fields if field not in drop]
+    at = fields.index(before) if before is not None else len(fields)
+    fields[at:at] = list(add)
+    defaults = [twin._field_defaults[f] for f in fields if f in twin._field_defaults]
+    if fields[len(fields) - len(defaults):] != [f for f in fields if f in twin._field_defaults]:
+        raise ValueError(f"{name}: the fields with defaults must come last")
+    cls = collections.namedtuple(name, fields, defaults=defaults, module=module)
+    cls.__doc__ = doc
+    return cls
 
 
 def design_arrays(scene, follower_type: str, what: str, arrays=None, **options):
@@ -112,6 +132,29 @@ def weighted_objective(weights, size_term, peak_stress_MPa, sigma_max_MPa) -> ja
     return weights.alpha * size_term + weights.gamma * peak_stress_MPa / sigma_max_MPa
 
 
+def through_twin(as_twin, *functions) -> tuple:
+    """Each of a twin family's ``functions`` (``f(problem, design)``, e.g. the roller's pressure angle)
+    for this family's designs, mapped onto the twin's by ``as_twin``: a family whose contact is its
+    twin's (the curved face's is the roller's with R_f = R_c) takes them as they are. Each keeps
+    the twin function's name and docstring."""
+    def through(function):
+        def of_design(problem, design):
+            return function(problem, as_twin(design))
+
+        of_design.__name__ = of_design.__qualname__ = function.__name__
+        of_design.__doc__ = function.__doc__
+        return of_design
+
+    return tuple(through(f) for f in functions)
+
+
+def sized_objective(size_term, peak_stress, problem, weights, design) -> jax.Array:
+    """:func:`weighted_objective` of a family's ``size_term(problem, design)`` (dimensionless) and
+    ``peak_stress(problem, design)`` (MPa), in that order."""
+    return weighted_objective(weights, size_term(problem, design), peak_stress(problem, design),
+                              problem.sigma_max_MPa)
+
+
 def condense_at_largest(problem, per_angle_design, size_mm, angle_key: str):
     """The whole-cam design of a pointwise solve: the design of the angle where ``size_mm`` (n,)
     is largest (the first on ties); extras: that angle under ``angle_key`` and the grid."""
@@ -172,6 +215,37 @@ def violated_constraints(problem, violation) -> list[str]:
     return violated(names, violation, tolerances(names, sigma_max))
 
 
+def worst_contact(problem, design, sigma, phi, margin, limit_rad) -> tuple[dict, dict]:
+    """The worst of a circle's contact on the cam over the grid, and what it violates (traceable).
+
+    ``sigma`` the Hertz stress (MPa), ``phi`` the |pressure angle| (rad) and ``margin`` the convex
+    cam-surface radius rho_c (mm) per angle, shape (n,) each; ``limit_rad`` phi_max. Returns
+    (figures, violations): the Evaluation fields ``stress_max_MPa``, ``stress_max_deg``,
+    ``pressure_angle_max_deg``, ``pressure_angle_max_at_deg`` (the first angle on ties) and
+    ``cam_rho_min_mm``; the Violation fields ``pressure_angle`` (rad), ``undercut`` (mm, rho_min -
+    min rho_c against ``problem.min_curvature_radius_mm``), ``stress`` (MPa) and ``bounds`` (mm).
+    """
+    i, j = jnp.argmax(sigma), jnp.argmax(phi)
+    rho_c_min = jnp.min(margin)
+    figures = dict(stress_max_MPa=sigma[i], stress_max_deg=problem.theta_deg[i],
+                   pressure_angle_max_deg=jnp.rad2deg(phi[j]), pressure_angle_max_at_deg=problem.theta_deg[j],
+                   cam_rho_min_mm=rho_c_min)
+    violations = dict(pressure_angle=positive_part(phi[j] - limit_rad),
+                      undercut=positive_part(problem.min_curvature_radius_mm - rho_c_min),
+                      stress=positive_part(sigma[i] - problem.sigma_max_MPa),
+                      bounds=bounds_violation(problem, design))
+    return figures, violations
+
+
+def judged(evaluation_type, violation_type, problem, *, objective, size_mm, figures: dict, violations: dict):
+    """A family's ``Evaluation`` (``evaluation_type``) of one design: its ``objective`` and
+    ``size_mm``, the Evaluation ``figures``, the ``Violation`` of the ``violations`` (by field name)
+    and whether it is :func:`feasible`."""
+    v = violation_type(**violations)
+    return evaluation_type(objective=objective, size_mm=size_mm, **figures, violation=v,
+                           feasible=feasible(problem, v))
+
+
 def unit_coordinate(x, lo, hi):
     """(x - lo) / (hi - lo): a variable over its bounds (x - lo for a fixed one, lo == hi)."""
     return (x - lo) / jnp.where(hi > lo, hi - lo, 1.0)
@@ -195,9 +269,20 @@ def from_unit_box(problem, u):
 # -------------------------------------------------------------------------------- output
 
 
-def design_json(design, variables) -> dict:
-    """Each design variable's value (mm), in the order of ``variables``."""
-    return {name: finite_float(getattr(design, name)) for name in variables}
+def design_json(design, variables, **derived) -> dict:
+    """Each design variable's value (mm), in the order of ``variables``, then each ``derived``
+    length (mm, e.g. ``prime_radius_mm``)."""
+    return {**{name: finite_float(getattr(design, name)) for name in variables},
+            **{name: finite_float(v) for name, v in derived.items()}}
+
+
+def violation_json(violation) -> dict:
+    """result.json's ``constraint_violation``: each field of a family's ``Violation`` in the order of
+    its fields, named with its unit: ``pressure_angle_deg`` (converted from rad), ``stress_MPa``,
+    every other ``<name>_mm``."""
+    units = {"pressure_angle": "deg", "stress": "MPa"}
+    return {f"{name}_{units.get(name, 'mm')}": finite_float(np.degrees(v) if name == "pressure_angle" else v)
+            for name, v in zip(violation._fields, violation, strict=True)}
 
 
 def bounds_json(problem, variables) -> dict:
@@ -213,19 +298,20 @@ def pointwise_json(solution, variables) -> dict:
             **{name: np.asarray(getattr(solution.pointwise, name), float).tolist() for name in variables}}
 
 
-def solution_keys(problem, solution, variables, *, design_keys: dict, size_mm, violation: dict, figures: dict,
-                  pointwise_angles=()) -> dict:
+def solution_keys(problem, solution, variables, *, size_mm, figures: dict, pointwise_angles=(),
+                  **derived) -> dict:
     """A family's keys of result.json's design block, in the order every family writes them.
 
-    ``design_keys``, then ``size_mm``, ``constraint_violation`` (the ``violation`` dict), the
+    The design (:func:`design_json` of ``variables`` and the ``derived`` lengths), then
+    ``size_mm``, ``constraint_violation`` (:func:`violation_json` of the solution's violation), the
     evaluation ``figures``, ``sigma_max_MPa`` and each variable's bounds; for a pointwise
     ``solution`` also the extras named in ``pointwise_angles`` (deg) and the ``pointwise`` block.
     Every number is checked finite (:func:`camjax.numerics.finite_float`).
     """
     out = {
-        **design_keys,
+        **design_json(solution.design, variables, **derived),
         "size_mm": finite_float(size_mm),
-        "constraint_violation": {name: finite_float(v) for name, v in violation.items()},
+        "constraint_violation": violation_json(solution.violation),
         **{name: finite_float(v) for name, v in figures.items()},
         "sigma_max_MPa": finite_float(problem.sigma_max_MPa),
         **bounds_json(problem, variables),
@@ -236,8 +322,10 @@ def solution_keys(problem, solution, variables, *, design_keys: dict, size_mm, v
     return out
 
 
-def record_json(design_keys: dict, size_mm, evaluation) -> dict:
-    """A pareto.json row's family keys: the design's, its size (mm) and the peak stress and its angle."""
-    return {**design_keys, "size_mm": finite_float(size_mm),
+def record_json(solution, size_mm, **derived) -> dict:
+    """A pareto.json row's family keys: the solution's design (every field of its ``Design``, then
+    the ``derived`` lengths, :func:`design_json`), its size (mm) and the peak stress and its angle."""
+    d, evaluation = solution.design, solution.evaluation
+    return {**design_json(d, d._fields, **derived), "size_mm": finite_float(size_mm),
             "stress_max_MPa": finite_float(evaluation.stress_max_MPa),
             "stress_max_deg": finite_float(evaluation.stress_max_deg)}

@@ -102,10 +102,15 @@ def test_json_helpers_name_every_variable_and_refuse_non_finite_values():
         stress_max_MPa: float
         stress_max_deg: float
 
-    row = family.record_json({"a_mm": 1.0}, 3.0, Evaluation(400.0, 90.0))
-    assert row == {"a_mm": 1.0, "size_mm": 3.0, "stress_max_MPa": 400.0, "stress_max_deg": 90.0}
+    class Solved(NamedTuple):
+        design: Design
+        evaluation: Evaluation
+
+    row = family.record_json(Solved(Design(1.0, 2.0), Evaluation(400.0, 90.0)), 3.0, prime_radius_mm=3.5)
+    assert row == {"a_mm": 1.0, "b_mm": 2.0, "prime_radius_mm": 3.5, "size_mm": 3.0, "stress_max_MPa": 400.0,
+                   "stress_max_deg": 90.0}
     with pytest.raises(NonFiniteError, match="non-finite value nan"):
-        family.record_json({}, float("nan"), Evaluation(400.0, 90.0))
+        family.record_json(Solved(Design(1.0, 2.0), Evaluation(400.0, 90.0)), float("nan"))
 
 
 def test_solution_keys_keep_the_order_every_family_writes_and_add_the_pointwise_block():
@@ -115,14 +120,105 @@ def test_solution_keys_keep_the_order_every_family_writes_and_add_the_pointwise_
         mode: str
         extras: dict
         pointwise: Design
+        design: Design
+        violation: Violation
 
     s = Solution("pointwise", {"theta_deg": p.theta_deg, "a_deg": 120.0},
-                 Design(jnp.array([1.0, 2.0, 3.0]), jnp.zeros(3)))
-    out = family.solution_keys(p, s, ("a_mm",), design_keys={"a_mm": 3.0}, size_mm=3.0,
-                               violation={"curvature_mm": 0.0}, figures={"stress_max_MPa": 400.0},
-                               pointwise_angles=("a_deg",))
-    assert list(out) == ["a_mm", "size_mm", "constraint_violation", "stress_max_MPa", "sigma_max_MPa",
-                         "a_bounds_mm", "a_deg", "pointwise"]
+                 Design(jnp.array([1.0, 2.0, 3.0]), jnp.zeros(3)), Design(3.0, 2.0), Violation(0.0, 1.5))
+    out = family.solution_keys(p, s, ("a_mm",), size_mm=3.0, figures={"stress_max_MPa": 400.0},
+                               pointwise_angles=("a_deg",), prime_radius_mm=5.0)
+    assert list(out) == ["a_mm", "prime_radius_mm", "size_mm", "constraint_violation", "stress_max_MPa",
+                         "sigma_max_MPa", "a_bounds_mm", "a_deg", "pointwise"]
+    assert out["constraint_violation"] == {"curvature_mm": 0.0, "stress_MPa": 1.5}
     assert out["sigma_max_MPa"] == 500.0 and out["a_deg"] == 120.0 and out["pointwise"]["a_mm"] == [1.0, 2.0, 3.0]
-    assert "pointwise" not in family.solution_keys(p, s._replace(mode="global"), ("a_mm",), design_keys={},
-                                                   size_mm=3.0, violation={}, figures={})
+    assert "pointwise" not in family.solution_keys(p, s._replace(mode="global"), ("a_mm",), size_mm=3.0,
+                                                   figures={})
+
+
+def test_violation_json_names_each_field_with_its_unit_in_field_order():
+    class Circle(NamedTuple):
+        reach: float
+        pressure_angle: float
+        stress: float
+        bounds: float
+
+    # pi/36 rad = 5 deg (to a rounding of pi); the other fields pass through unchanged
+    out = family.violation_json(Circle(0.25, np.pi / 36.0, 3.0, 0.0))
+    assert list(out) == ["reach_mm", "pressure_angle_deg", "stress_MPa", "bounds_mm"]
+    assert out["pressure_angle_deg"] == pytest.approx(5.0, rel=1e-15)
+    assert (out["reach_mm"], out["stress_MPa"], out["bounds_mm"]) == (0.25, 3.0, 0.0)
+
+
+class ContactProblem(NamedTuple):
+    theta_deg: jax.Array
+    lower: Design
+    upper: Design
+    sigma_max_MPa: jax.Array
+    min_curvature_radius_mm: jax.Array
+
+
+class ContactViolation(NamedTuple):
+    pressure_angle: jax.Array
+    undercut: jax.Array
+    stress: jax.Array
+    bounds: jax.Array
+
+
+class ContactEvaluation(NamedTuple):
+    objective: jax.Array
+    size_mm: jax.Array
+    stress_max_MPa: jax.Array
+    stress_max_deg: jax.Array
+    pressure_angle_max_deg: jax.Array
+    pressure_angle_max_at_deg: jax.Array
+    cam_rho_min_mm: jax.Array
+    violation: ContactViolation
+    feasible: jax.Array
+
+
+def test_worst_contact_and_judged_read_the_worst_angle_off_the_curves():
+    # four angles, the curves written so that each worst value and its angle are known by hand
+    p = ContactProblem(jnp.array([0.0, 90.0, 180.0, 270.0]), Design(10.0, 2.0), Design(20.0, 2.0),
+                       jnp.asarray(500.0), jnp.asarray(3.0))
+    sigma = jnp.array([100.0, 620.0, 620.0, 300.0])  # peak 620 first at 90 deg: 120 MPa over
+    phi = jnp.array([0.1, 0.2, 0.6, 0.5])  # 0.6 rad at 180 deg: 0.1 rad over a 0.5 rad limit
+    margin = jnp.array([9.0, 2.0, 7.0, 5.0])  # rho_c 2 mm at 90 deg: 1 mm short of 3 mm
+    design = Design(jnp.asarray(25.0), jnp.asarray(2.0))  # 5 mm above the box
+    figures, violations = family.worst_contact(p, design, sigma, phi, margin, 0.5)
+    assert {k: float(v) for k, v in figures.items()} == {
+        "stress_max_MPa": 620.0, "stress_max_deg": 90.0, "pressure_angle_max_deg": pytest.approx(np.degrees(0.6)),
+        "pressure_angle_max_at_deg": 180.0, "cam_rho_min_mm": 2.0}
+    assert float(violations["pressure_angle"]) == pytest.approx(0.1, abs=1e-15)
+    assert (float(violations["undercut"]), float(violations["stress"]), float(violations["bounds"])) == (1.0, 120.0, 5.0)
+    ev = family.judged(ContactEvaluation, ContactViolation, p, objective=jnp.asarray(0.7), size_mm=27.0,
+                       figures=figures, violations=violations)
+    assert isinstance(ev.violation, ContactViolation) and float(ev.violation.stress) == 120.0
+    assert float(ev.objective) == 0.7 and ev.size_mm == 27.0 and not bool(ev.feasible)
+    inside = family.worst_contact(p, Design(jnp.asarray(15.0), jnp.asarray(2.0)), sigma * 0.5, phi * 0.5,
+                                  margin + 1.0, 0.5)
+    assert bool(family.judged(ContactEvaluation, ContactViolation, p, objective=0.0, size_mm=17.0,
+                              figures=inside[0], violations=inside[1]).feasible)
+
+
+def test_sized_objective_is_the_weighted_size_and_stress():
+    w = Weights(jnp.asarray(0.5), jnp.asarray(2.0))
+    p = _problem()
+    # 0.5 * 0.25 + 2 * 250 / 500 = 1.125, exact in binary
+    f = family.sized_objective(lambda p, d: 0.25 * d.a_mm, lambda p, d: 250.0 * d.b_mm, p, w, Design(1.0, 1.0))
+    assert float(f) == 1.125
+
+
+def test_twin_type_keeps_the_twins_fields_and_defaults_and_is_its_own_type():
+    class Twin(NamedTuple):
+        a: float
+        b: float
+        c: float = 1.0
+        d: float = 2.0
+
+    T = family.twin_type("T", Twin, "A twin without d, with x before c.", __name__, drop=("d",), add=("x",),
+                         before="c")
+    assert T._fields == ("a", "b", "x", "c") and T(1, 2, 3) == (1, 2, 3, 1.0)
+    assert T is not Twin and T.__doc__.startswith("A twin") and T.__module__ == __name__
+    assert jax.tree.leaves(T(1.0, 2.0, 3.0)) == [1.0, 2.0, 3.0, 1.0]
+    with pytest.raises(ValueError, match="defaults must come last"):
+        family.twin_type("U", Twin, "", __name__, add=("y",))

@@ -12,7 +12,7 @@ import math
 
 from camjax.family import FEASIBILITY_RTOL_STRESS, FEASIBILITY_TOL_MM, FEASIBILITY_TOL_RAD
 from camjax.results import GeometryViolation
-from camjax.scene.reader import DEFAULT
+from camjax.scene.reader import DEFAULT, fixed_or_free
 
 
 def curvature(rho: float, deg: float, rho_min_mm: float) -> list[GeometryViolation]:
@@ -58,6 +58,23 @@ def outer_flank(margin: float, deg: float) -> list[GeometryViolation]:
                               "flank cannot be cut")]
 
 
+def worst_of(theta_deg, extremes: dict | None = None):
+    """The function ``(values, pick, name=None, sense="min") -> (value, deg)`` that finds a curve's
+    worst value and its cam angle (deg): ``extremes[name]``'s min or max (``sense``) where the exact
+    extrema (:class:`camjax.results.Extremes` by curve name) have the curve, else the sample that
+    ``pick`` (``np.argmin``, ``np.argmax``) chooses among ``values`` on the grid ``theta_deg``."""
+    ex = extremes or {}
+
+    def at(values, pick, name=None, sense="min"):
+        if name in ex:
+            e = ex[name]
+            return (e.min, e.min_deg) if sense == "min" else (e.max, e.max_deg)
+        i = int(pick(values))
+        return float(values[i]), float(theta_deg[i])
+
+    return at
+
+
 def closure(own: dict, theta_deg, pressure_angle_limit_deg: float | None) -> list[GeometryViolation]:
     """The second contact of a positive drive (:mod:`camjax.followers._closure`), on its samples: a
     groove's outer flank that cannot be cut; a conjugate cam's pressure angle over the limit and its
@@ -65,10 +82,7 @@ def closure(own: dict, theta_deg, pressure_angle_limit_deg: float | None) -> lis
     import numpy as np
 
     out: list[GeometryViolation] = []
-
-    def worst(values, pick):
-        i = int(pick(values))
-        return float(values[i]), float(theta_deg[i])
+    worst = worst_of(theta_deg)
 
     if "outer_margin_mm" in own:
         out += outer_flank(*worst(own["outer_margin_mm"], np.argmin))
@@ -91,6 +105,32 @@ def read_max_pressure_angle(r):
     if limit is not DEFAULT and limit >= 90.0:
         raise r.error("max_pressure_angle_deg", limit, "out of range", "> 0 and < 90")
     return limit
+
+
+def read_face(r) -> tuple[float, float]:
+    """[follower] face_radius_mm R_c > 0 and face_width_mm W of a curved face (mm, either
+    family): 0 < W <= 2 R_c, the face a chord of its circle."""
+    radius = r.number("face_radius_mm", low=0.0, low_open=True)
+    width = r.number("face_width_mm", low=0.0, low_open=True)
+    if width > 2.0 * radius:
+        raise r.error("face_width_mm", width, f"is wider than the face's circle (2 face_radius_mm = "
+                      f"{2.0 * radius:g} mm)", f"<= {2.0 * radius:g}")
+    return radius, width
+
+
+def face_bounds(r, follower) -> tuple[tuple[float, float], tuple[float, float]]:
+    """[design] bounds (mm) of a curved face's R_c and W, fixed at the [follower]'s by default
+    (checked by :func:`face_fits_circle`)."""
+    return (fixed_or_free(r, "face_radius_mm", (follower.face_radius_mm,) * 2),
+            fixed_or_free(r, "face_width_mm", (follower.face_width_mm,) * 2))
+
+
+def face_fits_circle(r, radius: tuple[float, float], width: tuple[float, float]) -> None:
+    """Refuses [design] bounds that allow a face wider than its circle: W_max > 2 R_c,min."""
+    if width[1] > 2.0 * radius[0]:
+        raise r.error("face_width_mm", list(width) if width[0] != width[1] else width[0],
+                      f"allows a face wider than its circle (2 R_c = {2.0 * radius[0]:g} mm at the "
+                      "smallest face_radius_mm)", f"<= {2.0 * radius[0]:g}")
 
 
 def offset_cuts_prime_circle(r, offset: tuple[float, float], reach: float, prime: str) -> None:

@@ -166,13 +166,7 @@ def rocker_violations(curves: RockerCurves, scene, extremes: dict[str, Extremes]
     as the report states them), else on the samples.
     """
     t, out, ex = curves.theta_deg, [], extremes or {}
-
-    def at(values, pick, name=None, sense="min"):
-        if name in ex:
-            e = ex[name]
-            return (e.min, e.min_deg) if sense == "min" else (e.max, e.max_deg)
-        i = int(pick(values))
-        return float(values[i]), float(t[i])
+    at = _checks.worst_of(t, ex)
 
     if curves.undercut_margin_mm is not None:
         if "pressure_angle" in ex:  # rad in the extremes, deg in the checks

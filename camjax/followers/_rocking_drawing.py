@@ -18,7 +18,16 @@ from matplotlib.figure import Figure
 from camjax.followers._closure_drawing import draw_closure, second_outline, second_roller
 from camjax.output import animation
 from camjax.output.animation import ANGLE_RTOL, LENGTH_TOL_MM, FollowerArtists, Mechanism
-from camjax.output.plots import clip_axis, closed, cycle_axis, mark_extremes, rho_axis_limit_mm, title_figure
+from camjax.output.export import profile_columns
+from camjax.output.plots import (
+    cam_outline,
+    clip_axis,
+    closed,
+    cycle_axis,
+    mark_extremes,
+    rho_axis_limit_mm,
+    title_figure,
+)
 
 
 def to_cam_frame(x_f, y_f, theta_rad, rotation: str) -> tuple[float, float]:
@@ -100,14 +109,8 @@ def profile_figure(curves, title: str = "", draw_follower=None) -> Figure:
     c = curves
     fig = Figure(figsize=(6.4, 6.8), layout="constrained")
     ax = fig.subplots()
-    x, y = c.profile_x_mm, c.profile_y_mm
-    ax.fill(x, y, color="C0", alpha=0.12)
-    ax.plot(np.append(x, x[0]), np.append(y, y[0]), color="C0", linewidth=1.5, label="cam profile")
-    a = np.linspace(0.0, 2.0 * np.pi, 361)
-    rb = c.base_radius_mm
-    ax.plot(rb * np.sin(a), rb * np.cos(a), color="0.5", linestyle="--", linewidth=0.8,
-            label=f"base circle R_b = {rb:.3f} mm")
-    ax.plot([0.0], [0.0], "+", color="k")
+    x, y, rb = c.profile_x_mm, c.profile_y_mm, c.base_radius_mm
+    cam_outline(ax, x, y, rb)
     theta = np.deg2rad(c.theta_deg)
     psi = np.deg2rad(c.arm_angle_deg)
     px, py = draw_follower(ax, c, theta, psi)
@@ -158,14 +161,7 @@ def profile_table(curves) -> tuple[list[str], np.ndarray]:
     optional = (("pitch_rho_mm", c.pitch_rho_mm), ("pivot_torque_Nm", c.pivot_torque_Nm),
                 ("contact_force_N", c.contact_force_N), ("torque_Nm", c.torque_Nm),
                 ("stress_MPa", c.stress_MPa))
-    for name, values in optional:
-        if values is not None:
-            names.append(name)
-            cols.append(values)
-    for name, values in (getattr(c, "own_curves", None) or {}).items():  # the follower's own
-        names.append(name)
-        cols.append(values)
-    return names, np.column_stack(cols)
+    return profile_columns(names, cols, optional, c)
 
 
 

@@ -119,6 +119,47 @@ def moment_coefficient_at(model: MomentModel, kin: Kinematics) -> jax.Array:
     return HERTZ_FACTOR * safe_sqrt(moment / model.width_compliance)
 
 
+def moment_coefficient(scene, arrays) -> jax.Array:
+    """C_M = 0.564 sqrt(M / (w K)) per angle, shape (n,), of a rocker scene: M (N m) the torque about
+    the pivot (:func:`camjax.loads.rocker_torque`), w the cam width (mm), K the compliance (1/MPa);
+    zeros without a follower train or [contact]. Divided by the root of the lever arm of the contact
+    force (m) it is the Hertz coefficient C (MPa mm^0.5); every rocking family uses it
+    (:func:`moment_coefficient_at`).
+    """
+    model = moment_model(scene, arrays)
+    return jnp.zeros_like(arrays.kin.s) if model is None else moment_coefficient_at(model, arrays.kin)
+
+
+# the (n,) leaves of every rocking family's Problem
+GRID_FIELDS = frozenset({"theta_deg", "s_rad", "ds", "d2s", "moment_coefficient"})
+
+
+def scene_fields(scene, arrays, as_) -> dict:
+    """The Problem fields every rocking family takes from the scene alone: the grid (theta, the
+    swing s (rad), s', s'', C_M of :func:`moment_coefficient`), sigma_max (1 without one),
+    rho_min, the rotation's sign, and the motion program and :class:`MomentModel` behind the grid
+    when extrema are exact (None otherwise); ``as_`` casts to the problem's dtype (Python: reads
+    the scene)."""
+    d, f, kin = scene.design, scene.follower, arrays.kin
+    return dict(
+        theta_deg=as_(arrays.theta_deg), s_rad=kin.s, ds=kin.ds, d2s=kin.d2s,
+        moment_coefficient=as_(moment_coefficient(scene, arrays)),
+        sigma_max_MPa=as_(d.sigma_max_MPa if d.sigma_max_MPa is not None else 1.0),
+        min_curvature_radius_mm=as_(f.min_curvature_radius_mm),
+        rotation_sign=as_(rotation_sign(scene.motion.rotation)),
+        program=None if arrays.model is None else arrays.model.program,
+        moment_model=None if arrays.model is None else moment_model(scene, arrays),
+    )
+
+
+def per_angle(problem):
+    """The n pointwise problems of a rocking family: every grid leaf (n,) -> (n, 1), every scalar
+    leaf -> (n,); one angle's problem has no program or moment model (its sample is all there is)."""
+    from camjax import family
+
+    return family.per_angle(problem._replace(program=None, moment_model=None), GRID_FIELDS)
+
+
 def polish_design(problem, design, constraints, names: tuple[str, ...]):
     """The solver's design moved, where it is short, the least distance that keeps the named
     constraints at every cam angle, not only at the grid's samples

@@ -182,13 +182,7 @@ def geometry_violations(curves: DesignCurves, rho_min_mm: float = 0.0,
     design problems' polish keeps them, :mod:`camjax.followers._polish`).
     """
     t, out, ex = curves.theta_deg, [], extremes or {}
-
-    def at(values, pick, name=None, sense="min"):
-        if name in ex:
-            e = ex[name]
-            return (e.min, e.min_deg) if sense == "min" else (e.max, e.max_deg)
-        i = int(pick(values))
-        return float(values[i]), float(t[i])
+    at = _checks.worst_of(t, ex)
 
     if curves.rho_mm is not None:
         rho, deg = at(curves.rho_mm, np.argmin)

@@ -19,9 +19,11 @@ from matplotlib.figure import Figure
 from camjax.followers._closure_drawing import draw_closure, second_outline, second_roller
 from camjax.output import animation
 from camjax.output.animation import ANGLE_RTOL, LENGTH_TOL_MM, FollowerArtists, Mechanism
+from camjax.output.export import profile_columns
 from camjax.output.plots import (
     FIGURE_SIZE,
     angle_ring,
+    cam_outline,
     clip_axis,
     closed,
     cycle_axis,
@@ -82,15 +84,9 @@ def profile_figure(curves, title: str = "", draw_follower=None) -> Figure:
     """
     fig = Figure(figsize=(6.2, 7.6), layout="constrained")
     ax = fig.subplots()
-    x, y = curves.profile_x_mm, curves.profile_y_mm
+    x, y, rb = curves.profile_x_mm, curves.profile_y_mm, curves.base_radius_mm
     t = curves.theta_deg
-    ax.fill(x, y, color="C0", alpha=0.12)
-    ax.plot(np.append(x, x[0]), np.append(y, y[0]), color="C0", linewidth=1.5, label="cam profile")
-    phi = np.linspace(0.0, 2.0 * np.pi, 361)
-    rb = curves.base_radius_mm
-    ax.plot(rb * np.sin(phi), rb * np.cos(phi), color="0.5", linestyle="--", linewidth=0.8,
-            label=f"base circle R_b = {rb:.3f} mm")
-    ax.plot([0.0], [0.0], "+", color="k", markersize=9)
+    cam_outline(ax, x, y, rb, markersize=9)
     theta = np.deg2rad(t)
     sign = 1.0 if curves.rotation == "ccw" else -1.0  # a cw cam is the mirror image (X -> -X)
     radius = np.hypot(x, y)
@@ -294,14 +290,7 @@ def profile_table(curves) -> tuple[list[str], np.ndarray]:
     cols += [curves.d2s_mm, curves.velocity_m_s, curves.accel_m_s2, curves.jerk_m_s3]
     optional = (("pitch_rho_mm", curves.pitch_rho_mm), ("force_N", curves.force_N),
                 ("torque_Nm", curves.torque_Nm), ("stress_MPa", curves.stress_MPa))
-    for name, values in optional:
-        if values is not None:
-            names.append(name)
-            cols.append(values)
-    for name, values in (getattr(curves, "own_curves", None) or {}).items():  # the follower's own
-        names.append(name)
-        cols.append(values)
-    return names, np.column_stack(cols)
+    return profile_columns(names, cols, optional, curves)
 
 
 # ------------------------------------------------------------------------------- animation

@@ -14,10 +14,14 @@ Formatting only, as :mod:`camjax.output.report`, whose shared blocks this uses.
 
 from __future__ import annotations
 
+import math
 from typing import Any
+
+import numpy as np
 
 from camjax import followers
 from camjax.evaluate import curve_extremes, curve_names
+from camjax.family import FEASIBILITY_TOL_RAD
 from camjax.followers import _closure_report
 from camjax.output.report import feasibility_block, follower_scene_block, header_block, loads_block
 
@@ -65,6 +69,69 @@ def evaluated_block(curves, extremes) -> dict[str, Any]:
         e = extremes["stress"]
         out["stress_MPa"] = {"max": e.max, "max_deg": e.max_deg}
     return out
+
+
+def pressure_angle_sentence(out) -> str:
+    """The design sentence of a pressure angle over its limit, from the design block ``out``."""
+    return (f"pressure angle {out['pressure_angle_max_deg']:.6g} deg at "
+            f"{out['pressure_angle_max_at_deg']:g} deg > limit {out['max_pressure_angle_deg']:g} deg")
+
+
+def circle_sentences(who: str, out, solution) -> dict[str, str]:
+    """The design sentences of a circle follower (``who``: "the roller", "the face"): its pressure
+    angle over the limit (:func:`pressure_angle_sentence`) and the circle undercutting the cam."""
+    return {"pressure_angle": pressure_angle_sentence(out),
+            "undercut": f"{who} undercuts the cam: smallest convex cam-surface radius "
+                        f"{out['cam_rho_min_mm']:.6g} mm < {solution.rho_min_limit_mm:g} mm"}
+
+
+def limit_rules(follower) -> dict[str, str]:
+    """The sizing limits of a circle follower (roller, curved face) as the rules name them: the
+    pressure angle and the undercut (the convex cam-surface radius)."""
+    f = follower
+    return {"pressure_angle": f"pressure angle |phi| <= {f.max_pressure_angle_deg:g} deg",
+            "undercut": f"no undercut (convex cam-surface radius >= {f.min_curvature_radius_mm:g} mm)"}
+
+
+def min_base_radius_keys(minimum, rule: str, prime: bool = True) -> dict[str, Any]:
+    """The smallest cam's keys: its base radius (mm) and the cam angle (deg) where it binds, its prime
+    radius (mm, a circle follower: ``prime``), the ``rule`` naming the binding limit and its name."""
+    out = {"min_base_radius_mm": minimum.radius_mm, "min_base_radius_deg": minimum.angle_deg}
+    if prime:
+        out["min_prime_radius_mm"] = minimum.prime_radius_mm
+    return {**out, "min_base_radius_rule": rule, "min_base_radius_binding": minimum.binding}
+
+
+def signed_extremes(e, scale: float = 1.0) -> dict[str, float]:
+    """A signed curve's :class:`camjax.results.Extremes` times ``scale``: max, min, the largest
+    |value| (``max_abs``) and their cam angles (deg)."""
+    worst = (e.max, e.max_deg) if e.max >= -e.min else (-e.min, e.min_deg)
+    return {"max": scale * e.max, "max_deg": e.max_deg, "min": scale * e.min, "min_deg": e.min_deg,
+            "max_abs": scale * worst[0], "max_abs_deg": worst[1]}
+
+
+def pressure_angle_keys(curves, phi) -> dict[str, Any]:
+    """A follower block's pressure-angle keys from its extremes ``phi`` (rad): the signed extremes in
+    degrees, the limit, and whether the largest |phi| is within it to the solvers' tolerance (as
+    the run's geometry violations judge it)."""
+    block = signed_extremes(phi, math.degrees(1.0))
+    return {"pressure_angle_deg": block, "pressure_angle_limit_deg": curves.pressure_angle_limit_deg,
+            "pressure_angle_ok": bool(block["max_abs"] <= curves.pressure_angle_limit_deg
+                                      + math.degrees(FEASIBILITY_TOL_RAD))}
+
+
+def pitch_rho_block(curves, rho) -> dict[str, Any]:
+    """The smallest |pitch-curve radius| (mm, from its extremes ``rho``), its angle, and whether the
+    pitch curve has concave parts."""
+    return {"min_abs": rho.min, "min_abs_deg": rho.min_deg,
+            "concave": bool(np.any(curves.pitch_rho_mm < 0))}
+
+
+def undercut_keys(curves, margin) -> dict[str, Any]:
+    """A circle follower's undercut keys: the least margin rho_c - rho_min (mm, from its extremes
+    ``margin``), its angle, and whether the circle undercuts the cam (on the extremes or a sample)."""
+    return {"undercut_margin_mm": {"min": margin.min, "min_deg": margin.min_deg},
+            "undercut": bool(margin.min <= 0 or np.any(curves.undercut_margin_mm <= 0))}
 
 
 def report(scene, run, blocks) -> dict[str, Any]:

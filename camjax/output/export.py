@@ -21,6 +21,20 @@ from camjax import units as scene_units
 CSV_FORMAT = "%.12f"  # 1e-12 mm: far below any machining tolerance, round-trips the geometry
 
 
+def profile_columns(names: list[str], cols: list, optional, curves) -> tuple[list[str], np.ndarray]:
+    """A profile table from its first columns (``names``, ``cols``): then each of ``optional``
+    ((name, values) pairs) whose values the curves have (not None), then the follower's own curves
+    (``curves.own_curves``, name -> values, if any), stacked as the table's columns."""
+    for name, values in optional:
+        if values is not None:
+            names.append(name)
+            cols.append(values)
+    for name, values in (getattr(curves, "own_curves", None) or {}).items():  # the follower's own
+        names.append(name)
+        cols.append(values)
+    return names, np.column_stack(cols)
+
+
 def write_profile_csv(path: Path, curves, units: str = "mm") -> Path:
     """The follower's profile table (its drawing module's ``profile_table``) as CSV with one header
     line; ``units`` "in": ``curves`` are in inches (:func:`camjax.units.curves_to`) and the column

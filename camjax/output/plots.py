@@ -126,6 +126,18 @@ def clip_axis(ax, theta, values, limit: float, unit: str = "mm") -> np.ndarray:
     return cut
 
 
+def cam_outline(ax, profile_x_mm, profile_y_mm, base_radius_mm: float, **centre_mark) -> None:
+    """The cam's profile (filled, outlined and labelled "cam profile"), its base circle R_b (dashed,
+    labelled with its radius, mm) and the cam centre's "+" (``centre_mark``: its matplotlib options)."""
+    x, y, rb = profile_x_mm, profile_y_mm, base_radius_mm
+    ax.fill(x, y, color="C0", alpha=0.12)
+    ax.plot(np.append(x, x[0]), np.append(y, y[0]), color="C0", linewidth=1.5, label="cam profile")
+    a = np.linspace(0.0, 2.0 * np.pi, 361)
+    ax.plot(rb * np.sin(a), rb * np.cos(a), color="0.5", linestyle="--", linewidth=0.8,
+            label=f"base circle R_b = {rb:.3f} mm")
+    ax.plot([0.0], [0.0], "+", color="k", **centre_mark)
+
+
 def dimension(ax, start, end, text: str, color: str = "0.15", **text_kw) -> None:
     """A dimension line with arrows at both ends and its text at the middle."""
     ax.annotate("", xy=end, xytext=start,

@@ -17,7 +17,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from camjax import contact, program, runtime
+from camjax import program, runtime
 from camjax.evaluate import curve_extremes
 from camjax.followers import _checks
 from camjax.followers._pitch import rotation_sign
@@ -96,26 +96,18 @@ class CurvedFace(TranslatingFollower):
         self.check_keys(r)
         train = read_train(r)
         limit = _checks.read_max_pressure_angle(r)
-        radius = r.number("face_radius_mm", low=0.0, low_open=True)
-        width = r.number("face_width_mm", low=0.0, low_open=True)
-        if width > 2.0 * radius:
-            raise r.error("face_width_mm", width, f"is wider than the face's circle (2 face_radius_mm = "
-                          f"{2.0 * radius:g} mm)", f"<= {2.0 * radius:g}")
+        radius, width = _checks.read_face(r)
         return build(CurvedFaceSpec, type=self.name, train=train, face_radius_mm=radius, face_width_mm=width,
                      offset_mm=r.number("offset_mm", DEFAULT), max_pressure_angle_deg=limit,
                      min_curvature_radius_mm=r.number("min_curvature_radius_mm", DEFAULT, low=0.0))
 
     def design_bounds(self, r, follower) -> dict[str, tuple[float, float]]:
         base = fixed_or_free(r, "base_radius_mm")
-        radius = fixed_or_free(r, "face_radius_mm", (follower.face_radius_mm,) * 2)
-        width = fixed_or_free(r, "face_width_mm", (follower.face_width_mm,) * 2)
+        radius, width = _checks.face_bounds(r, follower)
         offset = fixed_or_free(r, "offset_mm", (follower.offset_mm,) * 2, positive=False)
         # refused only when no design in the bounds has |e| < R_p
         _checks.offset_cuts_prime_circle(r, offset, base[1] + radius[1], "R_b + R_c")
-        if width[1] > 2.0 * radius[0]:
-            raise r.error("face_width_mm", list(width) if width[0] != width[1] else width[0],
-                          f"allows a face wider than its circle (2 R_c = {2.0 * radius[0]:g} mm at the "
-                          "smallest face_radius_mm)", f"<= {2.0 * radius[0]:g}")
+        _checks.face_fits_circle(r, radius, width)
         return {"base_radius_mm": base, "face_radius_mm": radius, "face_width_mm": width, "offset_mm": offset}
 
     def drawn_follower(self, scene, result):
@@ -166,10 +158,8 @@ class CurvedFace(TranslatingFollower):
         x, y = curved_geo.profile(base_radius_mm, rc, e, kin, rotation)
         pitch_x, pitch_y = roller_geo.roller_pitch_curve(base_radius_mm, rc, e, kin, rotation)
         g = curved_geo.geometry(base_radius_mm, rc, e, kin, rotation, follower.min_curvature_radius_mm)
-        stress = None
-        if arrays.stress_coefficient is not None:
-            rho_eq = roller_geo.roller_equivalent_radius(g.pitch_curvature, rc)
-            stress = contact.roller_stress(arrays.stress_coefficient, g.pressure_angle, rho_eq)
+        coefficient = arrays.stress_coefficient
+        stress = roller_geo.roller_contact_stress(coefficient, g.pitch_curvature, g.pressure_angle, rc)
         own = {"face_travel_mm": curved_geo.face_travel(base_radius_mm, rc, e, kin, rotation),
                "sliding_speed_m_s": curved_geo.sliding_speed_m_s(base_radius_mm, rc, e, kin,
                                                                  arrays.cam_speed_rad_s, rotation)}
@@ -204,8 +194,8 @@ class CurvedFace(TranslatingFollower):
         g = roller_geo.roller_geometry(base_radius_mm, c.face_radius_mm, c.offset_mm, p.kin, "ccw",
                                        c.min_curvature_radius_mm)
         if name == "stress":  # contact stress, MPa (even in phi)
-            rho_eq = roller_geo.roller_equivalent_radius(g.pitch_curvature, c.face_radius_mm)
-            return contact.roller_stress(p.stress_coefficient, g.pressure_angle, rho_eq)
+            return roller_geo.roller_contact_stress(p.stress_coefficient, g.pitch_curvature, g.pressure_angle,
+                                                    c.face_radius_mm)
         if name in CURVED_CURVES:
             w = roller_geo.roller_pitch_height(base_radius_mm, c.face_radius_mm, c.offset_mm, p.kin)
             u = p.kin.ds - c.offset_mm

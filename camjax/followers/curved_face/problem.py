@@ -34,24 +34,23 @@ flat face's rule for L).
 
 from __future__ import annotations
 
-from typing import Any, NamedTuple
+from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
-import numpy as np
 
 from camjax import family
 
 # re-exported: this family's protocol functions and tolerance, written once for every family
 from camjax.family import FEASIBILITY_TOL_RAD as FEASIBILITY_TOL_RAD
-from camjax.family import Weights, weighted_objective
+from camjax.family import Weights
 from camjax.family import bounds as bounds
 from camjax.family import bounds_violation as bounds_violation
 from camjax.family import size_norm as size_norm
 from camjax.family import violated_constraints as violated_constraints
 from camjax.followers.roller import geometry as roller_geo
 from camjax.followers.roller import problem as roller
-from camjax.numerics import RHO_FLOOR_MM, finite_float, floor_positive, positive_part
+from camjax.numerics import RHO_FLOOR_MM, floor_positive, positive_part
 
 CONSTRAINT_NAMES = ("pressure_angle", "undercut", "face_travel", "stress", "bounds")
 VARIABLES = ("base_radius_mm", "face_radius_mm", "face_width_mm", "offset_mm")
@@ -67,25 +66,12 @@ class Design(NamedTuple):
     offset_mm: jax.Array  # e, mm (follower axis at x = e in the follower frame)
 
 
-class Problem(NamedTuple):
-    """Design-independent data of one curved-face design problem on an angle grid of n samples."""
-
-    theta_deg: jax.Array  # (n,) cam angle, degrees
-    s_mm: jax.Array  # (n,) s, mm
-    ds_mm: jax.Array  # (n,) s', mm/rad
-    d2s_mm: jax.Array  # (n,) s'', mm/rad^2
-    stress_coefficient: jax.Array  # (n,) C = 0.564 sqrt(F / (w K)), MPa mm^0.5 (0: no stress)
-    lower: Design  # lower bounds, mm
-    upper: Design  # upper bounds, mm
-    sigma_max_MPa: jax.Array  # () allowable contact stress
-    size_norm_mm: jax.Array  # () N = R_b,max + W_max
-    tan_max_pressure_angle: jax.Array  # () tan(phi_max)
-    max_pressure_angle_deg: jax.Array  # () phi_max, deg
-    min_curvature_radius_mm: jax.Array  # () smallest convex cam-surface radius allowed
-    rotation_sign: jax.Array  # () +1 ccw, -1 cw: e~ = sign e
-    # the scene's closed forms (camjax.evaluate.SceneModel) behind the grid when extrema are
-    # exact: :func:`polish` keeps every constraint between the samples too; None: the grid's
-    model: Any = None
+# the roller's Problem without a positive drive: the circle's grid, limits and model; here the
+# box is the curved face's Design and the size norm N = R_b,max + W_max
+Problem = family.twin_type(
+    "Problem", roller.Problem,
+    "Design-independent data of one curved-face design problem on an angle grid of n samples.", __name__,
+    drop=("closure",))
 
 
 class Constraints(NamedTuple):
@@ -107,20 +93,11 @@ class Violation(NamedTuple):
     bounds: jax.Array  # mm: largest distance outside the box
 
 
-class Evaluation(NamedTuple):
-    """A design judged on the whole grid (true maxima; shape () each)."""
-
-    objective: jax.Array  # F
-    size_mm: jax.Array  # R_b + W
-    stress_max_MPa: jax.Array  # max_theta sigma
-    stress_max_deg: jax.Array  # where it occurs
-    pressure_angle_max_deg: jax.Array  # max_theta |phi|
-    pressure_angle_max_at_deg: jax.Array  # where it occurs
-    cam_rho_min_mm: jax.Array  # smallest convex cam-surface radius rho_c (undercut at <= 0)
-    face_travel_max_mm: jax.Array  # max_theta R_c |sin phi|
-    face_travel_max_deg: jax.Array  # where it occurs
-    violation: Violation
-    feasible: jax.Array  # bool
+# the roller's Evaluation (size_mm: R_b + W) and the contact's largest travel off the face's axis,
+# max_theta R_c |sin phi| (mm), and where it occurs (deg)
+Evaluation = family.twin_type(
+    "Evaluation", roller.Evaluation, "A design judged on the whole grid (true maxima; shape () each).",
+    __name__, add=("face_travel_max_mm", "face_travel_max_deg"), before="violation")
 
 
 # ------------------------------------------------------------------------------ building
@@ -163,26 +140,23 @@ def _travel(x: roller.CircleTerms, design: Design) -> jax.Array:
     return design.face_radius_mm * jnp.abs(x.u) / floor_positive(x.r, RHO_FLOOR_MM)
 
 
-def pressure_angle(problem: Problem, design: Design) -> jax.Array:
-    """phi (rad) per angle, signed as :func:`camjax.followers._pitch.pressure_angle`."""
-    return roller.pressure_angle(problem, _as_roller(design))
+# the roller's at R_f = R_c: phi (rad) and sigma (MPa) per angle, and max_theta sigma (MPa)
+pressure_angle, stress, peak_stress = family.through_twin(_as_roller, roller.pressure_angle, roller.stress,
+                                                          roller.peak_stress)
 
 
 def face_width_need(problem: Problem, design: Design) -> jax.Array:
     """2 max_theta R_c |sin phi| (mm), the narrowest face that keeps the contact on it, shape ()
     (batched designs: over the last axis)."""
+    return width_need(lambda p, d: _travel(_terms(p, d), d), problem, design)
+
+
+def width_need(travel, problem, design) -> jax.Array:
+    """2 max_theta ``travel(problem, design)`` (mm) of a curved face (either family; ``travel`` its
+    contact's distance from the face's axis per angle), shape () (batched designs: over the last
+    axis)."""
     column = jax.tree.map(lambda x: jnp.expand_dims(x, -1), design)  # (..., 1) against the grid (n,)
-    return 2.0 * jnp.max(_travel(_terms(problem, column), column), axis=-1)
-
-
-def stress(problem: Problem, design: Design) -> jax.Array:
-    """Hertz contact stress sigma(theta) (MPa), shape (n,); finite (saturated) at an undercut."""
-    return roller.stress(problem, _as_roller(design))
-
-
-def peak_stress(problem: Problem, design: Design) -> jax.Array:
-    """max_theta sigma (MPa), shape (), as sqrt(max_theta C^2 / (cos phi rho_eq)): one root."""
-    return roller.peak_stress(problem, _as_roller(design))
+    return 2.0 * jnp.max(travel(problem, column), axis=-1)
 
 
 def size_term(problem: Problem, design: Design) -> jax.Array:
@@ -192,8 +166,7 @@ def size_term(problem: Problem, design: Design) -> jax.Array:
 
 def objective(problem: Problem, weights: Weights, design: Design) -> jax.Array:
     """F = alpha (R_b + W) / N + gamma max_theta sigma / sigma_max (dimensionless, shape ())."""
-    return weighted_objective(weights, size_term(problem, design), peak_stress(problem, design),
-                              problem.sigma_max_MPa)
+    return family.sized_objective(size_term, peak_stress, problem, weights, design)
 
 
 def constraints(problem: Problem, design: Design) -> Constraints:
@@ -269,26 +242,29 @@ def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
     """Objective, peak stress, pressure angle and face travel (and their angles), violations and
     feasibility."""
     x = _terms(problem, design)
-    sigma = stress(problem, design)
     phi = jnp.abs(jnp.arctan2(x.u, x.w))
-    travel = _travel(x, design)
-    i, j, k = jnp.argmax(sigma), jnp.argmax(phi), jnp.argmax(travel)
-    rho_c_min = jnp.min(roller_geo.roller_undercut_margin(x.kappa, design.face_radius_mm, 0.0))
-    v = Violation(
-        pressure_angle=positive_part(phi[j] - jnp.deg2rad(problem.max_pressure_angle_deg)),
-        undercut=positive_part(problem.min_curvature_radius_mm - rho_c_min),
-        face_travel=positive_part(travel[k] - 0.5 * design.face_width_mm),
-        stress=positive_part(sigma[i] - problem.sigma_max_MPa),
-        bounds=bounds_violation(problem, design),
-    )
-    return Evaluation(
-        objective=objective(problem, weights, design),
+    return judged_on_face(Evaluation, Violation, problem, design, objective(problem, weights, design),
+                          stress(problem, design), phi, x.kappa, _travel(x, design),
+                          jnp.deg2rad(problem.max_pressure_angle_deg))
+
+
+def judged_on_face(evaluation_type, violation_type, problem, design, objective, sigma, phi, kappa, travel,
+                   limit_rad, **violations):
+    """The ``Evaluation`` of a curved face (translating or oscillating) from its per-angle curves
+    (n,): the stress ``sigma`` (MPa), ``phi`` the |pressure angle| (rad), the pitch curvature
+    ``kappa`` (1/mm) and ``travel`` the contact's distance from the face's axis (mm); the circle's
+    worst contact (:func:`camjax.family.worst_contact`, the cam radius that of the crown's pitch
+    curve), the largest travel and its angle, the ``face_travel`` violation against W / 2 and the
+    family's own ``violations``; size R_b + W."""
+    margin = roller_geo.roller_undercut_margin(kappa, design.face_radius_mm, 0.0)
+    figures, circle = family.worst_contact(problem, design, sigma, phi, margin, limit_rad)
+    k = jnp.argmax(travel)
+    off_face = positive_part(travel[k] - 0.5 * design.face_width_mm)
+    return family.judged(
+        evaluation_type, violation_type, problem, objective=objective,
         size_mm=design.base_radius_mm + design.face_width_mm,
-        stress_max_MPa=sigma[i], stress_max_deg=problem.theta_deg[i],
-        pressure_angle_max_deg=jnp.rad2deg(phi[j]), pressure_angle_max_at_deg=problem.theta_deg[j],
-        cam_rho_min_mm=rho_c_min, face_travel_max_mm=travel[k], face_travel_max_deg=problem.theta_deg[k],
-        violation=v, feasible=family.feasible(problem, v),
-    )
+        figures=dict(**figures, face_travel_max_mm=travel[k], face_travel_max_deg=problem.theta_deg[k]),
+        violations=dict(**violations, **circle, face_travel=off_face))
 
 
 def condense_pointwise(problem: Problem, per_angle_design: Design) -> tuple[Design, dict]:
@@ -309,27 +285,27 @@ def polish_pointwise(problem: Problem, weights: Weights, design: Design, extras:
 
 # ------------------------------------------------------------------------------- output
 
-_f = finite_float
-
-
-def _design_keys(d: Design) -> dict:
-    return {**family.design_json(d, VARIABLES), "prime_radius_mm": _f(d.base_radius_mm + d.face_radius_mm)}
-
-
 def solution_json(problem: Problem, solution) -> dict:
     """The curved-face keys of result.json's design block, for one :class:`camjax.solvers.base.Solution`."""
-    d, v, ev = solution.design, solution.violation, solution.evaluation
-    return family.solution_keys(
-        problem, solution, VARIABLES, design_keys=_design_keys(d),
-        size_mm=d.base_radius_mm + d.face_width_mm,
-        violation={"pressure_angle_deg": np.degrees(v.pressure_angle), "undercut_mm": v.undercut,
-                   "face_travel_mm": v.face_travel, "stress_MPa": v.stress, "bounds_mm": v.bounds},
-        figures={**roller.roller_figures(ev, problem.max_pressure_angle_deg),
-                 "face_travel_max_mm": ev.face_travel_max_mm, "face_travel_max_deg": ev.face_travel_max_deg},
-        pointwise_angles=("base_radius_deg",))
+    d = solution.design
+    return family.solution_keys(problem, solution, VARIABLES, size_mm=d.base_radius_mm + d.face_width_mm,
+                                prime_radius_mm=d.base_radius_mm + d.face_radius_mm,
+                                figures=face_figures(solution.evaluation, problem.max_pressure_angle_deg),
+                                pointwise_angles=("base_radius_deg",))
+
+
+def face_figures(evaluation, max_pressure_angle_deg) -> dict:
+    """result.json's figures of a curved face (either curved-face family's ``Evaluation``): the
+    roller's (:func:`camjax.followers.roller.problem.roller_figures`) and the contact's largest
+    travel off the face's axis (mm) and its angle (deg)."""
+    ev = evaluation
+    return {**roller.roller_figures(ev, max_pressure_angle_deg),
+            "face_travel_max_mm": ev.face_travel_max_mm, "face_travel_max_deg": ev.face_travel_max_deg}
 
 
 def record(solution) -> dict:
-    """The curved-face keys of a pareto.json row: the design, size R_b + W and peak stress."""
+    """The keys of a pareto.json row of a curved face (translating or oscillating): the design, its
+    prime radius R_b + R_c, the size R_b + W and the peak stress."""
     d = solution.design
-    return family.record_json(_design_keys(d), d.base_radius_mm + d.face_width_mm, solution.evaluation)
+    return family.record_json(solution, d.base_radius_mm + d.face_width_mm,
+                              prime_radius_mm=d.base_radius_mm + d.face_radius_mm)

@@ -24,7 +24,7 @@ between the samples, and the modes are the roller's (:func:`to_unit`, :func:`fro
 
 from __future__ import annotations
 
-from typing import Any, NamedTuple
+from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
@@ -53,22 +53,13 @@ class Design(NamedTuple):
     offset_mm: jax.Array  # e, mm (follower axis at x = e in the follower frame)
 
 
-class Problem(NamedTuple):
-    """Design-independent data of one knife-edge design problem on an angle grid of n samples."""
-
-    theta_deg: jax.Array  # (n,) cam angle, degrees
-    s_mm: jax.Array  # (n,) s, mm
-    ds_mm: jax.Array  # (n,) s', mm/rad
-    d2s_mm: jax.Array  # (n,) s'', mm/rad^2
-    lower: Design  # lower bounds, mm
-    upper: Design  # upper bounds, mm
-    sigma_max_MPa: jax.Array  # () 1: the objective's unused stress scale (no stress is modelled)
-    size_norm_mm: jax.Array  # () N = R_b,max
-    tan_max_pressure_angle: jax.Array  # () tan(phi_max)
-    max_pressure_angle_deg: jax.Array  # () phi_max, deg (as the scene gives it)
-    min_curvature_radius_mm: jax.Array  # () smallest convex profile radius allowed
-    rotation_sign: jax.Array  # () +1 ccw, -1 cw (geometry.pitch): e~ = sign e
-    model: Any = None  # the scene's closed forms behind the grid when extrema are exact (:func:`polish`)
+# the roller's Problem without a stress coefficient and a positive drive (no stress is modelled:
+# sigma_max_MPa is 1, the objective's unused stress scale); the box is the knife edge's Design, the
+# size norm N = R_b,max and min_curvature_radius_mm the smallest convex profile radius allowed
+Problem = family.twin_type(
+    "Problem", roller.Problem,
+    "Design-independent data of one knife-edge design problem on an angle grid of n samples.", __name__,
+    drop=("stress_coefficient", "closure"))
 
 
 class Constraints(NamedTuple):
@@ -258,11 +249,9 @@ def condense_pointwise(problem: Problem, per_angle_design: Design) -> tuple[Desi
 def solution_json(problem: Problem, solution) -> dict:
     """The knife edge's keys of result.json's design block, for one
     :class:`camjax.solvers.base.Solution` (no ``sigma_max_MPa``: no stress is modelled)."""
-    d, v, ev = solution.design, solution.violation, solution.evaluation
+    ev = solution.evaluation
     out = family.solution_keys(
-        problem, solution, VARIABLES, design_keys=family.design_json(d, VARIABLES), size_mm=d.base_radius_mm,
-        violation={"pressure_angle_deg": np.degrees(v.pressure_angle), "curvature_mm": v.curvature,
-                   "bounds_mm": v.bounds},
+        problem, solution, VARIABLES, size_mm=solution.design.base_radius_mm,
         figures={"pressure_angle_max_deg": ev.pressure_angle_max_deg,
                  "pressure_angle_max_at_deg": ev.pressure_angle_max_at_deg,
                  "max_pressure_angle_deg": problem.max_pressure_angle_deg,
@@ -274,8 +263,7 @@ def solution_json(problem: Problem, solution) -> dict:
 
 def record(solution) -> dict:
     """The knife edge's keys of a pareto.json row: the design, size R_b and a zero peak stress."""
-    d = solution.design
-    return family.record_json(family.design_json(d, VARIABLES), d.base_radius_mm, solution.evaluation)
+    return family.record_json(solution, solution.design.base_radius_mm)
 
 
 __all__ = [

@@ -2,13 +2,10 @@
 
 from __future__ import annotations
 
-import math
 import sys
 from typing import Any
 
-import numpy as np
-
-from camjax.family import FEASIBILITY_TOL_MM, FEASIBILITY_TOL_RAD
+from camjax.family import FEASIBILITY_TOL_MM
 from camjax.followers import _translating_report
 
 
@@ -16,20 +13,17 @@ def min_base_radius_block(follower, minimum, exact: bool = False) -> dict[str, A
     """Smallest admissible base radius (mm), the cam angle (deg) where it binds, and the rule naming
     the binding limit (pressure angle or the profile's convex radius) at the follower's offset."""
     f = follower
-    limits = {"pressure_angle": f"pressure angle |phi| <= {f.max_pressure_angle_deg:g} deg",
+    limits = {"pressure_angle": _translating_report.limit_rules(f)["pressure_angle"],
               "curvature": f"convex profile radius >= {f.min_curvature_radius_mm:g} mm"}
     other = next(k for k in limits if k != minimum.binding)
     rule = (f"knife edge: {limits[minimum.binding]} binds at {minimum.angle_deg:g} deg "
             f"(offset {f.offset_mm:g} mm; {limits[other]} holds)")
-    return {"min_base_radius_mm": minimum.radius_mm, "min_base_radius_deg": minimum.angle_deg,
-            "min_base_radius_rule": rule, "min_base_radius_binding": minimum.binding}
+    return _translating_report.min_base_radius_keys(minimum, rule, prime=False)
 
 
 def design_sentences(spec, solution, out) -> dict[str, str]:
     return {
-        "pressure_angle": f"pressure angle {out['pressure_angle_max_deg']:.6g} deg at "
-                          f"{out['pressure_angle_max_at_deg']:g} deg > limit "
-                          f"{out['max_pressure_angle_deg']:g} deg",
+        "pressure_angle": _translating_report.pressure_angle_sentence(out),
         "curvature": f"the profile is too sharp for the knife edge: smallest convex radius "
                      f"{out['profile_rho_min_mm']:.6g} mm < {solution.rho_min_limit_mm:g} mm",
     }
@@ -37,19 +31,11 @@ def design_sentences(spec, solution, out) -> dict[str, str]:
 
 def evaluated_block(curves, extremes) -> dict[str, Any]:
     """The ``knife_edge`` block: offset, pressure angle, the profile's curvature and its margin."""
-    phi, rho, margin = extremes["pressure_angle"], extremes["pitch_rho_abs"], extremes["undercut_margin"]
-    deg = math.degrees
-    worst = (phi.max, phi.max_deg) if phi.max >= -phi.min else (-phi.min, phi.min_deg)
+    margin = extremes["undercut_margin"]
     return {"knife_edge": {
         "offset_mm": curves.offset_mm,
-        "pressure_angle_deg": {"max": deg(phi.max), "max_deg": phi.max_deg, "min": deg(phi.min),
-                               "min_deg": phi.min_deg, "max_abs": deg(worst[0]), "max_abs_deg": worst[1]},
-        "pressure_angle_limit_deg": curves.pressure_angle_limit_deg,
-        # within the solvers' tolerance, as the run's geometry violations judge it
-        "pressure_angle_ok": bool(deg(worst[0]) <= curves.pressure_angle_limit_deg
-                                  + math.degrees(FEASIBILITY_TOL_RAD)),
-        "profile_rho_mm": {"min_abs": rho.min, "min_abs_deg": rho.min_deg,
-                           "concave": bool(np.any(curves.pitch_rho_mm < 0))},
+        **_translating_report.pressure_angle_keys(curves, extremes["pressure_angle"]),
+        "profile_rho_mm": _translating_report.pitch_rho_block(curves, extremes["pitch_rho_abs"]),
         # rho - min_curvature_radius_mm on the convex parts (concave parts: no limit)
         "curvature_margin_mm": {"min": margin.min, "min_deg": margin.min_deg},
         "curvature_ok": bool(margin.min >= -FEASIBILITY_TOL_MM),

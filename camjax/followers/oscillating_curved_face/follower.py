@@ -17,7 +17,6 @@ from typing import NamedTuple
 
 import numpy as np
 
-from camjax import contact, loads
 from camjax.family import FEASIBILITY_TOL_MM
 from camjax.followers import _checks
 from camjax.followers._rocking import (
@@ -35,9 +34,13 @@ from camjax.followers.oscillating_curved_face.geometry import (
     CURVED_MAX_PRESSURE_ANGLE_DEG,
     CURVED_MIN_CURVATURE_RADIUS_MM,
 )
-from camjax.followers.oscillating_roller import geometry as rocker_roller_geo
-from camjax.followers.oscillating_roller.follower import arm_sizing, arm_sizing_result, check_rocker_closes
-from camjax.followers.roller import geometry as roller_geo
+from camjax.followers.oscillating_roller.follower import (
+    arm_sizing,
+    arm_sizing_result,
+    check_rocker_closes,
+    circle_contact,
+    circle_geometry,
+)
 from camjax.results import GeometryViolation
 from camjax.scene.reader import DEFAULT, build, fixed_or_free
 from camjax.scene.spec import FollowerSpec
@@ -82,11 +85,7 @@ class OscillatingCurvedFace(RockingFollower):
         train = read_train(r)
         pivot = r.number("pivot_distance_mm", low=0.0, low_open=True)
         limit = _checks.read_max_pressure_angle(r)
-        radius = r.number("face_radius_mm", low=0.0, low_open=True)
-        width = r.number("face_width_mm", low=0.0, low_open=True)
-        if width > 2.0 * radius:
-            raise r.error("face_width_mm", width, f"is wider than the face's circle (2 face_radius_mm = "
-                          f"{2.0 * radius:g} mm)", f"<= {2.0 * radius:g}")
+        radius, width = _checks.read_face(r)
         return build(OscillatingCurvedFaceSpec, type=self.name, train=train, pivot_distance_mm=pivot,
                      arm_length_mm=r.number("arm_length_mm", low=0.0, low_open=True),
                      face_radius_mm=radius, face_width_mm=width, max_pressure_angle_deg=limit,
@@ -94,15 +93,11 @@ class OscillatingCurvedFace(RockingFollower):
 
     def design_bounds(self, r, follower) -> dict[str, tuple[float, float]]:
         base = fixed_or_free(r, "base_radius_mm")
-        radius = fixed_or_free(r, "face_radius_mm", (follower.face_radius_mm,) * 2)
-        width = fixed_or_free(r, "face_width_mm", (follower.face_width_mm,) * 2)
+        radius, width = _checks.face_bounds(r, follower)
         variables = dict(
             pivot_distance_mm=fixed_or_free(r, "pivot_distance_mm", (follower.pivot_distance_mm,) * 2),
             arm_length_mm=fixed_or_free(r, "arm_length_mm", (follower.arm_length_mm,) * 2))
-        if width[1] > 2.0 * radius[0]:
-            raise r.error("face_width_mm", list(width) if width[0] != width[1] else width[0],
-                          f"allows a face wider than its circle (2 R_c = {2.0 * radius[0]:g} mm at the "
-                          "smallest face_radius_mm)", f"<= {2.0 * radius[0]:g}")
+        _checks.face_fits_circle(r, radius, width)
         check_rocker_closes(r, base, radius, **variables)
         return {"base_radius_mm": base, "face_radius_mm": radius, "face_width_mm": width, **variables}
 
@@ -130,30 +125,13 @@ class OscillatingCurvedFace(RockingFollower):
                                           "the face cannot reach the prime circle R_p = R_b + R_c")
 
     def geometry(self, scene, kin, base_radius_mm) -> RockerGeometry:
-        f, rotation = scene.follower, scene.motion.rotation
-        d, rc, l = f.pivot_distance_mm, f.face_radius_mm, f.arm_length_mm
-        rp = base_radius_mm + rc
-        g = curved_geo.geometry(d, l, rc, rp, kin, rotation, f.min_curvature_radius_mm)
-        x, y = curved_geo.profile(d, l, rc, rp, kin, rotation)
-        pitch_x, pitch_y = rocker_roller_geo.oscillating_roller_pitch_curve(d, l, rp, kin, rotation)
-        return RockerGeometry(
-            x, y, g.arm_angle, rocker_roller_geo.arm_start_angle(rp, d, l), g.pressure_angle,
-            g.cam_radius_of_curvature, pitch_x, pitch_y, g.pitch_radius_of_curvature, g.pitch_curvature,
-            g.undercut_margin, arm_length_mm=l, roller_radius_mm=rc, prime_radius_mm=float(rp),
-            pressure_angle_limit_deg=float(f.max_pressure_angle_deg))
+        return circle_geometry(scene, kin, base_radius_mm, scene.follower.face_radius_mm, curved_geo.geometry,
+                               curved_geo.profile)
 
     def contact(self, scene, moment, g):
         """The oscillating roller's with R_f = R_c: the normal runs through the face's centre, so
         P = M / (l cos phi); Hertz line contact of the cam and the crowned face."""
-        force = loads.rocker_roller_contact_force(moment, g.arm_length_mm, g.pressure_angle)
-        stress = None
-        if scene.contact is not None:
-            c = scene.contact
-            along = moment / (g.arm_length_mm * 1e-3)  # the force along the path of the face's centre, M / l
-            coeff = contact.stress_coefficient(along, c.cam_width_mm, c.cam, c.follower)
-            rho_eq = roller_geo.roller_equivalent_radius(g.pitch_curvature, scene.follower.face_radius_mm)
-            stress = contact.roller_stress(coeff, g.pressure_angle, rho_eq)
-        return force, stress
+        return circle_contact(scene, moment, g, scene.follower.face_radius_mm)
 
     def face_curves(self, scene, kin, cam_speed_rad_s, psi) -> dict:
         """The face's own curves at arm angles psi (rad): ``face_travel`` (mm, R_c sin phi) and

@@ -40,7 +40,7 @@ design of the angle with the largest R_b + R_c with the largest W over the angle
 
 from __future__ import annotations
 
-from typing import Any, NamedTuple
+from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
@@ -48,28 +48,28 @@ import numpy as np
 
 from camjax import family
 from camjax.contact import roller_stress
-from camjax.family import (
-    Weights,
-    weighted_objective,
-)
+from camjax.family import Weights
 
 # re-exported: this family's protocol functions, written once for every family
 from camjax.family import bounds as bounds
 from camjax.family import bounds_violation as bounds_violation
 from camjax.family import size_norm as size_norm
 from camjax.family import violated_constraints as violated_constraints
-from camjax.followers import _pitch as pitch
-from camjax.followers._swing import moment_model, polish_design
+from camjax.followers import _swing
+from camjax.followers._swing import per_angle as per_angle
+from camjax.followers._swing import polish_design
+from camjax.followers.curved_face.problem import face_figures, judged_on_face, width_need
+from camjax.followers.curved_face.problem import record as record  # as the translating face's
+from camjax.followers.curved_face.problem import size_term as size_term  # the translating twin's size
 from camjax.followers.oscillating_curved_face import geometry as curved_geo
 from camjax.followers.oscillating_roller import geometry as rocker_roller_geo
-from camjax.followers.oscillating_roller.problem import axial_coefficient, cos_phi, moment_coefficient
+from camjax.followers.oscillating_roller import problem as rocker
+from camjax.followers.oscillating_roller.problem import axial_coefficient, cos_phi
 from camjax.followers.roller import geometry as roller_geo
-from camjax.followers.roller.problem import roller_figures
-from camjax.numerics import RHO_FLOOR_MM, finite_float, floor_positive, positive_part, safe_sqrt
+from camjax.numerics import RHO_FLOOR_MM, floor_positive, positive_part, safe_sqrt
 
 CONSTRAINT_NAMES = ("reach", "pressure_angle", "undercut", "face_travel", "stress", "bounds")
 VARIABLES = ("base_radius_mm", "face_radius_mm", "face_width_mm", "pivot_distance_mm", "arm_length_mm")
-GRID_FIELDS = frozenset({"theta_deg", "s_rad", "ds", "d2s", "moment_coefficient"})
 
 
 class Design(NamedTuple):
@@ -82,24 +82,12 @@ class Design(NamedTuple):
     arm_length_mm: jax.Array  # l, mm: pivot to the centre of the face's circle
 
 
-class Problem(NamedTuple):
-    """Design-independent data of one oscillating curved-face design problem on n samples."""
-
-    theta_deg: jax.Array  # (n,) cam angle, degrees
-    s_rad: jax.Array  # (n,) arm swing s, rad
-    ds: jax.Array  # (n,) s', rad/rad
-    d2s: jax.Array  # (n,) s'', rad/rad^2
-    moment_coefficient: jax.Array  # (n,) C_M = 0.564 sqrt(M / (w K)), MPa mm^0.5 m^0.5 (0: no stress)
-    lower: Design  # lower bounds, mm
-    upper: Design  # upper bounds, mm
-    sigma_max_MPa: jax.Array  # () allowable contact stress
-    size_norm_mm: jax.Array  # () N = R_b,max + W_max
-    tan_max_pressure_angle: jax.Array  # () tan(phi_max)
-    min_curvature_radius_mm: jax.Array  # () smallest convex cam-surface radius allowed
-    rotation_sign: jax.Array  # () +1 ccw, -1 cw
-    # the motion program (as arrays) behind the grid when extrema are exact: :func:`polish`
-    program: Any = None
-    moment_model: Any = None  # camjax.followers._swing.MomentModel: C_M between the samples (the polish)
+# the oscillating roller's Problem without a positive drive: the grid, limits, program and moment
+# model; here the box is the curved face's Design and the size norm N = R_b,max + W_max
+Problem = family.twin_type(
+    "Problem", rocker.Problem,
+    "Design-independent data of one oscillating curved-face design problem on n samples.", __name__,
+    drop=("closure",))
 
 
 class Constraints(NamedTuple):
@@ -123,20 +111,11 @@ class Violation(NamedTuple):
     bounds: jax.Array  # mm
 
 
-class Evaluation(NamedTuple):
-    """A design judged on the whole grid (true maxima; shape () each)."""
-
-    objective: jax.Array
-    size_mm: jax.Array  # R_b + W
-    stress_max_MPa: jax.Array
-    stress_max_deg: jax.Array
-    pressure_angle_max_deg: jax.Array
-    pressure_angle_max_at_deg: jax.Array
-    cam_rho_min_mm: jax.Array  # smallest convex cam-surface radius
-    face_travel_max_mm: jax.Array  # max_theta R_c |sin phi|
-    face_travel_max_deg: jax.Array  # where it occurs
-    violation: Violation
-    feasible: jax.Array  # bool
+# the oscillating roller's Evaluation (size_mm: R_b + W) and the contact's largest travel off the
+# face's axis, max_theta R_c |sin phi| (mm), and where it occurs (deg)
+Evaluation = family.twin_type(
+    "Evaluation", rocker.Evaluation, "A design judged on the whole grid (true maxima; shape () each).",
+    __name__, add=("face_travel_max_mm", "face_travel_max_deg"), before="violation")
 
 
 # ------------------------------------------------------------------------------ building
@@ -147,30 +126,21 @@ def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=
     what = "an oscillating curved-face follower"
     arrays, as_ = family.design_arrays(scene, "oscillating_curved_face", what, arrays,
                                        samples=samples, dtype=dtype)
-    d, f, kin = scene.design, scene.follower, arrays.kin
+    d = scene.design
     lower, upper = family.design_box(d, Design, as_)
     return Problem(
-        theta_deg=as_(arrays.theta_deg), s_rad=kin.s, ds=kin.ds, d2s=kin.d2s,
-        moment_coefficient=as_(moment_coefficient(scene, arrays)),
-        lower=lower, upper=upper,
-        sigma_max_MPa=as_(d.sigma_max_MPa if d.sigma_max_MPa is not None else 1.0),
+        **_swing.scene_fields(scene, arrays, as_), lower=lower, upper=upper,
         size_norm_mm=as_(d.bounds("base_radius_mm")[1] + d.bounds("face_width_mm")[1]),
-        tan_max_pressure_angle=as_(np.tan(np.radians(f.max_pressure_angle_deg))),
-        min_curvature_radius_mm=as_(f.min_curvature_radius_mm),
-        rotation_sign=as_(pitch.rotation_sign(scene.motion.rotation)),
-        program=None if arrays.model is None else arrays.model.program,
-        moment_model=None if arrays.model is None else moment_model(scene, arrays),
+        tan_max_pressure_angle=as_(np.tan(np.radians(scene.follower.max_pressure_angle_deg))),
     )
-
-
-def per_angle(problem: Problem) -> Problem:
-    """The n pointwise problems: every grid leaf (n,) -> (n, 1), every scalar leaf -> (n,)."""
-    return family.per_angle(problem._replace(program=None, moment_model=None), GRID_FIELDS)
 
 
 # ---------------------------------------------------------------------------- physics
 
 
+# The oscillating roller's circle terms at R_f = R_c give the same values, but a gradient through
+# them adds its terms in another order (the solved design would move by ~1e-9 mm): the face keeps
+# its own, in the order its results were established with.
 class _Terms(NamedTuple):
     """Per-angle quantities every function of a design shares (shape (n,) each)."""
 
@@ -207,9 +177,8 @@ def pressure_angle(problem: Problem, design: Design) -> jax.Array:
 
 def face_width_need(problem: Problem, design: Design) -> jax.Array:
     """2 max_theta R_c |sin phi| (mm), the narrowest face that keeps the contact on it, shape ()
-    (batched designs: over the last axis)."""
-    column = jax.tree.map(lambda x: jnp.expand_dims(x, -1), design)  # (..., 1) against the grid (n,)
-    return 2.0 * jnp.max(_travel(_terms(problem, column), column), axis=-1)
+    (batched designs: over the last axis; :func:`camjax.followers.curved_face.problem.width_need`)."""
+    return width_need(lambda p, d: _travel(_terms(p, d), d), problem, design)
 
 
 def stress(problem: Problem, design: Design) -> jax.Array:
@@ -227,15 +196,9 @@ def peak_stress(problem: Problem, design: Design) -> jax.Array:
     return safe_sqrt(jnp.max(ratio))
 
 
-def size_term(problem: Problem, design: Design) -> jax.Array:
-    """Normalized size (R_b + W) / N (dimensionless)."""
-    return (design.base_radius_mm + design.face_width_mm) / problem.size_norm_mm
-
-
 def objective(problem: Problem, weights: Weights, design: Design) -> jax.Array:
     """F = alpha (R_b + W) / N + gamma max_theta sigma / sigma_max (dimensionless, shape ())."""
-    return weighted_objective(weights, size_term(problem, design), peak_stress(problem, design),
-                              problem.sigma_max_MPa)
+    return family.sized_objective(size_term, peak_stress, problem, weights, design)
 
 
 def constraints(problem: Problem, design: Design) -> Constraints:
@@ -270,27 +233,10 @@ def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
     """Objective, peak stress, pressure angle and face travel (and their angles), violations and
     feasibility."""
     x = _terms(problem, design)
-    sigma = stress(problem, design)
-    phi = jnp.abs(jnp.arctan2(x.legs.along, x.legs.across))
-    travel = _travel(x, design)
-    i, j, k = jnp.argmax(sigma), jnp.argmax(phi), jnp.argmax(travel)
-    rho_c_min = jnp.min(roller_geo.roller_undercut_margin(x.kappa, design.face_radius_mm, 0.0))
-    v = Violation(
-        reach=positive_part(x.reach),
-        pressure_angle=positive_part(phi[j] - jnp.arctan(problem.tan_max_pressure_angle)),
-        undercut=positive_part(problem.min_curvature_radius_mm - rho_c_min),
-        face_travel=positive_part(travel[k] - 0.5 * design.face_width_mm),
-        stress=positive_part(sigma[i] - problem.sigma_max_MPa),
-        bounds=bounds_violation(problem, design),
-    )
-    return Evaluation(
-        objective=objective(problem, weights, design),
-        size_mm=design.base_radius_mm + design.face_width_mm,
-        stress_max_MPa=sigma[i], stress_max_deg=problem.theta_deg[i],
-        pressure_angle_max_deg=jnp.rad2deg(phi[j]), pressure_angle_max_at_deg=problem.theta_deg[j],
-        cam_rho_min_mm=rho_c_min, face_travel_max_mm=travel[k], face_travel_max_deg=problem.theta_deg[k],
-        violation=v, feasible=family.feasible(problem, v),
-    )
+    return judged_on_face(Evaluation, Violation, problem, design, objective(problem, weights, design),
+                          stress(problem, design), jnp.abs(jnp.arctan2(x.legs.along, x.legs.across)), x.kappa,
+                          _travel(x, design), jnp.arctan(problem.tan_max_pressure_angle),
+                          reach=positive_part(x.reach))
 
 
 def condense_pointwise(problem: Problem, per_angle_design: Design) -> tuple[Design, dict]:
@@ -304,29 +250,10 @@ def condense_pointwise(problem: Problem, per_angle_design: Design) -> tuple[Desi
 
 # ------------------------------------------------------------------------------- output
 
-_f = finite_float
-
-
-def _design_keys(d: Design) -> dict:
-    return {**family.design_json(d, VARIABLES), "prime_radius_mm": _f(d.base_radius_mm + d.face_radius_mm)}
-
-
 def solution_json(problem: Problem, solution) -> dict:
     """The oscillating curved-face keys of result.json's design block, for one Solution."""
-    d, v, ev = solution.design, solution.violation, solution.evaluation
-    limit_deg = np.degrees(np.arctan(problem.tan_max_pressure_angle))
-    return family.solution_keys(
-        problem, solution, VARIABLES, design_keys=_design_keys(d),
-        size_mm=d.base_radius_mm + d.face_width_mm,
-        violation={"reach_mm": v.reach, "pressure_angle_deg": np.degrees(v.pressure_angle),
-                   "undercut_mm": v.undercut, "face_travel_mm": v.face_travel, "stress_MPa": v.stress,
-                   "bounds_mm": v.bounds},
-        figures={**roller_figures(ev, limit_deg),
-                 "face_travel_max_mm": ev.face_travel_max_mm, "face_travel_max_deg": ev.face_travel_max_deg},
-        pointwise_angles=("prime_radius_deg",))
-
-
-def record(solution) -> dict:
-    """The oscillating curved-face keys of a pareto.json row: the design, size R_b + W and peak stress."""
-    d = solution.design
-    return family.record_json(_design_keys(d), d.base_radius_mm + d.face_width_mm, solution.evaluation)
+    d, limit_deg = solution.design, np.degrees(np.arctan(problem.tan_max_pressure_angle))
+    return family.solution_keys(problem, solution, VARIABLES, size_mm=d.base_radius_mm + d.face_width_mm,
+                                prime_radius_mm=d.base_radius_mm + d.face_radius_mm,
+                                figures=face_figures(solution.evaluation, limit_deg),
+                                pointwise_angles=("prime_radius_deg",))

@@ -25,24 +25,25 @@ The face length the contact needs (max xi - min xi) is reported with the design.
 from __future__ import annotations
 
 import math
-from typing import Any, NamedTuple
+from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
 
 from camjax import family
 from camjax.contact import stress_from_coefficient
-from camjax.family import Weights, weighted_objective
+from camjax.family import Weights
 
 # re-exported: this family's protocol functions, written once for every family
 from camjax.family import bounds as bounds
 from camjax.family import bounds_violation as bounds_violation
 from camjax.family import size_norm as size_norm
 from camjax.family import violated_constraints as violated_constraints
-from camjax.followers import _pitch as pitch
-from camjax.followers._swing import moment_model, polish_design
+from camjax.followers import _swing
+from camjax.followers._swing import per_angle as per_angle
+from camjax.followers._swing import polish_design
 from camjax.followers.oscillating_flat import geometry as rocker_flat_geo
-from camjax.followers.oscillating_roller.problem import moment_coefficient
+from camjax.followers.oscillating_roller import problem as rocker_roller
 from camjax.numerics import RHO_FLOOR_MM, capped_divide, finite_float, floor_positive, positive_part
 
 CONSTRAINT_NAMES = ("reach", "swing", "curvature", "stress", "bounds")
@@ -57,23 +58,13 @@ class Design(NamedTuple):
     face_offset_mm: jax.Array  # f, mm
 
 
-class Problem(NamedTuple):
-    """Design-independent data of one oscillating flat-face design problem on n angles."""
-
-    theta_deg: jax.Array  # (n,) cam angle, degrees
-    s_rad: jax.Array  # (n,) arm swing s, rad
-    ds: jax.Array  # (n,) s', rad/rad
-    d2s: jax.Array  # (n,) s'', rad/rad^2
-    moment_coefficient: jax.Array  # (n,) C_M = 0.564 sqrt(M / (w K)) (0: no stress)
-    lower: Design
-    upper: Design
-    sigma_max_MPa: jax.Array  # ()
-    size_norm_mm: jax.Array  # () R_b,max
-    min_curvature_radius_mm: jax.Array  # ()
-    rotation_sign: jax.Array  # () +1 ccw, -1 cw
-    # the motion program (as arrays) behind the grid when extrema are exact: :func:`polish`
-    program: Any = None
-    moment_model: Any = None  # camjax.followers._swing.MomentModel: C_M between the samples (the polish)
+# the rocking grid, limits, program and moment model as the oscillating roller's Problem has them
+# (:func:`camjax.followers._swing.scene_fields`), without its pressure-angle limit and positive
+# drive; the box is the flat face's Design and the size norm N = R_b,max
+Problem = family.twin_type(
+    "Problem", rocker_roller.Problem,
+    "Design-independent data of one oscillating flat-face design problem on n angles.", __name__,
+    drop=("tan_max_pressure_angle", "closure"))
 
 
 class Constraints(NamedTuple):
@@ -113,24 +104,9 @@ def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=
     """Problem of an oscillating flat-face scene with a [design] section (Python: reads the scene)."""
     arrays, as_ = family.design_arrays(scene, "oscillating_flat", "an oscillating flat face", arrays,
                                        samples=samples, dtype=dtype)
-    d, f, kin = scene.design, scene.follower, arrays.kin
-    lower, upper = family.design_box(d, Design, as_)
-    return Problem(
-        theta_deg=as_(arrays.theta_deg), s_rad=kin.s, ds=kin.ds, d2s=kin.d2s,
-        moment_coefficient=as_(moment_coefficient(scene, arrays)),
-        lower=lower, upper=upper,
-        sigma_max_MPa=as_(d.sigma_max_MPa if d.sigma_max_MPa is not None else 1.0),
-        size_norm_mm=as_(d.bounds("base_radius_mm")[1]), min_curvature_radius_mm=as_(f.min_curvature_radius_mm),
-        rotation_sign=as_(pitch.rotation_sign(scene.motion.rotation)),
-        program=None if arrays.model is None else arrays.model.program,
-        moment_model=None if arrays.model is None else moment_model(scene, arrays),
-    )
-
-
-def per_angle(problem: Problem) -> Problem:
-    """The n pointwise problems: every grid leaf (n,) -> (n, 1), every scalar leaf -> (n,)."""
-    return family.per_angle(problem._replace(program=None, moment_model=None), {"theta_deg", "s_rad", "ds", "d2s",
-                                                             "moment_coefficient"})
+    lower, upper = family.design_box(scene.design, Design, as_)
+    return Problem(**_swing.scene_fields(scene, arrays, as_), lower=lower, upper=upper,
+                   size_norm_mm=as_(scene.design.bounds("base_radius_mm")[1]))
 
 
 class _Geometry(NamedTuple):
@@ -169,8 +145,7 @@ def size_term(problem: Problem, design: Design) -> jax.Array:
 
 def objective(problem: Problem, weights: Weights, design: Design) -> jax.Array:
     """F = alpha R_b / R_b,max + gamma max_theta sigma / sigma_max (shape ())."""
-    return weighted_objective(weights, size_term(problem, design), peak_stress(problem, design),
-                              problem.sigma_max_MPa)
+    return family.sized_objective(size_term, peak_stress, problem, weights, design)
 
 
 def constraints(problem: Problem, design: Design) -> Constraints:
@@ -258,18 +233,14 @@ _f = finite_float
 
 def solution_json(problem: Problem, solution) -> dict:
     """The oscillating flat-face keys of result.json's design block, for one Solution."""
-    d, ev, v = solution.design, solution.evaluation, solution.violation
-    violation = {f"{name}_{'MPa' if name == 'stress' else 'mm'}": getattr(v, name)
-                 for name in CONSTRAINT_NAMES}
+    ev = solution.evaluation
     figures = {"stress_max_MPa": ev.stress_max_MPa, "stress_max_deg": ev.stress_max_deg,
                "rho_min_mm": ev.rho_min_mm, "rho_min_deg": ev.rho_min_deg,
                "face_length_mm": ev.face_length_mm}
-    return family.solution_keys(problem, solution, VARIABLES, design_keys=family.design_json(d, VARIABLES),
-                                size_mm=d.base_radius_mm, violation=violation, figures=figures,
-                                pointwise_angles=("base_radius_deg",))
+    return family.solution_keys(problem, solution, VARIABLES, size_mm=solution.design.base_radius_mm,
+                                figures=figures, pointwise_angles=("base_radius_deg",))
 
 
 def record(solution) -> dict:
     """The oscillating flat-face keys of a pareto.json row: the design, size R_b and peak stress."""
-    d = solution.design
-    return family.record_json(family.design_json(d, VARIABLES), d.base_radius_mm, solution.evaluation)
+    return family.record_json(solution, solution.design.base_radius_mm)

@@ -116,6 +116,41 @@ def arm_sizing_result(kin, sampled, boundary, follower, max_pressure_angle_deg: 
     return RockerSizing(rp - roller_radius_mm, rp, _f(boundary.angle_deg), binding)
 
 
+def circle_geometry(scene, kin, base_radius_mm, radius_mm: float, geometry, profile) -> RockerGeometry:
+    """The :class:`camjax.followers._rocking.RockerGeometry` of a circle of radius ``radius_mm`` at
+    the arm's end (the roller, the oscillating curved face's crown) on a cam of base radius
+    ``base_radius_mm``: its pitch curve is the oscillating roller's of R_p = R_b + R; ``geometry``
+    and ``profile`` are the follower's closed forms, called as ``geometry(d, l, R, R_p, kin,
+    rotation, rho_min)`` and ``profile(d, l, R, R_p, kin, rotation)``."""
+    f, rotation = scene.follower, scene.motion.rotation
+    d, l = f.pivot_distance_mm, f.arm_length_mm
+    rp = base_radius_mm + radius_mm
+    g = geometry(d, l, radius_mm, rp, kin, rotation, f.min_curvature_radius_mm)
+    x, y = profile(d, l, radius_mm, rp, kin, rotation)
+    pitch_x, pitch_y = rocker_roller_geo.oscillating_roller_pitch_curve(d, l, rp, kin, rotation)
+    return RockerGeometry(
+        x, y, g.arm_angle, rocker_roller_geo.arm_start_angle(rp, d, l), g.pressure_angle,
+        g.cam_radius_of_curvature, pitch_x, pitch_y, g.pitch_radius_of_curvature, g.pitch_curvature,
+        g.undercut_margin, arm_length_mm=l, roller_radius_mm=radius_mm, prime_radius_mm=float(rp),
+        pressure_angle_limit_deg=float(f.max_pressure_angle_deg))
+
+
+def circle_contact(scene, moment, g, radius_mm: float):
+    """The contact force (N) and Hertz stress (MPa, None without [contact]) of a circle of radius
+    ``radius_mm`` (the roller, the oscillating curved face's crown) at the arm's end, from the pivot
+    torque ``moment`` (N m) and the rocker geometry ``g``: the normal runs through the circle's
+    centre, so P = M / (l cos phi); the force along the centre's path, M / l, is the roller
+    formula's "axial" force."""
+    force = loads.rocker_roller_contact_force(moment, g.arm_length_mm, g.pressure_angle)
+    stress = None
+    if scene.contact is not None:
+        c = scene.contact
+        along = moment / (g.arm_length_mm * 1e-3)  # N
+        coeff = contact.stress_coefficient(along, c.cam_width_mm, c.cam, c.follower)
+        stress = roller_geo.roller_contact_stress(coeff, g.pitch_curvature, g.pressure_angle, radius_mm)
+    return force, stress
+
+
 class OscillatingRoller(RockingFollower):
     name = "oscillating_roller"
     title = "oscillating roller"
@@ -196,29 +231,12 @@ class OscillatingRoller(RockingFollower):
                                           "the roller cannot reach the prime circle R_p")
 
     def geometry(self, scene, kin, base_radius_mm) -> RockerGeometry:
-        f, rotation = scene.follower, scene.motion.rotation
-        d, rf, l = f.pivot_distance_mm, f.roller_radius_mm, f.arm_length_mm
-        rp = base_radius_mm + rf
-        g = rocker_roller_geo.oscillating_roller_geometry(d, l, rf, rp, kin, rotation, f.min_curvature_radius_mm)
-        x, y = rocker_roller_geo.oscillating_roller_profile(d, l, rf, rp, kin, rotation)
-        pitch_x, pitch_y = rocker_roller_geo.oscillating_roller_pitch_curve(d, l, rp, kin, rotation)
-        return RockerGeometry(
-            x, y, g.arm_angle, rocker_roller_geo.arm_start_angle(rp, d, l), g.pressure_angle,
-            g.cam_radius_of_curvature, pitch_x, pitch_y, g.pitch_radius_of_curvature, g.pitch_curvature,
-            g.undercut_margin, arm_length_mm=l, roller_radius_mm=rf, prime_radius_mm=float(rp),
-            pressure_angle_limit_deg=float(f.max_pressure_angle_deg))
+        return circle_geometry(scene, kin, base_radius_mm, scene.follower.roller_radius_mm,
+                               rocker_roller_geo.oscillating_roller_geometry,
+                               rocker_roller_geo.oscillating_roller_profile)
 
     def contact(self, scene, moment, g):
-        f = scene.follower
-        force = loads.rocker_roller_contact_force(moment, g.arm_length_mm, g.pressure_angle)
-        stress = None
-        if scene.contact is not None:
-            c = scene.contact
-            # the force along the roller's path, M / l, is the roller formula's "axial" force
-            coeff = contact.stress_coefficient(moment / (g.arm_length_mm * 1e-3), c.cam_width_mm, c.cam, c.follower)
-            rho_eq = roller_geo.roller_equivalent_radius(g.pitch_curvature, f.roller_radius_mm)
-            stress = contact.roller_stress(coeff, g.pressure_angle, rho_eq)
-        return force, stress
+        return circle_contact(scene, moment, g, scene.follower.roller_radius_mm)
 
     def closure_curves(self, scene, kin, base_radius_mm, g, moment):
         """Both flanks of a groove (or the second cam of a conjugate pair), their margins and loads."""

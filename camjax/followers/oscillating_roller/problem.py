@@ -37,23 +37,23 @@ import numpy as np
 
 from camjax import family
 from camjax.contact import roller_stress
-from camjax.family import (
-    Weights,
-    weighted_objective,
-)
+from camjax.family import Weights
 
 # re-exported: this family's protocol functions, written once for every family
 from camjax.family import bounds as bounds
 from camjax.family import bounds_violation as bounds_violation
 from camjax.family import size_norm as size_norm
 from camjax.family import violated_constraints as violated_constraints
-from camjax.followers import _closure
-from camjax.followers import _pitch as pitch
-from camjax.followers._swing import moment_coefficient_at, moment_model, polish_design
+from camjax.followers import _closure, _swing
+from camjax.followers._swing import moment_coefficient as moment_coefficient
+from camjax.followers._swing import per_angle as per_angle
+from camjax.followers._swing import polish_design
 from camjax.followers.oscillating_roller import geometry as rocker_roller_geo
 from camjax.followers.roller import geometry as roller_geo
+from camjax.followers.roller.problem import record as record  # as the translating roller's
 from camjax.followers.roller.problem import roller_figures
-from camjax.numerics import COS_FLOOR, RHO_FLOOR_MM, finite_float, floor_positive, positive_part, safe_sqrt
+from camjax.followers.roller.problem import size_term as size_term  # the translating twin's size
+from camjax.numerics import COS_FLOOR, RHO_FLOOR_MM, floor_positive, positive_part, safe_sqrt
 
 CONSTRAINT_NAMES = ("reach", "pressure_angle", "undercut", "stress", "bounds")
 VARIABLES = ("base_radius_mm", "roller_radius_mm", "pivot_distance_mm", "arm_length_mm")
@@ -131,19 +131,12 @@ def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=
     """Problem of an oscillating-roller scene with a [design] section (Python: reads the scene)."""
     arrays, as_ = family.design_arrays(scene, "oscillating_roller", "an oscillating roller", arrays,
                                        samples=samples, dtype=dtype)
-    d, f, kin = scene.design, scene.follower, arrays.kin
+    d = scene.design
     lower, upper = family.design_box(d, Design, as_)
     return Problem(
-        theta_deg=as_(arrays.theta_deg), s_rad=kin.s, ds=kin.ds, d2s=kin.d2s,
-        moment_coefficient=as_(moment_coefficient(scene, arrays)),
-        lower=lower, upper=upper,
-        sigma_max_MPa=as_(d.sigma_max_MPa if d.sigma_max_MPa is not None else 1.0),
+        **_swing.scene_fields(scene, arrays, as_), lower=lower, upper=upper,
         size_norm_mm=as_(d.bounds("base_radius_mm")[1] + d.bounds("roller_radius_mm")[1]),
-        tan_max_pressure_angle=as_(np.tan(np.radians(f.max_pressure_angle_deg))),
-        min_curvature_radius_mm=as_(f.min_curvature_radius_mm),
-        rotation_sign=as_(pitch.rotation_sign(scene.motion.rotation)),
-        program=None if arrays.model is None else arrays.model.program,
-        moment_model=None if arrays.model is None else moment_model(scene, arrays),
+        tan_max_pressure_angle=as_(np.tan(np.radians(scene.follower.max_pressure_angle_deg))),
         closure=_closure.design_terms(scene, arrays, _second_moment_coefficient(scene, arrays)),
     )
 
@@ -159,23 +152,6 @@ def _second_moment_coefficient(scene, arrays) -> jax.Array:
         return jnp.zeros_like(kin.s)
     moment = loads.rocker_torque(f.train, kin, arrays.cam_speed_rad_s)
     return HERTZ_FACTOR * safe_sqrt(jnp.maximum(-moment, 0.0) / (c.cam_width_mm * compliance(c.cam, c.follower)))
-
-
-def moment_coefficient(scene, arrays) -> jax.Array:
-    """C_M = 0.564 sqrt(M / (w K)) per angle, shape (n,), of a rocker scene: M (N m) the torque about
-    the pivot (:func:`camjax.loads.rocker_torque`), w the cam width (mm), K the compliance (1/MPa);
-    zeros without a follower train or [contact]. Divided by the root of the lever arm of the contact
-    force (m) it is the Hertz coefficient C (MPa mm^0.5); both oscillating families use it
-    (:func:`camjax.followers._swing.moment_coefficient_at`).
-    """
-    model = moment_model(scene, arrays)
-    return jnp.zeros_like(arrays.kin.s) if model is None else moment_coefficient_at(model, arrays.kin)
-
-
-def per_angle(problem: Problem) -> Problem:
-    """The n pointwise problems: every grid leaf (n,) -> (n, 1), every scalar leaf -> (n,)."""
-    return family.per_angle(problem._replace(program=None, moment_model=None), {"theta_deg", "s_rad", "ds", "d2s",
-                                                             "moment_coefficient"})
 
 
 # ---------------------------------------------------------------------------- physics
@@ -237,15 +213,9 @@ def peak_stress(problem: Problem, design: Design) -> jax.Array:
     return safe_sqrt(jnp.max(ratio))
 
 
-def size_term(problem: Problem, design: Design) -> jax.Array:
-    """Normalized size (R_b + R_f) / N (dimensionless)."""
-    return (design.base_radius_mm + design.roller_radius_mm) / problem.size_norm_mm
-
-
 def objective(problem: Problem, weights: Weights, design: Design) -> jax.Array:
     """F = alpha (R_b + R_f) / N + gamma max_theta sigma / sigma_max (dimensionless, shape ())."""
-    return weighted_objective(weights, size_term(problem, design), peak_stress(problem, design),
-                              problem.sigma_max_MPa)
+    return family.sized_objective(size_term, peak_stress, problem, weights, design)
 
 
 def constraints(problem: Problem, design: Design) -> Constraints:
@@ -304,23 +274,11 @@ def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
     margin = roller_geo.roller_undercut_margin(g.kappa, design.roller_radius_mm, 0.0)
     if problem.closure is not None:  # a positive drive: the second contact's limits too
         sigma, phi, margin = _closure.worst_of_both(sigma, phi, margin, _second_contact(problem, design, g))
-    i, j = jnp.argmax(sigma), jnp.argmax(phi)
-    rho_c_min = jnp.min(margin)
-    v = Violation(
-        reach=positive_part(g.reach),
-        pressure_angle=positive_part(phi[j] - jnp.arctan(problem.tan_max_pressure_angle)),
-        undercut=positive_part(problem.min_curvature_radius_mm - rho_c_min),
-        stress=positive_part(sigma[i] - problem.sigma_max_MPa),
-        bounds=bounds_violation(problem, design),
-    )
-    feasible = family.feasible(problem, v)
-    return Evaluation(
-        objective=objective(problem, weights, design),
-        size_mm=design.base_radius_mm + design.roller_radius_mm,
-        stress_max_MPa=sigma[i], stress_max_deg=problem.theta_deg[i],
-        pressure_angle_max_deg=jnp.rad2deg(phi[j]), pressure_angle_max_at_deg=problem.theta_deg[j],
-        cam_rho_min_mm=rho_c_min, violation=v, feasible=feasible,
-    )
+    figures, violations = family.worst_contact(problem, design, sigma, phi, margin,
+                                               jnp.arctan(problem.tan_max_pressure_angle))
+    return family.judged(Evaluation, Violation, problem, objective=objective(problem, weights, design),
+                         size_mm=design.base_radius_mm + design.roller_radius_mm, figures=figures,
+                         violations=dict(reach=positive_part(g.reach), **violations))
 
 
 def condense_pointwise(problem: Problem, per_angle_design: Design) -> tuple[Design, dict]:
@@ -331,26 +289,10 @@ def condense_pointwise(problem: Problem, per_angle_design: Design) -> tuple[Desi
 
 # ------------------------------------------------------------------------------- output
 
-_f = finite_float
-
-
-def _design_keys(d: Design) -> dict:
-    return {**family.design_json(d, VARIABLES), "prime_radius_mm": _f(d.base_radius_mm + d.roller_radius_mm)}
-
-
 def solution_json(problem: Problem, solution) -> dict:
     """The oscillating-roller keys of result.json's design block, for one Solution."""
-    d, v = solution.design, solution.violation
     limit_deg = np.degrees(np.arctan(problem.tan_max_pressure_angle))
-    return family.solution_keys(
-        problem, solution, VARIABLES, design_keys=_design_keys(d),
-        size_mm=d.base_radius_mm + d.roller_radius_mm,
-        violation={"reach_mm": v.reach, "pressure_angle_deg": np.degrees(v.pressure_angle),
-                   "undercut_mm": v.undercut, "stress_MPa": v.stress, "bounds_mm": v.bounds},
-        figures=roller_figures(solution.evaluation, limit_deg), pointwise_angles=("prime_radius_deg",))
-
-
-def record(solution) -> dict:
-    """The oscillating-roller keys of a pareto.json row: the design, size R_b + R_f and peak stress."""
-    d = solution.design
-    return family.record_json(_design_keys(d), d.base_radius_mm + d.roller_radius_mm, solution.evaluation)
+    prime = solution.design.base_radius_mm + solution.design.roller_radius_mm
+    return family.solution_keys(problem, solution, VARIABLES, size_mm=prime, prime_radius_mm=prime,
+                                figures=roller_figures(solution.evaluation, limit_deg),
+                                pointwise_angles=("prime_radius_deg",))

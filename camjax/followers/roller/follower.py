@@ -17,7 +17,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from camjax import contact, runtime
+from camjax import runtime
 from camjax.evaluate import curve_extremes
 from camjax.followers import _checks, _closure
 from camjax.followers._closure import POSITIVE_CLOSURES, closure_keys, read_closure
@@ -207,10 +207,8 @@ class Roller(TranslatingFollower):
         x, y = roller_geo.roller_profile(base_radius_mm, rf, e, kin, rotation)
         pitch_x, pitch_y = roller_geo.roller_pitch_curve(base_radius_mm, rf, e, kin, rotation)
         g = roller_geo.roller_geometry(base_radius_mm, rf, e, kin, rotation, follower.min_curvature_radius_mm)
-        stress = None
-        if arrays.stress_coefficient is not None:
-            rho_eq = roller_geo.roller_equivalent_radius(g.pitch_curvature, rf)
-            stress = contact.roller_stress(arrays.stress_coefficient, g.pressure_angle, rho_eq)
+        coefficient = arrays.stress_coefficient
+        stress = roller_geo.roller_contact_stress(coefficient, g.pitch_curvature, g.pressure_angle, rf)
         return GeometryCurves(x, y, stress_MPa=stress, pitch_x_mm=pitch_x, pitch_y_mm=pitch_y,
                               pressure_angle_deg=jnp.rad2deg(g.pressure_angle),
                               pitch_rho_mm=g.pitch_radius_of_curvature, undercut_margin_mm=g.undercut_margin)
@@ -244,8 +242,8 @@ class Roller(TranslatingFollower):
         c = consts.follower
         if name == "stress":  # contact stress, MPa (even in phi)
             g = roller_geo.roller_geometry(base_radius_mm, c.roller_radius_mm, c.offset_mm, p.kin)
-            rho_eq = roller_geo.roller_equivalent_radius(g.pitch_curvature, c.roller_radius_mm)
-            return contact.roller_stress(p.stress_coefficient, g.pressure_angle, rho_eq)
+            return roller_geo.roller_contact_stress(p.stress_coefficient, g.pitch_curvature, g.pressure_angle,
+                                                    c.roller_radius_mm)
         if name == PRESSURE_NEED:
             return roller_geo.roller_pressure_angle_need(p.kin.ds, p.kin.s, c.offset_mm, c.tan_pressure_limit)
         if name in ROLLER_CURVES:

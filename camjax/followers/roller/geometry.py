@@ -92,6 +92,19 @@ def roller_equivalent_radius(pitch_curvature, roller_radius_mm) -> jax.Array:
     return roller_radius_mm * (1.0 - roller_radius_mm * pitch_curvature)
 
 
+def roller_contact_stress(coefficient, pitch_curvature, pressure_angle_rad,
+                          roller_radius_mm) -> jax.Array | None:
+    """Hertz stress (MPa) of a circle of radius R_f (a roller, a curved face's crown) on the cam
+    per angle: :func:`camjax.contact.roller_stress` of the axial-force coefficient C on the
+    :func:`roller_equivalent_radius`; None where there is no coefficient (no [contact])."""
+    from camjax.contact import roller_stress
+
+    if coefficient is None:
+        return None
+    rho_eq = roller_equivalent_radius(pitch_curvature, roller_radius_mm)
+    return roller_stress(coefficient, pressure_angle_rad, rho_eq)
+
+
 def roller_geometry(base_radius_mm, roller_radius_mm, offset_mm, kin: Kinematics,
                     rotation: str = DEFAULT_ROTATION,
                     min_curvature_radius_mm=ROLLER_MIN_CURVATURE_RADIUS_MM) -> RollerGeometry:

@@ -46,7 +46,7 @@ from camjax.contact import roller_stress
 
 # re-exported: this family's protocol functions and tolerance, written once for every family
 from camjax.family import FEASIBILITY_TOL_RAD as FEASIBILITY_TOL_RAD
-from camjax.family import Weights, weighted_objective
+from camjax.family import Weights
 from camjax.family import bounds as bounds
 from camjax.family import bounds_violation as bounds_violation
 from camjax.family import size_norm as size_norm
@@ -54,7 +54,7 @@ from camjax.family import violated_constraints as violated_constraints
 from camjax.followers import _closure
 from camjax.followers import _pitch as pitch
 from camjax.followers.roller import geometry as roller_geo
-from camjax.numerics import COS_FLOOR, RHO_FLOOR_MM, finite_float, floor_positive, positive_part, safe_sqrt
+from camjax.numerics import COS_FLOOR, RHO_FLOOR_MM, floor_positive, positive_part, safe_sqrt
 
 CONSTRAINT_NAMES = ("pressure_angle", "undercut", "stress", "bounds")
 VARIABLES = ("base_radius_mm", "roller_radius_mm", "offset_mm")
@@ -249,8 +249,7 @@ def size_term(problem: Problem, design: Design) -> jax.Array:
 
 def objective(problem: Problem, weights: Weights, design: Design) -> jax.Array:
     """F = alpha (R_b + R_f) / N + gamma max_theta sigma / sigma_max (dimensionless, shape ())."""
-    return weighted_objective(weights, size_term(problem, design), peak_stress(problem, design),
-                              problem.sigma_max_MPa)
+    return family.sized_objective(size_term, peak_stress, problem, weights, design)
 
 
 def constraints(problem: Problem, design: Design) -> Constraints:
@@ -430,22 +429,11 @@ def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
     margin = roller_geo.roller_undercut_margin(kappa, design.roller_radius_mm, 0.0)  # rho_c, convex parts
     if problem.closure is not None:  # a positive drive: the second contact's limits too
         sigma, phi, margin = _closure.worst_of_both(sigma, phi, margin, _second_contact(problem, design, x))
-    i, j = jnp.argmax(sigma), jnp.argmax(phi)
-    rho_c_min = jnp.min(margin)
-    v = Violation(
-        pressure_angle=positive_part(phi[j] - jnp.deg2rad(problem.max_pressure_angle_deg)),
-        undercut=positive_part(problem.min_curvature_radius_mm - rho_c_min),
-        stress=positive_part(sigma[i] - problem.sigma_max_MPa),
-        bounds=bounds_violation(problem, design),
-    )
-    feasible = family.feasible(problem, v)
-    return Evaluation(
-        objective=objective(problem, weights, design),
-        size_mm=design.base_radius_mm + design.roller_radius_mm,
-        stress_max_MPa=sigma[i], stress_max_deg=problem.theta_deg[i],
-        pressure_angle_max_deg=jnp.rad2deg(phi[j]), pressure_angle_max_at_deg=problem.theta_deg[j],
-        cam_rho_min_mm=rho_c_min, violation=v, feasible=feasible,
-    )
+    figures, violations = family.worst_contact(problem, design, sigma, phi, margin,
+                                               jnp.deg2rad(problem.max_pressure_angle_deg))
+    return family.judged(Evaluation, Violation, problem, objective=objective(problem, weights, design),
+                         size_mm=design.base_radius_mm + design.roller_radius_mm, figures=figures,
+                         violations=violations)
 
 
 def condense_pointwise(problem: Problem, per_angle_design: Design) -> tuple[Design, dict]:
@@ -462,23 +450,13 @@ def condense_pointwise(problem: Problem, per_angle_design: Design) -> tuple[Desi
 
 # ------------------------------------------------------------------------------- output
 
-_f = finite_float
-
-
-def _design_keys(d: Design) -> dict:
-    return {**family.design_json(d, VARIABLES), "prime_radius_mm": _f(d.base_radius_mm + d.roller_radius_mm)}
-
-
 def solution_json(problem: Problem, solution) -> dict:
     """The roller keys of result.json's design block, for one :class:`camjax.solvers.base.Solution`."""
-    d, v = solution.design, solution.violation
-    return family.solution_keys(
-        problem, solution, VARIABLES, design_keys=_design_keys(d),
-        size_mm=d.base_radius_mm + d.roller_radius_mm,
-        violation={"pressure_angle_deg": np.degrees(v.pressure_angle), "undercut_mm": v.undercut,
-                   "stress_MPa": v.stress, "bounds_mm": v.bounds},
-        figures=roller_figures(solution.evaluation, problem.max_pressure_angle_deg),
-        pointwise_angles=("prime_radius_deg",))
+    d = solution.design
+    prime = d.base_radius_mm + d.roller_radius_mm
+    return family.solution_keys(problem, solution, VARIABLES, size_mm=prime, prime_radius_mm=prime,
+                                figures=roller_figures(solution.evaluation, problem.max_pressure_angle_deg),
+                                pointwise_angles=("prime_radius_deg",))
 
 
 def roller_figures(evaluation, max_pressure_angle_deg) -> dict:
@@ -493,6 +471,8 @@ def roller_figures(evaluation, max_pressure_angle_deg) -> dict:
 
 
 def record(solution) -> dict:
-    """The roller keys of a pareto.json row: the design, size R_b + R_f and peak stress."""
+    """The keys of a pareto.json row of a roller (translating or oscillating): the design, its prime
+    radius, the size R_b + R_f and the peak stress."""
     d = solution.design
-    return family.record_json(_design_keys(d), d.base_radius_mm + d.roller_radius_mm, solution.evaluation)
+    prime = d.base_radius_mm + d.roller_radius_mm
+    return family.record_json(solution, prime, prime_radius_mm=prime)
