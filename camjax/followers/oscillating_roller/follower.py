@@ -17,7 +17,7 @@ import numpy as np
 
 from camjax import contact, loads, runtime
 from camjax.errors import SceneError
-from camjax.followers import _checks, _closure
+from camjax.followers import _checks, _closure, _closure_design
 from camjax.followers._closure import POSITIVE_CLOSURES, closure_keys, read_closure
 from camjax.followers._rocking import (
     TRAIN_KEYS,
@@ -124,6 +124,7 @@ class OscillatingRoller(RockingFollower):
     closures = POSITIVE_CLOSURES
     example_scene = "oscillating-roller"
     variables = ("base_radius_mm", "roller_radius_mm", "pivot_distance_mm", "arm_length_mm")
+    optional_variables = (_closure_design.ARM_ANGLE,)
 
     def parse(self, r) -> OscillatingRollerSpec:
         """Whether the geometry closes for the prime (base) radius the cam gets is checked where that
@@ -146,7 +147,8 @@ class OscillatingRoller(RockingFollower):
             pivot_distance_mm=fixed_or_free(r, "pivot_distance_mm", (follower.pivot_distance_mm,) * 2),
             arm_length_mm=fixed_or_free(r, "arm_length_mm", (follower.arm_length_mm,) * 2))
         check_rocker_closes(r, base, roller, **variables)
-        return {"base_radius_mm": base, "roller_radius_mm": roller, **variables}
+        return {"base_radius_mm": base, "roller_radius_mm": roller, **variables,
+                **_closure_design.design_bounds(r, follower, True, roller[0])}
 
     def sizing(self, scene, kin, program=None) -> RockerSizing:
         f = scene.follower

@@ -19,7 +19,7 @@ import numpy as np
 
 from camjax import contact, runtime
 from camjax.evaluate import curve_extremes
-from camjax.followers import _checks, _closure
+from camjax.followers import _checks, _closure, _closure_design
 from camjax.followers._closure import POSITIVE_CLOSURES, closure_keys, read_closure
 from camjax.followers._pitch import rotation_sign
 from camjax.followers._translating import (
@@ -107,6 +107,7 @@ class Roller(TranslatingFollower):
     closures = POSITIVE_CLOSURES
     example_scene = "roller"
     variables = ("base_radius_mm", "roller_radius_mm", "offset_mm")
+    optional_variables = (_closure_design.YOKE_SPAN,)
 
     def parse(self, r) -> RollerSpec:
         self.check_keys(r)
@@ -124,14 +125,15 @@ class Roller(TranslatingFollower):
         offset = fixed_or_free(r, "offset_mm", (follower.offset_mm,) * 2, positive=False)
         # refused only when no design in the bounds has |e| < R_p
         _checks.offset_cuts_prime_circle(r, offset, base[1] + roller[1], "R_b + R_f")
-        return {"base_radius_mm": base, "roller_radius_mm": roller, "offset_mm": offset}
+        return {"base_radius_mm": base, "roller_radius_mm": roller, "offset_mm": offset,
+                **_closure_design.design_bounds(r, follower, False, roller[0])}
 
     def drawn_follower(self, scene, result):
         """The [follower] with a design's R_f and offset."""
         if "roller_radius_mm" not in result:
             return scene.follower
         return replace(scene.follower, roller_radius_mm=result["roller_radius_mm"],
-                       offset_mm=result["offset_mm"])
+                       offset_mm=result["offset_mm"], closure=scene.follower.closure.designed(result))
 
     def min_base_radius(self, scene, arrays) -> MinBaseRadius:
         """The smallest prime circle with |phi| <= max_pressure_angle_deg and no undercut (convex
