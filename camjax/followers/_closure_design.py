@@ -10,19 +10,19 @@ The objective (size and the first contact's stress) does not depend on it: it on
 second cam, whose limits (pressure angle, undercut, roller off the shaft, stress) are kept with the
 first's. A free one is therefore chosen in two steps (:func:`solve_scene_design`):
 
-1. the design is solved with it at its most permissive value: a yoke's largest span (the second
-   roller deepest below the shaft: its cam's pressure angle and its distance from the shaft ease as
-   L grows), a rocker's [follower] angle clipped into the bounds;
-2. at that design it is moved to the smallest value in its bounds at which the second cam still holds
-   its limits at every sample (a scan and a bisection, :func:`smallest_admissible`), and the design
-   is judged again there (:func:`evaluated_with`): the objective does not change, the second
-   contact's figures do. The smallest value is the smallest second cam: a yoke's second pitch
-   circle sqrt(e^2 + (L - w)^2) grows with L, a second arm's largest reach
-   |C2|^2 = d^2 + l2^2 - 2 d l2 cos(psi - beta) (psi - beta in (-180, 0) deg) grows with beta.
+1. the design is solved for the first contact alone: no span or angle can give a smaller objective;
+2. at that design the value is the smallest in its bounds at which the second cam holds its limits at
+   every sample (a scan and a bisection, :func:`smallest_admissible`), and the design is judged again
+   with it (:func:`evaluated_with`: the objective is the same, the second contact's figures are
+   added). That design and value are an optimum of the whole problem. The smallest value is the
+   smallest second cam: a yoke's second pitch circle sqrt(e^2 + (L - w)^2) grows with L, a second
+   arm's largest reach |C2|^2 = d^2 + l2^2 - 2 d l2 cos(psi - beta) (psi - beta in (-180, 0) deg)
+   grows with beta.
 
-The design is not solved again at the chosen value (a solve from scratch there can start where the
-second roller meets the shaft and not recover); where a rocker's second cam binds its design at the
-[follower]'s angle, another angle may allow a smaller cam, which this choice does not look for.
+Where no value in the bounds lets the first contact's optimum keep the second cam, the design is
+solved with both contacts at the most permissive value (:func:`camjax.followers._closure.design_start`:
+a yoke's largest span, a rocker's [follower] angle clipped into the bounds) and step 2 is taken at
+that design; the objective is then that value's optimum, which another value may better.
 
 result.json's design block holds the chosen value under its key, and the cam is drawn with it.
 """
@@ -43,7 +43,9 @@ from camjax.scene.reader import TableReader, fixed_or_free
 # each free dimension: its [design] key, the design problem's closure field and the factor to it
 YOKE_SPAN, ARM_ANGLE = "yoke_span_mm", "second_arm_angle_deg"
 _TERMS_FIELD = {YOKE_SPAN: ("span_mm", 1.0), ARM_ANGLE: ("angle_rad", math.pi / 180.0)}
-ADMISSIBLE_SCAN = 256  # values scanned in the bounds before the bisection onto the first admissible one
+ADMISSIBLE_SCAN = 256  # steps of the scan over the bounds, before the refinements
+ADMISSIBLE_HALVINGS = 80  # golden-section and bisection steps: below float64 resolution of the bounds
+GOLDEN = (math.sqrt(5.0) - 1.0) / 2.0
 
 
 def design_bounds(r: TableReader, follower, rocking: bool,
@@ -85,40 +87,63 @@ def with_dimension(problem, key: str, value):
     return problem._replace(closure=terms._replace(**{field: value}))
 
 
-def _design_of(problem, result: dict):
-    from camjax.solvers.base import family_of
-
-    family = family_of(problem)
-    dtype = problem.lower[0].dtype
-    return family, family.Design(*(jnp.asarray(result[name], dtype) for name in family.Design._fields))
-
-
 @partial(jax.jit, static_argnames=("key_field",))
 def _smallest(problem, design, allowed, low, high, key_field: int):
     """Traced body of :func:`smallest_admissible` (``key_field``: the closure field's index)."""
-    from camjax.followers._swing import first_admissible
+    from camjax.family import FEASIBILITY_TOL_MM
     from camjax.solvers.base import family_of
 
     family = family_of(problem)
 
-    def bad(value):
+    def worst(value):  # the second contact's largest excess over what is allowed, mm
         terms = problem.closure
         moved = problem._replace(closure=terms._replace(**{terms._fields[key_field]: value}))
-        g = jnp.stack(family.constraints(moved, design))
-        return jnp.any(g > allowed)
+        return jnp.max(jnp.stack(family.constraints(moved, design)) - allowed)
 
-    n = problem.theta_deg.shape[-1]
-    ok_low = ~bad(low)
-    value, found = first_admissible(bad, low, high, n, scan=ADMISSIBLE_SCAN)
-    return jnp.where(ok_low, low, value), ok_low | found
+    xs = low + (high - low) * jnp.linspace(0.0, 1.0, ADMISSIBLE_SCAN + 1)
+    hs = jax.lax.map(worst, xs)
+    ok = hs <= FEASIBILITY_TOL_MM
+    # the least excess, refined between the scan's neighbours of its smallest (golden section): an
+    # admissible range narrower than the scan's step (both contacts at their limit) is found there
+    k = jnp.argmin(hs)
+    a, b = xs[jnp.maximum(k - 1, 0)], xs[jnp.minimum(k + 1, ADMISSIBLE_SCAN)]
+
+    def golden(_, bracket):
+        a, b = bracket
+        c, d = b - GOLDEN * (b - a), a + GOLDEN * (b - a)
+        lower = worst(c) <= worst(d)
+        return jnp.where(lower, a, c), jnp.where(lower, d, b)
+
+    a, b = jax.lax.fori_loop(0, ADMISSIBLE_HALVINGS, golden, (a, b))
+    best = 0.5 * (a + b)
+    # bisect between an inadmissible value and the first admissible one found
+    j = jnp.argmax(ok)
+    right = jnp.where(ok[j], xs[j], best)
+    left = jnp.where(ok[j], xs[jnp.maximum(j - 1, 0)], xs[jnp.maximum(k - 1, 0)])
+
+    def halve(_, bracket):
+        a, b = bracket
+        m = 0.5 * (a + b)
+        bad = worst(m) > FEASIBILITY_TOL_MM
+        return jnp.where(bad, m, a), jnp.where(bad, b, m)
+
+    found = ok[j] | (worst(best) <= FEASIBILITY_TOL_MM)
+    left_ok = worst(left) <= FEASIBILITY_TOL_MM
+    _, right = jax.lax.fori_loop(0, ADMISSIBLE_HALVINGS, halve, (left, right))
+    return jnp.where(left_ok, left, right), found
 
 
-def smallest_admissible(problem, result: dict, key: str, low: float, high: float) -> float | None:
-    """The smallest yoke span (mm) or second arm angle (deg) in [low, high] at which the design of
-    ``result`` keeps every second-contact limit at every sample where the first contact keeps its
-    own (where the first is over, the second may be up to as far over); None where none does.
-    One compiled program for every scene of a shape (the problem, design and bounds are its data)."""
-    family, design = _design_of(problem, result)
+def smallest_admissible(problem, design, key: str, low: float, high: float) -> float | None:
+    """The smallest yoke span (mm) or second arm angle (deg) in [low, high] at which ``design`` (the
+    family's Design) keeps every second-contact limit at every sample where the first contact keeps
+    its own (where the first is over, the second may be up to as far over), to the solvers'
+    feasibility tolerance (:data:`camjax.family.FEASIBILITY_TOL_MM`); None where none does. A scan,
+    a golden-section refinement of the least excess (a range narrower than the scan's step, as where
+    both contacts reach their limit at once) and a bisection onto the first admissible value. One
+    compiled program for every scene of a shape (the problem, design and bounds are its data)."""
+    from camjax.solvers.base import family_of
+
+    family = family_of(problem)
     field, factor = _TERMS_FIELD[key]
     first = jnp.stack(family.constraints(problem._replace(closure=None), design))
     dtype = first.dtype
@@ -163,12 +188,20 @@ def solve_scene_design(scene, arrays) -> tuple[dict, object]:
     if free is None:
         return design_json(problem, d), problem
     key, low, high = free
+    solve_as_scene = partial(solve, weights=(d.alpha, d.gamma), mode=d.mode, solver=d.solver, seed=d.seed)
     value = design_start(scene, key)  # the problem's own
-    solution = solve(problem, (d.alpha, d.gamma), mode=d.mode, solver=d.solver, seed=d.seed)
-    out = solution.to_json(problem)
-    smallest = None if low == high else smallest_admissible(problem, out, key, low, high)
-    if smallest is not None and smallest != value:
-        problem, value = with_dimension(problem, key, smallest), smallest
-        out = evaluated_with(problem, solution).to_json(problem)
+    if low == high:
+        out = solve_as_scene(problem).to_json(problem)
+        out[key] = value
+        return out, problem
+    # the first contact alone: no value of the span or angle gives a smaller objective
+    solution = solve_as_scene(problem._replace(closure=None))
+    smallest = smallest_admissible(problem, solution.design, key, low, high)
+    if smallest is None:  # the second cam binds there: solved at the most permissive value
+        solution = solve_as_scene(problem)
+        smallest = smallest_admissible(problem, solution.design, key, low, high)
+    value = value if smallest is None else smallest
+    problem = with_dimension(problem, key, value)
+    out = evaluated_with(problem, solution).to_json(problem)
     out[key] = value
     return out, problem
