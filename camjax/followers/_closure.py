@@ -542,7 +542,7 @@ def second_limits(closure: ClosureSpec, kin, *, prime_radius_mm=None, signed_off
         second = yoke_second(terms, w, kin.ds - signed_offset_mm, kin.ds, kin.d2s, signed_offset_mm,
                              min_curvature_radius_mm, tan_limit, 1.0)
     else:
-        terms = ArmTerms(closure.second_arm_length_mm, math.radians(closure.second_arm_angle_deg),
+        terms = ArmTerms(closure.second_arm_length_mm, closure.second_arm_angle_deg * (math.pi / 180.0),
                          closure.second_roller_radius_mm, zero)
         second = arm_second(terms, pivot_distance_mm, psi0 + kin.s, kin.ds, kin.d2s, sign, min_curvature_radius_mm,
                             tan_limit, 1.0)
