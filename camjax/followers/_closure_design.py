@@ -158,11 +158,18 @@ def evaluated_with(problem, solution):
     evaluation, violations and feasibility there; the objective does not depend on the conjugate
     pair's span or angle, the solver's iterations and certificate are those of its own solve)."""
     from camjax.family import weights_of
-    from camjax.solvers.base import family_of
 
     weights = weights_of(solution.alpha, solution.gamma, problem.lower[0].dtype)
-    ev = jax.jit(family_of(problem).evaluate)(problem, weights, solution.design)
+    ev = _evaluate(problem, weights, solution.design)
     return replace(solution, evaluation=ev, violation=ev.violation, feasible=ev.feasible)
+
+
+@jax.jit
+def _evaluate(problem, weights, design):
+    """The design problem's family's ``evaluate`` (one compiled program per family and grid)."""
+    from camjax.solvers.base import family_of
+
+    return family_of(problem).evaluate(problem, weights, design)
 
 
 def solve_scene_design(scene, arrays) -> tuple[dict, object]:
