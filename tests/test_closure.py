@@ -379,3 +379,195 @@ def test_the_animation_draws_the_second_roller_on_its_cam_and_keeps_the_link_rig
         (x0, x1), (y0, y1) = mf.artists["second_link"].get_data()
         assert (x1, y1) == (cx, cy)
         assert math.hypot(x1 - x0, y1 - y0) == pytest.approx(link, abs=1e-6), i
+
+
+# ------------------------------------------------------------------ the free span or arm angle
+
+FREE = {  # scene text, [design] key, bounds whose low end the second cam cannot hold; size only (gamma 0)
+    "yoke": (YOKE.replace("gamma = 0.0 ", "yoke_span_mm = [20.0, 120.0]\ngamma = 0.0 "), "yoke_span_mm"),
+    "conjugate": (builtin_scene_text("conjugate").replace("gamma = 0.1", "gamma = 0.0\nsecond_arm_angle_deg = [30.0, 170.0]"),
+                  "second_arm_angle_deg"),
+}
+# the chosen value against the positions' scan: the design judges 360 samples, the scan 7200, where
+# the second cam's largest pressure angle can exceed the 360 samples' by ~ (0.5 deg)^2 / 2 x its
+# second derivative over the cam angle (< 1 deg/deg^2 here): SAMPLING_DEG = 0.01 deg over the limit
+# is admitted; the chosen value then sits within 0.02 (mm of span, deg of arm angle: the pressure
+# angle moves by > 0.5 deg per mm or deg of either near the choice) of the scan's smallest
+SAMPLING_DEG = 0.01
+FREE_TOL = 0.02
+
+
+def _second_pressure_angle_deg(cx, cy, path_x, path_y):
+    """The second cam's largest pressure angle (deg) from the second roller's centres (cam frame) and
+    the direction that cam drives each (any length, either sign): the angle between the curve's
+    normal (central differences, O(h^2) at h = 0.05 deg) and that direction."""
+    tx, ty = np.roll(cx, -1) - np.roll(cx, 1), np.roll(cy, -1) - np.roll(cy, 1)
+    cos_phi = np.abs(-ty * path_x + tx * path_y) / (np.hypot(tx, ty) * np.hypot(path_x, path_y))
+    return float(np.degrees(np.arccos(np.min(np.clip(cos_phi, 0.0, 1.0)))))
+
+
+def _second_cam_cuttable(cx, cy, r2, rho_min):
+    """The second roller off the shaft and the second cam's convex radius >= rho_min where its pitch
+    curve bends towards the cam centre (three-point circles)."""
+    radius = np.abs(_turning_radii(cx, cy))
+    ax, ay = np.roll(cx, 1) + np.roll(cx, -1) - 2 * cx, np.roll(cy, 1) + np.roll(cy, -1) - 2 * cy
+    convex = ax * -cx + ay * -cy > 0
+    return np.min(np.hypot(cx, cy)) > r2 and np.min(radius[convex], initial=np.inf) >= r2 + rho_min
+
+
+def _first_within(f, limit, low, high, steps=400, iterations=60):
+    """The smallest value in [low, high] with f <= limit (positions only): a scan, the least f refined
+    by a golden section where no scanned value is within (a narrow admissible range), a bisection."""
+    grid = np.linspace(low, high, steps + 1)
+    values = np.array([f(v) for v in grid])
+    within = np.flatnonzero(values <= limit)
+    if len(within):
+        j = int(within[0])
+        if j == 0:
+            return low
+        a, b = grid[j - 1], grid[j]
+    else:
+        k = int(np.argmin(values))
+        a, b = grid[max(k - 1, 0)], grid[min(k + 1, steps)]
+        for _ in range(iterations):
+            c, d = b - 0.618 * (b - a), a + 0.618 * (b - a)
+            a, b = (a, d) if f(c) <= f(d) else (c, b)
+        assert f(b) <= limit, (b, f(b))
+        a = grid[max(k - 1, 0)]
+    for _ in range(iterations):
+        m = 0.5 * (a + b)
+        a, b = (a, m) if f(m) <= limit else (m, b)
+    return b
+
+
+def _slsqp_objectives(scene, key, starts=(0.25, 0.5, 0.75)):
+    """SciPy SLSQP on the same design problem with the span or angle as one more variable: the
+    objective of each converged, feasible answer from starts spread over the box."""
+    import jax
+    import jax.numpy as jnp
+    from scipy.optimize import minimize
+
+    from camjax.family import weights_of
+    from camjax.followers._closure_design import with_dimension
+    from camjax.solvers.base import family_of, problem_from_scene
+
+    problem = problem_from_scene(scene)
+    fam = family_of(problem)
+    names = fam.Design._fields
+    lo = [float(getattr(problem.lower, n)) for n in names] + [scene.design.bounds(key)[0]]
+    hi = [float(getattr(problem.upper, n)) for n in names] + [scene.design.bounds(key)[1]]
+    weights = weights_of(scene.design.alpha, scene.design.gamma, jnp.float64)
+
+    def split(z):
+        return fam.Design(*z[:-1]), z[-1]
+
+    objective = jax.jit(lambda z: fam.objective(problem, weights, split(z)[0]))
+    rows = jax.jit(lambda z: -jnp.concatenate(fam.constraints(with_dimension(problem, key, split(z)[1]),
+                                                              split(z)[0])))
+    jac_f, jac_g = jax.jit(jax.grad(objective)), jax.jit(jax.jacfwd(rows))
+    out = []
+    for t in starts:
+        z0 = np.array([a + t * (b - a) for a, b in zip(lo, hi, strict=True)])
+        r = minimize(lambda z: float(objective(z)), z0, jac=lambda z: np.asarray(jac_f(z)), method="SLSQP",
+                     bounds=list(zip(lo, hi, strict=True)), options={"maxiter": 500, "ftol": 1e-12},
+                     constraints=[{"type": "ineq", "fun": lambda z: np.asarray(rows(z)),
+                                   "jac": lambda z: np.asarray(jac_g(z))}])
+        if r.success and np.min(np.asarray(rows(r.x))) > -1e-7:
+            out.append(float(r.fun))
+    return out
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("case", sorted(FREE))
+def test_a_free_span_or_arm_angle_is_the_smallest_the_second_cam_allows(case, tmp_path):
+    """[design] frees the yoke span or the second arm angle: the CLI's design keeps the optimum
+    (SciPy SLSQP over the same problem with the span or angle as one more variable finds none
+    smaller) and reports the chosen value in its design and closure blocks; drawn at 7200 samples
+    with that value, both rollers ride their exported cams, the link is rigid at that value, and a
+    scan over the value on the exported positions (the second cam's pressure angle by finite
+    differences, its distance from the shaft and its convex radius by three-point circles) puts the
+    smallest admissible value where the design put it."""
+    text, key = FREE[case]
+    text = text.replace("[motion]\n", '[motion]\nextrema = "grid"\n')  # the samples' problem, as SLSQP's
+    (tmp_path / "free.toml").write_text(text)
+    assert cli.main(["design", str(tmp_path / "free.toml"), "--out", str(tmp_path / "design")]) == 0
+    data = json.loads((tmp_path / "design" / "result.json").read_text())
+    design, chosen = data["design"], data["design"][key]
+    low, high = parse_scene(text).design.bounds(key)
+    assert design["feasible"] and data["closure"][key] == chosen and low < chosen < high, (chosen, design)
+    best = _slsqp_objectives(parse_scene(text), key)
+    assert best and design["objective"] <= min(best) + 1e-6, (design["objective"], best)
+
+    # the design drawn at 7200 samples with the chosen value in [follower] (the rocker's curves at the
+    # design's radius: at 7200 samples the second cam may pass its limit by the sampling's ~0.01 deg,
+    # and the run's sizing would refuse the follower)
+    scene = parse_scene(text)
+    kind = followers.of(scene)
+    scene = with_samples(replace(scene, follower=kind.drawn_follower(scene, design), design=None,
+                                 motion=replace(scene.motion, extrema="grid")), SAMPLES)
+    f, r2 = scene.follower, scene.follower.closure.second_roller_radius_mm
+    assert getattr(f.closure, key) == chosen
+    if case == "yoke":
+        curves = camjax.run_design(scene, base_radius_mm=design["base_radius_mm"]).curves
+    else:
+        arrays = camjax.scene_arrays(scene)
+        curves = kind.evaluate(scene, arrays.kin, arrays.cam_speed_rad_s, design["base_radius_mm"])
+    export.write_profile_csv(tmp_path / "profile.csv", curves)
+    names = (tmp_path / "profile.csv").read_text().splitlines()[0].split(",")
+    table = np.loadtxt(tmp_path / "profile.csv", delimiter=",", skiprows=1)
+    col = {n: table[:, k] for k, n in enumerate(names)}
+    first = _distances(col["pitch_x_mm"], col["pitch_y_mm"], col["x_mm"], col["y_mm"])
+    second = _distances(col["conjugate_pitch_x_mm"], col["conjugate_pitch_y_mm"], col["conjugate_x_mm"],
+                        col["conjugate_y_mm"])
+    assert np.max(np.abs(first - f.roller_radius_mm)) < RIDE_TOL_MM
+    assert np.max(np.abs(second - r2)) < RIDE_TOL_MM
+    c1x, c1y, c2x, c2y = col["pitch_x_mm"], col["pitch_y_mm"], col["conjugate_pitch_x_mm"], col["conjugate_pitch_y_mm"]
+    if case == "yoke":
+        span = np.hypot(c1x - c2x, c1y - c2y)
+        assert np.max(np.abs(span - chosen)) < 1e-9
+        ux, uy = (c1x - c2x) / span, (c1y - c2y) / span  # the follower axis, first roller up
+
+        def second_centres(value):
+            return c1x - value * ux, c1y - value * uy, ux, uy
+    else:
+        px, py = _pivot(scene, col["theta_deg"])
+        a1, a2 = np.arctan2(c1y - py, c1x - px), np.arctan2(c2y - py, c2x - px)
+        turn = np.angle(np.exp(1j * (a2 - a1)))  # from the first arm to the second, signed
+        assert np.max(np.abs(np.abs(turn) - math.radians(chosen))) < 1e-9
+        l2, sense = f.closure.second_arm_length_mm, np.sign(turn[0])
+
+        def second_centres(value):
+            a = a1 + sense * math.radians(value)
+            cx, cy = px + l2 * np.cos(a), py + l2 * np.sin(a)
+            return cx, cy, -(cy - py), cx - px  # driven square to the second arm
+
+    def pressure(value):
+        return _second_pressure_angle_deg(*second_centres(value))
+
+    limit = f.max_pressure_angle_deg + SAMPLING_DEG
+    assert pressure(chosen) <= limit and _second_cam_cuttable(*second_centres(chosen)[:2], r2,
+                                                              f.min_curvature_radius_mm)
+    assert _first_within(pressure, limit, low, high) == pytest.approx(chosen, abs=FREE_TOL)
+
+
+FREE_BAD = {
+    "span_on_a_groove": ("groove", "gamma = 0.0 ", "yoke_span_mm = [40.0, 80.0]\ngamma = 0.0 ", "design.yoke_span_mm"),
+    "span_overlapping": (YOKE, "gamma = 0.0 ", "yoke_span_mm = [8.0, 80.0]\ngamma = 0.0 ", "design.yoke_span_mm"),
+    "span_reversed": (YOKE, "gamma = 0.0 ", "yoke_span_mm = [80.0, 40.0]\ngamma = 0.0 ", "design.yoke_span_mm"),
+    "angle_past_the_first_arm": ("conjugate", "gamma = 0.1", "gamma = 0.1\nsecond_arm_angle_deg = [30.0, 360.0]",
+                                 "design.second_arm_angle_deg"),
+    "angle_on_a_yoke": (YOKE, "gamma = 0.0 ", "second_arm_angle_deg = [30.0, 90.0]\ngamma = 0.0 ",
+                        "design.second_arm_angle_deg"),
+    "span_on_a_flat_face": ("default", "[design]\n", "[design]\nyoke_span_mm = [40.0, 80.0]\n", "design.yoke_span_mm"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(FREE_BAD))
+def test_bad_span_or_arm_angle_bounds_exit_2_naming_the_key(case, tmp_path, capsys):
+    name, old, new, field = FREE_BAD[case]
+    text = builtin_scene_text(name) if "\n" not in name else name
+    assert old in text
+    (tmp_path / "bad.toml").write_text(text.replace(old, new, 1))
+    assert cli.main(["design", str(tmp_path / "bad.toml"), "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and f" {field}" in err[0], err

@@ -399,11 +399,25 @@ def design_terms(scene, arrays, second_coefficient):
     if c.kind == "groove":
         return GrooveTerms(as_(c.clearance_mm), second_coefficient)
     if c.kind == "conjugate" and c.yoke_span_mm is not None:
-        return YokeTerms(as_(c.yoke_span_mm), as_(c.second_roller_radius_mm), second_coefficient)
+        return YokeTerms(as_(design_start(scene, "yoke_span_mm")), as_(c.second_roller_radius_mm),
+                         second_coefficient)
     if c.kind == "conjugate":
-        return ArmTerms(as_(c.second_arm_length_mm), as_(math.radians(c.second_arm_angle_deg)),
-                        as_(c.second_roller_radius_mm), second_coefficient)
+        angle = math.radians(design_start(scene, "second_arm_angle_deg"))
+        return ArmTerms(as_(c.second_arm_length_mm), as_(angle), as_(c.second_roller_radius_mm),
+                        second_coefficient)
     return None
+
+
+def design_start(scene, key: str) -> float:
+    """The yoke span (mm) or second arm angle (deg) a conjugate pair's design problem is solved at: the
+    [follower]'s, or the [design]'s where it sets one; where [design] frees it, the most permissive
+    value (:mod:`camjax.followers._closure_design`): a yoke's largest span, a rocker's [follower]
+    angle clipped into the bounds."""
+    value = getattr(scene.follower.closure, key)
+    if scene.design is None or key not in dict(scene.design.variables):
+        return value
+    low, high = scene.design.bounds(key)
+    return high if key == "yoke_span_mm" else min(max(value, low), high)
 
 
 def reversed_coefficient(force_N, cam_width_mm, cam, follower):
@@ -528,7 +542,7 @@ def second_limits(closure: ClosureSpec, kin, *, prime_radius_mm=None, signed_off
         second = yoke_second(terms, w, kin.ds - signed_offset_mm, kin.ds, kin.d2s, signed_offset_mm,
                              min_curvature_radius_mm, tan_limit, 1.0)
     else:
-        terms = ArmTerms(closure.second_arm_length_mm, math.radians(closure.second_arm_angle_deg),
+        terms = ArmTerms(closure.second_arm_length_mm, closure.second_arm_angle_deg * (math.pi / 180.0),
                          closure.second_roller_radius_mm, zero)
         second = arm_second(terms, pivot_distance_mm, psi0 + kin.s, kin.ds, kin.d2s, sign, min_curvature_radius_mm,
                             tan_limit, 1.0)

@@ -43,6 +43,9 @@ class Follower(abc.ABC):
     rocking: ClassVar[bool]  # an arm swinging about a pivot (lifts in deg, loads about it)
     keys: ClassVar[tuple[str, ...]]  # the [follower] table's keys besides ``type``
     variables: ClassVar[tuple[str, ...]]  # design variables (mm), in result.json's order
+    # [design] variables that only some of its scenes have (a conjugate pair's yoke span or second
+    # arm angle): :meth:`design_bounds` returns them, after :attr:`variables`, only where they apply
+    optional_variables: ClassVar[tuple[str, ...]] = ()
     example_scene: ClassVar[str]  # a built-in scene with a [design] that shows it (docs, tests/test_followers.py)
     design_needs_contact: ClassVar[bool] = False  # a [design] needs [contact] (its objective is the stress)
     takes_contact: ClassVar[bool] = True  # a [contact] section (Hertz stress) is defined for it
@@ -60,7 +63,8 @@ class Follower(abc.ABC):
     @abc.abstractmethod
     def design_bounds(self, r: TableReader, follower: FollowerSpec) -> dict[str, tuple[float, float]]:
         """The [design] table's design variables as (low, high) bounds, mm (a fixed one as (v, v)),
-        in the order of :attr:`variables`; a box in which no design closes is a SceneError."""
+        in the order of :attr:`variables`, then those of :attr:`optional_variables` the scene has; a
+        box in which no design closes is a SceneError."""
 
     def check_keys(self, r: TableReader) -> None:
         """Refuse a [follower] key of another follower type (naming the types it belongs to) or of

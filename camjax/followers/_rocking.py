@@ -285,6 +285,9 @@ class RockingFollower(Follower):
         """The [follower] spec with a solved design's pivot, arm (or face) and roller (those the cam
         is drawn with; ``result``: the solver's JSON, empty without a design)."""
         dims = {k: result[k] for k in self.variables if k != "base_radius_mm" and k in result}
+        closure = scene.follower.closure.designed(result)
+        if closure is not scene.follower.closure:
+            dims["closure"] = closure
         return replace(scene.follower, **dims) if dims else scene.follower
 
     # ---- the curves the report takes extrema of
@@ -403,17 +406,9 @@ class RockingFollower(Follower):
         arrays = scene_arrays(scene, dtype=dtype) if arrays is None else arrays
         design = None
         if scene.design is not None:
-            from camjax.solvers.base import problem_from_scene
-            from camjax.solvers.newton import design_json
+            from camjax.followers._closure_design import solve_scene_design
 
-            d = scene.design
-            problem = problem_from_scene(scene, arrays)
-            if d.robust is not None:  # kept over the samples of [tolerances], beside the nominal optimum
-                from camjax.robust.design import design_json as robust_design_json
-
-                design = robust_design_json(scene, problem)
-            else:
-                design = design_json(problem, d)
+            design, _ = solve_scene_design(scene, arrays)
         kin, w, drawn = arrays.kin, arrays.cam_speed_rad_s, scene
         program = None if arrays.model is None else arrays.model.program
         if design is not None:

@@ -124,9 +124,10 @@ def report(scene, run, blocks) -> dict[str, Any]:
     if run.design is not None:
         out["design"] = run.design
         out["follower_scene"] = follower_scene_block(followers.of(scene), f)
-    if f.closure.positive:  # a groove or conjugate cams: no spring to lose, the load changes contact
+    closure = f.closure.designed(run.design or {})
+    if closure.positive:  # a groove or conjugate cams: no spring to lose, the load changes contact
         load = None if c.pivot_torque_Nm is None else c.pivot_torque_Nm / (c.arm_length_mm * 1e-3)
-        out["closure"] = _closure_report.closure_block(f.closure, c, load, c.pressure_angle_deg)
+        out["closure"] = _closure_report.closure_block(closure, c, load, c.pressure_angle_deg)
         if "loads" in out:
-            out["loads"]["contact"] = _closure_report.positive_contact(f.closure)
+            out["loads"]["contact"] = _closure_report.positive_contact(closure)
     return out

@@ -294,17 +294,9 @@ class TranslatingFollower(Follower):
         """
         if scene.design is None:
             return None
-        from camjax.solvers.base import problem_from_scene
-        from camjax.solvers.newton import design_json
+        from camjax.followers._closure_design import solve_scene_design
 
-        d = scene.design
-        problem = problem_from_scene(scene, arrays)
-        if d.robust is not None:  # kept over the samples of [tolerances], beside the nominal optimum
-            from camjax.robust.design import design_json as robust_design_json
-
-            out = robust_design_json(scene, problem)
-        else:
-            out = design_json(problem, d)
+        out, problem = solve_scene_design(scene, arrays)
         return self.design_solution(scene, arrays, out, problem)
 
     def curves(self, scene, arrays: SceneArrays, base_radius_mm: float, follower=None,

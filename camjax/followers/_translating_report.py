@@ -165,7 +165,7 @@ def report(scene, run, blocks) -> dict[str, Any]:
                             **feasibility_block(run.violations)}
     data.update(evaluated_block(run.curves, extremes))
     data.update(blocks.evaluated_block(run.curves, extremes))
-    closure = scene.follower.closure
+    closure = scene.follower.closure.designed(run.design.result if run.design is not None else {})
     if closure.positive:  # a groove or conjugate cams: no spring to lose, the load changes contact
         c = run.curves
         data["closure"] = _closure_report.closure_block(closure, c, c.force_N, c.pressure_angle_deg)

@@ -58,13 +58,14 @@ def parse_design(r: TableReader, follower, spec: FollowerSpec, has_contact: bool
     sigma_max_MPa) here, its design variables from the follower (``follower.design_bounds``)."""
     from camjax import followers
 
-    own = follower.variables
-    others = {v for f in followers.all_followers() for v in f.variables} - set(own)
+    own, optional = follower.variables, follower.optional_variables
+    others = {v for f in followers.all_followers() for v in (*f.variables, *f.optional_variables)}
+    others -= {*own, *optional}
     for key in sorted(others):
         if r.has(key):
             raise r.error(key, r.table[key], f"is not a design variable of a {follower.name} follower",
                           ", ".join(own))
-    r.check_keys(("mode", *own, "sigma_max_MPa", "alpha", "gamma", "solver", "seed", "robust"))
+    r.check_keys(("mode", *own, *optional, "sigma_max_MPa", "alpha", "gamma", "solver", "seed", "robust"))
     common = dict(
         mode=r.choice("mode", MODES, DEFAULT),
         alpha=r.number("alpha", DEFAULT, low=0.0),
@@ -76,7 +77,8 @@ def parse_design(r: TableReader, follower, spec: FollowerSpec, has_contact: bool
     bounds = follower.design_bounds(r, spec)
     free = max(1, sum(1 for lo, hi in bounds.values() if hi > lo))
     robust = parse_robust(r.sub("robust"), free) if r.has("robust") else None
-    design = build(DesignSpec, variables=tuple((name, bounds[name]) for name in own),
+    names = (name for name in (*own, *optional) if name in bounds)
+    design = build(DesignSpec, variables=tuple((name, bounds[name]) for name in names),
                    sigma_max_MPa=sigma_max(r, has_contact, common), robust=robust, **common)
     if design.alpha == 0 and design.gamma == 0:
         raise r.error("alpha", 0.0, "alpha and gamma are both zero: nothing to minimize",

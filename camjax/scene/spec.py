@@ -6,7 +6,7 @@ read them.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 from camjax.contact import Material
@@ -66,6 +66,12 @@ class ClosureSpec:
     def positive(self) -> bool:
         """Positive drive (no spring needed): a groove or conjugate cams."""
         return self.kind != "spring"
+
+    def designed(self, design: dict) -> ClosureSpec:
+        """This closure with a solved [design]'s yoke span or second arm angle (``design``: result.json's
+        design block, or {}); itself where the design has neither."""
+        dims = {k: design[k] for k in ("yoke_span_mm", "second_arm_angle_deg") if k in design}
+        return replace(self, **dims) if dims else self
 
 
 SPRING = ClosureSpec()

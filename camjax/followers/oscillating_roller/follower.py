@@ -10,14 +10,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import partial
 
-import jax
 import jax.numpy as jnp
 import numpy as np
 
 from camjax import contact, loads, runtime
 from camjax.errors import SceneError
-from camjax.followers import _checks, _closure
+from camjax.followers import _checks, _closure, _closure_design
 from camjax.followers._closure import POSITIVE_CLOSURES, closure_keys, read_closure
 from camjax.followers._rocking import (
     TRAIN_KEYS,
@@ -31,7 +31,31 @@ from camjax.followers.oscillating_roller import geometry as rocker_roller_geo
 from camjax.followers.roller import geometry as roller_geo
 from camjax.followers.roller.geometry import ROLLER_MAX_PRESSURE_ANGLE_DEG, ROLLER_MIN_CURVATURE_RADIUS_MM
 from camjax.scene.reader import DEFAULT, build, fixed_or_free
-from camjax.scene.spec import FollowerSpec
+from camjax.scene.spec import ClosureSpec, FollowerSpec
+
+
+@partial(runtime.program_cache, static_argnames=("kind",))
+def _second_start_angle(kin, psi_first, sizing, second, kind: str):
+    """The smallest arm start angle psi0 >= ``psi_first`` (rad) at which both contacts of a positive
+    drive hold their limits at every sample (:func:`camjax.followers._closure.first_admissible_size`),
+    whether one does, and the sample where the limits are tightest there. ``sizing``: (d, l, rotation
+    sign, tan(limit), R_f + rho_min); ``second``: (groove clearance, second arm length, its angle (deg),
+    second roller radius, R_f, rho_min), arrays: one compiled program for every scene of a closure
+    kind and grid (the scene's values are its data)."""
+    d, l, sign, tan_lim, _ = sizing
+    clearance, arm, angle, radius, rf, rho_min = second
+    closure = ClosureSpec(kind, clearance_mm=clearance, second_roller_radius_mm=radius,
+                          second_arm_length_mm=arm, second_arm_angle_deg=angle)
+
+    def limits(psi0):
+        g = _closure.second_limits(closure, kin, psi0=psi0, pivot_distance_mm=d, arm_length_mm=l, sign=sign,
+                                   roller_radius_mm=rf, min_curvature_radius_mm=rho_min, tan_limit=tan_lim)
+        return jnp.concatenate([rocker_roller_geo.sizing_limits(kin, psi0, sizing), g])
+
+    hi = jnp.pi - jnp.max(kin.s)
+    psi0, found = _closure.first_admissible_size(lambda p: jnp.any(limits(p) > 0.0), psi_first, hi,
+                                                 kin.s.shape[-1])
+    return psi0, found, jnp.argmax(jnp.max(limits(psi0), axis=0))
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -159,6 +183,7 @@ class OscillatingRoller(RockingFollower):
     closures = POSITIVE_CLOSURES
     example_scene = "oscillating-roller"
     variables = ("base_radius_mm", "roller_radius_mm", "pivot_distance_mm", "arm_length_mm")
+    optional_variables = (_closure_design.ARM_ANGLE,)
 
     def parse(self, r) -> OscillatingRollerSpec:
         """Whether the geometry closes for the prime (base) radius the cam gets is checked where that
@@ -181,7 +206,8 @@ class OscillatingRoller(RockingFollower):
             pivot_distance_mm=fixed_or_free(r, "pivot_distance_mm", (follower.pivot_distance_mm,) * 2),
             arm_length_mm=fixed_or_free(r, "arm_length_mm", (follower.arm_length_mm,) * 2))
         check_rocker_closes(r, base, roller, **variables)
-        return {"base_radius_mm": base, "roller_radius_mm": roller, **variables}
+        return {"base_radius_mm": base, "roller_radius_mm": roller, **variables,
+                **_closure_design.design_bounds(r, follower, True, roller[0])}
 
     def sizing(self, scene, kin, program=None) -> RockerSizing:
         f = scene.follower
@@ -199,29 +225,20 @@ class OscillatingRoller(RockingFollower):
         and the drawn cam reports it."""
         from camjax.followers._pitch import rotation_sign
 
-        f = scene.follower
+        f, c, dt = scene.follower, scene.follower.closure, kin.s.dtype
         d, l, rf = f.pivot_distance_mm, f.arm_length_mm, f.roller_radius_mm
-        sign, tan_lim = rotation_sign(scene.motion.rotation), math.tan(math.radians(f.max_pressure_angle_deg))
-        dt = kin.s.dtype
-        params = tuple(jnp.asarray(v, dt) for v in (d, l, sign, tan_lim, rf + f.min_curvature_radius_mm))
-
-        def limits(psi0):
-            second = _closure.second_limits(f.closure, kin, psi0=psi0, pivot_distance_mm=d, arm_length_mm=l,
-                                            sign=sign, roller_radius_mm=rf,
-                                            min_curvature_radius_mm=f.min_curvature_radius_mm, tan_limit=tan_lim)
-            return jnp.concatenate([rocker_roller_geo.sizing_limits(kin, psi0, params), second])
-
-        bad = lambda psi0: jnp.any(limits(psi0) > 0.0)  # noqa: E731
+        as_ = lambda *v: tuple(jnp.asarray(x, dt) for x in v)  # noqa: E731
+        tan_lim = math.tan(math.radians(f.max_pressure_angle_deg))
+        sizing = as_(d, l, rotation_sign(scene.motion.rotation), tan_lim, rf + f.min_curvature_radius_mm)
+        arm = (c.second_arm_length_mm, c.second_arm_angle_deg, c.second_roller_radius_mm)
+        second = as_(c.clearance_mm, *(arm if c.kind == "conjugate" else (0.0,) * 3), rf, f.min_curvature_radius_mm)
         psi_first = rocker_roller_geo.arm_start_angle(jnp.asarray(first.min_prime_radius_mm, dt), d, l)
-        hi = jnp.asarray(math.pi, dt) - jnp.max(kin.s)
-        psi0, found = jax.jit(_closure.first_admissible_size, static_argnums=(0, 3))(bad, psi_first, hi,
-                                                                                     kin.s.shape[-1])
+        psi0, found, worst = _second_start_angle(kin, psi_first, sizing, second, kind=c.kind)
         rp = _f(rocker_roller_geo.roller_centre_distance(d, l, psi0))
         if not bool(found) or rp <= first.min_prime_radius_mm * (1.0 + 1e-12):
             return first
-        g = np.asarray(limits(psi0))
-        deg = float(np.degrees(np.asarray(kin.theta))[int(np.argmax(np.max(g, axis=0)))])
-        return RockerSizing(rp - rf, rp, deg, "outer_flank" if f.closure.kind == "groove" else "conjugate")
+        deg = float(np.degrees(np.asarray(kin.theta))[int(worst)])
+        return RockerSizing(rp - rf, rp, deg, "outer_flank" if c.kind == "groove" else "conjugate")
 
     def closure_problem(self, scene, kin, base_radius_mm) -> str | None:
         """The prime radius R_p = R_b + R_f must lie strictly between |d - l| and d + l (the roller

@@ -19,7 +19,7 @@ import numpy as np
 
 from camjax import runtime
 from camjax.evaluate import curve_extremes
-from camjax.followers import _checks, _closure
+from camjax.followers import _checks, _closure, _closure_design
 from camjax.followers._closure import POSITIVE_CLOSURES, closure_keys, read_closure
 from camjax.followers._pitch import rotation_sign
 from camjax.followers._translating import (
@@ -33,7 +33,7 @@ from camjax.followers.roller import geometry as roller_geo
 from camjax.followers.roller.geometry import ROLLER_MAX_PRESSURE_ANGLE_DEG, ROLLER_MIN_CURVATURE_RADIUS_MM
 from camjax.results import MinBaseRadius
 from camjax.scene.reader import DEFAULT, build, fixed_or_free
-from camjax.scene.spec import FollowerSpec
+from camjax.scene.spec import ClosureSpec, FollowerSpec
 
 # the roller's curves at the drawing radius: pressure angle (rad), |pitch-curve rho| (mm), undercut
 # margin rho_c - rho_min on convex parts (mm; the largest float on concave ones, as
@@ -69,6 +69,25 @@ def exact_prime_radius(arrays, grid_prime_radius_mm, pressure_need, roller_radiu
     if rp_uc > rp_phi:
         return rp_uc, _f(b.angle_deg), True
     return rp_phi, pressure_need.max_deg, False
+
+
+@partial(runtime.program_cache, static_argnames=("kind",))
+def _second_prime_radius(kin, prime_radius_mm, high_mm, dims, kind: str):
+    """The smallest prime radius >= ``prime_radius_mm`` (< ``high_mm``) at which a positive drive's
+    second contact holds its limits at every sample (:func:`camjax.followers._closure.second_limits`,
+    :func:`camjax.followers._closure.first_admissible_size`), whether one does, and the sample where
+    they are tightest there. ``dims``: (sign e, R_f, rho_min, tan(limit), groove clearance, yoke span,
+    second roller radius), arrays: one compiled program for every scene of a closure kind and grid."""
+    offset, rf, rho_min, tan_lim, clearance, span, radius = dims
+    closure = ClosureSpec(kind, clearance_mm=clearance, yoke_span_mm=span, second_roller_radius_mm=radius)
+
+    def limits(rp):
+        return _closure.second_limits(closure, kin, prime_radius_mm=rp, signed_offset_mm=offset,
+                                      roller_radius_mm=rf, min_curvature_radius_mm=rho_min, tan_limit=tan_lim)
+
+    rp, found = _closure.first_admissible_size(lambda rp: jnp.any(limits(rp) > 0.0), prime_radius_mm, high_mm,
+                                               kin.s.shape[-1])
+    return rp, found, jnp.argmax(jnp.max(limits(rp), axis=0))
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -107,6 +126,7 @@ class Roller(TranslatingFollower):
     closures = POSITIVE_CLOSURES
     example_scene = "roller"
     variables = ("base_radius_mm", "roller_radius_mm", "offset_mm")
+    optional_variables = (_closure_design.YOKE_SPAN,)
 
     def parse(self, r) -> RollerSpec:
         self.check_keys(r)
@@ -124,14 +144,15 @@ class Roller(TranslatingFollower):
         offset = fixed_or_free(r, "offset_mm", (follower.offset_mm,) * 2, positive=False)
         # refused only when no design in the bounds has |e| < R_p
         _checks.offset_cuts_prime_circle(r, offset, base[1] + roller[1], "R_b + R_f")
-        return {"base_radius_mm": base, "roller_radius_mm": roller, "offset_mm": offset}
+        return {"base_radius_mm": base, "roller_radius_mm": roller, "offset_mm": offset,
+                **_closure_design.design_bounds(r, follower, False, roller[0])}
 
     def drawn_follower(self, scene, result):
         """The [follower] with a design's R_f and offset."""
         if "roller_radius_mm" not in result:
             return scene.follower
         return replace(scene.follower, roller_radius_mm=result["roller_radius_mm"],
-                       offset_mm=result["offset_mm"])
+                       offset_mm=result["offset_mm"], closure=scene.follower.closure.designed(result))
 
     def min_base_radius(self, scene, arrays) -> MinBaseRadius:
         """The smallest prime circle with |phi| <= max_pressure_angle_deg and no undercut (convex
@@ -168,21 +189,20 @@ class Roller(TranslatingFollower):
         flank, yoke's cam) breaks its limits there, to the smallest prime radius where it holds them
         too (on the samples; the first's hold at every larger one). Where none does (a yoke's
         second cam shrinks as the first grows) the first's stays and the drawn cam reports it."""
-        f, kin = scene.follower, arrays.kin
-        limits = partial(_closure.second_limits, f.closure, kin,
-                         signed_offset_mm=rotation_sign(scene.motion.rotation) * f.offset_mm,
-                         roller_radius_mm=f.roller_radius_mm, min_curvature_radius_mm=f.min_curvature_radius_mm,
-                         tan_limit=math.tan(math.radians(f.max_pressure_angle_deg)))
-        bad = lambda rp: jnp.any(limits(prime_radius_mm=rp) > 0.0)  # noqa: E731
-        rp0 = jnp.asarray(first.prime_radius_mm, kin.s.dtype)
-        rp, found = jax.jit(_closure.first_admissible_size, static_argnums=(0, 3))(
-            bad, rp0, 10.0 * rp0 + 10.0 * (f.roller_radius_mm + f.closure.clearance_mm), kin.s.shape[-1])
+        f, c, kin = scene.follower, scene.follower.closure, arrays.kin
+        dt = kin.s.dtype
+        dims = tuple(jnp.asarray(v, dt) for v in (
+            rotation_sign(scene.motion.rotation) * f.offset_mm, f.roller_radius_mm, f.min_curvature_radius_mm,
+            math.tan(math.radians(f.max_pressure_angle_deg)), c.clearance_mm, c.yoke_span_mm or 0.0,
+            c.second_roller_radius_mm or 0.0))
+        rp0 = jnp.asarray(first.prime_radius_mm, dt)
+        high = 10.0 * rp0 + 10.0 * (f.roller_radius_mm + c.clearance_mm)
+        rp, found, worst = _second_prime_radius(kin, rp0, high, dims, kind=c.kind)
         rp = _f(rp)
         if not bool(found) or rp <= first.prime_radius_mm:
             return first
-        g = np.asarray(limits(prime_radius_mm=rp))
-        deg = _f(np.asarray(arrays.theta_deg)[int(np.argmax(np.max(g, axis=0)))])
-        return MinBaseRadius(rp - f.roller_radius_mm, deg, "outer_flank" if f.closure.kind == "groove" else "conjugate", rp)
+        deg = _f(np.asarray(arrays.theta_deg)[int(worst)])
+        return MinBaseRadius(rp - f.roller_radius_mm, deg, "outer_flank" if c.kind == "groove" else "conjugate", rp)
 
     def design_solution(self, scene, arrays, result, problem) -> DesignSolution:
         """A roller design's figures: its peak stress as the stress curve computes it, and the
