@@ -368,6 +368,20 @@ def _problems_program(nom: ev.Nominal, base):
     return jax.jit(jax.vmap(one, in_axes=(0, 0, None)))
 
 
+def refuse_sweep(scene) -> None:
+    """A sweep of a scene with [design] robust is refused (SceneError naming ``design.robust``):
+    a sweep solves every weighting in one batched program of the nominal problem, and a robust
+    design is a solve by rounds over its sample set, one weighting at a time (``camjax design``)."""
+    from camjax.errors import SceneError
+
+    spec = None if scene.design is None else scene.design.robust
+    if spec is not None:
+        raise SceneError("design.robust", {"probability": spec.probability, "samples": spec.samples},
+                         "camjax sweep solves the nominal problem of every weighting; a robust design is "
+                         "solved one weighting at a time by camjax design (--alpha, --gamma)",
+                         "no robust key in [design] for a sweep of the nominal problem")
+
+
 # ------------------------------------------------------------------------------ result
 
 
