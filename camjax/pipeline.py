@@ -81,7 +81,11 @@ def sweep_scene(scene: Scene, alphas, gammas, *, mode: str, solver: str, seed: i
     ``chunk_size`` does not apply; ``mode`` must be "global").
 
     Returns :class:`camjax.solvers.sweep.SweepResult` (its ``records()`` are the JSON rows).
+    A scene with [design] robust is refused (:func:`camjax.robust.design.refuse_sweep`).
     """
+    from camjax.robust.design import refuse_sweep
+
+    refuse_sweep(scene)
     if scene.motion.designed:
         from camjax.codesign.sweep import codesign_sweep
         from camjax.scene import with_design

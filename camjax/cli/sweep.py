@@ -74,6 +74,9 @@ def _setup_sweep(p: argparse.ArgumentParser):
         if scene.design is None:
             raise UsageError(f"scene '{scene.name}' has no [design] section: a sweep needs its bounds "
                              "and sigma_max_MPa")
+        from camjax.robust.design import refuse_sweep
+
+        refuse_sweep(scene)  # a robust [design] is solved by camjax design, one weighting at a time
         # --alpha/--gamma are lists here: only mode, solver and seed override the scene
         overrides = argparse.Namespace(mode=args.mode, solver=args.solver, seed=args.seed)
         d = apply_design_options(scene, overrides).design

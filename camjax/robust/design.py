@@ -23,8 +23,9 @@ the nominal values too). A scene with loads adds ``contact_lost``: the order sta
 geometry (the follower force is the train's), so a scene that loses contact too often has no
 robust design (reported infeasible, ``contact_lost`` violated). The objective is the nominal
 one; every solver and mode run the problem unchanged. A global solve goes by rounds
-(:func:`solve_robust`): each row is kept over the samples left when its m largest at the current
-design are discarded (one row per sample), until the order statistics agree. In pointwise mode
+(:func:`solve_robust`) from the nominal optimum (``origin``, when the problem holds it): each row
+is kept over the samples left when its m largest at the current design are discarded (one row
+per sample), until the order statistics agree. In pointwise mode
 each angle keeps its own order statistic (the fraction of samples that keep a limit at every
 angle can then be lower).
 
@@ -67,6 +68,10 @@ class Problem(NamedTuple):
     # (rows, S) bool: the samples each row is kept over (the m it may exceed discarded, a solve's
     # smooth form: a max over fixed samples); None: the order statistic itself
     keep: jax.Array | None = None
+    # the family's Design a solve starts from (mm): the nominal optimum, whose basin the robust
+    # optimum is in (the gradient solver also starts from the box's centre and keeps the better);
+    # None: the family's own start
+    origin: Any = None
 
     @property
     def theta_deg(self):
@@ -171,17 +176,19 @@ def constraint_maxima(problem: Problem, design):
 
 def constraints(problem: Problem, design):
     """The robust rows as the protocol's constraint arrays. With ``keep``: one row per sample, shape
-    (1 + S,) (the nominal's max over the grid, then each sample's; a discarded sample's row is
-    -1e30, never active), whose max is :func:`constraint_maxima`; without: the order statistic,
-    shape (1,)."""
+    (1 + S,) (the nominal's max over the grid, then each sample's; a discarded sample's row repeats
+    the nominal's, or for a row without one (contact) the least sample's: never above the others,
+    and no huge constant for the solver's multipliers to see), whose max is
+    :func:`constraint_maxima`; without: the order statistic, shape (1,)."""
     m = constraint_maxima(problem, design)
     if problem.keep is None:
         return type(m)(*(jnp.reshape(v, (1,)) for v in m))
     nominal = _base(problem).constraint_maxima(problem.nominal, design)._asdict()
     rows = {}
     for r, (name, values) in enumerate(sample_maxima(problem, design).items()):
-        kept = jnp.where(problem.keep[..., r, :], values, -1e30)
-        rows[name] = jnp.concatenate([jnp.reshape(nominal.get(name, -1e30), (1,)), kept], axis=-1)
+        first = nominal[name] if name in nominal else jnp.min(values, axis=-1)
+        kept = jnp.where(problem.keep[..., r, :], values, first[..., None])
+        rows[name] = jnp.concatenate([first[..., None], kept], axis=-1)
     return type(m)(**rows)
 
 
@@ -224,6 +231,9 @@ def from_unit(problem: Problem, u):
 
 
 def start(problem: Problem):
+    """The nominal optimum (``origin``) where the problem holds one, else the family's start."""
+    if problem.origin is not None:
+        return problem.origin
     base = _base(problem)
     if hasattr(base, "start"):
         return base.start(problem.nominal)
@@ -311,9 +321,10 @@ def _split(tol: Tolerances, variables) -> tuple[Tolerances, list[int], list[int]
 
 
 def robust_problem(scene, nominal_problem, *, samples: int | None = None, seed: int | None = None,
-                   probability: float | None = None) -> Problem:
+                   probability: float | None = None, origin=None) -> Problem:
     """The robust problem of a scene with [design] robust (``samples``, ``seed``, ``probability``
-    override the scene's), around ``nominal_problem`` (the follower's problem of the scene).
+    override the scene's), around ``nominal_problem`` (the follower's problem of the scene);
+    ``origin``: the nominal optimum (the family's Design, mm) the solves start from, or None.
     Python: draws the samples and builds their problems in one compiled call."""
     spec = scene.design.robust
     samples = spec.samples if samples is None else int(samples)
@@ -349,7 +360,8 @@ def robust_problem(scene, nominal_problem, *, samples: int | None = None, seed: 
         contact = -loads / scale * base.size_norm(nominal_problem)
     as_design = lambda d: base.Design(**{k: jnp.asarray(d[k], dtype) for k in variables})  # noqa: E731
     return Problem(nominal_problem, probs, as_design(factor), as_design(shift), contact,
-                   jnp.asarray(rank_from_top(p, samples, free_variables(scene.design.variables)), jnp.int32))
+                   jnp.asarray(rank_from_top(p, samples, free_variables(scene.design.variables)), jnp.int32),
+                   origin=None if origin is None else as_design(origin._asdict()))
 
 
 def nominal_load(scene) -> jax.Array:
@@ -366,6 +378,20 @@ def _problems_program(nom: ev.Nominal, base):
         problem = base.problem_from_scene(d.scene, d.arrays)
         return problem, ev.contact_load(d.scene, d.arrays)
     return jax.jit(jax.vmap(one, in_axes=(0, 0, None)))
+
+
+def refuse_sweep(scene) -> None:
+    """A sweep of a scene with [design] robust is refused (SceneError naming ``design.robust``):
+    a sweep solves every weighting in one batched program of the nominal problem, and a robust
+    design is a solve by rounds over its sample set, one weighting at a time (``camjax design``)."""
+    from camjax.errors import SceneError
+
+    spec = None if scene.design is None else scene.design.robust
+    if spec is not None:
+        raise SceneError("design.robust", {"probability": spec.probability, "samples": spec.samples},
+                         "camjax sweep solves the nominal problem of every weighting; a robust design is "
+                         "solved one weighting at a time by camjax design (--alpha, --gamma)",
+                         "no robust key in [design] for a sweep of the nominal problem")
 
 
 # ------------------------------------------------------------------------------ result
@@ -401,7 +427,7 @@ def design_json(scene, nominal_problem) -> dict:
     t0 = time.perf_counter()
     nominal = solve(nominal_problem, (d.alpha, d.gamma), mode=d.mode, solver=d.solver, seed=d.seed)
     t1 = time.perf_counter()
-    problem = robust_problem(scene, nominal_problem)
+    problem = robust_problem(scene, nominal_problem, origin=nominal.design)
     t2 = time.perf_counter()
     robust, rounds = solve_robust(problem, (d.alpha, d.gamma), mode=d.mode, solver=d.solver, seed=d.seed)
     t3 = time.perf_counter()
@@ -484,7 +510,8 @@ def solve_robust(problem: Problem, weights, *, mode: str, solver: str, seed: int
                  rounds: int = 8):
     """The robust design of ``problem`` (:func:`camjax.solvers.base.solve`), and the rounds it took.
 
-    Global mode, by rounds: at the current design (at first the family's start) each row's m
+    Global mode, by rounds: at the current design (at first :func:`start`: the nominal optimum,
+    or the family's start) each row's m
     largest samples are discarded and the row is the max over the others (a max over fixed samples,
     as smooth as each family's max over the grid, where the order statistic switches samples);
     a set larger than ``subset`` is solved on its ``subset`` samples nearest to breaking a limit.
