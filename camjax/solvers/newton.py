@@ -87,6 +87,7 @@ class NewtonSettings:
 
 DEFAULT_SETTINGS = NewtonSettings()
 FILTER = 32  # entries of the line search's filter (a ring: the oldest is replaced)
+ROW_FLOOR = 1e3  # the normalized rows' floor (a row below it is inactive; see ``_functions``)
 S_MAX = 100.0  # IPOPT's s_max: multipliers larger than this on average scale the dual residuals
 
 
@@ -120,18 +121,35 @@ def _functions(problem, weights: Weights) -> _Functions:
     def phi(z):
         return z[m] + tie * family.size_term(problem, design_of(z))
 
+    n = problem.theta_deg.shape[-1]
+    shapes = jax.eval_shape(lambda: family.constraints(problem, from_unit(problem, u_max_tree)))
+    # a block with one row per angle is smooth; any other (a robust problem's row per sample, each
+    # a max over the grid) is taken from the n one-angle problems instead, one row per angle and
+    # sample: the same feasible set (max_i g_i <= 0 iff every g_i <= 0) without a kink in a row
+    split = tuple(tuple(v.shape) != (n,) for v in shapes)
+
+    def constraint_rows(design):
+        g = family.constraints(problem, design)
+        if any(split):
+            at = jax.vmap(lambda p: family.constraints(p, design))(per)  # (n, ...) each
+            g = [jnp.moveaxis(a, 0, -1) if cut else v for v, a, cut in zip(g, at, split, strict=True)]
+        return [jnp.ravel(v) for v in g]
+
     def rows(z):
         design = design_of(z)
         f = jax.vmap(lambda p: family.objective(p, weights, design))(per) / scale
-        g = family.constraints(problem, design)
+        g = jnp.concatenate(constraint_rows(design)) / norm
+        # a row far inside its limit (a never-active row: a robust problem's discarded sample is
+        # -1e30) floored at -ROW_FLOOR: the same feasible set (max(g, -F) <= 0 iff g <= 0), and
+        # slacks of O(F), whose rounding cannot swamp the infeasibility measure
+        g = jnp.maximum(g, -ROW_FLOOR)
         u = z[:m]
         box_lo = jnp.where(free_u > 0, -u, -1.0)
         box_hi = jnp.where(free_u > 0, u - u_max, -1.0)
-        return jnp.concatenate([(f - z[m]).astype(dtype), *[jnp.ravel(v) / norm for v in g], box_lo, box_hi])
+        return jnp.concatenate([(f - z[m]).astype(dtype), g, box_lo, box_hi])
 
-    shapes = jax.eval_shape(lambda: family.constraints(problem, from_unit(problem, u_max_tree)))
-    n = problem.theta_deg.shape[-1]
-    blocks = ((name, int(np.prod(s.shape))) for name, s in zip(shapes._fields, shapes, strict=True))
+    counts = [v.shape[0] for v in jax.eval_shape(lambda: constraint_rows(from_unit(problem, u_max_tree)))]
+    blocks = zip(shapes._fields, counts, strict=True)
     kinds = (("objective", n), *blocks, ("lower_bound", m), ("upper_bound", m))
     return _Functions(phi, rows, unravel, free, u_max, n, kinds)
 
