@@ -99,6 +99,7 @@ class _Functions(NamedTuple):
     u_max: jax.Array  # (m,)
     n_angles: int
     kinds: tuple  # ((name, count), ...) the row blocks in order: "objective", each constraint, bounds
+    epigraph: jax.Array  # (n,) bool: the objective rows that hold t (all, or the first alone: gamma = 0)
 
 
 def _functions(problem, weights: Weights) -> _Functions:
@@ -135,9 +136,15 @@ def _functions(problem, weights: Weights) -> _Functions:
             g = [jnp.moveaxis(a, 0, -1) if cut else v for v, a, cut in zip(g, at, split, strict=True)]
         return [jnp.ravel(v) for v in g]
 
+    epigraph = (weights.gamma != 0) | (jnp.arange(n) == 0)
+
     def rows(z):
         design = design_of(z)
-        f = jax.vmap(lambda p: family.objective(p, weights, design))(per) / scale
+        f = jax.vmap(lambda p: family.objective(p, weights, design))(per) / scale - z[m]
+        # without a stress weight every f_i is the same size term: n equal rows make the epigraph
+        # degenerate (the multipliers' split among them is free, and the path stalls on it), so
+        # the first row alone carries it and the others are a constant -1 (never active)
+        f = jnp.where(epigraph, f, -1.0)
         g = jnp.concatenate(constraint_rows(design)) / norm
         # a row far inside its limit (a never-active row: a robust problem's discarded sample is
         # -1e30) floored at -ROW_FLOOR: the same feasible set (max(g, -F) <= 0 iff g <= 0), and
@@ -146,12 +153,12 @@ def _functions(problem, weights: Weights) -> _Functions:
         u = z[:m]
         box_lo = jnp.where(free_u > 0, -u, -1.0)
         box_hi = jnp.where(free_u > 0, u - u_max, -1.0)
-        return jnp.concatenate([(f - z[m]).astype(dtype), g, box_lo, box_hi])
+        return jnp.concatenate([f.astype(dtype), g, box_lo, box_hi])
 
     counts = [v.shape[0] for v in jax.eval_shape(lambda: constraint_rows(from_unit(problem, u_max_tree)))]
     blocks = zip(shapes._fields, counts, strict=True)
     kinds = (("objective", n), *blocks, ("lower_bound", m), ("upper_bound", m))
-    return _Functions(phi, rows, unravel, free, u_max, n, kinds)
+    return _Functions(phi, rows, unravel, free, u_max, n, kinds, epigraph)
 
 
 class KKT(NamedTuple):
@@ -213,10 +220,11 @@ def _start(problem, fns: _Functions, design, settings: NewtonSettings, mu0):
     z0 = jnp.concatenate([u, jnp.zeros(1, dtype)])
     n = fns.n_angles
     rows0 = fns.rows(z0)  # t = 0: the epigraph rows are f_i
-    f_max = jnp.max(rows0[:n])
+    f_max = jnp.max(jnp.where(fns.epigraph, rows0[:n], -jnp.inf))
     t0 = f_max + 0.1 * (1.0 + jnp.abs(f_max))  # epigraph rows strictly feasible
     z0 = z0.at[-1].set(t0)
-    c0 = rows0 - t0 * (jnp.arange(rows0.shape[0]) < n)  # t enters the epigraph rows linearly
+    epigraph = jnp.zeros(rows0.shape[0], bool).at[:n].set(fns.epigraph)
+    c0 = rows0 - t0 * epigraph  # t enters the epigraph rows linearly
     s0 = jnp.maximum(-c0, a)
     m = u.shape[0]
     # the box rows are linear: their slack is their distance to the face, exactly
@@ -225,7 +233,7 @@ def _start(problem, fns: _Functions, design, settings: NewtonSettings, mu0):
     mu0 = jnp.asarray(mu0, dtype)
     # multipliers: the epigraph rows share the objective's unit weight (sum y = 1 where t is
     # stationary), every other row mu / s
-    y0 = jnp.where(jnp.arange(c0.shape[0]) < n, 1.0 / n, mu0 / s0)
+    y0 = jnp.where(epigraph, 1.0 / jnp.sum(fns.epigraph), mu0 / s0)
     return z0, s0, y0, mu0
 
 
@@ -464,7 +472,7 @@ def certify_point(problem: Problem, weights: Weights, design: Design, iterations
     u = jnp.where(fns.u_max > 0, u, 0.0)
     n = fns.n_angles
     rows0 = fns.rows(jnp.concatenate([u, jnp.zeros(1, dtype)]))
-    t = jnp.max(rows0[:n])
+    t = jnp.max(jnp.where(fns.epigraph, rows0[:n], -jnp.inf))
     z = jnp.concatenate([u, t[None]])
     c, jac = _rows_and_jacobian(fns, z)
     grad = jax.grad(fns.phi)(z)
