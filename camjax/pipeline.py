@@ -32,6 +32,23 @@ def design_problem(scene: Scene, arrays: SceneArrays | None = None, *, samples: 
     return problem_from_scene(scene, arrays, samples=samples)
 
 
+def design_block(scene: Scene, problem) -> dict:
+    """result.json's design block of the scene's [design] for its ``problem``
+    (:func:`design_problem`): the one dispatch between a plain design, solved through the solver
+    registry (:func:`camjax.solvers.base.solve` with the section's alpha, gamma, mode, solver and
+    seed; the solution's JSON, its certificate included where the solver gives one), and a robust
+    one (``[design] robust``: :func:`camjax.robust.design.design_json`, the nominal and robust
+    optima side by side)."""
+    d = scene.design
+    if d.robust is not None:
+        from camjax.robust.design import design_json
+
+        return design_json(scene, problem)
+    from camjax.solvers.base import solve
+
+    return solve(problem, (d.alpha, d.gamma), mode=d.mode, solver=d.solver, seed=d.seed).to_json(problem)
+
+
 def run_design(scene: Scene, arrays: SceneArrays | None = None, *,
                base_radius_mm: float | None = None, dtype=None):
     """Run every model the scene declares: arrays, the design, the smallest cam, the curves.

@@ -409,17 +409,9 @@ class RockingFollower(Follower):
         arrays = scene_arrays(scene, dtype=dtype) if arrays is None else arrays
         design = None
         if scene.design is not None:
-            from camjax.solvers.base import problem_from_scene
-            from camjax.solvers.newton import design_json
+            from camjax.pipeline import design_block, design_problem
 
-            d = scene.design
-            problem = problem_from_scene(scene, arrays)
-            if d.robust is not None:  # kept over the samples of [tolerances], beside the nominal optimum
-                from camjax.robust.design import design_json as robust_design_json
-
-                design = robust_design_json(scene, problem)
-            else:
-                design = design_json(problem, d)
+            design = design_block(scene, design_problem(scene, arrays))
         kin, w, drawn = arrays.kin, arrays.cam_speed_rad_s, scene
         program = None if arrays.model is None else arrays.model.program
         if design is not None:

@@ -293,25 +293,19 @@ class TranslatingFollower(Follower):
     def solve_design(self, scene, arrays: SceneArrays) -> DesignSolution | None:
         """The optimized design of a scene with a [design] section; None without one.
 
-        Solved by :func:`camjax.solvers.base.solve` with the scene's mode, alpha, gamma, solver
-        and seed (keys of :meth:`camjax.solvers.base.Solution.to_json`: mode, solver, the design
-        variables, objective, feasible, violated, iterations, ..., and in pointwise mode the
-        angles and per-angle ``pointwise`` arrays).
+        Solved by :func:`camjax.pipeline.design_block` (the solver registry's
+        :func:`camjax.solvers.base.solve` with the scene's mode, alpha, gamma, solver and seed, or
+        the robust design of ``[design] robust``; keys of
+        :meth:`camjax.solvers.base.Solution.to_json`: mode, solver, the design variables,
+        objective, feasible, violated, iterations, ..., and in pointwise mode the angles and
+        per-angle ``pointwise`` arrays).
         """
         if scene.design is None:
             return None
-        from camjax.solvers.base import problem_from_scene
-        from camjax.solvers.newton import design_json
+        from camjax.pipeline import design_block, design_problem
 
-        d = scene.design
-        problem = problem_from_scene(scene, arrays)
-        if d.robust is not None:  # kept over the samples of [tolerances], beside the nominal optimum
-            from camjax.robust.design import design_json as robust_design_json
-
-            out = robust_design_json(scene, problem)
-        else:
-            out = design_json(problem, d)
-        return self.design_solution(scene, arrays, out, problem)
+        problem = design_problem(scene, arrays)
+        return self.design_solution(scene, arrays, design_block(scene, problem), problem)
 
     def curves(self, scene, arrays: SceneArrays, base_radius_mm: float, follower=None,
                face_width_mm: float | None = None) -> DesignCurves:

@@ -62,7 +62,7 @@ import numpy as np
 from jax.flatten_util import ravel_pytree
 
 from camjax.family import Design, Problem, Weights
-from camjax.solvers.base import Raw, family_of, solve
+from camjax.solvers.base import Raw, family_of
 from camjax.solvers.gradient import TIE_BREAK, from_unit, midpoint, to_unit, u_max_of
 
 
@@ -584,10 +584,3 @@ def certificate_json(problem, cert: Certificate, *, mode: str = "global", solver
     block["limited_by"] = limited_by(block)
     return block
 
-
-def design_json(problem, spec) -> dict:
-    """result.json's design block of a scene's [design] ``spec`` (alpha, gamma, mode, solver, seed):
-    :func:`camjax.solvers.base.solve`'s one weighting as JSON, with the solver's certificate
-    (computed in the same compiled program) under ``certificate`` where it gives one."""
-    return solve(problem, (spec.alpha, spec.gamma), mode=spec.mode, solver=spec.solver,
-                 seed=spec.seed).to_json(problem)
