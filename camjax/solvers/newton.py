@@ -15,8 +15,14 @@ an epigraph variable t stands for the max over angles of the objective:
 which is smooth (the kink of the max over angles is gone) and has the same minimizer as the
 family's objective on the grid: min_u max_i f_i(u) = min_u F(u) / (alpha + gamma). Every family's
 objective is alpha size + gamma (peak stress) / sigma_max with the peak a max over angles, so
-f_i needs nothing but ``per_angle`` and ``objective``: the split is generic (a family without
-stress has f_i = alpha size for every i, n equal rows).
+f_i needs nothing but ``per_angle`` and ``objective``: the split is generic. With gamma = 0
+every f_i is the same size term; n equal rows would leave the split of the objective's
+multiplier among them free (a degenerate path that stalls), so the first row alone holds t and
+the others are the constant -1. A constraint block that is not one row per angle (a robust
+problem's row per sample, :mod:`camjax.robust.design`, each a max over the grid) is taken from
+the n one-angle problems instead: one smooth row per angle and sample, the same feasible set.
+Rows below -1e3 (normalized; a discarded sample's -1e30) are floored there, the same feasible
+set with slacks of O(1).
 
 Method (Nocedal & Wright, Numerical Optimization, 2nd ed., Algorithm 19.2; the barrier update and
 the filter line search of IPOPT, Waechter & Biegler 2006). Slacks s > 0 turn every row into
