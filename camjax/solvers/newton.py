@@ -106,6 +106,7 @@ class _Functions(NamedTuple):
     n_angles: int
     kinds: tuple  # ((name, count), ...) the row blocks in order: "objective", each constraint, bounds
     epigraph: jax.Array  # (n,) bool: the objective rows that hold t (all, or the first alone: gamma = 0)
+    mu_scale: float  # 1 / the most rows per angle of a split block (1 without one): scales mu0
 
 
 def _functions(problem, weights: Weights) -> _Functions:
@@ -164,7 +165,11 @@ def _functions(problem, weights: Weights) -> _Functions:
     counts = [v.shape[0] for v in jax.eval_shape(lambda: constraint_rows(from_unit(problem, u_max_tree)))]
     blocks = zip(shapes._fields, counts, strict=True)
     kinds = (("objective", n), *blocks, ("lower_bound", m), ("upper_bound", m))
-    return _Functions(phi, rows, unravel, free, u_max, n, kinds, epigraph)
+    # a split block has k rows per angle (a robust problem's 1 + S): its barrier term is k times a
+    # grid block's, so the first barrier parameters are divided by k (the path starts as near the
+    # objective as on a grid problem; with mu0 the barrier pushed the design to the box's far side)
+    mu_scale = 1.0 / max([c // n for c, cut in zip(counts, split, strict=True) if cut] or [1])
+    return _Functions(phi, rows, unravel, free, u_max, n, kinds, epigraph, mu_scale)
 
 
 class KKT(NamedTuple):
@@ -368,7 +373,7 @@ def minimize(problem: Problem, weights: Weights, init_design: Design | None = No
     # at a dwell) that can hold a filter's iterates. Measured on the seven follower types: no one
     # of the four reaches the optimum on all. The loop ends when one path has converged; of the
     # converged ones the lowest objective is kept.
-    mu0s = jnp.asarray([settings.mu0, settings.mu0 / fns.n_angles] * 2)
+    mu0s = jnp.asarray([settings.mu0, settings.mu0 / fns.n_angles] * 2) * fns.mu_scale
     filters = jnp.asarray([True, True, False, False])
     states = jax.vmap(start)(mu0s, filters)
     step = jax.vmap(partial(_step, fns=fns, settings=settings))
