@@ -61,6 +61,24 @@ def test_matches_slsqp(solved):
         np.testing.assert_allclose(float(np.sum(np.asarray(cert.result.multipliers)[:n])), 1.0, rtol=1e-8)
 
 
+@pytest.mark.slow
+@pytest.mark.parametrize("scene_name", ["roller", "oscillating-roller"])
+def test_size_only_matches_slsqp(scene_name):
+    """alpha = 1, gamma = 0 (the built-in roller scene's weighting, its own 360 samples; the size
+    alone, every angle's objective row equal): converged within the issue's 40 iterations, feasible,
+    the objective within 1e-7 of SLSQP's (both stop at a KKT point of the same problem, as above),
+    and the one row that holds t carries the objective's unit multiplier."""
+    problem = _problem(scene_name, samples=360)
+    cert = jax.jit(newton.certify)(problem, weights_of(1.0, 0.0))
+    ref = scipy_family.slsqp(problem, 1.0, 0.0)
+    ev = family_of(problem).evaluate(problem, weights_of(1.0, 0.0), cert.result.design)
+    assert bool(cert.result.converged) and bool(ev.feasible)
+    assert int(cert.result.iterations) <= 40
+    assert ref.max_violation < 1e-9
+    assert abs(float(ev.objective) / ref.objective - 1.0) < 1e-7
+    np.testing.assert_allclose(float(np.asarray(cert.result.multipliers)[0]), 1.0, rtol=1e-8)
+
+
 def _moved(problem, key, value):
     """The problem with one limit (a scene key of the certificate, or 'lower.<field>' / 'upper.<field>',
     a bound) set to value."""

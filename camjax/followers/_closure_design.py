@@ -8,7 +8,7 @@ may be a [design] variable like the others: a number fixes it (over the [followe
 
 The objective (size and the first contact's stress) does not depend on it: it only moves the
 second cam, whose limits (pressure angle, undercut, roller off the shaft, stress) are kept with the
-first's. A free one is therefore chosen in two steps (:func:`solve_scene_design`):
+first's. A free one is therefore chosen in two steps (:func:`solve_with_dimension`):
 
 1. the design is solved for the first contact alone: no span or angle can give a smaller objective;
 2. at that design the value is the smallest in its bounds at which the second cam holds its limits at
@@ -172,28 +172,15 @@ def _evaluate(problem, weights, design):
     return family_of(problem).evaluate(problem, weights, design)
 
 
-def solve_scene_design(scene, arrays) -> tuple[dict, object]:
-    """A scene's [design] solved: (result.json's design block, the design problem it is judged on).
-
-    The scene's mode, weights, solver and seed (:func:`camjax.solvers.base.solve`); a robust design's
-    over its samples (:func:`camjax.robust.design.design_json`). A conjugate pair's yoke span or
-    second arm angle in [design] is set (fixed) or chosen (free) as the module docstring says, and
-    reported under its key."""
-    from camjax.solvers.base import problem_from_scene, solve
-    from camjax.solvers.newton import design_json
+def solve_with_dimension(scene, problem, free: tuple) -> tuple[dict, object]:
+    """A scene's [design] with a conjugate pair's yoke span or second arm angle in it
+    (``free`` = :func:`free_dimension`'s (key, low, high)): result.json's design block and the
+    problem carrying the value, set (``low == high``) or chosen (free) as the module docstring says,
+    and reported under its key. The scene's mode, weights, solver and seed
+    (:func:`camjax.solvers.base.solve`); :func:`camjax.pipeline.design_block` dispatches here."""
+    from camjax.solvers.base import solve
 
     d = scene.design
-    problem = problem_from_scene(scene, arrays)
-    free = free_dimension(d)
-    if d.robust is not None:
-        if free is not None:
-            raise SceneError(f"design.{free[0]}", list(free[1:]), "cannot be set in a robust design (its "
-                             "samples hold the [follower]'s)", "the value in [follower] only")
-        from camjax.robust.design import design_json as robust_design_json
-
-        return robust_design_json(scene, problem), problem
-    if free is None:
-        return design_json(problem, d), problem
     key, low, high = free
     solve_as_scene = partial(solve, weights=(d.alpha, d.gamma), mode=d.mode, solver=d.solver, seed=d.seed)
     value = design_start(scene, key)  # the problem's own

@@ -406,9 +406,9 @@ class RockingFollower(Follower):
         arrays = scene_arrays(scene, dtype=dtype) if arrays is None else arrays
         design = None
         if scene.design is not None:
-            from camjax.followers._closure_design import solve_scene_design
+            from camjax.pipeline import design_block, design_problem
 
-            design, _ = solve_scene_design(scene, arrays)
+            design, _ = design_block(scene, design_problem(scene, arrays))
         kin, w, drawn = arrays.kin, arrays.cam_speed_rad_s, scene
         program = None if arrays.model is None else arrays.model.program
         if design is not None:

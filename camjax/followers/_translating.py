@@ -287,16 +287,18 @@ class TranslatingFollower(Follower):
     def solve_design(self, scene, arrays: SceneArrays) -> DesignSolution | None:
         """The optimized design of a scene with a [design] section; None without one.
 
-        Solved by :func:`camjax.solvers.base.solve` with the scene's mode, alpha, gamma, solver
-        and seed (keys of :meth:`camjax.solvers.base.Solution.to_json`: mode, solver, the design
-        variables, objective, feasible, violated, iterations, ..., and in pointwise mode the
-        angles and per-angle ``pointwise`` arrays).
+        Solved by :func:`camjax.pipeline.design_block` (the solver registry's
+        :func:`camjax.solvers.base.solve` with the scene's mode, alpha, gamma, solver and seed, or
+        the robust design of ``[design] robust``; keys of
+        :meth:`camjax.solvers.base.Solution.to_json`: mode, solver, the design variables,
+        objective, feasible, violated, iterations, ..., and in pointwise mode the angles and
+        per-angle ``pointwise`` arrays).
         """
         if scene.design is None:
             return None
-        from camjax.followers._closure_design import solve_scene_design
+        from camjax.pipeline import design_block, design_problem
 
-        out, problem = solve_scene_design(scene, arrays)
+        out, problem = design_block(scene, design_problem(scene, arrays))
         return self.design_solution(scene, arrays, out, problem)
 
     def curves(self, scene, arrays: SceneArrays, base_radius_mm: float, follower=None,

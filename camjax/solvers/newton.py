@@ -15,8 +15,14 @@ an epigraph variable t stands for the max over angles of the objective:
 which is smooth (the kink of the max over angles is gone) and has the same minimizer as the
 family's objective on the grid: min_u max_i f_i(u) = min_u F(u) / (alpha + gamma). Every family's
 objective is alpha size + gamma (peak stress) / sigma_max with the peak a max over angles, so
-f_i needs nothing but ``per_angle`` and ``objective``: the split is generic (a family without
-stress has f_i = alpha size for every i, n equal rows).
+f_i needs nothing but ``per_angle`` and ``objective``: the split is generic. With gamma = 0
+every f_i is the same size term; n equal rows would leave the split of the objective's
+multiplier among them free (a degenerate path that stalls), so the first row alone holds t and
+the others are the constant -1. A constraint block that is not one row per angle (a robust
+problem's row per sample, :mod:`camjax.robust.design`, each a max over the grid) is taken from
+the n one-angle problems instead: one smooth row per angle and sample, the same feasible set.
+Rows below -1e3 (normalized; a discarded sample's -1e30) are floored there, the same feasible
+set with slacks of O(1).
 
 Method (Nocedal & Wright, Numerical Optimization, 2nd ed., Algorithm 19.2; the barrier update and
 the filter line search of IPOPT, Waechter & Biegler 2006). Slacks s > 0 turn every row into
@@ -62,7 +68,7 @@ import numpy as np
 from jax.flatten_util import ravel_pytree
 
 from camjax.family import Design, Problem, Weights
-from camjax.solvers.base import Raw, family_of, solve
+from camjax.solvers.base import Raw, family_of
 from camjax.solvers.gradient import TIE_BREAK, from_unit, midpoint, to_unit, u_max_of
 
 
@@ -87,6 +93,7 @@ class NewtonSettings:
 
 DEFAULT_SETTINGS = NewtonSettings()
 FILTER = 32  # entries of the line search's filter (a ring: the oldest is replaced)
+ROW_FLOOR = 1e3  # the normalized rows' floor (a row below it is inactive; see ``_functions``)
 S_MAX = 100.0  # IPOPT's s_max: multipliers larger than this on average scale the dual residuals
 
 
@@ -98,6 +105,8 @@ class _Functions(NamedTuple):
     u_max: jax.Array  # (m,)
     n_angles: int
     kinds: tuple  # ((name, count), ...) the row blocks in order: "objective", each constraint, bounds
+    epigraph: jax.Array  # (n,) bool: the objective rows that hold t (all, or the first alone: gamma = 0)
+    mu_scale: float  # 1 / the most rows per angle of a split block (1 without one): scales mu0
 
 
 def _functions(problem, weights: Weights) -> _Functions:
@@ -120,20 +129,47 @@ def _functions(problem, weights: Weights) -> _Functions:
     def phi(z):
         return z[m] + tie * family.size_term(problem, design_of(z))
 
+    n = problem.theta_deg.shape[-1]
+    shapes = jax.eval_shape(lambda: family.constraints(problem, from_unit(problem, u_max_tree)))
+    # a block with one row per angle is smooth; any other (a robust problem's row per sample, each
+    # a max over the grid) is taken from the n one-angle problems instead, one row per angle and
+    # sample: the same feasible set (max_i g_i <= 0 iff every g_i <= 0) without a kink in a row
+    split = tuple(tuple(v.shape) != (n,) for v in shapes)
+
+    def constraint_rows(design):
+        g = family.constraints(problem, design)
+        if any(split):
+            at = jax.vmap(lambda p: family.constraints(p, design))(per)  # (n, ...) each
+            g = [jnp.moveaxis(a, 0, -1) if cut else v for v, a, cut in zip(g, at, split, strict=True)]
+        return [jnp.ravel(v) for v in g]
+
+    epigraph = (weights.gamma != 0) | (jnp.arange(n) == 0)
+
     def rows(z):
         design = design_of(z)
-        f = jax.vmap(lambda p: family.objective(p, weights, design))(per) / scale
-        g = family.constraints(problem, design)
+        f = jax.vmap(lambda p: family.objective(p, weights, design))(per) / scale - z[m]
+        # without a stress weight every f_i is the same size term: n equal rows make the epigraph
+        # degenerate (the multipliers' split among them is free, and the path stalls on it), so
+        # the first row alone carries it and the others are a constant -1 (never active)
+        f = jnp.where(epigraph, f, -1.0)
+        g = jnp.concatenate(constraint_rows(design)) / norm
+        # a row far inside its limit (a never-active row: a robust problem's discarded sample is
+        # -1e30) floored at -ROW_FLOOR: the same feasible set (max(g, -F) <= 0 iff g <= 0), and
+        # slacks of O(F), whose rounding cannot swamp the infeasibility measure
+        g = jnp.maximum(g, -ROW_FLOOR)
         u = z[:m]
         box_lo = jnp.where(free_u > 0, -u, -1.0)
         box_hi = jnp.where(free_u > 0, u - u_max, -1.0)
-        return jnp.concatenate([(f - z[m]).astype(dtype), *[jnp.ravel(v) / norm for v in g], box_lo, box_hi])
+        return jnp.concatenate([f.astype(dtype), g, box_lo, box_hi])
 
-    shapes = jax.eval_shape(lambda: family.constraints(problem, from_unit(problem, u_max_tree)))
-    n = problem.theta_deg.shape[-1]
-    blocks = ((name, int(np.prod(s.shape))) for name, s in zip(shapes._fields, shapes, strict=True))
+    counts = [v.shape[0] for v in jax.eval_shape(lambda: constraint_rows(from_unit(problem, u_max_tree)))]
+    blocks = zip(shapes._fields, counts, strict=True)
     kinds = (("objective", n), *blocks, ("lower_bound", m), ("upper_bound", m))
-    return _Functions(phi, rows, unravel, free, u_max, n, kinds)
+    # a split block has k rows per angle (a robust problem's 1 + S): its barrier term is k times a
+    # grid block's, so the first barrier parameters are divided by k (the path starts as near the
+    # objective as on a grid problem; with mu0 the barrier pushed the design to the box's far side)
+    mu_scale = 1.0 / max([c // n for c, cut in zip(counts, split, strict=True) if cut] or [1])
+    return _Functions(phi, rows, unravel, free, u_max, n, kinds, epigraph, mu_scale)
 
 
 class KKT(NamedTuple):
@@ -195,10 +231,11 @@ def _start(problem, fns: _Functions, design, settings: NewtonSettings, mu0):
     z0 = jnp.concatenate([u, jnp.zeros(1, dtype)])
     n = fns.n_angles
     rows0 = fns.rows(z0)  # t = 0: the epigraph rows are f_i
-    f_max = jnp.max(rows0[:n])
+    f_max = jnp.max(jnp.where(fns.epigraph, rows0[:n], -jnp.inf))
     t0 = f_max + 0.1 * (1.0 + jnp.abs(f_max))  # epigraph rows strictly feasible
     z0 = z0.at[-1].set(t0)
-    c0 = rows0 - t0 * (jnp.arange(rows0.shape[0]) < n)  # t enters the epigraph rows linearly
+    epigraph = jnp.zeros(rows0.shape[0], bool).at[:n].set(fns.epigraph)
+    c0 = rows0 - t0 * epigraph  # t enters the epigraph rows linearly
     s0 = jnp.maximum(-c0, a)
     m = u.shape[0]
     # the box rows are linear: their slack is their distance to the face, exactly
@@ -207,7 +244,7 @@ def _start(problem, fns: _Functions, design, settings: NewtonSettings, mu0):
     mu0 = jnp.asarray(mu0, dtype)
     # multipliers: the epigraph rows share the objective's unit weight (sum y = 1 where t is
     # stationary), every other row mu / s
-    y0 = jnp.where(jnp.arange(c0.shape[0]) < n, 1.0 / n, mu0 / s0)
+    y0 = jnp.where(epigraph, 1.0 / jnp.sum(fns.epigraph), mu0 / s0)
     return z0, s0, y0, mu0
 
 
@@ -336,7 +373,7 @@ def minimize(problem: Problem, weights: Weights, init_design: Design | None = No
     # at a dwell) that can hold a filter's iterates. Measured on the seven follower types: no one
     # of the four reaches the optimum on all. The loop ends when one path has converged; of the
     # converged ones the lowest objective is kept.
-    mu0s = jnp.asarray([settings.mu0, settings.mu0 / fns.n_angles] * 2)
+    mu0s = jnp.asarray([settings.mu0, settings.mu0 / fns.n_angles] * 2) * fns.mu_scale
     filters = jnp.asarray([True, True, False, False])
     states = jax.vmap(start)(mu0s, filters)
     step = jax.vmap(partial(_step, fns=fns, settings=settings))
@@ -446,7 +483,7 @@ def certify_point(problem: Problem, weights: Weights, design: Design, iterations
     u = jnp.where(fns.u_max > 0, u, 0.0)
     n = fns.n_angles
     rows0 = fns.rows(jnp.concatenate([u, jnp.zeros(1, dtype)]))
-    t = jnp.max(rows0[:n])
+    t = jnp.max(jnp.where(fns.epigraph, rows0[:n], -jnp.inf))
     z = jnp.concatenate([u, t[None]])
     c, jac = _rows_and_jacobian(fns, z)
     grad = jax.grad(fns.phi)(z)
@@ -558,10 +595,3 @@ def certificate_json(problem, cert: Certificate, *, mode: str = "global", solver
     block["limited_by"] = limited_by(block)
     return block
 
-
-def design_json(problem, spec) -> dict:
-    """result.json's design block of a scene's [design] ``spec`` (alpha, gamma, mode, solver, seed):
-    :func:`camjax.solvers.base.solve`'s one weighting as JSON, with the solver's certificate
-    (computed in the same compiled program) under ``certificate`` where it gives one."""
-    return solve(problem, (spec.alpha, spec.gamma), mode=spec.mode, solver=spec.solver,
-                 seed=spec.seed).to_json(problem)
