@@ -171,10 +171,7 @@ def test_bad_bspline_keys_name_the_field(rise, field):
 
 
 def _with_law(name: str, law: dict) -> tuple[dict, bool]:
-    """The follower's example scene at 90 samples (4 deg: the laws' values at every sample and
-    between them are what the design compares, whatever the grid) with ``law`` for its rise."""
     data = tomllib.loads(builtin_scene_text(followers.get(name).example_scene))
-    data["motion"]["samples"] = 90
     for seg in data["motion"]["segments"]:
         if seg.get("kind") == "rise":
             for key in ("law", "exponents", "coefficients", "phases"):
