@@ -1,10 +1,11 @@
 """One answer whatever the path: the command line with its saved-program cache on, cold or warm, in
 any order of runs, writes what it writes with the cache off.
 
-Each follower type runs a sequence of commands through :func:`camjax.cli.main`, one option changed
-at a time (mode, solver, seed, samples, weights, base radius, and edits of the scene file: extrema,
-rotation, each design variable fixed or free, the [design] block's own mode and limits), all
-sharing one cache folder. Every run starts as a fresh process would (this process's memory of
+One follower type (FULL_SEQUENCE) runs a sequence of commands through :func:`camjax.cli.main`, one
+option changed at a time (mode, solver, seed, samples, weights, base radius, edits of the scene
+file: extrema, rotation, each design variable fixed or free, the [design] block's own mode and
+limits, and sweeps), all sharing one cache folder; every other type runs the part of its sequence
+that traces its own code (:func:`own_runs`). Every run starts as a fresh process would (this process's memory of
 loaded programs cleared), in the cache's verify mode (every saved program's StableHLO compared
 with a fresh trace's: a key that misses a trace-time input raises). Each result.json (pareto.json,
 dynamics.json) must equal, number for number, the same run with the cache off; the quick test's
