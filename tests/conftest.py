@@ -59,6 +59,22 @@ def default_arrays(default_scene):
     return camjax.scene_arrays(default_scene)
 
 
+@pytest.fixture
+def quiet_files(monkeypatch):
+    """The saved-program matrix's command runs (tests/cache_matrix.py): figures and the DXF not
+    drawn (they read no saved program); the JSON written as the command line writes it."""
+    from camjax.output import export
+    from camjax.solvers import sweep
+
+    class NoFigure:
+        def savefig(self, *args, **kwargs):
+            pass
+
+    monkeypatch.setattr(export, "write_design_files", lambda *args, **kwargs: [])
+    monkeypatch.setattr(sweep, "plot_pareto", lambda *args, **kwargs: NoFigure())
+    monkeypatch.setenv("CAMJAX_DRAWING_PROCESSES", "0")
+
+
 @pytest.fixture(scope="session")
 def reference_1deg():
     """The reference case (SPEC 5) in independent NumPy closed forms on the scene's 1 deg grid."""
@@ -87,3 +103,71 @@ def _release_compiled_programs():
     if _mapping_count() > MAX_MAPPINGS:
         jax.clear_caches()
         gc.collect()
+
+
+# ------------------------------------------------------------------ CPU seconds per test
+# On the shared 2-core machine a test's wall time says as much about the other jobs as about the
+# test; ``--cpu-durations=N`` lists the N tests that used the most CPU time instead (this process's
+# threads, XLA's compiler threads among them, and its finished subprocesses: every phase, module
+# fixtures counted in the test that first asks for them). Works with xdist: the workers' figures
+# travel in the reports.
+
+
+def pytest_addoption(parser):
+    parser.addoption("--cpu-durations", type=int, default=None, metavar="N",
+                     help="list the N tests that used the most CPU seconds (this process and its children)")
+
+
+def _cpu_seconds() -> float:
+    import resource
+    import time
+
+    children = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return time.process_time() + children.ru_utime + children.ru_stime
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_makereport(item, call):
+    outcome = yield
+    if item.config.getoption("cpu_durations") is not None:
+        start = getattr(item, "_cpu_phase_start", None)
+        if start is not None:
+            outcome.get_result().user_properties.append(("cpu_s", _cpu_seconds() - start))
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_setup(item):
+    item._cpu_phase_start = _cpu_seconds()
+    yield
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_call(item):
+    item._cpu_phase_start = _cpu_seconds()
+    yield
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_teardown(item, nextitem):
+    item._cpu_phase_start = _cpu_seconds()
+    yield
+
+
+_CPU_BY_TEST: dict = {}
+
+
+def pytest_runtest_logreport(report):
+    for name, value in getattr(report, "user_properties", ()):
+        if name == "cpu_s":
+            _CPU_BY_TEST[(report.nodeid, report.when)] = value
+
+
+def pytest_terminal_summary(terminalreporter, config):
+    count = config.getoption("cpu_durations")
+    if count is None or not _CPU_BY_TEST:
+        return
+    total = sum(_CPU_BY_TEST.values())
+    terminalreporter.write_sep("=", f"{count or 'all'} most CPU seconds (total {total:.1f} s)")
+    ranked = sorted(_CPU_BY_TEST.items(), key=lambda kv: -kv[1])
+    for (nodeid, when), seconds in ranked[: count or None]:
+        terminalreporter.write_line(f"{seconds:8.2f}s {when:8s} {nodeid}")

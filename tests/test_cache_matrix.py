@@ -1,198 +1,17 @@
-"""One answer whatever the path: the command line with its saved-program cache on, cold or warm, in
-any order of runs, writes what it writes with the cache off.
-
-Each follower type runs a sequence of commands through :func:`camjax.cli.main`, one option changed
-at a time (mode, solver, seed, samples, weights, base radius, and edits of the scene file: extrema,
-rotation, each design variable fixed or free, the [design] block's own mode and limits), all
-sharing one cache folder. Every run starts as a fresh process would (this process's memory of
-loaded programs cleared), in the cache's verify mode (every saved program's StableHLO compared
-with a fresh trace's: a key that misses a trace-time input raises). Each result.json (pareto.json,
-dynamics.json) must equal, number for number, the same run with the cache off; the quick test's
-sequence then runs again in reverse order, every program now loaded from the folder, with the same
-check.
-
-The reference is the same command with the cache off (plain ``jax.jit`` tracing): equality is exact
-because a saved program is the traced program itself. Figures and the DXF are not drawn here (they
-read no saved program); everything the JSON holds is computed as the command computes it.
-"""
+"""The saved-program cache against the cache off (tests/cache_matrix.py says how): the full
+sequence of one follower type, the quick share of the flat face's, and the dynamics command.
+Every other follower type's own runs: tests/test_cache_matrix_types_*.py."""
 
 from __future__ import annotations
 
-import json
-import re
-from pathlib import Path
-
 import pytest
-
-from camjax import cli, runtime
-from validation.compare_results import differences
-
-# keys that time the run: they differ between any two runs
-TIMING_KEYS = frozenset({"seconds", "compile_s", "run_s", "timings", "elapsed_s"})
-
-FLAT = (Path(__file__).resolve().parents[1] / "camjax" / "scenes" / "default.toml").read_text()
-ROLLER = (Path(__file__).resolve().parents[1] / "camjax" / "scenes" / "roller.toml").read_text()
-
-ROCKER = """
-[motion]
-rpm = 300.0
-samples = 90
-rotation = "ccw"
-segments = [
-  { kind = "rise",   angle_deg = 120, law = "cycloidal", lift_deg = 20.0 },
-  { kind = "dwell",  angle_deg = 60 },
-  { kind = "return", angle_deg = 100, law = "poly_3_4_5", lift_deg = 20.0 },
-  { kind = "dwell",  angle_deg = 80 },
-]
-
-[follower]
-type = "oscillating_roller"
-pivot_distance_mm = 80.0
-arm_length_mm = 60.0
-roller_radius_mm = 8.0
-inertia_kg_m2 = 0.002
-spring_N_m_per_rad = 20.0
-preload_rad = 0.3
-
-[contact]
-cam_width_mm = 8.0
-cam = { E_MPa = 2.1e5, poisson = 0.3 }
-follower = { E_MPa = 2.1e5, poisson = 0.3 }
-
-[design]
-base_radius_mm = [5.0, 60.0]
-pivot_distance_mm = [65.0, 110.0]
-sigma_max_MPa = 2000.0
-alpha = 1.0
-gamma = 0.5
-"""
-
-ROCKER_FLAT = (ROCKER.replace('type = "oscillating_roller"', 'type = "oscillating_flat"')
-               .replace("arm_length_mm = 60.0\nroller_radius_mm = 8.0", "face_offset_mm = 10.0")
-               .replace("pivot_distance_mm = 80.0", "pivot_distance_mm = 150.0")
-               .replace("base_radius_mm = [5.0, 60.0]\npivot_distance_mm = [65.0, 110.0]",
-                        "base_radius_mm = [5.0, 130.0]\npivot_distance_mm = [120.0, 200.0]"))
-
-
-def _edit(text: str, *replacements: tuple[str, str]) -> str:
-    for old, new in replacements:
-        assert text.count(old) == 1, old
-        text = text.replace(old, new)
-    return text
-
-
-# follower -> (scene text, option sets, scene edits); each entry runs `design` once
-SCENES = {
-    "flat": (
-        _edit(FLAT, ("samples = 360", "samples = 90"), ("gamma = 1.0", "gamma = 2.0")),
-        [[], ["--mode", "pointwise"], ["--solver", "ga"], ["--solver", "ga", "--seed", "7"],
-         ["--solver", "hybrid"], ["--samples", "120"], ["--alpha", "3", "--gamma", "1"],
-         ["--base-radius", "33"], ["--mode", "pointwise", "--solver", "ga", "--seed", "7"]],
-        [("samples = 90", 'samples = 90\nextrema = "grid"'),
-         ("samples = 90", 'samples = 90\nrotation = "cw"'),
-         ("face_width_mm = [5.0, 25.0]", "face_width_mm = [20.0, 20.0]"),
-         ('mode = "global"', 'mode = "pointwise"'),
-         ("sigma_max_MPa = 1230.0", "sigma_max_MPa = 200.0")],
-    ),
-    "roller": (
-        _edit(ROLLER, ("samples = 360", "samples = 90"), ("gamma = 0.0", "gamma = 0.5")),
-        [[], ["--mode", "pointwise"], ["--solver", "ga"], ["--solver", "ga", "--seed", "7"],
-         ["--solver", "hybrid"], ["--samples", "120"], ["--alpha", "3", "--gamma", "1"],
-         ["--base-radius", "30"]],
-        [("samples = 90", 'samples = 90\nextrema = "grid"'),
-         ('rotation = "ccw"', 'rotation = "cw"'),
-         ("offset_mm = [-4.0, 4.0]", "offset_mm = 1.5"),
-         ("roller_radius_mm = [3.0, 12.0]", "roller_radius_mm = 6.0"),
-         ('mode = "global"', 'mode = "pointwise"'),
-         ("sigma_max_MPa = 1000.0", "sigma_max_MPa = 700.0")],
-    ),
-    "oscillating_roller": (
-        ROCKER,
-        [[], ["--mode", "pointwise"], ["--solver", "ga"], ["--solver", "hybrid", "--seed", "7"],
-         ["--samples", "120"], ["--alpha", "3", "--gamma", "1"]],
-        [('rotation = "ccw"', 'rotation = "cw"'),
-         ("pivot_distance_mm = [65.0, 110.0]", "pivot_distance_mm = [65.0, 110.0]\narm_length_mm = [50.0, 70.0]"),
-         ("pivot_distance_mm = [65.0, 110.0]", "pivot_distance_mm = 90.0"),
-         ("sigma_max_MPa = 2000.0", "sigma_max_MPa = 1500.0")],
-    ),
-    "oscillating_flat": (
-        ROCKER_FLAT,
-        [[], ["--mode", "pointwise"], ["--solver", "ga"], ["--solver", "hybrid", "--seed", "7"],
-         ["--samples", "120"], ["--alpha", "3", "--gamma", "1"]],
-        [('rotation = "ccw"', 'rotation = "cw"'),
-         ("pivot_distance_mm = [120.0, 200.0]", "pivot_distance_mm = [120.0, 200.0]\nface_offset_mm = [-10.0, 20.0]"),
-         ("pivot_distance_mm = [120.0, 200.0]", "pivot_distance_mm = 160.0"),
-         ("sigma_max_MPa = 2000.0", "sigma_max_MPa = 1500.0")],
-    ),
-}
-
-SWEEPS = [["--alpha", "0.5,2", "--gamma", "1"], ["--alpha", "0.5,2", "--gamma", "1", "--mode", "pointwise"],
-          ["--alpha", "1", "--gamma", "0.5,2", "--solver", "ga", "--seed", "3"]]
-
-
-@pytest.fixture
-def quiet_files(monkeypatch):
-    """Figures and the DXF not drawn (they read no saved program); the JSON written as the CLI does."""
-    from camjax.output import export
-    from camjax.solvers import sweep
-
-    class NoFigure:
-        def savefig(self, *args, **kwargs):
-            pass
-
-    monkeypatch.setattr(export, "write_design_files", lambda *args, **kwargs: [])
-    monkeypatch.setattr(sweep, "plot_pareto", lambda *args, **kwargs: NoFigure())
-    monkeypatch.setenv("CAMJAX_DRAWING_PROCESSES", "0")
-
-
-def _run(argv: list[str], out: Path, cache: Path | None, monkeypatch) -> dict:
-    """One command as a fresh process runs it (cache on in ``cache``, verify mode; or off)."""
-    from camjax.solvers import base
-
-    runtime.use_program_cache(None)  # a fresh process starts with the cache off ...
-    base._COMPILED.clear()  # ... and nothing compiled
-    if cache is None:
-        monkeypatch.setenv("CAMJAX_PROGRAM_CACHE", "0")
-    else:
-        monkeypatch.setenv("CAMJAX_PROGRAM_CACHE", str(cache))
-        monkeypatch.setenv("CAMJAX_PROGRAM_CACHE_VERIFY", "1")
-    try:
-        assert cli.main([*argv, "--out", str(out)]) == 0, argv
-    finally:
-        runtime.use_program_cache(None)
-        monkeypatch.delenv("CAMJAX_PROGRAM_CACHE_VERIFY", raising=False)
-    name = {"design": "result.json", "sweep": "pareto.json", "dynamics": "dynamics.json"}[argv[0]]
-    return json.loads((out / name).read_text())
-
-
-def _runs(follower: str, tmp: Path) -> list[list[str]]:
-    """The follower's sequence of commands: each option set on the scene, each scene edit, sweeps."""
-    text, options, edits = SCENES[follower]
-    base = tmp / f"{follower}.toml"
-    base.write_text(text)
-    runs = [["design", str(base), *opts] for opts in options]
-    for k, (old, new) in enumerate(edits):
-        edited = tmp / f"{follower}-edit{k}.toml"
-        edited.write_text(_edit(text, (old, new)))
-        runs.append(["design", str(edited)])
-    runs += [["sweep", str(base), *opts] for opts in SWEEPS]
-    return runs
-
-
-def _check_sequence(runs: list[list[str]], tmp: Path, monkeypatch, warm_pass: bool = True) -> None:
-    """Each run with the cache off, then with it on in one folder, in order (a run whose key an
-    earlier run saved loads that program: the case a key that misses an input gets wrong, which
-    verify mode then catches), and (``warm_pass``) again in reverse order, every program loaded."""
-    cache = tmp / "programs"
-    off = [_run(argv, tmp / f"off{k}", None, monkeypatch) for k, argv in enumerate(runs)]
-    orders = [range(len(runs))] + ([reversed(range(len(runs)))] if warm_pass else [])
-    for order in orders:
-        for k in order:
-            on = _run(runs[k], tmp / f"on{k}", cache, monkeypatch)
-            diff = differences(off[k], on, ignore=TIMING_KEYS)
-            assert not diff, f"{' '.join(runs[k])}: cache on != off:\n" + "\n".join(diff[:20])
-    assert list(cache.glob(f"*{runtime.PROGRAM_SUFFIX}")), "the sequence saved no program"
-
+from cache_matrix import (
+    FULL_SEQUENCE,
+    SCENES,
+    _check_sequence,
+    _edit,
+    _runs,
+)
 
 QUICK = {"flat": [["design", "{scene}"], ["design", "{scene}", "--mode", "pointwise"],
                   ["design", "{scene}", "--solver", "ga", "--seed", "7"], ["design", "{scene}", "--solver", "ga"]]}
@@ -200,50 +19,19 @@ QUICK = {"flat": [["design", "{scene}"], ["design", "{scene}", "--mode", "pointw
 
 @pytest.mark.slow
 def test_flat_face_mode_solver_and_seed_never_reuse_another_runs_program(tmp_path, quiet_files, monkeypatch):
-    """The quick loop's share of the matrix: the runs the stale cache got wrong (a pointwise run
-    after a global one, a GA run after another seed), in one folder."""
+    """The runs the stale cache got wrong (a pointwise run after a global one, a GA run after
+    another seed), in one folder, then again in reverse order with every program loaded."""
     scene = tmp_path / "flat.toml"
     scene.write_text(SCENES["flat"][0])
     runs = [[a.format(scene=scene) for a in argv] for argv in QUICK["flat"]]
     _check_sequence(runs, tmp_path, monkeypatch)
 
 
-def _example_runs(follower: str, tmp: Path) -> list[list[str]]:
-    """A follower type without a sequence of its own: its built-in example scene at 90 samples, each
-    mode and solver, another seed and weighting, the other rotation and the grid's extrema."""
-    from camjax import followers
-    from camjax.scene import builtin_scene_text
-
-    text = builtin_scene_text(followers.get(follower).example_scene)
-    text = re.sub(r"(?m)^samples = \d+", "samples = 90", text)
-    base = tmp / f"{follower}.toml"
-    base.write_text(text)
-    runs = [["design", str(base), *opts] for opts in
-            ([], ["--mode", "pointwise"], ["--solver", "ga", "--seed", "7"], ["--alpha", "3"])]
-    rotation = re.search(r'(?m)^rotation = "(\w+)"', text)
-    other = 'rotation = "cw"' if rotation is None or rotation.group(1) == "ccw" else 'rotation = "ccw"'
-    for k, edited_text in enumerate((re.sub(r'(?m)^rotation = "\w+"', "", text).replace(
-            "samples = 90", f"samples = 90\n{other}"), text.replace("samples = 90", 'samples = 90\nextrema = "grid"'))):
-        edited = tmp / f"{follower}-edit{k}.toml"
-        edited.write_text(edited_text)
-        runs.append(["design", str(edited)])
-    return runs
-
-
-def _follower_names() -> list[str]:
-    from camjax import followers
-
-    return followers.names()
-
-
 @pytest.mark.slow
-@pytest.mark.parametrize("follower", _follower_names())
-def test_every_option_and_scene_edit_gives_the_cache_off_result(follower, tmp_path, quiet_files, monkeypatch):
-    # every registered follower type: its own sequence where it has one, else its example scene's.
-    # One pass in order: every program saved by an earlier run of the sequence is loaded by the
-    # later runs that share its key (the quick test above adds the reverse, all-warm pass)
-    runs = _runs(follower, tmp_path) if follower in SCENES else _example_runs(follower, tmp_path)
-    _check_sequence(runs, tmp_path, monkeypatch, warm_pass=False)
+def test_every_option_scene_edit_and_sweep_gives_the_cache_off_result(tmp_path, quiet_files, monkeypatch):
+    # one pass in order: every program saved by an earlier run of the sequence is loaded by the
+    # later runs that share its key (the flat face's test above adds the reverse, all-warm pass)
+    _check_sequence(_runs(FULL_SEQUENCE, tmp_path), tmp_path, monkeypatch, warm_pass=False)
 
 
 @pytest.mark.slow

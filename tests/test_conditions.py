@@ -272,9 +272,11 @@ def test_every_builtin_scene_loads():
 
 
 @pytest.mark.slow
-def test_cli_design_of_the_constant_velocity_scene_is_c3(tmp_path, monkeypatch):
-    """`camjax design constant-velocity`: every joint reported "ok" with v, a, j asked to match,
-    and the profile's own s column continuous through the jerk (finite differences).
+def test_the_constant_velocity_scene_is_c3():
+    """The built-in constant-velocity scene: every joint reported "ok" with v, a, j asked to match
+    (the report's flcd block as `camjax design` writes it; tests/test_cli.py runs the command that
+    writes the block), and its displacement samples continuous through the jerk (finite
+    differences).
 
     Central differences of s on the 0.5 deg grid (h = 8.7e-3 rad) estimate s', s'', s'''. Where a
     derivative is continuous, one step changes it by at most h times the next derivative's peak
@@ -282,28 +284,24 @@ def test_cli_design_of_the_constant_velocity_scene_is_c3(tmp_path, monkeypatch):
     differences straddle no joint); across a jump it changes by the jump. The bounds: 1.5 h peak
     for s' and s'' (C1, C2; measured 1.0), and 0.2 of the s''' peak per step for s''' (C3;
     measured 0.087, and 0.48 with the jerk left free, 20 with the acceleration left free). The
-    CSV's 12 decimals put a rounding of 1e-12 / h^3 = 2e-6 mm/rad^3 on s''': negligible.
+    samples are the scene's program in float64 (profile.csv prints them to 12 decimals, a rounding
+    of 1e-12 / h^3 = 2e-6 mm/rad^3 on s''': negligible either way).
     """
-    import json
+    from camjax.evaluate import scene_arrays
+    from camjax.output.report import flcd_block
+    from camjax.scene import load_scene
 
-    from camjax import cli
-
-    monkeypatch.setenv("CAMJAX_COMPILATION_CACHE", "0")
-    out = tmp_path / "cv"
-    assert cli.main(["design", "constant-velocity", "--out", str(out), "--dpi", "30"]) == 0
-    data = json.loads((out / "result.json").read_text())
-    assert [s.get("solved_degree") for s in data["segments"]] == [None, 6, None, 6, None, 7]
-    assert all(j["class"] == "ok" and j["asked_to_match"] == ["v", "a", "j"] for j in data["flcd"])
-    rows = [line.split(",") for line in (out / "profile.csv").read_text().splitlines()
-            if line and not line.startswith("#")]
-    col = rows[0].index("s_mm")
-    s = np.array([float(r[col]) for r in rows[1:]])
+    scene = load_scene("constant-velocity")
+    segments = [dict(seg) for seg in scene.motion.segments]
+    assert [seg.get("solved_degree") for seg in segments] == [None, 6, None, 6, None, 7]
+    assert all(j["class"] == "ok" and j["asked_to_match"] == ["v", "a", "j"] for j in flcd_block(scene))
+    s = np.asarray(scene_arrays(scene, extrema="grid").kin.s)
     n = len(s)
     h = math.radians(360.0 / n)
     d1 = (np.roll(s, -1) - np.roll(s, 1)) / (2 * h)
     d2 = (np.roll(s, -1) - 2 * s + np.roll(s, 1)) / h**2
     d3 = (np.roll(s, -2) - 2 * np.roll(s, -1) + 2 * np.roll(s, 1) - np.roll(s, 2)) / (2 * h**3)
-    joints_deg = np.cumsum([0.0] + [seg["angle_deg"] for seg in data["segments"]][:-1])
+    joints_deg = np.cumsum([0.0] + [seg["angle_deg"] for seg in segments][:-1])
     k = np.arange(n)
     near = np.zeros(n, bool)
     for j in joints_deg * n / 360.0:
