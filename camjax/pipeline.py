@@ -21,7 +21,6 @@ from __future__ import annotations
 from typing import Any, NamedTuple
 
 from camjax import followers
-from camjax.errors import SceneError
 from camjax.evaluate import SceneArrays
 from camjax.scene import Scene
 
@@ -31,33 +30,6 @@ def design_problem(scene: Scene, arrays: SceneArrays | None = None, *, samples: 
     from camjax.solvers.base import problem_from_scene
 
     return problem_from_scene(scene, arrays, samples=samples)
-
-
-def design_block(scene: Scene, problem) -> tuple[dict, Any]:
-    """result.json's design block of the scene's [design] for its ``problem``
-    (:func:`design_problem`), and the problem the design is judged on: the one dispatch between a
-    plain design, solved through the solver registry (:func:`camjax.solvers.base.solve` with the
-    section's alpha, gamma, mode, solver and seed; the solution's JSON, its certificate included
-    where the solver gives one), a robust one (``[design] robust``:
-    :func:`camjax.robust.design.design_json`, the nominal and robust optima side by side) and a
-    conjugate pair's yoke span or second arm angle set or chosen in [design]
-    (:func:`camjax.followers._closure_design.solve_with_dimension`, whose problem carries the value)."""
-    from camjax.followers._closure_design import free_dimension, solve_with_dimension
-
-    d = scene.design
-    free = free_dimension(d)
-    if d.robust is not None:
-        if free is not None:
-            raise SceneError(f"design.{free[0]}", list(free[1:]), "cannot be set in a robust design (its "
-                             "samples hold the [follower]'s)", "the value in [follower] only")
-        from camjax.robust.design import design_json
-
-        return design_json(scene, problem), problem
-    if free is not None:
-        return solve_with_dimension(scene, problem, free)
-    from camjax.solvers.base import solve
-
-    return solve(problem, (d.alpha, d.gamma), mode=d.mode, solver=d.solver, seed=d.seed).to_json(problem), problem
 
 
 def run_design(scene: Scene, arrays: SceneArrays | None = None, *,

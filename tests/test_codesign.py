@@ -131,13 +131,15 @@ def test_codesign_never_loses_to_choosing(case):
     out = codesign_scene(scene, samples=SAMPLES)
     weights = dict(scene.synthesis.objective)
     designed = scene.motion.designed
-    # the co-designed laws, re-evaluated through the program: the search's F to 1e-9 (the same
-    # solver on the same grid; the affine map equals the program to rounding)
+    # the co-designed laws, re-evaluated through the program: the search's F to 1e-8 (the same
+    # solver on the same grid, a separate solve; the affine map equals the program to rounding).
+    # Two solves agree to the solver's stopping rule, not to rounding: measured 4e-10 on one CPU and
+    # 1.04e-9 on an AMD EPYC (the same code), so 1e-8; still 6 orders below the >= 1 % win below.
     laws = [law_from_control(ds, c)[0] for ds, c in zip(designed, out.controls, strict=True)]
     law_terms = sum(w * float(getattr(measures(build_problem(ds.basis(), ds.conditions, ()), c), n))
                     for ds, c in zip(designed, out.controls, strict=True) for n, w in weights.items())
     mine = _program_objective(scene, laws, law_terms)
-    assert mine == pytest.approx(out.codesign_objective, rel=1e-9)
+    assert mine == pytest.approx(out.codesign_objective, rel=1e-8)
     # built-in laws (one for both segments, each with its own optimal geometry, exact law figures)
     best = out.best_builtin[1]
     for law in ("cycloidal", "poly_3_4_5", "modified_sine", "modified_trapezoid"):

@@ -177,7 +177,7 @@ def solve_with_dimension(scene, problem, free: tuple) -> tuple[dict, object]:
     (``free`` = :func:`free_dimension`'s (key, low, high)): result.json's design block and the
     problem carrying the value, set (``low == high``) or chosen (free) as the module docstring says,
     and reported under its key. The scene's mode, weights, solver and seed
-    (:func:`camjax.solvers.base.solve`); :func:`camjax.pipeline.design_block` dispatches here."""
+    (:func:`camjax.solvers.base.solve`); :func:`camjax.followers._design.design_block` dispatches here."""
     from camjax.solvers.base import solve
 
     d = scene.design

@@ -406,9 +406,10 @@ class RockingFollower(Follower):
         arrays = scene_arrays(scene, dtype=dtype) if arrays is None else arrays
         design = None
         if scene.design is not None:
-            from camjax.pipeline import design_block, design_problem
+            from camjax.followers._design import design_block
+            from camjax.solvers.base import problem_from_scene
 
-            design, _ = design_block(scene, design_problem(scene, arrays))
+            design, _ = design_block(scene, problem_from_scene(scene, arrays))
         kin, w, drawn = arrays.kin, arrays.cam_speed_rad_s, scene
         program = None if arrays.model is None else arrays.model.program
         if design is not None:

@@ -287,7 +287,7 @@ class TranslatingFollower(Follower):
     def solve_design(self, scene, arrays: SceneArrays) -> DesignSolution | None:
         """The optimized design of a scene with a [design] section; None without one.
 
-        Solved by :func:`camjax.pipeline.design_block` (the solver registry's
+        Solved by :func:`camjax.followers._design.design_block` (the solver registry's
         :func:`camjax.solvers.base.solve` with the scene's mode, alpha, gamma, solver and seed, or
         the robust design of ``[design] robust``; keys of
         :meth:`camjax.solvers.base.Solution.to_json`: mode, solver, the design variables,
@@ -296,9 +296,10 @@ class TranslatingFollower(Follower):
         """
         if scene.design is None:
             return None
-        from camjax.pipeline import design_block, design_problem
+        from camjax.followers._design import design_block
+        from camjax.solvers.base import problem_from_scene
 
-        out, problem = design_block(scene, design_problem(scene, arrays))
+        out, problem = design_block(scene, problem_from_scene(scene, arrays))
         return self.design_solution(scene, arrays, out, problem)
 
     def curves(self, scene, arrays: SceneArrays, base_radius_mm: float, follower=None,
