@@ -51,7 +51,7 @@ from camjax.followers._swing import polish_design
 from camjax.followers.oscillating_roller import geometry as rocker_roller_geo
 from camjax.followers.roller import geometry as roller_geo
 from camjax.followers.roller.problem import record as record  # as the translating roller's
-from camjax.followers.roller.problem import roller_figures
+from camjax.followers.roller.problem import roller_evaluation, roller_figures
 from camjax.followers.roller.problem import size_term as size_term  # the translating twin's size
 from camjax.numerics import COS_FLOOR, RHO_FLOOR_MM, floor_positive, positive_part, safe_sqrt
 
@@ -269,16 +269,11 @@ def constraint_maxima(problem: Problem, design: Design) -> Constraints:
 def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
     """Objective, peak stress and pressure angle (and their angles), violations and feasibility."""
     g = _geometry(problem, design)
-    sigma = stress(problem, design)
-    phi = jnp.abs(jnp.arctan2(g.along, g.across))
-    margin = roller_geo.roller_undercut_margin(g.kappa, design.roller_radius_mm, 0.0)
-    if problem.closure is not None:  # a positive drive: the second contact's limits too
-        sigma, phi, margin = _closure.worst_of_both(sigma, phi, margin, _second_contact(problem, design, g))
-    figures, violations = family.worst_contact(problem, design, sigma, phi, margin,
-                                               jnp.arctan(problem.tan_max_pressure_angle))
-    return family.judged(Evaluation, Violation, problem, objective=objective(problem, weights, design),
-                         size_mm=design.base_radius_mm + design.roller_radius_mm, figures=figures,
-                         violations=dict(reach=positive_part(g.reach), **violations))
+    return roller_evaluation((Evaluation, Violation), problem, objective(problem, weights, design), design,
+                             stress(problem, design),
+                             jnp.abs(jnp.arctan2(g.along, g.across)), g.kappa,
+                             lambda: _second_contact(problem, design, g), jnp.arctan(problem.tan_max_pressure_angle),
+                             reach=positive_part(g.reach))
 
 
 def condense_pointwise(problem: Problem, per_angle_design: Design) -> tuple[Design, dict]:

@@ -423,17 +423,27 @@ def polish_pointwise(problem: Problem, weights: Weights, design: Design, extras:
 def evaluate(problem: Problem, weights: Weights, design: Design) -> Evaluation:
     """Objective, peak stress and pressure angle (and their angles), violations and feasibility."""
     x = circle_terms(problem, design)
-    kappa = x.kappa
-    sigma = stress(problem, design)
-    phi = jnp.abs(jnp.arctan2(x.u, x.w))
+    return roller_evaluation((Evaluation, Violation), problem, objective(problem, weights, design), design,
+                             stress(problem, design), jnp.abs(jnp.arctan2(x.u, x.w)), x.kappa,
+                             lambda: _second_contact(problem, design, x),
+                             jnp.deg2rad(problem.max_pressure_angle_deg))
+
+
+def roller_evaluation(types, problem, objective_value, design, sigma, phi, kappa, second_contact,
+                      max_pressure_angle_rad, **violations):
+    """Either roller family's :class:`Evaluation` (``types``: its (Evaluation, Violation)) at its
+    ``objective_value``, from its contact stress (MPa), pressure angle (rad) and pitch-curve
+    curvature (1/mm) per angle: the undercut margin of the convex parts, with a positive drive the worse of both contacts
+    (``second_contact()``, called only then), the worst contact and the size R_b + R_f;
+    ``violations``: the family's own beside the contact's."""
     margin = roller_geo.roller_undercut_margin(kappa, design.roller_radius_mm, 0.0)  # rho_c, convex parts
     if problem.closure is not None:  # a positive drive: the second contact's limits too
-        sigma, phi, margin = _closure.worst_of_both(sigma, phi, margin, _second_contact(problem, design, x))
-    figures, violations = family.worst_contact(problem, design, sigma, phi, margin,
-                                               jnp.deg2rad(problem.max_pressure_angle_deg))
-    return family.judged(Evaluation, Violation, problem, objective=objective(problem, weights, design),
+        sigma, phi, margin = _closure.worst_of_both(sigma, phi, margin, second_contact())
+    figures, contact = family.worst_contact(problem, design, sigma, phi, margin, max_pressure_angle_rad)
+    evaluation, violation = types
+    return family.judged(evaluation, violation, problem, objective=objective_value,
                          size_mm=design.base_radius_mm + design.roller_radius_mm, figures=figures,
-                         violations=violations)
+                         violations=dict(**violations, **contact))
 
 
 def condense_pointwise(problem: Problem, per_angle_design: Design) -> tuple[Design, dict]:
