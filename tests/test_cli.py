@@ -242,6 +242,7 @@ def break_outline(monkeypatch, module, function: str, field: str, index: int, va
     monkeypatch.setattr(module, function, broken)
 
 
+@pytest.mark.slow
 def test_design_refuses_an_undrawable_outline_in_one_line(tmp_path, capsys, monkeypatch):
     from camjax.followers._translating import TranslatingFollower
 

@@ -38,6 +38,7 @@ def peak_scene():
     return scene_from_dict(data, "peaks")
 
 
+@pytest.mark.slow
 def test_the_smooth_peak_bounds_the_exact_one_within_its_stated_gap(peak_scene):
     """max|v| <= M_tau(v) <= max|v| + tau log(2P) on the search's rows, at random z and every
     stage's tau."""

@@ -143,6 +143,7 @@ def test_gradients_through_every_design_variable_match_finite_differences(name):
                                    err_msg=f"{name}: d/d{var}")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", EACH_RUN)
 def test_gradients_stay_finite_far_outside_the_box(name):
     family, problem, design, lo, hi = _problem_at_a_design(name)

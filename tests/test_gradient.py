@@ -44,6 +44,7 @@ def test_pointwise_matches_closed_form_at_every_angle(problem, pointwise_all, i)
     assert np.all(np.asarray(res.iterations) > 0)
 
 
+@pytest.mark.slow
 def test_global_matches_exact_reference(problem):
     a = np.array([w[0] for w in WEIGHTINGS])
     g = np.array([w[1] for w in WEIGHTINGS])

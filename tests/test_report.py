@@ -147,6 +147,7 @@ def test_flcd_joints_of_reference_program(data):
 # ---------------------------------------------------------------------------------- design
 
 
+@pytest.mark.slow
 def test_design_is_the_optimum_of_an_independent_dense_scan(reference_1deg):
     """The grid problem (extrema = "grid"): its optimum against a NumPy scan on the same 1-deg grid.
 

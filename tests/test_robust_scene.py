@@ -68,6 +68,7 @@ def test_the_bounds_against_the_normal_approximation():
     assert upper_bound(0, n) == pytest.approx(1.0 - (1.0 - CONFIDENCE) ** (1.0 / n), rel=1e-9)
 
 
+@pytest.mark.slow
 def test_the_nominal_optimum_breaks_the_stress_limit_in_at_least_5_percent():
     """The nominal optimum sits on its 480 MPa stress limit: more than 5 % of fresh cams break it
     (the lower bound of 400 samples, ~0.41), and it is the design with the least size of the two."""
@@ -76,6 +77,7 @@ def test_the_nominal_optimum_breaks_the_stress_limit_in_at_least_5_percent():
     assert size(NOMINAL) <= size(ROBUST)
 
 
+@pytest.mark.slow
 def test_the_robust_design_keeps_every_limit_in_999_per_mille_for_5_percent_more_size():
     """The robust design: the stress limit, each other limit and all of them together broken in
     at most 0.1 % of fresh cams (upper bounds from 100000 samples), for R_p at most 1.05 x the

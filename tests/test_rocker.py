@@ -252,6 +252,7 @@ def test_design_thesis_bench(tmp_path):
     assert data["evaluated"]["pressure_angle_deg"]["max_abs"] < 30.0
 
 
+@pytest.mark.slow
 def test_design_refuses_a_rocker_no_cam_can_carry(tmp_path, capsys):
     # a face 10 mm from a pivot only 10 mm from the cam centre: R_b + f < d leaves no base circle
     text = FLAT_SCENE.replace("ROT", "ccw").replace("pivot_distance_mm = 150.0", "pivot_distance_mm = 10.0")

@@ -64,7 +64,9 @@ def test_every_solver_in_pointwise_mode_matches_the_closed_form(coarse, solver):
     assert int(sol.status) in (Status.CONVERGED, Status.MAX_STEPS)
 
 
-@pytest.mark.parametrize("solver", registry.SOLVERS)
+# the quick loop: the gradient and GA solvers; the hybrid (GA + polish) and newton (its own program) are slow
+@pytest.mark.parametrize("solver", [s if s in ("gradient", "ga") else pytest.param(s, marks=pytest.mark.slow)
+                                    for s in registry.SOLVERS])
 def test_unreachable_bounds_give_status_infeasible(problem, solver):
     # R_b <= 20 mm while curvature and stress need >= 24.1 mm (the scene's min base radius)
     tight = P.with_bounds(problem, base_radius_mm=(5.0, 20.0))
