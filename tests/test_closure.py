@@ -62,13 +62,26 @@ def _run(text: str, folder):
     return scene, data, {n: table[:, k] for k, n in enumerate(names)}
 
 
+class _Exported(dict):
+    """Each case's (scene, result, columns, folder), run when a test first asks for it: the quick
+    loop runs the groove and the conjugate cams; the yoke and the rocker's groove are slow cases."""
+
+    def __init__(self, tmp_path_factory):
+        super().__init__()
+        self._tmp = tmp_path_factory
+
+    def __missing__(self, name):
+        folder = self._tmp.mktemp(name)
+        self[name] = _run(CASES[name], folder) + (folder,)
+        return self[name]
+
+
 @pytest.fixture(scope="module")
 def exported(tmp_path_factory):
-    out = {}
-    for name, text in CASES.items():
-        folder = tmp_path_factory.mktemp(name)
-        out[name] = _run(text, folder) + (folder,)
-    return out
+    return _Exported(tmp_path_factory)
+
+
+SLOW = pytest.mark.slow
 
 
 def _distances(cx, cy, px, py, chunk=400):
@@ -94,7 +107,7 @@ def _pivot(scene, theta_deg):
     return d * np.cos(t), -sign * d * np.sin(t)
 
 
-@pytest.mark.parametrize("case", ["groove", "rocker_groove"])
+@pytest.mark.parametrize("case", ["groove", pytest.param("rocker_groove", marks=SLOW)])
 def test_the_roller_rides_both_exported_flanks(exported, case):
     scene, data, col, _ = exported[case]
     rf, c = scene.follower.roller_radius_mm, scene.follower.closure.clearance_mm
@@ -109,7 +122,7 @@ def test_the_roller_rides_both_exported_flanks(exported, case):
     assert data["closure"]["kind"] == "groove" and data["evaluated_at"]["feasible"]
 
 
-@pytest.mark.parametrize("case", ["yoke", "conjugate"])
+@pytest.mark.parametrize("case", [pytest.param("yoke", marks=SLOW), "conjugate"])
 def test_both_rollers_ride_their_exported_cams(exported, case):
     scene, data, col, _ = exported[case]
     r1, r2 = scene.follower.roller_radius_mm, scene.follower.closure.second_roller_radius_mm
@@ -121,6 +134,7 @@ def test_both_rollers_ride_their_exported_cams(exported, case):
     assert data["closure"]["kind"] == "conjugate"
 
 
+@SLOW
 def test_the_yoke_is_rigid_on_the_exported_pitch_curves(exported):
     scene, _, col, _ = exported["yoke"]
     span = np.hypot(col["pitch_x_mm"] - col["conjugate_pitch_x_mm"], col["pitch_y_mm"] - col["conjugate_pitch_y_mm"])
@@ -160,7 +174,7 @@ def _sign_changes(theta_deg, load):
     return np.sort(out)
 
 
-@pytest.mark.parametrize("case", ["groove", "yoke"])
+@pytest.mark.parametrize("case", ["groove", pytest.param("yoke", marks=SLOW)])
 def test_translating_switches_match_a_finite_difference_acceleration(exported, case):
     scene, data, col, _ = exported[case]
     train = scene.follower.train
@@ -181,7 +195,7 @@ def test_translating_switches_match_a_finite_difference_acceleration(exported, c
         assert np.sign(sw["load_rate_N_per_deg"]) == np.sign(load[i])
 
 
-@pytest.mark.parametrize("case", ["rocker_groove", "conjugate"])
+@pytest.mark.parametrize("case", [pytest.param("rocker_groove", marks=SLOW), "conjugate"])
 def test_rocker_switches_match_a_finite_difference_acceleration(exported, case):
     scene, data, col, _ = exported[case]
     h = math.radians(360.0 / SAMPLES)
@@ -359,7 +373,7 @@ ANIMATION_SAMPLES = 3600
 # (arc step)^2 / (8 rho) ~ (2 pi 70 mm / 3600)^2 / (8 x 5 mm) ~ 4e-5 mm, far below 1e-3 mm
 
 
-@pytest.mark.parametrize("case", ["yoke", "conjugate"])
+@pytest.mark.parametrize("case", [pytest.param("yoke", marks=SLOW), "conjugate"])
 def test_the_animation_draws_the_second_roller_on_its_cam_and_keeps_the_link_rigid(case):
     """At every 9th frame of the animation: the second roller drawn touches the second cam as drawn
     (distance from its centre to the drawn polyline = its radius, positions only) and the link that
