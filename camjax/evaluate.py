@@ -223,12 +223,20 @@ def curve_extremes(scene: Scene, arrays: SceneArrays, names: tuple[str, ...],
         return kind.curve_extremes(scene, arrays, names, radius, follower)
     model, consts = arrays.model, curve_constants(scene, follower)
     grid_point = PointValues(arrays.kin, arrays.force_N, arrays.torque_Nm, arrays.stress_coefficient)
-    grid = jnp.stack([_curve(n, grid_point, consts, radius, scene.follower.type) for n in names])
     if model is None:
+        grid = jnp.stack([_curve(n, grid_point, consts, radius, scene.follower.type) for n in names])
         hi, hi_deg, lo, lo_deg = extrema_mod.sampled_extremes(grid, arrays.theta_deg)
+        rows = range(len(names))
     else:
+        # the report's curves and the follower's sizing curves are refined in one program (a
+        # row of it is that curve's own refinement): one compile per run, not one per set
+        report = curve_names(scene, arrays)
+        shared = tuple(names) == report or set(names) <= set(kind.sizing_curves)
+        program_names = (*report, *kind.sizing_curves) if shared else names
+        grid = jnp.stack([_curve(n, grid_point, consts, radius, scene.follower.type) for n in program_names])
         consts = jax.tree_util.tree_map(lambda x: jnp.asarray(x, grid.dtype), consts)
-        refined = _refined_extremes(model, consts, grid, radius, names, scene.follower.type)
+        refined = _refined_extremes(model, consts, grid, radius, program_names, scene.follower.type)
         hi, hi_deg, lo, lo_deg = (np.asarray(a) for a in refined)
+        rows = [program_names.index(n) for n in names]
     return {n: Extremes(float(hi[k]), float(hi_deg[k]), float(lo[k]), float(lo_deg[k]))
-            for k, n in enumerate(names)}
+            for k, n in zip(rows, names, strict=True)}

@@ -326,13 +326,17 @@ def refine_curves(curves: SegmentFunction, params: Any, bounds_deg, grid: jax.Ar
     ``grid`` (Q, N) their values on the grid. One refinement per (curve, sense): the function
     refined is w . curves with w = +-e_q, mapped over the rows w one at a time (``lax.map``, not
     ``vmap``: the refinement is traced once and not batched again, which costs far more time than
-    the rows' sequential run saves). Returns (max, max_deg, min, min_deg), each of shape (Q,).
+    the rows' sequential run saves). A row sees its own curve only: another curve that is not
+    finite somewhere (say one taken at a base radius where it has no meaning) does not reach it.
+    Returns (max, max_deg, min, min_deg), each of shape (Q,).
     """
     count = grid.shape[0]
 
     def fn(segment, theta_deg, both):
         p, w = both
-        return jnp.tensordot(w, curves(segment, theta_deg, p), axes=1)
+        c = curves(segment, theta_deg, p)
+        mine = (w != 0).reshape(w.shape + (1,) * (c.ndim - 1))
+        return jnp.tensordot(w, jnp.where(mine, c, 0.0), axes=1)
 
     weights = jnp.concatenate([jnp.eye(count, dtype=grid.dtype), -jnp.eye(count, dtype=grid.dtype)])
     e = jax.lax.map(lambda w: refine_max(fn, (params, w), bounds_deg, w @ grid, constant=constant), weights)

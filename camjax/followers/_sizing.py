@@ -74,6 +74,29 @@ def peak(limits: Limits, prog, kin: Kinematics, x, params):
     return e.value[i], e.angle_deg[i], i
 
 
+class _Search(NamedTuple):
+    """State of :func:`exact_boundary`'s one loop (shape () each, ``gs``/``ts`` (SCAN,))."""
+
+    stage: jax.Array  # int: NEWTON, SCAN or ILLINOIS_START, ILLINOIS, FINAL, DONE
+    point: jax.Array  # the x the next pass evaluates G at
+    g0: jax.Array  # G(x0)
+    k: jax.Array  # int: Newton steps taken, then Illinois steps
+    a: jax.Array  # the bracket [a, b] and G, G' or G at its ends (Newton: G and G' at b)
+    b: jax.Array
+    fa: jax.Array
+    fb: jax.Array
+    sb: jax.Array
+    side: jax.Array  # int: Illinois, the end that moved last (-1 a, 1 b)
+    run: jax.Array  # bool: the root is bracketed inside, closed by Illinois
+    ts: jax.Array  # the scan's points and G there
+    gs: jax.Array
+    boundary: Boundary
+
+
+# stages of exact_boundary's loop, each pass one evaluation of G (and G') at ``point``
+_NEWTON, _SCAN, _ILLINOIS_START, _ILLINOIS, _FINAL, _DONE = range(6)
+
+
 @runtime.program_cache(static_argnames=("limits",))
 def exact_boundary(prog, kin: Kinematics, x0, hi, params, limits: Limits) -> Boundary:
     """The smallest x in [x0, hi] with G(x) <= 0 (see the module docstring), from the grid's
@@ -85,67 +108,102 @@ def exact_boundary(prog, kin: Kinematics, x0, hi, params, limits: Limits) -> Bou
       x0, hi: shape () each.
       params: pytree of the limits' other arguments (arrays).
       limits: static, a module-level function ``limits(kin, x, params)``.
+
+    The search's stages (Newton steps, a scan, Illinois steps, the boundary's peak) run as one
+    loop whose every pass evaluates G and its slope once, switched on the stage (as
+    :mod:`camjax.extrema` refines): the refined peak is traced once, not once per stage.
     """
     dtype = kin.s.dtype
     x0, hi = jnp.asarray(x0, dtype), jnp.asarray(hi, dtype)
 
-    def g(x):
-        return peak(limits, prog, kin, x, params)[0]
+    def full(x):
+        value, angle, row = peak(limits, prog, kin, x, params)
+        return value, (angle, row)
 
-    value_and_slope = jax.value_and_grad(g)  # the slope by the envelope theorem
+    value_and_slope = jax.value_and_grad(full, has_aux=True)  # the slope by the envelope theorem
 
     # Newton steps from x0 while G > 0 and falls (a little past the root each: from a convex G's
     # infeasible side plain Newton would only creep up to it). The admissible x can form a narrow
     # window (a rocker's pressure angle limits the arm from both sides), so no blind growth: a
     # step that lands where G > 0 and rises has passed the root or found none
-    def newton_cond(c):
-        k, a, b, gb, sb = c
+    def newton_cond(k, b, gb, sb):
         return (gb > 0) & (sb < 0) & (k < EXPANSIONS) & (b < hi)
 
-    def newton(c):
-        k, a, b, gb, sb = c
-        nb = jnp.minimum(b - NEWTON_OVERSHOOT * gb / sb, hi)
-        gn, sn = value_and_slope(nb)
-        return k + 1, b, nb, gn, sn
+    def illinois_point(a, fa, b, fb):
+        m = jnp.where(fa != fb, b - fb * (b - a) / (fa - fb), 0.5 * (a + b))
+        return jnp.where((m > a) & (m < b), m, 0.5 * (a + b))
 
-    g0, s0 = value_and_slope(x0)
-    _, a, b, gb, sb = jax.lax.while_loop(newton_cond, newton, (0, x0, x0, g0, s0))
-    inside = g0 > 0
-    # passed it (G > 0 and rising at b): the first admissible point of a scan of [a, b], if any
-    def scan(bracket):
-        a, b, gb = bracket
+    def open_(k, a, b):  # the bracket is wider than a few ulps of x
+        return (k < ITERATIONS) & (b - a > 4.0 * jnp.finfo(dtype).eps * jnp.abs(b))
+
+    def after_illinois(s: _Search) -> _Search:  # the next Illinois step, or the boundary's peak
+        more = s.run & open_(s.k, s.a, s.b)
+        x = jnp.where(s.run, s.b, x0)
+        return s._replace(stage=jnp.where(more, _ILLINOIS, _FINAL),
+                          point=jnp.where(more, illinois_point(s.a, s.fa, s.b, s.fb), x))
+
+    def newton(s: _Search, g, slope, _aux) -> _Search:
+        first = s.k < 0  # the pass at x0
+        g0 = jnp.where(first, g, s.g0)
+        k, a, b = jnp.where(first, 0, s.k + 1), jnp.where(first, x0, s.b), s.point
+        s = s._replace(g0=g0, k=k, a=a, b=b, fb=g, sb=slope)
+        more = newton_cond(k, b, g, slope)
+        nb = jnp.minimum(b - NEWTON_OVERSHOOT * g / slope, hi)
+        # passed it (G > 0 and rising at b): a scan of [a, b] for its first admissible point
+        scan = g > 0
         ts = a + (b - a) * jnp.linspace(0.0, 1.0, SCAN + 1, dtype=dtype)[1:]
-        gs = jax.lax.map(g, ts)
+        return s._replace(stage=jnp.where(more, _NEWTON, jnp.where(scan, _SCAN, _ILLINOIS_START)),
+                          point=jnp.where(more, nb, jnp.where(scan, ts[0], a)), k=jnp.where(more, k, 0), ts=ts)
+
+    def scan(s: _Search, g, _slope, _aux) -> _Search:
+        gs = s.gs.at[s.k].set(g)
+        k = s.k + 1
+        done = k >= SCAN
         j = jnp.argmax(gs <= 0)
         hit = gs[j] <= 0
-        return (jnp.where(hit & (j > 0), ts[jnp.maximum(j - 1, 0)], a), jnp.where(hit, ts[j], b),
-                jnp.where(hit, gs[j], gb))
+        a = jnp.where(hit & (j > 0), s.ts[jnp.maximum(j - 1, 0)], s.a)
+        b, gb = jnp.where(hit, s.ts[j], s.b), jnp.where(hit, gs[j], s.fb)
+        return s._replace(stage=jnp.where(done, _ILLINOIS_START, _SCAN), gs=gs, k=jnp.where(done, 0, k),
+                          point=jnp.where(done, a, s.ts[jnp.minimum(k, SCAN - 1)]),
+                          a=jnp.where(done, a, s.a), b=jnp.where(done, b, s.b), fb=jnp.where(done, gb, s.fb))
 
-    a, b, gb = jax.lax.cond(gb > 0, scan, lambda bracket: bracket, (a, b, gb))
-    found = ~inside | (gb <= 0)
+    def illinois_start(s: _Search, g, _slope, _aux) -> _Search:
+        found = ~(s.g0 > 0) | (s.fb <= 0)
+        run = (s.g0 > 0) & found
+        s = s._replace(run=run, a=jnp.where(run, s.a, x0), fa=jnp.where(run, g, 1.0), b=jnp.where(run, s.b, x0),
+                       fb=jnp.where(run, s.fb, 0.0), side=jnp.asarray(0), k=jnp.asarray(0),
+                       boundary=s.boundary._replace(refined=found))
+        return after_illinois(s)
 
-    def illinois(c):
-        k, a, fa, b, fb, side = c
-        m = jnp.where(fa != fb, b - fb * (b - a) / (fa - fb), 0.5 * (a + b))
-        m = jnp.where((m > a) & (m < b), m, 0.5 * (a + b))
-        fm = g(m)
+    def illinois(s: _Search, fm, _slope, _aux) -> _Search:
+        a, fa, b, fb, side, m = s.a, s.fa, s.b, s.fb, s.side, s.point
         bad = fm > 0
         # Illinois: halve the value at the end that stays twice in a row
         a2, fa2 = jnp.where(bad, m, a), jnp.where(bad, fm, jnp.where(side == 1, 0.5 * fa, fa))
         b2, fb2 = jnp.where(bad, b, m), jnp.where(bad, jnp.where(side == -1, 0.5 * fb, fb), fm)
-        return k + 1, a2, fa2, b2, fb2, jnp.where(bad, -1, 1)
+        return after_illinois(s._replace(k=s.k + 1, a=a2, fa=fa2, b=b2, fb=fb2, side=jnp.where(bad, -1, 1)))
 
-    def open_(c):  # the bracket is wider than a few ulps of x
-        k, a, _, b, _, _ = c
-        return (k < ITERATIONS) & (b - a > 4.0 * jnp.finfo(dtype).eps * jnp.abs(b))
+    def final(s: _Search, value, _slope, aux) -> _Search:
+        angle, row = aux
+        return s._replace(stage=jnp.asarray(_DONE), boundary=s.boundary._replace(
+            x=s.point, angle_deg=angle, row=row, peak=value))
 
-    run = inside & found
-    start = (0, jnp.where(run, a, x0), jnp.where(run, g(a), 1.0), jnp.where(run, b, x0),
-             jnp.where(run, gb, 0.0), jnp.asarray(0))
-    _, a, _, b, _, _ = jax.lax.while_loop(lambda c: run & open_(c), illinois, start)
-    x = jnp.where(run, b, x0)
-    value, angle, row = peak(limits, prog, kin, x, params)
-    return Boundary(x, angle, row, value, found)
+    def body(s: _Search) -> _Search:
+        (value, aux), slope = value_and_slope(s.point)
+        branches = [lambda *a, f=f: _typed(f(*a), s) for f in (newton, scan, illinois_start, illinois, final)]
+        return jax.lax.switch(s.stage, branches, s, value, slope, aux)
+
+    zero, int0 = jnp.zeros((), dtype), jnp.zeros((), jnp.int32)
+    row0 = jnp.zeros((), int)  # jnp.argmax's
+    start = _Search(int0 + _NEWTON, x0, zero, int0 - 1, x0, x0, zero, zero, zero, int0,
+                    jnp.zeros((), bool), jnp.zeros((SCAN,), dtype), jnp.zeros((SCAN,), dtype),
+                    Boundary(x0, zero, row0, zero, jnp.zeros((), bool)))
+    return jax.lax.while_loop(lambda s: s.stage != _DONE, body, start).boundary
+
+
+def _typed(new, like):
+    """``new`` with the dtypes of ``like`` (a loop carry keeps its types)."""
+    return jax.tree.map(lambda x, y: jax.lax.convert_element_type(x, y.dtype), new, like)
 
 
 __all__ = ["EXPANSIONS", "ITERATIONS", "Boundary", "Limits", "exact_boundary", "peak"]

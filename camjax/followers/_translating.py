@@ -273,6 +273,11 @@ class TranslatingFollower(Follower):
         """Names of the follower's own curves whose extrema the report takes (see :meth:`curve`)."""
         return ()
 
+    # curves (see :meth:`curve`) whose extrema the follower's sizing takes besides the report's:
+    # refined in the report's program (:func:`camjax.evaluate.curve_extremes`), so that a run
+    # compiles one refinement, not one per set of names
+    sizing_curves: tuple[str, ...] = ()
+
     def curve_constants(self, scene, follower):
         """A pytree of the constants :meth:`curve` needs besides the motion (None: none)."""
         return None

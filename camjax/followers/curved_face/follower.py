@@ -91,6 +91,7 @@ class CurvedFace(TranslatingFollower):
             "min_curvature_radius_mm")
     example_scene = "curved-face"
     variables = ("base_radius_mm", "face_radius_mm", "face_width_mm", "offset_mm")
+    sizing_curves = (PRESSURE_NEED,)
 
     def parse(self, r) -> CurvedFaceSpec:
         self.check_keys(r)

@@ -76,7 +76,8 @@ def polish(problem: Problem, weights: Weights, design: Design) -> Design:
         best_rho = optimal_curvature_radius(weights, coefficient, problem.sigma_max_MPa, problem.size_norm_mm)
         return x + best_rho - rho  # R + rho_best - rho*: inf or nan fall to bisection
 
-    g_lo, g_hi = slope(peak(lo)[1]), slope(peak(hi)[1])  # weighting-independent peaks
+    # weighting-independent peaks; mapped, not called twice: the refined peak is traced once here
+    g_lo, g_hi = slope(jax.lax.map(peak, jnp.stack([lo, hi]))[1])
     interior = (g_lo < 0) & (g_hi > 0)  # else an end is the optimum: no search
 
     def settled(x, nxt):  # the next step is shorter than STOP_RTOL

@@ -127,6 +127,7 @@ class Roller(TranslatingFollower):
     example_scene = "roller"
     variables = ("base_radius_mm", "roller_radius_mm", "offset_mm")
     optional_variables = (_closure_design.YOKE_SPAN,)
+    sizing_curves = (PRESSURE_NEED,)
 
     def parse(self, r) -> RollerSpec:
         self.check_keys(r)
