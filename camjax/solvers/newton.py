@@ -22,7 +22,8 @@ the others are the constant -1. A constraint block that is not one row per angle
 problem's row per sample, :mod:`camjax.robust.design`, each a max over the grid) is taken from
 the n one-angle problems instead: one smooth row per angle and sample, the same feasible set.
 Rows below -1e3 (normalized; a discarded sample's -1e30) are floored there, the same feasible
-set with slacks of O(1).
+set with slacks of O(1). Such a split problem (up to 1e5 near-parallel rows) takes the
+feasible-slack path (:func:`_slacks`) and a linear fall of the barrier parameter.
 
 Method (Nocedal & Wright, Numerical Optimization, 2nd ed., Algorithm 19.2; the barrier update and
 the filter line search of IPOPT, Waechter & Biegler 2006). Slacks s > 0 turn every row into
@@ -107,6 +108,7 @@ class _Functions(NamedTuple):
     kinds: tuple  # ((name, count), ...) the row blocks in order: "objective", each constraint, bounds
     epigraph: jax.Array  # (n,) bool: the objective rows that hold t (all, or the first alone: gamma = 0)
     mu_scale: float  # 1 / the most rows per angle of a split block (1 without one): scales mu0
+    split: bool  # a block was split by angle and sample (a robust problem): the feasible-slack path
 
 
 def _functions(problem, weights: Weights) -> _Functions:
@@ -169,7 +171,7 @@ def _functions(problem, weights: Weights) -> _Functions:
     # grid block's, so the first barrier parameters are divided by k (the path starts as near the
     # objective as on a grid problem; with mu0 the barrier pushed the design to the box's far side)
     mu_scale = 1.0 / max([c // n for c, cut in zip(counts, split, strict=True) if cut] or [1])
-    return _Functions(phi, rows, unravel, free, u_max, n, kinds, epigraph, mu_scale)
+    return _Functions(phi, rows, unravel, free, u_max, n, kinds, epigraph, mu_scale, any(split))
 
 
 class KKT(NamedTuple):
@@ -248,6 +250,17 @@ def _start(problem, fns: _Functions, design, settings: NewtonSettings, mu0):
     return z0, s0, y0, mu0
 
 
+def _slacks(fns: _Functions, s, c):
+    """The slacks after a step to rows c: at least -c (a row more feasible than its slack says). On
+    a split problem's path every row inside its limit takes s = -c exactly (so c + s = 0 there: the
+    infeasibility measure counts violated rows only), and the line search keeps such a row inside.
+    Its 1e5 rows' second-order errors c(z + dz) - c - J dz summed to an infeasibility of 3 to 300 that
+    no step could lower by the filter's margin: the path stalled at the iteration cap."""
+    if fns.split:
+        return jnp.where(c < 0, -c, s)
+    return jnp.maximum(s, -c)
+
+
 def _step(state: NewtonState, fns: _Functions, settings: NewtonSettings) -> NewtonState:
     """One iteration: the rows, their Jacobian and the gradient at z (one evaluation each); the
     KKT residual there ends the loop (no step from a converged point); else the barrier update
@@ -263,7 +276,10 @@ def _step(state: NewtonState, fns: _Functions, settings: NewtonSettings) -> Newt
     sd = _scaled(y, y.shape[0])
     e_mu = jnp.maximum(jnp.maximum(kkt.stationarity, jnp.max(jnp.abs(c + s))),
                        jnp.max(jnp.abs(s * y - mu)) / sd)
-    mu_next = jnp.maximum(settings.tol / 100.0, jnp.minimum(settings.kappa_mu * mu, mu**settings.theta_mu))
+    # a split problem's mu falls linearly: a superlinear fall (x 480 from 4e-6) moved its many
+    # near-parallel rows' slacks so far that the Newton step crossed them (see ``_slacks``)
+    fall = settings.kappa_mu * mu if fns.split else jnp.minimum(settings.kappa_mu * mu, mu**settings.theta_mu)
+    mu_next = jnp.maximum(settings.tol / 100.0, fall)
     lower_mu = (e_mu <= settings.kappa_eps * mu) & (state.iteration > 0)
     mu = jnp.where(lower_mu, mu_next, mu)
     # the filter holds (theta, psi) of the barrier problem at one mu: emptied when mu changes
@@ -305,7 +321,7 @@ def _step(state: NewtonState, fns: _Functions, settings: NewtonSettings) -> Newt
 
     def measures(zv, sv):
         cv = fns.rows(zv)
-        sv = jnp.maximum(sv, -cv)
+        sv = _slacks(fns, sv, cv)
         return fns.phi(zv) - mu * jnp.sum(jnp.log(sv)), jnp.sum(jnp.abs(cv + sv)), cv
 
     psi0, theta0, _ = measures(z, s)
@@ -322,6 +338,8 @@ def _step(state: NewtonState, fns: _Functions, settings: NewtonSettings) -> Newt
     ok = jnp.isfinite(psi_t) & jnp.isfinite(theta_t) & (theta_t <= theta_max) & jnp.where(
         state.use_filter, in_filter & jnp.where(switching, armijo, progress),
         jnp.where(switching, armijo, progress | armijo))
+    if fns.split:  # the feasible-slack path: a row inside its limit stays inside (see ``_slacks``)
+        ok = ok & jnp.all((c_t < 0) | (c[None, :] >= 0), axis=1)
     first = jnp.where(jnp.any(ok), jnp.argmax(ok), settings.line_search_trials - 1)
     # a step that is not Armijo's on psi (an h-type step) adds the current pair to the filter
     add = ~(switching & armijo[first]) & ~done
@@ -330,7 +348,7 @@ def _step(state: NewtonState, fns: _Functions, settings: NewtonSettings) -> Newt
     count = count + add
     length, c_new = lengths[first], c_t[first]
     z_new = z + length * dz
-    s_new = jnp.maximum(s + length * ds, -c_new)
+    s_new = _slacks(fns, s + length * ds, c_new)
     y_new = y + alpha_y * dy
     # IPOPT's safeguard: y_i within [mu / (k s_i), k mu / s_i], k = 1e10
     y_new = jnp.clip(y_new, mu / (1e10 * s_new), 1e10 * mu / s_new)
