@@ -71,6 +71,8 @@ from jax.flatten_util import ravel_pytree
 from camjax.family import Design, Problem, Weights
 from camjax.solvers.base import Raw, family_of
 from camjax.solvers.gradient import TIE_BREAK, from_unit, midpoint, to_unit, u_max_of
+from camjax.solvers.limits import limit_setters as _limits
+from camjax.solvers.limits import limit_values
 
 
 @dataclass(frozen=True)
@@ -415,40 +417,6 @@ def run_one(problem: Problem, weights: Weights, key: jax.Array, settings, init: 
 
 
 # --------------------------------------------------------------------------- certificate
-
-
-def _limits(problem) -> dict:
-    """The scene's limits a problem carries: scene key -> (problem, value) -> problem with that
-    limit set to ``value`` (in the scene's units), every field derived from it moved with it."""
-    fields = set(problem._fields)
-    has_stress = "stress" in jax.eval_shape(
-        lambda: family_of(problem).constraints(problem, family_of(problem).bounds(problem)[0]))._fields
-    out = {}
-    if "sigma_max_MPa" in fields and has_stress:
-        out["sigma_max_MPa"] = lambda p, v: p._replace(sigma_max_MPa=v)
-    if "tan_max_pressure_angle" in fields:
-        def pressure(p, v):
-            extra = {"max_pressure_angle_deg": v} if "max_pressure_angle_deg" in fields else {}
-            return p._replace(tan_max_pressure_angle=jnp.tan(jnp.radians(v)), **extra)
-        out["max_pressure_angle_deg"] = pressure
-    for name in ("min_curvature_radius_mm", "rho_min_mm"):
-        if name in fields:
-            out["min_curvature_radius_mm"] = lambda p, v, name=name: p._replace(**{name: v})
-    return out
-
-
-def limit_values(problem) -> dict:
-    """The current value of each limit of :func:`_limits` (scene units), () arrays."""
-    values = {}
-    for key in _limits(problem):
-        if key == "max_pressure_angle_deg":
-            values[key] = (problem.max_pressure_angle_deg if "max_pressure_angle_deg" in problem._fields
-                           else jnp.degrees(jnp.arctan(problem.tan_max_pressure_angle)))
-        elif key == "min_curvature_radius_mm":
-            values[key] = getattr(problem, "min_curvature_radius_mm", getattr(problem, "rho_min_mm", None))
-        else:
-            values[key] = getattr(problem, key)
-    return values
 
 
 class Certificate(NamedTuple):
