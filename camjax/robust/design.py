@@ -429,9 +429,12 @@ def design_json(scene, nominal_problem) -> dict:
     t1 = time.perf_counter()
     problem = robust_problem(scene, nominal_problem, origin=nominal.design)
     t2 = time.perf_counter()
-    robust, rounds = solve_robust(problem, (d.alpha, d.gamma), mode=d.mode, solver=d.solver, seed=d.seed)
+    robust, rounds, solved = solve_rounds(problem, (d.alpha, d.gamma), mode=d.mode, solver=d.solver,
+                                          seed=d.seed)
     t3 = time.perf_counter()
     out = robust.to_json(problem)
+    if robust.certificate is not None:  # its multipliers are the rows of the last round's subset
+        out["certificate"] = robust.certificate_json(solved)
     fresh, fresh_seed = check_samples(spec.samples), (spec.seed + 1) % 2**32
     variables = family_of(nominal_problem).Design._fields
     side = {}
@@ -508,7 +511,16 @@ def _sample_rows(problem: Problem, design) -> jax.Array:
 
 def solve_robust(problem: Problem, weights, *, mode: str, solver: str, seed: int, subset: int = SUBSET,
                  rounds: int = 8):
-    """The robust design of ``problem`` (:func:`camjax.solvers.base.solve`), and the rounds it took.
+    """The robust design of ``problem`` and the rounds it took (:func:`solve_rounds`)."""
+    solution, done, _ = solve_rounds(problem, weights, mode=mode, solver=solver, seed=seed, subset=subset,
+                                     rounds=rounds)
+    return solution, done
+
+
+def solve_rounds(problem: Problem, weights, *, mode: str, solver: str, seed: int, subset: int = SUBSET,
+                 rounds: int = 8):
+    """The robust design of ``problem`` (:func:`camjax.solvers.base.solve`), the rounds it took,
+    and the problem the last round solved (a solution's certificate is of that problem's rows).
 
     Global mode, by rounds: at the current design (at first :func:`start`: the nominal optimum,
     or the family's start) each row's m
@@ -528,7 +540,7 @@ def solve_robust(problem: Problem, weights, *, mode: str, solver: str, seed: int
     m = int(problem.rank)
     subset = max(subset, 4 * (m + 1) + 64)
     if mode != "global":
-        return solve(problem, weights, mode=mode, solver=solver, seed=seed), 1
+        return solve(problem, weights, mode=mode, solver=solver, seed=seed), 1, problem
     design, index, done = start(problem), None, 0
     while done < rounds:
         done += 1
@@ -553,7 +565,7 @@ def solve_robust(problem: Problem, weights, *, mode: str, solver: str, seed: int
     status = np.int32(Status.INFEASIBLE if not full.feasible else
                       Status.CONVERGED if converged is not None and bool(converged) else Status.MAX_STEPS)
     return dataclasses.replace(sol, objective=full.objective, violation=full.violation,
-                               feasible=full.feasible, evaluation=full, status=status), done
+                               feasible=full.feasible, evaluation=full, status=status), done, sub
 
 
 def _merge(previous: np.ndarray, order: np.ndarray, subset: int) -> np.ndarray:

@@ -238,10 +238,15 @@ class Solution:
                "iterations": int(self.iterations),
                "converged": None if self.converged is None else bool(self.converged)}
         out.update(family_of(problem).solution_json(problem, self))
-        if self.certificate is not None:  # the solver module renders its own certificate
-            out["certificate"] = solver_module(self.solver).certificate_json(
-                problem, self.certificate, mode=self.mode, solver=self.solver)
+        if self.certificate is not None:
+            out["certificate"] = self.certificate_json(problem)
         return out
+
+    def certificate_json(self, problem) -> dict[str, Any]:
+        """The certificate's result.json block, rendered by the solver module against ``problem``:
+        the problem the solver solved (its rows are the multipliers' rows)."""
+        return solver_module(self.solver).certificate_json(problem, self.certificate, mode=self.mode,
+                                                           solver=self.solver)
 
     def record(self, problem) -> dict[str, Any]:
         """One pareto.json row of a single result (without "pareto")."""
