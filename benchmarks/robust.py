@@ -162,7 +162,8 @@ def dynamics_run(samples: int = 1000, cli_runs: int = 3) -> dict:
         result = json.loads((out / "robust.json").read_text())
     return {
         "samples": samples,
-        "cli_command": f"camjax robust <thesis-bench + [design] + [tolerances]> --samples {samples} --out DIR",
+        "cli_command": f"camjax robust <thesis-bench + [design] + [tolerances]> --samples {samples} "
+                       "--out DIR",
         "tolerances": DYNAMICS_TOLERANCES.strip().splitlines()[1:],
         "cli_wall_s": {"cold_first": walls[0], "warm": walls[1:],
                        "warm_median": statistics.median(walls[1:]) if len(walls) > 1 else None},
@@ -272,9 +273,10 @@ def main(argv=None) -> int:
                                    **dynamics_run(samples, cli_runs=args.cli_runs)}
         path.write_text(json.dumps(data, indent=1) + "\n")
         r = data["robust_dynamics"]
-        print(f"thesis-bench with [dynamics], {samples} samples: CLI cold {r['cli_wall_s']['cold_first']:.1f} s "
-              f"wall ({r['cli_cpu_s']['cold_first']:.1f} s CPU), warm {r['cli_wall_s']['warm_median']} s wall "
-              f"({r['cli_cpu_s']['warm_median']} s CPU); load {r['environment']['load_average_at_start']}")
+        wall, cpu = r["cli_wall_s"], r["cli_cpu_s"]
+        print(f"thesis-bench with [dynamics], {samples} samples: CLI cold {wall['cold_first']:.1f} s wall "
+              f"({cpu['cold_first']:.1f} s CPU), warm {wall['warm_median']} s wall ({cpu['warm_median']} s "
+              f"CPU); load {r['environment']['load_average_at_start']}")
         return 0
     data = {"environment": environment("float64"), "robust": run(args.samples, cli_runs=args.cli_runs)}
     Path(args.out).write_text(json.dumps(data, indent=1) + "\n")
