@@ -18,7 +18,15 @@ given, no solve).
 The machine is a shared 2-core CPU: other processes run beside it (``environment``'s load
 average), so the figures are medians, and ratios come from the same run.
 
-``python -m benchmarks.robust [--samples N] --out FILE.json``.
+With ``--dynamics``: ``camjax robust`` of the built-in thesis-bench (a rocker with [dynamics]: the
+follower train's residual vibration is an output of every sample) with a [design] and a
+[tolerances] section added (:data:`DYNAMICS_TOLERANCES`: speed, the train's stiffness, damping and
+inertia, roller radius, spring), ``--samples 1000`` by default: wall and CPU seconds (the child
+process's user + system) of a cold run (compilation caches in an empty folder) and of warm runs
+(the same folders, filled), written under the key ``robust_dynamics`` of ``--out``, whose other keys
+are kept.
+
+``python -m benchmarks.robust [--samples N] [--dynamics] --out FILE.json``.
 """
 
 from __future__ import annotations
@@ -50,6 +58,19 @@ base_radius_mm = { sd = 0.02 }
 face_width_mm = { sd = 0.05 }
 cam_width_mm = { sd = 0.05 }
 profile_error_mm = { amplitude = 0.005, harmonics = [2, 3, 5] }
+"""
+DYNAMICS_DESIGN = """
+[design]
+base_radius_mm = [20.0, 200.0]
+"""
+DYNAMICS_TOLERANCES = """
+[tolerances]
+rpm = { sd_percent = 2 }
+k23 = { sd_percent = 5 }
+c3 = { sd_percent = 10 }
+I3 = { half_width_percent = 3, dist = "uniform" }
+roller_radius_mm = { sd = 0.02 }
+spring_N_m_per_rad = { sd_percent = 5 }
 """
 LOOP_SAMPLES = 2000
 CHUNK = 8192
@@ -102,16 +123,59 @@ def numpy_outputs(ctx, values, phases):
                      np.where(ctx["dwell"], np.abs(eps), 0.0).max(1), np.abs(accel).max(1)], axis=1)
 
 
-def cli_wall(path: str, samples: int, runs: int, extra: tuple[str, ...] = ()) -> list[float]:
+def cli_wall(path: str, samples: int, runs: int, extra: tuple[str, ...] = (), env_extra=None,
+             cpu: list | None = None, keep: Path | None = None) -> list[float]:
+    """Wall seconds of ``runs`` fresh ``camjax robust`` processes; each one's CPU seconds (user +
+    system of the child) appended to ``cpu`` when given; the last run's folder written to ``keep``
+    when given."""
+    import resource
+
     out = []
-    env = dict(os.environ, PYTHONPATH=str(Path(__file__).resolve().parent.parent))
-    for _ in range(runs):
+    env = dict(os.environ, PYTHONPATH=str(Path(__file__).resolve().parent.parent), **(env_extra or {}))
+    for i in range(runs):
         with tempfile.TemporaryDirectory() as tmp:
+            folder = keep if keep is not None and i == runs - 1 else Path(tmp) / "o"
+            r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
             t0 = time.perf_counter()
             subprocess.run([sys.executable, "-m", "camjax.cli", "robust", path, "--samples", str(samples),
-                            "--out", str(Path(tmp) / "o"), *extra], check=True, env=env, capture_output=True)
+                            "--out", str(folder), *extra], check=True, env=env, capture_output=True)
             out.append(time.perf_counter() - t0)
+            r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+            if cpu is not None:
+                cpu.append(r1.ru_utime - r0.ru_utime + r1.ru_stime - r0.ru_stime)
     return out
+
+
+def dynamics_run(samples: int = 1000, cli_runs: int = 3) -> dict:
+    """``camjax robust`` of thesis-bench with [design] and [tolerances] added: a cold run (empty
+    compilation caches) then ``cli_runs - 1`` warm runs, wall and CPU seconds each."""
+    from camjax.scene import builtin_scene_text
+
+    with tempfile.TemporaryDirectory() as tmp:
+        path = str(Path(tmp) / "thesis-bench-tolerances.toml")
+        Path(path).write_text(builtin_scene_text("thesis-bench") + DYNAMICS_DESIGN + DYNAMICS_TOLERANCES)
+        caches = {"CAMJAX_COMPILATION_CACHE": str(Path(tmp) / "xla"),
+                  "CAMJAX_PROGRAM_CACHE": str(Path(tmp) / "programs")}
+        cpu: list[float] = []
+        out = Path(tmp) / "last"
+        walls = cli_wall(path, samples, cli_runs, env_extra=caches, cpu=cpu, keep=out)
+        result = json.loads((out / "robust.json").read_text())
+    return {
+        "samples": samples,
+        "cli_command": f"camjax robust <thesis-bench + [design] + [tolerances]> --samples {samples} "
+                       "--out DIR",
+        "tolerances": DYNAMICS_TOLERANCES.strip().splitlines()[1:],
+        "cli_wall_s": {"cold_first": walls[0], "warm": walls[1:],
+                       "warm_median": statistics.median(walls[1:]) if len(walls) > 1 else None},
+        "cli_cpu_s": {"cold_first": cpu[0], "warm": cpu[1:],
+                      "warm_median": statistics.median(cpu[1:]) if len(cpu) > 1 else None},
+        "timings_s_of_the_last_run": result["timings_s"],
+        "residual_vibration": result["outputs"]["residual_vibration"],
+        "residual_vibration_sensitivities": result["sensitivities"]["residual_vibration"],
+        "limits": result["limits"],
+        "load_average_at_end": list(os.getloadavg()),
+        "target_s": 30.0,
+    }
 
 
 def run(samples: int = 100_000, repeats: int = 3, cli_runs: int = 3) -> dict:
@@ -196,8 +260,24 @@ def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--samples", type=int, default=100_000)
     p.add_argument("--cli-runs", type=int, default=3)
+    p.add_argument("--dynamics", action="store_true",
+                   help="measure thesis-bench with [dynamics] (default 1000 samples) under the key "
+                        "robust_dynamics of --out, keeping its other keys")
     p.add_argument("--out", required=True)
     args = p.parse_args(argv)
+    if args.dynamics:
+        path = Path(args.out)
+        data = json.loads(path.read_text()) if path.exists() else {}
+        samples = 1000 if args.samples == p.get_default("samples") else args.samples
+        data["robust_dynamics"] = {"environment": environment("float64"),
+                                   **dynamics_run(samples, cli_runs=args.cli_runs)}
+        path.write_text(json.dumps(data, indent=1) + "\n")
+        r = data["robust_dynamics"]
+        wall, cpu = r["cli_wall_s"], r["cli_cpu_s"]
+        print(f"thesis-bench with [dynamics], {samples} samples: CLI cold {wall['cold_first']:.1f} s wall "
+              f"({cpu['cold_first']:.1f} s CPU), warm {wall['warm_median']} s wall ({cpu['warm_median']} s "
+              f"CPU); load {r['environment']['load_average_at_start']}")
+        return 0
     data = {"environment": environment("float64"), "robust": run(args.samples, cli_runs=args.cli_runs)}
     Path(args.out).write_text(json.dumps(data, indent=1) + "\n")
     r = data["robust"]

@@ -13,7 +13,10 @@ Outputs per sample (Python names, units in the name): ``peak_stress_MPa`` (with 
 loads), ``peak_pressure_angle_deg`` (types with a pressure angle), ``least_curvature_radius_mm``,
 ``dwell_position_error_mm`` (with a form error: max |eps| over the dwells' samples),
 ``peak_acceleration_m_s2`` (translating) or ``peak_acceleration_rad_s2`` (rocking). All are the
-grid's (the family evaluation's) extrema on the scene's ``[motion] samples`` grid.
+grid's (the family evaluation's) extrema on the scene's ``[motion] samples`` grid. With [dynamics],
+``residual_vibration`` (m, or rad for an oscillating train): the follower train's steady-state
+vibration about the cam's motion, max over the cycle of |theta3 - theta2|, the figure ``camjax
+dynamics`` reports as dynamics.json's ``nominal.max_tracking_error`` (:func:`residual_vibration`).
 """
 
 from __future__ import annotations
@@ -59,6 +62,8 @@ def nominal(scene, tolerances: Tolerances, design: dict[str, float]) -> Nominal:
 def _scene_value(scene, name: str, section: str, design: dict[str, float]):
     if section == "motion":
         return scene.motion.rpm
+    if section == "dynamics":
+        return getattr(scene.dynamics, name)
     if section == "train":
         return getattr(scene.follower.train, name)
     if section == "follower":
@@ -71,13 +76,19 @@ def _scene_value(scene, name: str, section: str, design: dict[str, float]):
 def perturbed_scene(nom: Nominal, values) -> tuple[Any, dict[str, Any]]:
     """The scene with the toleranced values replaced by ``values`` (arrays, traceable) and the
     design (dict) with its toleranced variables replaced. A design variable that is also a
-    [follower] key (e.g. a roller's radius) is replaced in both."""
+    [follower] key (e.g. a roller's radius) is replaced in both. A [dynamics] cam speed that is the
+    rpm's (not given apart) follows a drawn rpm."""
     scene, design = nom.scene, dict(nom.design)
-    motion, spec, contact = scene.motion, scene.follower, scene.contact
+    motion, spec, contact, dyn = scene.motion, scene.follower, scene.contact, scene.dynamics
+    speed_of_rpm = dyn is not None and dyn.cam_speed_hz == motion.rpm / 60.0
     train = spec.train
     for t, v in zip(nom.tolerances.values, values, strict=True):
         if t.section == "motion":
             motion = dataclasses.replace(motion, rpm=v)
+            if speed_of_rpm:
+                dyn = dataclasses.replace(dyn, cam_speed_hz=v / 60.0)
+        elif t.section == "dynamics":
+            dyn = dataclasses.replace(dyn, **{t.name: v})
         elif t.section == "train":
             train = train._replace(**{t.name: v})
         elif t.section == "follower":
@@ -90,7 +101,7 @@ def perturbed_scene(nom: Nominal, values) -> tuple[Any, dict[str, Any]]:
                 spec = dataclasses.replace(spec, **{t.name: v})
     if train is not spec.train:
         spec = dataclasses.replace(spec, train=train)
-    return dataclasses.replace(scene, motion=motion, follower=spec, contact=contact), design
+    return dataclasses.replace(scene, motion=motion, follower=spec, contact=contact, dynamics=dyn), design
 
 
 class Grid(NamedTuple):
@@ -146,6 +157,8 @@ def output_names(scene, tolerances: Tolerances) -> tuple[str, ...]:
     if tolerances.profile is not None:
         names.append("dwell_position_error_mm")
     names.append("peak_acceleration_rad_s2" if kind.rocking else "peak_acceleration_m_s2")
+    if scene.dynamics is not None:
+        names.append("residual_vibration")
     return tuple(names)
 
 
@@ -193,6 +206,33 @@ def drawn(nom: Nominal, values, phases, g: Grid | None = None) -> Drawn:
     return Drawn(scene, design, arrays_from_kinematics(scene, kin), eps)
 
 
+def residual_vibration(scene, profile=None, phases=None) -> jax.Array:
+    """The follower train's residual vibration of a scene with [dynamics] (m, or rad for an
+    oscillating train): max over the cam cycle of |theta3 - theta2|, the load's steady-state
+    deviation from the cam's motion, from the transfer function harmonic by harmonic on the
+    [dynamics] ``samples`` grid: what ``camjax dynamics`` reports as ``nominal.max_tracking_error``
+    (:func:`camjax.dynamics.report.nominal`). ``profile`` (a translating train only) adds the form
+    error of ``phases`` to the cam's harmonics (a harmonic above [dynamics] ``harmonics`` is left
+    out, as the dynamics' series leaves the law's out). Traceable in the plant, the cam speed and
+    the phases; a maximum over the grid, differentiable where one sample holds it."""
+    from camjax.dynamics import context as dc
+    from camjax.dynamics.harmonics import TWO_PI, CamHarmonics, cam_grid, max_abs
+    from camjax.dynamics.plant import tracking_error_harmonics
+
+    spec = scene.dynamics
+    cam = dc.program_cam(scene)
+    if profile is not None and spec.follower == "translating":
+        kept = [(j, h) for j, h in enumerate(profile.harmonics) if h <= spec.harmonics]
+        if kept:
+            rows = jnp.asarray([h for _, h in kept])
+            ph = jnp.stack([phases[j] for j, _ in kept])
+            a = jnp.asarray(profile.amplitude_mm * spec.motion_scale)
+            # a cos(h phi + p) = a cos p cos(h phi) - a sin p sin(h phi)
+            cam = CamHarmonics(cam.cos.at[rows].add(a * jnp.cos(ph)), cam.sin.at[rows].add(-a * jnp.sin(ph)))
+    err = tracking_error_harmonics(cam, cam, dc.plant_of(spec), TWO_PI * jnp.asarray(spec.cam_speed_hz))
+    return max_abs(err, cam_grid(spec.samples))
+
+
 def contact_load(scene, arrays) -> jax.Array:
     """(N,) the load that holds the follower on the cam: a translating follower's contact force (N),
     a rocker's moment about its pivot (N m); zeros without loads. Contact is lost where it is < 0."""
@@ -237,6 +277,8 @@ def sample(nom: Nominal, values, phases, g: Grid | None = None) -> Sample:
         elif name == "dwell_position_error_mm":
             mask = jnp.asarray(dwell_mask(scene0, n))
             out.append(jnp.max(jnp.where(mask, jnp.abs(eps[0]), 0.0)))
+        elif name == "residual_vibration":
+            out.append(residual_vibration(scene, nom.tolerances.profile, phases))
         else:
             out.append(jnp.max(jnp.abs(accel)))
     broken = []

@@ -85,7 +85,7 @@ def run(scene, samples: int, seed: int, *, tolerances: Tolerances | None = None,
         "profile_error_mm": None if tol.profile is None else {
             "amplitude": tol.profile.amplitude_mm, "harmonics": list(tol.profile.harmonics)},
         "outputs": {n: {"nominal": float(nominal_out[j]), "limit": limit_of.get(n),
-                        **_stats(out[:, j])} for j, n in enumerate(names)},
+                        **_stats(out[:, j]), **_unit_of(scene, n)} for j, n in enumerate(names)},
         "limits": {lim: {"probability": float(broken[:, i].mean()), "broken": int(broken[:, i].sum())}
                    for i, lim in enumerate(lims)},
         "any_limit_probability": float(broken.any(axis=1).mean()) if lims else 0.0,
@@ -104,6 +104,14 @@ def run(scene, samples: int, seed: int, *, tolerances: Tolerances | None = None,
     for key, curves in (("lift", res.lift), ("accel", res.accel), ("load", res.load)):
         env[key] = np.percentile(curves, [1, 50, 99], axis=0)
     return RobustRun(data, out, broken, env)
+
+
+def _unit_of(scene, name: str) -> dict[str, str]:
+    """The unit of an output whose name does not carry it: the residual vibration's is the
+    [dynamics] train's motion unit (m, or rad for an oscillating train)."""
+    if name != "residual_vibration":
+        return {}
+    return {"unit": "m" if scene.dynamics.follower == "translating" else "rad"}
 
 
 def _stats(x: np.ndarray) -> dict[str, float]:

@@ -11,8 +11,10 @@ Each key of the section names a scene value and its spread, e.g.::
 A value is ``rpm`` ([motion]), a [follower] key of the scene's follower type that the scene gives
 (its dimensions and its train: mass, spring, preload, ...; not the limits ``max_pressure_angle_deg``
 and ``min_curvature_radius_mm``, which are requirements, not built values), ``cam_width_mm``
-([contact]), or a design variable of the [design] (``base_radius_mm``, ...: the nominal is then the
-solved design's value). ``profile_error_mm`` is a radial form error of the cam surface,
+([contact]), a [dynamics] value of the follower train's model (``I3``, ``c3``, ``k23``: what its
+residual vibration depends on besides the cam speed, which follows ``rpm`` unless [dynamics] gives
+``cam_speed_hz``), or a design variable of the [design] (``base_radius_mm``, ...: the nominal is then
+the solved design's value). ``profile_error_mm`` is a radial form error of the cam surface,
 eps(theta) = sum_h a cos(h theta + phi_h) over the listed harmonics h, each of amplitude a (mm) and a
 phase phi_h drawn uniform in [0, 2 pi) per sample; it adds to the follower's lift (translating
 followers; the cam's surface moves along the follower axis to first order).
@@ -38,6 +40,7 @@ SPREAD_KEYS = ("sd", "sd_percent", "half_width", "half_width_percent", "dist")
 PROFILE_KEY = "profile_error_mm"
 LIMIT_KEYS = ("max_pressure_angle_deg", "min_curvature_radius_mm")
 CONTACT_KEYS = ("cam_width_mm",)
+DYNAMICS_KEYS = ("I3", "c3", "k23")  # the follower train's plant (camjax.dynamics.context.plant_of)
 
 
 class Tolerance(NamedTuple):
@@ -91,6 +94,8 @@ def value_names(scene) -> dict[str, str]:
             out[key] = "follower"
     if scene.contact is not None:
         out.update(dict.fromkeys(CONTACT_KEYS, "contact"))
+    if scene.dynamics is not None:
+        out.update(dict.fromkeys(DYNAMICS_KEYS, "dynamics"))
     if scene.design is not None:
         out.update(dict.fromkeys(kind.variables, "design"))
     return out
@@ -118,8 +123,11 @@ def parse_tolerances(r: TableReader, scene) -> Tolerances:
         if key not in allowed:
             why = ("a limit, not a built value" if key in LIMIT_KEYS else
                    "not a value of this scene" if key in _known_anywhere() else "unknown value")
-            if key.startswith("dynamics") or (scene.dynamics is not None and _is_dynamics_key(key)):
-                why = "[dynamics] values are not sampled yet"
+            if scene.dynamics is not None and _is_dynamics_key(key):
+                why = ("a [dynamics] value the follower train's residual vibration does not use (its "
+                       "plant: " + ", ".join(DYNAMICS_KEYS) + ")")
+            elif key in DYNAMICS_KEYS:
+                why = "a [dynamics] value: the scene has no [dynamics]"
             raise r.error(key, spec, why, ", ".join([*allowed, PROFILE_KEY]))
         values.append(_spread(r.sub(key), key, allowed[key]))
     return Tolerances(tuple(values), profile)
@@ -128,7 +136,8 @@ def parse_tolerances(r: TableReader, scene) -> Tolerances:
 def _known_anywhere() -> set[str]:
     from camjax import followers
 
-    return {k for f in followers.all_followers() for k in (*f.keys, *f.variables)} | {"rpm", *CONTACT_KEYS}
+    return ({k for f in followers.all_followers() for k in (*f.keys, *f.variables)}
+            | {"rpm", *CONTACT_KEYS, *DYNAMICS_KEYS})
 
 
 def _is_dynamics_key(key: str) -> bool:
