@@ -468,6 +468,14 @@ def targets() -> list[dict]:
     rows.append(_target("robust.cli_wall_s.warm_median", "`camjax robust`, 100000 samples, warm", 10.0,
                         robust["robust"]["cli_wall_s"]["warm_median"], False, robust["environment"], "robust",
                         unit=" s"))
+    rows.append(_target("robust.cli_wall_s.cold_first", "`camjax robust`, 100000 samples, cold", 20.0,
+                        robust["robust"]["cli_wall_s"]["cold_first"], False, robust["environment"], "robust",
+                        unit=" s"))
+    if "robust_dynamics" in robust:
+        dyn = robust["robust_dynamics"]
+        rows.append(_target("robust_dynamics.cli_wall_s.warm_median",
+                            "`camjax robust` with [dynamics], 1000 samples, warm", 30.0,
+                            dyn["cli_wall_s"]["warm_median"], False, dyn["environment"], "robust", unit=" s"))
     return rows
 
 
