@@ -4,7 +4,11 @@ Shared fixtures: the default scene, its arrays, and the reference case in NumPy 
 """
 
 import gc
+import json
+import logging
 import os
+import re
+from pathlib import Path
 
 # XLA compiles are most of the suite's time: compile as the command line does
 # (camjax.runtime.CPU_XLA_FLAGS: XLA's loop emitters, not its CPU fusion emitters; the default
@@ -27,6 +31,7 @@ from camjax.runtime import use_compilation_cache  # noqa: E402
 def pytest_configure(config):
     assert jax.config.jax_enable_x64, "camjax tests run in float64"
     _persistent_compilation_cache(config)
+    _ledger_start(config)
 
 
 def _persistent_compilation_cache(config) -> None:
@@ -114,6 +119,7 @@ def _release_compiled_programs():
 
 
 def pytest_addoption(parser):
+    _addoption_ledger(parser)
     parser.addoption("--cpu-durations", type=int, default=None, metavar="N",
                      help="list the N tests that used the most CPU seconds (this process and its children)")
 
@@ -171,3 +177,62 @@ def pytest_terminal_summary(terminalreporter, config):
     ranked = sorted(_CPU_BY_TEST.items(), key=lambda kv: -kv[1])
     for (nodeid, when), seconds in ranked[: count or None]:
         terminalreporter.write_line(f"{seconds:8.2f}s {when:8s} {nodeid}")
+
+
+# ------------------------------------------------------------------ compiled programs per test
+# ``--compile-ledger=DIR`` writes, per worker, one JSON line per test phase: the XLA programs it
+# compiled (name, seconds), the ones it loaded from the persistent compilation cache, and its
+# tracing seconds (JAX's own compile log, turned on for the run). The suite is bound by XLA
+# compiles; the ledger shows which tests compile which programs, and which programs several tests
+# compile again under another shape.
+
+_LEDGER: dict = {"phase": None, "records": []}
+_COMPILED = re.compile(r"Finished XLA compilation of (.+) in ([0-9.e-]+) sec")
+_TRACED = re.compile(r"Finished tracing (.+) for jit in ([0-9.e-]+) sec")
+_HIT = re.compile(r"Persistent compilation cache hit for '([^']+)'")
+
+
+class _LedgerHandler(logging.Handler):
+    def emit(self, record):
+        if _LEDGER["phase"] is None:
+            return
+        message = record.getMessage()
+        for kind, pattern in (("compile", _COMPILED), ("trace", _TRACED), ("hit", _HIT)):
+            match = pattern.search(message)
+            if match:
+                seconds = float(match.group(2)) if kind != "hit" else 0.0
+                _LEDGER["records"].append((kind, match.group(1), seconds))
+
+
+def _addoption_ledger(parser):
+    parser.addoption("--compile-ledger", default=None, metavar="DIR",
+                     help="write each test's compiled programs to DIR/ledger-<worker>.jsonl")
+
+
+def _ledger_start(config) -> None:
+    folder = config.getoption("compile_ledger")
+    if folder is None:
+        return
+    jax.config.update("jax_log_compiles", True)
+    handler = _LedgerHandler(level=logging.DEBUG)
+    for name in ("jax", "jax._src.dispatch", "jax._src.interpreters.pxla", "jax._src.compiler",
+                 "jax._src.compilation_cache"):
+        log = logging.getLogger(name)
+        log.addHandler(handler)
+        log.setLevel(min(log.level or logging.WARNING, logging.DEBUG))
+    worker = os.environ.get("PYTEST_XDIST_WORKER", "main")
+    Path(folder).mkdir(parents=True, exist_ok=True)
+    _LEDGER["file"] = open(Path(folder) / f"ledger-{worker}.jsonl", "a")  # noqa: SIM115
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_protocol(item, nextitem):
+    if "file" in _LEDGER:
+        _LEDGER["phase"] = item.nodeid
+        _LEDGER["records"] = []
+    yield
+    if "file" in _LEDGER:
+        records = _LEDGER["records"]
+        _LEDGER["file"].write(json.dumps({"test": item.nodeid, "records": records}) + "\n")
+        _LEDGER["file"].flush()
+        _LEDGER["phase"] = None
