@@ -32,6 +32,7 @@ def pytest_configure(config):
     assert jax.config.jax_enable_x64, "camjax tests run in float64"
     _persistent_compilation_cache(config)
     _ledger_start(config)
+    _keep_file_order(config)
 
 
 def _persistent_compilation_cache(config) -> None:
@@ -120,6 +121,7 @@ def _release_compiled_programs():
 
 def pytest_addoption(parser):
     _addoption_ledger(parser)
+    _addoption_file_durations(parser)
     parser.addoption("--cpu-durations", type=int, default=None, metavar="N",
                      help="list the N tests that used the most CPU seconds (this process and its children)")
 
@@ -163,6 +165,7 @@ _CPU_BY_TEST: dict = {}
 
 
 def pytest_runtest_logreport(report):
+    _record_file_seconds(report)
     for name, value in getattr(report, "user_properties", ()):
         if name == "cpu_s":
             _CPU_BY_TEST[(report.nodeid, report.when)] = value
@@ -232,3 +235,53 @@ def pytest_runtest_protocol(item, nextitem):
         _LEDGER["file"].write(json.dumps({"test": item.nodeid, "records": records}) + "\n")
         _LEDGER["file"].flush()
         _LEDGER["phase"] = None
+
+
+# ------------------------------------------------------------------ the longest files first
+# `-n auto --dist loadfile` hands whole files to the workers in the order of its queue, and xdist
+# orders that queue by each file's number of tests: a file of three long tests (the cache matrix)
+# started last and ran alone at the end of the run. Here the files are ordered by their seconds in
+# the last full run (tests/file_durations.json), the longest first, so that the short files fill
+# the end, and xdist's reordering is turned off. A file not recorded there counts 0.6 s a test.
+# ``--file-durations=PATH`` writes each file's seconds (every phase of every test) of this run to
+# PATH, for a full run to refresh the record.
+
+FILE_DURATIONS = Path(__file__).with_name("file_durations.json")
+_SECONDS_BY_FILE: dict = {}
+
+
+def _addoption_file_durations(parser):
+    parser.addoption("--file-durations", default=None, metavar="PATH",
+                     help="write each test file's seconds in this run to PATH (JSON)")
+
+
+def _keep_file_order(config) -> None:
+    if hasattr(config.option, "loadscopereorder"):  # pytest-xdist: keep the queue in collection order
+        config.option.loadscopereorder = False
+
+
+def pytest_collection_modifyitems(config, items):
+    try:
+        recorded = json.loads(FILE_DURATIONS.read_text())
+    except (OSError, ValueError):
+        recorded = {}
+    counts: dict = {}
+    for item in items:
+        path = item.nodeid.split("::")[0]
+        counts[path] = counts.get(path, 0) + 1
+    weight = {path: recorded.get(path, 0.6 * n) for path, n in counts.items()}
+    rank = {path: k for k, path in enumerate(sorted(weight, key=lambda p: (-weight[p], p)))}
+    order = {id(item): k for k, item in enumerate(items)}
+    items.sort(key=lambda item: (rank[item.nodeid.split("::")[0]], order[id(item)]))
+
+
+def _record_file_seconds(report) -> None:
+    path = report.nodeid.split("::")[0]
+    _SECONDS_BY_FILE[path] = _SECONDS_BY_FILE.get(path, 0.0) + report.duration
+
+
+def pytest_sessionfinish(session, exitstatus):
+    target = session.config.getoption("file_durations", None)
+    if target and _SECONDS_BY_FILE and not os.environ.get("PYTEST_XDIST_WORKER"):
+        Path(target).write_text(json.dumps({p: round(s, 1) for p, s in sorted(_SECONDS_BY_FILE.items())},
+                                           indent=1) + "\n")
