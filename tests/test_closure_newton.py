@@ -29,7 +29,8 @@ CASES = {
 
 def _problem(scene_name):
     scene = camjax.load_scene(scene_name)
-    scene = dataclasses.replace(scene, motion=dataclasses.replace(scene.motion, samples=SAMPLES, extrema="grid"))
+    motion = dataclasses.replace(scene.motion, samples=SAMPLES, extrema="grid")
+    scene = dataclasses.replace(scene, motion=motion)
     return scene, problem_from_scene(scene)
 
 
