@@ -18,8 +18,9 @@ One room for what a translating and a rocking roller share when no spring holds 
   contact (inner flank, first cam) where it is > 0 and pulled by the second where it is < 0
   (:func:`split_load`).
 - the design problems' second contact (:class:`GrooveTerms`, :class:`YokeTerms`, :class:`ArmTerms`
-  and :func:`groove_second`, :func:`yoke_second`, :func:`arm_second`: g <= 0 per angle, maxed with
-  the first contact's) and the sizing's (:func:`second_limits`, :func:`first_admissible_size`).
+  and :func:`groove_second`, :func:`yoke_second`, :func:`arm_second`: g <= 0 per angle, each limit
+  of each contact its own row, :func:`with_second_contact`) and the sizing's (:func:`second_limits`,
+  :func:`first_admissible_size`).
 
 The report's block and the drawings are :mod:`camjax.followers._closure_report` and
 :mod:`camjax.followers._closure_drawing` (output layer, NumPy only).
@@ -428,26 +429,127 @@ def reversed_coefficient(force_N, cam_width_mm, cam, follower):
 
 
 class SecondContact(NamedTuple):
-    """The second contact's constraints of a design, g <= 0 per angle, to be maxed with the first's."""
+    """The second contact's constraints of a design, g <= 0 per angle (mm), each its own row beside the
+    first contact's (:func:`with_second_contact`), and what a report judges of it."""
 
-    pressure_angle: jax.Array  # mm (as the first's)
-    undercut: jax.Array  # mm
+    lean: jax.Array  # mm: its pressure-angle limit is |lean| - reach <= 0 (a groove's is the first's)
+    reach: jax.Array  # mm
+    undercut: jax.Array  # mm: the cut limit of its curvature
     stress: jax.Array  # mm (C^2 / (sigma_max^2 cos phi) - rho_eq)
     pressure_angle_rad: jax.Array  # |phi| of the second contact (the evaluation)
     margin_mm: jax.Array  # the second contact's cut margin (mm; <= rho_min: violated)
     stress_MPa: jax.Array  # the second contact's Hertz stress
+    shaft: jax.Array | None = None  # mm: R2 - |C2| (conjugate): the second roller off the shaft
+    side: jax.Array | None = None  # mm: l2 sin(psi - beta) (a second arm): across the line of centres
 
 
-def _second(sigma_max_MPa, coefficient, pressure_g, phi, undercut_g, margin, rho_eq) -> SecondContact:
-    """A second contact's constraints from its pressure-angle and cut constraints (mm), pressure angle
-    (rad), cut margin (mm), Hertz equivalent radius (mm) and the coefficient of its load."""
+# A positive drive's constraint rows (its own NamedTuple per family and closure, declared with
+# camjax.family.twin_type from the spring-closed Constraints): no max inside a row, so that the
+# constraint set is smooth where two pieces cross. The pressure angle |lean| - reach <= 0 is two
+# rows, lean - reach and -lean - reach (+phi_max and -phi_max: |s' - e~| is kinked at every
+# dwell sample where s' = e~, and an interior-point path that crosses e~ = 0 over such rows
+# oscillated there at the iteration cap); then each limit of the second contact on its own row.
+# Each row names the spring-closed row of its limit (:data:`LIMIT_ROW`: what polish keeps and what
+# the second contact is judged beside, :func:`second_excess`) and the SecondContact field it is.
+PRESSURE_ROWS = ("pressure_angle_plus", "pressure_angle_minus")
+GROOVE_ROWS = (*PRESSURE_ROWS, "outer_undercut", "outer_stress")  # one normal: one pressure angle
+YOKE_ROWS = (*PRESSURE_ROWS, "second_pressure_angle_plus", "second_pressure_angle_minus", "second_undercut",
+             "second_stress", "second_shaft")
+ARM_ROWS = (*YOKE_ROWS, "second_side")
+LIMIT_ROW = {"pressure_angle_plus": "pressure_angle", "pressure_angle_minus": "pressure_angle",
+             "outer_undercut": "undercut", "outer_stress": "stress",
+             "second_pressure_angle_plus": "pressure_angle", "second_pressure_angle_minus": "pressure_angle",
+             "second_undercut": "undercut", "second_stress": "stress", "second_shaft": "undercut",
+             "second_side": "pressure_angle"}
+_SECOND_FIELD = {"outer_undercut": "undercut", "outer_stress": "stress", "second_undercut": "undercut",
+                 "second_stress": "stress", "second_shaft": "shaft", "second_side": "side"}
+
+
+_ROWS = {GrooveTerms: GROOVE_ROWS, YokeTerms: YOKE_ROWS, ArmTerms: ARM_ROWS}
+
+
+def row_names(terms) -> tuple[str, ...]:
+    """The rows a positive drive with closure ``terms`` adds to the spring-closed constraints, in
+    place of their pressure angle (static)."""
+    return _ROWS[type(terms)]
+
+
+def with_second_contact(first, lean, reach, second: SecondContact, terms, types: dict):
+    """A positive drive's constraints (g <= 0, mm, (n,) each), as ``types[type(terms)]`` (the family's
+    NamedTuple, declared with :func:`positive_type`): the first contact's rows ``first`` (the
+    family's spring-closed Constraints) less its pressure angle |lean| - reach, which is two rows
+    (``lean`` and ``reach`` in mm), then the second contact's rows (:func:`row_names`)."""
+    rows = {"pressure_angle_plus": lean - reach, "pressure_angle_minus": -lean - reach,
+            "second_pressure_angle_plus": second.lean - second.reach,
+            "second_pressure_angle_minus": -second.lean - second.reach}
+    own = {name: rows[name] if name in rows else getattr(second, _SECOND_FIELD[name])
+           for name in row_names(terms)}
+    kept = {name: value for name, value in first._asdict().items() if name != "pressure_angle"}
+    return types[type(terms)](**kept, **own)
+
+
+def positive_type(name: str, constraints, terms_type, module: str):
+    """A family's NamedTuple of a positive drive's constraints (:func:`with_second_contact`): its
+    spring-closed ``constraints`` type without the pressure angle, then the rows of closure
+    ``terms_type`` (:func:`camjax.family.twin_type`; ``module``: the declaring module's name)."""
+    from camjax.family import twin_type
+
+    return twin_type(name, constraints, f"{name}: g <= 0 (mm, (n,) each), the first contact's rows, the "
+                     "pressure angle as two rows (+ and - the limit), then the second contact's.", module,
+                     drop=("pressure_angle",), add=_ROWS[terms_type])
+
+
+def second_excess(constraints, first) -> jax.Array:
+    """Each second-contact row of a positive drive's ``constraints`` less what the spring-closed rows
+    ``first`` of the same design allow there, max(that limit's row, 0) (mm, shape (rows, n)): <= 0
+    where the second contact keeps every limit the first keeps, and is over by no more where the
+    first is over."""
+    names = [f for f in constraints._fields if f in LIMIT_ROW and f not in PRESSURE_ROWS]
+    return jnp.stack([getattr(constraints, f) - jnp.maximum(getattr(first, LIMIT_ROW[f]), 0.0)
+                      for f in names])
+
+
+def exact_rows(names: tuple[str, ...], terms) -> tuple[str, ...]:
+    """The rows a polish keeps at every angle (static): the spring-closed rows ``names`` and, with
+    closure ``terms``, the rows of a positive drive of those limits (:data:`LIMIT_ROW`)."""
+    if terms is None:
+        return names
+    kept = (f for f in names if f != "pressure_angle")
+    return (*kept, *(f for f in row_names(terms) if LIMIT_ROW[f] in names))
+
+
+_CONTACTS = {"groove": ("inner flank", "outer flank"), "conjugate": ("first cam", "second cam")}
+_KINDS = {"second_shaft": "shaft_clearance", "second_side": "arm_side"}
+
+
+def row_labels(terms) -> dict[str, tuple[str, str]]:
+    """Row name -> (kind, contact) of a positive drive's constraint rows with closure ``terms`` (the
+    certificate's labels): the kind of its limit (pressure_angle, undercut, stress, shaft_clearance,
+    arm_side) and the contact ("inner flank", "outer flank", "inner and outer flanks": a groove's pressure
+    angle; "first cam", "second cam"); {} for a spring-closed problem (``terms`` None)."""
+    if terms is None:
+        return {}
+    groove = type(terms) is GrooveTerms
+    first, second = _CONTACTS["groove" if groove else "conjugate"]
+    labels = {"undercut": ("undercut", first), "stress": ("stress", first)}
+    for name in row_names(terms):
+        contact = ("inner and outer flanks" if groove else first) if name in PRESSURE_ROWS else second
+        labels[name] = (_KINDS.get(name, LIMIT_ROW[name]), contact)
+    return labels
+
+
+def _second(sigma_max_MPa, coefficient, pressure, phi, undercut_g, margin, rho_eq,
+            **clearances) -> SecondContact:
+    """A second contact's constraints from its pressure-angle terms (lean, reach: |lean| - reach <= 0,
+    mm), pressure angle (rad), cut constraint and margin (mm), Hertz equivalent radius (mm) and the
+    coefficient of its load; ``clearances``: its ``shaft`` and ``side`` rows (mm) where it has them."""
     from camjax.contact import roller_stress
     from camjax.numerics import COS_FLOOR
 
     cos_phi = jnp.maximum(jnp.cos(phi), COS_FLOOR)
     need = coefficient**2 / (sigma_max_MPa**2 * cos_phi)
-    return SecondContact(pressure_g, undercut_g, need - rho_eq, jnp.abs(phi), margin,
-                         roller_stress(coefficient, phi, rho_eq))
+    return SecondContact(*pressure, undercut_g, need - rho_eq, jnp.abs(phi), margin,
+                         roller_stress(coefficient, phi, rho_eq), **clearances)
 
 
 def worst_of_both(sigma, phi, margin, second: SecondContact):
@@ -457,13 +559,14 @@ def worst_of_both(sigma, phi, margin, second: SecondContact):
             jnp.minimum(margin, second.margin_mm))
 
 
-def groove_second(terms: GrooveTerms, kappa, roller_radius_mm, min_curvature_radius_mm, pressure_g, phi,
-                  tan_limit, sigma_max_MPa, coefficient=None) -> SecondContact:
-    """The outer flank: the first's pressure angle (shared normal), its concavity limit and its stress
-    (``coefficient``: the Hertz coefficient of the force along the roller's path, default the terms')."""
+def groove_second(terms: GrooveTerms, kappa, roller_radius_mm, min_curvature_radius_mm, pressure, phi,
+                  sigma_max_MPa, coefficient=None) -> SecondContact:
+    """The outer flank: the first's pressure angle (shared normal: ``pressure`` = its (lean, reach), mm),
+    its concavity limit and its stress (``coefficient``: the Hertz coefficient of the force along the
+    roller's path, default the terms')."""
     c = terms.clearance_mm
     coefficient = terms.second_coefficient if coefficient is None else coefficient
-    return _second(sigma_max_MPa, coefficient, pressure_g, phi,
+    return _second(sigma_max_MPa, coefficient, pressure, phi,
                    outer_flank_constraint(kappa, roller_radius_mm + c, min_curvature_radius_mm),
                    outer_flank_margin(kappa, roller_radius_mm + c),
                    outer_equivalent_radius(kappa, roller_radius_mm, c))
@@ -473,26 +576,27 @@ def yoke_second(terms: YokeTerms, w, u, ds, d2s, signed_offset_mm, min_curvature
                 sigma_max_MPa) -> SecondContact:
     """The yoke's second cam (ccw formulas, e~ = sign e): its roller at depth D = L - w below the
     centre on the axis, tan phi2 = |s' - e~| / D; curvature of the pitch curve of (e~, w - L); the
-    roller must stay off the shaft (D > R2, folded into the undercut). ``w``, ``u``: the first
-    roller's height and s' - e~ (mm)."""
+    roller must stay off the shaft (D > R2: the ``shaft`` row). ``w``, ``u``: the first roller's
+    height and s' - e~ (mm)."""
     from camjax.followers import _pitch as pitch
     from camjax.followers.roller.geometry import roller_undercut_margin
 
     r2, depth = terms.roller_radius_mm, terms.span_mm - w
     reach = r2 + min_curvature_radius_mm
     kappa2 = pitch.pitch_curvature(w - terms.span_mm, ds, d2s, signed_offset_mm)
-    undercut = jnp.maximum(reach * (kappa2 * reach - 1.0), r2 - depth)
     phi2 = jnp.arctan2(jnp.abs(u), depth)
-    return _second(sigma_max_MPa, terms.second_coefficient, jnp.abs(u) - tan_limit * depth, phi2,
-                   undercut, jnp.minimum(roller_undercut_margin(kappa2, r2), depth - r2),
-                   r2 * (1.0 - r2 * kappa2))
+    return _second(sigma_max_MPa, terms.second_coefficient, (u, tan_limit * depth), phi2,
+                   reach * (kappa2 * reach - 1.0),
+                   jnp.minimum(roller_undercut_margin(kappa2, r2), depth - r2),
+                   r2 * (1.0 - r2 * kappa2), shaft=r2 - depth)
 
 
 def arm_second(terms: ArmTerms, pivot_distance_mm, psi, ds, d2s, sign, min_curvature_radius_mm, tan_limit,
                sigma_max_MPa) -> SecondContact:
     """A rocker's second cam: its roller at C2 = (d - l2 cos(psi - beta), l2 sin(psi - beta)) driven
     along -dC2/dpsi (:func:`point_pitch`, :func:`path_pressure_angle`); the arm must stay across the
-    line of centres (sin(psi - beta) < 0, folded into the pressure angle as l2 sin(psi - beta))."""
+    line of centres (sin(psi - beta) < 0: the ``side`` row l2 sin(psi - beta)) and its roller off the
+    shaft (|C2| > R2: the ``shaft`` row)."""
     from camjax.followers.roller.geometry import roller_undercut_margin
 
     l2, r2 = terms.arm_length_mm, terms.roller_radius_mm
@@ -505,12 +609,11 @@ def arm_second(terms: ArmTerms, pivot_distance_mm, psi, ds, d2s, sign, min_curva
     across = -(pp.normal_x * dcy - pp.normal_y * dcx)
     phi2 = jnp.arctan2(across, along)
     reach = r2 + min_curvature_radius_mm
-    pressure = jnp.maximum(jnp.abs(across) - tan_limit * along, y)  # y = l2 sin(psi - beta) < 0
-    undercut = jnp.maximum(reach * (pp.curvature * reach - 1.0), r2 - jnp.hypot(x, y))
     coefficient = terms.second_coefficient * jax.lax.rsqrt(l2 * 1e-3)  # of the force -M / l2 on its path
-    return _second(sigma_max_MPa, coefficient, pressure, phi2, undercut,
+    return _second(sigma_max_MPa, coefficient, (across, tan_limit * along), phi2,
+                   reach * (pp.curvature * reach - 1.0),
                    jnp.minimum(roller_undercut_margin(pp.curvature, r2), jnp.hypot(x, y) - r2),
-                   r2 * (1.0 - r2 * pp.curvature))
+                   r2 * (1.0 - r2 * pp.curvature), shaft=r2 - jnp.hypot(x, y), side=y)
 
 
 # ------------------------------------------------------------------------------ sizing
@@ -519,8 +622,9 @@ def arm_second(terms: ArmTerms, pivot_distance_mm, psi, ds, d2s, sign, min_curva
 def second_limits(closure: ClosureSpec, kin, *, prime_radius_mm=None, signed_offset_mm=0.0, psi0=None,
                   pivot_distance_mm=None, arm_length_mm=None, sign=1.0, roller_radius_mm, min_curvature_radius_mm,
                   tan_limit):
-    """The second contact's limits at one cam size, g <= 0 where admissible (shape (2, n): pressure
-    angle, cut), from the design problems' closed forms: a translating roller at prime radius
+    """The second contact's limits at one cam size, g <= 0 where admissible (shape (k, n): pressure
+    angle, cut, and a conjugate cam's shaft clearance and a second arm's side), from the design
+    problems' closed forms: a translating roller at prime radius
     ``prime_radius_mm`` (``signed_offset_mm``: sign e), a rocker at arm start angle ``psi0``."""
     from camjax.followers import _pitch as pitch
 
@@ -546,7 +650,8 @@ def second_limits(closure: ClosureSpec, kin, *, prime_radius_mm=None, signed_off
                          closure.second_roller_radius_mm, zero)
         second = arm_second(terms, pivot_distance_mm, psi0 + kin.s, kin.ds, kin.d2s, sign, min_curvature_radius_mm,
                             tan_limit, 1.0)
-    return jnp.stack([second.pressure_angle, second.undercut])
+    pressure = jnp.abs(second.lean) - second.reach
+    return jnp.stack([v for v in (pressure, second.undercut, second.shaft, second.side) if v is not None])
 
 
 def first_admissible_size(bad, x0, hi, samples: int):

@@ -37,7 +37,7 @@ import jax
 import jax.numpy as jnp
 
 from camjax.errors import SceneError
-from camjax.followers._closure import design_start
+from camjax.followers._closure import design_start, second_excess
 from camjax.scene.reader import TableReader, fixed_or_free
 
 # each free dimension: its [design] key, the design problem's closure field and the factor to it
@@ -88,17 +88,17 @@ def with_dimension(problem, key: str, value):
 
 
 @partial(jax.jit, static_argnames=("key_field",))
-def _smallest(problem, design, allowed, low, high, key_field: int):
+def _smallest(problem, design, first, low, high, key_field: int):
     """Traced body of :func:`smallest_admissible` (``key_field``: the closure field's index)."""
     from camjax.family import FEASIBILITY_TOL_MM
     from camjax.solvers.base import family_of
 
     family = family_of(problem)
 
-    def worst(value):  # the second contact's largest excess over what is allowed, mm
+    def worst(value):  # the second contact's largest excess over what the first allows, mm
         terms = problem.closure
         moved = problem._replace(closure=terms._replace(**{terms._fields[key_field]: value}))
-        return jnp.max(jnp.stack(family.constraints(moved, design)) - allowed)
+        return jnp.max(second_excess(family.constraints(moved, design), first))
 
     xs = low + (high - low) * jnp.linspace(0.0, 1.0, ADMISSIBLE_SCAN + 1)
     hs = jax.lax.map(worst, xs)
@@ -145,10 +145,10 @@ def smallest_admissible(problem, design, key: str, low: float, high: float) -> f
 
     family = family_of(problem)
     field, factor = _TERMS_FIELD[key]
-    first = jnp.stack(family.constraints(problem._replace(closure=None), design))
-    dtype = first.dtype
+    first = family.constraints(problem._replace(closure=None), design)
+    dtype = first[0].dtype
     index = problem.closure._fields.index(field)
-    value, found = _smallest(problem, design, jnp.maximum(first, 0.0), jnp.asarray(low * factor, dtype),
+    value, found = _smallest(problem, design, first, jnp.asarray(low * factor, dtype),
                              jnp.asarray(high * factor, dtype), key_field=index)
     return float(value) / factor if bool(found) else None
 

@@ -494,6 +494,8 @@ def _block(problem, cert: Certificate, *, active_tol: float = 1e-6) -> dict:
             "undercut": "min_curvature_radius_mm", "curvature": "min_curvature_radius_mm",
             # the face's own width (a design variable) is what these rows bind against
             "face_width": "face_width_mm (design)", "face_travel": "face_width_mm (design)"}
+    # a problem with two contacts (a positive drive) names each row's kind and contact
+    labels = getattr(family_of(problem), "row_labels", lambda p: {})(problem)
     sens = {k: np.asarray(v, float) for k, v in cert.sensitivity.items()}
     bound_sens = np.asarray(cert.bound_sensitivity, float)
     active = []
@@ -513,18 +515,22 @@ def _block(problem, cert: Certificate, *, active_tol: float = 1e-6) -> dict:
                 continue
             if kind == "objective" and float(cert.gamma) == 0.0:
                 continue  # without a stress weight the epigraph rows are the size term's, not a limit
-            name = "stress" if kind == "objective" else kind
+            name, contact = labels.get("stress" if kind == "objective" else kind,
+                                       ("stress" if kind == "objective" else kind, None))
             key = keys.get(name)
             entry = {"kind": name, "limit": key, "theta_deg": float(theta[j % theta.size]),
                      "multiplier": float(scale * y[i])}
+            if contact is not None:
+                entry["contact"] = contact
             if key in sens:
                 entry["dF_dlimit"] = float(sens[key][i])
             active.append(entry)
         start += count
-    # merge the rows of one kind at one angle (the stress in the objective and as a constraint)
+    # merge the rows of one kind and contact at one angle (the stress in the objective and as a
+    # constraint; a pressure angle's two rows, + and - the limit)
     merged: dict = {}
     for e in active:
-        k = (e["kind"], e["theta_deg"], e.get("variable"))
+        k = (e["kind"], e["theta_deg"], e.get("variable"), e.get("contact"))
         if k in merged:
             merged[k]["multiplier"] += e["multiplier"]
             if "dF_dlimit" in e:
@@ -548,7 +554,8 @@ def limited_by(certificate: dict, top: int = 3) -> str:
         if e["kind"] == "bound":
             parts.append(f"the {e['limit']}")
         else:
-            parts.append(f"the {e['kind'].replace('_', ' ')} at {e['theta_deg']:.1f} deg")
+            of = f" of the {e['contact']}" if "contact" in e else ""
+            parts.append(f"the {e['kind'].replace('_', ' ')}{of} at {e['theta_deg']:.1f} deg")
     return "limited by " + (" and ".join(parts) if parts else "nothing (an interior optimum)")
 
 
@@ -565,11 +572,12 @@ def certificate_json(problem, cert: Certificate, *, mode: str = "global", solver
     ``iterations``, ``converged`` (the residuals within the stopping rule); ``dF_dlimit``: the
     optimal objective's sensitivity to each scene limit; ``active``: every row whose multiplier
     times (alpha + gamma) exceeds ``active_tol`` (the rows of one kind and angle merged), each with
-    its kind (a constraint's field name, ``stress`` for the objective's stress rows, ``bound``),
-    the scene key of its limit, the cam angle (deg; None for a bound), the variable (bounds), its
-    multiplier and dF*/d limit (scene units); ``limited_by``: the summary's line. Pointwise mode:
-    the certificate of the critical angle's one-angle problem (the one whose optimum is the
-    largest), its angle under ``critical_angle_deg``.
+    its kind (a constraint's field name, ``stress`` for the objective's stress rows, ``bound``; a
+    positive drive's rows by the family's ``row_labels``: the kind of the limit and, under
+    ``contact``, the flank or cam, e.g. "outer flank"), the scene key of its limit, the cam angle
+    (deg; None for a bound), the variable (bounds), its multiplier and dF*/d limit (scene units);
+    ``limited_by``: the summary's line. Pointwise mode: the certificate of the critical angle's
+    one-angle problem (the one whose optimum is the largest), its angle under ``critical_angle_deg``.
     """
     extra = {}
     if mode == "pointwise":

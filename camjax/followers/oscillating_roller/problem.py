@@ -52,6 +52,9 @@ from camjax.followers.oscillating_roller import geometry as rocker_roller_geo
 from camjax.followers.roller import geometry as roller_geo
 from camjax.followers.roller.problem import record as record  # as the translating roller's
 from camjax.followers.roller.problem import roller_evaluation, roller_figures
+from camjax.followers.roller.problem import (
+    row_labels as row_labels,  # a positive drive's, as the translating roller's
+)
 from camjax.followers.roller.problem import size_term as size_term  # the translating twin's size
 from camjax.numerics import COS_FLOOR, RHO_FLOOR_MM, floor_positive, positive_part, safe_sqrt
 
@@ -87,7 +90,8 @@ class Problem(NamedTuple):
     program: Any = None
     moment_model: Any = None  # camjax.followers._swing.MomentModel: C_M between the samples (the polish)
     # a positive drive's second contact (camjax.followers._closure: GrooveTerms or ArmTerms), whose
-    # constraints are maxed with the first's; None: spring-closed
+    # constraints are rows of their own beside the first's (GrooveConstraints, ArmConstraints);
+    # None: spring-closed
     closure: Any = None
 
 
@@ -98,6 +102,13 @@ class Constraints(NamedTuple):
     pressure_angle: jax.Array  # |l Q - d c| - tan(phi_max) d sn
     undercut: jax.Array  # (R_f + rho_min) (kappa (R_f + rho_min) - 1)
     stress: jax.Array  # C_M^2 / (sigma_max^2 l cos phi) - rho_eq
+
+
+# a positive drive's constraints (camjax.followers._closure.with_second_contact): the first contact's
+# rows, the pressure angle as two, then the second contact's
+GrooveConstraints = _closure.positive_type("GrooveConstraints", Constraints, _closure.GrooveTerms, __name__)
+ArmConstraints = _closure.positive_type("ArmConstraints", Constraints, _closure.ArmTerms, __name__)
+POSITIVE_CONSTRAINTS = {_closure.GrooveTerms: GrooveConstraints, _closure.ArmTerms: ArmConstraints}
 
 
 class Violation(NamedTuple):
@@ -233,10 +244,9 @@ def constraints(problem: Problem, design: Design) -> Constraints:
     )
     if problem.closure is None:
         return first
-    second = _second_contact(problem, design, g)
-    return first._replace(pressure_angle=jnp.maximum(first.pressure_angle, second.pressure_angle),
-                          undercut=jnp.maximum(first.undercut, second.undercut),
-                          stress=jnp.maximum(first.stress, second.stress))
+    return _closure.with_second_contact(first, g.along, problem.tan_max_pressure_angle * g.across,
+                                        _second_contact(problem, design, g), problem.closure,
+                                        POSITIVE_CONSTRAINTS)
 
 
 def _second_contact(problem: Problem, design: Design, g: _Geometry) -> _closure.SecondContact:
@@ -245,9 +255,8 @@ def _second_contact(problem: Problem, design: Design, g: _Geometry) -> _closure.
     if isinstance(t, _closure.GrooveTerms):
         coefficient = t.second_coefficient * jax.lax.rsqrt(design.arm_length_mm * 1e-3)
         return _closure.groove_second(t, g.kappa, design.roller_radius_mm, problem.min_curvature_radius_mm,
-                                      jnp.abs(g.along) - problem.tan_max_pressure_angle * g.across,
-                                      jnp.arctan2(g.along, g.across), problem.tan_max_pressure_angle,
-                                      problem.sigma_max_MPa, coefficient)
+                                      (g.along, problem.tan_max_pressure_angle * g.across),
+                                      jnp.arctan2(g.along, g.across), problem.sigma_max_MPa, coefficient)
     rp = design.base_radius_mm + design.roller_radius_mm
     psi = rocker_roller_geo.arm_start_angle(rp, design.pivot_distance_mm, design.arm_length_mm) + problem.s_rad
     return _closure.arm_second(t, design.pivot_distance_mm, psi, problem.ds, problem.d2s, problem.rotation_sign,
@@ -258,7 +267,8 @@ def polish(problem: Problem, weights: Weights, design: Design) -> Design:
     """The solver's design moved, where it is short, the least that keeps the pressure angle, the undercut and the stress at every
     cam angle, not only at the samples (:func:`camjax.followers._swing.polish_design`; needs
     ``problem.program``, i.e. exact extrema)."""
-    return polish_design(problem, design, constraints, ("pressure_angle", "undercut", "stress"))
+    return polish_design(problem, design, constraints,
+                         _closure.exact_rows(("pressure_angle", "undercut", "stress"), problem.closure))
 
 
 def constraint_maxima(problem: Problem, design: Design) -> Constraints:

@@ -88,7 +88,8 @@ class Problem(NamedTuple):
     # exact: :func:`polish` keeps every constraint between the samples too; None: the grid's
     model: Any = None
     # a positive drive's second contact (camjax.followers._closure: GrooveTerms or YokeTerms), whose
-    # constraints are maxed with the first's; None: spring-closed
+    # constraints are rows of their own beside the first's (GrooveConstraints, YokeConstraints);
+    # None: spring-closed
     closure: Any = None
 
 
@@ -98,6 +99,13 @@ class Constraints(NamedTuple):
     pressure_angle: jax.Array  # |s' - e~| - tan(phi_max) (d + s)
     undercut: jax.Array  # (R_f + rho_min) (kappa (R_f + rho_min) - 1)
     stress: jax.Array  # C^2 / (sigma_max^2 cos phi) - rho_eq
+
+
+# a positive drive's constraints (camjax.followers._closure.with_second_contact): the first contact's
+# rows, the pressure angle as two, then the second contact's
+GrooveConstraints = _closure.positive_type("GrooveConstraints", Constraints, _closure.GrooveTerms, __name__)
+YokeConstraints = _closure.positive_type("YokeConstraints", Constraints, _closure.YokeTerms, __name__)
+POSITIVE_CONSTRAINTS = {_closure.GrooveTerms: GrooveConstraints, _closure.YokeTerms: YokeConstraints}
 
 
 class Violation(NamedTuple):
@@ -253,13 +261,22 @@ def objective(problem: Problem, weights: Weights, design: Design) -> jax.Array:
 
 
 def constraints(problem: Problem, design: Design) -> Constraints:
-    """Every angle's constraints as g <= 0 (mm), shape (n,) each; finite for every design."""
+    """Every angle's constraints as g <= 0 (mm), shape (n,) each; finite for every design. A positive
+    drive's are a :data:`GrooveConstraints` or :data:`YokeConstraints`: the second contact's rows after
+    the first's."""
     x = circle_terms(problem, design)
     first = circle_constraints(problem, design, x)
     if problem.closure is None:
         return first
-    second = _second_contact(problem, design, x)
-    return Constraints(*(jnp.maximum(a, b) for a, b in zip(first, second[:3], strict=True)))
+    return _closure.with_second_contact(first, x.u, problem.tan_max_pressure_angle * x.w,
+                                        _second_contact(problem, design, x), problem.closure,
+                                        POSITIVE_CONSTRAINTS)
+
+
+def row_labels(problem: Problem) -> dict:
+    """Each constraint row's (kind, contact) where the problem has two contacts (the certificate's
+    labels, :func:`camjax.followers._closure.row_labels`)."""
+    return _closure.row_labels(problem.closure)
 
 
 def circle_constraints(problem: Problem, design: Design, x: CircleTerms) -> Constraints:
@@ -280,8 +297,8 @@ def _second_contact(problem: Problem, design: Design, x: CircleTerms) -> _closur
     t = problem.closure
     if isinstance(t, _closure.GrooveTerms):
         return _closure.groove_second(t, x.kappa, design.roller_radius_mm, problem.min_curvature_radius_mm,
-                                      jnp.abs(x.u) - problem.tan_max_pressure_angle * x.w, jnp.arctan2(x.u, x.w),
-                                      problem.tan_max_pressure_angle, problem.sigma_max_MPa)
+                                      (x.u, problem.tan_max_pressure_angle * x.w), jnp.arctan2(x.u, x.w),
+                                      problem.sigma_max_MPa)
     return _closure.yoke_second(t, x.w, x.u, problem.ds_mm, problem.d2s_mm, problem.rotation_sign * design.offset_mm,
                                 problem.min_curvature_radius_mm, problem.tan_max_pressure_angle, problem.sigma_max_MPa)
 
@@ -387,9 +404,10 @@ def problem_at(problem: Problem, segment: int, theta_deg: jax.Array) -> Problem:
 
 def exact_constraints(problem: Problem) -> tuple[str, ...]:
     """The constraints :func:`polish` keeps at every angle (static): the pressure angle and the
-    undercut, and the stress with a contact model."""
+    undercut, and the stress with a contact model; a positive drive's second contact's too."""
     has_stress = problem.model is not None and problem.model.cam_width_mm is not None
-    return ("pressure_angle", "undercut", *(("stress",) if has_stress else ()))
+    return _closure.exact_rows(("pressure_angle", "undercut", *(("stress",) if has_stress else ())),
+                               problem.closure)
 
 
 def polish(problem: Problem, weights: Weights, design: Design, free: tuple[str, ...] | None = None) -> Design:
