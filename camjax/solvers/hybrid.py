@@ -1,4 +1,5 @@
-"""Hybrid solver: the GA's global search, then a gradient polish from its best design.
+"""Hybrid solver: the GA's global search, then a gradient polish from its best design, kept only
+where it is no worse (the hybrid never returns a worse design than the GA it starts from).
 
 The solver protocol of :mod:`camjax.solvers.base`; settings are the GA's and the gradient
 solver's (``settings.of("ga")``, ``settings.of("gradient")``).
@@ -7,6 +8,7 @@ solver's (``settings.of("ga")``, ``settings.of("gradient")``).
 from __future__ import annotations
 
 import jax
+import jax.numpy as jnp
 
 from camjax.family import Design, Weights
 from camjax.solvers import ga, gradient, newton
@@ -19,11 +21,17 @@ DEFAULT_SETTINGS = None  # the hybrid has no settings of its own
 def run_one(problem, weights: Weights, key: jax.Array, settings, init: Design | None = None) -> Raw:
     """GA from ``init`` (if given), then the gradient solver from the GA's best design.
 
-    Iterations: generations + gradient steps; converged: the gradient stopping rule was met. The
-    final point's KKT certificate (:func:`camjax.solvers.newton.certify_point`) comes with it.
+    The polished design is kept where it is feasible and its objective no larger than the GA's,
+    or where it repairs an infeasible GA design; elsewhere the GA's design is the answer (a polish
+    that stalls on a kink of the max over angles can end above its start). Iterations:
+    generations + gradient steps; converged: the polished design was kept and the gradient
+    stopping rule was met. The final point's KKT certificate
+    (:func:`camjax.solvers.newton.certify_point`) comes with it.
     """
     found = ga.run(key, problem, weights, settings.of("ga"), seed_design=init)
     polished = gradient.minimize(problem, weights, found.design, settings.of("gradient"))
+    keep = polished.feasible & (~found.feasible | (polished.objective <= found.objective))
+    design = jax.tree.map(lambda a, b: jnp.where(keep, a, b), polished.design, found.design)
     iterations = found.iterations + polished.iterations
-    return Raw(polished.design, iterations, polished.converged,
-               newton.certify_point(problem, weights, polished.design, iterations))
+    return Raw(design, iterations, keep & polished.converged,
+               newton.certify_point(problem, weights, design, iterations))
