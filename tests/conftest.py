@@ -241,10 +241,11 @@ def pytest_runtest_protocol(item, nextitem):
 # `-n auto --dist loadfile` hands whole files to the workers in the order of its queue, and xdist
 # orders that queue by each file's number of tests: a file of three long tests (the cache matrix)
 # started last and ran alone at the end of the run. Here the files are ordered by their seconds in
-# the last full run (tests/file_durations.json), the longest first, so that the short files fill
-# the end, and xdist's reordering is turned off. A file not recorded there counts 0.6 s a test.
-# ``--file-durations=PATH`` writes each file's seconds (every phase of every test) of this run to
-# PATH, for a full run to refresh the record.
+# a recorded run (tests/file_durations.json: one table for the whole suite, one for the quick
+# loop, ``-m "not slow"``), the longest first, so that the short files fill the end, and xdist's
+# reordering is turned off. A file not recorded counts 0.6 s a test. ``--file-durations=PATH``
+# writes each file's seconds (every phase of every test) of this run into PATH's table for this
+# run's ``-m`` expression, to refresh the record from a run of the whole suite or of the quick loop.
 
 FILE_DURATIONS = Path(__file__).with_name("file_durations.json")
 _SECONDS_BY_FILE: dict = {}
@@ -260,11 +261,19 @@ def _keep_file_order(config) -> None:
         config.option.loadscopereorder = False
 
 
-def pytest_collection_modifyitems(config, items):
+def _table_name(config) -> str:
+    return "not slow" if (config.getoption("markexpr", "") or "").strip() == "not slow" else "full run"
+
+
+def _read_durations(path: Path) -> dict:
     try:
-        recorded = json.loads(FILE_DURATIONS.read_text())
+        return json.loads(path.read_text())
     except (OSError, ValueError):
-        recorded = {}
+        return {}
+
+
+def pytest_collection_modifyitems(config, items):
+    recorded = _read_durations(FILE_DURATIONS).get(_table_name(config), {})
     counts: dict = {}
     for item in items:
         path = item.nodeid.split("::")[0]
@@ -283,5 +292,6 @@ def _record_file_seconds(report) -> None:
 def pytest_sessionfinish(session, exitstatus):
     target = session.config.getoption("file_durations", None)
     if target and _SECONDS_BY_FILE and not os.environ.get("PYTEST_XDIST_WORKER"):
-        Path(target).write_text(json.dumps({p: round(s, 1) for p, s in sorted(_SECONDS_BY_FILE.items())},
-                                           indent=1) + "\n")
+        tables = _read_durations(Path(target))
+        tables[_table_name(session.config)] = {p: round(s, 1) for p, s in sorted(_SECONDS_BY_FILE.items())}
+        Path(target).write_text(json.dumps(tables, indent=1) + "\n")
