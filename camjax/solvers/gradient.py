@@ -253,36 +253,10 @@ def augmented_lagrangian(u: Design, problem: Problem, weights: Weights, multipli
     """
     design = from_unit(problem, u)
     g = scaled_constraints(problem, design, aggregate)
-    return solver_objective(problem, weights, design) + 0.5 * penalty * _penalty_sum(g, multipliers, penalty), g
-
-
-def _penalty_sum(g: Constraints, multipliers: Constraints, penalty) -> jax.Array:
-    """sum_i [max(0, g_i + lam_i/mu)^2 - (lam_i/mu)^2] over every constraint row (shape ())."""
     terms = jax.tree.map(
         lambda gi, lam: jnp.sum(jnp.maximum(gi + lam / penalty, 0.0) ** 2 - (lam / penalty) ** 2),
         g, multipliers)
-    return sum(jax.tree.leaves(terms))
-
-
-def _lagrangians(x: jax.Array, refining: jax.Array, problem: Problem, weights: Weights, unravel,
-                 rprop_multipliers: Constraints, row_multipliers: Constraints, penalty: jax.Array,
-                 settings: GradientSettings) -> tuple[jax.Array, tuple[Constraints, Constraints]]:
-    """Rprop's L_A (unit box) or the refinement's (box angles, per-angle rows), one trace of the physics.
-
-    ``x`` (m,) is the raveled unit-box point while Rprop runs and the raveled box angles once
-    ``refining``; the family's objective is evaluated once and both constraint forms are taken
-    at the same design (the rows the refinement needs, the maxima Rprop's aggregated multipliers
-    need), so the loop holding both phases evaluates its physics once per iteration. Returns
-    the phase's L_A and (Rprop's constraints, the rows).
-    """
-    u = unravel(x)
-    u = jax.tree.map(lambda a, b: jnp.where(refining, a, b), _from_angle(problem, u), u)
-    design = from_unit(problem, u)
-    rows = scaled_constraints(problem, design, False)
-    g = scaled_constraints(problem, design, True) if settings.aggregate_constraints else rows
-    terms = jnp.where(refining, _penalty_sum(rows, row_multipliers, penalty),
-                      _penalty_sum(g, rprop_multipliers, penalty))
-    return solver_objective(problem, weights, design) + 0.5 * penalty * terms, (g, rows)
+    return solver_objective(problem, weights, design) + 0.5 * penalty * sum(jax.tree.leaves(terms)), g
 
 
 def _projected_gradient(problem: Problem, u: Design, grad: Design) -> Design:
@@ -294,11 +268,6 @@ def _projected_gradient(problem: Problem, u: Design, grad: Design) -> Design:
 
 def _tree_max_abs(tree) -> jax.Array:
     return jnp.max(jnp.stack([jnp.max(jnp.abs(x)) for x in jax.tree.leaves(tree)]))
-
-
-def _where(condition, a, b):
-    """``a`` where ``condition`` (a () bool), else ``b``, leaf by leaf of two like pytrees."""
-    return jax.tree.map(lambda x, y: jnp.where(condition, x, y), a, b)
 
 
 # --------------------------------------------------------------------------- init/step
@@ -313,22 +282,19 @@ def init(problem: Problem, design: Design | None = None,
     dtype = problem_dtype(problem)
     u = _clip_unit(problem, jax.tree.map(lambda x: jnp.asarray(x, dtype), to_unit(problem, design)))
     rprop = _transform(settings).init(u)
-    zeros = _zero_multipliers(problem, u, settings.aggregate_constraints)
+    shapes = jax.eval_shape(
+        lambda v: scaled_constraints(problem, from_unit(problem, v), settings.aggregate_constraints), u)
+    zeros = jax.tree.map(lambda a: jnp.zeros(a.shape, a.dtype), shapes)
     inf = jnp.asarray(jnp.inf, dtype)
     return GradientState(u, rprop, zeros, jnp.asarray(0), jnp.asarray(0), inf, inf, jnp.asarray(False))
 
 
-def _zero_multipliers(problem: Problem, u: Design, aggregate: bool) -> Constraints:
-    """Multipliers 0 shaped like :func:`scaled_constraints` (their shapes only: nothing is traced)."""
-    shapes = jax.eval_shape(lambda v: scaled_constraints(problem, from_unit(problem, v), aggregate), u)
-    return jax.tree.map(lambda a: jnp.zeros(a.shape, a.dtype), shapes)
-
-
-def rprop_step(state: GradientState, g: Constraints, grad: Design, problem: Problem,
-               settings: GradientSettings = DEFAULT_SETTINGS) -> GradientState:
-    """One projected Rprop step from L_A's gradient ``grad`` and constraints ``g`` at ``state.u``
-    (:func:`augmented_lagrangian`), a multiplier update when the inner problem has converged."""
+def step(state: GradientState, problem: Problem, weights: Weights,
+         settings: GradientSettings = DEFAULT_SETTINGS) -> GradientState:
+    """One projected Rprop step on L_A, a multiplier update when the inner problem has converged."""
     mu = settings.penalty
+    (_, g), grad = jax.value_and_grad(augmented_lagrangian, has_aux=True)(
+        state.u, problem, weights, state.multipliers, mu, settings.aggregate_constraints)
     pg = _projected_gradient(problem, state.u, grad)
     pg_norm = _tree_max_abs(pg)
     residual = _tree_max_abs(jax.tree.map(lambda gi, lam: jnp.minimum(-gi, lam / mu), g, state.multipliers))
@@ -353,8 +319,8 @@ def rprop_step(state: GradientState, g: Constraints, grad: Design, problem: Prob
         jax.tree.map(lambda s: jnp.maximum(s, jnp.clip(residual, 10 * settings.xtol, settings.reset_step)),
                      rprop.step_sizes),
         jax.tree.map(jnp.zeros_like, rprop.prev_grads), rprop.prev_params)
-    rprop = _where(update, restarted, rprop)
-    u = _where(done, state.u, u_next)
+    rprop = jax.tree.map(lambda a, b: jnp.where(update, a, b), restarted, rprop)
+    u = jax.tree.map(lambda a, b: jnp.where(done, a, b), state.u, u_next)
     return GradientState(
         u, rprop, multipliers,
         state.step + jnp.where(done, 0, 1),
@@ -367,39 +333,25 @@ def _transform(settings: GradientSettings) -> optax.GradientTransformation:
                                  max_step=settings.max_step, secant=settings.secant)
 
 
-def _rprop_over(state: GradientState, settings: GradientSettings) -> jax.Array:
-    """Rprop has stopped: on its rule or at ``max_steps``."""
-    return state.done | (state.step >= settings.max_steps)
-
-
-def _refinement_needed(state: GradientState, settings: GradientSettings) -> jax.Array:
-    """Rprop's own stopping rule on the gradient is a KKT point; a stall (steps shrunk by sign
-    flips, at a kink of a max over angles or in a curved valley) need not be, and is refined."""
-    return ~(state.done & (state.pg_norm <= settings.gtol))
-
-
 def postprocess(state: GradientState, problem: Problem, weights: Weights,
-                settings: GradientSettings = DEFAULT_SETTINGS,
-                refined: tuple[Design, jax.Array, jax.Array] | None = None) -> GradientResult:
-    """Design in mm, judged with the true max over angles (after the BFGS refinement, if any).
-
-    ``refined``: the refinement's (design, evaluations, finished) from Rprop's end point
-    (:func:`refine_bfgs`), when ``settings.refine_rounds`` > 0.
-    """
+                settings: GradientSettings = DEFAULT_SETTINGS) -> GradientResult:
+    """Design in mm, judged with the true max over angles (after the BFGS refinement, if any)."""
     design = from_unit(problem, state.u)
     family = family_of(problem)
     steps, done = state.step, state.done
-    if refined is not None:
-        needed = _refinement_needed(state, settings)
-        refined_design, refine_steps, finished = refined
+    if settings.refine_rounds > 0:
+        # Rprop's own stopping rule on the gradient is a KKT point; a stall (steps shrunk by sign
+        # flips, at a kink of a max over angles or in a curved valley) need not be, and is refined
+        needed = ~(state.done & (state.pg_norm <= settings.gtol))
+        refined, refine_steps, finished = refine_bfgs(problem, weights, state.u, settings, needed)
         # both designs judged in one (vmapped) evaluation: one trace of the family's physics
         both = jax.vmap(lambda d: family.evaluate(problem, weights, d))(
-            jax.tree.map(lambda a, b: jnp.stack([a, b]), design, refined_design))
+            jax.tree.map(lambda a, b: jnp.stack([a, b]), design, refined))
         ev, ev_r = jax.tree.map(lambda x: x[0], both), jax.tree.map(lambda x: x[1], both)
         # kept only when no worse: feasible, and a smaller objective or a feasibility repaired
         better = needed & ev_r.feasible & (~ev.feasible | (ev_r.objective <= ev.objective))
-        design = _where(better, refined_design, design)
-        ev = _where(better, ev_r, ev)
+        design = jax.tree.map(lambda a, b: jnp.where(better, a, b), refined, design)
+        ev = jax.tree.map(lambda a, b: jnp.where(better, a, b), ev_r, ev)
         # converged: Rprop's stopping rule, or the refinement's (its point no better: Rprop's kept)
         steps, done = steps + refine_steps, done | better | (needed & finished)
     else:
@@ -435,89 +387,6 @@ class _BfgsState(NamedTuple):
     done: jax.Array  # () bool
 
 
-def _bfgs_start(x0: jax.Array, lam0: Constraints, needed: jax.Array | bool,
-                settings: GradientSettings) -> _BfgsState:
-    """The refinement's state at box angles ``x0``, per-angle multipliers ``lam0`` (zeros); done at
-    once where not ``needed``."""
-    dtype, zero = x0.dtype, jnp.asarray(0)
-    eye = jnp.eye(x0.shape[0], dtype=dtype)
-    return _BfgsState(x0, jnp.asarray(jnp.inf, dtype), jnp.zeros_like(x0), lam0, eye, jnp.zeros_like(x0),
-                      jnp.asarray(0.0, dtype), lam0, zero, zero, zero, jnp.asarray(True),
-                      ~jnp.asarray(needed) | (settings.refine_rounds <= 0))
-
-
-def _refine_penalty(s: _BfgsState, settings: GradientSettings) -> jax.Array:
-    """The round's penalty: ``penalty`` grown by ``refine_penalty_growth`` a round, up to
-    ``refine_penalty_max``."""
-    mu_max = max(settings.refine_penalty_max, settings.penalty)
-    return jnp.minimum(settings.penalty * settings.refine_penalty_growth ** s.rnd.astype(s.x.dtype), mu_max)
-
-
-def _bfgs_trial(s: _BfgsState) -> jax.Array:
-    """The point the refinement evaluates next: the round's start, or a step along the direction."""
-    return jnp.where(s.fresh, s.x, s.x + s.t * s.p)
-
-
-def _bfgs_update(s: _BfgsState, x_try: jax.Array, f_try: jax.Array, g_try: Constraints, grad_try: jax.Array,
-                 settings: GradientSettings) -> _BfgsState:
-    """The refinement's state after L_A ``f_try``, its rows ``g_try`` and gradient ``grad_try`` at
-    ``x_try`` (:func:`_bfgs_trial`): a line-search trial accepted or shortened, the inverse
-    Hessian updated, a round ended and the multipliers updated (:func:`refine_bfgs`)."""
-    dtype = s.x.dtype
-    eye = jnp.eye(s.x.shape[0], dtype=dtype)
-    mu = _refine_penalty(s, settings)
-    f_try = f_try.astype(dtype)  # (the weights may be wider than the problem)
-    slope = s.grad @ s.p
-    ok = s.fresh | (jnp.isfinite(f_try) & (f_try <= s.f + 1e-4 * s.t * slope))
-    # BFGS update of the inverse Hessian on an accepted step with positive curvature
-    dx, dg = x_try - s.x, grad_try - s.grad
-    sy = dx @ dg
-    curved = ok & ~s.fresh & (sy > 1e-12 * jnp.linalg.norm(dx) * jnp.linalg.norm(dg))
-    first = jnp.all(s.h == eye)  # Shanno's scaling before the first update
-    h = jnp.where(first, sy / jnp.where(curved, dg @ dg, 1.0) * eye, s.h)
-    rho = 1.0 / jnp.where(curved, sy, 1.0)
-    v = eye - rho * jnp.outer(dx, dg)
-    h = jnp.where(curved, v @ h @ v.T + rho * jnp.outer(dx, dx), jnp.where(s.fresh, eye, s.h))
-    x = jnp.where(ok, x_try, s.x)
-    f = jnp.where(ok, f_try, s.f)
-    grad = jnp.where(ok, grad_try, s.grad)
-    g = _where(ok, g_try, s.g)
-    p = -h @ grad
-    p = jnp.where(p @ grad < 0, p, -grad)  # a descent direction (h reset if it is not)
-    # first step of a round: 0.1 in the largest angle; else the full quasi-Newton step
-    t_new = jnp.where(s.fresh, 0.1 / jnp.maximum(jnp.max(jnp.abs(p)), 1e-300), 1.0)
-    # a rejected trial: the minimizer of the quadratic through f, the slope and f_try,
-    # within [0.1, 0.5] of the step
-    curv = f_try - s.f - s.t * slope
-    t_quad = -slope * s.t**2 / (2.0 * jnp.where(curv > 0, curv, 1.0))
-    quad = jnp.isfinite(f_try) & (curv > 0)
-    t_back = jnp.where(quad, jnp.clip(t_quad, 0.1 * s.t, 0.5 * s.t), 0.1 * s.t)
-    t = jnp.where(ok, t_new, t_back).astype(dtype)
-    p = jnp.where(ok, p, s.p)
-    # end of a round: gradient small, line search exhausted (a kink: no decrease along p
-    # above rounding) or the step cap
-    gnorm = jnp.linalg.norm(grad)
-    stuck = ~ok & (t * jnp.max(jnp.abs(p)) <= settings.xtol)
-    solved = ok & (gnorm <= settings.refine_gtol)
-    ends = solved | stuck | (s.k + 1 >= settings.refine_steps)
-    residual = _tree_max_abs(jax.tree.map(lambda gi, lam: jnp.minimum(-gi, lam / mu), g, s.lam))
-    finished = ends & (solved | stuck) & (residual <= settings.ctol)
-    update = ends & ~finished
-    lam = jax.tree.map(lambda lm, gi: jnp.where(update, jnp.clip(lm + mu * gi, 0.0, LAM_MAX), lm),
-                       s.lam, g)
-    rnd = s.rnd + jnp.where(update, 1, 0)
-    done = finished | (rnd >= settings.refine_rounds)
-    return _BfgsState(x, f, grad, g, jnp.where(update, eye, h), p, t, lam, rnd,
-                      jnp.where(update, 0, s.k + 1), s.steps + 1, update, done)
-
-
-def _bfgs_outcome(problem: Problem, s: _BfgsState, unravel, settings: GradientSettings
-                  ) -> tuple[Design, jax.Array, jax.Array]:
-    """The refinement's design (mm), its evaluations and whether its rounds stopped on their rule."""
-    design = from_unit(problem, _from_angle(problem, unravel(s.x)))
-    return design, s.steps, s.rnd < settings.refine_rounds
-
-
 def refine_bfgs(problem: Problem, weights: Weights, u: Design,
                 settings: GradientSettings = DEFAULT_SETTINGS, needed: jax.Array | bool = True
                 ) -> tuple[Design, jax.Array, jax.Array]:
@@ -534,40 +403,86 @@ def refine_bfgs(problem: Problem, weights: Weights, u: Design,
 
     Each round minimizes L_A for fixed multipliers (to ``refine_gtol``, ``refine_steps``
     evaluations, or a line search that cannot decrease it any more: a kink), then updates the
-    multipliers as :func:`rprop_step` does, the penalty growing from round to round
+    multipliers as :func:`step` does, the penalty growing from round to round
     (``refine_penalty_growth`` up to ``refine_penalty_max``) so that the last rounds end feasible
     to the families' tolerances. The rounds stop once a round ended on its gradient or line-search
     test with the AL residual within ``ctol``. Every loop iteration is one evaluation of L_A and
-    its gradient, the line search's trials included; none is run where ``needed`` is false (a
-    vmapped batch runs until its last member is done). Returns the design (mm), the evaluations
-    made and whether the rounds stopped on their rule (not on ``refine_rounds``).
-
-    The gradient solver itself runs these rounds as the second phase of its one loop
-    (:func:`_minimize_from`); this is the refinement alone, from a given point.
+    its gradient (one trace: the compile cost of one more Rprop loop), the line search's trials
+    included; none is run where ``needed`` is false (a vmapped batch runs until its last member
+    is done). Returns the design (mm), the evaluations made and whether the rounds stopped on
+    their rule (not on ``refine_rounds``).
     """
     x0, unravel = ravel_pytree(_to_angle(problem, u))
-    lam0 = _zero_multipliers(problem, u, False)
+    dtype, m = x0.dtype, x0.shape[0]
+    eye = jnp.eye(m, dtype=dtype)
+    mu_max = max(settings.refine_penalty_max, settings.penalty)
+
+    def penalty(rnd):
+        return jnp.minimum(settings.penalty * settings.refine_penalty_growth ** rnd.astype(dtype), mu_max)
 
     def lagrangian(x, lam, mu):
         return augmented_lagrangian(_from_angle(problem, unravel(x)), problem, weights, lam, mu, False)
 
     value_and_grad = jax.value_and_grad(lagrangian, has_aux=True)
+    # per-angle multipliers, 0 (their shapes only: nothing is traced)
+    shapes = jax.eval_shape(lambda v: scaled_constraints(problem, from_unit(problem, v), False), u)
+    lam0 = jax.tree.map(lambda a: jnp.zeros(a.shape, a.dtype), shapes)
 
     def body(s: _BfgsState) -> _BfgsState:
-        x_try = _bfgs_trial(s)
-        (f_try, g_try), grad_try = value_and_grad(x_try, s.lam, _refine_penalty(s, settings))
-        return _bfgs_update(s, x_try, f_try, g_try, grad_try, settings)
+        mu = penalty(s.rnd)
+        x_try = jnp.where(s.fresh, s.x, s.x + s.t * s.p)
+        (f_try, g_try), grad_try = value_and_grad(x_try, s.lam, mu)
+        f_try = f_try.astype(dtype)  # (the weights may be wider than the problem)
+        slope = s.grad @ s.p
+        ok = s.fresh | (jnp.isfinite(f_try) & (f_try <= s.f + 1e-4 * s.t * slope))
+        # BFGS update of the inverse Hessian on an accepted step with positive curvature
+        dx, dg = x_try - s.x, grad_try - s.grad
+        sy = dx @ dg
+        curved = ok & ~s.fresh & (sy > 1e-12 * jnp.linalg.norm(dx) * jnp.linalg.norm(dg))
+        first = jnp.all(s.h == eye)  # Shanno's scaling before the first update
+        h = jnp.where(first, sy / jnp.where(curved, dg @ dg, 1.0) * eye, s.h)
+        rho = 1.0 / jnp.where(curved, sy, 1.0)
+        v = eye - rho * jnp.outer(dx, dg)
+        h = jnp.where(curved, v @ h @ v.T + rho * jnp.outer(dx, dx), jnp.where(s.fresh, eye, s.h))
+        x = jnp.where(ok, x_try, s.x)
+        f = jnp.where(ok, f_try, s.f)
+        grad = jnp.where(ok, grad_try, s.grad)
+        g = jax.tree.map(lambda a, b: jnp.where(ok, a, b), g_try, s.g)
+        p = -h @ grad
+        p = jnp.where(p @ grad < 0, p, -grad)  # a descent direction (h reset if it is not)
+        # first step of a round: 0.1 in the largest angle; else the full quasi-Newton step
+        t_new = jnp.where(s.fresh, 0.1 / jnp.maximum(jnp.max(jnp.abs(p)), 1e-300), 1.0)
+        # a rejected trial: the minimizer of the quadratic through f, the slope and f_try,
+        # within [0.1, 0.5] of the step
+        curv = f_try - s.f - s.t * slope
+        t_quad = -slope * s.t**2 / (2.0 * jnp.where(curv > 0, curv, 1.0))
+        quad = jnp.isfinite(f_try) & (curv > 0)
+        t_back = jnp.where(quad, jnp.clip(t_quad, 0.1 * s.t, 0.5 * s.t), 0.1 * s.t)
+        t = jnp.where(ok, t_new, t_back).astype(dtype)
+        p = jnp.where(ok, p, s.p)
+        # end of a round: gradient small, line search exhausted (a kink: no decrease along p
+        # above rounding) or the step cap
+        gnorm = jnp.linalg.norm(grad)
+        stuck = ~ok & (t * jnp.max(jnp.abs(p)) <= settings.xtol)
+        solved = ok & (gnorm <= settings.refine_gtol)
+        ends = solved | stuck | (s.k + 1 >= settings.refine_steps)
+        residual = _tree_max_abs(jax.tree.map(lambda gi, lam: jnp.minimum(-gi, lam / mu), g, s.lam))
+        finished = ends & (solved | stuck) & (residual <= settings.ctol)
+        update = ends & ~finished
+        lam = jax.tree.map(lambda lm, gi: jnp.where(update, jnp.clip(lm + mu * gi, 0.0, LAM_MAX), lm),
+                           s.lam, g)
+        rnd = s.rnd + jnp.where(update, 1, 0)
+        done = finished | (rnd >= settings.refine_rounds)
+        return _BfgsState(x, f, grad, g, jnp.where(update, eye, h), p, t, lam, rnd,
+                          jnp.where(update, 0, s.k + 1), s.steps + 1, update, done)
 
-    end = jax.lax.while_loop(lambda s: ~s.done, body, _bfgs_start(x0, lam0, needed, settings))
-    return _bfgs_outcome(problem, end, unravel, settings)
-
-
-class _SolveState(NamedTuple):
-    """State of the gradient solver's one loop: Rprop, then the refinement from Rprop's end."""
-
-    rprop: GradientState
-    refine: _BfgsState  # placeholders while Rprop runs
-    refining: jax.Array  # () bool: the phase (Rprop over, the refinement running)
+    zero = jnp.asarray(0)
+    start = _BfgsState(x0, jnp.asarray(jnp.inf, dtype), jnp.zeros_like(x0), lam0, eye, jnp.zeros_like(x0),
+                       jnp.asarray(0.0, dtype), lam0, zero, zero, zero, jnp.asarray(True),
+                       ~jnp.asarray(needed) | (settings.refine_rounds <= 0))
+    end = jax.lax.while_loop(lambda s: ~s.done, body, start)
+    design = from_unit(problem, _from_angle(problem, unravel(end.x)))
+    return design, end.steps, end.rnd < settings.refine_rounds
 
 
 # ------------------------------------------------------------------------------ solves
@@ -600,49 +515,13 @@ def minimize(problem: Problem, weights: Weights, init_design: Design | None = No
 
 def _minimize_from(problem: Problem, weights: Weights, init_design: Design | None,
                    settings: GradientSettings) -> GradientResult:
-    """One ``lax.while_loop`` from ``init_design``: Rprop until its stopping rule or ``max_steps``,
-    then (``refine_rounds`` > 0) the refinement (:func:`refine_bfgs`) from where Rprop stopped.
+    def cond(state):
+        return ~state.done & (state.step < settings.max_steps)
 
-    The two are phases of the same loop: every iteration evaluates L_A and its gradient once, at
-    the phase's point and in the phase's form (:func:`_lagrangians`), so the program holds one
-    trace of the family's physics; each phase's rule then updates its own state.
-    """
-    start = init(problem, init_design, settings)
-    if settings.refine_rounds <= 0:
-        def rprop_only(r: GradientState) -> GradientState:
-            (_, g), grad = jax.value_and_grad(augmented_lagrangian, has_aux=True)(
-                r.u, problem, weights, r.multipliers, settings.penalty, settings.aggregate_constraints)
-            return rprop_step(r, g, grad, problem, settings)
-
-        end = jax.lax.while_loop(lambda r: ~_rprop_over(r, settings), rprop_only, start)
-        return postprocess(end, problem, weights, settings)
-
-    unravel = ravel_pytree(start.u)[1]  # the box angles have the same tree
-    row_zeros = _zero_multipliers(problem, start.u, False)
-    value_and_grad = jax.value_and_grad(_lagrangians, has_aux=True)
-
-    def handover(r: GradientState) -> _BfgsState:
-        """The refinement's start at Rprop's point ``r.u``."""
-        x0 = ravel_pytree(_to_angle(problem, r.u))[0]
-        return _bfgs_start(x0, row_zeros, _refinement_needed(r, settings), settings)
-
-    def body(s: _SolveState) -> _SolveState:
-        r, b = s.rprop, s.refine
-        x_try = _bfgs_trial(b)
-        mu = jnp.where(s.refining, _refine_penalty(b, settings), settings.penalty)
-        x = jnp.where(s.refining, x_try, ravel_pytree(r.u)[0])
-        (f, (g, rows)), grad = value_and_grad(x, s.refining, problem, weights, unravel, r.multipliers,
-                                              b.lam, mu, settings)
-        r_next = rprop_step(r, g, unravel(grad), problem, settings)
-        over = _rprop_over(r_next, settings)
-        b_next = _where(s.refining, _bfgs_update(b, x_try, f, rows, grad, settings),
-                        _where(over, handover(r_next), b))
-        return _SolveState(_where(s.refining, r, r_next), b_next, s.refining | over)
-
-    first = _SolveState(start, handover(start), _rprop_over(start, settings))
-    end = jax.lax.while_loop(lambda s: ~(s.refining & s.refine.done), body, first)
-    return postprocess(end.rprop, problem, weights, settings,
-                       _bfgs_outcome(problem, end.refine, unravel, settings))
+    state = init(problem, init_design, settings)
+    state = jax.lax.while_loop(cond, partial(step, problem=problem, weights=weights, settings=settings),
+                               state)
+    return postprocess(state, problem, weights, settings)
 
 
 @partial(jax.jit, static_argnames="settings")
