@@ -11,9 +11,13 @@ Each scene is measured in a fresh process (no compilation cache, no program cach
 
 With several ``--tree LABEL=PATH`` (checkouts of other commits) every scene is measured with each
 tree, the trees alternating scene by scene so that the machine's load falls on all alike; the
-JSON has one column per label. Writes benchmarks/results/solve_compile.json.
+JSON has one column per label. Writes benchmarks/results/solve_compile.json. ``--parts`` counts
+the equations of the program's pieces instead (the family's evaluate and polish, L_A and its
+gradient, the refinement's loop, :func:`camjax.solvers.gradient.minimize`: both loops and the
+judgement of their designs), written to benchmarks/results/solve_compile_parts.json.
 
     python3 benchmarks/solve_compile.py [--tree before=/tmp/base@15abba3 --tree after=.] [--scenes default]
+    python3 benchmarks/solve_compile.py --parts --out benchmarks/results/solve_compile_parts.json
 """
 
 from __future__ import annotations
@@ -81,6 +85,37 @@ def measure(scene_name: str) -> dict:
             "compile_s": t3 - t2, "cpu_s": cpu, "dtype": str(dtype)}
 
 
+def parts(scene_name: str) -> dict:
+    """Equations of the pieces the design program is made of, for one scene (jaxprs only)."""
+    import jax
+
+    jax.config.update("jax_enable_x64", True)
+    from camjax.family import weights_of
+    from camjax.pipeline import design_problem
+    from camjax.scene import load_scene
+    from camjax.solvers import gradient
+    from camjax.solvers.base import family_of
+
+    problem = design_problem(load_scene(scene_name))
+    family, settings = family_of(problem), gradient.DEFAULT_SETTINGS
+    weights = jax.tree.map(lambda x: x[0], weights_of([1.0], [1.0], jax.numpy.float64))
+    design = gradient.midpoint(problem)
+    u = gradient.to_unit(problem, design)
+    zeros = jax.tree.map(jax.numpy.zeros_like, gradient.scaled_constraints(problem, design, True))
+
+    def eqns(fn, *args) -> int:
+        return count_eqns(jax.make_jaxpr(fn)(*args).jaxpr)
+
+    def lagrangian(v):
+        return gradient.augmented_lagrangian(v, problem, weights, zeros, settings.penalty, True)[0]
+
+    return {"evaluate": eqns(lambda d: family.evaluate(problem, weights, d), design),
+            "polish": eqns(lambda d: family.polish(problem, weights, d), design),
+            "lagrangian_value_and_grad": eqns(jax.value_and_grad(lagrangian), u),
+            "refine_bfgs": eqns(lambda v: gradient.refine_bfgs(problem, weights, v, settings)[0], u),
+            "minimize": eqns(lambda w: gradient.minimize(problem, w, None, settings).design, weights)}
+
+
 def in_fresh_process(tree: Path, scene_name: str) -> dict:
     env = dict(os.environ, PYTHONPATH=str(tree), CAMJAX_COMPILATION_CACHE="0", CAMJAX_PROGRAM_CACHE="0",
                JAX_ENABLE_COMPILATION_CACHE="false", JAX_PLATFORMS=os.environ.get("JAX_PLATFORMS", "cpu"))
@@ -108,9 +143,16 @@ def main() -> None:
                         help="a tree to measure (repeat to compare; default: this one, as 'after')")
     parser.add_argument("--scenes", nargs="+", default=list(SCENES))
     parser.add_argument("--out", type=Path, default=OUT)
+    parser.add_argument("--parts", action="store_true",
+                        help="equations of each piece of the program instead (this tree; to --out)")
     args = parser.parse_args()
     if args.worker:
         print(json.dumps(measure(args.worker)))
+        return
+    if args.parts:
+        rows = {name: parts(name) for name in args.scenes}
+        args.out.parent.mkdir(parents=True, exist_ok=True)
+        args.out.write_text(json.dumps({"commit": git_head(ROOT), "eqns": rows}, indent=2) + "\n")
         return
     trees = args.tree or [("after", ROOT, git_head(ROOT))]
     rows = {}
