@@ -12,7 +12,7 @@ import pytest
 
 import camjax
 from camjax.family import weights_of
-from camjax.followers import _closure
+from camjax.followers import _closure_problem
 from camjax.solvers import newton, scipy_family
 from camjax.solvers.base import family_of, problem_from_scene
 
@@ -60,7 +60,7 @@ def test_every_contact_and_sign_is_a_row_of_its_own(solved):
     fam = family_of(problem)
     design = jax.tree.map(lambda x: x[0], certs.result.design)
     rows = fam.constraints(problem, design)
-    assert rows._fields[-len(_closure.row_names(problem.closure)):] == _closure.row_names(problem.closure)
+    assert rows._fields[-len(_closure_problem.row_names(problem.closure)):] == _closure_problem.row_names(problem.closure)
     assert "pressure_angle" not in rows._fields
     spring = fam.constraints(problem._replace(closure=None), design)
     np.testing.assert_array_equal(np.maximum(rows.pressure_angle_plus, rows.pressure_angle_minus),

@@ -20,7 +20,7 @@ first's. A free one is therefore chosen in two steps (:func:`solve_with_dimensio
    grows with beta.
 
 Where no value in the bounds lets the first contact's optimum keep the second cam, the design is
-solved with both contacts at the most permissive value (:func:`camjax.followers._closure.design_start`:
+solved with both contacts at the most permissive value (:func:`camjax.followers._closure_problem.design_start`:
 a yoke's largest span, a rocker's [follower] angle clipped into the bounds) and step 2 is taken at
 that design; the objective is then that value's optimum, which another value may better.
 
@@ -37,7 +37,7 @@ import jax
 import jax.numpy as jnp
 
 from camjax.errors import SceneError
-from camjax.followers._closure import design_start, second_excess
+from camjax.followers._closure_problem import design_start, second_excess
 from camjax.scene.reader import TableReader, fixed_or_free
 
 # each free dimension: its [design] key, the design problem's closure field and the factor to it

@@ -17,7 +17,7 @@ import numpy as np
 
 from camjax import contact, loads, runtime
 from camjax.errors import SceneError
-from camjax.followers import _checks, _closure, _closure_design
+from camjax.followers import _checks, _closure, _closure_design, _closure_problem
 from camjax.followers._closure import POSITIVE_CLOSURES, closure_keys, read_closure
 from camjax.followers._rocking import (
     TRAIN_KEYS,
@@ -37,7 +37,7 @@ from camjax.scene.spec import ClosureSpec, FollowerSpec
 @partial(runtime.program_cache, static_argnames=("kind",))
 def _second_start_angle(kin, psi_first, sizing, second, kind: str):
     """The smallest arm start angle psi0 >= ``psi_first`` (rad) at which both contacts of a positive
-    drive hold their limits at every sample (:func:`camjax.followers._closure.first_admissible_size`),
+    drive hold their limits at every sample (:func:`camjax.followers._closure_problem.first_admissible_size`),
     whether one does, and the sample where the limits are tightest there. ``sizing``: (d, l, rotation
     sign, tan(limit), R_f + rho_min); ``second``: (groove clearance, second arm length, its angle (deg),
     second roller radius, R_f, rho_min), arrays: one compiled program for every scene of a closure
@@ -48,12 +48,12 @@ def _second_start_angle(kin, psi_first, sizing, second, kind: str):
                           second_arm_length_mm=arm, second_arm_angle_deg=angle)
 
     def limits(psi0):
-        g = _closure.second_limits(closure, kin, psi0=psi0, pivot_distance_mm=d, arm_length_mm=l, sign=sign,
+        g = _closure_problem.second_limits(closure, kin, psi0=psi0, pivot_distance_mm=d, arm_length_mm=l, sign=sign,
                                    roller_radius_mm=rf, min_curvature_radius_mm=rho_min, tan_limit=tan_lim)
         return jnp.concatenate([rocker_roller_geo.sizing_limits(kin, psi0, sizing), g])
 
     hi = jnp.pi - jnp.max(kin.s)
-    psi0, found = _closure.first_admissible_size(lambda p: jnp.any(limits(p) > 0.0), psi_first, hi,
+    psi0, found = _closure_problem.first_admissible_size(lambda p: jnp.any(limits(p) > 0.0), psi_first, hi,
                                                  kin.s.shape[-1])
     return psi0, found, jnp.argmax(jnp.max(limits(psi0), axis=0))
 

@@ -44,7 +44,7 @@ from camjax.family import bounds as bounds
 from camjax.family import bounds_violation as bounds_violation
 from camjax.family import size_norm as size_norm
 from camjax.family import violated_constraints as violated_constraints
-from camjax.followers import _closure, _swing
+from camjax.followers import _closure_problem, _swing
 from camjax.followers._swing import moment_coefficient as moment_coefficient
 from camjax.followers._swing import per_angle as per_angle
 from camjax.followers._swing import polish_design
@@ -104,11 +104,11 @@ class Constraints(NamedTuple):
     stress: jax.Array  # C_M^2 / (sigma_max^2 l cos phi) - rho_eq
 
 
-# a positive drive's constraints (camjax.followers._closure.with_second_contact): the first contact's
+# a positive drive's constraints (camjax.followers._closure_problem.with_second_contact): the first contact's
 # rows, the pressure angle as two, then the second contact's
-GrooveConstraints = _closure.positive_type("GrooveConstraints", Constraints, _closure.GrooveTerms, __name__)
-ArmConstraints = _closure.positive_type("ArmConstraints", Constraints, _closure.ArmTerms, __name__)
-POSITIVE_CONSTRAINTS = {_closure.GrooveTerms: GrooveConstraints, _closure.ArmTerms: ArmConstraints}
+GrooveConstraints = _closure_problem.positive_type("GrooveConstraints", Constraints, _closure_problem.GrooveTerms, __name__)
+ArmConstraints = _closure_problem.positive_type("ArmConstraints", Constraints, _closure_problem.ArmTerms, __name__)
+POSITIVE_CONSTRAINTS = {_closure_problem.GrooveTerms: GrooveConstraints, _closure_problem.ArmTerms: ArmConstraints}
 
 
 class Violation(NamedTuple):
@@ -148,7 +148,7 @@ def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=
         **_swing.scene_fields(scene, arrays, as_), lower=lower, upper=upper,
         size_norm_mm=as_(d.bounds("base_radius_mm")[1] + d.bounds("roller_radius_mm")[1]),
         tan_max_pressure_angle=as_(np.tan(np.radians(scene.follower.max_pressure_angle_deg))),
-        closure=_closure.design_terms(scene, arrays, _second_moment_coefficient(scene, arrays)),
+        closure=_closure_problem.design_terms(scene, arrays, _second_moment_coefficient(scene, arrays)),
     )
 
 
@@ -244,22 +244,22 @@ def constraints(problem: Problem, design: Design) -> Constraints:
     )
     if problem.closure is None:
         return first
-    return _closure.with_second_contact(first, g.along, problem.tan_max_pressure_angle * g.across,
+    return _closure_problem.with_second_contact(first, g.along, problem.tan_max_pressure_angle * g.across,
                                         _second_contact(problem, design, g), problem.closure,
                                         POSITIVE_CONSTRAINTS)
 
 
-def _second_contact(problem: Problem, design: Design, g: _Geometry) -> _closure.SecondContact:
+def _second_contact(problem: Problem, design: Design, g: _Geometry) -> _closure_problem.SecondContact:
     """The positive drive's second contact (the groove's outer flank, the second arm's cam)."""
     t = problem.closure
-    if isinstance(t, _closure.GrooveTerms):
+    if isinstance(t, _closure_problem.GrooveTerms):
         coefficient = t.second_coefficient * jax.lax.rsqrt(design.arm_length_mm * 1e-3)
-        return _closure.groove_second(t, g.kappa, design.roller_radius_mm, problem.min_curvature_radius_mm,
+        return _closure_problem.groove_second(t, g.kappa, design.roller_radius_mm, problem.min_curvature_radius_mm,
                                       (g.along, problem.tan_max_pressure_angle * g.across),
                                       jnp.arctan2(g.along, g.across), problem.sigma_max_MPa, coefficient)
     rp = design.base_radius_mm + design.roller_radius_mm
     psi = rocker_roller_geo.arm_start_angle(rp, design.pivot_distance_mm, design.arm_length_mm) + problem.s_rad
-    return _closure.arm_second(t, design.pivot_distance_mm, psi, problem.ds, problem.d2s, problem.rotation_sign,
+    return _closure_problem.arm_second(t, design.pivot_distance_mm, psi, problem.ds, problem.d2s, problem.rotation_sign,
                                problem.min_curvature_radius_mm, problem.tan_max_pressure_angle, problem.sigma_max_MPa)
 
 
@@ -268,7 +268,7 @@ def polish(problem: Problem, weights: Weights, design: Design) -> Design:
     cam angle, not only at the samples (:func:`camjax.followers._swing.polish_design`; needs
     ``problem.program``, i.e. exact extrema)."""
     return polish_design(problem, design, constraints,
-                         _closure.exact_rows(("pressure_angle", "undercut", "stress"), problem.closure))
+                         _closure_problem.exact_rows(("pressure_angle", "undercut", "stress"), problem.closure))
 
 
 def constraint_maxima(problem: Problem, design: Design) -> Constraints:

@@ -19,7 +19,7 @@ import numpy as np
 
 from camjax import runtime
 from camjax.evaluate import curve_extremes
-from camjax.followers import _checks, _closure, _closure_design
+from camjax.followers import _checks, _closure, _closure_design, _closure_problem
 from camjax.followers._closure import POSITIVE_CLOSURES, closure_keys, read_closure
 from camjax.followers._pitch import rotation_sign
 from camjax.followers._translating import (
@@ -74,18 +74,18 @@ def exact_prime_radius(arrays, grid_prime_radius_mm, pressure_need, roller_radiu
 @partial(runtime.program_cache, static_argnames=("kind",))
 def _second_prime_radius(kin, prime_radius_mm, high_mm, dims, kind: str):
     """The smallest prime radius >= ``prime_radius_mm`` (< ``high_mm``) at which a positive drive's
-    second contact holds its limits at every sample (:func:`camjax.followers._closure.second_limits`,
-    :func:`camjax.followers._closure.first_admissible_size`), whether one does, and the sample where
+    second contact holds its limits at every sample (:func:`camjax.followers._closure_problem.second_limits`,
+    :func:`camjax.followers._closure_problem.first_admissible_size`), whether one does, and the sample where
     they are tightest there. ``dims``: (sign e, R_f, rho_min, tan(limit), groove clearance, yoke span,
     second roller radius), arrays: one compiled program for every scene of a closure kind and grid."""
     offset, rf, rho_min, tan_lim, clearance, span, radius = dims
     closure = ClosureSpec(kind, clearance_mm=clearance, yoke_span_mm=span, second_roller_radius_mm=radius)
 
     def limits(rp):
-        return _closure.second_limits(closure, kin, prime_radius_mm=rp, signed_offset_mm=offset,
+        return _closure_problem.second_limits(closure, kin, prime_radius_mm=rp, signed_offset_mm=offset,
                                       roller_radius_mm=rf, min_curvature_radius_mm=rho_min, tan_limit=tan_lim)
 
-    rp, found = _closure.first_admissible_size(lambda rp: jnp.any(limits(rp) > 0.0), prime_radius_mm, high_mm,
+    rp, found = _closure_problem.first_admissible_size(lambda rp: jnp.any(limits(rp) > 0.0), prime_radius_mm, high_mm,
                                                kin.s.shape[-1])
     return rp, found, jnp.argmax(jnp.max(limits(rp), axis=0))
 

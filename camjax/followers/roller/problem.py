@@ -51,7 +51,7 @@ from camjax.family import bounds as bounds
 from camjax.family import bounds_violation as bounds_violation
 from camjax.family import size_norm as size_norm
 from camjax.family import violated_constraints as violated_constraints
-from camjax.followers import _closure
+from camjax.followers import _closure_problem
 from camjax.followers import _pitch as pitch
 from camjax.followers.roller import geometry as roller_geo
 from camjax.numerics import COS_FLOOR, RHO_FLOOR_MM, floor_positive, positive_part, safe_sqrt
@@ -101,11 +101,11 @@ class Constraints(NamedTuple):
     stress: jax.Array  # C^2 / (sigma_max^2 cos phi) - rho_eq
 
 
-# a positive drive's constraints (camjax.followers._closure.with_second_contact): the first contact's
+# a positive drive's constraints (camjax.followers._closure_problem.with_second_contact): the first contact's
 # rows, the pressure angle as two, then the second contact's
-GrooveConstraints = _closure.positive_type("GrooveConstraints", Constraints, _closure.GrooveTerms, __name__)
-YokeConstraints = _closure.positive_type("YokeConstraints", Constraints, _closure.YokeTerms, __name__)
-POSITIVE_CONSTRAINTS = {_closure.GrooveTerms: GrooveConstraints, _closure.YokeTerms: YokeConstraints}
+GrooveConstraints = _closure_problem.positive_type("GrooveConstraints", Constraints, _closure_problem.GrooveTerms, __name__)
+YokeConstraints = _closure_problem.positive_type("YokeConstraints", Constraints, _closure_problem.YokeTerms, __name__)
+POSITIVE_CONSTRAINTS = {_closure_problem.GrooveTerms: GrooveConstraints, _closure_problem.YokeTerms: YokeConstraints}
 
 
 class Violation(NamedTuple):
@@ -154,7 +154,7 @@ def problem_from_scene(scene, arrays=None, *, samples: int | None = None, dtype=
     return Problem(
         **circle_scene_fields(scene, arrays, as_), lower=lower, upper=upper,
         size_norm_mm=as_(d.bounds("base_radius_mm")[1] + d.bounds("roller_radius_mm")[1]),
-        closure=_closure.design_terms(scene, arrays, _second_coefficient(scene.contact, arrays.force_N, kin.s)),
+        closure=_closure_problem.design_terms(scene, arrays, _second_coefficient(scene.contact, arrays.force_N, kin.s)),
     )
 
 
@@ -181,7 +181,7 @@ def _second_coefficient(contact, force_N, like) -> jax.Array:
     """Hertz coefficient of the load a positive drive's second contact carries, max(-F, 0)."""
     if contact is None or force_N is None:
         return jnp.zeros_like(like)
-    return _closure.reversed_coefficient(force_N, contact.cam_width_mm, contact.cam, contact.follower)
+    return _closure_problem.reversed_coefficient(force_N, contact.cam_width_mm, contact.cam, contact.follower)
 
 
 def per_angle(problem: Problem) -> Problem:
@@ -268,15 +268,15 @@ def constraints(problem: Problem, design: Design) -> Constraints:
     first = circle_constraints(problem, design, x)
     if problem.closure is None:
         return first
-    return _closure.with_second_contact(first, x.u, problem.tan_max_pressure_angle * x.w,
+    return _closure_problem.with_second_contact(first, x.u, problem.tan_max_pressure_angle * x.w,
                                         _second_contact(problem, design, x), problem.closure,
                                         POSITIVE_CONSTRAINTS)
 
 
 def row_labels(problem: Problem) -> dict:
     """Each constraint row's (kind, contact) where the problem has two contacts (the certificate's
-    labels, :func:`camjax.followers._closure.row_labels`)."""
-    return _closure.row_labels(problem.closure)
+    labels, :func:`camjax.followers._closure_problem.row_labels`)."""
+    return _closure_problem.row_labels(problem.closure)
 
 
 def circle_constraints(problem: Problem, design: Design, x: CircleTerms) -> Constraints:
@@ -292,14 +292,14 @@ def circle_constraints(problem: Problem, design: Design, x: CircleTerms) -> Cons
     )
 
 
-def _second_contact(problem: Problem, design: Design, x: CircleTerms) -> _closure.SecondContact:
+def _second_contact(problem: Problem, design: Design, x: CircleTerms) -> _closure_problem.SecondContact:
     """The positive drive's second contact (the groove's outer flank, the yoke's second cam)."""
     t = problem.closure
-    if isinstance(t, _closure.GrooveTerms):
-        return _closure.groove_second(t, x.kappa, design.roller_radius_mm, problem.min_curvature_radius_mm,
+    if isinstance(t, _closure_problem.GrooveTerms):
+        return _closure_problem.groove_second(t, x.kappa, design.roller_radius_mm, problem.min_curvature_radius_mm,
                                       (x.u, problem.tan_max_pressure_angle * x.w), jnp.arctan2(x.u, x.w),
                                       problem.sigma_max_MPa)
-    return _closure.yoke_second(t, x.w, x.u, problem.ds_mm, problem.d2s_mm, problem.rotation_sign * design.offset_mm,
+    return _closure_problem.yoke_second(t, x.w, x.u, problem.ds_mm, problem.d2s_mm, problem.rotation_sign * design.offset_mm,
                                 problem.min_curvature_radius_mm, problem.tan_max_pressure_angle, problem.sigma_max_MPa)
 
 
@@ -396,7 +396,7 @@ def problem_at(problem: Problem, segment: int, theta_deg: jax.Array) -> Problem:
     if closure is not None:
         m = problem.model
         second = (jnp.zeros_like(p.kin.s) if m.cam_width_mm is None or p.force_N is None else
-                  _closure.reversed_coefficient(p.force_N, m.cam_width_mm, m.cam, m.follower))
+                  _closure_problem.reversed_coefficient(p.force_N, m.cam_width_mm, m.cam, m.follower))
         closure = closure._replace(second_coefficient=second)
     return problem._replace(theta_deg=theta_deg, s_mm=p.kin.s, ds_mm=p.kin.ds, d2s_mm=p.kin.d2s,
                             stress_coefficient=coefficient, closure=closure)
@@ -406,7 +406,7 @@ def exact_constraints(problem: Problem) -> tuple[str, ...]:
     """The constraints :func:`polish` keeps at every angle (static): the pressure angle and the
     undercut, and the stress with a contact model; a positive drive's second contact's too."""
     has_stress = problem.model is not None and problem.model.cam_width_mm is not None
-    return _closure.exact_rows(("pressure_angle", "undercut", *(("stress",) if has_stress else ())),
+    return _closure_problem.exact_rows(("pressure_angle", "undercut", *(("stress",) if has_stress else ())),
                                problem.closure)
 
 
@@ -456,7 +456,7 @@ def roller_evaluation(types, problem, objective_value, design, sigma, phi, kappa
     ``violations``: the family's own beside the contact's."""
     margin = roller_geo.roller_undercut_margin(kappa, design.roller_radius_mm, 0.0)  # rho_c, convex parts
     if problem.closure is not None:  # a positive drive: the second contact's limits too
-        sigma, phi, margin = _closure.worst_of_both(sigma, phi, margin, second_contact())
+        sigma, phi, margin = _closure_problem.worst_of_both(sigma, phi, margin, second_contact())
     figures, contact = family.worst_contact(problem, design, sigma, phi, margin, max_pressure_angle_rad)
     evaluation, violation = types
     return family.judged(evaluation, violation, problem, objective=objective_value,
