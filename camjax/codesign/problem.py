@@ -18,8 +18,13 @@ functions of z, not smooth), which the search takes as smooth maxima sharpened b
 (:mod:`camjax.codesign.peaks`: :attr:`Codesign.taus` set, their gradient added; the exact maxima
 when it is None).
 
-- **Inner**: the registered gradient solver on the grid (``extrema = "grid"``: the problem is a
-  pytree of arrays whose kinematic fields are functions of z; one compiled program for every z).
+- **Inner**: the registered interior-point solver (:data:`INNER_SOLVER`, its KKT residual to
+  1e-12) on the grid (``extrema = "grid"``: the problem is a pytree of arrays whose kinematic
+  fields are functions of z), every solve from one reference geometry (:attr:`Codesign.reference`).
+- **Compiled once per shape**: the pieces are module-level programs whose static argument is the
+  :class:`ProblemShape` (what the family's problem reads of the scene, compared by value) and whose
+  weights, kinematics and spring are arrays: every z, every weighting of a sweep and every spring
+  box of one scene and grid share one program each.
 - **Gradient of the inner optimum** by the envelope theorem: at the optimum d* with multipliers
   lambda >= 0 of its active constraints, every angle's its own (from stationarity by nonnegative
   least squares, :func:`multipliers`), dF/dz is the partial derivative in z of the Lagrangian
@@ -60,6 +65,7 @@ from camjax.evaluate import arrays_from_kinematics, scene_arrays
 from camjax.family import weights_of
 from camjax.program import Kinematics
 from camjax.solvers.base import Settings, family_of, problem_from_scene, solver_module
+from camjax.solvers.gradient import midpoint
 from camjax.solvers.newton import NewtonSettings
 from camjax.synthesis.linear import law_quadratics, linear_kinematics
 from camjax.synthesis.problem import ALL_OBJECTIVES, L2_OBJECTIVES
@@ -217,8 +223,9 @@ class Codesign:
             if self.spring is not None:
                 k, p, _ = self._spring_at(self.kin0, None if self.u0 is None else jnp.asarray(self.u0))
                 spring = (float(k), float(p))
+            start = _start_program(self.shape, self.theta, self.kin0, spring)
             self._reference = jax.device_get(
-                _inner_program(self.shape, self.theta, self.kin0, spring, self.weights, None)[1])
+                _inner_program(self.shape, self.theta, self.kin0, spring, self.weights, start)[1])
         return self._reference
 
     def _local(self, kin4, spring, design):
@@ -407,6 +414,14 @@ def inner_solve(problem, weights, start=None):
     raw = solver_module(INNER_SOLVER).run_one(problem, weights, jax.random.key(0), INNER_SETTINGS, start)
     ev = family_of(problem).evaluate(problem, weights, raw.design)
     return ev.objective, raw.design, ev.feasible
+
+
+@partial(jax.jit, static_argnums=0)
+def _start_program(shape: ProblemShape, theta, kin4, spring):
+    """The solvers' own start on ``kin4``: the family's ``start`` where it has one, else the box's
+    middle (so that the reference solve is the inner program's, not a second compile)."""
+    problem = shape.problem(theta, kin4, spring)
+    return getattr(family_of(problem), "start", midpoint)(problem)
 
 
 @partial(jax.jit, static_argnums=0)
