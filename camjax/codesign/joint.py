@@ -257,10 +257,9 @@ class JointResult(NamedTuple):
 def solve(problem: JointProblem, start: JointDesign, settings=SETTINGS, solver: str = "gradient",
           key: jax.Array | None = None, ga_settings=None) -> JointResult:
     """One joint co-design from ``start`` by a registered solver, then the geometry of its laws
-    solved as the bilevel search solves it (:func:`camjax.codesign.problem.inner_solve` on P(z),
-    from the joint solve's geometry: what :meth:`camjax.codesign.Codesign.value` gives, to its
-    1e-12), so that F(z) is the co-design's own value of those laws and the geometry meets the
-    family's tolerances. Traceable; vmap it over a stack.
+    solved as the bilevel search solves it (:func:`camjax.codesign.problem.inner_solve` on P(z):
+    what :meth:`camjax.codesign.Codesign.value` gives), so that F(z) is the co-design's own value
+    of those laws and the geometry meets the family's tolerances. Traceable; vmap it over a stack.
 
     ``solver``: ``gradient`` (the gradient solver's augmented-Lagrangian BFGS with ``settings``),
     ``ga`` (the GA, ``ga_settings`` (default its own), PRNG ``key``, its population seeded with the
@@ -281,7 +280,7 @@ def solve(problem: JointProblem, start: JointDesign, settings=SETTINGS, solver: 
         design, refine_steps, _ = gradient.refine_bfgs(problem, problem.weights, u, settings)
         steps = steps + refine_steps
     base = base_problem(problem, design)
-    objective, geometry, feasible = inner_solve(base, problem.weights, design.geometry)
+    objective, geometry, feasible = inner_solve(base, problem.weights)
     f = objective + law_value(problem, design.laws)
     width = problem.upper.laws - problem.lower.laws
     at_box = jnp.any((design.laws - problem.lower.laws <= AT_BOX_RTOL * width)
