@@ -257,7 +257,7 @@ class JointResult(NamedTuple):
 def solve(problem: JointProblem, start: JointDesign, settings=SETTINGS, solver: str = "gradient",
           key: jax.Array | None = None, ga_settings=None) -> JointResult:
     """One joint co-design from ``start`` by a registered solver, then the geometry of its laws
-    solved as the bilevel search solves it (the registered gradient solver on P(z), global mode:
+    solved as the bilevel search solves it (:func:`camjax.codesign.problem.inner_solve` on P(z):
     what :meth:`camjax.codesign.Codesign.value` gives), so that F(z) is the co-design's own value
     of those laws and the geometry meets the family's tolerances. Traceable; vmap it over a stack.
 
@@ -265,8 +265,8 @@ def solve(problem: JointProblem, start: JointDesign, settings=SETTINGS, solver: 
     ``ga`` (the GA, ``ga_settings`` (default its own), PRNG ``key``, its population seeded with the
     start: by elitism never worse than it) or ``hybrid`` (that GA, then the gradient solver from its
     best). Iterations: the GA's generations plus the gradient solver's evaluations."""
+    from camjax.codesign.problem import inner_solve
     from camjax.solvers import ga
-    from camjax.solvers.base import solve_one
 
     steps = jnp.asarray(0)
     if solver in ("ga", "hybrid"):
@@ -280,12 +280,12 @@ def solve(problem: JointProblem, start: JointDesign, settings=SETTINGS, solver: 
         design, refine_steps, _ = gradient.refine_bfgs(problem, problem.weights, u, settings)
         steps = steps + refine_steps
     base = base_problem(problem, design)
-    inner = solve_one(base, problem.weights, jax.random.key(0), mode="global", solver="gradient")
-    f = inner.objective + law_value(problem, design.laws)
+    objective, geometry, feasible = inner_solve(base, problem.weights)
+    f = objective + law_value(problem, design.laws)
     width = problem.upper.laws - problem.lower.laws
     at_box = jnp.any((design.laws - problem.lower.laws <= AT_BOX_RTOL * width)
                      | (problem.upper.laws - design.laws <= AT_BOX_RTOL * width))
-    return JointResult(design.laws, at_box, inner.design, f, inner.feasible, steps)
+    return JointResult(design.laws, at_box, geometry, f, feasible, steps)
 
 
 @partial(jax.jit, static_argnames="settings")

@@ -18,8 +18,12 @@ functions of z, not smooth), which the search takes as smooth maxima sharpened b
 (:mod:`camjax.codesign.peaks`: :attr:`Codesign.taus` set, their gradient added; the exact maxima
 when it is None).
 
-- **Inner**: the registered gradient solver on the grid (``extrema = "grid"``: the problem is a
-  pytree of arrays whose kinematic fields are functions of z; one compiled program for every z).
+- **Inner**: the registered gradient solver (:data:`INNER_SOLVER`) on the grid (``extrema =
+  "grid"``: the problem is a pytree of arrays whose kinematic fields are functions of z).
+- **Compiled once per shape**: the pieces are module-level programs whose static argument is the
+  :class:`ProblemShape` (what the family's problem reads of the scene, compared by value) and whose
+  weights, kinematics and spring are arrays: every z, every weighting of a sweep and every spring
+  box of one scene and grid share one program each.
 - **Gradient of the inner optimum** by the envelope theorem: at the optimum d* with multipliers
   lambda >= 0 of its active constraints, every angle's its own (from stationarity by nonnegative
   least squares, :func:`multipliers`), dF/dz is the partial derivative in z of the Lagrangian
@@ -46,6 +50,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from functools import partial
 from typing import Any, NamedTuple
 
 import jax
@@ -58,7 +63,7 @@ import camjax.codesign.spring as spring_mod
 from camjax.evaluate import arrays_from_kinematics, scene_arrays
 from camjax.family import weights_of
 from camjax.program import Kinematics
-from camjax.solvers.base import family_of, problem_from_scene, solve_one
+from camjax.solvers.base import Settings, family_of, problem_from_scene, solver_module
 from camjax.synthesis.linear import law_quadratics, linear_kinematics
 from camjax.synthesis.problem import ALL_OBJECTIVES, L2_OBJECTIVES
 from camjax.synthesis.vibration import residual_maps
@@ -166,11 +171,7 @@ class Codesign:
             P, q, c = train_quadratics(self.lin, [Q for _, Q in self.residual], self.residual_weight)
             self.law_P, self.law_q, self.law_c = self.law_P + P, self.law_q + q, self.law_c + c
         self.weights = weights_of(scene.design.alpha, scene.design.gamma)
-        self._inner = jax.jit(self._inner_fn)
-        self._lagrangian_grad = jax.jit(jax.grad(self._lagrangian, argnums=0))
-        self._kin_lagrangian_grad = jax.jit(jax.grad(self._kin_lagrangian, argnums=0))
-        self._local = jax.jit(self._local_fn)
-        self._spring_at = jax.jit(self._spring_fn)
+        self.shape = ProblemShape.of(grid, self.spring)
         self.evaluations = 0
         self.builtin_cache: dict = {} if builtin_cache is None else builtin_cache
 
@@ -195,51 +196,24 @@ class Codesign:
         """The family's problem on kinematics ``kin4`` (4, samples): s, s', s'', s''' (traceable);
         ``spring``: (rate, preload) replacing the scene's (a designed spring: N/m and N, or a rocker's
         N m/rad and N m)."""
-        kin = Kinematics(self.theta, kin4[0], kin4[1], kin4[2], kin4[3])
-        scene = self.grid_scene
-        if spring is not None:
-            train = spring_mod.train_of(self.spring, spring[0], spring[1])
-            scene = dataclasses.replace(scene, follower=dataclasses.replace(scene.follower, train=train))
-        return problem_from_scene(scene, arrays_from_kinematics(scene, kin))
-
-    def _spring_fn(self, kin4, u):
-        """(k, P, P_min): the rate of u, the optimal preload and the least keeping contact."""
-        k = spring_mod.rate_of(self.spring, u)
-        p, need = spring_mod.preload_of(self.spring, kin4, k)
-        return k, p, need
+        return self.shape.problem(self.theta, kin4, spring)
 
     def kinematics(self, z):
         """(4, samples) kinematics of the coordinates z (traceable)."""
-        return self.kin0 + jnp.tensordot(self.jacobian, jnp.asarray(z) - self.lin.z0, axes=1)
+        return _kinematics(self.kin0, self.jacobian, self.lin.z0, z)
 
-    def _inner_fn(self, kin4, spring):
-        sol = solve_one(self.problem(kin4, spring), self.weights, jax.random.key(0), mode="global",
-                        solver="gradient")
-        return sol.objective, sol.design, sol.feasible
+    def _inner(self, kin4, spring):
+        """(F, design, feasible) of the inner optimum on ``kin4`` with ``spring`` (None: the scene's)."""
+        return _inner_program(self.shape, self.theta, jnp.asarray(kin4), spring, self.weights, None)
 
-    def _lagrangian(self, x, design, lam):
-        """f + lam . g as a function of the outer x (the spring's rate and preload follow from x)."""
-        z, u = self.split(x)
-        kin4 = self.kinematics(z)
-        return self._kin_lagrangian(kin4, design, lam, self._spring_fn(kin4, u)[:2])
+    def _local(self, kin4, spring, design):
+        """The objective and every angle's constraints at ``design``, their Jacobian in the design,
+        the bounds and the size norm (:func:`_local_program`)."""
+        return _local_program(self.shape, self.theta, jnp.asarray(kin4), spring, design, self.weights)
 
-    def _kin_lagrangian(self, kin4, design, lam, spring=None):
-        problem = self.problem(kin4, spring)
-        family = family_of(problem)
-        g = _stacked(family, problem, design)
-        return family.objective(problem, self.weights, design) + jnp.dot(lam, g)
-
-    def _local_fn(self, kin4, spring, design):
-        """Objective and every angle's constraints, with their gradients in the design, at ``design``."""
-        problem = self.problem(kin4, spring)
-        family = family_of(problem)
-
-        def parts(d):
-            g = _stacked(family, problem, d)
-            return jnp.concatenate([family.objective(problem, self.weights, d)[None], g])
-
-        jac = jax.jacobian(parts)(design)
-        return parts(design), jac, problem.lower, problem.upper, family.size_norm(problem)
+    def _spring_at(self, kin4, u):
+        """(k, P, P_min): the rate of u, the optimal preload and the least keeping contact."""
+        return _spring_program(self.spring, jnp.asarray(kin4), u)
 
     # ------------------------------------------------------------------ evaluations
 
@@ -265,12 +239,12 @@ class Codesign:
         if self.spring is not None:
             u = self.u0 if u is None else u
             k, p, need = (float(v) for v in jax.device_get(
-                self._spring_at(jnp.asarray(kin4), None if u is None else jnp.asarray(u))))
+                self._spring_at(kin4, None if u is None else jnp.asarray(u))))
             spring = (k, p)
             high = self.spring.preload[1]
             if not need <= high + spring_mod.PRELOAD_TOL * max(1.0, abs(high)):
                 return Inner(math.inf, None, False, spring)
-        f, d, ok = jax.device_get(self._inner(jnp.asarray(kin4), spring))
+        f, d, ok = jax.device_get(self._inner(kin4, spring))
         return Inner(float(f) if bool(ok) and np.isfinite(f) else math.inf, d, bool(ok), spring)
 
     def value(self, x) -> tuple[float, Inner]:
@@ -286,10 +260,13 @@ class Codesign:
         values, jac, lower, upper, norm = jax.device_get(self._local(kin4, inner.spring, inner.design))
         lam = multipliers(values, jac, inner.design, lower, upper, norm)
         if self.spring is None:  # through the kinematics, chained with J
-            gk = self._kin_lagrangian_grad(kin4, inner.design, jnp.asarray(lam))
+            gk = _kin_lagrangian_grad(self.shape, self.theta, kin4, inner.design, jnp.asarray(lam), None,
+                                      self.weights)
             g = np.asarray(jnp.tensordot(gk, self.jacobian, axes=((0, 1), (0, 1))))
         else:  # x's rate and the preload it implies too
-            g = np.asarray(self._lagrangian_grad(jnp.asarray(x), inner.design, jnp.asarray(lam)))
+            g = np.asarray(_lagrangian_grad(self.shape, self.spring, self.theta, self.kin0, self.jacobian,
+                                            jnp.asarray(self.lin.z0), jnp.asarray(x), inner.design,
+                                            jnp.asarray(lam), self.weights))
         # (g + P z) + q: the order of the sums as ever (the search's path is sensitive to rounding)
         gz = g[: self.nz] + self.law_P @ x[: self.nz] + self.law_q
         if self.peaks is not None:  # the smooth peaks' (the last stage's smoothing where none is set)
@@ -337,6 +314,126 @@ class Codesign:
             e[i] = h
             out[i] = (self.value(z + e)[0] - self.value(z - e)[0]) / (2.0 * h)
         return out
+
+
+# ------------------------------------------------------------------ compiled pieces
+# One compiled program per problem shape, shared by every Codesign of it: the scene's values enter
+# as the static ProblemShape (compared by value) or as arrays (the weights, the kinematics, the
+# spring), so a sweep's weightings and the co-designs of one scene with other spring boxes reuse the
+# programs of the first.
+
+# the inner geometry solve: the gradient solver. The interior-point solver ("newton", its KKT
+# residual to 1e-12, from the inner optimum on the starting laws) was measured against it: the same
+# optima to 1e-12 relative on the tests' inner problems, 1.5 to 5 x less CPU per solve, but the
+# outer searches, sensitive to the last digits of F, then ended elsewhere (tests/test_codesign_spring.py:
+# a free rate 0.7 % above a fixed one; the `codesign` scene 0.12 % above), so it is not used yet
+INNER_SOLVER = "gradient"
+INNER_SETTINGS = Settings()
+
+
+class ProblemShape:
+    """What the compiled pieces of a co-design read from its scene: the grid scene without what
+    the family's problem does not read (its name, [synthesis], [design]'s weights, which are an
+    argument), and the spring box's follower train (the rate and preload are arguments). Equal
+    (and one object, :meth:`of`) when their text is: the static argument of the compiled pieces."""
+
+    _interned: dict = {}
+
+    def __init__(self, scene, train_box):
+        self.scene = scene
+        self.train_box = train_box  # a SpringBox whose train and kind alone are read (train_of), or None
+        self.key = repr((scene, train_box))
+
+    @classmethod
+    def of(cls, grid_scene, box) -> ProblemShape:
+        """The shape of a co-design's grid scene and its spring box (None: the scene's spring)."""
+        design = dataclasses.replace(grid_scene.design, alpha=1.0, gamma=1.0)
+        scene = dataclasses.replace(grid_scene, name="", synthesis=None, design=design)
+        train_box = None if box is None else box._replace(rate=(1.0, 1.0), preload=(0.0, 0.0), min_force=0.0,
+                                                          overspeed=1.0, omega_os=0.0)
+        shape = cls(scene, train_box)
+        return cls._interned.setdefault(shape.key, shape)
+
+    def __eq__(self, other) -> bool:
+        return isinstance(other, ProblemShape) and self.key == other.key
+
+    def __hash__(self) -> int:
+        return hash(self.key)
+
+    def problem(self, theta, kin4, spring=None):
+        """The family's problem on kinematics ``kin4`` (4, samples) at the grid's angles ``theta``;
+        ``spring``: (rate, preload) replacing the scene's (traceable)."""
+        kin = Kinematics(theta, kin4[0], kin4[1], kin4[2], kin4[3])
+        scene = self.scene
+        if spring is not None:
+            train = spring_mod.train_of(self.train_box, spring[0], spring[1])
+            scene = dataclasses.replace(scene, follower=dataclasses.replace(scene.follower, train=train))
+        return problem_from_scene(scene, arrays_from_kinematics(scene, kin))
+
+
+def _kinematics(kin0, jacobian, z0, z):
+    """(4, samples) kinematics kin0 + J (z - z0) of the laws' coordinates z (traceable)."""
+    return kin0 + jnp.tensordot(jacobian, jnp.asarray(z) - z0, axes=1)
+
+
+def _spring_fn(box, kin4, u):
+    k = spring_mod.rate_of(box, u)
+    p, need = spring_mod.preload_of(box, kin4, k)
+    return k, p, need
+
+
+_spring_program = jax.jit(_spring_fn, static_argnums=0)
+
+
+def inner_solve(problem, weights, start=None):
+    """(F, design, feasible): the geometry optimum of a grid problem by :data:`INNER_SOLVER` from
+    ``start`` (a design, mm; None: the solver's own start), judged by the family's evaluation (on
+    the grid: a solution's polish moves nothing without exact extrema). Traceable."""
+    raw = solver_module(INNER_SOLVER).run_one(problem, weights, jax.random.key(0), INNER_SETTINGS, start)
+    ev = family_of(problem).evaluate(problem, weights, raw.design)
+    return ev.objective, raw.design, ev.feasible
+
+
+@partial(jax.jit, static_argnums=0)
+def _inner_program(shape: ProblemShape, theta, kin4, spring, weights, start):
+    return inner_solve(shape.problem(theta, kin4, spring), weights, start)
+
+
+@partial(jax.jit, static_argnums=0)
+def _local_program(shape: ProblemShape, theta, kin4, spring, design, weights):
+    problem = shape.problem(theta, kin4, spring)
+    family = family_of(problem)
+
+    def parts(d):
+        g = _stacked(family, problem, d)
+        return jnp.concatenate([family.objective(problem, weights, d)[None], g])
+
+    jac = jax.jacobian(parts)(design)
+    return parts(design), jac, problem.lower, problem.upper, family.size_norm(problem)
+
+
+def _kin_lagrangian(shape: ProblemShape, theta, kin4, design, lam, spring, weights):
+    """f + lam . g on kinematics ``kin4`` at ``design`` (every angle's constraint its own lam)."""
+    problem = shape.problem(theta, kin4, spring)
+    family = family_of(problem)
+    return family.objective(problem, weights, design) + jnp.dot(lam, _stacked(family, problem, design))
+
+
+_kin_lagrangian_grad = jax.jit(jax.grad(_kin_lagrangian, argnums=2), static_argnums=0)
+
+
+@partial(jax.jit, static_argnums=(0, 1))
+def _lagrangian_grad(shape: ProblemShape, box, theta, kin0, jacobian, z0, x, design, lam, weights):
+    """d/dx of f + lam . g at ``design`` as a function of the outer x = (z, u): the kinematics of z,
+    the rate of u and the preload they imply (a designed spring)."""
+    nz = jacobian.shape[-1]
+
+    def lagrangian(v):
+        z, u = v[:nz], (v[nz] if v.shape[0] > nz else None)
+        kin4 = _kinematics(kin0, jacobian, z0, z)
+        return _kin_lagrangian(shape, theta, kin4, design, lam, _spring_fn(box, kin4, u)[:2], weights)
+
+    return jax.grad(lagrangian)(x)
 
 
 def train_quadratics(lin, grams, weight: float) -> tuple[np.ndarray, np.ndarray, float]:

@@ -10,11 +10,9 @@ mode and seed: what ``camjax design --alpha a --gamma g`` writes for that scene,
 with a ``codesign`` block each: which laws were chosen and the co-design objective.
 
 One co-design per weighting, in a Python loop with a progress bar (each takes seconds to minutes).
-Each weighting compiles its own inner pieces: the weights are constants of the compiled inner
-solve, as in ``camjax design`` (made an argument instead, the objective rounds differently in the
-last bit, and the search, sensitive to rounding, ends elsewhere: 0.4333 instead of 0.4208 on the
-built-in ``codesign`` scene at 120 samples). What does not depend on the weights is shared: the
-built-in laws' kinematics and residuals (:attr:`Codesign.builtin_cache`).
+The weightings share the co-design's compiled pieces (the weights are an argument of them, as in
+``camjax design``: :class:`camjax.codesign.problem.ProblemShape`) and the built-in laws'
+kinematics and residuals (:attr:`Codesign.builtin_cache`), which do not depend on the weights.
 
 Python (a driver of jitted pieces): not traceable.
 """
