@@ -1,0 +1,100 @@
+"""Size and compile cost of the design program (:func:`camjax.solvers.base.solve_batch`) per solver.
+
+For each registered follower type (its example scene as ``camjax design`` loads it, one weighting
+(1, 1), global mode) and each solver of ``--solvers``: the equations of the traced program
+(``jaxpr_eqns``: every equation, those of nested jaxprs (loop bodies, conditionals, calls)
+included), the seconds to trace, to lower and to compile it with XLA (wall), and the CPU seconds
+of the process over the three (``cpu_s``: user + system of every thread; less distorted by other
+jobs on a shared machine than wall time, which its load inflates; the load average is recorded).
+The CPU XLA flags of the command line (:data:`camjax.runtime.CPU_XLA_FLAGS`) are set, and no
+compilation cache is used: every program is compiled.
+
+``python -m benchmarks.newton_compile --out benchmarks/results/newton_compile.json``
+(``--label`` names the code measured, e.g. a commit; ``--merge FILE`` adds the runs of another
+result file under their own labels, so that two versions measured in one session sit side by side).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import time
+
+
+def equation_count(jaxpr) -> int:
+    """Equations of a (closed) jaxpr, those of every nested jaxpr in its equations' parameters included."""
+    from jax.extend import core
+
+    inner = jaxpr.jaxpr if isinstance(jaxpr, core.ClosedJaxpr) else jaxpr
+    total = 0
+    for eqn in inner.eqns:
+        total += 1
+        for value in eqn.params.values():
+            for sub in value if isinstance(value, list | tuple) else (value,):
+                if isinstance(sub, core.ClosedJaxpr | core.Jaxpr):
+                    total += equation_count(sub)
+    return total
+
+
+def measure(problem, solver: str) -> dict:
+    """Trace, lower and compile ``solve_batch`` of ``problem`` for one weighting with ``solver``."""
+    from camjax.family import weights_of
+    from camjax.solvers.base import solve_batch, weighting_keys
+
+    weights, keys = weights_of([1.0], [1.0]), weighting_keys(0, 1)
+    cpu0, t0 = time.process_time(), time.perf_counter()
+    traced = solve_batch.trace(problem, weights, keys, "global", solver)
+    t1 = time.perf_counter()
+    lowered = traced.lower()
+    t2 = time.perf_counter()
+    lowered.compile()
+    t3 = time.perf_counter()
+    cpu = time.process_time() - cpu0
+    return {"jaxpr_eqns": equation_count(traced.jaxpr), "trace_s": round(t1 - t0, 3),
+            "lower_s": round(t2 - t1, 3), "compile_s": round(t3 - t2, 3), "cpu_s": round(cpu, 3)}
+
+
+def run(solvers=("gradient", "newton"), names=None, label: str = "") -> dict:
+    from camjax import runtime
+
+    runtime.use_cpu_xla_flags()
+    import camjax
+    from camjax import followers
+    from camjax.solvers.base import problem_from_scene
+
+    out = {"label": label, "loadavg_before": round(os.getloadavg()[0], 2), "followers": {}}
+    for name in names or followers.names():
+        scene_name = followers.get(name).example_scene
+        problem = problem_from_scene(camjax.load_scene(scene_name))
+        row = {"scene": scene_name}
+        for solver in solvers:
+            row[solver] = measure(problem, solver)
+        out["followers"][name] = row
+        print(name, json.dumps(row), flush=True)
+    out["loadavg_after"] = round(os.getloadavg()[0], 2)
+    return out
+
+
+def main(argv=None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--out", default="benchmarks/results/newton_compile.json")
+    parser.add_argument("--solvers", default="gradient,newton")
+    parser.add_argument("--followers", default="", help="comma-separated names (default: every type)")
+    parser.add_argument("--label", default="")
+    parser.add_argument("--merge", action="append", default=[], help="a result file of this script to keep beside")
+    args = parser.parse_args(argv)
+    names = [n for n in args.followers.split(",") if n] or None
+    result = run(tuple(args.solvers.split(",")), names, args.label)
+    runs = [result]
+    for path in args.merge:
+        with open(path) as f:
+            other = json.load(f)
+        runs += other.get("runs", [other])
+    with open(args.out, "w") as f:
+        json.dump({"runs": runs} if args.merge else result, f, indent=1)
+        f.write("\n")
+
+
+if __name__ == "__main__":
+    main()
