@@ -3,11 +3,12 @@
 For each registered follower type (its example scene as ``camjax design`` loads it, one weighting
 (1, 1), global mode) and each solver of ``--solvers``: the equations of the traced program
 (``jaxpr_eqns``: every equation, those of nested jaxprs (loop bodies, conditionals, calls)
-included), the seconds to trace, to lower and to compile it with XLA (wall), and the CPU seconds
+included), the seconds to trace, to lower and to compile it with XLA (wall), the CPU seconds
 of the process over the three (``cpu_s``: user + system of every thread; less distorted by other
-jobs on a shared machine than wall time, which its load inflates; the load average is recorded).
-The CPU XLA flags of the command line (:data:`camjax.runtime.CPU_XLA_FLAGS`) are set, and no
-compilation cache is used: every program is compiled.
+jobs on a shared machine than wall time, which its load inflates; the load average is recorded),
+and the fastest of three warm runs of the compiled program (``run_s``, wall).
+Each program is measured in a fresh process with the command line's CPU XLA flags
+(:data:`camjax.runtime.CPU_XLA_FLAGS`) and no compilation cache: every program is compiled.
 
 ``python -m benchmarks.newton_compile --out benchmarks/results/newton_compile.json``
 (``--label`` names the code measured, e.g. a commit; ``--merge FILE`` adds the runs of another
@@ -19,6 +20,8 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import subprocess
+import sys
 import time
 
 
@@ -38,7 +41,10 @@ def equation_count(jaxpr) -> int:
 
 
 def measure(problem, solver: str) -> dict:
-    """Trace, lower and compile ``solve_batch`` of ``problem`` for one weighting with ``solver``."""
+    """Trace, lower and compile ``solve_batch`` of ``problem`` for one weighting with ``solver``, then
+    run it three times (``run_s``: the fastest, wall)."""
+    import jax
+
     from camjax.family import weights_of
     from camjax.solvers.base import solve_batch, weighting_keys
 
@@ -48,14 +54,21 @@ def measure(problem, solver: str) -> dict:
     t1 = time.perf_counter()
     lowered = traced.lower()
     t2 = time.perf_counter()
-    lowered.compile()
+    program = lowered.compile()
     t3 = time.perf_counter()
     cpu = time.process_time() - cpu0
+    runs = []
+    for _ in range(3):
+        t4 = time.perf_counter()
+        jax.block_until_ready(program(problem, weights, keys))
+        runs.append(time.perf_counter() - t4)
     return {"jaxpr_eqns": equation_count(traced.jaxpr), "trace_s": round(t1 - t0, 3),
-            "lower_s": round(t2 - t1, 3), "compile_s": round(t3 - t2, 3), "cpu_s": round(cpu, 3)}
+            "lower_s": round(t2 - t1, 3), "compile_s": round(t3 - t2, 3), "cpu_s": round(cpu, 3),
+            "run_s": round(min(runs), 4)}
 
 
-def run(solvers=("gradient", "newton"), names=None, label: str = "") -> dict:
+def measure_one(name: str, solver: str) -> dict:
+    """:func:`measure` of one follower type's example scene and one solver (in this process)."""
     from camjax import runtime
 
     runtime.use_cpu_xla_flags()
@@ -63,13 +76,23 @@ def run(solvers=("gradient", "newton"), names=None, label: str = "") -> dict:
     from camjax import followers
     from camjax.solvers.base import problem_from_scene
 
+    problem = problem_from_scene(camjax.load_scene(followers.get(name).example_scene))
+    return measure(problem, solver)
+
+
+def run(solvers=("gradient", "newton"), names=None, label: str = "") -> dict:
+    """Every follower type and solver, each in a fresh process (no trace or compile cache shared
+    between the programs measured: a second program would reuse the traces of the first's jitted
+    parts)."""
+    from camjax import followers
+
     out = {"label": label, "loadavg_before": round(os.getloadavg()[0], 2), "followers": {}}
     for name in names or followers.names():
-        scene_name = followers.get(name).example_scene
-        problem = problem_from_scene(camjax.load_scene(scene_name))
-        row = {"scene": scene_name}
+        row = {"scene": followers.get(name).example_scene}
         for solver in solvers:
-            row[solver] = measure(problem, solver)
+            done = subprocess.run([sys.executable, __file__, "--one", name, solver], check=True,
+                                  capture_output=True, text=True)
+            row[solver] = json.loads(done.stdout.strip().splitlines()[-1])
         out["followers"][name] = row
         print(name, json.dumps(row), flush=True)
     out["loadavg_after"] = round(os.getloadavg()[0], 2)
@@ -83,7 +106,11 @@ def main(argv=None) -> None:
     parser.add_argument("--followers", default="", help="comma-separated names (default: every type)")
     parser.add_argument("--label", default="")
     parser.add_argument("--merge", action="append", default=[], help="a result file of this script to keep beside")
+    parser.add_argument("--one", nargs=2, metavar=("FOLLOWER", "SOLVER"), help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
+    if args.one:
+        print(json.dumps(measure_one(*args.one)))
+        return
     names = [n for n in args.followers.split(",") if n] or None
     result = run(tuple(args.solvers.split(",")), names, args.label)
     runs = [result]
