@@ -11,8 +11,9 @@ Each program is measured in a fresh process with the command line's CPU XLA flag
 (:data:`camjax.runtime.CPU_XLA_FLAGS`) and no compilation cache: every program is compiled.
 
 ``python -m benchmarks.newton_compile --out benchmarks/results/newton_compile.json``
-(``--label`` names the code measured, e.g. a commit; ``--merge FILE`` adds the runs of another
-result file under their own labels, so that two versions measured in one session sit side by side).
+(``--label`` names the code measured, e.g. a commit; ``--combine A.json B.json ...`` writes the
+runs of several result files side by side, e.g. two versions of the code measured in one session:
+run the file with PYTHONPATH pointing at each version's checkout).
 """
 
 from __future__ import annotations
@@ -105,21 +106,25 @@ def main(argv=None) -> None:
     parser.add_argument("--solvers", default="gradient,newton")
     parser.add_argument("--followers", default="", help="comma-separated names (default: every type)")
     parser.add_argument("--label", default="")
-    parser.add_argument("--merge", action="append", default=[], help="a result file of this script to keep beside")
+    parser.add_argument("--combine", nargs="+", metavar="FILE",
+                        help="write these result files' runs side by side under 'runs' (no measuring)")
     parser.add_argument("--one", nargs=2, metavar=("FOLLOWER", "SOLVER"), help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.one:
         print(json.dumps(measure_one(*args.one)))
         return
-    names = [n for n in args.followers.split(",") if n] or None
-    result = run(tuple(args.solvers.split(",")), names, args.label)
-    runs = [result]
-    for path in args.merge:
-        with open(path) as f:
-            other = json.load(f)
-        runs += other.get("runs", [other])
+    if args.combine:
+        runs = []
+        for path in args.combine:
+            with open(path) as f:
+                other = json.load(f)
+            runs += other.get("runs", [other])
+        result = {"runs": runs}
+    else:
+        names = [n for n in args.followers.split(",") if n] or None
+        result = run(tuple(args.solvers.split(",")), names, args.label)
     with open(args.out, "w") as f:
-        json.dump({"runs": runs} if args.merge else result, f, indent=1)
+        json.dump(result, f, indent=1)
         f.write("\n")
 
 

@@ -29,7 +29,8 @@ Method (Nocedal & Wright, Numerical Optimization, 2nd ed., Algorithm 19.2; the b
 the filter line search of IPOPT, Waechter & Biegler 2006). Slacks s > 0 turn every row into
 c(z) + s = 0 (z = (u, t)); the barrier KKT conditions grad phi + J^T y = 0, c + s = 0, S y = mu e
 are solved by Newton steps on the condensed system (H + J^T S^-1 Y J) dz = ... of size (m + 1)^2
-(m free variables), H the exact Hessian of the Lagrangian from ``jax.hessian``; its inertia is
+(m free variables), H the exact Hessian of the Lagrangian (with the rows and their Jacobian from one
+forward-over-forward pass, :func:`_derivatives`); its inertia is
 corrected through its eigenvalues (a non-positive one flipped and floored at 1e-8: the system is
 tiny). Steps keep s, y > 0 by the fraction-to-boundary rule (tau = max(0.99, 1 - mu)); the primal
 step length is found by a backtracking search (Armijo on the barrier objective once nearly
@@ -291,7 +292,8 @@ def _slacks(fns: _Functions, s, c):
 
 
 def _step(state: NewtonState, fns: _Functions, settings: NewtonSettings) -> NewtonState:
-    """One iteration: the rows, their Jacobian and the gradient at z (one evaluation each); the
+    """One iteration: the rows, their Jacobian, the gradient and the Lagrangian's Hessian at z (one
+    forward-over-forward pass, :func:`_derivatives`, whose rows the line search reuses); the
     KKT residual there ends the loop (no step from a converged point); else the barrier update
     (the barrier problem solved to ``kappa_eps`` mu) and one Newton step with its line search."""
     z, s, y, mu = state.z, state.s, state.y, state.mu
