@@ -471,7 +471,8 @@ def _certificate(problem: Problem, weights: Weights, res: NewtonResult) -> Certi
             moved = setter(moved, values[key])
         return _functions(moved, weights).rows(res.z)
 
-    moved = jax.jacfwd(rows_at)(limit_values(problem))  # limit key -> (M,) dc/d limit
+    # limit key -> (M,) dc/d limit (a problem without limits, e.g. a robust one: none)
+    moved = jax.jacfwd(rows_at)(limit_values(problem)) if setters else {}
     sens = {key: scale * res.multipliers * moved[key] for key in setters}
     m = ravel_pytree(u_max_of(problem))[0].shape[0]
     x, unravel = ravel_pytree(res.design)
