@@ -293,3 +293,31 @@ def test_robust_optimum_matches_the_gradient_solver():
         assert e["multiplier"] * abs(at) <= 1e-5, e
         if e["multiplier"] >= 0.01 * named[0]["multiplier"]:
             assert at == pytest.approx(0.0, abs=1e-6), e
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", followers.names())
+def test_forward_derivatives_match_reverse_mode(name):
+    """The step's one forward-over-forward pass (rows, Jacobian, objective gradient, Lagrangian
+    Hessian) against independent ones: the rows themselves, the Jacobian by reverse mode
+    (jacrev) and the Hessian of phi + y . c by forward-over-reverse (jax.hessian), at the start
+    of the solve with positive multipliers of O(1). Both are exact derivatives of the same
+    function: they differ by rounding only (rtol 1e-9 of the largest entry, O(1) after the
+    solver's normalization)."""
+    problem = _problem(followers.get(name).example_scene, samples=36)
+    w = weights_of(1.0, 1.0)
+
+    @jax.jit
+    def both(y_raw):
+        fns = newton._functions(problem, w)
+        z, _, _, _ = newton._start(problem, fns, None, newton.DEFAULT_SETTINGS, 0.1)
+        y = 0.5 + y_raw[: fns.rows(z).shape[0]]
+        ours = newton._derivatives(fns, z, y)
+        ref = (fns.rows(z), jax.jacrev(fns.rows)(z), jax.grad(fns.phi)(z),
+               jax.hessian(lambda v: fns.phi(v) + y @ fns.rows(v))(z))
+        return ours, ref
+
+    ours, ref = both(jax.random.uniform(jax.random.key(0), (4096,)))
+    for got, want, what in zip(ours, ref, ("rows", "jacobian", "gradient", "hessian"), strict=True):
+        scale = max(float(jnp.max(jnp.abs(want))), 1.0)
+        np.testing.assert_allclose(np.asarray(got), np.asarray(want), rtol=0, atol=1e-9 * scale, err_msg=what)

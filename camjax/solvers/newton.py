@@ -29,7 +29,8 @@ Method (Nocedal & Wright, Numerical Optimization, 2nd ed., Algorithm 19.2; the b
 the filter line search of IPOPT, Waechter & Biegler 2006). Slacks s > 0 turn every row into
 c(z) + s = 0 (z = (u, t)); the barrier KKT conditions grad phi + J^T y = 0, c + s = 0, S y = mu e
 are solved by Newton steps on the condensed system (H + J^T S^-1 Y J) dz = ... of size (m + 1)^2
-(m free variables), H the exact Hessian of the Lagrangian from ``jax.hessian``; its inertia is
+(m free variables), H the exact Hessian of the Lagrangian (with the rows and their Jacobian from one
+forward-over-forward pass, :func:`_derivatives`); its inertia is
 corrected through its eigenvalues (a non-positive one flipped and floored at 1e-8: the system is
 tiny). Steps keep s, y > 0 by the fraction-to-boundary rule (tau = max(0.99, 1 - mu)); the primal
 step length is found by a backtracking search (Armijo on the barrier objective once nearly
@@ -214,9 +215,36 @@ def _residuals(grad, c, jac, y, free) -> KKT:
 
 
 def _rows_and_jacobian(fns: _Functions, z):
-    """c(z) and its Jacobian from one forward-mode pass."""
-    jac, c = jax.jacfwd(lambda v: (fns.rows(v), fns.rows(v)), has_aux=True)(z)
+    """c(z) and its Jacobian from one forward-mode pass (the rows traced once: c is its primal)."""
+
+    def rows(v):
+        c = fns.rows(v)
+        return c, c
+
+    jac, c = jax.jacfwd(rows, has_aux=True)(z)
     return c, jac
+
+
+class _Derivatives(NamedTuple):
+    c: jax.Array  # (M,) the rows
+    jac: jax.Array  # (M, m + 1) their Jacobian
+    grad: jax.Array  # (m + 1,) the objective's gradient
+    hess: jax.Array  # (m + 1, m + 1) the Lagrangian's Hessian, phi + y . c
+
+
+def _derivatives(fns: _Functions, z, y) -> _Derivatives:
+    """The rows, their Jacobian, the objective's gradient and the Hessian of the Lagrangian
+    phi + y . c at z, from one forward-over-forward pass: the Hessian is the forward derivative of
+    grad phi + J^T y, J itself a forward pass (m + 1 <= 7 directions each; no reverse pass), and the
+    rows, J and grad phi are its primal values."""
+
+    def lagrangian_gradient(v):
+        c, jac = _rows_and_jacobian(fns, v)
+        grad = jax.jacfwd(fns.phi)(v)
+        return grad + jac.T @ y, (c, jac, grad)
+
+    hess, (c, jac, grad) = jax.jacfwd(lagrangian_gradient, has_aux=True)(z)
+    return _Derivatives(c, jac, grad, hess)
 
 
 def kkt_residuals(fns: _Functions, z, y) -> KKT:
@@ -264,14 +292,14 @@ def _slacks(fns: _Functions, s, c):
 
 
 def _step(state: NewtonState, fns: _Functions, settings: NewtonSettings) -> NewtonState:
-    """One iteration: the rows, their Jacobian and the gradient at z (one evaluation each); the
+    """One iteration: the rows, their Jacobian, the gradient and the Lagrangian's Hessian at z (one
+    forward-over-forward pass, :func:`_derivatives`, whose rows the line search reuses); the
     KKT residual there ends the loop (no step from a converged point); else the barrier update
     (the barrier problem solved to ``kappa_eps`` mu) and one Newton step with its line search."""
     z, s, y, mu = state.z, state.s, state.y, state.mu
     dtype = z.dtype
     free = fns.free
-    c, jac = _rows_and_jacobian(fns, z)
-    grad = jax.grad(fns.phi)(z)
+    c, jac, grad, hess = _derivatives(fns, z, y)
     kkt = _residuals(grad, c, jac, y, free)
     done = kkt.error <= settings.tol
     # barrier update (IPOPT's E_mu of the barrier problem: c + s = 0, S y = mu)
@@ -287,7 +315,6 @@ def _step(state: NewtonState, fns: _Functions, settings: NewtonSettings) -> Newt
     # the filter holds (theta, psi) of the barrier problem at one mu: emptied when mu changes
     filt = jnp.where(lower_mu, jnp.inf, state.filter)
     count = jnp.where(lower_mu, 0, state.filter_count)
-    hess = jax.hessian(lambda v: fns.phi(v) + y @ fns.rows(v))(z)
     jac = jac * free  # fixed variables take no step
     sigma = y / s
     rd = (grad + jac.T @ y) * free
@@ -321,15 +348,15 @@ def _step(state: NewtonState, fns: _Functions, settings: NewtonSettings) -> Newt
     # s >= -c (a row more feasible than its slack says). An l1 merit would stall where a family's
     # rows have kinks (|s' - e| at a dwell).
 
-    def measures(zv, sv):
-        cv = fns.rows(zv)
+    def measures(zv, sv, cv):
         sv = _slacks(fns, sv, cv)
         return fns.phi(zv) - mu * jnp.sum(jnp.log(sv)), jnp.sum(jnp.abs(cv + sv)), cv
 
-    psi0, theta0, _ = measures(z, s)
+    psi0, theta0, _ = measures(z, s, c)  # the rows at z are the derivatives' primal
     slope = grad @ dz - mu * jnp.sum(ds / s)
     lengths = alpha_s * 0.5 ** jnp.arange(settings.line_search_trials, dtype=dtype)
-    psi_t, theta_t, c_t = jax.vmap(lambda al: measures(z + al * dz, s + al * ds))(lengths)
+    psi_t, theta_t, c_t = jax.vmap(
+        lambda al: measures(z + al * dz, s + al * ds, fns.rows(z + al * dz)))(lengths)
     theta_max = 1e4 * jnp.maximum(1.0, theta0)
     switching = (slope < 0) & (theta0 <= 1e-4)
     # Armijo's decrease, relaxed by the rounding of psi (IPOPT's 10 eps |psi|)
@@ -436,12 +463,17 @@ def _certificate(problem: Problem, weights: Weights, res: NewtonResult) -> Certi
     minus that for an upper bound), with the normalization N fixed. No solve: traceable, vmappable."""
     total = weights.alpha + weights.gamma
     scale = jnp.where(total > 0, total, 1.0)
-    sens = {}
-    values = limit_values(problem)
-    for key, setter in _limits(problem).items():
-        moved = jax.jacfwd(
-            lambda v, setter=setter: _functions(setter(problem, v), weights).rows(res.z))(values[key])
-        sens[key] = scale * res.multipliers * moved
+    setters = _limits(problem)
+
+    def rows_at(values):  # the rows at the answer with every limit set to ``values`` (one trace)
+        moved = problem
+        for key, setter in setters.items():
+            moved = setter(moved, values[key])
+        return _functions(moved, weights).rows(res.z)
+
+    # limit key -> (M,) dc/d limit (a problem without limits, e.g. a robust one: none)
+    moved = jax.jacfwd(rows_at)(limit_values(problem)) if setters else {}
+    sens = {key: scale * res.multipliers * moved[key] for key in setters}
     m = ravel_pytree(u_max_of(problem))[0].shape[0]
     x, unravel = ravel_pytree(res.design)
     diag = jnp.diagonal(jax.jacfwd(lambda v: ravel_pytree(to_unit(problem, unravel(v)))[0])(x))
