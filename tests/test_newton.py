@@ -14,7 +14,7 @@ import pytest
 import camjax
 from camjax import followers
 from camjax.family import weights_of
-from camjax.solvers import newton, scipy_family
+from camjax.solvers import epigraph, newton, scipy_family
 from camjax.solvers.base import family_of, problem_from_scene, solve
 
 pytest.importorskip("scipy")
@@ -309,7 +309,7 @@ def test_forward_derivatives_match_reverse_mode(name):
 
     @jax.jit
     def both(y_raw):
-        fns = newton._functions(problem, w)
+        fns = epigraph.epigraph_form(problem, w)
         z, _, _, _ = newton._start(problem, fns, None, newton.DEFAULT_SETTINGS, 0.1)
         y = 0.5 + y_raw[: fns.rows(z).shape[0]]
         ours = newton._derivatives(fns, z, y)

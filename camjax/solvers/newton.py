@@ -25,6 +25,9 @@ Rows below -1e3 (normalized; a discarded sample's -1e30) are floored there, the 
 set with slacks of O(1). Such a split problem (up to 1e5 near-parallel rows) takes the
 feasible-slack path (:func:`_slacks`) and a linear fall of the barrier parameter.
 
+The form (its objective phi, its rows and their blocks) is built by
+:func:`camjax.solvers.epigraph.epigraph_form`.
+
 Method (Nocedal & Wright, Numerical Optimization, 2nd ed., Algorithm 19.2; the barrier update and
 the filter line search of IPOPT, Waechter & Biegler 2006). Slacks s > 0 turn every row into
 c(z) + s = 0 (z = (u, t)); the barrier KKT conditions grad phi + J^T y = 0, c + s = 0, S y = mu e
@@ -62,7 +65,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import partial
-from typing import Any, NamedTuple
+from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
@@ -71,7 +74,8 @@ from jax.flatten_util import ravel_pytree
 
 from camjax.family import Design, Problem, Weights
 from camjax.solvers.base import Raw, family_of
-from camjax.solvers.gradient import TIE_BREAK, from_unit, midpoint, to_unit, u_max_of
+from camjax.solvers.epigraph import EpigraphForm, epigraph_form
+from camjax.solvers.gradient import from_unit, midpoint, to_unit, u_max_of
 from camjax.solvers.limits import limit_setters as _limits
 from camjax.solvers.limits import limit_values
 
@@ -97,84 +101,7 @@ class NewtonSettings:
 
 DEFAULT_SETTINGS = NewtonSettings()
 FILTER = 32  # entries of the line search's filter (a ring: the oldest is replaced)
-ROW_FLOOR = 1e3  # the normalized rows' floor (a row below it is inactive; see ``_functions``)
 S_MAX = 100.0  # IPOPT's s_max: multipliers larger than this on average scale the dual residuals
-
-
-class _Functions(NamedTuple):
-    phi: Any  # z -> () objective
-    rows: Any  # z -> (M,) c(z) <= 0, every row
-    unravel: Any  # (m,) -> unit-box Design
-    free: jax.Array  # (m + 1,) 1 free, 0 fixed (t free)
-    u_max: jax.Array  # (m,)
-    n_angles: int
-    kinds: tuple  # ((name, count), ...) the row blocks in order: "objective", each constraint, bounds
-    epigraph: jax.Array  # (n,) bool: the objective rows that hold t (all, or the first alone: gamma = 0)
-    mu_scale: float  # 1 / the most rows per angle of a split block (1 without one): scales mu0
-    split: bool  # a block was split by angle and sample (a robust problem): the feasible-slack path
-
-
-def _functions(problem, weights: Weights) -> _Functions:
-    family = family_of(problem)
-    u_max_tree = u_max_of(problem)
-    u_max, unravel = ravel_pytree(u_max_tree)
-    m = u_max.shape[0]
-    dtype = u_max.dtype
-    free_u = (u_max > 0).astype(dtype)
-    free = jnp.concatenate([free_u, jnp.ones(1, dtype)])
-    per = family.per_angle(problem)
-    total = weights.alpha + weights.gamma
-    scale = jnp.where(total > 0, total, 1.0)
-    tie = jnp.where(weights.alpha > 0, 0.0, TIE_BREAK)
-    norm = family.size_norm(problem)
-
-    def design_of(z):
-        return from_unit(problem, unravel(z[:m]))
-
-    def phi(z):
-        return z[m] + tie * family.size_term(problem, design_of(z))
-
-    n = problem.theta_deg.shape[-1]
-    shapes = jax.eval_shape(lambda: family.constraints(problem, from_unit(problem, u_max_tree)))
-    # a block with one row per angle is smooth; any other (a robust problem's row per sample, each
-    # a max over the grid) is taken from the n one-angle problems instead, one row per angle and
-    # sample: the same feasible set (max_i g_i <= 0 iff every g_i <= 0) without a kink in a row
-    split = tuple(tuple(v.shape) != (n,) for v in shapes)
-
-    def constraint_rows(design):
-        g = family.constraints(problem, design)
-        if any(split):
-            at = jax.vmap(lambda p: family.constraints(p, design))(per)  # (n, ...) each
-            g = [jnp.moveaxis(a, 0, -1) if cut else v for v, a, cut in zip(g, at, split, strict=True)]
-        return [jnp.ravel(v) for v in g]
-
-    epigraph = (weights.gamma != 0) | (jnp.arange(n) == 0)
-
-    def rows(z):
-        design = design_of(z)
-        f = jax.vmap(lambda p: family.objective(p, weights, design))(per) / scale - z[m]
-        # without a stress weight every f_i is the same size term: n equal rows make the epigraph
-        # degenerate (the multipliers' split among them is free, and the path stalls on it), so
-        # the first row alone carries it and the others are a constant -1 (never active)
-        f = jnp.where(epigraph, f, -1.0)
-        g = jnp.concatenate(constraint_rows(design)) / norm
-        # a row far inside its limit (a never-active row: a robust problem's discarded sample is
-        # -1e30) floored at -ROW_FLOOR: the same feasible set (max(g, -F) <= 0 iff g <= 0), and
-        # slacks of O(F), whose rounding cannot swamp the infeasibility measure
-        g = jnp.maximum(g, -ROW_FLOOR)
-        u = z[:m]
-        box_lo = jnp.where(free_u > 0, -u, -1.0)
-        box_hi = jnp.where(free_u > 0, u - u_max, -1.0)
-        return jnp.concatenate([f.astype(dtype), g, box_lo, box_hi])
-
-    counts = [v.shape[0] for v in jax.eval_shape(lambda: constraint_rows(from_unit(problem, u_max_tree)))]
-    blocks = zip(shapes._fields, counts, strict=True)
-    kinds = (("objective", n), *blocks, ("lower_bound", m), ("upper_bound", m))
-    # a split block has k rows per angle (a robust problem's 1 + S): its barrier term is k times a
-    # grid block's, so the first barrier parameters are divided by k (the path starts as near the
-    # objective as on a grid problem; with mu0 the barrier pushed the design to the box's far side)
-    mu_scale = 1.0 / max([c // n for c, cut in zip(counts, split, strict=True) if cut] or [1])
-    return _Functions(phi, rows, unravel, free, u_max, n, kinds, epigraph, mu_scale, any(split))
 
 
 class KKT(NamedTuple):
@@ -214,7 +141,7 @@ def _residuals(grad, c, jac, y, free) -> KKT:
     return KKT(stat, primal, comp, jnp.maximum(jnp.maximum(stat, primal), comp))
 
 
-def _rows_and_jacobian(fns: _Functions, z):
+def _rows_and_jacobian(fns: EpigraphForm, z):
     """c(z) and its Jacobian from one forward-mode pass (the rows traced once: c is its primal)."""
 
     def rows(v):
@@ -232,7 +159,7 @@ class _Derivatives(NamedTuple):
     hess: jax.Array  # (m + 1, m + 1) the Lagrangian's Hessian, phi + y . c
 
 
-def _derivatives(fns: _Functions, z, y) -> _Derivatives:
+def _derivatives(fns: EpigraphForm, z, y) -> _Derivatives:
     """The rows, their Jacobian, the objective's gradient and the Hessian of the Lagrangian
     phi + y . c at z, from one forward-over-forward pass: the Hessian is the forward derivative of
     grad phi + J^T y, J itself a forward pass (m + 1 <= 7 directions each; no reverse pass), and the
@@ -247,13 +174,13 @@ def _derivatives(fns: _Functions, z, y) -> _Derivatives:
     return _Derivatives(c, jac, grad, hess)
 
 
-def kkt_residuals(fns: _Functions, z, y) -> KKT:
+def kkt_residuals(fns: EpigraphForm, z, y) -> KKT:
     """The scaled KKT residuals of the epigraph form at z = (u, t) with multipliers y (one per row)."""
     c, jac = _rows_and_jacobian(fns, z)
     return _residuals(jax.grad(fns.phi)(z), c, jac, y, fns.free)
 
 
-def _start(problem, fns: _Functions, design, settings: NewtonSettings, mu0):
+def _start(problem, fns: EpigraphForm, design, settings: NewtonSettings, mu0):
     if design is None:
         design = getattr(family_of(problem), "start", midpoint)(problem)
     dtype = fns.u_max.dtype
@@ -280,7 +207,7 @@ def _start(problem, fns: _Functions, design, settings: NewtonSettings, mu0):
     return z0, s0, y0, mu0
 
 
-def _slacks(fns: _Functions, s, c):
+def _slacks(fns: EpigraphForm, s, c):
     """The slacks after a step to rows c: at least -c (a row more feasible than its slack says). On
     a split problem's path every row inside its limit takes s = -c exactly (so c + s = 0 there: the
     infeasibility measure counts violated rows only), and the line search keeps such a row inside.
@@ -291,7 +218,7 @@ def _slacks(fns: _Functions, s, c):
     return jnp.maximum(s, -c)
 
 
-def _step(state: NewtonState, fns: _Functions, settings: NewtonSettings) -> NewtonState:
+def _step(state: NewtonState, fns: EpigraphForm, settings: NewtonSettings) -> NewtonState:
     """One iteration: the rows, their Jacobian, the gradient and the Lagrangian's Hessian at z (one
     forward-over-forward pass, :func:`_derivatives`, whose rows the line search reuses); the
     KKT residual there ends the loop (no step from a converged point); else the barrier update
@@ -405,7 +332,7 @@ def minimize(problem: Problem, weights: Weights, init_design: Design | None = No
     ``init_design``: the start (mm); default the family's ``start(problem)`` where it has one,
     else the centre of the box (pulled ``settings.interior`` inside the box's faces).
     """
-    fns = _functions(problem, weights)
+    fns = epigraph_form(problem, weights)
 
     def start(mu0, use_filter):
         z0, s0, y0, mu0 = _start(problem, fns, init_design, settings, mu0)
@@ -469,7 +396,7 @@ def _certificate(problem: Problem, weights: Weights, res: NewtonResult) -> Certi
         moved = problem
         for key, setter in setters.items():
             moved = setter(moved, values[key])
-        return _functions(moved, weights).rows(res.z)
+        return epigraph_form(moved, weights).rows(res.z)
 
     # limit key -> (M,) dc/d limit (a problem without limits, e.g. a robust one: none)
     moved = jax.jacfwd(rows_at)(limit_values(problem)) if setters else {}
@@ -495,7 +422,7 @@ def certify_point(problem: Problem, weights: Weights, design: Design, iterations
     the least-squares fit of stationarity grad phi + J_A^T y_A = 0 (negative ones set to 0, which
     leaves their share in the stationarity residual), the KKT residuals and sensitivities from
     those. ``converged``: the residuals are within ``tol``. Traceable, vmappable."""
-    fns = _functions(problem, weights)
+    fns = epigraph_form(problem, weights)
     dtype = fns.u_max.dtype
     u = ravel_pytree(jax.tree.map(lambda x: jnp.asarray(x, dtype), to_unit(problem, design)))[0]
     u = jnp.where(fns.u_max > 0, u, 0.0)
@@ -518,7 +445,7 @@ def _block(problem, cert: Certificate, *, active_tol: float = 1e-6) -> dict:
     res = cert.result
     y = np.asarray(res.multipliers, float)
     scale = float(cert.scale)
-    fns = _functions(problem, Weights(jnp.asarray(1.0), jnp.asarray(1.0)))
+    fns = epigraph_form(problem, Weights(jnp.asarray(1.0), jnp.asarray(1.0)))
     theta = np.asarray(problem.theta_deg, float).reshape(-1)
     lower = family_of(problem).bounds(problem)[0]
     variables = list(lower._fields)
