@@ -2,7 +2,7 @@
 
 For one problem and weighting (every registered problem family, through its protocol only,
 :mod:`camjax.solvers.base`), with the design mapped to the unit box u
-(:func:`camjax.solvers.gradient.to_unit`) and an epigraph variable t, z = (u, t):
+(:func:`camjax.solvers.gradient.to_unit` with ``own=False``: each variable over its bounds) and an epigraph variable t, z = (u, t):
 
     minimize    phi(z) = t  (+ 1e-9 size_term when alpha = 0, the gradient solver's tie-break)
     subject to  rows(z) <= 0: f_i(u) - t at every angle i (f_i the one-angle problem's objective
@@ -62,13 +62,13 @@ def epigraph_form(problem, weights: Weights) -> EpigraphForm:
     norm = family.size_norm(problem)
 
     def design_of(z):
-        return from_unit(problem, unravel(z[:m]))
+        return from_unit(problem, unravel(z[:m]), own=False)
 
     def phi(z):
         return z[m] + tie * family.size_term(problem, design_of(z))
 
     n = problem.theta_deg.shape[-1]
-    shapes = jax.eval_shape(lambda: family.constraints(problem, from_unit(problem, u_max_tree)))
+    shapes = jax.eval_shape(lambda: family.constraints(problem, from_unit(problem, u_max_tree, own=False)))
     # a block with one row per angle is smooth; any other (a robust problem's row per sample, each
     # a max over the grid) is taken from the n one-angle problems instead, one row per angle and
     # sample: the same feasible set (max_i g_i <= 0 iff every g_i <= 0) without a kink in a row
@@ -100,7 +100,7 @@ def epigraph_form(problem, weights: Weights) -> EpigraphForm:
         box_hi = jnp.where(free_u > 0, u - u_max, -1.0)
         return jnp.concatenate([f.astype(dtype), g, box_lo, box_hi])
 
-    counts = [v.shape[0] for v in jax.eval_shape(lambda: constraint_rows(from_unit(problem, u_max_tree)))]
+    counts = [v.shape[0] for v in jax.eval_shape(lambda: constraint_rows(from_unit(problem, u_max_tree, own=False)))]
     blocks = zip(shapes._fields, counts, strict=True)
     kinds = (("objective", n), *blocks, ("lower_bound", m), ("upper_bound", m))
     # a split block has k rows per angle (a robust problem's 1 + S): its barrier term is k times a

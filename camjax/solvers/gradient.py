@@ -187,24 +187,26 @@ def u_max_of(problem: Problem) -> Design:
                         *family_of(problem).bounds(problem))
 
 
-def to_unit(problem: Problem, design: Design) -> Design:
+def to_unit(problem: Problem, design: Design, own: bool = True) -> Design:
     """Design (mm) -> unit box coordinates (not clipped).
 
     A family may define its own ``to_unit``/``from_unit`` (a bijection of the same unit box onto
     its bounds, one coordinate per variable, fixed where the variable is fixed) when the plain
-    per-variable scaling is badly conditioned for its optimum; the solvers then work in those.
+    per-variable scaling is badly conditioned for its optimum; the first-order solvers then work
+    in those (``own``). ``own=False``: the plain scaling, each variable over its bounds (what a
+    second-order solver takes: a family's map may clip, which it cannot see).
     """
     family = family_of(problem)
-    if hasattr(family, "to_unit"):
+    if own and hasattr(family, "to_unit"):
         return family.to_unit(problem, design)
     lower = family.bounds(problem)[0]
     return jax.tree.map(lambda x, lo, w: (x - lo) / w, design, lower, _span(problem))
 
 
-def from_unit(problem: Problem, u: Design) -> Design:
-    """Unit box coordinates -> design (mm) (a family's own ``from_unit`` if it has one)."""
+def from_unit(problem: Problem, u: Design, own: bool = True) -> Design:
+    """Unit box coordinates -> design (mm) (a family's own ``from_unit`` if it has one and ``own``)."""
     family = family_of(problem)
-    if hasattr(family, "from_unit"):
+    if own and hasattr(family, "from_unit"):
         return family.from_unit(problem, u)
     lower = family.bounds(problem)[0]
     return jax.tree.map(lambda v, lo, w: lo + v * w, u, lower, _span(problem))

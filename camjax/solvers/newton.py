@@ -1,8 +1,9 @@
 """Newton solver: a primal-dual interior-point method on the smooth epigraph form, in one ``lax.while_loop``.
 
 Formulation (one problem, one weighting; every registered problem family, through its protocol
-only, :mod:`camjax.solvers.base`). The design is mapped to the unit box, u = (x - lo) / (hi - lo)
-(a family's own ``to_unit``/``from_unit`` where it has them, :mod:`camjax.solvers.gradient`), and
+only, :mod:`camjax.solvers.base`). The design is mapped to the unit box, u = (x - lo) / (hi - lo),
+each variable over its bounds (not a family's own ``to_unit``/``from_unit``: the roller's keeps a
+bound by a clip that a second-order path cannot see, :mod:`camjax.solvers.gradient`), and
 an epigraph variable t stands for the max over angles of the objective:
 
     minimize    t  (+ 1e-9 size_term when alpha = 0, the gradient solver's tie-break)
@@ -184,7 +185,7 @@ def _start(problem, fns: EpigraphForm, design, settings: NewtonSettings, mu0):
     if design is None:
         design = getattr(family_of(problem), "start", midpoint)(problem)
     dtype = fns.u_max.dtype
-    u = ravel_pytree(jax.tree.map(lambda x: jnp.asarray(x, dtype), to_unit(problem, design)))[0]
+    u = ravel_pytree(jax.tree.map(lambda x: jnp.asarray(x, dtype), to_unit(problem, design, own=False)))[0]
     a = settings.interior
     u = jnp.where(fns.u_max > 0, jnp.clip(u, a * fns.u_max, (1.0 - a) * fns.u_max), 0.0)
     z0 = jnp.concatenate([u, jnp.zeros(1, dtype)])
@@ -357,7 +358,7 @@ def minimize(problem: Problem, weights: Weights, init_design: Design | None = No
     best = jnp.where(jnp.any(ends.done), jnp.argmin(objective), jnp.argmin(ends.kkt.error))
     end = jax.tree.map(lambda x: x[best], ends)
     m = fns.u_max.shape[0]
-    design = from_unit(problem, fns.unravel(end.z[:m]))
+    design = from_unit(problem, fns.unravel(end.z[:m]), own=False)
     return NewtonResult(design, end.iteration, end.done, end.z, end.y, end.kkt)
 
 
@@ -403,7 +404,7 @@ def _certificate(problem: Problem, weights: Weights, res: NewtonResult) -> Certi
     sens = {key: scale * res.multipliers * moved[key] for key in setters}
     m = ravel_pytree(u_max_of(problem))[0].shape[0]
     x, unravel = ravel_pytree(res.design)
-    diag = jnp.diagonal(jax.jacfwd(lambda v: ravel_pytree(to_unit(problem, unravel(v)))[0])(x))
+    diag = jnp.diagonal(jax.jacfwd(lambda v: ravel_pytree(to_unit(problem, unravel(v), own=False))[0])(x))
     y_box = res.multipliers[-2 * m:]
     bound = scale * y_box * jnp.concatenate([diag, -diag])
     return Certificate(res, scale, sens, bound, weights.gamma)
@@ -424,7 +425,7 @@ def certify_point(problem: Problem, weights: Weights, design: Design, iterations
     those. ``converged``: the residuals are within ``tol``. Traceable, vmappable."""
     fns = epigraph_form(problem, weights)
     dtype = fns.u_max.dtype
-    u = ravel_pytree(jax.tree.map(lambda x: jnp.asarray(x, dtype), to_unit(problem, design)))[0]
+    u = ravel_pytree(jax.tree.map(lambda x: jnp.asarray(x, dtype), to_unit(problem, design, own=False)))[0]
     u = jnp.where(fns.u_max > 0, u, 0.0)
     n = fns.n_angles
     rows0 = fns.rows(jnp.concatenate([u, jnp.zeros(1, dtype)]))
