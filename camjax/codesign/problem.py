@@ -335,9 +335,7 @@ class ProblemShape:
     """What the compiled pieces of a co-design read from its scene: the grid scene without what
     the family's problem does not read (its name, [synthesis], [design]'s weights, which are an
     argument), and the spring box's follower train (the rate and preload are arguments). Equal
-    (and one object, :meth:`of`) when their text is: the static argument of the compiled pieces."""
-
-    _interned: dict = {}
+    when their text is: the static argument of the compiled pieces."""
 
     def __init__(self, scene, train_box):
         self.scene = scene
@@ -351,8 +349,7 @@ class ProblemShape:
         scene = dataclasses.replace(grid_scene, name="", synthesis=None, design=design)
         train_box = None if box is None else box._replace(rate=(1.0, 1.0), preload=(0.0, 0.0), min_force=0.0,
                                                           overspeed=1.0, omega_os=0.0)
-        shape = cls(scene, train_box)
-        return cls._interned.setdefault(shape.key, shape)
+        return cls(scene, train_box)
 
     def __eq__(self, other) -> bool:
         return isinstance(other, ProblemShape) and self.key == other.key
