@@ -110,7 +110,7 @@ def _problem_at_a_design(name):
     problem = camjax.problem_from_scene(scene)
     family = f.problem_module()
     lo, hi = family.bounds(problem)
-    design = jax.tree.map(lambda a, b: 0.55 * jnp.asarray(a) + 0.45 * jnp.asarray(b) + 0.1 * (b - a), lo, hi)
+    design = jax.tree.map(lambda a, b: a + 0.55 * (b - a), lo, hi)  # the centre + a tenth of the way up
     return family, problem, design, lo, hi
 
 
