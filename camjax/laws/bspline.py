@@ -132,6 +132,55 @@ def evaluate_derivatives(knots: np.ndarray, coeffs: jax.Array, degree: int, x: j
     return tuple(out)
 
 
+def evaluate_numpy(knots: np.ndarray, coeffs: np.ndarray, degree: int, x) -> np.ndarray:
+    """The NumPy twin of :func:`evaluate` (same spans, same recursion) on a matrix of coefficients
+    at once: sum_i coeffs[i, :] N_i,degree(x) for every x, shape (len(x), coeffs.shape[1]); with
+    ``coeffs`` the identity it is the basis matrix. For static data (a scene's laws as it is read,
+    the synthesis' basis matrices): no program is compiled."""
+    t, C, k = np.asarray(knots, dtype=np.float64), np.asarray(coeffs, dtype=np.float64), int(degree)
+    x = np.atleast_1d(np.asarray(x, dtype=np.float64))
+    n = C.shape[0]
+    if k == 0:
+        span = np.clip(np.searchsorted(t, x, side="right") - 1, 0, n - 1)
+        return C[span]
+    span = np.clip(np.searchsorted(t, x, side="right") - 1, k, n - 1)
+    offsets = np.arange(k + 1)
+    d = C[span[:, None] - k + offsets]  # (X, k + 1, cols)
+    for r in range(1, k + 1):
+        j = offsets[r:]
+        left = t[span[:, None] - k + j]
+        right = t[span[:, None] + 1 + j - r]
+        alpha = ((x[:, None] - left) / (right - left))[..., None]
+        new = (1.0 - alpha) * d[:, r - 1:k] + alpha * d[:, r:]
+        d = np.concatenate([d[:, :r], new], axis=1)
+    return d[:, k]
+
+
+def derivative_coefficients_numpy(knots: np.ndarray, coeffs: np.ndarray, degree: int
+                                  ) -> tuple[np.ndarray, np.ndarray, int]:
+    """The NumPy twin of :func:`derivative_coefficients` on a matrix of coefficients (one column
+    per spline)."""
+    t, C, k = np.asarray(knots, dtype=np.float64), np.asarray(coeffs, dtype=np.float64), int(degree)
+    if k == 0:
+        return t, np.zeros_like(C), 0
+    n = C.shape[0]
+    width = t[k + 1: k + n] - t[1:n]
+    scale = np.where(width > 0.0, k / np.where(width > 0.0, width, 1.0), 0.0)
+    return t[1:-1], scale[:, None] * np.diff(C, axis=0), k - 1
+
+
+def evaluate_derivatives_numpy(knots: np.ndarray, coeffs: np.ndarray, degree: int, x,
+                               orders: int = 3) -> tuple[np.ndarray, ...]:
+    """The NumPy twin of :func:`evaluate_derivatives` for one spline (``coeffs`` shape (n,)): the
+    spline and its first ``orders`` derivatives at x (1-D), for static data."""
+    t, c, k = np.asarray(knots, dtype=np.float64), np.asarray(coeffs, dtype=np.float64)[:, None], int(degree)
+    out = []
+    for _ in range(orders + 1):
+        out.append(evaluate_numpy(t, c, k, x)[:, 0])
+        t, c, k = derivative_coefficients_numpy(t, c, k)
+    return tuple(out)
+
+
 def reversed_spline(knots: np.ndarray, coeffs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Knots and coefficients of q(x) = f(1 - x) for a spline f on [0, 1]: mirrored knots,
     reversed coefficients (the basis is mirrored with them)."""
@@ -154,8 +203,7 @@ def spline_law(knots: np.ndarray, coeffs: Sequence[float], degree: int, name: st
     def evaluate_law(x):
         return LawValues(*evaluate_derivatives(t, jnp.asarray(c, dtype=jnp.result_type(x, float)), k, x))
 
-    v0 = float(evaluate_derivatives(t, jnp.asarray(c), k, jnp.asarray(0.0), 1)[1])
-    v1 = float(evaluate_derivatives(t, jnp.asarray(c), k, jnp.asarray(1.0), 1)[1])
+    v0, v1 = (float(v) for v in evaluate_derivatives_numpy(t, c, k, [0.0, 1.0], 1)[1])
     # the uniform law's field: p' at the ends; a shaped law with equal ends records it, else 0 (the
     # program's joint analysis reads the exact one-sided limits, not this field)
     end_velocity = v0 if math.isclose(v0, v1, rel_tol=1e-12, abs_tol=1e-12) else 0.0

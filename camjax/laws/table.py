@@ -31,7 +31,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from camjax.laws import Law, LawValues
-from camjax.laws.bspline import evaluate_derivatives
+from camjax.laws.bspline import evaluate_derivatives, evaluate_derivatives_numpy
 
 NOISE_RATIO = 1.05  # peak jerk(lam) / peak jerk(2 lam) above this: noise dominates the jerk
 LEVEL_TOLERANCE = 0.02  # a segment table's end rows must meet the neighbours' levels within 2 % of its lift
@@ -123,9 +123,9 @@ def _check_count(n: int, degree: int) -> None:
 
 def _peaks(knots, coeffs, degree, lo, hi, width_deg):
     """max |f'|, |f''|, |f'''| per deg over [lo, hi] (normalized abscissa spanning width_deg)."""
-    x = jnp.linspace(lo, hi, 20_001)
-    _, d1, d2, d3 = evaluate_derivatives(knots, jnp.asarray(coeffs), degree, x)
-    return tuple(float(jnp.max(jnp.abs(d))) / width_deg**r for r, d in ((1, d1), (2, d2), (3, d3)))
+    x = np.linspace(lo, hi, 20_001)
+    _, d1, d2, d3 = evaluate_derivatives_numpy(knots, coeffs, degree, x)
+    return tuple(float(np.max(np.abs(d))) / width_deg**r for r, d in ((1, d1), (2, d2), (3, d3)))
 
 
 def _report(file, x, y, fit, refit, lo, hi, width_deg, gcv) -> TableFit:
@@ -240,8 +240,7 @@ def cycle_table_segments(file, angles, lifts, *, degree: int = DEFAULT_DEGREE, s
     b0 = float(fit.knots[degree])
     report = _report(file, x, lifts, fit, refit, b0, b0 + 1.0, 360.0, smoothing is None)
     grid = np.linspace(0.0, 1.0, 36_001)
-    f = np.asarray(evaluate_derivatives(fit.knots, jnp.asarray(fit.coeffs), degree,
-                                        jnp.asarray(b0 + np.mod(grid - b0, 1.0)), 0)[0])
+    f = evaluate_derivatives_numpy(fit.knots, fit.coeffs, degree, b0 + np.mod(grid - b0, 1.0), 0)[0]
     f0 = f[0]
     rng = float(np.ptp(f))
     lo_deg = min(min_angle_deg, 180.0)
@@ -259,10 +258,8 @@ def cycle_table_segments(file, angles, lifts, *, degree: int = DEFAULT_DEGREE, s
     xs = split / 360.0
     name = f"table {Path(file).name}"
     desc = f"periodic smoothing spline of degree {degree} fitted to {angles.size} points of {Path(file).name}"
-    f_split = float(evaluate_derivatives(fit.knots, jnp.asarray(fit.coeffs), degree,
-                                         jnp.asarray(b0 + np.mod(xs - b0, 1.0)), 0)[0])
-    f_zero = float(evaluate_derivatives(fit.knots, jnp.asarray(fit.coeffs), degree,
-                                        jnp.asarray(b0 + np.mod(0.0 - b0, 1.0)), 0)[0])
+    f_split, f_zero = (float(v) for v in evaluate_derivatives_numpy(
+        fit.knots, fit.coeffs, degree, [b0 + np.mod(xs - b0, 1.0), b0 + np.mod(0.0 - b0, 1.0)], 0)[0])
     lift = f_split - f_zero
     rise = _mapped_law(fit.knots, fit.coeffs, degree, 0.0, xs, f_zero, lift, name, desc, report, period=b0)
     ret = _mapped_law(fit.knots, fit.coeffs, degree, 1.0, xs, f_zero, lift, name, desc, report, period=b0)

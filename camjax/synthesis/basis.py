@@ -27,7 +27,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from camjax.laws.bspline import clamped_knots
+from camjax.laws.bspline import clamped_knots, derivative_coefficients_numpy, evaluate_numpy
 
 
 class Basis(NamedTuple):
@@ -54,48 +54,17 @@ def make_basis(degree: int, n_control: int, interior=None) -> Basis:
     return Basis(int(degree), clamped_knots(int(degree), int(n_control), interior), int(n_control))
 
 
-def _de_boor(t: np.ndarray, C: np.ndarray, k: int, x: np.ndarray) -> np.ndarray:
-    """sum_i C[i, :] N_i,k(x) for every x: (len(x), C.shape[1]). The NumPy twin of
-    :func:`camjax.laws.bspline.evaluate` (same spans, same recursion), run on a matrix of
-    coefficients at once: with C the identity it is the basis matrix. Static data, so NumPy."""
-    n = C.shape[0]
-    if k == 0:
-        span = np.clip(np.searchsorted(t, x, side="right") - 1, 0, n - 1)
-        return C[span]
-    span = np.clip(np.searchsorted(t, x, side="right") - 1, k, n - 1)
-    offsets = np.arange(k + 1)
-    d = C[span[:, None] - k + offsets]  # (X, k + 1, cols)
-    for r in range(1, k + 1):
-        j = offsets[r:]
-        left = t[span[:, None] - k + j]
-        right = t[span[:, None] + 1 + j - r]
-        alpha = ((x[:, None] - left) / (right - left))[..., None]
-        new = (1.0 - alpha) * d[:, r - 1:k] + alpha * d[:, r:]
-        d = np.concatenate([d[:, :r], new], axis=1)
-    return d[:, k]
-
-
-def _derivative(t: np.ndarray, C: np.ndarray, k: int):
-    """The NumPy twin of :func:`camjax.laws.bspline.derivative_coefficients` on a matrix."""
-    if k == 0:
-        return t, np.zeros_like(C), 0
-    n = C.shape[0]
-    width = t[k + 1: k + n] - t[1:n]
-    scale = np.where(width > 0.0, k / np.where(width > 0.0, width, 1.0), 0.0)
-    return t[1:-1], scale[:, None] * np.diff(C, axis=0), k - 1
-
-
 def _derivative_basis(basis: Basis, order: int):
     t, C, k = basis.knots, np.eye(basis.n), basis.degree
     for _ in range(order):
-        t, C, k = _derivative(t, C, k)
+        t, C, k = derivative_coefficients_numpy(t, C, k)
     return t, C, k
 
 
 def evaluation_matrix(basis: Basis, x, order: int) -> np.ndarray:
     """(len(x), n): row i maps the control values to q^(order)(x_i)."""
     t, C, k = _derivative_basis(basis, order)
-    return _de_boor(t, C, k, np.atleast_1d(np.asarray(x, dtype=np.float64)))
+    return evaluate_numpy(t, C, k, x)
 
 
 def derivative_matrix(basis: Basis, order: int) -> np.ndarray:
