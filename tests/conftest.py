@@ -87,11 +87,18 @@ def reference_1deg():
     return reference_case(360)
 
 
-# Each compiled XLA program holds a few memory mappings of its own; a whole suite in one process
-# compiles tens of thousands and would pass the kernel's vm.max_map_count (65,530 by default),
-# after which mmap fails inside XLA and the process dies (SIGSEGV). Past this many mappings the
-# in-memory caches are dropped (compiled kernels stay in the persistent cache on disk).
+# Each compiled XLA program holds a few memory mappings of its own (~3.3 measured); a whole suite in
+# one process compiles tens of thousands and would pass the kernel's vm.max_map_count (65,530 by
+# default), after which mmap fails inside XLA and the process dies (SIGSEGV). Past MAX_MAPPINGS the
+# in-memory programs are dropped: JAX's caches and camjax's own tables of compiled programs
+# (compiled kernels stay in the persistent cache on disk). The next drop waits until the count has
+# grown MAPPINGS_MARGIN past what the last one left: a count the drop could not bring under the
+# limit (programs some module still holds) would otherwise make every later test drop and compile
+# again what the tests before it had compiled.
 MAX_MAPPINGS = 25_000
+MAPPINGS_MARGIN = 5_000
+HARD_MAPPINGS = 50_000  # never wait past this: well under vm.max_map_count
+_NEXT_DROP = [MAX_MAPPINGS]
 
 
 def _mapping_count() -> int:
@@ -102,13 +109,25 @@ def _mapping_count() -> int:
         return 0
 
 
+def _drop_compiled_programs() -> None:
+    from camjax import runtime
+    from camjax.robust import evaluate as robust_evaluate
+    from camjax.solvers import base
+
+    jax.clear_caches()
+    base._COMPILED.clear()
+    runtime._LOADED.clear()
+    robust_evaluate._PROGRAMS.clear()
+    gc.collect()
+
+
 @pytest.fixture(autouse=True)
 def _release_compiled_programs():
-    """Drop JAX's in-memory program caches once the process holds more than MAX_MAPPINGS."""
+    """Drop the in-memory compiled programs once the process holds more than MAX_MAPPINGS."""
     yield
-    if _mapping_count() > MAX_MAPPINGS:
-        jax.clear_caches()
-        gc.collect()
+    if _mapping_count() > _NEXT_DROP[0]:
+        _drop_compiled_programs()
+        _NEXT_DROP[0] = min(max(MAX_MAPPINGS, _mapping_count() + MAPPINGS_MARGIN), HARD_MAPPINGS)
 
 
 # ------------------------------------------------------------------ CPU seconds per test
