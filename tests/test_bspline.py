@@ -35,7 +35,8 @@ def _random_spline(k, n, seed, repeat=False):
 def test_de_boor_matches_scipy_with_derivatives(k):
     t, c = _random_spline(k, k + 9, seed=k, repeat=k >= 3)
     x = np.linspace(0.0, 1.0, 2001)
-    got = B.evaluate_derivatives(t, jnp.asarray(c), k, jnp.asarray(x))
+    # jitted: one compiled program per degree (eagerly each of de Boor's operations compiles alone)
+    got = jax.jit(lambda cc, xx: B.evaluate_derivatives(t, cc, k, xx))(jnp.asarray(c), jnp.asarray(x))
     ref = BSpline(t, c, k)
     for nu, g in enumerate(got):
         want = ref(x, nu=nu)
@@ -66,8 +67,9 @@ def test_degree_nine_matches_exact_rational_evaluation():
     c = [Fraction(int(v), 100) for v in rng.integers(-300, 300, n)]
     xs = [Fraction(j, 97) for j in range(98)]
     exact = np.array([float(_exact_de_boor(t, c, k, x)) for x in xs])
-    got = B.evaluate(np.array([float(v) for v in t]), jnp.asarray([float(v) for v in c]), k,
-                     jnp.asarray([float(x) for x in xs]))
+    knots = np.array([float(v) for v in t])
+    got = jax.jit(lambda cc, xx: B.evaluate(knots, cc, k, xx))(jnp.asarray([float(v) for v in c]),
+                                                                jnp.asarray([float(x) for x in xs]))
     # the issue's bar for high degree is 1e-9 of the lift; de Boor holds ~1e-15 here
     np.testing.assert_allclose(np.asarray(got), exact, rtol=0, atol=1e-13)
 
@@ -83,7 +85,7 @@ def test_degree_five_bspline_is_the_345_polynomial():
     control = _bernstein_coefficients({3: Fraction(10), 4: Fraction(-15), 5: Fraction(6)}, 5)
     law = B.bspline_law(5, [float(v) for v in control])
     x = jnp.linspace(0.0, 1.0, 1001)
-    got, ref = law(x), LAWS["poly_3_4_5"](x)
+    got, ref = jax.jit(law)(x), jax.jit(LAWS["poly_3_4_5"])(x)
     for g, r in zip(got, ref, strict=True):
         # exact control values (0,0,0,1,1,1); p''' peaks at 60: 1e-12 absolute on every derivative
         np.testing.assert_allclose(np.asarray(g), np.asarray(r), rtol=0, atol=1e-12)
@@ -94,11 +96,12 @@ def test_gradient_with_respect_to_control_values_matches_finite_differences():
     t, c = _random_spline(5, 12, seed=3)
     x = jnp.linspace(0.0, 1.0, 301)
 
+    @jax.jit  # one program for the 24 differences (eagerly, every operation compiles alone)
     def objective(cc):  # a smooth scalar of values and derivatives, like a peak acceleration
         v = B.evaluate_derivatives(t, cc, 5, x)
         return jnp.sum(v[0] ** 2) + 1e-3 * jnp.sum(v[2] ** 2) + 1e-6 * jnp.sum(jnp.sin(v[3] * 1e-2))
 
-    g = jax.grad(objective)(jnp.asarray(c))
+    g = jax.jit(jax.grad(objective))(jnp.asarray(c))
     h = 1e-5
     fd = np.array([(objective(jnp.asarray(c + h * e)) - objective(jnp.asarray(c - h * e))) / (2 * h)
                    for e in np.eye(c.size)])
@@ -110,7 +113,8 @@ def test_gradient_with_respect_to_control_values_matches_finite_differences():
 def test_derivative_in_x_by_jvp_is_the_derivative_spline():
     t, c = _random_spline(5, 10, seed=4)
     x = jnp.linspace(0.01, 0.99, 57)
-    _, tangent = jax.jvp(lambda xx: B.evaluate(t, jnp.asarray(c), 5, xx), (x,), (jnp.ones_like(x),))
+    _, tangent = jax.jit(lambda xx: jax.jvp(lambda u: B.evaluate(t, jnp.asarray(c), 5, u), (xx,),
+                                            (jnp.ones_like(xx),)))(x)
     np.testing.assert_allclose(np.asarray(tangent), BSpline(t, c, 5)(np.asarray(x), nu=1), rtol=1e-12,
                                atol=1e-12)
 
@@ -119,7 +123,7 @@ def test_derivative_in_x_by_jvp_is_the_derivative_spline():
 def test_return_control_runs_backwards():
     law = B.bspline_law(5, [1, 1, 1, 0, 0, 0], falling=True)
     x = jnp.linspace(0, 1, 101)
-    for g, r in zip(law(x), LAWS["poly_3_4_5"](x), strict=True):
+    for g, r in zip(jax.jit(law)(x), jax.jit(LAWS["poly_3_4_5"])(x), strict=True):
         np.testing.assert_allclose(np.asarray(g), np.asarray(r), atol=1e-12)
 
 

@@ -384,8 +384,13 @@ def test_the_problem_and_the_run_report_a_face_too_narrow():
     # the solvers' coordinates floor W at the need: every design they see keeps the contact on the face
     floored = P.from_unit(problem, P.to_unit(problem, narrow))
     assert abs(float(floored.face_width_mm) - float(P.face_width_need(problem, narrow))) < 1e-12
-    # and a run drawn at a cam too small for the face says so
-    run = camjax.run_design(scene, base_radius_mm=15.0)
+    # and a run drawn at a cam too small for the face says so: the scene's 8 mm face at R_b = 15 mm,
+    # whose contact runs past the edge by positions alone ([design] left out: a solve would not change
+    # the drawing at 15 mm and would compile a program of its own; the sizing's programs are the
+    # ones the narrow-face test above compiles)
+    assert 2 * _max_travel_from_positions(15.0, 100.0, 0.0, scene.motion.program) > 8.0
+    text = _scene_text(face_radius=100.0, face_width=8.0)
+    run = camjax.run_design(parse_scene(text[: text.index("[design]")]), base_radius_mm=15.0)
     assert any(v.constraint == "face_width" for v in run.violations)
 
 

@@ -59,16 +59,23 @@ def _module_name(path: Path) -> str:
     return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
 
 
-@pytest.mark.parametrize("path", sorted(PACKAGE.rglob("*.py")), ids=lambda p: str(p.relative_to(ROOT)))
-def test_no_module_reaches_back_up_the_chain(path):
+def _later_stages_imported(path: Path) -> list[str]:
+    """The modules of a later stage of the chain that the file imports at run time."""
     name = _module_name(path)
     forbidden = [bad for prefix, bads in LATER.items() if name == prefix or name.startswith(prefix + ".")
                  for bad in bads]
     if name.startswith("camjax.followers.") and name.rsplit(".", 1)[-1] not in OUTPUT_LAYERS:
         forbidden.append("camjax.output")
-    wrong = sorted(m for m in _runtime_imports(path) for bad in forbidden
-                   if m == bad.rstrip(".") or m.startswith(bad if bad.endswith(".") else bad + "."))
-    assert not wrong, f"{name} imports {wrong}: a later stage of scene -> pipeline -> output -> cli"
+    return sorted(m for m in _runtime_imports(path) for bad in forbidden
+                  if m == bad.rstrip(".") or m.startswith(bad if bad.endswith(".") else bad + "."))
+
+
+def test_no_module_reaches_back_up_the_chain():
+    # every module of the package in one test, each offender named in the message (one test per
+    # module cost more in the suite's set-up and tear-down per test than in the check itself)
+    wrong = {_module_name(p): bad for p in sorted(PACKAGE.rglob("*.py")) if (bad := _later_stages_imported(p))}
+    assert not wrong, "\n".join(f"{name} imports {bad}: a later stage of scene -> pipeline -> output -> cli"
+                                 for name, bad in wrong.items())
 
 
 def test_the_chain_check_sees_a_violation(tmp_path):
