@@ -5,12 +5,13 @@ One follower type (FULL_SEQUENCE) runs a sequence of commands through :func:`cam
 option changed at a time (mode, solver, seed, samples, weights, base radius, edits of the scene
 file: extrema, rotation, each design variable fixed or free, the [design] block's own mode and
 limits, and sweeps), all sharing one cache folder; every other type runs the part of its sequence
-that traces its own code (:func:`own_runs`). Every run starts as a fresh process would (this process's memory of
-loaded programs cleared), in the cache's verify mode (every saved program's StableHLO compared
-with a fresh trace's: a key that misses a trace-time input raises). Each result.json (pareto.json,
-dynamics.json) must equal, number for number, the same run with the cache off; the quick test's
-sequence then runs again in reverse order, every program now loaded from the folder, with the same
-check.
+that traces its own code (:func:`own_runs`), one of them (QUICK_SEQUENCE) with the runs a stale
+cache once got wrong added. Every run starts as a fresh process would (this process's memory of
+loaded programs cleared), in the cache's verify mode (every program read from the folder traced
+again and its StableHLO compared with the saved one's: a key that misses a trace-time input
+raises). Each result.json (pareto.json, dynamics.json) must equal, number for number, the same run
+with the cache off; the quick sequence's stale-cache runs and the dynamics runs then run again in
+reverse order, every program now loaded from the folder, with the same check.
 
 The reference is the same command with the cache off (plain ``jax.jit`` tracing): equality is exact
 because a saved program is the traced program itself. Figures and the DXF are not drawn here (they
@@ -25,6 +26,7 @@ from __future__ import annotations
 
 import json
 import re
+from collections.abc import Sequence
 from pathlib import Path
 
 from camjax import cli, followers, runtime
@@ -167,21 +169,18 @@ def _runs(follower: str, tmp: Path) -> list[list[str]]:
     return runs
 
 
-def _check_sequence(runs: list[list[str]], tmp: Path, monkeypatch, warm_pass: bool = True) -> None:
+def _check_sequence(runs: list[list[str]], tmp: Path, monkeypatch, warm: Sequence[int] = ()) -> None:
     """Each run with the cache off, then with it on in one folder, in order (a run whose key an
     earlier run saved loads that program: the case a key that misses an input gets wrong, which
-    verify mode then catches), and (``warm_pass``) again in reverse order, every program loaded."""
+    verify mode then catches), then the runs numbered in ``warm`` again in reverse order, every
+    program they run loaded from the folder (each compared with its cache-off result as well)."""
     cache = tmp / "programs"
     off = [_run(argv, tmp / f"off{k}", None, monkeypatch) for k, argv in enumerate(runs)]
-    orders = [range(len(runs))] + ([reversed(range(len(runs)))] if warm_pass else [])
-    for order in orders:
-        for k in order:
-            on = _run(runs[k], tmp / f"on{k}", cache, monkeypatch)
-            diff = differences(off[k], on, ignore=TIMING_KEYS)
-            assert not diff, f"{' '.join(runs[k])}: cache on != off:\n" + "\n".join(diff[:20])
+    for k in [*range(len(runs)), *sorted(warm, reverse=True)]:
+        on = _run(runs[k], tmp / f"on{k}", cache, monkeypatch)
+        diff = differences(off[k], on, ignore=TIMING_KEYS)
+        assert not diff, f"{' '.join(runs[k])}: cache on != off:\n" + "\n".join(diff[:20])
     assert list(cache.glob(f"*{runtime.PROGRAM_SUFFIX}")), "the sequence saved no program"
-
-
 
 
 # The full sequence above runs on one follower type (FULL_SEQUENCE); every other type runs OWN_RUNS,
@@ -240,7 +239,23 @@ def example_runs(follower: str, tmp: Path) -> list[list[str]]:
     return runs
 
 
+# The quick sequence: QUICK_SEQUENCE's own runs and the runs a stale cache once got wrong (a GA run
+# after another seed's; a pointwise run after a global one is among the own runs), those four then
+# again in reverse order, every program loaded (tests/test_cache_matrix.py). It holds that type's
+# own runs: the type is not in tests/test_cache_matrix_types_*.py.
+QUICK_SEQUENCE = "flat"
+QUICK_OPTIONS = [["--solver", "ga", "--seed", "7"], ["--solver", "ga"]]
+
+
+def quick_runs(tmp: Path) -> tuple[list[list[str]], list[int]]:
+    """(runs, the numbers of those run again warm) of the quick sequence (see above)."""
+    runs = own_runs(QUICK_SEQUENCE, tmp)
+    base = runs[0]
+    return runs + [[*base, *opts] for opts in QUICK_OPTIONS], [0, 1, len(runs), len(runs) + 1]
+
+
 def followers_share(part: int, parts: int) -> list[str]:
-    """Every registered follower type but FULL_SEQUENCE, dealt into ``parts`` files (a new type's
-    folder is covered without editing a test)."""
-    return [name for name in followers.names() if name != FULL_SEQUENCE][part::parts]
+    """Every registered follower type but FULL_SEQUENCE's and QUICK_SEQUENCE's, dealt into ``parts``
+    files (a new type's folder is covered without editing a test)."""
+    own = [name for name in followers.names() if name not in (FULL_SEQUENCE, QUICK_SEQUENCE)]
+    return own[part::parts]

@@ -1,37 +1,33 @@
 """The saved-program cache against the cache off (tests/cache_matrix.py says how): the full
-sequence of one follower type, the quick share of the flat face's, and the dynamics command.
-Every other follower type's own runs: tests/test_cache_matrix_types_*.py."""
+sequence of one follower type, the quick sequence of another (its own runs among them), and the
+dynamics command. Every other follower type's own runs: tests/test_cache_matrix_types_*.py."""
 
 from __future__ import annotations
 
 import pytest
 from cache_matrix import (
     FULL_SEQUENCE,
-    SCENES,
     _check_sequence,
     _edit,
     _runs,
+    quick_runs,
 )
-
-QUICK = {"flat": [["design", "{scene}"], ["design", "{scene}", "--mode", "pointwise"],
-                  ["design", "{scene}", "--solver", "ga", "--seed", "7"], ["design", "{scene}", "--solver", "ga"]]}
 
 
 @pytest.mark.slow
 def test_flat_face_mode_solver_and_seed_never_reuse_another_runs_program(tmp_path, quiet_files, monkeypatch):
     """The runs the stale cache got wrong (a pointwise run after a global one, a GA run after
-    another seed), in one folder, then again in reverse order with every program loaded."""
-    scene = tmp_path / "flat.toml"
-    scene.write_text(SCENES["flat"][0])
-    runs = [[a.format(scene=scene) for a in argv] for argv in QUICK["flat"]]
-    _check_sequence(runs, tmp_path, monkeypatch)
+    another seed), in one folder with the type's own runs, then again in reverse order with every
+    program loaded."""
+    runs, warm = quick_runs(tmp_path)
+    _check_sequence(runs, tmp_path, monkeypatch, warm)
 
 
 @pytest.mark.slow
 def test_every_option_scene_edit_and_sweep_gives_the_cache_off_result(tmp_path, quiet_files, monkeypatch):
     # one pass in order: every program saved by an earlier run of the sequence is loaded by the
     # later runs that share its key (the flat face's test above adds the reverse, all-warm pass)
-    _check_sequence(_runs(FULL_SEQUENCE, tmp_path), tmp_path, monkeypatch, warm_pass=False)
+    _check_sequence(_runs(FULL_SEQUENCE, tmp_path), tmp_path, monkeypatch)
 
 
 @pytest.mark.slow
@@ -47,4 +43,4 @@ def test_dynamics_with_its_scene_edited_gives_the_cache_off_result(tmp_path, mon
         path = tmp_path / f"bench{k}.toml"
         path.write_text(text if edit is None else _edit(text, edit))
         runs.append(["dynamics", str(path)])
-    _check_sequence(runs, tmp_path, monkeypatch)
+    _check_sequence(runs, tmp_path, monkeypatch, range(len(runs)))
