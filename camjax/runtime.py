@@ -174,7 +174,8 @@ def use_program_cache(folder: str | os.PathLike | None, *, verify: bool | None =
     as the compilation cache's is: its files are unpickled and run.
 
     ``verify``: trace every program read from the folder anyway and raise
-    :class:`StaleProgramError` when the saved program's StableHLO differs from the fresh trace's (default: $CAMJAX_PROGRAM_CACHE_VERIFY=1).
+    :class:`StaleProgramError` when the saved program's StableHLO differs from the fresh trace's
+    (default: $CAMJAX_PROGRAM_CACHE_VERIFY=1).
     """
     if folder is not None:
         os.makedirs(folder, exist_ok=True)
