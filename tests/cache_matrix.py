@@ -156,16 +156,27 @@ def _run(argv: list[str], out: Path, cache: Path | None, monkeypatch) -> dict:
 
 
 def _runs(follower: str, tmp: Path) -> list[list[str]]:
-    """The follower's sequence of commands: each option set on the scene, each scene edit, sweeps."""
-    text, options, edits = SCENES[follower]
+    """The follower's sequence of commands: each option set on the scene, each scene edit, sweeps
+    (validation/snapshot.py runs them all; the matrix, :func:`full_runs` and :func:`own_runs`)."""
+    text, options, _ = SCENES[follower]
     base = tmp / f"{follower}.toml"
     base.write_text(text)
     runs = [["design", str(base), *opts] for opts in options]
+    runs += _edited_runs(follower, tmp)
+    return runs + [["sweep", str(base), *opts] for opts in SWEEPS]
+
+
+def _edited_runs(follower: str, tmp: Path, *, block_mode: bool = True) -> list[list[str]]:
+    """A design of each scene edit of the follower's sequence (``block_mode``: with the [design]
+    block's own mode among them)."""
+    text, _, edits = SCENES[follower]
+    runs = []
     for k, (old, new) in enumerate(edits):
+        if new.startswith("mode =") and not block_mode:
+            continue
         edited = tmp / f"{follower}-edit{k}.toml"
         edited.write_text(_edit(text, (old, new)))
         runs.append(["design", str(edited)])
-    runs += [["sweep", str(base), *opts] for opts in SWEEPS]
     return runs
 
 
@@ -198,24 +209,31 @@ FULL_SEQUENCE = "roller"
 OWN_OPTIONS = [[], ["--mode", "pointwise"]]
 
 
+def full_runs(tmp: Path) -> list[list[str]]:
+    """FULL_SEQUENCE's sequence as the matrix runs it: every option set and scene edit but two kinds
+    of run that check nothing another run does not (measured, recording each run's program keys
+    and the digests of the arguments each program ran on):
+    - the [design] block's own mode: the same programs on the same argument values as
+      ``--mode pointwise`` (the scene's common code reads the mode);
+    - the sweeps: ``camjax sweep`` runs its solves through ``jax.jit`` (camjax.solvers.sweep),
+      no saved program, so with the cache on it computes what it computes with the cache off."""
+    text, options, _ = SCENES[FULL_SEQUENCE]
+    base = tmp / f"{FULL_SEQUENCE}.toml"
+    base.write_text(text)
+    return [["design", str(base), *opts] for opts in options] + _edited_runs(FULL_SEQUENCE, tmp, block_mode=False)
+
+
 def own_runs(follower: str, tmp: Path) -> list[list[str]]:
     """The runs of ``follower`` that trace its own code (see the comment above FULL_SEQUENCE): the
     base design, pointwise mode and each scene edit of its sequence (the [design] block's own mode
-    left out: the same solve program as ``--mode pointwise``, read by the scene's common code);
-    a type without a sequence, its built-in example scene's (:func:`example_runs`)."""
+    left out: see :func:`full_runs`); a type without a sequence, its built-in example scene's
+    (:func:`example_runs`)."""
     if follower not in SCENES:
         return example_runs(follower, tmp)
-    text, _, edits = SCENES[follower]
     base = tmp / f"{follower}.toml"
-    base.write_text(text)
+    base.write_text(SCENES[follower][0])
     runs = [["design", str(base), *opts] for opts in OWN_OPTIONS]
-    for k, (old, new) in enumerate(edits):
-        if new.startswith("mode ="):
-            continue
-        edited = tmp / f"{follower}-edit{k}.toml"
-        edited.write_text(_edit(text, (old, new)))
-        runs.append(["design", str(edited)])
-    return runs
+    return runs + _edited_runs(follower, tmp, block_mode=False)
 
 
 def example_runs(follower: str, tmp: Path) -> list[list[str]]:

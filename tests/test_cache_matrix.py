@@ -5,13 +5,7 @@ dynamics command. Every other follower type's own runs: tests/test_cache_matrix_
 from __future__ import annotations
 
 import pytest
-from cache_matrix import (
-    FULL_SEQUENCE,
-    _check_sequence,
-    _edit,
-    _runs,
-    quick_runs,
-)
+from cache_matrix import _check_sequence, _edit, full_runs, quick_runs
 
 
 @pytest.mark.slow
@@ -26,8 +20,9 @@ def test_flat_face_mode_solver_and_seed_never_reuse_another_runs_program(tmp_pat
 @pytest.mark.slow
 def test_every_option_scene_edit_and_sweep_gives_the_cache_off_result(tmp_path, quiet_files, monkeypatch):
     # one pass in order: every program saved by an earlier run of the sequence is loaded by the
-    # later runs that share its key (the flat face's test above adds the reverse, all-warm pass)
-    _check_sequence(_runs(FULL_SEQUENCE, tmp_path), tmp_path, monkeypatch)
+    # later runs that share its key (the flat face's test above adds the reverse, all-warm pass;
+    # cache_matrix.full_runs: the runs of the sequence left out, and why)
+    _check_sequence(full_runs(tmp_path), tmp_path, monkeypatch)
 
 
 @pytest.mark.slow
