@@ -166,13 +166,21 @@ def _runs(follower: str, tmp: Path) -> list[list[str]]:
     return runs + [["sweep", str(base), *opts] for opts in SWEEPS]
 
 
-def _edited_runs(follower: str, tmp: Path, *, block_mode: bool = True) -> list[list[str]]:
-    """A design of each scene edit of the follower's sequence (``block_mode``: with the [design]
-    block's own mode among them)."""
+# A scene edit whose design runs the same programs on the same argument values as its sequence's
+# base design (measured: each run's program keys and the digests of the arguments each program ran
+# on): the flat face's rotation turns its profile in the command's own code, outside every program.
+SAME_AS_BASE = {"flat": ['rotation = "cw"']}
+
+
+def _edited_runs(follower: str, tmp: Path, *, every_edit: bool = True) -> list[list[str]]:
+    """A design of each scene edit of the follower's sequence; ``every_edit`` False: without the
+    edits that run no program on values another run does not (the [design] block's own mode, see
+    :func:`full_runs`; :data:`SAME_AS_BASE`)."""
     text, _, edits = SCENES[follower]
     runs = []
     for k, (old, new) in enumerate(edits):
-        if new.startswith("mode =") and not block_mode:
+        same = new.startswith("mode =") or any(edit in new for edit in SAME_AS_BASE.get(follower, ()))
+        if same and not every_edit:
             continue
         edited = tmp / f"{follower}-edit{k}.toml"
         edited.write_text(_edit(text, (old, new)))
@@ -220,20 +228,20 @@ def full_runs(tmp: Path) -> list[list[str]]:
     text, options, _ = SCENES[FULL_SEQUENCE]
     base = tmp / f"{FULL_SEQUENCE}.toml"
     base.write_text(text)
-    return [["design", str(base), *opts] for opts in options] + _edited_runs(FULL_SEQUENCE, tmp, block_mode=False)
+    return [["design", str(base), *opts] for opts in options] + _edited_runs(FULL_SEQUENCE, tmp, every_edit=False)
 
 
 def own_runs(follower: str, tmp: Path) -> list[list[str]]:
     """The runs of ``follower`` that trace its own code (see the comment above FULL_SEQUENCE): the
-    base design, pointwise mode and each scene edit of its sequence (the [design] block's own mode
-    left out: see :func:`full_runs`); a type without a sequence, its built-in example scene's
-    (:func:`example_runs`)."""
+    base design, pointwise mode and each scene edit of its sequence (those that run no program on
+    values another run does not left out: :func:`_edited_runs`); a type without a sequence, its
+    built-in example scene's (:func:`example_runs`)."""
     if follower not in SCENES:
         return example_runs(follower, tmp)
     base = tmp / f"{follower}.toml"
     base.write_text(SCENES[follower][0])
     runs = [["design", str(base), *opts] for opts in OWN_OPTIONS]
-    return runs + _edited_runs(follower, tmp, block_mode=False)
+    return runs + _edited_runs(follower, tmp, every_edit=False)
 
 
 def example_runs(follower: str, tmp: Path) -> list[list[str]]:
