@@ -3,13 +3,12 @@ any order of runs, writes what it writes with the cache off.
 
 One follower type (FULL_SEQUENCE) runs a sequence of commands through :func:`camjax.cli.main`, one
 option changed at a time (mode, solver, seed, samples, weights, base radius, edits of the scene
-file: extrema, rotation, each design variable fixed or free, the [design] block's own mode and
-limits, and sweeps), all sharing one cache folder; every other type runs the part of its sequence
-that traces its own code (:func:`own_runs`), one of them (QUICK_SEQUENCE) with the runs a stale
+file: extrema, rotation, each design variable fixed or free, the stress limit; :func:`full_runs`),
+all sharing one cache folder; every other type runs the part of its sequence that traces its own code (:func:`own_runs`), one of them (QUICK_SEQUENCE) with the runs a stale
 cache once got wrong added. Every run starts as a fresh process would (this process's memory of
 loaded programs cleared), in the cache's verify mode (every program read from the folder traced
 again and its StableHLO compared with the saved one's: a key that misses a trace-time input
-raises). Each result.json (pareto.json, dynamics.json) must equal, number for number, the same run
+raises). Each result.json (dynamics.json) must equal, number for number, the same run
 with the cache off; the quick sequence's stale-cache runs and the dynamics runs then run again in
 reverse order, every program now loaded from the folder, with the same check.
 
@@ -19,7 +18,7 @@ read no saved program); everything the JSON holds is computed as the command com
 
 The sequences and checks shared by tests/test_cache_matrix*.py (several files, so that the matrix
 spreads over the workers of ``pytest -n auto --dist loadfile``); validation/snapshot.py runs the
-full sequences of :data:`SCENES` too.
+full sequences of :data:`SCENES` (:func:`_runs`, sweeps too).
 """
 
 from __future__ import annotations
@@ -205,9 +204,9 @@ def _check_sequence(runs: list[list[str]], tmp: Path, monkeypatch, warm: Sequenc
 # The full sequence above runs on one follower type (FULL_SEQUENCE); every other type runs OWN_RUNS,
 # the part of it that traces the type's own code. What the rest checks does not depend on the
 # follower: the program key is computed from an entry point's arguments by the same code for every
-# type (camjax.runtime.program_key), and the solver, seed, sample count, weights and the sweep only
-# change generic entry-point arguments (static mode/solver, the PRNG keys, grid shapes, the weights'
-# batch) whose handling the full sequence checks once. A follower's code enters through what it
+# type (camjax.runtime.program_key), and the solver, seed, sample count and weights only change
+# generic entry-point arguments (static mode/solver, the PRNG keys, grid shapes, the weights' values)
+# whose handling the full sequence checks once. A follower's code enters through what it
 # traces: its problem in the solve program (the base design), its pointwise condensing (pointwise
 # mode), its sizing programs keyed by rotation (the rotation edit), its exact or grid extrema, its
 # own design variables free or fixed (the problem's tree structure: its scene edits) and its scene
