@@ -145,11 +145,13 @@ def quiet_startup_interrupts() -> None:
 #   4. the process's JAX configuration (x64, dtype promotion, precision, PRNG, ...) and devices.
 # The key is a digest of all four. A trace that read anything else (an environment variable, a
 # mutable module global, a closed-over value that is not an argument) would be a leak: the
-# verify mode (CAMJAX_PROGRAM_CACHE_VERIFY=1; the test matrix runs in it) traces every call
-# anyway and compares its StableHLO with the saved program's, so a leak fails loudly.
+# verify mode (CAMJAX_PROGRAM_CACHE_VERIFY=1; the test matrix runs in it) traces every program
+# it reads from the folder again and compares its StableHLO with the saved program's, so a leak
+# fails loudly. (A program already traced or compared in this process is reused as it is, as
+# ``jax.jit`` reuses its trace: a leak between two calls of one process is no saved program's.)
 PROGRAM_FORMAT = 2  # layout of a saved program's file; another layout is exported again
 _PROGRAM_DIR: list = [None]  # folder of the program cache; None: off (the library default)
-_VERIFY: list = [False]  # trace every call and compare with the saved program (tests)
+_VERIFY: list = [False]  # trace every program read from the folder and compare (tests)
 _LOADED: dict = {}  # key -> _Entry, loaded or exported in this process
 _UNEXPORTABLE: set = set()  # qualified names whose export failed here: called directly from then on
 PROGRAM_SUFFIX = ".jaxprog"
@@ -171,8 +173,9 @@ def use_program_cache(folder: str | os.PathLike | None, *, verify: bool | None =
     missing; OSError if it cannot be); None switches the program cache off. The folder is trusted
     as the compilation cache's is: its files are unpickled and run.
 
-    ``verify``: trace every call anyway and raise :class:`StaleProgramError` when the saved
-    program's StableHLO differs from the fresh trace's (default: $CAMJAX_PROGRAM_CACHE_VERIFY=1).
+    ``verify``: trace every program read from the folder anyway and raise
+    :class:`StaleProgramError` when the saved program's StableHLO differs from the fresh trace's
+    (default: $CAMJAX_PROGRAM_CACHE_VERIFY=1).
     """
     if folder is not None:
         os.makedirs(folder, exist_ok=True)
@@ -486,29 +489,36 @@ def _write(path: Path, key: str, exported, out_tree) -> str:
 
 def _program(folder: Path, name: str, fn, static: dict, dynamic: dict) -> _Entry:
     """The compiled program for these arguments: from this process, else from ``folder``, else
-    exported now and saved there. In verify mode every call is traced again and compared."""
+    exported now and saved there. In verify mode a program read from ``folder`` is traced again
+    and compared before it runs; one this process holds already was traced or compared here (as
+    ``jax.jit`` reuses its own trace within a process) and runs as it is."""
     import jax
 
     key = program_key(name, static, dynamic)
     entry = _LOADED.get(key)
-    if entry is None:
-        path = folder / f"{name}-{key[:40]}{PROGRAM_SUFFIX}"
-        saved = _read(path, key)
-        if saved is not None:
-            exported, skeleton, module = saved
-            arrays = [jax.random.key_data(x) if _is_key(x) else x for x in jax.tree.leaves(dynamic)]
-            entry = _Entry(_compile(exported, arrays), jax.tree.structure(skeleton), module)
-        else:
-            exported, out_tree, arrays = _export(name, fn, static, dynamic)
-            module = _write(path, key, exported, out_tree)
-            entry = _Entry(_compile(exported, arrays), out_tree, module)
-            _LOADED[key] = entry
-            return entry  # traced just now: nothing to verify
-        _LOADED[key] = entry
-    if _VERIFY[0]:
-        exported, _, _ = _export(name, fn, static, dynamic)
-        if _sha256(module_text(exported)) != entry.module_sha256:
-            raise StaleProgramError(
-                f"{name}: the saved program for key {key[:12]} differs from a fresh trace; its key "
-                "misses something the trace reads (see camjax.runtime.program_key)")
+    if entry is not None:
+        return entry
+    path = folder / f"{name}-{key[:40]}{PROGRAM_SUFFIX}"
+    saved = _read(path, key)
+    if saved is None:  # traced just now: nothing to verify
+        exported, out_tree, arrays = _export(name, fn, static, dynamic)
+        module = _write(path, key, exported, out_tree)
+        entry = _Entry(_compile(exported, arrays), out_tree, module)
+    else:
+        exported, skeleton, module = saved
+        if _VERIFY[0]:
+            _verify(name, key, fn, static, dynamic, module)
+        arrays = [jax.random.key_data(x) if _is_key(x) else x for x in jax.tree.leaves(dynamic)]
+        entry = _Entry(_compile(exported, arrays), jax.tree.structure(skeleton), module)
+    _LOADED[key] = entry
     return entry
+
+
+def _verify(name: str, key: str, fn, static: dict, dynamic: dict, module_sha256: str) -> None:
+    """Raise :class:`StaleProgramError` unless a fresh trace of ``fn`` for these arguments has the
+    module digest ``module_sha256`` (that of the program saved for ``key``)."""
+    exported, _, _ = _export(name, fn, static, dynamic)
+    if _sha256(module_text(exported)) != module_sha256:
+        raise StaleProgramError(
+            f"{name}: the saved program for key {key[:12]} differs from a fresh trace; its key "
+            "misses something the trace reads (see camjax.runtime.program_key)")

@@ -3,14 +3,14 @@ any order of runs, writes what it writes with the cache off.
 
 One follower type (FULL_SEQUENCE) runs a sequence of commands through :func:`camjax.cli.main`, one
 option changed at a time (mode, solver, seed, samples, weights, base radius, edits of the scene
-file: extrema, rotation, each design variable fixed or free, the [design] block's own mode and
-limits, and sweeps), all sharing one cache folder; every other type runs the part of its sequence
-that traces its own code (:func:`own_runs`). Every run starts as a fresh process would (this process's memory of
-loaded programs cleared), in the cache's verify mode (every saved program's StableHLO compared
-with a fresh trace's: a key that misses a trace-time input raises). Each result.json (pareto.json,
-dynamics.json) must equal, number for number, the same run with the cache off; the quick test's
-sequence then runs again in reverse order, every program now loaded from the folder, with the same
-check.
+file: extrema, rotation, each design variable fixed or free, the stress limit; :func:`full_runs`),
+all sharing one cache folder; every other type runs the part of its sequence that traces its own code (:func:`own_runs`), one of them (QUICK_SEQUENCE) with the runs a stale
+cache once got wrong added. Every run starts as a fresh process would (this process's memory of
+loaded programs cleared), in the cache's verify mode (every program read from the folder traced
+again and its StableHLO compared with the saved one's: a key that misses a trace-time input
+raises). Each result.json (dynamics.json) must equal, number for number, the same run
+with the cache off; the quick sequence's stale-cache runs and the dynamics runs then run again in
+reverse order, every program now loaded from the folder, with the same check.
 
 The reference is the same command with the cache off (plain ``jax.jit`` tracing): equality is exact
 because a saved program is the traced program itself. Figures and the DXF are not drawn here (they
@@ -18,13 +18,14 @@ read no saved program); everything the JSON holds is computed as the command com
 
 The sequences and checks shared by tests/test_cache_matrix*.py (several files, so that the matrix
 spreads over the workers of ``pytest -n auto --dist loadfile``); validation/snapshot.py runs the
-full sequences of :data:`SCENES` too.
+full sequences of :data:`SCENES` (:func:`_runs`, sweeps too).
 """
 
 from __future__ import annotations
 
 import json
 import re
+from collections.abc import Sequence
 from pathlib import Path
 
 from camjax import cli, followers, runtime
@@ -154,42 +155,58 @@ def _run(argv: list[str], out: Path, cache: Path | None, monkeypatch) -> dict:
 
 
 def _runs(follower: str, tmp: Path) -> list[list[str]]:
-    """The follower's sequence of commands: each option set on the scene, each scene edit, sweeps."""
-    text, options, edits = SCENES[follower]
+    """The follower's sequence of commands: each option set on the scene, each scene edit, sweeps
+    (validation/snapshot.py runs them all; the matrix, :func:`full_runs` and :func:`own_runs`)."""
+    text, options, _ = SCENES[follower]
     base = tmp / f"{follower}.toml"
     base.write_text(text)
     runs = [["design", str(base), *opts] for opts in options]
+    runs += _edited_runs(follower, tmp)
+    return runs + [["sweep", str(base), *opts] for opts in SWEEPS]
+
+
+# A scene edit whose design runs the same programs on the same argument values as its sequence's
+# base design (measured: each run's program keys and the digests of the arguments each program ran
+# on): the flat face's rotation turns its profile in the command's own code, outside every program.
+SAME_AS_BASE = {"flat": ['rotation = "cw"']}
+
+
+def _edited_runs(follower: str, tmp: Path, *, every_edit: bool = True) -> list[list[str]]:
+    """A design of each scene edit of the follower's sequence; ``every_edit`` False: without the
+    edits that run no program on values another run does not (the [design] block's own mode, see
+    :func:`full_runs`; :data:`SAME_AS_BASE`)."""
+    text, _, edits = SCENES[follower]
+    runs = []
     for k, (old, new) in enumerate(edits):
+        same = new.startswith("mode =") or any(edit in new for edit in SAME_AS_BASE.get(follower, ()))
+        if same and not every_edit:
+            continue
         edited = tmp / f"{follower}-edit{k}.toml"
         edited.write_text(_edit(text, (old, new)))
         runs.append(["design", str(edited)])
-    runs += [["sweep", str(base), *opts] for opts in SWEEPS]
     return runs
 
 
-def _check_sequence(runs: list[list[str]], tmp: Path, monkeypatch, warm_pass: bool = True) -> None:
+def _check_sequence(runs: list[list[str]], tmp: Path, monkeypatch, warm: Sequence[int] = ()) -> None:
     """Each run with the cache off, then with it on in one folder, in order (a run whose key an
     earlier run saved loads that program: the case a key that misses an input gets wrong, which
-    verify mode then catches), and (``warm_pass``) again in reverse order, every program loaded."""
+    verify mode then catches), then the runs numbered in ``warm`` again in reverse order, every
+    program they run loaded from the folder (each compared with its cache-off result as well)."""
     cache = tmp / "programs"
     off = [_run(argv, tmp / f"off{k}", None, monkeypatch) for k, argv in enumerate(runs)]
-    orders = [range(len(runs))] + ([reversed(range(len(runs)))] if warm_pass else [])
-    for order in orders:
-        for k in order:
-            on = _run(runs[k], tmp / f"on{k}", cache, monkeypatch)
-            diff = differences(off[k], on, ignore=TIMING_KEYS)
-            assert not diff, f"{' '.join(runs[k])}: cache on != off:\n" + "\n".join(diff[:20])
+    for k in [*range(len(runs)), *sorted(warm, reverse=True)]:
+        on = _run(runs[k], tmp / f"on{k}", cache, monkeypatch)
+        diff = differences(off[k], on, ignore=TIMING_KEYS)
+        assert not diff, f"{' '.join(runs[k])}: cache on != off:\n" + "\n".join(diff[:20])
     assert list(cache.glob(f"*{runtime.PROGRAM_SUFFIX}")), "the sequence saved no program"
-
-
 
 
 # The full sequence above runs on one follower type (FULL_SEQUENCE); every other type runs OWN_RUNS,
 # the part of it that traces the type's own code. What the rest checks does not depend on the
 # follower: the program key is computed from an entry point's arguments by the same code for every
-# type (camjax.runtime.program_key), and the solver, seed, sample count, weights and the sweep only
-# change generic entry-point arguments (static mode/solver, the PRNG keys, grid shapes, the weights'
-# batch) whose handling the full sequence checks once. A follower's code enters through what it
+# type (camjax.runtime.program_key), and the solver, seed, sample count and weights only change
+# generic entry-point arguments (static mode/solver, the PRNG keys, grid shapes, the weights' values)
+# whose handling the full sequence checks once. A follower's code enters through what it
 # traces: its problem in the solve program (the base design), its pointwise condensing (pointwise
 # mode), its sizing programs keyed by rotation (the rotation edit), its exact or grid extrema, its
 # own design variables free or fixed (the problem's tree structure: its scene edits) and its scene
@@ -199,24 +216,31 @@ FULL_SEQUENCE = "roller"
 OWN_OPTIONS = [[], ["--mode", "pointwise"]]
 
 
+def full_runs(tmp: Path) -> list[list[str]]:
+    """FULL_SEQUENCE's sequence as the matrix runs it: every option set and scene edit but two kinds
+    of run that check nothing another run does not (measured, recording each run's program keys
+    and the digests of the arguments each program ran on):
+    - the [design] block's own mode: the same programs on the same argument values as
+      ``--mode pointwise`` (the scene's common code reads the mode);
+    - the sweeps: ``camjax sweep`` runs its solves through ``jax.jit`` (camjax.solvers.sweep),
+      no saved program, so with the cache on it computes what it computes with the cache off."""
+    text, options, _ = SCENES[FULL_SEQUENCE]
+    base = tmp / f"{FULL_SEQUENCE}.toml"
+    base.write_text(text)
+    return [["design", str(base), *opts] for opts in options] + _edited_runs(FULL_SEQUENCE, tmp, every_edit=False)
+
+
 def own_runs(follower: str, tmp: Path) -> list[list[str]]:
     """The runs of ``follower`` that trace its own code (see the comment above FULL_SEQUENCE): the
-    base design, pointwise mode and each scene edit of its sequence (the [design] block's own mode
-    left out: the same solve program as ``--mode pointwise``, read by the scene's common code);
-    a type without a sequence, its built-in example scene's (:func:`example_runs`)."""
+    base design, pointwise mode and each scene edit of its sequence (those that run no program on
+    values another run does not left out: :func:`_edited_runs`); a type without a sequence, its
+    built-in example scene's (:func:`example_runs`)."""
     if follower not in SCENES:
         return example_runs(follower, tmp)
-    text, _, edits = SCENES[follower]
     base = tmp / f"{follower}.toml"
-    base.write_text(text)
+    base.write_text(SCENES[follower][0])
     runs = [["design", str(base), *opts] for opts in OWN_OPTIONS]
-    for k, (old, new) in enumerate(edits):
-        if new.startswith("mode ="):
-            continue
-        edited = tmp / f"{follower}-edit{k}.toml"
-        edited.write_text(_edit(text, (old, new)))
-        runs.append(["design", str(edited)])
-    return runs
+    return runs + _edited_runs(follower, tmp, every_edit=False)
 
 
 def example_runs(follower: str, tmp: Path) -> list[list[str]]:
@@ -240,7 +264,23 @@ def example_runs(follower: str, tmp: Path) -> list[list[str]]:
     return runs
 
 
+# The quick sequence: QUICK_SEQUENCE's own runs and the runs a stale cache once got wrong (a GA run
+# after another seed's; a pointwise run after a global one is among the own runs), those four then
+# again in reverse order, every program loaded (tests/test_cache_matrix.py). It holds that type's
+# own runs: the type is not in tests/test_cache_matrix_types_*.py.
+QUICK_SEQUENCE = "flat"
+QUICK_OPTIONS = [["--solver", "ga", "--seed", "7"], ["--solver", "ga"]]
+
+
+def quick_runs(tmp: Path) -> tuple[list[list[str]], list[int]]:
+    """(runs, the numbers of those run again warm) of the quick sequence (see above)."""
+    runs = own_runs(QUICK_SEQUENCE, tmp)
+    base = runs[0]
+    return runs + [[*base, *opts] for opts in QUICK_OPTIONS], [0, 1, len(runs), len(runs) + 1]
+
+
 def followers_share(part: int, parts: int) -> list[str]:
-    """Every registered follower type but FULL_SEQUENCE, dealt into ``parts`` files (a new type's
-    folder is covered without editing a test)."""
-    return [name for name in followers.names() if name != FULL_SEQUENCE][part::parts]
+    """Every registered follower type but FULL_SEQUENCE's and QUICK_SEQUENCE's, dealt into ``parts``
+    files (a new type's folder is covered without editing a test)."""
+    own = [name for name in followers.names() if name not in (FULL_SEQUENCE, QUICK_SEQUENCE)]
+    return own[part::parts]

@@ -1,37 +1,28 @@
 """The saved-program cache against the cache off (tests/cache_matrix.py says how): the full
-sequence of one follower type, the quick share of the flat face's, and the dynamics command.
-Every other follower type's own runs: tests/test_cache_matrix_types_*.py."""
+sequence of one follower type, the quick sequence of another (its own runs among them), and the
+dynamics command. Every other follower type's own runs: tests/test_cache_matrix_types_*.py."""
 
 from __future__ import annotations
 
 import pytest
-from cache_matrix import (
-    FULL_SEQUENCE,
-    SCENES,
-    _check_sequence,
-    _edit,
-    _runs,
-)
-
-QUICK = {"flat": [["design", "{scene}"], ["design", "{scene}", "--mode", "pointwise"],
-                  ["design", "{scene}", "--solver", "ga", "--seed", "7"], ["design", "{scene}", "--solver", "ga"]]}
+from cache_matrix import _check_sequence, _edit, full_runs, quick_runs
 
 
 @pytest.mark.slow
 def test_flat_face_mode_solver_and_seed_never_reuse_another_runs_program(tmp_path, quiet_files, monkeypatch):
     """The runs the stale cache got wrong (a pointwise run after a global one, a GA run after
-    another seed), in one folder, then again in reverse order with every program loaded."""
-    scene = tmp_path / "flat.toml"
-    scene.write_text(SCENES["flat"][0])
-    runs = [[a.format(scene=scene) for a in argv] for argv in QUICK["flat"]]
-    _check_sequence(runs, tmp_path, monkeypatch)
+    another seed), in one folder with the type's own runs, then again in reverse order with every
+    program loaded."""
+    runs, warm = quick_runs(tmp_path)
+    _check_sequence(runs, tmp_path, monkeypatch, warm)
 
 
 @pytest.mark.slow
 def test_every_option_scene_edit_and_sweep_gives_the_cache_off_result(tmp_path, quiet_files, monkeypatch):
     # one pass in order: every program saved by an earlier run of the sequence is loaded by the
-    # later runs that share its key (the flat face's test above adds the reverse, all-warm pass)
-    _check_sequence(_runs(FULL_SEQUENCE, tmp_path), tmp_path, monkeypatch, warm_pass=False)
+    # later runs that share its key (the flat face's test above adds the reverse, all-warm pass;
+    # cache_matrix.full_runs: the runs of the sequence left out, and why)
+    _check_sequence(full_runs(tmp_path), tmp_path, monkeypatch)
 
 
 @pytest.mark.slow
@@ -39,12 +30,14 @@ def test_dynamics_with_its_scene_edited_gives_the_cache_off_result(tmp_path, mon
     from camjax.scene import builtin_scene_text
 
     text = builtin_scene_text("thesis-bench")
-    compute = 'compute = ["compensation", "robustness", "time_domain", "drive", "nonlinear", "jump", "shaping"]'
-    edits = [None, (compute, 'compute = ["compensation", "jump", "shaping"]'), ("I3 = 0.357", "I3 = 0.394"),
-             ("samples = 360", "samples = 240"), ("rpm = 177.6", "rpm = 160.0")]
+    # two edits left out run the same programs on the same argument values as the scene itself
+    # (measured: each run's program keys and the digests of the arguments each program ran on):
+    # fewer outputs in `compute` (a subset of its programs) and other [motion] samples (the
+    # dynamics runs on a grid of its own)
+    edits = [None, ("I3 = 0.357", "I3 = 0.394"), ("rpm = 177.6", "rpm = 160.0")]
     runs = []
     for k, edit in enumerate(edits):
         path = tmp_path / f"bench{k}.toml"
         path.write_text(text if edit is None else _edit(text, edit))
         runs.append(["dynamics", str(path)])
-    _check_sequence(runs, tmp_path, monkeypatch)
+    _check_sequence(runs, tmp_path, monkeypatch, range(len(runs)))

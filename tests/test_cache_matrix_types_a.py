@@ -8,4 +8,4 @@ from cache_matrix import _check_sequence, followers_share, own_runs
 @pytest.mark.slow
 @pytest.mark.parametrize("follower", followers_share(0, 2))
 def test_the_types_own_runs_give_the_cache_off_result(follower, tmp_path, quiet_files, monkeypatch):
-    _check_sequence(own_runs(follower, tmp_path), tmp_path, monkeypatch, warm_pass=False)
+    _check_sequence(own_runs(follower, tmp_path), tmp_path, monkeypatch)

@@ -210,6 +210,35 @@ def test_verify_mode_catches_a_trace_that_reads_state_outside_its_key(tmp_path, 
         runtime.use_program_cache(None)
 
 
+TRACES: list = []  # one entry per trace of _counted
+
+
+def _counted(pair: Pair):
+    TRACES.append(1)  # runs while tracing only
+    return pair.a * pair.b
+
+
+counted = runtime.program_cache(_counted)
+
+
+def test_verify_mode_traces_each_program_read_from_the_folder_once(tmp_path):
+    """Verify mode traces a program again when it is read from the folder (to compare it), not at
+    every call: a program this process exported or compared already runs as it is."""
+    runtime.use_program_cache(tmp_path, verify=True)
+    try:
+        pair = _args()[0]
+        TRACES.clear()
+        for _ in range(3):
+            _same(counted(pair), pair.a * pair.b)
+        assert len(TRACES) == 1  # exported on the first call, run as it is by the next two
+        runtime._LOADED.clear()  # as a fresh process
+        for _ in range(3):
+            _same(counted(Pair(pair.a, 2 * pair.b)), 2 * pair.a * pair.b)
+        assert len(TRACES) == 2  # read from the folder and traced once to compare
+    finally:
+        runtime.use_program_cache(None)
+
+
 def test_the_key_holds_static_values_structure_shapes_dtypes_and_jax_options():
     half = jnp.asarray(0.5, jnp.float64)  # not weak-typed (a Python float is)
     static, dynamic = {"power": 2}, {"pair": Pair(jnp.zeros(7), half)}

@@ -8,7 +8,7 @@ number, one after, and compare them with ``python validation/compare_results.py 
 
 The cases: each built-in scene through ``design`` (and ``dynamics`` where it has [dynamics]), the
 reference case in pointwise mode and with every solver, a sweep, and the scenes of the cache
-matrix (``tests/test_cache_matrix.py``: every follower type with each option and scene edit).
+matrix (``tests/cache_matrix.py``: every follower type with each option and scene edit).
 """
 
 from __future__ import annotations
@@ -26,7 +26,7 @@ ROOT = Path(__file__).resolve().parents[1]
 def cases(tmp: Path) -> dict[str, list[str]]:
     """Case name -> CLI arguments (without --out); scene files written into ``tmp``."""
     sys.path.insert(0, str(ROOT / "tests"))
-    import test_cache_matrix as matrix
+    import cache_matrix as matrix
 
     out = {
         "default": ["design"], "default-pointwise": ["design", "--mode", "pointwise"],
