@@ -46,8 +46,9 @@ class SearchResult(NamedTuple):
 def bfgs(cd: Codesign, z0, f0: float, inner0: Inner, max_iterations: int = MAX_ITERATIONS,
          gtol: float = 1e-9, ftol: float = 1e-12) -> tuple[np.ndarray, float, Inner, int, list]:
     """BFGS with Armijo backtracking on F (inverse Hessian started at the identity scaled by the
-    first step). Stops on a small gradient, no decrease, or ``max_iterations``; returns z, F, the
-    inner optimum, the number of accepted steps and F after each."""
+    first step), each trial's inner solve from the inner optimum at z. Stops on a small gradient,
+    no decrease, or ``max_iterations``; returns z, F, the inner optimum, the number of accepted
+    steps and F after each."""
     z, f, inner = np.asarray(z0, dtype=np.float64), f0, inner0
     g = cd.gradient(z, inner)
     H = None
@@ -63,7 +64,7 @@ def bfgs(cd: Codesign, z0, f0: float, inner0: Inner, max_iterations: int = MAX_I
         accepted = False
         for _ in range(30):
             zn = z + step * p
-            fn, innern = cd.value(zn)
+            fn, innern = cd.value(zn, inner.design)  # warm: from z's inner optimum
             if fn <= f + 1e-4 * step * slope:
                 accepted = True
                 break
