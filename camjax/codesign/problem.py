@@ -74,6 +74,7 @@ from camjax.synthesis.vibration import residual_maps
 # the [synthesis] terms the co-design takes: quadratics in z, and the peaks as smooth maxima
 SUPPORTED = ALL_OBJECTIVES
 ACTIVE_RTOL = 1e-7  # a constraint is active within this fraction of the problem's size norm
+RATE_TIE_RTOL = 1e-9  # best_rate: objectives this close (relative) tie (inner solves repeat to ~1e-12)
 
 
 class CodesignError(ValueError):
@@ -285,8 +286,10 @@ class Codesign:
         """The rate (as u) with the least objective on fixed kinematics ``kin4``: ``count`` rates
         geometric over the box, then golden-section search in log k between the best one's
         neighbours (``refine`` intervals, each inside the last by the golden ratio; one solve
-        each, the other interior point kept), each solve from the best geometry so far (Python;
-        a fixed rate: the inner optimum at it)."""
+        each, the other interior point kept), each solve from the best geometry so far. Objectives
+        within :data:`RATE_TIE_RTOL` are a tie, won by the softer spring (F is often flat in the
+        rate near the box's low end; which rate wins there would be the inner solve's rounding).
+        Python; a fixed rate: the inner optimum at it."""
         if self.u0 is None:
             return 0.0, self.inner(kin4)
         lo, hi = (math.log(v) for v in self.spring.rate)
@@ -296,7 +299,8 @@ class Codesign:
 
         ts = np.linspace(0.0, 1.0, count)
         inners = [self.inner(kin4, u_at(t)) for t in ts]
-        i = int(np.argmin([inn.objective for inn in inners]))
+        fs = np.asarray([inn.objective for inn in inners])
+        i = int(np.argmax(fs <= fs.min() + RATE_TIE_RTOL * abs(fs.min()))) if np.isfinite(fs.min()) else 0
         best = (u_at(ts[i]), inners[i])
         if not np.isfinite(best[1].objective):
             return best
@@ -306,7 +310,7 @@ class Codesign:
         def solved(t):  # from the best geometry so far: a neighbouring rate's (a warm start)
             nonlocal best
             inn = self.inner(kin4, u_at(t), best[1].design)
-            if inn.objective < best[1].objective:
+            if inn.objective < best[1].objective - RATE_TIE_RTOL * abs(best[1].objective):
                 best = (u_at(t), inn)
             return inn.objective
 
