@@ -21,7 +21,8 @@ when it is None).
 - **Inner**: the registered interior-point solver (:data:`INNER_SOLVER`, its KKT residual to
   1e-12) on the grid (``extrema = "grid"``: the problem is a pytree of arrays whose kinematic
   fields are functions of z); the outer search's solves start from the inner optimum of the point
-  it moves from (a continuation: the outer steps are small).
+  it moves from (a continuation: the outer steps are small). The scenes the joint program takes
+  keep the gradient solver (:data:`JOINT_INNER_SOLVER`).
 - **Compiled once per shape**: the pieces are module-level programs whose static argument is the
   :class:`ProblemShape` (what the family's problem reads of the scene, compared by value) and whose
   weights, kinematics and spring are arrays: every z, every weighting of a sweep and every spring
@@ -176,6 +177,8 @@ class Codesign:
             self.law_P, self.law_q, self.law_c = self.law_P + P, self.law_q + q, self.law_c + c
         self.weights = weights_of(scene.design.alpha, scene.design.gamma)
         self.shape = ProblemShape.of(grid, self.spring)
+        # the joint program's scenes (no designed spring, no peak terms) keep its inner solver
+        self.inner_solver = JOINT_INNER_SOLVER if self.spring is None and self.peaks is None else INNER_SOLVER
         self.evaluations = 0
         self.builtin_cache: dict = {} if builtin_cache is None else builtin_cache
 
@@ -209,7 +212,8 @@ class Codesign:
     def _inner(self, kin4, spring, start=None):
         """(F, design, feasible) of the inner optimum on ``kin4`` with ``spring`` (None: the scene's),
         solved from the design ``start`` (mm; None: the solver's own start)."""
-        return _inner_program(self.shape, self.theta, jnp.asarray(kin4), spring, self.weights, start)
+        return _inner_program(self.inner_solver, self.shape, self.theta, jnp.asarray(kin4), spring,
+                              self.weights, start)
 
     def _local(self, kin4, spring, design):
         """The objective and every angle's constraints at ``design``, their Jacobian in the design,
@@ -240,7 +244,8 @@ class Codesign:
         """The geometry optimum on ``kin4``; with a designed spring at the rate of ``u`` (default
         the start's) and the optimal preload, +inf where no preload in the box keeps contact.
         ``start``: the design (mm) the solve starts from (a warm start: a nearby inner optimum;
-        None: the solver's own start)."""
+        None: the solver's own start), taken by the interior-point solver only (the gradient
+        solver's Rprop restarts with its full step from any start: no step saved)."""
         self.evaluations += 1
         spring = None
         if self.spring is not None:
@@ -251,6 +256,7 @@ class Codesign:
             high = self.spring.preload[1]
             if not need <= high + spring_mod.PRELOAD_TOL * max(1.0, abs(high)):
                 return Inner(math.inf, None, False, spring)
+        start = start if self.inner_solver == INNER_SOLVER else None
         f, d, ok = jax.device_get(self._inner(kin4, spring, start))
         return Inner(float(f) if bool(ok) and np.isfinite(f) else math.inf, d, bool(ok), spring)
 
@@ -355,6 +361,13 @@ class Codesign:
 # the outer line search then spent most of its trials on; 3.5 x the CPU per solve
 INNER_SOLVER = "newton"
 INNER_SETTINGS = Settings.of_solvers(newton=NewtonSettings(tol=1e-12, line_search_trials=12))
+# the inner solve of a co-design the joint program takes (camjax.codesign.joint: no designed spring,
+# no peak terms): the gradient solver, as before the bilevel search took the interior-point one. Its
+# solves there are few (the built-in floor, the start, the end: 68 of the `codesign` scene's 43 CPU
+# s), and the joint solve runs from the start's geometry to its evaluation cap (24,000 on that
+# scene), so the start's last digits move its end: with the interior-point solver the scene's
+# objective moved 0.41884 -> 0.41908 (R_b 15.67 -> 15.97 mm) for no time saved
+JOINT_INNER_SOLVER = "gradient"
 
 
 class ProblemShape:
@@ -408,18 +421,18 @@ def _spring_fn(box, kin4, u):
 _spring_program = jax.jit(_spring_fn, static_argnums=0)
 
 
-def inner_solve(problem, weights, start=None):
-    """(F, design, feasible): the geometry optimum of a grid problem by :data:`INNER_SOLVER` from
+def inner_solve(problem, weights, start=None, solver: str = INNER_SOLVER):
+    """(F, design, feasible): the geometry optimum of a grid problem by ``solver`` from
     ``start`` (a design, mm; None: the solver's own start), judged by the family's evaluation (on
     the grid: a solution's polish moves nothing without exact extrema). Traceable."""
-    raw = solver_module(INNER_SOLVER).run_one(problem, weights, jax.random.key(0), INNER_SETTINGS, start)
+    raw = solver_module(solver).run_one(problem, weights, jax.random.key(0), INNER_SETTINGS, start)
     ev = family_of(problem).evaluate(problem, weights, raw.design)
     return ev.objective, raw.design, ev.feasible
 
 
-@partial(jax.jit, static_argnums=0)
-def _inner_program(shape: ProblemShape, theta, kin4, spring, weights, start):
-    return inner_solve(shape.problem(theta, kin4, spring), weights, start)
+@partial(jax.jit, static_argnums=(0, 1))
+def _inner_program(solver: str, shape: ProblemShape, theta, kin4, spring, weights, start):
+    return inner_solve(shape.problem(theta, kin4, spring), weights, start, solver)
 
 
 @partial(jax.jit, static_argnums=0)
