@@ -45,8 +45,8 @@ class SearchResult(NamedTuple):
 
 def bfgs(cd: Codesign, z0, f0: float, inner0: Inner, max_iterations: int = MAX_ITERATIONS,
          gtol: float = 1e-9, ftol: float = 1e-12) -> tuple[np.ndarray, float, Inner, int, list]:
-    """BFGS with Armijo backtracking on F (:func:`backtrack`; inverse Hessian started at the
-    identity scaled by the first step), each trial's inner solve from the inner optimum at z.
+    """BFGS with Armijo backtracking on F (inverse Hessian started at the identity scaled by the
+    first step), each trial's inner solve from the inner optimum at z.
     Stops on a small gradient, no decrease, or ``max_iterations``; returns z, F, the inner
     optimum, the number of accepted steps and F after each."""
     z, f, inner = np.asarray(z0, dtype=np.float64), f0, inner0
@@ -61,15 +61,14 @@ def bfgs(cd: Codesign, z0, f0: float, inner0: Inner, max_iterations: int = MAX_I
         if slope >= 0.0:  # not a descent direction: restart from steepest descent
             H, p, slope = None, -g, -float(g @ g)
         step = 1.0 if H is not None else min(1.0, 0.1 / max(np.linalg.norm(g, np.inf), 1e-300))
-        least = step * 0.5**29  # the smallest step tried (30 halvings' worth)
         accepted = False
-        while step >= least:
+        for _ in range(30):
             zn = z + step * p
             fn, innern = cd.value(zn, inner.design)  # warm: from z's inner optimum
             if fn <= f + 1e-4 * step * slope:
                 accepted = True
                 break
-            step = backtrack(step, slope, f, fn)
+            step *= 0.5
         if not accepted:
             if H is None:
                 break
@@ -90,18 +89,6 @@ def bfgs(cd: Codesign, z0, f0: float, inner0: Inner, max_iterations: int = MAX_I
         if decrease <= ftol * max(1.0, abs(f)):
             break
     return z, f, inner, len(history) - 1, history
-
-
-def backtrack(step: float, slope: float, f: float, f_step: float) -> float:
-    """The next step length after ``step`` failed the Armijo test: the minimizer of the quadratic
-    through F (``f``), the slope along the direction and F at the step (``f_step``), kept within
-    [0.1, 0.5] x ``step``; half the step where F there is +inf (an infeasible inner problem) or the
-    quadratic has no minimum. Where a step overshoots by far (a kink of F: the inner optimum's
-    binding angle changes), it shrinks by 10 at once instead of by 2 per trial."""
-    curvature = f_step - f - step * slope
-    if not (np.isfinite(f_step) and curvature > 0.0):
-        return 0.5 * step
-    return min(max(-slope * step**2 / (2.0 * curvature), 0.1 * step), 0.5 * step)
 
 
 def search(cd: Codesign, x0, f0: float, inner0: Inner, max_iterations: int = MAX_ITERATIONS):
