@@ -265,7 +265,7 @@ def solve(problem: JointProblem, start: JointDesign, settings=SETTINGS, solver: 
     ``ga`` (the GA, ``ga_settings`` (default its own), PRNG ``key``, its population seeded with the
     start: by elitism never worse than it) or ``hybrid`` (that GA, then the gradient solver from its
     best). Iterations: the GA's generations plus the gradient solver's evaluations."""
-    from camjax.codesign.problem import inner_solve
+    from camjax.codesign.problem import JOINT_INNER_SOLVER, inner_solve
     from camjax.solvers import ga
 
     steps = jnp.asarray(0)
@@ -280,7 +280,7 @@ def solve(problem: JointProblem, start: JointDesign, settings=SETTINGS, solver: 
         design, refine_steps, _ = gradient.refine_bfgs(problem, problem.weights, u, settings)
         steps = steps + refine_steps
     base = base_problem(problem, design)
-    objective, geometry, feasible = inner_solve(base, problem.weights)
+    objective, geometry, feasible = inner_solve(base, problem.weights, solver=JOINT_INNER_SOLVER)
     f = objective + law_value(problem, design.laws)
     width = problem.upper.laws - problem.lower.laws
     at_box = jnp.any((design.laws - problem.lower.laws <= AT_BOX_RTOL * width)

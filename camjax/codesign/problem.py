@@ -18,8 +18,11 @@ functions of z, not smooth), which the search takes as smooth maxima sharpened b
 (:mod:`camjax.codesign.peaks`: :attr:`Codesign.taus` set, their gradient added; the exact maxima
 when it is None).
 
-- **Inner**: the registered gradient solver (:data:`INNER_SOLVER`) on the grid (``extrema =
-  "grid"``: the problem is a pytree of arrays whose kinematic fields are functions of z).
+- **Inner**: the registered interior-point solver (:data:`INNER_SOLVER`, its KKT residual to
+  1e-12) on the grid (``extrema = "grid"``: the problem is a pytree of arrays whose kinematic
+  fields are functions of z); the outer search's solves start from the inner optimum of the point
+  it moves from (a continuation: the outer steps are small). The scenes the joint program takes
+  keep the gradient solver (:data:`JOINT_INNER_SOLVER`).
 - **Compiled once per shape**: the pieces are module-level programs whose static argument is the
   :class:`ProblemShape` (what the family's problem reads of the scene, compared by value) and whose
   weights, kinematics and spring are arrays: every z, every weighting of a sweep and every spring
@@ -64,6 +67,7 @@ from camjax.evaluate import arrays_from_kinematics, scene_arrays
 from camjax.family import weights_of
 from camjax.program import Kinematics
 from camjax.solvers.base import Settings, family_of, problem_from_scene, solver_module
+from camjax.solvers.newton import NewtonSettings
 from camjax.synthesis.linear import law_quadratics, linear_kinematics
 from camjax.synthesis.problem import ALL_OBJECTIVES, L2_OBJECTIVES
 from camjax.synthesis.vibration import residual_maps
@@ -71,6 +75,7 @@ from camjax.synthesis.vibration import residual_maps
 # the [synthesis] terms the co-design takes: quadratics in z, and the peaks as smooth maxima
 SUPPORTED = ALL_OBJECTIVES
 ACTIVE_RTOL = 1e-7  # a constraint is active within this fraction of the problem's size norm
+RATE_TIE_RTOL = 1e-9  # best_rate: objectives this close (relative) tie (inner solves repeat to ~1e-12)
 
 
 class CodesignError(ValueError):
@@ -172,6 +177,8 @@ class Codesign:
             self.law_P, self.law_q, self.law_c = self.law_P + P, self.law_q + q, self.law_c + c
         self.weights = weights_of(scene.design.alpha, scene.design.gamma)
         self.shape = ProblemShape.of(grid, self.spring)
+        # the joint program's scenes (no designed spring, no peak terms) keep its inner solver
+        self.inner_solver = JOINT_INNER_SOLVER if self.spring is None and self.peaks is None else INNER_SOLVER
         self.evaluations = 0
         self.builtin_cache: dict = {} if builtin_cache is None else builtin_cache
 
@@ -202,9 +209,11 @@ class Codesign:
         """(4, samples) kinematics of the coordinates z (traceable)."""
         return _kinematics(self.kin0, self.jacobian, self.lin.z0, z)
 
-    def _inner(self, kin4, spring):
-        """(F, design, feasible) of the inner optimum on ``kin4`` with ``spring`` (None: the scene's)."""
-        return _inner_program(self.shape, self.theta, jnp.asarray(kin4), spring, self.weights, None)
+    def _inner(self, kin4, spring, start=None):
+        """(F, design, feasible) of the inner optimum on ``kin4`` with ``spring`` (None: the scene's),
+        solved from the design ``start`` (mm; None: the solver's own start)."""
+        return _inner_program(self.inner_solver, self.shape, self.theta, jnp.asarray(kin4), spring,
+                              self.weights, start)
 
     def _local(self, kin4, spring, design):
         """The objective and every angle's constraints at ``design``, their Jacobian in the design,
@@ -231,9 +240,12 @@ class Codesign:
                       peaks_mod.smooth_value(self.peaks, z, self.taus)[0])
         return value
 
-    def inner(self, kin4, u=None) -> Inner:
+    def inner(self, kin4, u=None, start=None) -> Inner:
         """The geometry optimum on ``kin4``; with a designed spring at the rate of ``u`` (default
-        the start's) and the optimal preload, +inf where no preload in the box keeps contact."""
+        the start's) and the optimal preload, +inf where no preload in the box keeps contact.
+        ``start``: the design (mm) the solve starts from (a warm start: a nearby inner optimum;
+        None: the solver's own start), taken by the interior-point solver only (the gradient
+        solver's Rprop restarts with its full step from any start: no step saved)."""
         self.evaluations += 1
         spring = None
         if self.spring is not None:
@@ -244,13 +256,15 @@ class Codesign:
             high = self.spring.preload[1]
             if not need <= high + spring_mod.PRELOAD_TOL * max(1.0, abs(high)):
                 return Inner(math.inf, None, False, spring)
-        f, d, ok = jax.device_get(self._inner(kin4, spring))
+        start = start if self.inner_solver == INNER_SOLVER else None
+        f, d, ok = jax.device_get(self._inner(kin4, spring, start))
         return Inner(float(f) if bool(ok) and np.isfinite(f) else math.inf, d, bool(ok), spring)
 
-    def value(self, x) -> tuple[float, Inner]:
-        """F(x) and the inner optimum (x: the laws' z, then u for a free rate)."""
+    def value(self, x, start=None) -> tuple[float, Inner]:
+        """F(x) and the inner optimum (x: the laws' z, then u for a free rate); ``start``: the
+        inner solve's start (:meth:`inner`)."""
         z, u = self.split(np.asarray(x, dtype=np.float64))
-        inner = self.inner(self.kinematics(z), u)
+        inner = self.inner(self.kinematics(z), u, start)
         return inner.objective + self.law_value(x), inner
 
     def gradient(self, x, inner: Inner) -> np.ndarray:
@@ -277,7 +291,11 @@ class Codesign:
     def best_rate(self, kin4, count: int = 9, refine: int = 12) -> tuple[float, Inner]:
         """The rate (as u) with the least objective on fixed kinematics ``kin4``: ``count`` rates
         geometric over the box, then golden-section search in log k between the best one's
-        neighbours (Python; a fixed rate: the inner optimum at it)."""
+        neighbours (``refine`` intervals, each inside the last by the golden ratio; one solve
+        each, the other interior point kept), each solve from the best geometry so far. Objectives
+        within :data:`RATE_TIE_RTOL` are a tie, won by the softer spring (F is often flat in the
+        rate near the box's low end; which rate wins there would be the inner solve's rounding).
+        Python; a fixed rate: the inner optimum at it."""
         if self.u0 is None:
             return 0.0, self.inner(kin4)
         lo, hi = (math.log(v) for v in self.spring.rate)
@@ -287,22 +305,32 @@ class Codesign:
 
         ts = np.linspace(0.0, 1.0, count)
         inners = [self.inner(kin4, u_at(t)) for t in ts]
-        i = int(np.argmin([inn.objective for inn in inners]))
+        fs = np.asarray([inn.objective for inn in inners])
+        i = int(np.argmax(fs <= fs.min() + RATE_TIE_RTOL * abs(fs.min()))) if np.isfinite(fs.min()) else 0
         best = (u_at(ts[i]), inners[i])
         if not np.isfinite(best[1].objective):
             return best
         a, b = ts[max(i - 1, 0)], ts[min(i + 1, count - 1)]
         ratio = (math.sqrt(5.0) - 1.0) / 2.0
-        for _ in range(refine):
-            c, d = b - ratio * (b - a), a + ratio * (b - a)
-            ic, id_ = self.inner(kin4, u_at(c)), self.inner(kin4, u_at(d))
-            for t, inn in ((c, ic), (d, id_)):
-                if inn.objective < best[1].objective:
-                    best = (u_at(t), inn)
-            if ic.objective <= id_.objective:
-                b = d
+
+        def solved(t):  # from the best geometry so far: a neighbouring rate's (a warm start)
+            nonlocal best
+            inn = self.inner(kin4, u_at(t), best[1].design)
+            if inn.objective < best[1].objective - RATE_TIE_RTOL * abs(best[1].objective):
+                best = (u_at(t), inn)
+            return inn.objective
+
+        c, d = b - ratio * (b - a), a + ratio * (b - a)
+        fc, fd = solved(c), solved(d)
+        for _ in range(refine - 1):  # one interior point kept: one new solve per shrink
+            if fc <= fd:
+                b, d, fd = d, c, fc
+                c = b - ratio * (b - a)
+                fc = solved(c)
             else:
-                a = c
+                a, c, fc = c, d, fd
+                d = a + ratio * (b - a)
+                fd = solved(d)
         return best
 
     def gradient_fd(self, z, h: float = 1e-5) -> np.ndarray:
@@ -322,13 +350,24 @@ class Codesign:
 # spring), so a sweep's weightings and the co-designs of one scene with other spring boxes reuse the
 # programs of the first.
 
-# the inner geometry solve: the gradient solver. The interior-point solver ("newton", its KKT
-# residual to 1e-12, from the inner optimum on the starting laws) was measured against it: the same
-# optima to 1e-12 relative on the tests' inner problems, 1.5 to 5 x less CPU per solve, but the
-# outer searches, sensitive to the last digits of F, then ended elsewhere (tests/test_codesign_spring.py:
-# a free rate 0.7 % above a fixed one; the `codesign` scene 0.12 % above), so it is not used yet
-INNER_SOLVER = "gradient"
-INNER_SETTINGS = Settings()
+# the inner geometry solve: the registered interior-point solver, its scaled KKT residual driven to
+# 1e-12 (its default 1e-9 leaves F ~5e-10 relative above the optimum; the envelope gradient is
+# checked against central differences of F with h = 1e-5, which amplify that scatter by 1e5), 12
+# trial step lengths (of 30 by default: the same steps on the co-designs' inner problems in 2/3 of
+# the time). The search's solves start warm, from the inner optimum of the point it moves from
+# (:meth:`Codesign.value`'s ``start``): ~10 Newton steps where the solver's own start takes ~25.
+# The gradient solver (Rprop to its 1000-step cap, then its BFGS refinement: ~1,050 steps a solve)
+# gave the same optima but F only to ~3e-9 relative between two solves of one problem, the noise
+# the outer line search then spent most of its trials on; 3.5 x the CPU per solve
+INNER_SOLVER = "newton"
+INNER_SETTINGS = Settings.of_solvers(newton=NewtonSettings(tol=1e-12, line_search_trials=12))
+# the inner solve of a co-design the joint program takes (camjax.codesign.joint: no designed spring,
+# no peak terms): the gradient solver, as before the bilevel search took the interior-point one. Its
+# solves there are few (the built-in floor, the start, the end: 68 of the `codesign` scene's 43 CPU
+# s), and the joint solve runs from the start's geometry to its evaluation cap (24,000 on that
+# scene), so the start's last digits move its end: with the interior-point solver the scene's
+# objective moved 0.41884 -> 0.41908 (R_b 15.67 -> 15.97 mm) for no time saved
+JOINT_INNER_SOLVER = "gradient"
 
 
 class ProblemShape:
@@ -382,18 +421,18 @@ def _spring_fn(box, kin4, u):
 _spring_program = jax.jit(_spring_fn, static_argnums=0)
 
 
-def inner_solve(problem, weights, start=None):
-    """(F, design, feasible): the geometry optimum of a grid problem by :data:`INNER_SOLVER` from
+def inner_solve(problem, weights, start=None, solver: str = INNER_SOLVER):
+    """(F, design, feasible): the geometry optimum of a grid problem by ``solver`` from
     ``start`` (a design, mm; None: the solver's own start), judged by the family's evaluation (on
     the grid: a solution's polish moves nothing without exact extrema). Traceable."""
-    raw = solver_module(INNER_SOLVER).run_one(problem, weights, jax.random.key(0), INNER_SETTINGS, start)
+    raw = solver_module(solver).run_one(problem, weights, jax.random.key(0), INNER_SETTINGS, start)
     ev = family_of(problem).evaluate(problem, weights, raw.design)
     return ev.objective, raw.design, ev.feasible
 
 
-@partial(jax.jit, static_argnums=0)
-def _inner_program(shape: ProblemShape, theta, kin4, spring, weights, start):
-    return inner_solve(shape.problem(theta, kin4, spring), weights, start)
+@partial(jax.jit, static_argnums=(0, 1))
+def _inner_program(solver: str, shape: ProblemShape, theta, kin4, spring, weights, start):
+    return inner_solve(shape.problem(theta, kin4, spring), weights, start, solver)
 
 
 @partial(jax.jit, static_argnums=0)
