@@ -264,7 +264,8 @@ def pytest_runtest_protocol(item, nextitem):
 # loop, ``-m "not slow"``), the longest first, so that the short files fill the end, and xdist's
 # reordering is turned off. A file not recorded counts 0.6 s a test. ``--file-durations=PATH``
 # writes each file's seconds (every phase of every test) of this run into PATH's table for this
-# run's ``-m`` expression, to refresh the record from a run of the whole suite or of the quick loop.
+# run's ``-m`` expression, to refresh the record from a run of the whole suite or of the quick loop;
+# every run also keeps its table in pytest's cache (.pytest_cache/v/camjax/file-durations/).
 
 FILE_DURATIONS = Path(__file__).with_name("file_durations.json")
 _SECONDS_BY_FILE: dict = {}
@@ -309,8 +310,14 @@ def _record_file_seconds(report) -> None:
 
 
 def pytest_sessionfinish(session, exitstatus):
+    if not _SECONDS_BY_FILE or os.environ.get("PYTEST_XDIST_WORKER"):
+        return
+    table = {p: round(s, 1) for p, s in sorted(_SECONDS_BY_FILE.items())}
+    cache = getattr(session.config, "cache", None)
+    if cache is not None:  # every run's own figures, to refresh the record from (e.g. after CI)
+        cache.set(f"camjax/file-durations/{_table_name(session.config)}", table)
     target = session.config.getoption("file_durations", None)
-    if target and _SECONDS_BY_FILE and not os.environ.get("PYTEST_XDIST_WORKER"):
+    if target:
         tables = _read_durations(Path(target))
-        tables[_table_name(session.config)] = {p: round(s, 1) for p, s in sorted(_SECONDS_BY_FILE.items())}
+        tables[_table_name(session.config)] = table
         Path(target).write_text(json.dumps(tables, indent=1) + "\n")
