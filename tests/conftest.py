@@ -47,6 +47,11 @@ def _persistent_compilation_cache(config) -> None:
     # compiles a module of its own, which would add a compile per scene shape to a fresh run;
     # tests/test_runtime.py and the CLI tests marked for it turn the program cache on themselves.
     os.environ.setdefault("CAMJAX_PROGRAM_CACHE", "0")
+    # The CLI tests draw their figures in the test's own process: a drawing process imports NumPy,
+    # matplotlib and ezdxf afresh (~0.8 CPU s, two per design), where the test worker imports them
+    # once. tests/test_cli.py's design run draws in processes, as the command does by default, and
+    # tests/test_export.py checks the processes' files against the in-process ones byte for byte.
+    os.environ.setdefault("CAMJAX_DRAWING_PROCESSES", "0")
     cache = getattr(config, "cache", None)
     if os.environ.get("CAMJAX_COMPILATION_CACHE") == "0" or cache is None:
         os.environ["CAMJAX_COMPILATION_CACHE"] = "0"

@@ -23,10 +23,13 @@ def _strict_json(path):
 
 @pytest.fixture(scope="session")
 def design_run(tmp_path_factory):
-    """`camjax design --out DIR` on the default scene, in process, without the disk cache."""
+    """`camjax design --out DIR` on the default scene, in process, without the disk cache, its
+    figures and DXF drawn in two processes of their own as the command draws them by default (the
+    other CLI tests draw in the test's process: tests/conftest.py)."""
     out = tmp_path_factory.mktemp("design") / "out"
     with pytest.MonkeyPatch.context() as mp:
         mp.setenv("CAMJAX_COMPILATION_CACHE", "0")
+        mp.setenv("CAMJAX_DRAWING_PROCESSES", "2")
         rc = cli.main(["design", "--out", str(out), "--dpi", "40"])
     return rc, out
 
