@@ -7,6 +7,7 @@ shares one cache.
 
 from __future__ import annotations
 
+import contextlib
 import os
 from pathlib import Path
 from typing import Any, NamedTuple
@@ -62,10 +63,65 @@ def use_cpu_xla_flags(flags: tuple[str, ...] = CPU_XLA_FLAGS) -> None:
 
 
 def enable_caches() -> None:
-    """What the command line turns on before its first computation: the compilation cache and the
-    program cache (:func:`enable_program_cache`)."""
+    """What the command line turns on before its first computation: the compilation cache, the
+    program cache (:func:`enable_program_cache`) and compiling ahead (:func:`enable_compiling_ahead`)."""
     enable_compilation_cache()
     enable_program_cache()
+    enable_compiling_ahead()
+
+
+# ----------------------------------------------------------------------- compiling ahead
+
+# A cold design compiles its solver's program, then the drawing's (the smallest cam, the refined
+# extrema, the curves), one after the other, each on one core. The drawing's programs take the
+# design's dimensions as data, so they can be compiled before the design is known: :func:`ahead`
+# runs the drawing for the scene's own follower in a second thread while the design solves, and the
+# drawing at the design then finds its programs compiled (measured in docs/development.md). The
+# library default is off (a library call makes no threads); the command line turns it on.
+_AHEAD: list = [False]
+AHEAD_THREAD = "camjax-ahead"
+
+
+def enable_compiling_ahead() -> None:
+    """Turn :func:`ahead` on where there is a second core to compile on; CAMJAX_COMPILE_AHEAD=0
+    leaves it off."""
+    _AHEAD[0] = os.environ.get("CAMJAX_COMPILE_AHEAD", "").strip() != "0" and (os.cpu_count() or 1) > 1
+
+
+def compiling_ahead() -> bool:
+    """Whether :func:`ahead` runs its function (see :func:`enable_compiling_ahead`)."""
+    return _AHEAD[0]
+
+
+@contextlib.contextmanager
+def ahead(fn):
+    """Run ``fn()`` in a thread of its own while the ``with`` body runs, for the programs it
+    compiles: its result and any exception it raises are dropped, and the body's end waits for it
+    (a program both compile is then compiled once). Nothing happens when compiling ahead is off.
+
+    ``fn`` must be a pure computation (no output, no warnings): it runs on provisional inputs.
+    If the body raises, the thread is left to end on its own (a daemon; :func:`computing` counts it).
+    """
+    if not _AHEAD[0]:
+        yield
+        return
+    import threading
+
+    done = threading.Event()
+
+    def work():
+        try:
+            fn()
+        except BaseException:  # noqa: BLE001, S110  (provisional inputs: only the compiles count)
+            pass
+        finally:
+            done.set()
+            _RUNNING.discard(done)
+
+    _RUNNING.add(done)
+    threading.Thread(target=work, name=AHEAD_THREAD, daemon=True).start()
+    yield
+    done.wait()
 
 
 COMPUTE_THREAD = "camjax-compute"

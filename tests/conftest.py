@@ -52,6 +52,9 @@ def _persistent_compilation_cache(config) -> None:
     # once. tests/test_cli.py's design run draws in processes, as the command does by default, and
     # tests/test_export.py checks the processes' files against the in-process ones byte for byte.
     os.environ.setdefault("CAMJAX_DRAWING_PROCESSES", "0")
+    # No second compiling thread beside a test's design (camjax.runtime.ahead): the workers already
+    # keep both cores busy. tests/test_runtime.py runs the command with it.
+    os.environ.setdefault("CAMJAX_COMPILE_AHEAD", "0")
     cache = getattr(config, "cache", None)
     if os.environ.get("CAMJAX_COMPILATION_CACHE") == "0" or cache is None:
         os.environ["CAMJAX_COMPILATION_CACHE"] = "0"

@@ -181,6 +181,42 @@ def test_cli_with_saved_programs_writes_what_it_writes_without(command, scene, n
         assert json.loads((tmp_path / run / name).read_text()) == off, run
 
 
+@pytest.mark.slow
+def test_compiling_ahead_draws_the_same_design(tmp_path, monkeypatch):
+    """The command line runs the drawing for the scene's own follower in a second thread while the
+    design solves (runtime.ahead: its programs compiled beside the solver's), then the drawing at
+    the design: the same result.json, number for number, as without; and the second thread ran."""
+    import json
+    import threading
+
+    from camjax import cli
+    from camjax.followers._translating import TranslatingFollower
+    from validation.compare_results import differences
+
+    threads = []
+    drawn_run = TranslatingFollower._drawn_run
+
+    def spy(self, *args, **kwargs):
+        threads.append(threading.current_thread().name)
+        return drawn_run(self, *args, **kwargs)
+
+    monkeypatch.setattr(TranslatingFollower, "_drawn_run", spy)
+    results = {}
+    try:
+        for setting in ("1", "0"):
+            monkeypatch.setenv("CAMJAX_COMPILE_AHEAD", setting)
+            threads.clear()
+            assert cli.main(["design", "--out", str(tmp_path / setting), "--dpi", "30"]) == 0
+            results[setting] = (json.loads((tmp_path / setting / "result.json").read_text()), list(threads))
+    finally:
+        runtime._AHEAD[0] = False
+    assert results["1"][1] == [runtime.AHEAD_THREAD, runtime.COMPUTE_THREAD]  # ahead, then at the design
+    assert results["0"][1] == [runtime.COMPUTE_THREAD]
+    diff = differences(results["1"][0], results["0"][0],
+                       ignore=frozenset({"seconds", "compile_s", "run_s", "timings", "elapsed_s"}))
+    assert not diff, diff[:10]
+
+
 # ------------------------------------------------------------------ what the key must hold
 
 LEAK = {"power": 2}  # a module global read while tracing: what an entry point must never do

@@ -24,7 +24,7 @@ from typing import Any, NamedTuple
 import jax
 import numpy as np
 
-from camjax import loads
+from camjax import loads, runtime
 from camjax.evaluate import SceneArrays, curve_extremes, curve_names, scene_arrays
 from camjax.family import FEASIBILITY_TOL_MM
 from camjax.followers import _checks
@@ -347,7 +347,16 @@ class TranslatingFollower(Follower):
         [design], instead of the smallest admissible + 1 mm, rounded up)."""
         if arrays is None:
             arrays = scene_arrays(scene, dtype=dtype)
-        design = self.solve_design(scene, arrays)
+        if scene.design is None:
+            return self._drawn_run(scene, arrays, None, base_radius_mm)
+        # the drawing's programs compiled beside the solver's, for the scene's own follower
+        with runtime.ahead(lambda: self._drawn_run(scene, arrays, None, base_radius_mm)):
+            design = self.solve_design(scene, arrays)
+        return self._drawn_run(scene, arrays, design, base_radius_mm)
+
+    def _drawn_run(self, scene, arrays: SceneArrays, design, base_radius_mm: float | None) -> DesignRun:
+        """The run's smallest cam, drawing radius, curves and violations, for a solved ``design``
+        (or None: the scene's follower, drawn at ``base_radius_mm`` or its smallest cam + 1 mm)."""
         result = design.result if design is not None else {}
         drawn = self.drawn_follower(scene, result)
         # the smallest cam for the follower the cam is drawn with (a design's dimensions)
