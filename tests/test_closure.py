@@ -84,18 +84,29 @@ def exported(tmp_path_factory):
 SLOW = pytest.mark.slow
 
 
-def _distances(cx, cy, px, py, chunk=400):
-    """Distance (mm) from each centre (cx, cy) to the closed polyline (px, py), brute force over
-    every segment."""
-    ax, ay = px, py
-    bx, by = np.roll(px, -1), np.roll(py, -1)
-    dx, dy = bx - ax, by - ay
-    length2 = dx * dx + dy * dy
-    out = np.empty(len(cx))
-    for k in range(0, len(cx), chunk):
-        x, y = cx[k:k + chunk, None], cy[k:k + chunk, None]
-        u = np.clip(((x - ax) * dx + (y - ay) * dy) / length2, 0.0, 1.0)
-        out[k:k + chunk] = np.min(np.hypot(x - ax - u * dx, y - ay - u * dy), axis=1)
+def _segment_distances(x, y, ax, ay, dx, dy):
+    """Distance from points (x, y) to segments from (ax, ay) along (dx, dy), broadcast."""
+    u = np.clip(((x - ax) * dx + (y - ay) * dy) / (dx * dx + dy * dy), 0.0, 1.0)
+    return np.hypot(x - ax - u * dx, y - ay - u * dy)
+
+
+def _distances(cx, cy, px, py, near=48):
+    """Distance (mm) from each centre (cx, cy) to the closed polyline (px, py): the exact minimum
+    over every segment that can be the nearest. The nearest vertex is at D; each point of a segment
+    lies within L/2 of one of its ends (L <= the longest segment), so a segment with both ends farther
+    than D + L/2 is farther than D: the segments at the ``near`` nearest vertices (a k-d tree) hold
+    the minimum wherever the next vertex is that far; elsewhere every segment is measured."""
+    from scipy.spatial import cKDTree
+
+    dx, dy = np.roll(px, -1) - px, np.roll(py, -1) - py
+    centres = np.column_stack([cx, cy])
+    dist, idx = cKDTree(np.column_stack([px, py])).query(centres, k=near)
+    segments = np.concatenate([idx, (idx - 1) % len(px)], axis=1)  # those starting or ending there
+    x, y = cx[:, None], cy[:, None]
+    out = np.min(_segment_distances(x, y, px[segments], py[segments], dx[segments], dy[segments]), axis=1)
+    unsure = dist[:, -1] <= dist[:, 0] + 0.5 * np.max(np.hypot(dx, dy))
+    for k in np.flatnonzero(unsure):  # the whole polyline
+        out[k] = np.min(_segment_distances(cx[k], cy[k], px, py, dx, dy))
     return out
 
 
