@@ -291,7 +291,8 @@ def test_design_and_sweep_run_on_both_closures(scene, tmp_path, capsys):
     if sharp:  # the outer flank binds the design
         (tmp_path / "sharp.toml").write_text(SHARP)
         scene = str(tmp_path / "sharp.toml")
-    assert cli.main(["design", scene, "--out", str(tmp_path / "design")]) == 0
+    # figures at 40 dpi: no figure is checked here (tests/test_followers.py checks they are drawn)
+    assert cli.main(["design", scene, "--out", str(tmp_path / "design"), "--dpi", "40"]) == 0
     data = json.loads((tmp_path / "design" / "result.json").read_text())
     assert data["closure"]["positive_drive"] and data["design"]["feasible"]
     assert data["evaluated_at"]["feasible"], data["evaluated_at"]["violations"]
@@ -517,7 +518,7 @@ def test_a_free_span_or_arm_angle_is_the_smallest_the_second_cam_allows(case, tm
     text, key = FREE[case]
     text = text.replace("[motion]\n", '[motion]\nextrema = "grid"\n')  # the samples' problem, as SLSQP's
     (tmp_path / "free.toml").write_text(text)
-    assert cli.main(["design", str(tmp_path / "free.toml"), "--out", str(tmp_path / "design")]) == 0
+    assert cli.main(["design", str(tmp_path / "free.toml"), "--out", str(tmp_path / "design"), "--dpi", "40"]) == 0
     data = json.loads((tmp_path / "design" / "result.json").read_text())
     design, chosen = data["design"], data["design"][key]
     low, high = parse_scene(text).design.bounds(key)
