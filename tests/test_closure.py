@@ -49,7 +49,7 @@ CASES = {"groove": builtin_scene_text("groove"), "rocker_groove": ROCKER_GROOVE,
 
 def _run(text: str, folder):
     """The scene without [design] on 7200 samples (grid extrema: the files' samples are what is
-    checked), its report and profile.csv/DXF written and read back."""
+    checked), its report and profile.csv/DXF written and read back, and the run itself."""
     scene = with_samples(parse_scene(text), SAMPLES)
     scene = replace(scene, design=None, motion=replace(scene.motion, extrema="grid"))
     run = camjax.run_design(scene)
@@ -59,11 +59,11 @@ def _run(text: str, folder):
     with open(folder / "profile.csv") as f:
         names = f.readline().strip().split(",")
     table = np.loadtxt(folder / "profile.csv", delimiter=",", skiprows=1)
-    return scene, data, {n: table[:, k] for k, n in enumerate(names)}
+    return scene, data, {n: table[:, k] for k, n in enumerate(names)}, run
 
 
 class _Exported(dict):
-    """Each case's (scene, result, columns, folder), run when a test first asks for it: the quick
+    """Each case's (scene, result, columns, run, folder), run when a test first asks for it: the quick
     loop runs the groove and the conjugate cams; the yoke and the rocker's groove are slow cases."""
 
     def __init__(self, tmp_path_factory):
@@ -84,18 +84,29 @@ def exported(tmp_path_factory):
 SLOW = pytest.mark.slow
 
 
-def _distances(cx, cy, px, py, chunk=400):
-    """Distance (mm) from each centre (cx, cy) to the closed polyline (px, py), brute force over
-    every segment."""
-    ax, ay = px, py
-    bx, by = np.roll(px, -1), np.roll(py, -1)
-    dx, dy = bx - ax, by - ay
-    length2 = dx * dx + dy * dy
-    out = np.empty(len(cx))
-    for k in range(0, len(cx), chunk):
-        x, y = cx[k:k + chunk, None], cy[k:k + chunk, None]
-        u = np.clip(((x - ax) * dx + (y - ay) * dy) / length2, 0.0, 1.0)
-        out[k:k + chunk] = np.min(np.hypot(x - ax - u * dx, y - ay - u * dy), axis=1)
+def _segment_distances(x, y, ax, ay, dx, dy):
+    """Distance from points (x, y) to segments from (ax, ay) along (dx, dy), broadcast."""
+    u = np.clip(((x - ax) * dx + (y - ay) * dy) / (dx * dx + dy * dy), 0.0, 1.0)
+    return np.hypot(x - ax - u * dx, y - ay - u * dy)
+
+
+def _distances(cx, cy, px, py, near=48):
+    """Distance (mm) from each centre (cx, cy) to the closed polyline (px, py): the exact minimum
+    over every segment that can be the nearest. The nearest vertex is at D; each point of a segment
+    lies within L/2 of one of its ends (L <= the longest segment), so a segment with both ends farther
+    than D + L/2 is farther than D: the segments at the ``near`` nearest vertices (a k-d tree) hold
+    the minimum wherever the next vertex is that far; elsewhere every segment is measured."""
+    from scipy.spatial import cKDTree
+
+    dx, dy = np.roll(px, -1) - px, np.roll(py, -1) - py
+    centres = np.column_stack([cx, cy])
+    dist, idx = cKDTree(np.column_stack([px, py])).query(centres, k=near)
+    segments = np.concatenate([idx, (idx - 1) % len(px)], axis=1)  # those starting or ending there
+    x, y = cx[:, None], cy[:, None]
+    out = np.min(_segment_distances(x, y, px[segments], py[segments], dx[segments], dy[segments]), axis=1)
+    unsure = dist[:, -1] <= dist[:, 0] + 0.5 * np.max(np.hypot(dx, dy))
+    for k in np.flatnonzero(unsure):  # the whole polyline
+        out[k] = np.min(_segment_distances(cx[k], cy[k], px, py, dx, dy))
     return out
 
 
@@ -109,7 +120,7 @@ def _pivot(scene, theta_deg):
 
 @pytest.mark.parametrize("case", ["groove", pytest.param("rocker_groove", marks=SLOW)])
 def test_the_roller_rides_both_exported_flanks(exported, case):
-    scene, data, col, _ = exported[case]
+    scene, data, col = exported[case][:3]
     rf, c = scene.follower.roller_radius_mm, scene.follower.closure.clearance_mm
     assert c > 0
     px, py = col["pitch_x_mm"], col["pitch_y_mm"]
@@ -124,7 +135,7 @@ def test_the_roller_rides_both_exported_flanks(exported, case):
 
 @pytest.mark.parametrize("case", [pytest.param("yoke", marks=SLOW), "conjugate"])
 def test_both_rollers_ride_their_exported_cams(exported, case):
-    scene, data, col, _ = exported[case]
+    scene, data, col = exported[case][:3]
     r1, r2 = scene.follower.roller_radius_mm, scene.follower.closure.second_roller_radius_mm
     first = _distances(col["pitch_x_mm"], col["pitch_y_mm"], col["x_mm"], col["y_mm"])
     second = _distances(col["conjugate_pitch_x_mm"], col["conjugate_pitch_y_mm"], col["conjugate_x_mm"],
@@ -136,7 +147,7 @@ def test_both_rollers_ride_their_exported_cams(exported, case):
 
 @SLOW
 def test_the_yoke_is_rigid_on_the_exported_pitch_curves(exported):
-    scene, _, col, _ = exported["yoke"]
+    scene, _, col = exported["yoke"][:3]
     span = np.hypot(col["pitch_x_mm"] - col["conjugate_pitch_x_mm"], col["pitch_y_mm"] - col["conjugate_pitch_y_mm"])
     assert np.max(np.abs(span - scene.follower.closure.yoke_span_mm)) < 1e-9
     # and the two centres stay on one line through the follower axis' direction: the axis at theta
@@ -148,7 +159,7 @@ def test_the_yoke_is_rigid_on_the_exported_pitch_curves(exported):
 
 
 def test_the_two_arm_rocker_is_rigid_on_the_exported_pitch_curves(exported):
-    scene, _, col, _ = exported["conjugate"]
+    scene, _, col = exported["conjugate"][:3]
     f, cl = scene.follower, scene.follower.closure
     ax, ay = _pivot(scene, col["theta_deg"])
     l1 = np.hypot(col["pitch_x_mm"] - ax, col["pitch_y_mm"] - ay)
@@ -176,7 +187,7 @@ def _sign_changes(theta_deg, load):
 
 @pytest.mark.parametrize("case", ["groove", pytest.param("yoke", marks=SLOW)])
 def test_translating_switches_match_a_finite_difference_acceleration(exported, case):
-    scene, data, col, _ = exported[case]
+    scene, data, col = exported[case][:3]
     train = scene.follower.train
     omega = scene.motion.rpm * 2.0 * math.pi / 60.0
     h = math.radians(360.0 / SAMPLES)
@@ -197,7 +208,7 @@ def test_translating_switches_match_a_finite_difference_acceleration(exported, c
 
 @pytest.mark.parametrize("case", [pytest.param("rocker_groove", marks=SLOW), "conjugate"])
 def test_rocker_switches_match_a_finite_difference_acceleration(exported, case):
-    scene, data, col, _ = exported[case]
+    scene, data, col = exported[case][:3]
     h = math.radians(360.0 / SAMPLES)
     psi = np.radians(col["swing_deg"])
     moment = scene.follower.train.inertia_kg_m2 * (np.roll(psi, -1) - 2 * psi + np.roll(psi, 1)) / h**2
@@ -211,7 +222,7 @@ def test_each_flank_and_cam_is_a_dxf_layer(exported):
     import ezdxf
 
     for case, layers in (("groove", ("GROOVE_INNER", "GROOVE_OUTER")), ("conjugate", ("CAM_PROFILE", "CONJUGATE_CAM"))):
-        _, _, col, folder = exported[case]
+        _, _, col, _, folder = exported[case]
         doc = ezdxf.readfile(folder / "profile.dxf")
         polylines = {p.dxf.layer: np.array(p.get_points("xy")) for p in doc.modelspace().query("LWPOLYLINE")}
         assert set(polylines) == set(layers)
@@ -280,7 +291,8 @@ def test_design_and_sweep_run_on_both_closures(scene, tmp_path, capsys):
     if sharp:  # the outer flank binds the design
         (tmp_path / "sharp.toml").write_text(SHARP)
         scene = str(tmp_path / "sharp.toml")
-    assert cli.main(["design", scene, "--out", str(tmp_path / "design")]) == 0
+    # figures at 40 dpi: no figure is checked here (tests/test_followers.py checks they are drawn)
+    assert cli.main(["design", scene, "--out", str(tmp_path / "design"), "--dpi", "40"]) == 0
     data = json.loads((tmp_path / "design" / "result.json").read_text())
     assert data["closure"]["positive_drive"] and data["design"]["feasible"]
     assert data["evaluated_at"]["feasible"], data["evaluated_at"]["violations"]
@@ -368,21 +380,19 @@ def test_a_positive_drive_has_no_jump_analysis():
         parse_scene(text)
 
 
-ANIMATION_SAMPLES = 3600
 # a roller drawn on its cam's polyline: the chords cut inside a convex cam by at most
-# (arc step)^2 / (8 rho) ~ (2 pi 70 mm / 3600)^2 / (8 x 5 mm) ~ 4e-5 mm, far below 1e-3 mm
+# (arc step)^2 / (8 rho) ~ (2 pi 70 mm / 7200)^2 / (8 x 5 mm) ~ 1e-5 mm, far below 1e-3 mm; the run is
+# the exported case's (its 7200 samples), so no sizing of another grid is compiled for the drawing
 
 
 @pytest.mark.parametrize("case", [pytest.param("yoke", marks=SLOW), "conjugate"])
-def test_the_animation_draws_the_second_roller_on_its_cam_and_keeps_the_link_rigid(case):
+def test_the_animation_draws_the_second_roller_on_its_cam_and_keeps_the_link_rigid(exported, case):
     """At every 9th frame of the animation: the second roller drawn touches the second cam as drawn
     (distance from its centre to the drawn polyline = its radius, positions only) and the link that
     carries it is rigid: the yoke's length is yoke_span_mm, the second arm's second_arm_length_mm."""
     from camjax.output.animation import motion_frames
 
-    scene = with_samples(parse_scene(CASES[case]), ANIMATION_SAMPLES)
-    scene = replace(scene, design=None, motion=replace(scene.motion, extrema="grid"))
-    run = camjax.run_design(scene)
+    scene, _, _, run, _ = exported[case]
     m = followers.drawing(scene.follower.type).mechanism(run.curves)
     mf = motion_frames(m, 72)
     closure = scene.follower.closure
@@ -508,7 +518,7 @@ def test_a_free_span_or_arm_angle_is_the_smallest_the_second_cam_allows(case, tm
     text, key = FREE[case]
     text = text.replace("[motion]\n", '[motion]\nextrema = "grid"\n')  # the samples' problem, as SLSQP's
     (tmp_path / "free.toml").write_text(text)
-    assert cli.main(["design", str(tmp_path / "free.toml"), "--out", str(tmp_path / "design")]) == 0
+    assert cli.main(["design", str(tmp_path / "free.toml"), "--out", str(tmp_path / "design"), "--dpi", "40"]) == 0
     data = json.loads((tmp_path / "design" / "result.json").read_text())
     design, chosen = data["design"], data["design"][key]
     low, high = parse_scene(text).design.bounds(key)

@@ -76,7 +76,8 @@ def test_flat_face_min_rho_closed_form():
     angle = 300.0 + 60.0 * (1.0 - u)
     base_radius = 30.0
     kin = evaluate(prog, 360)
-    e = extrema.min_of(prog, rho, rho(kin, base_radius), base_radius)
+    # one compiled program for the refinement (not op by op)
+    e = jax.jit(lambda b: extrema.min_of(prog, rho, rho(kin, b), b))(base_radius)
     # value: rounding of a few terms of size ~30 mm (1e-15 relative) is all that remains
     assert float(e.value) == pytest.approx(base_radius - need, rel=1e-12)
     assert float(e.value) < float(jnp.min(rho(kin, base_radius)))  # the grid misses it
@@ -90,7 +91,7 @@ def test_cycloidal_peak_acceleration_closed_form():
     prog = ref_program()
     d2s = lambda kin, _: kin.d2s  # noqa: E731
     kin = evaluate(prog, 7)  # a coarse grid: the bracket alone must suffice
-    e = extrema.max_of(prog, d2s, d2s(kin, None))
+    e = jax.jit(lambda k: extrema.max_of(prog, d2s, d2s(k, None)))(kin)  # one program, not op by op
     assert float(e.value) == pytest.approx(H * 2 * math.pi / math.radians(60) ** 2, rel=1e-13)
     assert float(e.angle_deg) == pytest.approx(345.0, abs=1e-7)
 
@@ -102,7 +103,7 @@ def test_peak_force_against_dense_scipy_reference():
     ref, ref_angle = dense_reference_max(reference_force)
     prog = ref_program()
     kin = evaluate(prog, 360)
-    e = extrema.max_of(prog, force, force(kin))
+    e = jax.jit(lambda k: extrema.max_of(prog, force, force(k)))(kin)  # one program, not op by op
     # the reference is SciPy's bounded Brent to 1e-12 deg on the 1e6-grid's bracket, so it is
     # good to ~1e-15 relative; both sides are float64 evaluations of ~70 N
     assert float(e.value) == pytest.approx(ref, rel=1e-12)
@@ -116,8 +117,8 @@ def test_peak_stress_against_dense_reference():
     """sigma = C / sqrt(rho) needs s''' in its slope; a 1e6-sample grid of the same curve agrees."""
     prog = ref_program()
     base_radius = 26.0
-    dense = float(jnp.max(stress(evaluate(prog, 1_000_000), base_radius)))
-    e = extrema.max_of(prog, stress, stress(evaluate(prog, 360), base_radius), base_radius)
+    dense = float(jax.jit(lambda b: jnp.max(stress(evaluate(prog, 1_000_000), b)))(base_radius))
+    e = jax.jit(lambda b: extrema.max_of(prog, stress, stress(evaluate(prog, 360), b), b))(base_radius)  # one program each
     # a dense grid undershoots a smooth max by <= f'' dtheta^2 / 8: with dtheta = 6.3e-6 rad and
     # f'' / f < 1e4 per rad^2 near the sharp peak that is < 5e-8 relative
     assert 0.0 <= (float(e.value) - dense) / dense < 5e-8

@@ -1,5 +1,6 @@
 """Motion laws: closed forms vs SPEC table, vs autodiff, boundary conditions, families."""
 
+import functools
 import math
 
 import jax
@@ -18,6 +19,7 @@ from camjax.laws import (
     polynomial_law,
     stepped_law,
     summarize,
+    summarize_all,
 )
 
 PI = math.pi
@@ -49,6 +51,14 @@ CLOSED_FORM = {
 }
 
 
+@functools.cache
+def _summaries(samples: int = 2001, names: tuple[str, ...] = tuple(LAWS)) -> dict:
+    """name -> summary of each named law on ``samples`` points, all of them from one compiled
+    program (summarize_all) instead of one per law and test; summarize is summarize_all of one law.
+    The end values (FLCD) are the laws' at x = 0 and 1 whatever the samples."""
+    return dict(zip(names, summarize_all([LAWS[n] for n in names], samples=samples), strict=True))
+
+
 def _half_ulp_of_print(text: str) -> float:
     digits = text.split(".")[1] if "." in text else ""
     return 0.5 * 10.0 ** (-len(digits)) if digits else 0.5
@@ -56,7 +66,7 @@ def _half_ulp_of_print(text: str) -> float:
 
 @pytest.mark.parametrize("name", list(SPEC_TABLE))
 def test_peaks_match_spec_table_to_printed_digits(name):
-    s = summarize(LAWS[name])
+    s = _summaries()[name]
     got = (s.peak_velocity, s.peak_accel_pos, s.peak_accel_neg, s.peak_jerk)
     for g, printed in zip(got, SPEC_TABLE[name], strict=True):
         # peaks refined to ~1e-13 relative (next test): far below print precision
@@ -66,7 +76,8 @@ def test_peaks_match_spec_table_to_printed_digits(name):
 @pytest.mark.parametrize("samples", [101, 2001])
 @pytest.mark.parametrize("name", list(CLOSED_FORM))
 def test_peaks_match_closed_forms(name, samples):
-    s = summarize(LAWS[name], samples=samples)
+    s = _summaries() if samples == 2001 else _summaries(samples, tuple(CLOSED_FORM))
+    s = s[name]
     got = (s.peak_velocity, s.peak_accel_pos, s.peak_accel_neg, s.peak_jerk)
     for g, ref in zip(got, CLOSED_FORM[name], strict=True):
         if ref is not None:
@@ -77,9 +88,15 @@ def test_peaks_match_closed_forms(name, samples):
             assert g == pytest.approx(ref, rel=0, abs=2e-10), (name, g, ref)
 
 
+@functools.cache
+def _ends():
+    """name -> every law at x = 0 and 1, all laws in one compiled program (not op by op per law)."""
+    return jax.jit(lambda x: {name: law(x) for name, law in LAWS.items()})(jnp.asarray([0.0, 1.0]))
+
+
 @pytest.mark.parametrize("name", list(LAWS))
 def test_boundary_values(name):
-    v = LAWS[name](jnp.asarray([0.0, 1.0]))
+    v = _ends()[name]
     np.testing.assert_allclose(v.p, [0.0, 1.0], atol=1e-14)
     # rest-to-rest laws start and end at rest; the uniform law moves at p' = 1 throughout
     end_v = 1.0 if name == "uniform" else 0.0
@@ -94,12 +111,13 @@ def test_closed_form_derivatives_equal_autodiff(name):
     # interior points away from the piecewise breaks of the modified laws (1/8, 3/8, ...)
     x = jnp.linspace(0.0, 1.0, 97)[1:-1] + 1e-3
 
-    def comp(k):
-        return jax.vmap(jax.grad(lambda t: law(t)[k]))(x)
+    @jax.jit  # the law and its three derivatives in one program (not op by op)
+    def closed_and_autodiff(x):
+        v = law(x)
+        return (v.dp, v.d2p, v.d3p), [jax.vmap(jax.grad(lambda t, k=k: law(t)[k]))(x) for k in range(3)]
 
-    v = law(x)
-    for k, closed in enumerate((v.dp, v.d2p, v.d3p)):
-        ad = comp(k)
+    closed_forms, autodiff = closed_and_autodiff(x)
+    for k, (closed, ad) in enumerate(zip(closed_forms, autodiff, strict=True)):
         scale = max(1.0, float(jnp.max(jnp.abs(closed))))
         np.testing.assert_allclose(closed, ad, rtol=0, atol=1e-10 * scale, err_msg=f"{name} order {k + 1}")
 
@@ -118,7 +136,7 @@ FLCD_EXPECTED = {
 
 @pytest.mark.parametrize("name", list(FLCD_EXPECTED))
 def test_flcd_statements_of_the_spec(name):
-    s = summarize(LAWS[name], samples=11)
+    s = _summaries()[name]
     flcd, pert = FLCD_EXPECTED[name]
     assert s.flcd_against_dwells is flcd
     if pert is not None:
@@ -208,7 +226,7 @@ def test_uniform_law_is_constant_velocity():
     np.testing.assert_array_equal(v.d3p, np.zeros(101))
     # the slope from differences of the positions alone (exact for a line up to rounding)
     np.testing.assert_allclose(np.diff(np.asarray(v.p)) / np.diff(np.asarray(x)), 1.0, rtol=1e-12)
-    s = summarize(LAWS["uniform"], samples=11)
+    s = _summaries()["uniform"]
     assert s.flcd_against_dwells is False and s.perturbation_against_dwells is False
     assert (s.peak_velocity, s.peak_accel_pos, s.peak_accel_neg, s.peak_jerk) == (1.0, 0.0, 0.0, 0.0)
 

@@ -12,10 +12,10 @@ from camjax.numerics import max_over_angles, safe_divide, safe_sqrt
 
 def test_safe_sqrt_and_divide_have_finite_gradients():
     x = jnp.asarray([-1.0, 0.0, 1e-300, 4.0])
-    np.testing.assert_array_equal(safe_sqrt(x), [0.0, 0.0, 1e-150, 2.0])
-    g = jax.vmap(jax.grad(safe_sqrt))(x)
+    np.testing.assert_array_equal(jax.jit(safe_sqrt)(x), [0.0, 0.0, 1e-150, 2.0])  # one program, not op by op
+    g = jax.jit(jax.vmap(jax.grad(safe_sqrt)))(x)
     assert np.all(np.isfinite(g)) and float(g[3]) == pytest.approx(0.25)
-    gd = jax.vmap(jax.grad(lambda d: safe_divide(1.0, d)))(jnp.asarray([0.0, 2.0]))
+    gd = jax.jit(jax.vmap(jax.grad(lambda d: safe_divide(1.0, d))))(jnp.asarray([0.0, 2.0]))
     np.testing.assert_allclose(gd, [0.0, -0.25])
 
 
@@ -31,8 +31,11 @@ def test_max_over_angles_equals_the_plain_max_value_and_gradient(n, tile):
     def plain(r):
         return jnp.max(c**2 / (r + q))
 
-    assert float(tiled(10.0)) == float(plain(10.0))  # a max is exact in any order
-    assert float(jax.grad(tiled)(10.0)) == float(jax.grad(plain)(10.0))
+    # each side one compiled program (value and gradient together), not op by op
+    tiled_value, tiled_grad = jax.jit(jax.value_and_grad(tiled))(10.0)
+    plain_value, plain_grad = jax.jit(jax.value_and_grad(plain))(10.0)
+    assert float(tiled_value) == float(plain_value)  # a max is exact in any order
+    assert float(tiled_grad) == float(plain_grad)
 
 
 @pytest.mark.slow
@@ -48,9 +51,9 @@ def test_capped_divide_saturates_with_finite_gradients():
 
     big = float(np.finfo(np.float64).max)
     den = jnp.asarray([2.0, -4.0, 1e-300, -1e-300, 0.0])  # normal numbers: XLA:CPU flushes subnormals
-    got = capped_divide(1e10, den)
+    got = jax.jit(capped_divide)(1e10, den)  # one program, not op by op
     np.testing.assert_array_equal(got, [5e9, -2.5e9, big, -big, big])
     # 1e10 / 1e-300 overflows: saturated, and the gradient must not be 0 * inf = nan
-    g = jax.vmap(jax.grad(lambda d: capped_divide(1e10, d)))(den)
+    g = jax.jit(jax.vmap(jax.grad(lambda d: capped_divide(1e10, d))))(den)
     assert np.all(np.isfinite(g)) and float(g[0]) == pytest.approx(-2.5e9)
     assert float(capped_divide(0.0, 0.0)) == big

@@ -22,6 +22,20 @@ PROGRAM = MotionProgram.from_segments([Segment("rise", 120, get_law("poly_3_4_5"
 CASES = [("ccw", 4.0), ("cw", 4.0), ("ccw", -3.0), ("cw", 0.0)]
 
 
+class _Compiled:
+    """The module's functions, each one compiled program per rotation and shape (the same values as
+    the module's own, op by op: each operation otherwise compiles and dispatches on its own)."""
+
+    def __init__(self, module, names):
+        for name in names:
+            setattr(self, name, jax.jit(getattr(module, name), static_argnames="rotation"))
+
+
+roller = _Compiled(roller_geo, ("roller_pressure_angle", "roller_pitch_curvature", "roller_geometry",
+                                "roller_profile", "roller_pitch_curve"))
+flat = _Compiled(flat_geo, ("flat_profile",))
+
+
 def inversion(rb, rf, e, kin, rotation):
     """Pitch curve by kinematic inversion, in NumPy: the roller centre (e, d + s) of the fixed frame
     seen from a cam turned by theta (ccw: the cam point at R(theta) P is in contact, so P = R(-theta) p)."""
@@ -44,10 +58,10 @@ def test_pressure_angle_from_positions_only(rotation, e):
     a = th if rotation == "ccw" else -th
     fx, fy = np.cos(a) * tx - np.sin(a) * ty, np.sin(a) * tx + np.cos(a) * ty
     phi_fd = np.arctan(fy / fx)
-    phi = roller_geo.roller_pressure_angle(rb, rf, e, kin, rotation)
+    phi = roller.roller_pressure_angle(rb, rf, e, kin, rotation)
     # central differences at 0.01 deg: O(h^2) = 3e-9 relative in the tangent times |P'''|/|P'| ~ 10
     np.testing.assert_allclose(phi, phi_fd, rtol=0, atol=1e-7)
-    np.testing.assert_allclose(roller_geo.roller_geometry(rb, rf, e, kin, rotation).pressure_angle, phi_fd,
+    np.testing.assert_allclose(roller.roller_geometry(rb, rf, e, kin, rotation).pressure_angle, phi_fd,
                                rtol=0, atol=1e-7)
 
 
@@ -64,7 +78,7 @@ def test_pitch_curvature_sign_and_size_from_positions(rotation, e):
     # curve clockwise (polar angle -theta), so convex means negative cross product there
     turn = -1.0 if rotation == "ccw" else 1.0
     kappa_fd = turn * (d1(x) * d2(y) - d1(y) * d2(x)) / (d1(x) ** 2 + d1(y) ** 2) ** 1.5
-    kappa = np.asarray(roller_geo.roller_pitch_curvature(rb, rf, e, kin, rotation))
+    kappa = np.asarray(roller.roller_pitch_curvature(rb, rf, e, kin, rotation))
     # second differences: O(h^2) truncation plus eps |P| / h^2 round-off (measured 1.4e-8 1/mm)
     # away from the joints; on a joint s''' of
     # the 3-4-5 jumps and the difference across it is O(h) off (measured 1.6e-5 1/mm at R_p = 11)
@@ -74,7 +88,7 @@ def test_pitch_curvature_sign_and_size_from_positions(rotation, e):
     np.testing.assert_allclose(kappa_fd[~near_joint], kappa[~near_joint], rtol=0, atol=1e-7)
     np.testing.assert_allclose(kappa_fd, kappa, rtol=0, atol=5e-5)
     assert kappa.min() < 0 < kappa.max()  # this cam has concave stretches: both signs are tested
-    g = roller_geo.roller_geometry(rb, rf, e, kin, rotation)
+    g = roller.roller_geometry(rb, rf, e, kin, rotation)
     np.testing.assert_allclose(g.pitch_radius_of_curvature * kappa, 1.0, rtol=1e-12)
     convex = kappa > 0
     np.testing.assert_allclose(g.cam_radius_of_curvature, 1 / kappa - rf, rtol=1e-12)
@@ -84,13 +98,13 @@ def test_pitch_curvature_sign_and_size_from_positions(rotation, e):
 
 def test_cw_cam_is_the_mirror_image_of_ccw_with_mirrored_offset():
     kin = evaluate(PROGRAM, 720)
-    for f in (roller_geo.roller_profile, roller_geo.roller_pitch_curve):
+    for f in (roller.roller_profile, roller.roller_pitch_curve):
         xc, yc = f(25.0, 6.0, 4.0, kin, "cw")
         xa, ya = f(25.0, 6.0, -4.0, kin, "ccw")
         np.testing.assert_allclose(xc, -xa, atol=1e-12)
         np.testing.assert_allclose(yc, ya, atol=1e-12)
-    xc, yc = flat_geo.flat_profile(30.0, kin, "cw")
-    xa, ya = flat_geo.flat_profile(30.0, kin, "ccw")
+    xc, yc = flat.flat_profile(30.0, kin, "cw")
+    xa, ya = flat.flat_profile(30.0, kin, "ccw")
     np.testing.assert_allclose(xc, -xa, atol=1e-12)
     np.testing.assert_allclose(yc, ya, atol=1e-12)
 
@@ -116,7 +130,7 @@ def test_pressure_angle_limited_prime_radius_of_harmonic_rise_closed_form(beta_d
     # ~ 100 * 7.6e-11 / 2 mm: 1e-8 mm covers it
     assert float(rp) == pytest.approx(closed, abs=1e-8)
     # and at that radius the largest pressure angle sits on the limit
-    phi = roller_geo.roller_pressure_angle(float(rp), 0.0, 0.0, kin)
+    phi = roller.roller_pressure_angle(float(rp), 0.0, 0.0, kin)
     assert float(jnp.max(jnp.abs(phi))) == pytest.approx(lim, abs=1e-12)
 
 
@@ -125,10 +139,10 @@ def test_min_prime_radius_for_pressure_angle_with_offset_puts_phi_on_the_limit(r
     kin = evaluate(PROGRAM, 3600)
     lim = math.radians(30.0)
     rp = float(roller_geo.roller_min_prime_radius_for_pressure_angle(kin, e, lim, rotation))
-    phi = roller_geo.roller_pressure_angle(rp, 0.0, e, kin, rotation)
+    phi = roller.roller_pressure_angle(rp, 0.0, e, kin, rotation)
     assert float(jnp.max(jnp.abs(phi))) == pytest.approx(lim, abs=1e-12)
     # 1 um smaller breaks it (the root is a single monotone crossing in R_p)
-    phi = roller_geo.roller_pressure_angle(rp - 1e-3, 0.0, e, kin, rotation)
+    phi = roller.roller_pressure_angle(rp - 1e-3, 0.0, e, kin, rotation)
     assert float(jnp.max(jnp.abs(phi))) > lim
 
 
@@ -144,7 +158,7 @@ def riding_heights(rb, rf, e, rotation, theta_deg, dense=7200, iters=90):
 
     def height(tau_deg, th):
         kin = motion_at(PROGRAM, tau_deg)
-        x, y = roller_geo.roller_profile(rb, rf, e, kin, rotation)
+        x, y = roller.roller_profile(rb, rf, e, kin, rotation)
         a = th if rotation == "ccw" else -th  # follower frame = cam frame turned by the cam angle
         xf, yf = turn(x, y, a)
         gap = rf**2 - (xf - e) ** 2
@@ -158,7 +172,7 @@ def riding_heights(rb, rf, e, rotation, theta_deg, dense=7200, iters=90):
 def test_follower_riding_on_exported_profile_reproduces_s(rotation, e):
     rb, rf = 25.0, 6.0  # no undercut here (checked below), so the roller touches one point
     kin_all = evaluate(PROGRAM, 360)
-    assert float(jnp.min(roller_geo.roller_geometry(rb, rf, e, kin_all, rotation).undercut_margin)) > 0
+    assert float(jnp.min(roller.roller_geometry(rb, rf, e, kin_all, rotation).undercut_margin)) > 0
     theta_deg = np.arange(0.0, 360.0, 2.5)
     y = riding_heights(rb, rf, e, rotation, theta_deg)
     s = np.asarray(motion_at(PROGRAM, theta_deg).s)
@@ -176,7 +190,7 @@ def test_gradients_through_base_radius_roller_radius_offset_match_finite_differe
 
     def quantities(x, rotation):
         rb, rf, e = x
-        g = roller_geo.roller_geometry(rb, rf, e, kin, rotation)
+        g = roller.roller_geometry(rb, rf, e, kin, rotation)
         rho_eq = roller_geo.roller_equivalent_radius(g.pitch_curvature, rf)
         sigma = contact.roller_stress(coeff, g.pressure_angle, rho_eq)
         return jnp.stack([
@@ -184,7 +198,7 @@ def test_gradients_through_base_radius_roller_radius_offset_match_finite_differe
             jnp.max(roller_geo.roller_undercut_constraint(g.pitch_curvature, rf, 0.5)),
             jnp.max(sigma),
             jnp.sum(g.pitch_curvature),
-            jnp.sum(jnp.stack(roller_geo.roller_profile(rb, rf, e, kin, rotation))),
+            jnp.sum(jnp.stack(roller.roller_profile(rb, rf, e, kin, rotation))),
         ])
 
     x0 = jnp.asarray([25.0, 6.0, 4.0])
@@ -209,7 +223,7 @@ def test_roller_stress_closed_forms():
         assert float(sigma) == pytest.approx(ref, rel=1e-13)
     # a dwell: pitch circle R_p, cam circle R_b = R_p - R_f, two cylinders 1/R_b + 1/R_f
     kin = evaluate(MotionProgram.from_segments([Segment("dwell", 360)]), 8)
-    g = roller_geo.roller_geometry(20.0, 8.0, 0.0, kin)
+    g = roller.roller_geometry(20.0, 8.0, 0.0, kin)
     rho_eq = roller_geo.roller_equivalent_radius(g.pitch_curvature, 8.0)
     sigma = contact.roller_stress(contact.stress_coefficient(50.0, 10.0, cam, fol), g.pressure_angle, rho_eq)
     np.testing.assert_allclose(sigma, 0.564 * math.sqrt(5.0 * (1 / 20.0 + 1 / 8.0) / k), rtol=1e-13)
@@ -222,10 +236,10 @@ def test_everything_finite_for_infeasible_designs():
 
     def worst(x):
         rb, rf, e = x
-        g = roller_geo.roller_geometry(rb, rf, e, kin)
+        g = roller.roller_geometry(rb, rf, e, kin)
         rho_eq = roller_geo.roller_equivalent_radius(g.pitch_curvature, rf)
         sigma = contact.roller_stress(40.0, g.pressure_angle, rho_eq)
-        px, py = roller_geo.roller_profile(rb, rf, e, kin)
+        px, py = roller.roller_profile(rb, rf, e, kin)
         return (jnp.max(sigma) + jnp.max(roller_geo.roller_undercut_constraint(g.pitch_curvature, rf))
                 + jnp.max(jnp.abs(g.pressure_angle)) + jnp.sum(px + py)
                 + jnp.max(contact.roller_hertz_line_stress(40.0, g.pressure_angle, g.cam_radius_of_curvature,
@@ -246,11 +260,9 @@ def test_undercut_limited_prime_radius_against_a_dense_scan(rotation, e, rf, rho
     # scan R_p in 1 um steps around it, judging undercut by the smallest convex cam radius
     # (a different formula: rho_c = 1/kappa - R_f on the convex samples)
     scan = np.arange(rp - 0.05, rp + 0.05, 1e-3)
+    curvatures = np.asarray(jax.vmap(lambda r: roller.roller_pitch_curvature(r - rf, rf, e, kin, rotation))(scan))
+    ok = [np.all(1 / k[k > 0] - rf >= rho_min) for k in curvatures]  # every radius in one call
 
-    def ok(r):
-        k = np.asarray(roller_geo.roller_pitch_curvature(r - rf, rf, e, kin, rotation))
-        return np.all(1 / k[k > 0] - rf >= rho_min)
-
-    first = scan[np.argmax([ok(r) for r in scan])]
-    assert not ok(scan[0]) and ok(scan[-1])
+    first = scan[np.argmax(ok)]
+    assert not ok[0] and ok[-1]
     assert first - 1e-3 <= rp <= first + 1e-12
