@@ -271,6 +271,8 @@ ENV_CASES: dict[str, tuple[list[str], dict[str, str], str]] = {
     "debug_word": (["laws", "--json", "{tmp}/laws.json"], {"CAMJAX_DEBUG": "true"}, "CAMJAX_DEBUG"),
     "verify_two": (["design", "--out", "{dir}"], {"CAMJAX_PROGRAM_CACHE_VERIFY": "2"},
                    "CAMJAX_PROGRAM_CACHE_VERIFY"),
+    "compile_ahead_word": (["design", "--out", "{dir}"], {"CAMJAX_COMPILE_AHEAD": "on"},
+                           "CAMJAX_COMPILE_AHEAD = 'on': not a switch"),
     "program_cache_is_a_file": (["design", "--out", "{dir}"], {"CAMJAX_PROGRAM_CACHE": "{file}"},
                                 "CAMJAX_PROGRAM_CACHE"),
     "compilation_cache_is_a_file": (["check-extremes", "--out", "{dir}"], {"CAMJAX_COMPILATION_CACHE": "{file}"},

@@ -12,6 +12,8 @@ variable                       allowed
 ``CAMJAX_COMPILATION_CACHE``   ``0`` or empty (off), or a folder path (not an existing file)
 ``CAMJAX_PROGRAM_CACHE``       ``0`` or empty (off), or a folder path (not an existing file)
 ``CAMJAX_XLA_FLAGS``           ``0`` XLA_FLAGS left as set, ``1`` or unset: camjax's CPU flags added
+``CAMJAX_COMPILE_AHEAD``       ``0`` one compiling thread, ``1`` or unset: the drawing's programs compiled
+                               beside the solver's where there are two cores (``camjax.runtime.ahead``)
 ``JAX_PLATFORMS``              platforms JAX can start on this machine (e.g. ``cpu``), or unset
 =============================  ===================================================================
 """
@@ -24,7 +26,8 @@ import sys
 from camjax.cli.common import UsageError
 from camjax.scene import cut, quote
 
-FLAGS = ("CAMJAX_PROGRESS", "CAMJAX_DEBUG", "CAMJAX_PROGRAM_CACHE_VERIFY", "CAMJAX_XLA_FLAGS")
+FLAGS = ("CAMJAX_PROGRESS", "CAMJAX_DEBUG", "CAMJAX_PROGRAM_CACHE_VERIFY", "CAMJAX_XLA_FLAGS",
+         "CAMJAX_COMPILE_AHEAD")
 FOLDERS = ("CAMJAX_COMPILATION_CACHE", "CAMJAX_PROGRAM_CACHE")
 PLATFORMS = "JAX_PLATFORMS"
 
