@@ -180,8 +180,8 @@ def constraints(problem: Problem, design):
     the nominal's, or for a row without one (contact) the least sample's: never above the others,
     and no huge constant for the solver's multipliers to see), whose max is
     :func:`constraint_maxima`; without: the order statistic, shape (1,)."""
-    m = constraint_maxima(problem, design)
     if problem.keep is None:
+        m = constraint_maxima(problem, design)
         return type(m)(*(jnp.reshape(v, (1,)) for v in m))
     nominal = _base(problem).constraint_maxima(problem.nominal, design)._asdict()
     rows = {}
@@ -189,7 +189,7 @@ def constraints(problem: Problem, design):
         first = nominal[name] if name in nominal else jnp.min(values, axis=-1)
         kept = jnp.where(problem.keep[..., r, :], values, first[..., None])
         rows[name] = jnp.concatenate([first[..., None], kept], axis=-1)
-    return type(m)(**rows)
+    return _named("Constraints", tuple(rows))(**rows)
 
 
 # ---------------------------------------------------------- the family's own, at the nominal
@@ -339,9 +339,9 @@ def robust_problem(scene, nominal_problem, *, samples: int | None = None, seed: 
     nom = ev.nominal(scene, scene_tol, {})
     dtype = jax.tree.leaves(nominal_problem.lower)[0].dtype
     build = ev._cached("robust-problems", nom, lambda: _problems_program(nom, base))
-    g = ev._cached("grid", nom, lambda: jax.jit(lambda: ev.grid(nom)))()
+    g = ev._cached("grid", nom, lambda: ev._grid_program(nom))()
     probs, loads = build(jnp.asarray(unit[:, scene_cols].reshape(samples, len(scene_cols))),
-                         jnp.asarray(draws.phases), g)
+                         jnp.asarray(draws.phases), g, ev.numbers(nom))
     factor = {v: np.ones(samples) for v in variables}
     shift = {v: np.zeros(samples) for v in variables}
     for j in design_cols:
@@ -372,12 +372,14 @@ def nominal_load(scene) -> jax.Array:
 
 
 def _problems_program(nom: ev.Nominal, base):
-    """The jitted, vmapped family problem and contact load of a batch of samples."""
-    def one(u, p, g):
-        d = ev.drawn(nom, ev.values_of(nom, u), p, g)
+    """The jitted, vmapped family problem and contact load of a batch of samples, of the nominal's
+    :class:`camjax.robust.evaluate.Numbers` (one program for every spread of a scene's tolerances)."""
+    def one(u, p, g, n):
+        at = ev.with_numbers(nom, n)
+        d = ev.drawn(at, ev.values_of(at, u), p, g)
         problem = base.problem_from_scene(d.scene, d.arrays)
         return problem, ev.contact_load(d.scene, d.arrays)
-    return jax.jit(jax.vmap(one, in_axes=(0, 0, None)))
+    return jax.jit(jax.vmap(one, in_axes=(0, 0, None, None)))
 
 
 def refuse_sweep(scene) -> None:
