@@ -442,8 +442,9 @@ def design_json(scene, nominal_problem) -> dict:
     side = {}
     for name, sol in (("nominal", nominal), ("robust", robust)):
         design = {k: float(getattr(sol.design, k)) for k in variables}
-        rows = (sol.evaluation.rows._asdict() if name == "robust" else
-                dict(zip(_row_names(problem), np.asarray(_rows_at(problem, sol.design)), strict=True)))
+        rows = (sol.evaluation.rows._asdict() if name == "robust" else dict(zip(
+            _row_names(problem), _rows_of(*jax.device_get(_maxima(problem, sol.design)), int(problem.rank)),
+            strict=True)))
         at_nominal = sol.evaluation.nominal if name == "robust" else sol.evaluation
         side[name] = {"design": design, "size_mm": finite_float(at_nominal.size_mm),
                       "objective": finite_float(sol.objective), "feasible": bool(sol.feasible),
@@ -483,12 +484,33 @@ def take(problem: Problem, index) -> Problem:
 
 
 @jax.jit
-def _critical(problem: Problem, design) -> jax.Array:
-    """(S,) each sample's best rank from the top over the robust rows at ``design`` (0: the
+def _maxima(problem: Problem, design) -> tuple[jax.Array, jax.Array]:
+    """At ``design`` (one program for everything a round judges): (rows,) the nominal's max over
+    the grid of each robust row's constraint (mm; -inf for a row without one: contact) and
+    (rows, S) every sample's (:func:`sample_maxima`)."""
+    nominal = _base(problem).constraint_maxima(problem.nominal, design)._asdict()
+    g = sample_maxima(problem, design)
+    low = jnp.asarray(-jnp.inf, problem.lower[0].dtype)
+    return jnp.stack([nominal.get(k, low) for k in g]), jnp.stack(list(g.values()))
+
+
+def _rows_of(nominal: np.ndarray, g: np.ndarray, rank: int, keep: np.ndarray | None = None) -> np.ndarray:
+    """(rows,) the robust rows (:func:`constraint_maxima`) from :func:`_maxima`'s arrays (NumPy):
+    each row's order statistic over the samples (with ``keep``: its max over the kept ones), no
+    lower than the nominal's."""
+    if keep is None:
+        count = g.shape[-1]
+        q = np.sort(g, axis=-1)[:, count - 1 - min(rank, count - 1)]
+    else:
+        q = np.max(np.where(keep, g, -1e30), axis=-1)
+    return np.maximum(q, nominal)
+
+
+def _critical(g: np.ndarray) -> np.ndarray:
+    """(S,) each sample's best rank from the top over the robust rows ``g`` (rows, S) (0: the
     largest of some row): the order the subsets take samples in."""
-    g = jnp.stack(list(sample_maxima(problem, design).values()))  # (rows, S)
-    ranks = jnp.argsort(jnp.argsort(-g, axis=-1), axis=-1)
-    return jnp.min(ranks, axis=0)
+    ranks = np.argsort(np.argsort(-g, axis=-1, kind="stable"), axis=-1, kind="stable")
+    return np.min(ranks, axis=0)
 
 
 def _settings():
@@ -503,12 +525,6 @@ def _settings():
 
 
 _SETTINGS = _settings()
-
-
-@jax.jit
-def _sample_rows(problem: Problem, design) -> jax.Array:
-    """(rows, S) every sample's max over the grid of each robust row's constraint (mm)."""
-    return jnp.stack(list(sample_maxima(problem, design).values()))
 
 
 def solve_robust(problem: Problem, weights, *, mode: str, solver: str, seed: int, subset: int = SUBSET,
@@ -544,25 +560,28 @@ def solve_rounds(problem: Problem, weights, *, mode: str, solver: str, seed: int
     if mode != "global":
         return solve(problem, weights, mode=mode, solver=solver, seed=seed), 1, problem
     design, index, done = start(problem), None, 0
+    nominal, g = jax.device_get(_maxima(problem, design))
     while done < rounds:
         done += 1
-        g = np.asarray(_sample_rows(problem, design))
         keep = np.ones(g.shape, bool)
         for r in range(g.shape[0]):
             keep[r, np.argsort(-g[r], kind="stable")[:m]] = False
         if count <= subset:
             index = np.arange(count)
         else:
-            order = np.argsort(np.asarray(_critical(problem, design)), kind="stable")
+            order = np.argsort(_critical(g), kind="stable")
             index = order[:subset] if index is None else _merge(index, order, subset)
-        sub = take(problem._replace(keep=jnp.asarray(keep)), jnp.asarray(np.sort(index)))
+        at = np.sort(index)
+        sub = take(problem._replace(keep=jnp.asarray(keep)), jnp.asarray(at))
         sol = solve(sub, weights, mode=mode, solver=solver, seed=seed, settings=_SETTINGS)
         design = sol.design
-        full, kept_rows = np.asarray(_rows_at(problem, design)), np.asarray(_rows_at(sub, design))
+        nominal, g = jax.device_get(_maxima(problem, design))
+        # the full set's order statistics against the rows the solve kept (the subset's kept samples)
+        full, kept_rows = _rows_of(nominal, g, m), _rows_of(nominal, g[:, at], m, keep[:, at])
         if np.allclose(full, kept_rows, rtol=0.0, atol=1e-12):
             break
     w = weights_of(sol.alpha, sol.gamma, problem.lower[0].dtype)
-    full = jax.device_get(evaluate(problem, w, jax.tree.map(jnp.asarray, design)))
+    full = jax.device_get(_evaluate(problem, w, jax.tree.map(jnp.asarray, design)))
     converged = sol.converged
     status = np.int32(Status.INFEASIBLE if not full.feasible else
                       Status.CONVERGED if converged is not None and bool(converged) else Status.MAX_STEPS)
@@ -576,9 +595,7 @@ def _merge(previous: np.ndarray, order: np.ndarray, subset: int) -> np.ndarray:
     return np.asarray(keep[:subset])
 
 
-@jax.jit
-def _rows_at(problem: Problem, design):
-    return jnp.stack(list(constraint_maxima(problem, design)))
+_evaluate = jax.jit(evaluate)
 
 
 def summary(block: dict) -> str:

@@ -355,8 +355,9 @@ def _cached(what: str, nom: Nominal, make, *extra):
     the same shape) compiles nothing: the program takes the nominal's :class:`Numbers` as an
     argument (:func:`with_numbers`)."""
     tol = nom.tolerances
-    form = (tuple((t.name, t.section) for t in tol.values), None if tol.profile is None else tol.profile.harmonics)
-    key = (what, repr(dataclasses.replace(nom.scene, tolerances=None)), form, tuple(sorted(nom.design)), *extra)
+    harmonics = None if tol.profile is None else tol.profile.harmonics
+    form = (tuple((t.name, t.section) for t in tol.values), harmonics, tuple(sorted(nom.design)))
+    key = (what, repr(dataclasses.replace(nom.scene, tolerances=None)), form, *extra)
     fn = _PROGRAMS.pop(key, None) or make()
     _PROGRAMS[key] = fn
     while len(_PROGRAMS) > _PROGRAMS_KEPT:
