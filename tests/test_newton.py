@@ -262,12 +262,11 @@ def test_robust_optimum_matches_the_gradient_solver():
     scene = scene_from_dict(tomllib.loads(ROBUST_SCENE), "robust-newton")
     base = problem_from_scene(scene)
     weights = (scene.design.alpha, scene.design.gamma)
-    # both solve by rounds from the same start, the nominal optimum: the gradient solver's (newton's
-    # own nominal optimum is held against SLSQP above; one nominal solve, not two, is compiled)
-    nominal = solve(base, weights, solver="gradient")
-    problem = rd.robust_problem(scene, base, origin=nominal.design)
-    out = {solver: rd.solve_rounds(problem, weights, mode="global", solver=solver, seed=0)
-           for solver in ("newton", "gradient")}
+    out = {}
+    for solver in ("newton", "gradient"):
+        nominal = solve(base, weights, solver=solver)
+        problem = rd.robust_problem(scene, base, origin=nominal.design)
+        out[solver] = rd.solve_rounds(problem, weights, mode="global", solver=solver, seed=0)
     (robust, _, solved), (reference, _, _) = out["newton"], out["gradient"]
     assert robust.status_name == "converged"
     assert bool(robust.feasible) and bool(reference.feasible)
