@@ -49,7 +49,8 @@ from camjax.family import FEASIBILITY_TOL_MM, all_within, violated
 from camjax.numerics import finite_float, positive_part
 from camjax.robust import evaluate as ev
 from camjax.robust.tolerances import Tolerances, draw
-from camjax.solvers.base import family_of, register_family
+from camjax.solvers import gradient
+from camjax.solvers.base import Settings, family_of, register_family
 
 CHECK_SAMPLES_MIN = 20_000  # the fresh sample set: at least this many, and 10 x the design's
 CHECK_SAMPLES_MAX = 200_000
@@ -485,9 +486,8 @@ def take(problem: Problem, index) -> Problem:
 
 @jax.jit
 def _maxima(problem: Problem, design) -> tuple[jax.Array, jax.Array]:
-    """At ``design`` (one program for everything a round judges): (rows,) the nominal's max over
-    the grid of each robust row's constraint (mm; -inf for a row without one: contact) and
-    (rows, S) every sample's (:func:`sample_maxima`)."""
+    """At ``design``, all a round judges in one program: (rows,) the nominal's max over the grid of
+    each robust row's constraint (mm; -inf without one: contact) and (rows, S) every sample's."""
     nominal = _base(problem).constraint_maxima(problem.nominal, design)._asdict()
     g = sample_maxima(problem, design)
     low = jnp.asarray(-jnp.inf, problem.lower[0].dtype)
@@ -495,36 +495,18 @@ def _maxima(problem: Problem, design) -> tuple[jax.Array, jax.Array]:
 
 
 def _rows_of(nominal: np.ndarray, g: np.ndarray, rank: int, keep: np.ndarray | None = None) -> np.ndarray:
-    """(rows,) the robust rows (:func:`constraint_maxima`) from :func:`_maxima`'s arrays (NumPy):
-    each row's order statistic over the samples (with ``keep``: its max over the kept ones), no
-    lower than the nominal's."""
+    """(rows,) the robust rows of :func:`constraint_maxima` from :func:`_maxima`'s arrays, in NumPy."""
     if keep is None:
-        count = g.shape[-1]
-        q = np.sort(g, axis=-1)[:, count - 1 - min(rank, count - 1)]
+        q = np.sort(g, axis=-1)[:, g.shape[-1] - 1 - min(rank, g.shape[-1] - 1)]
     else:
         q = np.max(np.where(keep, g, -1e30), axis=-1)
     return np.maximum(q, nominal)
 
 
-def _critical(g: np.ndarray) -> np.ndarray:
-    """(S,) each sample's best rank from the top over the robust rows ``g`` (rows, S) (0: the
-    largest of some row): the order the subsets take samples in."""
-    ranks = np.argsort(np.argsort(-g, axis=-1, kind="stable"), axis=-1, kind="stable")
-    return np.min(ranks, axis=0)
-
-
-def _settings():
-    """The gradient solver (and the hybrid's polish) with one multiplier per row (per kept sample):
-    its max over rows is not one variable minus a fixed term, as a family's max over the grid is."""
-    import dataclasses as dc
-
-    from camjax.solvers import gradient
-    from camjax.solvers.base import Settings
-
-    return Settings.of_solvers(gradient=dc.replace(gradient.DEFAULT_SETTINGS, aggregate_constraints=False))
-
-
-_SETTINGS = _settings()
+# the gradient solver (and the hybrid's polish) with one multiplier per row (per kept sample): its
+# max over rows is not one variable minus a fixed term, as a family's max over the grid is
+_SETTINGS = Settings.of_solvers(gradient=dataclasses.replace(gradient.DEFAULT_SETTINGS,
+                                                             aggregate_constraints=False))
 
 
 def solve_robust(problem: Problem, weights, *, mode: str, solver: str, seed: int, subset: int = SUBSET,
@@ -541,15 +523,14 @@ def solve_rounds(problem: Problem, weights, *, mode: str, solver: str, seed: int
     and the problem the last round solved (a solution's certificate is of that problem's rows).
 
     Global mode, by rounds: at the current design (at first :func:`start`: the nominal optimum,
-    or the family's start) each row's m
-    largest samples are discarded and the row is the max over the others (a max over fixed samples,
-    as smooth as each family's max over the grid, where the order statistic switches samples);
-    a set larger than ``subset`` is solved on its ``subset`` samples nearest to breaking a limit.
-    The design is solved, and the rounds end when every row's order statistic over the full set
-    equals the row the solver kept (the discarded samples are the m largest at the design, and the
-    subset holds the rest of the top). The solution is judged on the full set's order statistics.
-    Pointwise mode solves the order statistics of the full set directly (each angle its own).
-    """
+    or the family's start) each row's m largest samples are discarded and the row is the max over
+    the others (a max over fixed samples, as smooth as each family's max over the grid, where the
+    order statistic switches samples); a set larger than ``subset`` is solved on its ``subset``
+    samples nearest to breaking a limit. The design is solved, and the rounds end when every row's
+    order statistic over the full set equals the row the solver kept (the discarded samples are
+    the m largest at the design, and the subset holds the rest of the top). The solution is judged
+    on the full set's order statistics. Pointwise mode solves the order statistics of the full set
+    directly (each angle its own)."""
     from camjax.family import weights_of
     from camjax.results import Status
     from camjax.solvers.base import solve
@@ -569,14 +550,15 @@ def solve_rounds(problem: Problem, weights, *, mode: str, solver: str, seed: int
         if count <= subset:
             index = np.arange(count)
         else:
-            order = np.argsort(_critical(g), kind="stable")
+            # each sample's best rank from the top over the rows (0: the largest of some row)
+            best = np.min(np.argsort(np.argsort(-g, axis=-1, kind="stable"), axis=-1, kind="stable"), axis=0)
+            order = np.argsort(best, kind="stable")
             index = order[:subset] if index is None else _merge(index, order, subset)
         at = np.sort(index)
         sub = take(problem._replace(keep=jnp.asarray(keep)), jnp.asarray(at))
         sol = solve(sub, weights, mode=mode, solver=solver, seed=seed, settings=_SETTINGS)
         design = sol.design
-        nominal, g = jax.device_get(_maxima(problem, design))
-        # the full set's order statistics against the rows the solve kept (the subset's kept samples)
+        nominal, g = jax.device_get(_maxima(problem, design))  # the full set's rows against the kept
         full, kept_rows = _rows_of(nominal, g, m), _rows_of(nominal, g[:, at], m, keep[:, at])
         if np.allclose(full, kept_rows, rtol=0.0, atol=1e-12):
             break
