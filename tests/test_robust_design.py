@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 import tomllib
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -154,42 +155,6 @@ def test_sweep_refuses_a_robust_design(tmp_path, capsys):
     assert not out.exists()
 
 
-@pytest.mark.slow
-def test_a_rocking_follower_with_the_interior_point_solver():
-    """An oscillating roller (its example scene, rpm and the roller's radius toleranced) solved by
-    the newton solver: converged, feasible, robust rows <= 0 on the full set, an objective no better
-    than the nominal optimum's (the robust problem's feasible set is inside the nominal's), and the
-    gradient solver's robust optimum on the same robust rows: the objective within 1e-7 relative
-    (the solvers' accuracy target; each stops far tighter, newton on a scaled KKT residual of 1e-9,
-    measured apart by 5e-10) and the base radius within 1e-6 mm (measured 2e-8 mm)."""
-    from camjax import followers
-
-    kind = followers.get("oscillating_roller")
-    d = tomllib.loads(builtin_scene_text(kind.example_scene))
-    d["motion"]["samples"] = 90
-    d["motion"]["extrema"] = "grid"
-    d["design"]["solver"] = "newton"
-    d["design"]["robust"] = {"probability": 0.95, "samples": 100}
-    d["tolerances"] = {"rpm": {"sd_percent": 3}, "roller_radius_mm": {"sd": 0.05}}
-    try:
-        scene = scene_from_dict(d, "rocker")
-    except SceneError as exc:  # a coarser grid than the scene's shortest segment allows
-        pytest.skip(str(exc))
-    base = problem_from_scene(scene)
-    weights = (scene.design.alpha, scene.design.gamma)
-    nominal = solve(base, weights, solver="newton")
-    problem = rd.robust_problem(scene, base)
-    robust, _ = rd.solve_robust(problem, weights, mode="global", solver="newton", seed=0)
-    assert robust.status_name == "converged"
-    assert bool(robust.feasible), robust.violation
-    assert all(float(v) <= 1e-6 for v in robust.evaluation.rows)
-    assert float(robust.objective) >= float(nominal.objective) - 1e-9
-    reference, _ = rd.solve_robust(problem, weights, mode="global", solver="gradient", seed=0)
-    assert bool(reference.feasible)
-    assert float(robust.objective) == pytest.approx(float(reference.objective), rel=1e-7)
-    assert float(robust.design.base_radius_mm) == pytest.approx(float(reference.design.base_radius_mm), abs=1e-6)
-
-
 PF, SF = 0.9, 200  # every follower's robust set: m = floor(0.1 x 201) - d = 20 - d samples may exceed a row
 FRESH_SETS = 5  # fresh sets of SF samples each (seeds 1..5): the same shapes, so nothing compiles again
 FOLLOWER_SPREAD_MM = 0.05  # sd of every toleranced design variable but the base radius
@@ -213,9 +178,55 @@ def follower_scene(name: str, scale: float = 1.0):
     return scene_from_dict(d, f"robust-{name}")
 
 
+@pytest.fixture(scope="module")
+def follower_designs():
+    """Each follower type's :func:`follower_scene`, its problem and weights, the nominal optimum
+    and the robust problem around it with its robust design (gradient solver), solved once per
+    type for the tests of this module (``get(name)``)."""
+    solved = {}
+
+    def get(name: str) -> SimpleNamespace:
+        if name not in solved:
+            scene = follower_scene(name)
+            base = problem_from_scene(scene)
+            w = (scene.design.alpha, scene.design.gamma)
+            nominal = solve(base, w, solver="gradient")
+            problem = rd.robust_problem(scene, base, origin=nominal.design)
+            robust, _ = rd.solve_robust(problem, w, mode="global", solver="gradient", seed=0)
+            solved[name] = SimpleNamespace(scene=scene, base=base, weights=w, nominal=nominal,
+                                           problem=problem, robust=robust)
+        return solved[name]
+
+    return get
+
+
+@pytest.mark.slow
+def test_a_rocking_follower_with_the_interior_point_solver(follower_designs):
+    """An oscillating roller (its example scene with the robust set and tolerances of
+    :func:`follower_scene`: rpm, the roller's radius, the pivot distance and the arm length
+    toleranced) solved by the newton solver: converged, feasible, robust rows <= 0 on the full set,
+    an objective no better than the nominal optimum's (the robust problem's feasible set is inside
+    the nominal's), and the gradient solver's robust optimum on the same robust problem (the one
+    test_every_follower_type_keeps_each_constraint_on_fresh_samples checks on fresh samples): the
+    objective within 1e-7 relative (the solvers' accuracy target; each stops far tighter, newton
+    on a scaled KKT residual of 1e-9, measured apart by 2e-9) and the base radius within 1e-6 mm
+    (measured 6e-8 mm). Sharing the gradient solver's problem and design with the follower test
+    compiles one robust solve here (newton's), not three."""
+    d = follower_designs("oscillating_roller")
+    robust, _ = rd.solve_robust(d.problem, d.weights, mode="global", solver="newton", seed=0)
+    assert robust.status_name == "converged"
+    assert bool(robust.feasible), robust.violation
+    assert all(float(v) <= 1e-6 for v in robust.evaluation.rows)
+    assert float(robust.objective) >= float(d.nominal.objective) - 1e-9
+    reference = d.robust
+    assert bool(reference.feasible)
+    assert float(robust.objective) == pytest.approx(float(reference.objective), rel=1e-7)
+    assert float(robust.design.base_radius_mm) == pytest.approx(float(reference.design.base_radius_mm), abs=1e-6)
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("name", followers.names())
-def test_every_follower_type_keeps_each_constraint_on_fresh_samples(name):
+def test_every_follower_type_keeps_each_constraint_on_fresh_samples(name, follower_designs):
     """Every registered follower type through its family protocol.
 
     - The robust design is feasible and no smaller than the nominal optimum, and each of its
@@ -230,11 +241,10 @@ def test_every_follower_type_keeps_each_constraint_on_fresh_samples(name):
       e.g. the oscillating curved face's R_b + R_c, where two runs' designs differ along it and
       their objectives by ~4e-8).
     """
-    scene, zero = follower_scene(name), follower_scene(name, 0.0)
-    base = problem_from_scene(scene)
+    d = follower_designs(name)
+    scene, base, w, nominal, robust = d.scene, d.base, d.weights, d.nominal, d.robust
+    zero = follower_scene(name, 0.0)
     fam = family_of(base)
-    w = (scene.design.alpha, scene.design.gamma)
-    nominal = solve(base, w, solver="gradient")
     flat_problem = rd.robust_problem(zero, base, origin=nominal.design)
     same, _ = rd.solve_robust(flat_problem, w, mode="global", solver="gradient", seed=0)
     assert float(same.objective) == pytest.approx(float(nominal.objective), rel=1e-7)
@@ -243,8 +253,6 @@ def test_every_follower_type_keeps_each_constraint_on_fresh_samples(name):
         for k in ref._fields:
             assert float(getattr(rows, k)) == pytest.approx(float(getattr(ref, k)), abs=1e-9), k
             assert float(getattr(rows, k)) <= FEASIBILITY_TOL_MM, k
-    robust, _ = rd.solve_robust(rd.robust_problem(scene, base, origin=nominal.design), w, mode="global",
-                                solver="gradient", seed=0)
     assert bool(same.feasible) and bool(robust.feasible), robust.violation
     assert float(robust.evaluation.nominal.size_mm) >= float(nominal.evaluation.size_mm) - 1e-6
     free = rd.free_variables(scene.design.variables)

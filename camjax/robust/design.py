@@ -49,7 +49,8 @@ from camjax.family import FEASIBILITY_TOL_MM, all_within, violated
 from camjax.numerics import finite_float, positive_part
 from camjax.robust import evaluate as ev
 from camjax.robust.tolerances import Tolerances, draw
-from camjax.solvers.base import family_of, register_family
+from camjax.solvers import gradient
+from camjax.solvers.base import Settings, family_of, register_family
 
 CHECK_SAMPLES_MIN = 20_000  # the fresh sample set: at least this many, and 10 x the design's
 CHECK_SAMPLES_MAX = 200_000
@@ -180,8 +181,8 @@ def constraints(problem: Problem, design):
     the nominal's, or for a row without one (contact) the least sample's: never above the others,
     and no huge constant for the solver's multipliers to see), whose max is
     :func:`constraint_maxima`; without: the order statistic, shape (1,)."""
-    m = constraint_maxima(problem, design)
     if problem.keep is None:
+        m = constraint_maxima(problem, design)
         return type(m)(*(jnp.reshape(v, (1,)) for v in m))
     nominal = _base(problem).constraint_maxima(problem.nominal, design)._asdict()
     rows = {}
@@ -189,7 +190,7 @@ def constraints(problem: Problem, design):
         first = nominal[name] if name in nominal else jnp.min(values, axis=-1)
         kept = jnp.where(problem.keep[..., r, :], values, first[..., None])
         rows[name] = jnp.concatenate([first[..., None], kept], axis=-1)
-    return type(m)(**rows)
+    return _named("Constraints", tuple(rows))(**rows)
 
 
 # ---------------------------------------------------------- the family's own, at the nominal
@@ -339,9 +340,9 @@ def robust_problem(scene, nominal_problem, *, samples: int | None = None, seed: 
     nom = ev.nominal(scene, scene_tol, {})
     dtype = jax.tree.leaves(nominal_problem.lower)[0].dtype
     build = ev._cached("robust-problems", nom, lambda: _problems_program(nom, base))
-    g = ev._cached("grid", nom, lambda: jax.jit(lambda: ev.grid(nom)))()
+    g = ev._cached("grid", nom, lambda: ev._grid_program(nom))()
     probs, loads = build(jnp.asarray(unit[:, scene_cols].reshape(samples, len(scene_cols))),
-                         jnp.asarray(draws.phases), g)
+                         jnp.asarray(draws.phases), g, ev.numbers(nom))
     factor = {v: np.ones(samples) for v in variables}
     shift = {v: np.zeros(samples) for v in variables}
     for j in design_cols:
@@ -372,12 +373,14 @@ def nominal_load(scene) -> jax.Array:
 
 
 def _problems_program(nom: ev.Nominal, base):
-    """The jitted, vmapped family problem and contact load of a batch of samples."""
-    def one(u, p, g):
-        d = ev.drawn(nom, ev.values_of(nom, u), p, g)
+    """The jitted, vmapped family problem and contact load of a batch of samples, of the nominal's
+    :class:`camjax.robust.evaluate.Numbers` (one program for every spread of a scene's tolerances)."""
+    def one(u, p, g, n):
+        at = ev.with_numbers(nom, n)
+        d = ev.drawn(at, ev.values_of(at, u), p, g)
         problem = base.problem_from_scene(d.scene, d.arrays)
         return problem, ev.contact_load(d.scene, d.arrays)
-    return jax.jit(jax.vmap(one, in_axes=(0, 0, None)))
+    return jax.jit(jax.vmap(one, in_axes=(0, 0, None, None)))
 
 
 def refuse_sweep(scene) -> None:
@@ -440,8 +443,9 @@ def design_json(scene, nominal_problem) -> dict:
     side = {}
     for name, sol in (("nominal", nominal), ("robust", robust)):
         design = {k: float(getattr(sol.design, k)) for k in variables}
-        rows = (sol.evaluation.rows._asdict() if name == "robust" else
-                dict(zip(_row_names(problem), np.asarray(_rows_at(problem, sol.design)), strict=True)))
+        rows = (sol.evaluation.rows._asdict() if name == "robust" else dict(zip(
+            _row_names(problem), _rows_of(*jax.device_get(_maxima(problem, sol.design)), int(problem.rank)),
+            strict=True)))
         at_nominal = sol.evaluation.nominal if name == "robust" else sol.evaluation
         side[name] = {"design": design, "size_mm": finite_float(at_nominal.size_mm),
                       "objective": finite_float(sol.objective), "feasible": bool(sol.feasible),
@@ -481,32 +485,28 @@ def take(problem: Problem, index) -> Problem:
 
 
 @jax.jit
-def _critical(problem: Problem, design) -> jax.Array:
-    """(S,) each sample's best rank from the top over the robust rows at ``design`` (0: the
-    largest of some row): the order the subsets take samples in."""
-    g = jnp.stack(list(sample_maxima(problem, design).values()))  # (rows, S)
-    ranks = jnp.argsort(jnp.argsort(-g, axis=-1), axis=-1)
-    return jnp.min(ranks, axis=0)
+def _maxima(problem: Problem, design) -> tuple[jax.Array, jax.Array]:
+    """At ``design``, all a round judges in one program: (rows,) the nominal's max over the grid of
+    each robust row's constraint (mm; -inf without one: contact) and (rows, S) every sample's."""
+    nominal = _base(problem).constraint_maxima(problem.nominal, design)._asdict()
+    g = sample_maxima(problem, design)
+    low = jnp.asarray(-jnp.inf, problem.lower[0].dtype)
+    return jnp.stack([nominal.get(k, low) for k in g]), jnp.stack(list(g.values()))
 
 
-def _settings():
-    """The gradient solver (and the hybrid's polish) with one multiplier per row (per kept sample):
-    its max over rows is not one variable minus a fixed term, as a family's max over the grid is."""
-    import dataclasses as dc
-
-    from camjax.solvers import gradient
-    from camjax.solvers.base import Settings
-
-    return Settings.of_solvers(gradient=dc.replace(gradient.DEFAULT_SETTINGS, aggregate_constraints=False))
+def _rows_of(nominal: np.ndarray, g: np.ndarray, rank: int, keep: np.ndarray | None = None) -> np.ndarray:
+    """(rows,) the robust rows of :func:`constraint_maxima` from :func:`_maxima`'s arrays, in NumPy."""
+    if keep is None:
+        q = np.sort(g, axis=-1)[:, g.shape[-1] - 1 - min(rank, g.shape[-1] - 1)]
+    else:
+        q = np.max(np.where(keep, g, -1e30), axis=-1)
+    return np.maximum(q, nominal)
 
 
-_SETTINGS = _settings()
-
-
-@jax.jit
-def _sample_rows(problem: Problem, design) -> jax.Array:
-    """(rows, S) every sample's max over the grid of each robust row's constraint (mm)."""
-    return jnp.stack(list(sample_maxima(problem, design).values()))
+# the gradient solver (and the hybrid's polish) with one multiplier per row (per kept sample): its
+# max over rows is not one variable minus a fixed term, as a family's max over the grid is
+_SETTINGS = Settings.of_solvers(gradient=dataclasses.replace(gradient.DEFAULT_SETTINGS,
+                                                             aggregate_constraints=False))
 
 
 def solve_robust(problem: Problem, weights, *, mode: str, solver: str, seed: int, subset: int = SUBSET,
@@ -523,15 +523,14 @@ def solve_rounds(problem: Problem, weights, *, mode: str, solver: str, seed: int
     and the problem the last round solved (a solution's certificate is of that problem's rows).
 
     Global mode, by rounds: at the current design (at first :func:`start`: the nominal optimum,
-    or the family's start) each row's m
-    largest samples are discarded and the row is the max over the others (a max over fixed samples,
-    as smooth as each family's max over the grid, where the order statistic switches samples);
-    a set larger than ``subset`` is solved on its ``subset`` samples nearest to breaking a limit.
-    The design is solved, and the rounds end when every row's order statistic over the full set
-    equals the row the solver kept (the discarded samples are the m largest at the design, and the
-    subset holds the rest of the top). The solution is judged on the full set's order statistics.
-    Pointwise mode solves the order statistics of the full set directly (each angle its own).
-    """
+    or the family's start) each row's m largest samples are discarded and the row is the max over
+    the others (a max over fixed samples, as smooth as each family's max over the grid, where the
+    order statistic switches samples); a set larger than ``subset`` is solved on its ``subset``
+    samples nearest to breaking a limit. The design is solved, and the rounds end when every row's
+    order statistic over the full set equals the row the solver kept (the discarded samples are
+    the m largest at the design, and the subset holds the rest of the top). The solution is judged
+    on the full set's order statistics. Pointwise mode solves the order statistics of the full set
+    directly (each angle its own)."""
     from camjax.family import weights_of
     from camjax.results import Status
     from camjax.solvers.base import solve
@@ -542,25 +541,29 @@ def solve_rounds(problem: Problem, weights, *, mode: str, solver: str, seed: int
     if mode != "global":
         return solve(problem, weights, mode=mode, solver=solver, seed=seed), 1, problem
     design, index, done = start(problem), None, 0
+    nominal, g = jax.device_get(_maxima(problem, design))
     while done < rounds:
         done += 1
-        g = np.asarray(_sample_rows(problem, design))
         keep = np.ones(g.shape, bool)
         for r in range(g.shape[0]):
             keep[r, np.argsort(-g[r], kind="stable")[:m]] = False
         if count <= subset:
             index = np.arange(count)
         else:
-            order = np.argsort(np.asarray(_critical(problem, design)), kind="stable")
+            # each sample's best rank from the top over the rows (0: the largest of some row)
+            best = np.min(np.argsort(np.argsort(-g, axis=-1, kind="stable"), axis=-1, kind="stable"), axis=0)
+            order = np.argsort(best, kind="stable")
             index = order[:subset] if index is None else _merge(index, order, subset)
-        sub = take(problem._replace(keep=jnp.asarray(keep)), jnp.asarray(np.sort(index)))
+        at = np.sort(index)
+        sub = take(problem._replace(keep=jnp.asarray(keep)), jnp.asarray(at))
         sol = solve(sub, weights, mode=mode, solver=solver, seed=seed, settings=_SETTINGS)
         design = sol.design
-        full, kept_rows = np.asarray(_rows_at(problem, design)), np.asarray(_rows_at(sub, design))
+        nominal, g = jax.device_get(_maxima(problem, design))  # the full set's rows against the kept
+        full, kept_rows = _rows_of(nominal, g, m), _rows_of(nominal, g[:, at], m, keep[:, at])
         if np.allclose(full, kept_rows, rtol=0.0, atol=1e-12):
             break
     w = weights_of(sol.alpha, sol.gamma, problem.lower[0].dtype)
-    full = jax.device_get(evaluate(problem, w, jax.tree.map(jnp.asarray, design)))
+    full = jax.device_get(_evaluate(problem, w, jax.tree.map(jnp.asarray, design)))
     converged = sol.converged
     status = np.int32(Status.INFEASIBLE if not full.feasible else
                       Status.CONVERGED if converged is not None and bool(converged) else Status.MAX_STEPS)
@@ -574,9 +577,7 @@ def _merge(previous: np.ndarray, order: np.ndarray, subset: int) -> np.ndarray:
     return np.asarray(keep[:subset])
 
 
-@jax.jit
-def _rows_at(problem: Problem, design):
-    return jnp.stack(list(constraint_maxima(problem, design)))
+_evaluate = jax.jit(evaluate)
 
 
 def summary(block: dict) -> str:

@@ -320,11 +320,44 @@ _PROGRAMS: dict = {}  # (what, content of the nominal, ...) -> jitted function, 
 _PROGRAMS_KEPT = 8
 
 
+class Numbers(NamedTuple):
+    """The numbers of a :class:`Nominal` that its programs take as arguments (arrays), so that one
+    compiled program serves every design, every spread and every form-error amplitude of a scene."""
+
+    design: dict[str, Any]  # the nominal design's variables (mm)
+    values: Any  # (k,) nominal of each toleranced value
+    scales: Any  # (k,) spread of each
+    amplitude_mm: Any  # the form error's amplitude (mm); None without one
+
+
+def numbers(nom: Nominal) -> Numbers:
+    """The :class:`Numbers` of a nominal (NumPy float64)."""
+    profile = nom.tolerances.profile
+    f = lambda x: np.asarray(x, np.float64).reshape(-1)  # noqa: E731
+    return Numbers({k: np.float64(v) for k, v in nom.design.items()}, f(nom.values), f(nom.scales),
+                   None if profile is None else np.float64(profile.amplitude_mm))
+
+
+def with_numbers(nom: Nominal, n: Numbers) -> Nominal:
+    """``nom`` with its numbers replaced by ``n`` (traced inside a program)."""
+    k = len(nom.values)
+    tol = nom.tolerances
+    if tol.profile is not None:
+        tol = tol._replace(profile=tol.profile._replace(amplitude_mm=n.amplitude_mm))
+    return nom._replace(tolerances=tol, design=dict(n.design), values=tuple(n.values[i] for i in range(k)),
+                        scales=tuple(n.scales[i] for i in range(k)))
+
+
 def _cached(what: str, nom: Nominal, make, *extra):
-    """The jitted program ``make()`` of a nominal, reused by any nominal of the same content (the
-    scene's repr, its tolerances, the design), so that a second run in a process (a scene read
-    again, another seed or sample count of the same shape) compiles nothing."""
-    key = (what, repr(nom.scene), nom.tolerances, tuple(sorted(nom.design.items())), *extra)
+    """The jitted program ``make()`` of a nominal, reused by any nominal of the same form (the scene
+    but its [tolerances], which values are toleranced, the form error's harmonics, the design's
+    variables), so that a second run in a process (another design, spread, seed or sample count of
+    the same shape) compiles nothing: the program takes the nominal's :class:`Numbers` as an
+    argument (:func:`with_numbers`)."""
+    tol = nom.tolerances
+    harmonics = None if tol.profile is None else tol.profile.harmonics
+    form = (tuple((t.name, t.section) for t in tol.values), harmonics, tuple(sorted(nom.design)))
+    key = (what, repr(dataclasses.replace(nom.scene, tolerances=None)), form, *extra)
     fn = _PROGRAMS.pop(key, None) or make()
     _PROGRAMS[key] = fn
     while len(_PROGRAMS) > _PROGRAMS_KEPT:
@@ -334,16 +367,29 @@ def _cached(what: str, nom: Nominal, make, *extra):
 
 def _outputs_program(nom: Nominal, block: int):
     """One jitted program for every sample: ``lax.map`` over blocks of ``block`` vmapped samples
-    (outputs and broken limits only)."""
-    def one(x, g):
-        s = sample(nom, values_of(nom, x[0]), x[1], g)
-        return s.outputs, s.broken
-    return jax.jit(lambda u, p, g: jax.lax.map(lambda x: one(x, g), (u, p), batch_size=block))
+    (outputs and broken limits only), of the nominal's :class:`Numbers` ``n``."""
+    def run(u, p, g, n):
+        at = with_numbers(nom, n)
+
+        def one(x):
+            s = sample(at, values_of(at, x[0]), x[1], g)
+            return s.outputs, s.broken
+        return jax.lax.map(one, (u, p), batch_size=block)
+    return jax.jit(run)
 
 
 def _curves_program(nom: Nominal):
-    """The jitted, vmapped evaluation of a batch with its curves (lift, acceleration, load)."""
-    return jax.jit(jax.vmap(lambda u, p, g: sample(nom, values_of(nom, u), p, g), in_axes=(0, 0, None)))
+    """The jitted, vmapped evaluation of a batch with its curves (lift, acceleration, load), of the
+    nominal's :class:`Numbers` ``n``."""
+    def run(u, p, g, n):
+        at = with_numbers(nom, n)
+        return jax.vmap(lambda ui, pi: sample(at, values_of(at, ui), pi, g))(u, p)
+    return jax.jit(run)
+
+
+def _grid_program(nom: Nominal):
+    """The jitted :func:`grid` of a nominal (its scene's motion and form error's harmonics only)."""
+    return jax.jit(lambda: grid(nom))
 
 
 def batch(nom: Nominal, unit, phases, *, chunk: int = 131072, curves: int = 2048, block: int = BLOCK):
@@ -353,18 +399,19 @@ def batch(nom: Nominal, unit, phases, *, chunk: int = 131072, curves: int = 2048
     samples only, to bound memory (None when ``curves`` is 0)."""
     unit, phases = np.asarray(unit), np.asarray(phases)
     total = unit.shape[0]
-    g = _cached("grid", nom, lambda: jax.jit(lambda: grid(nom)))()
+    g = _cached("grid", nom, lambda: _grid_program(nom))()
     program = _cached("outputs", nom, lambda: _outputs_program(nom, block), block)
+    n = numbers(nom)
     outs, broken = [], []
     for start in range(0, total, chunk):
-        o, b = program(jnp.asarray(unit[start:start + chunk]), jnp.asarray(phases[start:start + chunk]), g)
+        o, b = program(jnp.asarray(unit[start:start + chunk]), jnp.asarray(phases[start:start + chunk]), g, n)
         outs.append(np.asarray(o))
         broken.append(np.asarray(b))
     lift = accel = load = None
     if curves:
         m = min(curves, total)
         curves_of = _cached("curves", nom, lambda: _curves_program(nom))
-        c = curves_of(jnp.asarray(unit[:m]), jnp.asarray(phases[:m]), g)
+        c = curves_of(jnp.asarray(unit[:m]), jnp.asarray(phases[:m]), g, n)
         lift, accel, load = np.asarray(c.lift), np.asarray(c.accel), np.asarray(c.load)
     return Sample(np.concatenate(outs), np.concatenate(broken), lift, accel, load)
 
