@@ -205,6 +205,13 @@ class Codesign:
         N m/rad and N m)."""
         return self.shape.problem(self.theta, kin4, spring)
 
+    @property
+    def builder(self) -> ProblemBuilder:
+        """:meth:`problem` as a callable equal to that of every co-design of the same shape and grid
+        (the static ``build`` of :class:`camjax.codesign.joint.JointProblem`: one compiled joint
+        solve for every co-design of one scene and grid, e.g. a sweep's weightings)."""
+        return ProblemBuilder(self.shape, self.theta)
+
     def kinematics(self, z):
         """(4, samples) kinematics of the coordinates z (traceable)."""
         return _kinematics(self.kin0, self.jacobian, self.lin.z0, z)
@@ -405,6 +412,28 @@ class ProblemShape:
             train = spring_mod.train_of(self.train_box, spring[0], spring[1])
             scene = dataclasses.replace(scene, follower=dataclasses.replace(scene.follower, train=train))
         return problem_from_scene(scene, arrays_from_kinematics(scene, kin))
+
+
+class ProblemBuilder:
+    """``build(kin4, spring=None)``: the family's problem of a :class:`ProblemShape` on the grid's
+    angles ``theta`` (:meth:`ProblemShape.problem`), equal (and hashing alike) where the shape and
+    the angles are: a static argument of compiled programs that another co-design of the same scene
+    and grid reuses (a bound method of each co-design is a new one, compiled again)."""
+
+    def __init__(self, shape: ProblemShape, theta):
+        self.shape = shape
+        self.theta = theta
+        self._angles = np.asarray(theta)
+
+    def __call__(self, kin4, spring=None):
+        return self.shape.problem(self.theta, kin4, spring)
+
+    def __eq__(self, other) -> bool:
+        return (isinstance(other, ProblemBuilder) and self.shape == other.shape
+                and np.array_equal(self._angles, other._angles))
+
+    def __hash__(self) -> int:
+        return hash((self.shape, self._angles.shape))
 
 
 def _kinematics(kin0, jacobian, z0, z):
