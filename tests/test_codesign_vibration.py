@@ -13,9 +13,10 @@ import tomllib
 
 import numpy as np
 import pytest
+from codesign_fixtures import design_keeping_codesign
+from scene_text import toml_of
 
-from camjax.cli import main
-from camjax.codesign import Codesign, codesign_scene
+from camjax.codesign import Codesign
 from camjax.codesign.builtin import fitted_coordinates
 from camjax.codesign.problem import train_quadratics
 from camjax.dynamics.context import synthesis_train
@@ -137,11 +138,22 @@ def test_the_residual_terms_gradient_matches_central_differences(band, count):
 
 
 @pytest.fixture(scope="module")
-def heavy():
-    """The scene with a heavy residual weight (1e6 per (A/h)^2: the cam's objective is ~0.5) and its
-    co-design, at most 40 BFGS steps."""
-    scene = scene_from_dict(vib_data(l2_jerk=1e-6, residual_vibration=1e6), "vib")
-    return scene, codesign_scene(scene, SAMPLES, max_iterations=40)
+def command_run(tmp_path_factory):
+    """`camjax design` of the scene with a heavy residual weight (1e6 per (A/h)^2: the cam's
+    objective is ~0.5) and the co-design it computed on the way (the joint program's: quadratic
+    law terms alone), which the tests of the search's result check too."""
+    folder = tmp_path_factory.mktemp("vib")
+    path = folder / "vib.toml"
+    path.write_text(toml_of(vib_data(l2_jerk=1e-6, residual_vibration=1e6)))
+    outcome, _ = design_keeping_codesign([str(path), "--out", str(folder / "out")])
+    assert outcome.method == "joint" and outcome.scene.motion.samples == SAMPLES
+    return folder / "out", outcome
+
+
+@pytest.fixture(scope="module")
+def heavy(command_run):
+    """The heavy residual weight's scene and its co-design (the command's)."""
+    return scene_from_dict(vib_data(l2_jerk=1e-6, residual_vibration=1e6), "vib"), command_run[1]
 
 
 @pytest.mark.slow
@@ -199,16 +211,8 @@ def test_codesign_never_loses_to_choosing_with_the_residual(heavy):
 
 
 @pytest.mark.slow
-def test_design_reports_the_residual_per_segment(tmp_path):
-    path = tmp_path / "vib.toml"
-    data = vib_data(l2_jerk=1e-6, residual_vibration=1e6)
-    lines = [builtin_scene_text("codesign").split("[synthesis]")[0].replace("control_count = 16", "control_count = 8")
-             .replace("samples = 360", f"samples = {SAMPLES}")]
-    lines.append("[dynamics]\n" + "\n".join(f"{k} = {json.dumps(v)}" for k, v in data["dynamics"].items()))
-    lines.append("[synthesis]\nobjective = { l2_jerk = 1e-6, residual_vibration = 1e6 }\n")
-    path.write_text("\n".join(lines))
-    out = tmp_path / "out"
-    assert main(["design", str(path), "--out", str(out)]) == 0
+def test_design_reports_the_residual_per_segment(command_run):
+    out = command_run[0]
     syn = json.loads((out / "result.json").read_text())["synthesis"]
     assert syn["train"]["speed_factors"] == [1.0]
     assert syn["train"]["natural_frequency_hz"] == pytest.approx(60.0, rel=1e-5)
