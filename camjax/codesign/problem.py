@@ -67,6 +67,7 @@ from camjax.evaluate import arrays_from_kinematics, scene_arrays
 from camjax.family import weights_of
 from camjax.program import Kinematics
 from camjax.solvers.base import Settings, family_of, problem_from_scene, solver_module
+from camjax.solvers.gradient import midpoint
 from camjax.solvers.newton import NewtonSettings
 from camjax.synthesis.linear import law_quadratics, linear_kinematics
 from camjax.synthesis.problem import ALL_OBJECTIVES, L2_OBJECTIVES
@@ -180,6 +181,7 @@ class Codesign:
         # the joint program's scenes (no designed spring, no peak terms) keep its inner solver
         self.inner_solver = JOINT_INNER_SOLVER if self.spring is None and self.peaks is None else INNER_SOLVER
         self.evaluations = 0
+        self._placeholder = None  # a design of the family's structure: a cold inner solve's start argument
         self.builtin_cache: dict = {} if builtin_cache is None else builtin_cache
 
     # ------------------------------------------------------------------ pure pieces
@@ -219,13 +221,21 @@ class Codesign:
     def _inner(self, kin4, spring, start=None):
         """(F, design, feasible) of the inner optimum on ``kin4`` with ``spring`` (None: the scene's),
         solved from the design ``start`` (mm; None: the solver's own start)."""
+        spring = _rate_preload(spring)
+        cold = start is None and self.inner_solver == INNER_SOLVER
+        if cold:  # the warm solves' program, from the solver's own start (own_start)
+            if self._placeholder is None:
+                shapes = jax.eval_shape(lambda k, s: own_start(self.problem(k, s)), jnp.asarray(kin4), spring)
+                self._placeholder = jax.tree.map(lambda a: np.zeros(a.shape, a.dtype), shapes)
+            start = self._placeholder
         return _inner_program(self.inner_solver, self.shape, self.theta, jnp.asarray(kin4), spring,
-                              self.weights, start)
+                              self.weights, start, np.bool_(cold))
 
     def _local(self, kin4, spring, design):
         """The objective and every angle's constraints at ``design``, their Jacobian in the design,
         the bounds and the size norm (:func:`_local_program`)."""
-        return _local_program(self.shape, self.theta, jnp.asarray(kin4), spring, design, self.weights)
+        return _local_program(self.shape, self.theta, jnp.asarray(kin4), _rate_preload(spring), design,
+                              self.weights)
 
     def _spring_at(self, kin4, u):
         """(k, P, P_min): the rate of u, the optimal preload and the least keeping contact."""
@@ -258,7 +268,7 @@ class Codesign:
         if self.spring is not None:
             u = self.u0 if u is None else u
             k, p, need = (float(v) for v in jax.device_get(
-                self._spring_at(kin4, None if u is None else jnp.asarray(u))))
+                self._spring_at(kin4, None if u is None else np.float64(u))))
             spring = (k, p)
             high = self.spring.preload[1]
             if not need <= high + spring_mod.PRELOAD_TOL * max(1.0, abs(high)):
@@ -436,6 +446,13 @@ class ProblemBuilder:
         return hash((self.shape, self._angles.shape))
 
 
+def _rate_preload(spring):
+    """A (rate, preload) argument of the compiled pieces as float64 scalars (None stays None): a
+    Python float and a NumPy one are other argument types to ``jax.jit`` (weak and strong), each
+    compiled once more for the same program."""
+    return None if spring is None else tuple(np.float64(v) for v in spring)
+
+
 def _kinematics(kin0, jacobian, z0, z):
     """(4, samples) kinematics kin0 + J (z - z0) of the laws' coordinates z (traceable)."""
     return kin0 + jnp.tensordot(jacobian, jnp.asarray(z) - z0, axes=1)
@@ -459,9 +476,21 @@ def inner_solve(problem, weights, start=None, solver: str = INNER_SOLVER):
     return ev.objective, raw.design, ev.feasible
 
 
+def own_start(problem):
+    """The design the inner solver starts from without a start given: the family's ``start``, or
+    the middle of its box (:func:`camjax.solvers.newton.minimize`'s default). Traceable."""
+    return getattr(family_of(problem), "start", midpoint)(problem)
+
+
 @partial(jax.jit, static_argnums=(0, 1))
-def _inner_program(solver: str, shape: ProblemShape, theta, kin4, spring, weights, start):
-    return inner_solve(shape.problem(theta, kin4, spring), weights, start, solver)
+def _inner_program(solver: str, shape: ProblemShape, theta, kin4, spring, weights, start, cold):
+    """:func:`inner_solve` on the shape's problem; ``start`` a design and ``cold`` True: from
+    :func:`own_start` instead (one program for the cold and the warm solves: ``start`` is then a
+    placeholder of the design's structure), ``start`` None: the solver's own start."""
+    problem = shape.problem(theta, kin4, spring)
+    if start is not None:
+        start = jax.tree.map(lambda own, given: jnp.where(cold, own, given), own_start(problem), start)
+    return inner_solve(problem, weights, start, solver)
 
 
 @partial(jax.jit, static_argnums=0)
