@@ -153,9 +153,7 @@ class Codesign:
         self.x0 = np.concatenate([self.lin.z0, [self.u0]]) if free_rate else np.asarray(self.lin.z0)
         grid = dataclasses.replace(scene, motion=dataclasses.replace(scene.motion, extrema="grid"))
         self.grid_scene = grid
-        kin = scene_arrays(grid, samples=self.samples, extrema="grid").kin
-        self.theta = kin.theta
-        self.kin0 = jnp.stack([kin.s, kin.ds, kin.d2s, kin.d3s])
+        self.theta, self.kin0 = grid_kinematics(grid, self.samples)
         self.train = None
         if scene.dynamics is not None:  # the follower train: its residual term and figures
             from camjax.dynamics.context import synthesis_train
@@ -444,6 +442,27 @@ class ProblemBuilder:
 
     def __hash__(self) -> int:
         return hash((self.shape, self._angles.shape))
+
+
+KINEMATICS_KEPT = 32  # grid kinematics kept by grid_kinematics (the oldest dropped first)
+_KINEMATICS: dict[str, tuple] = {}
+
+
+def grid_kinematics(grid_scene, samples: int):
+    """(theta, kin0): the grid's angles (rad) and the (4, samples) kinematics (s and its first three
+    derivatives) of the scene's motion by :func:`camjax.evaluate.scene_arrays`, which compiles a
+    program per scene; kept per motion and grid, so the co-designs of one motion (a sweep's
+    weightings, the fixed springs of one box) take the same arrays without compiling it again (the
+    kinematics read the motion's program alone)."""
+    motion = grid_scene.motion
+    leaves, tree = jax.tree.flatten(motion.program)  # the segment tables, the laws, the lifts (scaled)
+    key = repr((motion, str(tree), [np.asarray(v).tobytes() for v in leaves], int(samples)))
+    if key not in _KINEMATICS:
+        kin = scene_arrays(grid_scene, samples=samples, extrema="grid").kin
+        if len(_KINEMATICS) >= KINEMATICS_KEPT:
+            del _KINEMATICS[next(iter(_KINEMATICS))]
+        _KINEMATICS[key] = (kin.theta, jnp.stack([kin.s, kin.ds, kin.d2s, kin.d3s]))
+    return _KINEMATICS[key]
 
 
 def _rate_preload(spring):
