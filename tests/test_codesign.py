@@ -11,6 +11,7 @@ import tomllib
 
 import numpy as np
 import pytest
+from codesign_fixtures import design_keeping_codesign
 
 from camjax.cli import main
 from camjax.codesign import Codesign, codesign_outcome, fixed_scene
@@ -19,7 +20,7 @@ from camjax.codesign.problem import nnls
 from camjax.evaluate import scene_arrays
 from camjax.laws import LAWS
 from camjax.pipeline import design_report
-from camjax.scene import builtin_scene_text, load_scene, scene_from_dict
+from camjax.scene import builtin_scene_text, load_scene, scene_from_dict, with_samples
 from camjax.scene.designed import law_from_control
 from camjax.solvers.base import problem_from_scene, solve
 from camjax.synthesis.problem import build_problem
@@ -42,13 +43,27 @@ def roller_data() -> dict:
     return data
 
 
-SCENES = {"flat": lambda: load_scene("codesign"), "roller": lambda: scene_from_dict(roller_data(), "roller-codesign")}
+# the built-in scene on the tests' grid: the scene `camjax design codesign --samples 120` designs,
+# so the command's co-design (flat_command) is the flat case's and shares its compiled programs
+SCENES = {"flat": lambda: with_samples(load_scene("codesign"), SAMPLES),
+          "roller": lambda: scene_from_dict(roller_data(), "roller-codesign")}
 
 
 @pytest.fixture(scope="module", params=sorted(SCENES))
 def case(request):
     scene = SCENES[request.param]()
     return request.param, scene, Codesign(scene, SAMPLES)
+
+
+@pytest.fixture(scope="module")
+def flat_command(tmp_path_factory):
+    """`camjax design codesign --samples 120` (its folder) and the co-design it computed on the way:
+    the flat case's search (codesign_outcome of its Codesign computes the same), run once for the
+    command's end-to-end test and "never loses to choosing"."""
+    out = tmp_path_factory.mktemp("codesign") / "out"
+    outcome, _ = design_keeping_codesign(["codesign", "--out", str(out), "--samples", str(SAMPLES)])
+    assert outcome.scene.motion.samples == SAMPLES
+    return out, outcome
 
 
 # ------------------------------------------------------------------------------ quick
@@ -126,11 +141,12 @@ def _program_objective(scene, laws, law_terms: float) -> float:
 
 
 @pytest.mark.slow
-def test_codesign_never_loses_to_choosing(case):
+def test_codesign_never_loses_to_choosing(case, request):
     # the search on the module's Codesign of the scene (codesign_scene builds the same one): its
-    # compiled inner solve and gradient are the ones the tests above ran, not traced and compiled again
+    # compiled inner solve and gradient are the ones the tests above ran, not traced and compiled
+    # again; the flat scene's search is the command's (flat_command: the same scene and grid)
     name, scene, cd = case
-    out = codesign_outcome(cd)
+    out = request.getfixturevalue("flat_command")[1] if name == "flat" else codesign_outcome(cd)
     weights = dict(scene.synthesis.objective)
     designed = scene.motion.designed
     # the co-designed laws, re-evaluated through the program: the search's F to 1e-8 (the same
@@ -157,9 +173,8 @@ def test_codesign_never_loses_to_choosing(case):
 
 
 @pytest.mark.slow
-def test_design_codesign_end_to_end_and_fed_back(tmp_path):
-    out = tmp_path / "out"
-    assert main(["design", "codesign", "--out", str(out), "--samples", "180"]) == 0
+def test_design_codesign_end_to_end_and_fed_back(flat_command):
+    out = flat_command[0]
     res = json.loads((out / "result.json").read_text())
     assert (out / "synthesis.png").stat().st_size > 10_000
     rows = (out / "synthesis.csv").read_text().splitlines()
@@ -181,7 +196,7 @@ def test_design_codesign_end_to_end_and_fed_back(tmp_path):
     # the designed laws fed back as fixed B-spline segments: the same design to 1e-9
     data = tomllib.loads(builtin_scene_text("codesign"))
     del data["synthesis"]
-    data["motion"]["samples"] = 180
+    data["motion"]["samples"] = SAMPLES
     for s in segs:
         data["motion"]["segments"][s["segment"]] = s["scene_segment"]
     scene = scene_from_dict(data)

@@ -14,6 +14,8 @@ import tomllib
 
 import numpy as np
 import pytest
+from codesign_fixtures import design_keeping_codesign
+from scene_text import toml_of
 
 from camjax import loads, program
 from camjax.cli import main
@@ -54,9 +56,23 @@ def force_of(scene, rpm: float, samples: int) -> np.ndarray:
 
 
 @pytest.fixture(scope="module")
-def free():
-    scene = scene_from_dict(spring_data(), "spring")
-    return scene, codesign_scene(scene, SAMPLES, max_iterations=ITERATIONS)
+def command_run(tmp_path_factory):
+    """`camjax design` of the free spring's scene (its 120 samples, the command's 400 steps) and the
+    co-design it computed on the way: one co-design serves the end-to-end test and the checks of
+    the search's result."""
+    folder = tmp_path_factory.mktemp("spring")
+    path = folder / "spring.toml"
+    path.write_text(toml_of(spring_data()))
+    outcome, _ = design_keeping_codesign([str(path), "--out", str(folder / "out")])
+    assert outcome.scene.motion.samples == SAMPLES
+    return folder / "out", outcome
+
+
+@pytest.fixture(scope="module")
+def free(command_run):
+    """The free spring's scene and its co-design (codesign_scene(scene, SAMPLES, ITERATIONS): the
+    command's)."""
+    return scene_from_dict(spring_data(), "spring"), command_run[1]
 
 
 @pytest.fixture(scope="module")
@@ -275,25 +291,18 @@ def test_a_translating_spring_key_on_a_rocker_is_refused_naming_the_field():
 
 
 @pytest.mark.slow
-def test_design_with_a_free_spring_end_to_end_and_fed_back(tmp_path):
+def test_design_with_a_free_spring_end_to_end_and_fed_back(command_run):
     """`camjax design` writes the designed spring; the designed laws and spring fed back as a plain
     scene (no [synthesis]) keep contact at the overspeed and give the same design."""
     from camjax.pipeline import design_report
 
-    path = tmp_path / "spring.toml"
-    text = builtin_scene_text("codesign").replace("samples = 360", f"samples = {SAMPLES}")
-    text = text.replace("control_count = 16", "control_count = 8").replace(
-        "[synthesis]", f"[synthesis]\nspring_N_per_m = {RATE}\npreload_N = {PRELOAD}\n"
-        f"min_contact_force_N = {MARGIN}\noverspeed = {OVERSPEED}")
-    path.write_text(text)
-    out = tmp_path / "out"
-    assert main(["design", str(path), "--out", str(out)]) == 0
+    out = command_run[0]
     res = json.loads((out / "result.json").read_text())
     sp = res["synthesis"]["codesign"]["spring"]
     assert set(sp) >= {"rate_N_per_m", "preload_N", "preload_mm", "min_contact_force_N", "overspeed",
                        "min_contact_force_at_overspeed_N", "binding"}
     assert sp["preload_mm"] == pytest.approx(1e3 * sp["preload_N"] / sp["rate_N_per_m"], rel=1e-12)
-    data = tomllib.loads(text)
+    data = spring_data()
     del data["synthesis"]
     for seg in res["synthesis"]["segments"]:
         data["motion"]["segments"][seg["segment"]] = seg["scene_segment"]

@@ -8,15 +8,14 @@ and write nothing."""
 
 from __future__ import annotations
 
-import contextlib
 import dataclasses
-import io
 import json
 import math
 import tomllib
 
 import numpy as np
 import pytest
+from codesign_fixtures import design_keeping_codesign
 from scene_text import toml_of
 
 from camjax.cli import main
@@ -216,23 +215,12 @@ def command_run(tmp_path_factory):
     """`camjax design` of the free rocker (its 90 samples, the command's 400 steps), and the
     co-design it computed on the way (camjax.codesign.codesign_scene's outcome, kept as it returns):
     one co-design serves the end-to-end test and the comparisons with fixed springs."""
-    import camjax.codesign
-
     folder = tmp_path_factory.mktemp("rocker")
     path = folder / "rocker.toml"
     path.write_text(toml_of(rocker_data()))
-    outcomes = []
-
-    def kept(scene, *args, **kwargs):
-        outcomes.append(codesign_scene(scene, *args, **kwargs))
-        return outcomes[-1]
-
-    stdout = io.StringIO()
-    with pytest.MonkeyPatch.context() as mp, contextlib.redirect_stdout(stdout):
-        mp.setattr(camjax.codesign, "codesign_scene", kept)
-        assert main(["design", str(path), "--out", str(folder / "out")]) == 0
-    assert len(outcomes) == 1 and outcomes[0].scene.motion.samples == SAMPLES
-    return folder / "out", outcomes[0], stdout.getvalue()
+    outcome, stdout = design_keeping_codesign([str(path), "--out", str(folder / "out")])
+    assert outcome.scene.motion.samples == SAMPLES
+    return folder / "out", outcome, stdout
 
 
 @pytest.fixture(scope="module")

@@ -148,7 +148,7 @@ def joint_problem(cd, z_start, design_start) -> tuple[JointProblem, JointDesign]
     family = family_of(problem0)
     lo, hi = family.bounds(problem0)
     half = max(Z_HALF_WIDTH, 2.0 * float(np.max(np.abs(z_start), initial=0.0)))
-    build = cd.problem
+    build = cd.builder  # equal for every co-design of one shape and grid: one compiled solve
     f_start = float(jnp.max(_peak_rows(problem0, cd.weights, design_start)))
     lower = JointDesign(jnp.asarray(z_start - half), lo, jnp.asarray(0.0))
     upper = JointDesign(jnp.asarray(z_start + half), hi, jnp.asarray(T_HEADROOM * max(f_start, 1e-3)))

@@ -67,6 +67,7 @@ from camjax.evaluate import arrays_from_kinematics, scene_arrays
 from camjax.family import weights_of
 from camjax.program import Kinematics
 from camjax.solvers.base import Settings, family_of, problem_from_scene, solver_module
+from camjax.solvers.gradient import midpoint
 from camjax.solvers.newton import NewtonSettings
 from camjax.synthesis.linear import law_quadratics, linear_kinematics
 from camjax.synthesis.problem import ALL_OBJECTIVES, L2_OBJECTIVES
@@ -152,9 +153,7 @@ class Codesign:
         self.x0 = np.concatenate([self.lin.z0, [self.u0]]) if free_rate else np.asarray(self.lin.z0)
         grid = dataclasses.replace(scene, motion=dataclasses.replace(scene.motion, extrema="grid"))
         self.grid_scene = grid
-        kin = scene_arrays(grid, samples=self.samples, extrema="grid").kin
-        self.theta = kin.theta
-        self.kin0 = jnp.stack([kin.s, kin.ds, kin.d2s, kin.d3s])
+        self.theta, self.kin0 = grid_kinematics(grid, self.samples)
         self.train = None
         if scene.dynamics is not None:  # the follower train: its residual term and figures
             from camjax.dynamics.context import synthesis_train
@@ -180,6 +179,7 @@ class Codesign:
         # the joint program's scenes (no designed spring, no peak terms) keep its inner solver
         self.inner_solver = JOINT_INNER_SOLVER if self.spring is None and self.peaks is None else INNER_SOLVER
         self.evaluations = 0
+        self._placeholder = None  # a design of the family's structure: a cold inner solve's start argument
         self.builtin_cache: dict = {} if builtin_cache is None else builtin_cache
 
     # ------------------------------------------------------------------ pure pieces
@@ -205,6 +205,13 @@ class Codesign:
         N m/rad and N m)."""
         return self.shape.problem(self.theta, kin4, spring)
 
+    @property
+    def builder(self) -> ProblemBuilder:
+        """:meth:`problem` as a callable equal to that of every co-design of the same shape and grid
+        (the static ``build`` of :class:`camjax.codesign.joint.JointProblem`: one compiled joint
+        solve for every co-design of one scene and grid, e.g. a sweep's weightings)."""
+        return ProblemBuilder(self.shape, self.theta)
+
     def kinematics(self, z):
         """(4, samples) kinematics of the coordinates z (traceable)."""
         return _kinematics(self.kin0, self.jacobian, self.lin.z0, z)
@@ -212,13 +219,21 @@ class Codesign:
     def _inner(self, kin4, spring, start=None):
         """(F, design, feasible) of the inner optimum on ``kin4`` with ``spring`` (None: the scene's),
         solved from the design ``start`` (mm; None: the solver's own start)."""
+        spring = _rate_preload(spring)
+        cold = start is None and self.inner_solver == INNER_SOLVER
+        if cold:  # the warm solves' program, from the solver's own start (own_start)
+            if self._placeholder is None:
+                shapes = jax.eval_shape(lambda k, s: own_start(self.problem(k, s)), jnp.asarray(kin4), spring)
+                self._placeholder = jax.tree.map(lambda a: np.zeros(a.shape, a.dtype), shapes)
+            start = self._placeholder
         return _inner_program(self.inner_solver, self.shape, self.theta, jnp.asarray(kin4), spring,
-                              self.weights, start)
+                              self.weights, start, np.bool_(cold))
 
     def _local(self, kin4, spring, design):
         """The objective and every angle's constraints at ``design``, their Jacobian in the design,
         the bounds and the size norm (:func:`_local_program`)."""
-        return _local_program(self.shape, self.theta, jnp.asarray(kin4), spring, design, self.weights)
+        return _local_program(self.shape, self.theta, jnp.asarray(kin4), _rate_preload(spring), design,
+                              self.weights)
 
     def _spring_at(self, kin4, u):
         """(k, P, P_min): the rate of u, the optimal preload and the least keeping contact."""
@@ -251,7 +266,7 @@ class Codesign:
         if self.spring is not None:
             u = self.u0 if u is None else u
             k, p, need = (float(v) for v in jax.device_get(
-                self._spring_at(kin4, None if u is None else jnp.asarray(u))))
+                self._spring_at(kin4, None if u is None else np.float64(u))))
             spring = (k, p)
             high = self.spring.preload[1]
             if not need <= high + spring_mod.PRELOAD_TOL * max(1.0, abs(high)):
@@ -407,6 +422,56 @@ class ProblemShape:
         return problem_from_scene(scene, arrays_from_kinematics(scene, kin))
 
 
+class ProblemBuilder:
+    """``build(kin4, spring=None)``: the family's problem of a :class:`ProblemShape` on the grid's
+    angles ``theta`` (:meth:`ProblemShape.problem`), equal (and hashing alike) where the shape and
+    the angles are: a static argument of compiled programs that another co-design of the same scene
+    and grid reuses (a bound method of each co-design is a new one, compiled again)."""
+
+    def __init__(self, shape: ProblemShape, theta):
+        self.shape = shape
+        self.theta = theta
+        self._angles = np.asarray(theta)
+
+    def __call__(self, kin4, spring=None):
+        return self.shape.problem(self.theta, kin4, spring)
+
+    def __eq__(self, other) -> bool:
+        return (isinstance(other, ProblemBuilder) and self.shape == other.shape
+                and np.array_equal(self._angles, other._angles))
+
+    def __hash__(self) -> int:
+        return hash((self.shape, self._angles.shape))
+
+
+KINEMATICS_KEPT = 32  # grid kinematics kept by grid_kinematics (the oldest dropped first)
+_KINEMATICS: dict[str, tuple] = {}
+
+
+def grid_kinematics(grid_scene, samples: int):
+    """(theta, kin0): the grid's angles (rad) and the (4, samples) kinematics (s and its first three
+    derivatives) of the scene's motion by :func:`camjax.evaluate.scene_arrays`, which compiles a
+    program per scene; kept per motion and grid, so the co-designs of one motion (a sweep's
+    weightings, the fixed springs of one box) take the same arrays without compiling it again (the
+    kinematics read the motion's program alone)."""
+    motion = grid_scene.motion
+    leaves, tree = jax.tree.flatten(motion.program)  # the segment tables, the laws, the lifts (scaled)
+    key = repr((motion, str(tree), [np.asarray(v).tobytes() for v in leaves], int(samples)))
+    if key not in _KINEMATICS:
+        kin = scene_arrays(grid_scene, samples=samples, extrema="grid").kin
+        if len(_KINEMATICS) >= KINEMATICS_KEPT:
+            del _KINEMATICS[next(iter(_KINEMATICS))]
+        _KINEMATICS[key] = (kin.theta, jnp.stack([kin.s, kin.ds, kin.d2s, kin.d3s]))
+    return _KINEMATICS[key]
+
+
+def _rate_preload(spring):
+    """A (rate, preload) argument of the compiled pieces as float64 scalars (None stays None): a
+    Python float and a NumPy one are other argument types to ``jax.jit`` (weak and strong), each
+    compiled once more for the same program."""
+    return None if spring is None else tuple(np.float64(v) for v in spring)
+
+
 def _kinematics(kin0, jacobian, z0, z):
     """(4, samples) kinematics kin0 + J (z - z0) of the laws' coordinates z (traceable)."""
     return kin0 + jnp.tensordot(jacobian, jnp.asarray(z) - z0, axes=1)
@@ -430,9 +495,21 @@ def inner_solve(problem, weights, start=None, solver: str = INNER_SOLVER):
     return ev.objective, raw.design, ev.feasible
 
 
+def own_start(problem):
+    """The design the inner solver starts from without a start given: the family's ``start``, or
+    the middle of its box (:func:`camjax.solvers.newton.minimize`'s default). Traceable."""
+    return getattr(family_of(problem), "start", midpoint)(problem)
+
+
 @partial(jax.jit, static_argnums=(0, 1))
-def _inner_program(solver: str, shape: ProblemShape, theta, kin4, spring, weights, start):
-    return inner_solve(shape.problem(theta, kin4, spring), weights, start, solver)
+def _inner_program(solver: str, shape: ProblemShape, theta, kin4, spring, weights, start, cold):
+    """:func:`inner_solve` on the shape's problem; ``start`` a design and ``cold`` True: from
+    :func:`own_start` instead (one program for the cold and the warm solves: ``start`` is then a
+    placeholder of the design's structure), ``start`` None: the solver's own start."""
+    problem = shape.problem(theta, kin4, spring)
+    if start is not None:
+        start = jax.tree.map(lambda own, given: jnp.where(cold, own, given), own_start(problem), start)
+    return inner_solve(problem, weights, start, solver)
 
 
 @partial(jax.jit, static_argnums=0)
