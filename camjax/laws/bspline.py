@@ -24,6 +24,7 @@ functions :func:`evaluate` and :func:`derivative_coefficients`, and constants of
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Sequence
 
@@ -222,7 +223,17 @@ def bspline_law(degree: int, control: Sequence[float], knots: Sequence[float] | 
     """
     if isinstance(degree, bool) or not isinstance(degree, int | np.integer):
         raise ValueError(f"degree: {degree!r} must be an integer 1..{MAX_DEGREE}")
-    c = np.asarray([float(v) for v in control], dtype=np.float64)
+    return _bspline_law(int(degree), tuple(float(v) for v in control),
+                        None if knots is None else tuple(float(v) for v in knots), bool(falling))
+
+
+# One law object per (degree, control, knots, direction): a program holds its laws as static values,
+# compared by identity, so a scene read again (a design fed back, a sweep's next weighting, a test
+# that parses the scene twice) reuses the programs compiled for the first reading.
+@functools.lru_cache(maxsize=256)
+def _bspline_law(degree: int, control: tuple[float, ...], knots: tuple[float, ...] | None,
+                 falling: bool) -> Law:
+    c = np.asarray(control, dtype=np.float64)
     if not np.all(np.isfinite(c)):
         raise ValueError("control: values must be finite numbers")
     t = clamped_knots(int(degree), c.size, knots)
