@@ -16,7 +16,7 @@ from codesign_fixtures import design_keeping_codesign
 from camjax.cli import main
 from camjax.codesign import Codesign, codesign_outcome, fixed_scene
 from camjax.codesign.builtin import fitted_coordinates
-from camjax.codesign.problem import nnls
+from camjax.codesign.kkt import nnls
 from camjax.evaluate import scene_arrays
 from camjax.laws import LAWS
 from camjax.pipeline import design_report

@@ -13,7 +13,8 @@ The pipeline's layer: it runs the solvers and imports no output.
 """
 
 from camjax.codesign.builtin import best_builtin_combination, builtin_candidates, builtin_kinematics
-from camjax.codesign.problem import SUPPORTED, Codesign, CodesignError, Inner, multipliers
+from camjax.codesign.kkt import multipliers
+from camjax.codesign.problem import SUPPORTED, Codesign, CodesignError, Inner
 from camjax.codesign.search import Outcome, codesign_outcome, codesign_scene, fixed_scene
 from camjax.codesign.sweep import codesign_sweep
 

@@ -29,7 +29,7 @@ when it is None).
   box of one scene and grid share one program each.
 - **Gradient of the inner optimum** by the envelope theorem: at the optimum d* with multipliers
   lambda >= 0 of its active constraints, every angle's its own (from stationarity by nonnegative
-  least squares, :func:`multipliers`), dF/dz is the partial derivative in z of the Lagrangian
+  least squares, :func:`camjax.codesign.kkt.multipliers`), dF/dz is the partial derivative in z of the Lagrangian
   f + lambda . g with d* and lambda held fixed (g: the family's ``constraints`` at every angle), by
   ``jax.grad`` through the problem's construction, plus the law terms'. tests/test_codesign.py
   checks it against central differences of F.
@@ -63,6 +63,7 @@ import numpy as np
 import camjax.codesign.helical as helical
 import camjax.codesign.peaks as peaks_mod
 import camjax.codesign.spring as spring_mod
+from camjax.codesign.kkt import multipliers
 from camjax.evaluate import arrays_from_kinematics, scene_arrays
 from camjax.family import weights_of
 from camjax.program import Kinematics
@@ -75,7 +76,6 @@ from camjax.synthesis.vibration import residual_maps
 
 # the [synthesis] terms the co-design takes: quadratics in z, and the peaks as smooth maxima
 SUPPORTED = ALL_OBJECTIVES
-ACTIVE_RTOL = 1e-7  # a constraint is active within this fraction of the problem's size norm
 RATE_TIE_RTOL = 1e-9  # best_rate: objectives this close (relative) tie (inner solves repeat to ~1e-12)
 
 
@@ -569,54 +569,3 @@ def train_quadratics(lin, grams, weight: float) -> tuple[np.ndarray, np.ndarray,
 def _stacked(family, problem, design):
     """Every constraint of the family at every angle, g <= 0 (mm), as one vector."""
     return jnp.concatenate([jnp.atleast_1d(g) for g in family.constraints(problem, design)])
-
-
-def multipliers(values, jac, design, lower, upper, size_norm) -> np.ndarray:
-    """Multipliers lambda >= 0 of the constraints (every angle's) at ``design``: the nonnegative
-    least-squares solution of stationarity grad f + sum lambda_i grad g_i - mu_lo + mu_hi = 0 over
-    the active constraints (g_i within :data:`ACTIVE_RTOL` of the size norm of 0) and the active
-    bounds (:func:`nnls`). Every angle's constraint is its own column, so a constraint whose
-    maximum is reached at two angles at once (a kink of the maximum: e.g. a roller's pressure
-    angle on the rise and on the return, balanced by the offset) gets a multiplier at each.
-    Inactive constraints get 0; the box's multipliers are dropped (the box does not depend on z)."""
-    grads = np.stack([np.asarray(leaf, dtype=np.float64) for leaf in jax.tree.leaves(jac)], axis=-1)
-    g = np.asarray(values[1:], dtype=np.float64)
-    tol = ACTIVE_RTOL * float(size_norm)
-    active = np.nonzero(g > -tol)[0]
-    d = np.asarray([float(v) for v in jax.tree.leaves(design)])
-    lo = np.asarray([float(v) for v in jax.tree.leaves(lower)])
-    hi = np.asarray([float(v) for v in jax.tree.leaves(upper)])
-    eye = np.eye(d.size)
-    cols = [grads[1 + i] for i in active]
-    cols += [-eye[i] for i in range(d.size) if d[i] - lo[i] <= tol]
-    cols += [eye[i] for i in range(d.size) if hi[i] - d[i] <= tol]
-    lam = np.zeros(g.size)
-    if cols:
-        sol = nnls(np.stack(cols, axis=1), -grads[0])
-        lam[active] = sol[:active.size]
-    return lam
-
-
-def nnls(A: np.ndarray, b: np.ndarray, iterations: int = 200) -> np.ndarray:
-    """min ||A x - b|| subject to x >= 0, by Lawson and Hanson's active-set method (NumPy; the
-    problems here have a few rows and a few dozen columns)."""
-    m, n = A.shape
-    x = np.zeros(n)
-    passive = np.zeros(n, dtype=bool)
-    tol = 1e-12 * max(1.0, float(np.abs(A).max(initial=0.0)) * float(np.abs(b).max(initial=0.0)))
-    for _ in range(iterations):
-        w = A.T @ (b - A @ x)
-        if passive.all() or np.max(np.where(passive, -np.inf, w)) <= tol:
-            break
-        passive[int(np.argmax(np.where(passive, -np.inf, w)))] = True
-        while True:
-            z = np.zeros(n)
-            z[passive] = np.linalg.lstsq(A[:, passive], b, rcond=None)[0]
-            if np.all(z[passive] > 0.0):
-                x = z
-                break
-            neg = passive & (z <= 0.0)
-            alpha = np.min(x[neg] / (x[neg] - z[neg]))
-            x = x + alpha * (z - x)
-            passive &= x > tol
-    return x
