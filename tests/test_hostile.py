@@ -900,6 +900,7 @@ def test_a_failed_drawing_process_leaves_the_folder_as_it_was(place, monkeypatch
     boot = drawing._BOOT.replace("serve(", "import camjax.followers._translating_drawing as p; "
                                  "p.svaj_figure = p.profile_figure = lambda *a: 1 / 0; serve(")
     monkeypatch.setattr(drawing, "_BOOT", boot)  # both workers fail: ZeroDivisionError
+    monkeypatch.setenv("CAMJAX_DRAWING_PROCESSES", "2")  # the command's default (tests draw in process)
     rc = cli.main(["design", "--dpi", "10", "--out", str(place / "out")])
     err = capsys.readouterr().err.strip().splitlines()
     assert rc == 1 and len(err) == 1, err
