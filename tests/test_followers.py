@@ -118,7 +118,9 @@ def _problem_at_a_design(name):
 @functools.cache
 def _rows_and_jacobian(name):
     """The example problem's objective and constraint maxima as one row vector, and its Jacobian:
-    one compiled program each (not one per operation), shared by the two gradient tests."""
+    one compiled program each (not one per operation), shared by the two gradient tests. Reverse
+    mode, as ``jax.grad`` differentiates: an unselected branch's infinite derivative turns into NaN
+    there (0 * inf), which the double-``where`` guards against, not in forward mode."""
     family, problem, design, lo, hi = _problem_at_a_design(name)
     weights = camjax.family.weights_of(1.0, 1.0)
 
@@ -126,7 +128,7 @@ def _rows_and_jacobian(name):
         cm = family.constraint_maxima(problem, d)
         return jnp.stack([family.objective(problem, weights, d), *jax.tree.leaves(cm)])
 
-    return jax.jit(f), jax.jit(jax.jacfwd(f)), design, lo, hi
+    return jax.jit(f), jax.jit(jax.jacrev(f)), design, lo, hi
 
 
 @pytest.mark.slow
