@@ -30,9 +30,9 @@ when it is None).
 - **Gradient of the inner optimum** by the envelope theorem: at the optimum d* with multipliers
   lambda >= 0 of its active constraints, every angle's its own (from stationarity by nonnegative
   least squares, :func:`camjax.codesign.kkt.multipliers`), dF/dz is the partial derivative in z of
-  the Lagrangian f + lambda . g with d* and lambda held fixed (g: the family's ``constraints`` at every angle), by
-  ``jax.grad`` through the problem's construction, plus the law terms'. tests/test_codesign.py
-  checks it against central differences of F.
+  the Lagrangian f + lambda . g with d* and lambda held fixed (g: the family's ``constraints`` at
+  every angle), by ``jax.grad`` through the problem's construction, plus the law terms'.
+  tests/test_codesign.py checks it against central differences of F.
 - **Spring** (:mod:`camjax.codesign.spring`, where [synthesis] gives spring keys): the preload is
   eliminated in closed form (the least keeping contact at the overspeed: exact, the objective
   grows with it; a rocker's is a moment, its condition on the moment about the pivot), the rate is
