@@ -355,16 +355,16 @@ def test_scenes_that_differ_in_values_only_share_the_closure_programs(name):
     from camjax.solvers.base import problem_from_scene
 
     scenes = [camjax.load_scene(name), parse_scene(_edited(name, VALUE_EDITS[name]))]
-    problems = [problem_from_scene(s) for s in scenes]
+    arrays = [scene_arrays(s, extrema="grid") for s in scenes]  # the sizing on the samples
+    problems = [problem_from_scene(s, a) for s, a in zip(scenes, arrays, strict=True)]
     assert problems[0].closure[0] != problems[1].closure[0]  # the clearance, the second arm: edited
     keys = {runtime.program_key("solve", {}, {"problem": p}) for p in problems}
     assert len(keys) == 1
-    rocking = followers.of(scenes[0]).rocking
-    program = (_second_start_angle if rocking else _second_prime_radius).jitted
+    follower = followers.of(scenes[0])
+    program = (_second_start_angle if follower.rocking else _second_prime_radius).jitted
     sizes = []
-    for scene in scenes:  # the sizing on the samples (grid extrema)
-        arrays, follower = scene_arrays(scene, samples=90, extrema="grid"), followers.of(scene)
-        follower.sizing(scene, arrays.kin) if rocking else follower.min_base_radius(scene, arrays)
+    for scene, a in zip(scenes, arrays, strict=True):
+        follower.sizing(scene, a.kin) if follower.rocking else follower.min_base_radius(scene, a)
         sizes.append(program._cache_size())
     assert sizes[0] >= 1 and sizes[1] == sizes[0]  # compiled for the first scene, run again for the other
 
