@@ -8,6 +8,7 @@ import sys
 from functools import partial
 from pathlib import Path
 
+import jax
 import pytest
 
 # tests/ is on sys.path (pytest's default import mode); spawned workers inherit it, Ray workers
@@ -75,9 +76,14 @@ def test_block_sweep_equals_the_in_process_sweep(reference):
 
 @pytest.mark.slow
 def test_sharded_equals_unsharded_on_4_host_devices():
-    # a fresh interpreter: the device count is fixed when JAX starts its backend
+    # a fresh interpreter: the device count is fixed when JAX starts its backend; it compiles into
+    # the tests' compilation cache (JAX reads its settings from the environment)
+    env = dict(os.environ)
+    cache = jax.config.jax_compilation_cache_dir
+    if cache:
+        env.update(JAX_COMPILATION_CACHE_DIR=str(cache), JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS="0")
     proc = subprocess.run([sys.executable, str(TESTS / "scaleout_sharded_check.py")],
-                          capture_output=True, text=True, timeout=300)
+                          capture_output=True, text=True, timeout=300, env=env)
     assert proc.returncode == 0, proc.stderr[-3000:]
     res = json.loads(proc.stdout.strip().splitlines()[-1])
     assert res["devices"] == 4

@@ -4,6 +4,7 @@ central finite differences of re-solved optima, and the certificate reaches resu
 in global and pointwise mode and for the GA's and the hybrid's final points."""
 
 import dataclasses
+import functools
 import tomllib
 
 import jax
@@ -21,8 +22,10 @@ pytest.importorskip("scipy")
 
 SAMPLES = 90
 WEIGHTINGS = ((1.0, 1.0), (0.9, 0.1), (0.1, 0.9))
-_certify = jax.jit(jax.vmap(newton.certify, in_axes=(None, 0)))
-_certify_problems = jax.jit(jax.vmap(newton.certify, in_axes=(0, None)))
+# One compiled program per follower type for every batch of certificates in this file: rows of
+# (problem, weights) pairs, len(WEIGHTINGS) at a time (the sensitivities' moved problems padded).
+_certify_rows = jax.jit(jax.vmap(newton.certify))
+
 
 def _problem(scene_name, samples=SAMPLES):
     scene = camjax.load_scene(scene_name)
@@ -30,13 +33,38 @@ def _problem(scene_name, samples=SAMPLES):
     return problem_from_scene(scene)
 
 
+def _stacked(trees):
+    return jax.tree.map(lambda *x: jnp.stack(x), *trees)
+
+
+def _row(tree, i):
+    return jax.tree.map(lambda x: x[i], tree)
+
+
+def _certify_all(problems, w):
+    """newton.certify of each problem at weights ``w`` through ``_certify_rows``: the problems in
+    batches of len(WEIGHTINGS) rows, the last one padded with the first problem."""
+    rows = len(WEIGHTINGS)
+    padded = list(problems) + [problems[0]] * (-len(problems) % rows)
+    ws = _stacked([w] * rows)
+    certs = [jax.device_get(_certify_rows(_stacked(padded[i:i + rows]), ws)) for i in range(0, len(padded), rows)]
+    return [_row(c, i) for c in certs for i in range(rows)][: len(problems)]
+
+
+@functools.cache
+def _example_certificates(name):
+    """The example scene of follower type ``name`` at SAMPLES grid angles and its certificates at
+    the three weightings (one call of ``_certify_rows``)."""
+    problem = _problem(followers.get(name).example_scene)
+    w = weights_of([a for a, _ in WEIGHTINGS], [g for _, g in WEIGHTINGS])
+    return problem, jax.device_get(_certify_rows(_stacked([problem] * len(WEIGHTINGS)), w))
+
+
 @pytest.fixture(scope="module", params=followers.names())
 def solved(request):
     """The three weightings of one follower type through one compiled program, and SLSQP on each."""
     name = request.param
-    problem = _problem(followers.get(name).example_scene)
-    w = weights_of([a for a, _ in WEIGHTINGS], [g for _, g in WEIGHTINGS])
-    certs = _certify(problem, w)
+    problem, certs = _example_certificates(name)
     return name, problem, certs, [scipy_family.slsqp(problem, a, g) for a, g in WEIGHTINGS]
 
 
@@ -91,8 +119,8 @@ def _moved(problem, key, value):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("scene_name,alpha,gamma", [("roller", 0.1, 0.9), ("oscillating-flat", 1.0, 1.0)])
-def test_sensitivities_match_finite_differences(scene_name, alpha, gamma):
+@pytest.mark.parametrize("name,alpha,gamma", [("roller", 0.1, 0.9), ("oscillating_flat", 1.0, 1.0)])
+def test_sensitivities_match_finite_differences(name, alpha, gamma):
     """Each reported dF*/d limit (envelope theorem) against a central difference of the optimum
     re-solved with that limit moved by +-h (all re-solves in one compiled program): sigma_max_MPa
     (h = 1 MPa), max_pressure_angle_deg (h = 0.05 deg, where the follower has one) and the bound
@@ -101,9 +129,11 @@ def test_sensitivities_match_finite_differences(scene_name, alpha, gamma):
     smooth in a limit while the active set stays the same; the truncation error is ~h^2 F''' and
     each optimum is within ~1e-9 of F*, so ~1e-9 / (2 h) in the derivative: rtol 1e-4 plus an atol
     of 1e-7 per unit of the limit leaves margin."""
-    problem = _problem(scene_name)
+    # the unmoved problem: the example scene's certificate at this weighting (test_matches_slsqp's);
+    # the re-solves through the same compiled program
+    problem, certs = _example_certificates(name)
+    first = _row(certs, WEIGHTINGS.index((alpha, gamma)))
     w = weights_of(alpha, gamma)
-    first = jax.jit(newton.certify)(problem, w)
     fields = list(problem.lower._fields)
     bound_sens = np.asarray(first.bound_sensitivity)
     index = int(np.argmax(np.abs(bound_sens)))
@@ -114,13 +144,12 @@ def test_sensitivities_match_finite_differences(scene_name, alpha, gamma):
     values = {**{k: float(v) for k, v in newton.limit_values(problem).items()},
               bound_key: float(getattr(getattr(problem, side), field))}
     keys = [k for k in steps if k in values]
-    batch = [problem] + [_moved(problem, k, values[k] + sign * steps[k]) for k in keys for sign in (1, -1)]
-    stacked = jax.tree.map(lambda *x: jnp.stack(x), *batch)
-    certs = _certify_problems(stacked, w)
-    assert bool(np.all(np.asarray(certs.result.converged)))
-    objective = [float(family_of(p).objective(p, w, jax.tree.map(lambda x, i=i: x[i], certs.result.design)))
-                 for i, p in enumerate(batch)]
-    base = jax.tree.map(lambda x: x[0], certs)
+    batch = [_moved(problem, k, values[k] + sign * steps[k]) for k in keys for sign in (1, -1)]
+    certs = [first, *_certify_all(batch, w)]
+    assert all(bool(c.result.converged) for c in certs)
+    objective = [float(family_of(p).objective(p, w, c.result.design))
+                 for p, c in zip([problem, *batch], certs, strict=True)]
+    base = first
     block = newton.certificate_json(problem, base)
     for j, key in enumerate(keys):
         fd = (objective[1 + 2 * j] - objective[2 + 2 * j]) / (2 * steps[key])
@@ -139,7 +168,8 @@ def test_certify_point_recovers_the_multipliers_at_the_optimum():
     multipliers ~mu / slack ~1e-6 that the fit leaves out: a relative 1e-4 between the two)."""
     problem = _problem("default", samples=36)
     w = weights_of(1.0, 1.0)
-    cert = jax.jit(newton.certify)(problem, w)
+    # newton.certify in the solve's program (test_solution_json_carries_the_certificate's)
+    cert = solve(problem, (1.0, 1.0), mode="global", solver="newton").certificate
     point = jax.jit(newton.certify_point)(problem, w, cert.result.design)
     assert float(point.result.kkt.error) < 1e-6
     a = newton.certificate_json(problem, cert)["dF_dlimit"]["sigma_max_MPa"]
@@ -262,11 +292,11 @@ def test_robust_optimum_matches_the_gradient_solver():
     scene = scene_from_dict(tomllib.loads(ROBUST_SCENE), "robust-newton")
     base = problem_from_scene(scene)
     weights = (scene.design.alpha, scene.design.gamma)
-    out = {}
-    for solver in ("newton", "gradient"):
-        nominal = solve(base, weights, solver=solver)
-        problem = rd.robust_problem(scene, base, origin=nominal.design)
-        out[solver] = rd.solve_rounds(problem, weights, mode="global", solver=solver, seed=0)
+    # both solvers start from newton's nominal optimum: the same robust problem, one nominal solve
+    nominal = solve(base, weights, solver="newton")
+    problem = rd.robust_problem(scene, base, origin=nominal.design)
+    out = {solver: rd.solve_rounds(problem, weights, mode="global", solver=solver, seed=0)
+           for solver in ("newton", "gradient")}
     (robust, _, solved), (reference, _, _) = out["newton"], out["gradient"]
     assert robust.status_name == "converged"
     assert bool(robust.feasible) and bool(reference.feasible)
