@@ -17,11 +17,13 @@ the extrema of. The run, step by step:
 from __future__ import annotations
 
 import abc
+import functools
 import math
-from dataclasses import replace
+from dataclasses import fields, replace
 from typing import Any, NamedTuple
 
 import jax
+import jax.numpy as jnp
 import numpy as np
 
 from camjax import loads, runtime
@@ -242,7 +244,13 @@ class TranslatingFollower(Follower):
 
     @abc.abstractmethod
     def geometry(self, follower, rotation: str, arrays: SceneArrays, base_radius_mm) -> GeometryCurves:
-        """The geometry at one base radius (traced: the follower's dimensions are constants)."""
+        """The geometry at one base radius (traced; so are the follower's :meth:`design_numbers`)."""
+
+    def design_numbers(self, follower) -> dict[str, float]:
+        """The [follower]'s dimensions a design varies (its ``variables`` that are fields of the
+        spec, the base radius not), by name: the geometry's program takes them as data."""
+        own = {f.name for f in fields(follower)}
+        return {k: getattr(follower, k) for k in self.variables if k != "base_radius_mm" and k in own}
 
     def drawn_follower(self, scene, result: dict):
         """The [follower] spec with a solved design's dimensions (those the cam is drawn with);
@@ -313,11 +321,15 @@ class TranslatingFollower(Follower):
 
         ``follower``: the [follower] spec with the design's dimensions (default the scene's).
         Outlines follow the scene's ``motion.rotation`` (a cw cam is the mirror image of ccw). The
-        geometry is one compiled call (the follower's dimensions are its constants).
+        geometry is one compiled call for every design of a follower: the dimensions a design
+        varies (:meth:`design_numbers`) and the base radius are its data.
         """
         follower = scene.follower if follower is None else follower
         rot = scene.motion.rotation
-        g = jax.jit(lambda a, r: self.geometry(follower, rot, a, r))(arrays, base_radius_mm)
+        numbers = self.design_numbers(follower)
+        dtype = arrays.kin.s.dtype
+        g = _geometry_program(self.name, replace(follower, **dict.fromkeys(numbers, 0.0)), rot)(
+            arrays, jnp.asarray(base_radius_mm, dtype), {k: jnp.asarray(v, dtype) for k, v in numbers.items()})
         face_width_mm = self.drawn_face_width(face_width_mm, g.face_width_mm)
         own = g.own_curves
         if follower.closure.positive:
@@ -368,3 +380,15 @@ class TranslatingFollower(Follower):
         return DesignRun(arrays, minimum, design, radius, source, curves,
                          tuple(geometry_violations(curves, scene.follower.min_curvature_radius_mm, extremes)),
                          extremes)
+
+
+@functools.lru_cache(maxsize=32)
+def _geometry_program(name: str, follower, rotation: str):
+    """The compiled geometry of follower type ``name`` for the [follower] spec ``follower`` (its
+    :meth:`TranslatingFollower.design_numbers` zeroed: they come as data) and the cam's rotation:
+    one program per follower of a scene, whatever its design's dimensions and base radius."""
+    from camjax import followers
+
+    kind = followers.get(name)
+    return jax.jit(lambda arrays, radius, numbers: kind.geometry(replace(follower, **numbers), rotation,
+                                                                 arrays, radius))

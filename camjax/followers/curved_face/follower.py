@@ -155,7 +155,7 @@ class CurvedFace(TranslatingFollower):
                               scene.follower.min_curvature_radius_mm)
 
     def geometry(self, follower, rotation, arrays, base_radius_mm) -> GeometryCurves:
-        kin, rc, e = arrays.kin, float(follower.face_radius_mm), float(follower.offset_mm)
+        kin, rc, e = arrays.kin, follower.face_radius_mm, follower.offset_mm
         x, y = curved_geo.profile(base_radius_mm, rc, e, kin, rotation)
         pitch_x, pitch_y = roller_geo.roller_pitch_curve(base_radius_mm, rc, e, kin, rotation)
         g = curved_geo.geometry(base_radius_mm, rc, e, kin, rotation, follower.min_curvature_radius_mm)
@@ -164,7 +164,7 @@ class CurvedFace(TranslatingFollower):
         own = {"face_travel_mm": curved_geo.face_travel(base_radius_mm, rc, e, kin, rotation),
                "sliding_speed_m_s": curved_geo.sliding_speed_m_s(base_radius_mm, rc, e, kin,
                                                                  arrays.cam_speed_rad_s, rotation)}
-        width = jnp.asarray(float(follower.face_width_mm))
+        width = jnp.asarray(follower.face_width_mm)
         return GeometryCurves(x, y, stress_MPa=stress, face_width_mm=width,
                               pitch_x_mm=pitch_x, pitch_y_mm=pitch_y,
                               pressure_angle_deg=jnp.rad2deg(g.pressure_angle),

@@ -102,7 +102,7 @@ class KnifeEdge(Roller):
                               f.min_curvature_radius_mm)
 
     def geometry(self, follower, rotation, arrays, base_radius_mm) -> GeometryCurves:
-        kin, e = arrays.kin, float(follower.offset_mm)
+        kin, e = arrays.kin, follower.offset_mm
         x, y = knife_geo.knife_edge_profile(base_radius_mm, e, kin, rotation)
         g = knife_geo.knife_edge_geometry(base_radius_mm, e, kin, rotation, follower.min_curvature_radius_mm)
         # the tip is the pitch point: the pitch curve is the outline

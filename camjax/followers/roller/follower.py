@@ -224,7 +224,7 @@ class Roller(TranslatingFollower):
                               None, f.min_curvature_radius_mm)
 
     def geometry(self, follower, rotation, arrays, base_radius_mm) -> GeometryCurves:
-        kin, rf, e = arrays.kin, float(follower.roller_radius_mm), float(follower.offset_mm)
+        kin, rf, e = arrays.kin, follower.roller_radius_mm, follower.offset_mm
         x, y = roller_geo.roller_profile(base_radius_mm, rf, e, kin, rotation)
         pitch_x, pitch_y = roller_geo.roller_pitch_curve(base_radius_mm, rf, e, kin, rotation)
         g = roller_geo.roller_geometry(base_radius_mm, rf, e, kin, rotation, follower.min_curvature_radius_mm)
