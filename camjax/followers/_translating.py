@@ -327,9 +327,9 @@ class TranslatingFollower(Follower):
         follower = scene.follower if follower is None else follower
         rot = scene.motion.rotation
         numbers = self.design_numbers(follower)
-        dtype = arrays.kin.s.dtype
+        as_ = lambda v: jnp.asarray(v, arrays.kin.s.dtype)  # noqa: E731
         g = _geometry_program(self.name, replace(follower, **dict.fromkeys(numbers, 0.0)), rot)(
-            arrays, jnp.asarray(base_radius_mm, dtype), {k: jnp.asarray(v, dtype) for k, v in numbers.items()})
+            arrays, as_(base_radius_mm), {k: as_(v) for k, v in numbers.items()})
         face_width_mm = self.drawn_face_width(face_width_mm, g.face_width_mm)
         own = g.own_curves
         if follower.closure.positive:
