@@ -6,7 +6,9 @@ pivot and arm (or face), the radii at which it closes, and its geometry and cont
 radius. The run, step by step:
 
 1. the scene's [design] solved, if it has one; the cam is then sized and drawn with the design's
-   pivot, arm (or face) and roller;
+   pivot, arm (or face) and roller (while it solves, the drawing for the scene's own follower runs
+   in a second thread, :func:`camjax.runtime.ahead`: the drawing's programs take those dimensions
+   and the base radius as data, so the design's drawing finds them compiled);
 2. :meth:`RockingFollower.sizing` finds the smallest admissible cam (a SceneError when none exists);
 3. :meth:`RockingFollower.drawing_radius` picks the base radius the cam is drawn at (the option
    ``--base-radius``, else the design's, else the smallest admissible + 1 mm rounded up) and checks
