@@ -15,7 +15,7 @@ from camjax.followers.roller import geometry as roller_geo
 from camjax.laws import get_law
 from camjax.loads import RockerTrain
 from camjax.program import MotionProgram, Segment, evaluate
-from camjax.scene import SceneError, parse_scene
+from camjax.scene import SceneError, parse_scene, with_samples
 
 LIFT = math.radians(20.0)
 PROGRAM = MotionProgram.from_segments([Segment("rise", 120, get_law("poly_3_4_5"), LIFT), Segment("dwell", 60),
@@ -350,3 +350,48 @@ def test_rho_panel_keeps_its_whole_range_when_nothing_is_clipped(rocker_report):
     low, high = ax.get_ylim()
     assert low <= float(np.min(c.rho_mm)) and float(np.max(c.rho_mm)) <= high
     assert "clipped" not in ax.get_title(loc="right")
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", [n for n in followers.names() if followers.get(n).rocking])
+def test_refined_extrema_take_the_design_as_data(name, monkeypatch):
+    """A rocker's exact extrema take the dimensions a design varies and the base radius as data:
+    the scene's follower and another design (each such dimension 5 % + 0.5 mm larger, the base
+    radius 2 mm larger) run one compiled program, and the other design's extrema are its own:
+    never beaten by a 20 000-sample grid of its curves (beyond round-off), and where they differ
+    from it by more than 1e-6 of the curve's scale (a grid of h = 0.018 deg misses a smooth peak
+    by about |f''| h^2 / 8, less than that), a grid four times as fine comes closer."""
+    from dataclasses import replace
+
+    from camjax import runtime
+    from camjax.evaluate import scene_arrays
+    from camjax.followers._rocking import _refined_curves
+    from camjax.scene import load_scene
+
+    monkeypatch.setattr(runtime, "_PROGRAM_DIR", [None])  # jax.jit's own cache counts the programs
+    kind, scene = followers.get(name), load_scene(followers.get(name).example_scene)
+    arrays = scene_arrays(scene, extrema="exact")
+    sizing = kind.sizing(scene, arrays.kin, arrays.model.program)
+    radius, _ = kind.drawing_radius(scene, arrays.kin, sizing)
+    other = replace(scene.follower, **{k: 1.05 * v + 0.5 for k, v in kind.design_numbers(scene.follower).items()})
+    other_radius = radius + 2.0
+    assert kind.closure_problem(replace(scene, follower=other), arrays.kin, other_radius) is None
+
+    kind.curve_extremes(scene, arrays, None, radius)
+    programs = _refined_curves.jitted._cache_size()
+    exact = kind.curve_extremes(scene, arrays, None, other_radius, follower=other)
+    assert _refined_curves.jitted._cache_size() == programs  # the other design: the same program
+
+    def grid(samples):
+        dense = with_samples(scene, samples)
+        return kind.curve_extremes(dense, scene_arrays(dense, extrema="grid"), tuple(exact), other_radius,
+                                   follower=other)
+
+    coarse, fine = grid(20_000), None
+    for key, e in exact.items():
+        g, scale = coarse[key], max(abs(e.max), abs(e.min), 1e-300)
+        assert e.max >= g.max - 1e-12 * scale and e.min <= g.min + 1e-12 * scale, (key, e, g)
+        for value, sampled, sense in ((e.max, g.max, "max"), (e.min, g.min, "min")):
+            if abs(value - sampled) > 1e-6 * scale:  # a sharp peak: a grid four times as fine comes closer
+                fine = fine or grid(80_003)
+                assert abs(value - getattr(fine[key], sense)) < abs(value - sampled), (key, sense, e, g)

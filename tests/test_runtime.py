@@ -182,31 +182,36 @@ def test_cli_with_saved_programs_writes_what_it_writes_without(command, scene, n
 
 
 @pytest.mark.slow
-def test_compiling_ahead_draws_the_same_design(tmp_path, monkeypatch):
+@pytest.mark.parametrize("scene", ["default", "oscillating-roller"])
+def test_compiling_ahead_draws_the_same_design(tmp_path, monkeypatch, scene):
     """The command line runs the drawing for the scene's own follower in a second thread while the
     design solves (runtime.ahead: its programs compiled beside the solver's), then the drawing at
-    the design: the same result.json, number for number, as without; and the second thread ran."""
+    the design: the same result.json, number for number, as without; and the second thread ran.
+    A translating follower and a rocker (whose drawing takes the design's dimensions as data)."""
     import json
     import threading
 
-    from camjax import cli
+    from camjax import cli, followers
+    from camjax.followers._rocking import RockingFollower
     from camjax.followers._translating import TranslatingFollower
+    from camjax.scene import load_scene
     from validation.compare_results import differences
 
+    family = RockingFollower if followers.get(load_scene(scene).follower.type).rocking else TranslatingFollower
     threads = []
-    drawn_run = TranslatingFollower._drawn_run
+    drawn_run = family._drawn_run
 
     def spy(self, *args, **kwargs):
         threads.append(threading.current_thread().name)
         return drawn_run(self, *args, **kwargs)
 
-    monkeypatch.setattr(TranslatingFollower, "_drawn_run", spy)
+    monkeypatch.setattr(family, "_drawn_run", spy)
     results = {}
     try:
         for setting in ("1", "0"):
             monkeypatch.setenv("CAMJAX_COMPILE_AHEAD", setting)
             threads.clear()
-            assert cli.main(["design", "--out", str(tmp_path / setting), "--dpi", "30"]) == 0
+            assert cli.main(["design", scene, "--out", str(tmp_path / setting), "--dpi", "30"]) == 0
             results[setting] = (json.loads((tmp_path / setting / "result.json").read_text()), list(threads))
     finally:
         runtime._AHEAD[0] = False

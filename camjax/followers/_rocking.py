@@ -6,7 +6,9 @@ pivot and arm (or face), the radii at which it closes, and its geometry and cont
 radius. The run, step by step:
 
 1. the scene's [design] solved, if it has one; the cam is then sized and drawn with the design's
-   pivot, arm (or face) and roller;
+   pivot, arm (or face) and roller (while it solves, the drawing for the scene's own follower runs
+   in a second thread, :func:`camjax.runtime.ahead`: the drawing's programs take those dimensions
+   and the base radius as data, so the design's drawing finds them compiled);
 2. :meth:`RockingFollower.sizing` finds the smallest admissible cam (a SceneError when none exists);
 3. :meth:`RockingFollower.drawing_radius` picks the base radius the cam is drawn at (the option
    ``--base-radius``, else the design's, else the smallest admissible + 1 mm rounded up) and checks
@@ -69,7 +71,8 @@ class RockerSizing(NamedTuple):
 
 class RockerGeometry(NamedTuple):
     """A rocking follower's geometry at one base radius (per sample (N,) arrays, or scalars), and
-    the dimensions :class:`RockerCurves` reports (None where the type has none)."""
+    the dimensions :class:`RockerCurves` reports (None where the type has none; scalars, traced
+    where the follower's dimensions are)."""
 
     profile_x_mm: Any  # cam outline, cam coordinates
     profile_y_mm: Any
@@ -218,26 +221,37 @@ class _Motion(NamedTuple):
 
 class CurveScene(NamedTuple):
     """What :meth:`RockingFollower.point_curves` reads of a scene (its follower spec, [contact] and
-    the cam's rotation): hashable and picklable, so that it keys a saved program."""
+    the cam's rotation), without the numbers a design varies: hashable and picklable, so that it
+    keys a saved program that serves every design of the scene's follower."""
 
     follower: Any
     contact: Any
     motion: _Motion
 
     @classmethod
-    def of(cls, scene) -> CurveScene:
-        return cls(scene.follower, scene.contact, _Motion(scene.motion.rotation))
+    def of(cls, scene, numbers=()) -> CurveScene:
+        """The scene's, with the follower's fields named in ``numbers`` set to 0 (they travel as
+        data, :meth:`with_numbers`)."""
+        follower = replace(scene.follower, **dict.fromkeys(numbers, 0.0)) if numbers else scene.follower
+        return cls(follower, scene.contact, _Motion(scene.motion.rotation))
+
+    def with_numbers(self, numbers: dict[str, Any]) -> CurveScene:
+        """This scene with the follower's fields ``numbers`` (name -> value, traced or not)."""
+        return self._replace(follower=replace(self.follower, **numbers)) if numbers else self
 
 
-@runtime.program_cache(static_argnames=("drawn", "base_radius_mm", "names"))
-def _refined_curves(prog, speed, grid, drawn: CurveScene, base_radius_mm: float, names: tuple[str, ...]):
-    """Max and min of the named point curves of ``drawn``'s rocker at one base radius, refined off
-    their grid values ``grid`` (Q, N) in one program (:func:`camjax.extrema.refine_curves`).
-    Module-level, so that one compiled program (and a saved one, :func:`camjax.runtime.program_cache`)
-    serves every call with the same follower, radius and curves."""
+@runtime.program_cache(static_argnames=("drawn", "names"))
+def _refined_curves(prog, speed, grid, numbers, base_radius_mm, drawn: CurveScene, names: tuple[str, ...]):
+    """Max and min of the named point curves of ``drawn``'s rocker at one base radius (mm), refined
+    off their grid values ``grid`` (Q, N) in one program (:func:`camjax.extrema.refine_curves`).
+    ``numbers``: the follower's dimensions a design varies (name -> scalar array,
+    :meth:`RockingFollower.design_numbers`), data like the base radius, so that one compiled program
+    (and a saved one, :func:`camjax.runtime.program_cache`) serves every design of a scene's
+    follower with the same curves."""
     from camjax import followers
 
     kind = followers.get(drawn.follower.type)
+    drawn = drawn.with_numbers(numbers)
 
     def stacked(segment, theta_deg, params):
         p, w = params
@@ -289,6 +303,11 @@ class RockingFollower(Follower):
         if closure is not scene.follower.closure:
             dims["closure"] = closure
         return replace(scene.follower, **dims) if dims else scene.follower
+
+    def design_numbers(self, follower) -> dict[str, float]:
+        """The [follower]'s dimensions a design varies (its ``variables`` but the base radius), by
+        name: the refined extrema take them as data."""
+        return {k: getattr(follower, k) for k in self.variables if k != "base_radius_mm"}
 
     # ---- the curves the report takes extrema of
 
@@ -342,9 +361,11 @@ class RockingFollower(Follower):
         if arrays.model is None:
             hi, hi_deg, lo, lo_deg = extrema_mod.sampled_extremes(grid, arrays.theta_deg)
         else:
+            as_ = lambda v: jnp.asarray(v, grid.dtype)  # noqa: E731
+            numbers = self.design_numbers(drawn.follower)
             hi, hi_deg, lo, lo_deg = (np.asarray(a) for a in _refined_curves(
-                arrays.model.program, jnp.asarray(speed, grid.dtype), grid, drawn=CurveScene.of(drawn),
-                base_radius_mm=radius, names=names))
+                arrays.model.program, as_(speed), grid, {k: as_(v) for k, v in numbers.items()}, as_(radius),
+                drawn=CurveScene.of(drawn, tuple(numbers)), names=names))
         return {n: Extremes(float(hi[k]), float(hi_deg[k]), float(lo[k]), float(lo_deg[k]))
                 for k, n in enumerate(names)}
 
@@ -380,6 +401,7 @@ class RockingFollower(Follower):
         if f.closure.positive:
             own = {k: np.asarray(v) for k, v in self.closure_curves(scene, kin, base_radius_mm, g, moment).items()}
         arr = lambda v: None if v is None else np.asarray(v)  # noqa: E731
+        num = lambda v: None if v is None else _f(v)  # noqa: E731
         return RockerCurves(
             theta_deg=np.degrees(np.asarray(kin.theta)), swing_deg=np.degrees(np.asarray(kin.s)),
             ds=np.asarray(kin.ds), d2s=np.asarray(kin.d2s),
@@ -388,7 +410,7 @@ class RockingFollower(Follower):
             segment_starts_deg=scene.motion.program.start_deg, follower_type=self.name, rotation=rotation,
             pivot_distance_mm=f.pivot_distance_mm, arm_length_mm=g.arm_length_mm,
             roller_radius_mm=g.roller_radius_mm, face_offset_mm=g.face_offset_mm,
-            base_radius_mm=float(base_radius_mm), prime_radius_mm=g.prime_radius_mm,
+            base_radius_mm=float(base_radius_mm), prime_radius_mm=num(g.prime_radius_mm),
             arm_start_angle_deg=_f(jnp.degrees(g.arm_start_angle)),
             arm_angle_deg=np.degrees(np.asarray(g.arm_angle)), profile_x_mm=np.asarray(g.profile_x_mm),
             profile_y_mm=np.asarray(g.profile_y_mm), pitch_x_mm=arr(g.pitch_x_mm), pitch_y_mm=arr(g.pitch_y_mm),
@@ -404,12 +426,22 @@ class RockingFollower(Follower):
         """Design, sizing, drawing radius, curves and violations of a rocker scene (see the module
         docstring; Python: may raise SceneError)."""
         arrays = scene_arrays(scene, dtype=dtype) if arrays is None else arrays
-        design = None
-        if scene.design is not None:
-            from camjax.followers._design import design_block
-            from camjax.solvers.base import problem_from_scene
+        if scene.design is None:
+            return self._drawn_run(scene, arrays, None, base_radius_mm)
+        from camjax.followers._design import design_block
+        from camjax.solvers.base import problem_from_scene
 
+        # the drawing's programs compiled beside the solver's, for the scene's own follower: they
+        # take the design's dimensions and base radius as data (:meth:`design_numbers`)
+        with runtime.ahead(lambda: self._drawn_run(scene, arrays, None, base_radius_mm)):
             design, _ = design_block(scene, problem_from_scene(scene, arrays))
+        return self._drawn_run(scene, arrays, design, base_radius_mm)
+
+    def _drawn_run(self, scene, arrays: SceneArrays, design: dict | None,
+                   base_radius_mm: float | None) -> RockerRun:
+        """The run's sizing, drawing radius, curves and violations for a solved ``design`` (the
+        solver's JSON), or None: the scene's follower, drawn at ``base_radius_mm`` or its smallest
+        cam + 1 mm."""
         kin, w, drawn = arrays.kin, arrays.cam_speed_rad_s, scene
         program = None if arrays.model is None else arrays.model.program
         if design is not None:

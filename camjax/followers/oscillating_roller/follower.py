@@ -155,7 +155,7 @@ def circle_geometry(scene, kin, base_radius_mm, radius_mm: float, geometry, prof
     return RockerGeometry(
         x, y, g.arm_angle, rocker_roller_geo.arm_start_angle(rp, d, l), g.pressure_angle,
         g.cam_radius_of_curvature, pitch_x, pitch_y, g.pitch_radius_of_curvature, g.pitch_curvature,
-        g.undercut_margin, arm_length_mm=l, roller_radius_mm=radius_mm, prime_radius_mm=float(rp),
+        g.undercut_margin, arm_length_mm=l, roller_radius_mm=radius_mm, prime_radius_mm=rp,
         pressure_angle_limit_deg=float(f.max_pressure_angle_deg))
 
 
