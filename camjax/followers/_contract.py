@@ -66,6 +66,15 @@ class Follower(abc.ABC):
         in the order of :attr:`variables`, then those of :attr:`optional_variables` the scene has; a
         box in which no design closes is a SceneError."""
 
+    def design_numbers(self, follower: FollowerSpec) -> dict[str, float]:
+        """The [follower]'s dimensions a design varies (its :attr:`variables` that are fields of the
+        spec, the base radius not), by name: the drawing's programs take them as data, so one
+        compiled program serves every design of a scene's follower."""
+        from dataclasses import fields
+
+        own = {f.name for f in fields(follower)}
+        return {k: getattr(follower, k) for k in self.variables if k != "base_radius_mm" and k in own}
+
     def check_keys(self, r: TableReader) -> None:
         """Refuse a [follower] key of another follower type (naming the types it belongs to) or of
         none, then any key this type does not take."""

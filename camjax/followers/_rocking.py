@@ -304,11 +304,6 @@ class RockingFollower(Follower):
             dims["closure"] = closure
         return replace(scene.follower, **dims) if dims else scene.follower
 
-    def design_numbers(self, follower) -> dict[str, float]:
-        """The [follower]'s dimensions a design varies (its ``variables`` but the base radius), by
-        name: the refined extrema take them as data."""
-        return {k: getattr(follower, k) for k in self.variables if k != "base_radius_mm"}
-
     # ---- the curves the report takes extrema of
 
     def point_curves(self, scene, kin: Kinematics, cam_speed_rad_s, base_radius_mm: float) -> dict[str, Any]:

@@ -19,7 +19,7 @@ from __future__ import annotations
 import abc
 import functools
 import math
-from dataclasses import fields, replace
+from dataclasses import replace
 from typing import Any, NamedTuple
 
 import jax
@@ -245,12 +245,6 @@ class TranslatingFollower(Follower):
     @abc.abstractmethod
     def geometry(self, follower, rotation: str, arrays: SceneArrays, base_radius_mm) -> GeometryCurves:
         """The geometry at one base radius (traced; so are the follower's :meth:`design_numbers`)."""
-
-    def design_numbers(self, follower) -> dict[str, float]:
-        """The [follower]'s dimensions a design varies (its ``variables`` that are fields of the
-        spec, the base radius not), by name: the geometry's program takes them as data."""
-        own = {f.name for f in fields(follower)}
-        return {k: getattr(follower, k) for k in self.variables if k != "base_radius_mm" and k in own}
 
     def drawn_follower(self, scene, result: dict):
         """The [follower] spec with a solved design's dimensions (those the cam is drawn with);
