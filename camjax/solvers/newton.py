@@ -42,7 +42,8 @@ feasible, else progress in it or in the infeasibility ||c + s||_1, and, on the p
 one, a filter of earlier (infeasibility, barrier objective) pairs that forbids cycling), its 30
 trial lengths evaluated at once (one ``vmap``: no inner loop). The barrier parameter falls
 superlinearly, mu <- max(tol / 100, min(0.2 mu, mu^1.5)), each time the barrier problem is solved
-to 10 mu. The box rows are linear and start with s = -c, so every iterate stays strictly inside
+to 10 mu (its infeasibility c + s counted on the rows at or beyond their limit: a row strictly
+inside is feasible whatever its slack). The box rows are linear and start with s = -c, so every iterate stays strictly inside
 the box, where the families' physics is defined. Four central paths run in one loop (mu0 and
 mu0 / n, each with and without the filter, :func:`minimize`); the loop ends when one converges.
 
@@ -232,7 +233,15 @@ def _step(state: NewtonState, fns: EpigraphForm, settings: NewtonSettings) -> Ne
     done = kkt.error <= settings.tol
     # barrier update (IPOPT's E_mu of the barrier problem: c + s = 0, S y = mu)
     sd = _scaled(y, y.shape[0])
-    e_mu = jnp.maximum(jnp.maximum(kkt.stationarity, jnp.max(jnp.abs(c + s))),
+    # Its infeasibility counts the rows at or beyond their limit only: a row strictly inside (c < 0)
+    # whose slack exceeds -c is feasible all the same (the reset ``_slacks`` only raises s to -c).
+    # Counted, such a gap could hold mu for good: at a dwell the pressure-angle row is |e| / r - limit
+    # in the offset e, the barrier problem's minimizer sits on that kink (the row's and the box's
+    # barrier terms are even in e), every Newton step that would close c + s crosses it and opens
+    # the gap wider, the line search accepts only tiny steps, and a one-angle problem stalled at
+    # mu ~ 1e-4 with c + s ~ 2e-2. The stopping rule is unchanged (its residuals take c, not s).
+    infeasibility = jnp.max(jnp.where(c < 0, 0.0, jnp.abs(c + s)))
+    e_mu = jnp.maximum(jnp.maximum(kkt.stationarity, infeasibility),
                        jnp.max(jnp.abs(s * y - mu)) / sd)
     # a split problem's mu falls linearly: a superlinear fall (x 480 from 4e-6) moved its many
     # near-parallel rows' slacks so far that the Newton step crossed them (see ``_slacks``)
