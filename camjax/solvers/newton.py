@@ -42,8 +42,11 @@ feasible, else progress in it or in the infeasibility ||c + s||_1, and, on the p
 one, a filter of earlier (infeasibility, barrier objective) pairs that forbids cycling), its 30
 trial lengths evaluated at once (one ``vmap``: no inner loop). The barrier parameter falls
 superlinearly, mu <- max(tol / 100, min(0.2 mu, mu^1.5)), each time the barrier problem is solved
-to 10 mu. The box rows are linear and start with s = -c, so every iterate stays strictly inside
-the box, where the families' physics is defined. Four central paths run in one loop (mu0 and
+to 10 mu (its infeasibility c + s counted on the rows at or beyond their limit: a row strictly
+inside is feasible whatever its slack) or when the line search accepts no trial (IPOPT's tiny step:
+a row's kink at the barrier problem's minimizer, a dwell's |e|, holds a stationarity ~ mu that
+only a lower mu removes). The box rows are linear and start with s = -c, so every iterate stays
+strictly inside the box, where the families' physics is defined. Four central paths run in one loop (mu0 and
 mu0 / n, each with and without the filter, :func:`minimize`); the loop ends when one converges.
 
 Stopping rule: the scaled KKT residual (IPOPT's: stationarity ||grad phi + J^T y||_inf / s_d,
@@ -219,6 +222,15 @@ def _slacks(fns: EpigraphForm, s, c):
     return jnp.maximum(s, -c)
 
 
+def _next_mu(mu, fns: EpigraphForm, settings: NewtonSettings):
+    """The barrier parameter after mu: superlinear, max(tol / 100, min(kappa_mu mu, mu^theta_mu)).
+
+    A split problem's mu falls linearly: a superlinear fall (x 480 from 4e-6) moved its many
+    near-parallel rows' slacks so far that the Newton step crossed them (see ``_slacks``)."""
+    fall = settings.kappa_mu * mu if fns.split else jnp.minimum(settings.kappa_mu * mu, mu**settings.theta_mu)
+    return jnp.maximum(settings.tol / 100.0, fall)
+
+
 def _step(state: NewtonState, fns: EpigraphForm, settings: NewtonSettings) -> NewtonState:
     """One iteration: the rows, their Jacobian, the gradient and the Lagrangian's Hessian at z (one
     forward-over-forward pass, :func:`_derivatives`, whose rows the line search reuses); the
@@ -232,14 +244,18 @@ def _step(state: NewtonState, fns: EpigraphForm, settings: NewtonSettings) -> Ne
     done = kkt.error <= settings.tol
     # barrier update (IPOPT's E_mu of the barrier problem: c + s = 0, S y = mu)
     sd = _scaled(y, y.shape[0])
-    e_mu = jnp.maximum(jnp.maximum(kkt.stationarity, jnp.max(jnp.abs(c + s))),
+    # Its infeasibility counts the rows at or beyond their limit only: a row strictly inside (c < 0)
+    # whose slack exceeds -c is feasible all the same (the reset ``_slacks`` only raises s to -c).
+    # Counted, such a gap could hold mu for good: at a dwell the pressure-angle row is |e| / r - limit
+    # in the offset e, the barrier problem's minimizer sits on that kink (the row's and the box's
+    # barrier terms are even in e), every Newton step that would close c + s crosses it and opens
+    # the gap wider, the line search accepts only tiny steps, and a one-angle problem stalled at
+    # mu ~ 1e-4 with c + s ~ 2e-2. The stopping rule is unchanged (its residuals take c, not s).
+    infeasibility = jnp.max(jnp.where(c < 0, 0.0, jnp.abs(c + s)))
+    e_mu = jnp.maximum(jnp.maximum(kkt.stationarity, infeasibility),
                        jnp.max(jnp.abs(s * y - mu)) / sd)
-    # a split problem's mu falls linearly: a superlinear fall (x 480 from 4e-6) moved its many
-    # near-parallel rows' slacks so far that the Newton step crossed them (see ``_slacks``)
-    fall = settings.kappa_mu * mu if fns.split else jnp.minimum(settings.kappa_mu * mu, mu**settings.theta_mu)
-    mu_next = jnp.maximum(settings.tol / 100.0, fall)
     lower_mu = (e_mu <= settings.kappa_eps * mu) & (state.iteration > 0)
-    mu = jnp.where(lower_mu, mu_next, mu)
+    mu = jnp.where(lower_mu, _next_mu(mu, fns, settings), mu)
     # the filter holds (theta, psi) of the barrier problem at one mu: emptied when mu changes
     filt = jnp.where(lower_mu, jnp.inf, state.filter)
     count = jnp.where(lower_mu, 0, state.filter_count)
@@ -298,19 +314,27 @@ def _step(state: NewtonState, fns: EpigraphForm, settings: NewtonSettings) -> Ne
     if fns.split:  # the feasible-slack path: a row inside its limit stays inside (see ``_slacks``)
         ok = ok & jnp.all((c_t < 0) | (c[None, :] >= 0), axis=1)
     first = jnp.where(jnp.any(ok), jnp.argmax(ok), settings.line_search_trials - 1)
+    # no trial accepted (IPOPT's tiny step): the barrier problem is solved as far as its Newton
+    # model reaches, so mu falls. Where a family's row has a kink (|e| at a dwell, a face's travel)
+    # at the barrier problem's minimizer, the stationarity there is y_i times the jump of the row's
+    # slope, y_i ~ mu / s_i: it falls with mu only, and the step across the kink, which the linear
+    # model cannot foresee, is rejected at every length.
+    stalled = ~jnp.any(ok) & ~done
     # a step that is not Armijo's on psi (an h-type step) adds the current pair to the filter
     add = ~(switching & armijo[first]) & ~done
     entry = jnp.stack([(1.0 - 1e-5) * theta0, psi0 - 1e-5 * theta0])
     filt = jnp.where(add, filt.at[count % FILTER].set(entry), filt)
-    count = count + add
+    count = jnp.where(stalled, 0, count + add)
+    filt = jnp.where(stalled, jnp.inf, filt)
     length, c_new = lengths[first], c_t[first]
     z_new = z + length * dz
     s_new = _slacks(fns, s + length * ds, c_new)
     y_new = y + alpha_y * dy
     # IPOPT's safeguard: y_i within [mu / (k s_i), k mu / s_i], k = 1e10
     y_new = jnp.clip(y_new, mu / (1e10 * s_new), 1e10 * mu / s_new)
+    mu_new = jnp.where(stalled, _next_mu(mu, fns, settings), mu)
     pick = lambda a_, b_: jnp.where(done, a_, b_)  # noqa: E731
-    return NewtonState(pick(z, z_new), pick(s, s_new), pick(y, y_new), pick(state.mu, mu),
+    return NewtonState(pick(z, z_new), pick(s, s_new), pick(y, y_new), pick(state.mu, mu_new),
                        state.iteration + jnp.where(done, 0, 1), kkt, done, pick(state.filter, filt),
                        pick(state.filter_count, count), state.use_filter)
 
