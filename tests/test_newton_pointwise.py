@@ -16,12 +16,16 @@ from camjax.solvers import newton
 from camjax.solvers.base import family_of, problem_from_scene, solve
 
 SAMPLES = 72
-# one-angle optima where the reach row is active with an infinite slope (a square root at its
-# limit): no finite multipliers exist there, so no KKT residual can reach tol on those angles
-SINGULAR = ("oscillating_curved_face", "oscillating_roller")
+# The types whose one-angle problems newton solves on every angle: the roller and the knife edge
+# (dwells: the pressure-angle row's kink in the offset), the curved face and the oscillating flat.
+# Left out: the flat face (its one-angle problems have no offset; tests/test_newton.py covers its
+# global problem) and the two types whose one-angle optimum can lie where the reach row is active
+# with an infinite slope (a square root at its limit: no finite multipliers, so no KKT residual
+# reaches tol on those angles: oscillating roller 10 of 360 angles, oscillating curved face 12).
+TYPES = ("roller", "knife_edge", "curved_face", "oscillating_flat")
 
 
-@pytest.fixture(scope="module", params=followers.names())
+@pytest.fixture(scope="module", params=TYPES)
 def solved(request):
     """One type's example scene: newton on every one-angle problem (one vmapped program), and the
     pointwise solves of newton and of the gradient solver."""
@@ -45,8 +49,6 @@ def test_converges_on_every_angle(solved):
     barrier problem's minimizer: its slack never equals the row there and the line search accepts
     no step across the kink, yet the barrier parameter must fall all the same."""
     name, _, _, res, by_newton, _ = solved
-    if name in SINGULAR:
-        pytest.xfail("a one-angle optimum on the reach row's infinite slope")
     converged = np.asarray(res.converged)
     assert converged.shape == (SAMPLES,)
     assert converged.all(), (name, np.flatnonzero(~converged))
@@ -72,14 +74,15 @@ def test_each_angle_optimum_is_the_gradient_solvers(solved):
 
 
 @pytest.mark.slow
-def test_condensed_design_no_worse_than_the_gradient_solvers(solved):
+def test_condensed_design_no_worse_than_the_gradient_solvers(solved, request):
     """The whole-cam design of the pointwise rule is the gradient solver's or better (1e-7 relative)
     where both are feasible. The knife edge's condensing angle (the first of largest R_b) is a dwell
     whose one-angle optimum leaves the offset free in an interval: newton's barrier takes an interior
     offset, the gradient solver keeps its start's, and the continuous polish then raises R_b by an
     amount that depends on that offset (the same gap before newton converged on every angle)."""
     name, _, _, _, by_newton, by_gradient = solved
-    if name == "knife_edge":
-        pytest.xfail("a degenerate condensing angle: the offset is the solver's choice")
+    if name == "knife_edge":  # measured: 0.260615 against 0.255900 (strict: a pass would be news)
+        request.applymarker(pytest.mark.xfail(strict=True, reason="a degenerate condensing angle: "
+                                              "the offset is the solver's choice"))
     if bool(by_newton.feasible) and bool(by_gradient.feasible):
         assert float(by_newton.objective) <= float(by_gradient.objective) * (1.0 + 1e-7), name
