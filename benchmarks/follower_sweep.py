@@ -1,16 +1,20 @@
 """Per-follower sweep benchmark: 100 weightings of one follower's design problem, camjax against SciPy.
 
-One benchmark for every follower with a design problem; a follower is named by its built-in
-scene (:data:`SCENES`) and its free variables are those the scene's [design] declares (the JSON
-lists them). Keys ``<follower>.*``: ``roller.*`` (R_b, R_f, e), ``oscillating_roller.*`` and
-``oscillating_flat.*`` (R_b and the pivot distance d).
+One benchmark for every follower type (:data:`SCENES`: each registered type's built-in scene);
+its free variables are those the scene's [design] declares (the JSON lists them). Keys
+``<follower>.*``, e.g. ``roller.*`` (R_b, R_f, e), ``oscillating_roller.*`` (R_b and the pivot
+distance d).
 
 camjax solves all weightings in one program (:func:`camjax.solvers.base.solve_batch`, global
-mode) with the gradient, GA and hybrid solvers. SciPy solves them one by one on the same grid:
-SLSQP in epigraph form from the box centre, and ``differential_evolution`` (polished by SciPy:
-its own hybrid). The roller's SciPy side is :mod:`camjax.solvers.scipy_roller` (NumPy, written
-from SPEC 3, finite-difference Jacobians); the rockers' is :mod:`camjax.solvers.scipy_family`
-(SciPy calling the family's jitted JAX functions and their JAX Jacobians).
+mode) with each solver of ``--solvers`` (default: the interior-point ``newton``, the first-order
+``gradient``, the GA and the hybrid). ``gradient_speedup`` is SLSQP's time over the second-order
+solver's (``newton``; the first-order ``gradient`` where newton was not run), named in
+``gradient_speedup_method``; ``first_order_speedup`` is SLSQP's over the first-order solver's.
+SciPy solves them one by one on the same grid: SLSQP in epigraph form from the box centre, and
+``differential_evolution`` (polished by SciPy: its own hybrid). The roller's SciPy side is
+:mod:`camjax.solvers.scipy_roller` (NumPy, written from SPEC 3, finite-difference Jacobians); every
+other type's is :mod:`camjax.solvers.scipy_family` (SciPy calling the family's jitted JAX functions
+and their JAX Jacobians).
 
 Accuracy: every weighting's reference objective F* is the best feasible one found by any method
 (tests/test_roller_solvers.py and tests/test_scipy_family.py check the solvers' optimum against
@@ -27,8 +31,9 @@ shared machine are noisy: the JSON records the load average before and after eac
 
 Run alone: ``python -m benchmarks.follower_sweep roller --out benchmarks/results/roller.json`` and
 ``python -m benchmarks.follower_sweep oscillating_roller oscillating_flat --out
-benchmarks/results/followers.json`` (an existing file keeps the followers not run), ``--quick``
-for 20 weightings; ``benchmarks/run.py`` runs the roller's (``roller.*``).
+benchmarks/results/followers.json`` (an existing file keeps the followers not run; ``all`` runs
+every type), ``--quick`` for 20 weightings, ``--solvers newton,ga,hybrid`` for a subset;
+``benchmarks/run.py`` runs the roller's (``roller.*``).
 """
 
 from __future__ import annotations
@@ -55,10 +60,16 @@ from camjax.solvers.base import family_of, problem_from_scene, solve_batch, weig
 GAP_TOLERANCE = 1e-7  # relative objective gaps below this count as equal
 # follower -> (built-in scene, SciPy baseline module)
 SCENES = {
+    "flat": ("default", "camjax.solvers.scipy_family"),
+    "knife_edge": ("knife-edge", "camjax.solvers.scipy_family"),
     "roller": ("roller", "camjax.solvers.scipy_roller"),
+    "curved_face": ("curved-face", "camjax.solvers.scipy_family"),
     "oscillating_roller": ("oscillating-roller", "camjax.solvers.scipy_family"),
     "oscillating_flat": ("oscillating-flat", "camjax.solvers.scipy_family"),
+    "oscillating_curved_face": ("oscillating-curved-face", "camjax.solvers.scipy_family"),
 }
+SOLVERS = ("newton", "gradient", "ga", "hybrid")  # camjax's, in the order they are run
+SLOW_S = 5.0  # a camjax solve of all weightings longer than this is timed once (harness.time_jit)
 SUBSETS = {"full": (20, 10), "quick": (4, 2)}  # SciPy weightings measured: (SLSQP, differential evolution)
 
 
@@ -92,8 +103,9 @@ def _accuracy(objective, feasible, reference) -> dict:
             "infeasible": int(np.sum(~feasible))}
 
 
-def run_follower(follower: str, quick: bool = False) -> dict:
-    """The sweep benchmark of one follower of :data:`SCENES`: the dict stored under its name."""
+def run_follower(follower: str, quick: bool = False, solvers: tuple[str, ...] = SOLVERS) -> dict:
+    """The sweep benchmark of one follower of :data:`SCENES` with camjax's ``solvers`` (the GA and
+    the hybrid always among them): the dict stored under its name."""
     scene_name, baseline_name = SCENES[follower]
     baseline = importlib.import_module(baseline_name)
     load_before = os.getloadavg()
@@ -105,13 +117,13 @@ def run_follower(follower: str, quick: bool = False) -> dict:
     keys = weighting_keys(0, count)
 
     results = {}
-    for solver in ("gradient", "ga", "hybrid"):
+    for solver in solvers:
         t, sol = time_jit(lambda p, w, k, solver=solver: solve_batch(p, w, k, "global", solver),
-                          problem, weights, keys, repeats=3)
+                          problem, weights, keys, repeats=3, slow_s=SLOW_S)
         its = np.asarray(sol.iterations)
         results["camjax_" + solver] = (t.median_s, t.compile_s, count, sol.design,
                                        {"iterations_max": int(np.max(its)),
-                                        "iterations_median": float(np.median(its))})
+                                        "iterations_median": float(np.median(its)), "timed_runs": t.repeats})
     n_slsqp, n_de = SUBSETS["quick" if quick else "full"]
     for name, n, solve_one in (("scipy_slsqp", n_slsqp, baseline.slsqp),
                                ("scipy_de", n_de, baseline.differential_evolution)):
@@ -156,14 +168,20 @@ def run_follower(follower: str, quick: bool = False) -> dict:
         return ga_ <= max(gb, GAP_TOLERANCE) and methods[a]["infeasible"] <= methods[b]["infeasible"]
 
     ga_name = "camjax_ga" if matched("camjax_ga", "scipy_de") else "camjax_hybrid"
+    second = "camjax_newton" if "camjax_newton" in methods else "camjax_gradient"
+    first = {"first_order_speedup": methods["scipy_slsqp"]["time_s"] / methods["camjax_gradient"]["time_s"],
+             "first_order_accuracy_matched": matched("camjax_gradient", "scipy_slsqp")} \
+        if "camjax_gradient" in methods else {}
     return {
         "scene": scene_name,
         "weightings": count,
         "free_variables": free_variables(problem),
         "samples": int(problem.theta_deg.shape[0]),
         "scipy_baseline": baseline_name,
-        "gradient_speedup": methods["scipy_slsqp"]["time_s"] / methods["camjax_gradient"]["time_s"],
-        "gradient_accuracy_matched": matched("camjax_gradient", "scipy_slsqp"),
+        "gradient_speedup": methods["scipy_slsqp"]["time_s"] / methods[second]["time_s"],
+        "gradient_speedup_method": second,
+        "gradient_accuracy_matched": matched(second, "scipy_slsqp"),
+        **first,
         "ga_speedup": methods["scipy_de"]["time_s"] / methods[ga_name]["time_s"],
         "ga_speedup_method": ga_name,
         "ga_accuracy_matched": matched(ga_name, "scipy_de"),
@@ -188,16 +206,24 @@ def run(scene=None, quick: bool = False) -> dict:
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("followers", nargs="+", choices=sorted(SCENES))
+    parser.add_argument("followers", nargs="+", choices=[*sorted(SCENES), "all"])
     parser.add_argument("--out", type=Path, required=True, help="JSON file (followers not run are kept)")
     parser.add_argument("--quick", action="store_true", help="20 weightings, SciPy on 4 and 2")
+    parser.add_argument("--solvers", default=",".join(SOLVERS),
+                        help=f"camjax's solvers, comma-separated (ga and hybrid always run; default "
+                        f"{','.join(SOLVERS)})")
     args = parser.parse_args(argv)
+    solvers = tuple(dict.fromkeys([*args.solvers.split(","), "ga", "hybrid"]))
+    unknown = sorted(set(solvers) - set(SOLVERS))
+    if unknown:
+        parser.error(f"--solvers: {', '.join(unknown)} not allowed; use {', '.join(SOLVERS)}")
+    names = list(SCENES) if "all" in args.followers else args.followers
     data = json.loads(args.out.read_text()) if args.out.exists() else {}
-    for follower in args.followers:
-        data[follower] = run_follower(follower, quick=args.quick)
+    for follower in names:
+        data[follower] = run_follower(follower, quick=args.quick, solvers=solvers)
         data.setdefault("environment", {})[follower] = environment("float64")
         r = data[follower]
-        print(f"{follower}.gradient_speedup = {r['gradient_speedup']:.1f} "
+        print(f"{follower}.gradient_speedup = {r['gradient_speedup']:.1f} via {r['gradient_speedup_method']} "
               f"(matched: {r['gradient_accuracy_matched']})")
         print(f"{follower}.ga_speedup = {r['ga_speedup']:.1f} via {r['ga_speedup_method']} "
               f"(matched: {r['ga_accuracy_matched']})", flush=True)

@@ -49,19 +49,26 @@ def _timing(compile_s: float, times: list[float]) -> Timing:
 
 
 def time_jit(
-    fn: Callable, *args, repeats: int = 5, warmup: int = 1, min_time_s: float = 0.2
+    fn: Callable, *args, repeats: int = 5, warmup: int = 1, min_time_s: float = 0.2,
+    slow_s: float | None = None,
 ) -> tuple[Timing, Any]:
     """Time ``jax.jit(fn)``: compile (lower + compile) alone, then the median of steady calls.
 
     Returns the timing and the output of the last call. ``args`` are passed as traced arguments
-    (never closed over), so XLA cannot constant-fold the benchmark away.
+    (never closed over), so XLA cannot constant-fold the benchmark away. ``slow_s``: a first
+    warm-up call longer than this many seconds is the one sample (a call of tens of seconds, whose
+    repeats would buy little; its first-call overhead is small beside it).
     """
     t0 = time.perf_counter()
     compiled = compile_for(fn, *args)
     compile_s = time.perf_counter() - t0
     out = None
-    for _ in range(warmup):
+    for k in range(warmup):
+        t1 = time.perf_counter()
         out = block(compiled(*args))
+        first = time.perf_counter() - t1
+        if k == 0 and slow_s is not None and first > slow_s:
+            return _timing(compile_s, [first]), out
     times = _repeat(lambda: compiled(*args), repeats, min_time_s)
     out = block(compiled(*args))
     return _timing(compile_s, times), out

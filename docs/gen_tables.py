@@ -223,14 +223,15 @@ def machine(env: dict | None) -> str:
 
 
 def follower_speed(followers: dict) -> str:
-    """A row per registered follower: the sweep speed-ups against SciPy at matched accuracy and the
-    gradient solver's largest iteration count, with the goals and the machine of that follower's
-    run (one machine per row); a follower not measured says so."""
+    """A row per registered follower: the sweep speed-ups against SciPy at matched accuracy (the
+    gradient-based solver named beside its figure: the interior point where it was measured, else
+    the first-order solver) and that solver's largest iteration count, with the goals and the
+    machine of that follower's run (one machine per row); a follower not measured says so."""
     sweeps = _sweeps(followers)
     lines = [
         f"| follower | gradient vs SLSQP (goal ≥ {SWEEP_GOALS['gradient_speedup']:g}×) | "
         f"GA or hybrid vs differential evolution (goal ≥ {SWEEP_GOALS['ga_speedup']:g}×) | "
-        "gradient steps (max) | machine |",
+        "its steps (max) | machine |",
         "|---|---|---|---:|---|",
     ]
     for name in _follower_names():
@@ -238,7 +239,8 @@ def follower_speed(followers: dict) -> str:
         if s is None:
             lines.append(f"| `{name}` | no sweep benchmark | no sweep benchmark | – | |")
             continue
-        gradient = s.get("methods", {}).get("camjax_gradient", {})
+        gradient_method = s.get("gradient_speedup_method", "camjax_gradient")
+        gradient = s.get("methods", {}).get(gradient_method, {})
         steps = gradient.get("iterations_max")
         via = s.get("ga_speedup_method", "camjax_ga").removeprefix("camjax_")
         gradient_cell = _ratio_cell(s["gradient_speedup"], SWEEP_GOALS["gradient_speedup"],
@@ -246,7 +248,8 @@ def follower_speed(followers: dict) -> str:
         ga_cell = _ratio_cell(s["ga_speedup"], SWEEP_GOALS["ga_speedup"],
                               matched=s.get("ga_accuracy_matched"))
         lines.append(
-            f"| `{name}` | {_matched(gradient_cell, s.get('gradient_accuracy_matched'))} | "
+            f"| `{name}` | {_matched(gradient_cell, s.get('gradient_accuracy_matched'))} "
+            f"({gradient_method.removeprefix('camjax_')}) | "
             f"{_matched(ga_cell, s.get('ga_accuracy_matched'))} ({via}) | {_g(steps)} | "
             f"{machine(s.get('_env'))} |"
         )
