@@ -1,7 +1,7 @@
 """camjax.solvers.newton in pointwise mode: the interior-point solver converges (scaled KKT residual
 within ``tol``) on every one-angle problem of each follower type's example scene, dwells included
-(one vmapped program per type), each angle's optimum is the gradient solver's, and the condensed
-pointwise design is no worse than the gradient solver's."""
+(the pointwise solve: one vmapped program per type), each angle's optimum is the gradient
+solver's, and the condensed pointwise design is no worse than the gradient solver's."""
 
 import dataclasses
 
@@ -27,19 +27,18 @@ TYPES = ("roller", "knife_edge", "curved_face", "oscillating_flat")
 
 @pytest.fixture(scope="module", params=TYPES)
 def solved(request):
-    """One type's example scene: newton on every one-angle problem (one vmapped program), and the
-    pointwise solves of newton and of the gradient solver."""
+    """One type's example scene: the pointwise solves of newton (every one-angle problem in one
+    vmapped program; the solution's ``converged`` is every angle's, its ``iterations`` the most any
+    angle took) and of the gradient solver."""
     name = request.param
     scene = camjax.load_scene(followers.get(name).example_scene)
     scene = dataclasses.replace(scene, motion=dataclasses.replace(scene.motion, samples=SAMPLES))
     problem = problem_from_scene(scene)
     weighting = (scene.design.alpha, scene.design.gamma)
     w = jax.tree.map(lambda x: x[0], weights_of([weighting[0]], [weighting[1]]))
-    per = family_of(problem).per_angle(problem)
-    res = jax.jit(jax.vmap(lambda q: newton.minimize(q, w)))(per)
     by_newton = solve(problem, weighting, mode="pointwise", solver="newton")
     by_gradient = solve(problem, weighting, mode="pointwise", solver="gradient")
-    return name, problem, w, res, by_newton, by_gradient
+    return name, problem, w, by_newton, by_gradient
 
 
 @pytest.mark.slow
@@ -48,13 +47,11 @@ def test_converges_on_every_angle(solved):
     the iteration safeguard. A dwell's pressure-angle row has a kink in the offset (|e|) at the
     barrier problem's minimizer: its slack never equals the row there and the line search accepts
     no step across the kink, yet the barrier parameter must fall all the same."""
-    name, _, _, res, by_newton, _ = solved
-    converged = np.asarray(res.converged)
-    assert converged.shape == (SAMPLES,)
-    assert converged.all(), (name, np.flatnonzero(~converged))
-    assert float(np.max(np.asarray(res.kkt.error))) <= newton.DEFAULT_SETTINGS.tol
-    assert int(np.max(np.asarray(res.iterations))) < newton.DEFAULT_SETTINGS.max_iterations // 4
+    name, _, _, by_newton, _ = solved
+    assert jax.tree.leaves(by_newton.pointwise)[0].shape == (SAMPLES,)
+    # converged: the scaled KKT residual within tol on every angle
     assert bool(by_newton.converged), name
+    assert int(by_newton.iterations) < newton.DEFAULT_SETTINGS.max_iterations // 4, name
 
 
 @pytest.mark.slow
@@ -62,12 +59,12 @@ def test_each_angle_optimum_is_the_gradient_solvers(solved):
     """Each one-angle problem's objective at newton's answer is the gradient solver's or lower
     (1e-7 relative: the gradient solver stops on its own tolerance, newton's barrier leaves ~1e-9),
     on the angles where both answers are feasible."""
-    name, problem, w, res, _, by_gradient = solved
+    name, problem, w, by_newton, by_gradient = solved
     fam = family_of(problem)
     per = fam.per_angle(problem)
     evaluate = jax.vmap(lambda q, d: fam.evaluate(q, w, d))
-    mine, theirs = evaluate(per, res.design), evaluate(per, by_gradient.pointwise)
-    both = np.asarray(mine.feasible) & np.asarray(theirs.feasible) & np.asarray(res.converged)
+    mine, theirs = evaluate(per, by_newton.pointwise), evaluate(per, by_gradient.pointwise)
+    both = np.asarray(mine.feasible) & np.asarray(theirs.feasible)
     assert both.sum() >= SAMPLES // 2, name
     excess = np.asarray(mine.objective) - np.asarray(theirs.objective) * (1.0 + 1e-7)
     assert np.all(excess[both] <= 0.0), (name, np.flatnonzero(both & (excess > 0.0)))
@@ -80,7 +77,7 @@ def test_condensed_design_no_worse_than_the_gradient_solvers(solved, request):
     whose one-angle optimum leaves the offset free in an interval: newton's barrier takes an interior
     offset, the gradient solver keeps its start's, and the continuous polish then raises R_b by an
     amount that depends on that offset (the same gap before newton converged on every angle)."""
-    name, _, _, _, by_newton, by_gradient = solved
+    name, _, _, by_newton, by_gradient = solved
     if name == "knife_edge":  # measured: 0.260615 against 0.255900 (strict: a pass would be news)
         request.applymarker(pytest.mark.xfail(strict=True, reason="a degenerate condensing angle: "
                                               "the offset is the solver's choice"))
