@@ -75,6 +75,15 @@ class Follower(abc.ABC):
         own = {f.name for f in fields(follower)}
         return {k: getattr(follower, k) for k in self.variables if k != "base_radius_mm" and k in own}
 
+    def without_design_numbers(self, follower: FollowerSpec) -> tuple[FollowerSpec, dict[str, float]]:
+        """(the spec with its :meth:`design_numbers` set to 0, those numbers): the first keys a
+        drawing program (static, hashable), the second are its data, put back in the traced spec
+        with ``dataclasses.replace``."""
+        from dataclasses import replace
+
+        numbers = self.design_numbers(follower)
+        return replace(follower, **dict.fromkeys(numbers, 0.0)), numbers
+
     def check_keys(self, r: TableReader) -> None:
         """Refuse a [follower] key of another follower type (naming the types it belongs to) or of
         none, then any key this type does not take."""

@@ -229,15 +229,10 @@ class CurveScene(NamedTuple):
     motion: _Motion
 
     @classmethod
-    def of(cls, scene, numbers=()) -> CurveScene:
-        """The scene's, with the follower's fields named in ``numbers`` set to 0 (they travel as
-        data, :meth:`with_numbers`)."""
-        follower = replace(scene.follower, **dict.fromkeys(numbers, 0.0)) if numbers else scene.follower
+    def of(cls, scene, follower) -> CurveScene:
+        """The scene's contact and rotation with ``follower`` (a spec whose design numbers are 0:
+        :meth:`camjax.followers._contract.Follower.without_design_numbers`)."""
         return cls(follower, scene.contact, _Motion(scene.motion.rotation))
-
-    def with_numbers(self, numbers: dict[str, Any]) -> CurveScene:
-        """This scene with the follower's fields ``numbers`` (name -> value, traced or not)."""
-        return self._replace(follower=replace(self.follower, **numbers)) if numbers else self
 
 
 @runtime.program_cache(static_argnames=("drawn", "names"))
@@ -251,7 +246,7 @@ def _refined_curves(prog, speed, grid, numbers, base_radius_mm, drawn: CurveScen
     from camjax import followers
 
     kind = followers.get(drawn.follower.type)
-    drawn = drawn.with_numbers(numbers)
+    drawn = drawn._replace(follower=replace(drawn.follower, **numbers))
 
     def stacked(segment, theta_deg, params):
         p, w = params
@@ -357,10 +352,10 @@ class RockingFollower(Follower):
             hi, hi_deg, lo, lo_deg = extrema_mod.sampled_extremes(grid, arrays.theta_deg)
         else:
             as_ = lambda v: jnp.asarray(v, grid.dtype)  # noqa: E731
-            numbers = self.design_numbers(drawn.follower)
+            static, numbers = self.without_design_numbers(drawn.follower)
             hi, hi_deg, lo, lo_deg = (np.asarray(a) for a in _refined_curves(
                 arrays.model.program, as_(speed), grid, {k: as_(v) for k, v in numbers.items()}, as_(radius),
-                drawn=CurveScene.of(drawn, tuple(numbers)), names=names))
+                drawn=CurveScene.of(drawn, static), names=names))
         return {n: Extremes(float(hi[k]), float(hi_deg[k]), float(lo[k]), float(lo_deg[k]))
                 for k, n in enumerate(names)}
 

@@ -320,9 +320,9 @@ class TranslatingFollower(Follower):
         """
         follower = scene.follower if follower is None else follower
         rot = scene.motion.rotation
-        numbers = self.design_numbers(follower)
+        static, numbers = self.without_design_numbers(follower)
         as_ = lambda v: jnp.asarray(v, arrays.kin.s.dtype)  # noqa: E731
-        g = _geometry_program(self.name, replace(follower, **dict.fromkeys(numbers, 0.0)), rot)(
+        g = _geometry_program(self.name, static, rot)(
             arrays, as_(base_radius_mm), {k: as_(v) for k, v in numbers.items()})
         face_width_mm = self.drawn_face_width(face_width_mm, g.face_width_mm)
         own = g.own_curves
@@ -379,7 +379,7 @@ class TranslatingFollower(Follower):
 @functools.lru_cache(maxsize=32)
 def _geometry_program(name: str, follower, rotation: str):
     """The compiled geometry of follower type ``name`` for the [follower] spec ``follower`` (its
-    :meth:`TranslatingFollower.design_numbers` zeroed: they come as data) and the cam's rotation:
+    design numbers zeroed, :meth:`Follower.without_design_numbers`: they come as data) and the cam's rotation:
     one program per follower of a scene, whatever its design's dimensions and base radius."""
     from camjax import followers
 
