@@ -305,3 +305,36 @@ def test_the_figures_profile_and_dxf_are_written(name, runs, written):
 
 # The saved-program cache against the cache off, for every follower type: tests/test_cache_matrix.py
 # (each type's sequence of runs, cold and warm, in verify mode).
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", [n for n in followers.names() if not followers.get(n).rocking])
+def test_the_drawing_geometry_is_one_program_for_every_design(name):
+    """A translating follower's drawing geometry takes the dimensions a design varies and the base
+    radius as data: two designs of the example scene's follower (each such dimension 5 % + 0.5 mm
+    larger, the base radius 2 mm larger) run one compiled program, and the other design's curves
+    equal those of the geometry traced with that design's dimensions as constants (1e-12 of each
+    curve's scale: constants folded into the program round differently, nothing else)."""
+    from dataclasses import replace
+
+    from camjax.evaluate import scene_arrays
+    from camjax.followers._translating import _geometry_program
+
+    kind, scene = followers.get(name), camjax.load_scene(followers.get(name).example_scene)
+    scene = with_samples(scene, 180)
+    arrays = scene_arrays(scene, extrema="grid")
+    other = replace(scene.follower, **{k: 1.05 * v + 0.5 for k, v in kind.design_numbers(scene.follower).items()})
+    kind.curves(scene, arrays, 30.0)
+    program = _geometry_program(kind.name, kind.without_design_numbers(scene.follower)[0], scene.motion.rotation)
+    assert program._cache_size() == 1
+    entries = _geometry_program.cache_info().currsize
+    drawn = kind.curves(scene, arrays, 32.0, follower=other)
+    # the other design: the same program (no new entry, no new compile of the one there is)
+    assert _geometry_program.cache_info().currsize == entries and program._cache_size() == 1
+    constants = jax.jit(lambda a: kind.geometry(other, scene.motion.rotation, a, 32.0))(arrays)
+    for field in ("profile_x_mm", "profile_y_mm", "stress_MPa", "pressure_angle_deg", "pitch_rho_mm"):
+        want = getattr(constants, field)
+        if want is None:
+            continue
+        want, got = np.asarray(want), np.asarray(getattr(drawn, field))
+        np.testing.assert_allclose(got, want, rtol=0, atol=1e-12 * np.max(np.abs(want)), err_msg=field)
