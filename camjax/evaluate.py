@@ -184,11 +184,28 @@ def curve_names(scene: Scene, arrays: SceneArrays, with_stress: bool = True) -> 
     return tuple(names)
 
 
-@runtime.program_cache(static_argnames=("names", "follower"))
-def _refined_extremes(model: SceneModel, consts: CurveConstants, grid: jax.Array, base_radius_mm,
+def _curve_grid(grid_point: PointValues, consts: CurveConstants, base_radius_mm, names: tuple[str, ...],
+                follower: str) -> jax.Array:
+    """The named curves on the grid, shape (len(names), N)."""
+    return jnp.stack([_curve(n, grid_point, consts, base_radius_mm, follower) for n in names])
+
+
+@partial(jax.jit, static_argnames=("names", "follower"))
+def _sampled_extremes(grid_point: PointValues, theta_deg, consts: CurveConstants, base_radius_mm,
                       names: tuple[str, ...], follower: str):
-    """Max and min of every named curve, refined off the grid ``grid`` (Q, N), in one program
-    (:func:`camjax.extrema.refine_curves`)."""
+    """(max, max_deg, min, min_deg) of the named curves' samples, in one compiled call (evaluated
+    operation by operation, a report's curves compiled some thirty one-operation programs)."""
+    return extrema_mod.sampled_extremes(_curve_grid(grid_point, consts, base_radius_mm, names, follower), theta_deg)
+
+
+@runtime.program_cache(static_argnames=("names", "follower"))
+def _refined_extremes(model: SceneModel, consts: CurveConstants, grid_point: PointValues, base_radius_mm,
+                      names: tuple[str, ...], follower: str):
+    """Max and min of every named curve, refined off its values at the grid's point values
+    ``grid_point`` (the curves computed here too: one program, no operation by operation), in one
+    program (:func:`camjax.extrema.refine_curves`)."""
+    grid = _curve_grid(grid_point, consts, base_radius_mm, names, follower)
+
     def curves(segment, theta_deg, params):
         m, c, radius = params
         p = model_at(m, segment, theta_deg)
@@ -203,8 +220,7 @@ def refined_extremes(model: SceneModel, consts: CurveConstants, grid_point: Poin
                      names: tuple[str, ...], follower: str):
     """(max, max_deg, min, min_deg), arrays of shape (len(names),), refined off the grid values
     ``grid_point``; traceable (``names`` and the follower type ``follower`` static)."""
-    grid = jnp.stack([_curve(n, grid_point, consts, base_radius_mm, follower) for n in names])
-    return _refined_extremes(model, consts, grid, base_radius_mm, names, follower)
+    return _refined_extremes(model, consts, grid_point, base_radius_mm, names, follower)
 
 
 def curve_extremes(scene: Scene, arrays: SceneArrays, names: tuple[str, ...],
@@ -224,8 +240,8 @@ def curve_extremes(scene: Scene, arrays: SceneArrays, names: tuple[str, ...],
     model, consts = arrays.model, curve_constants(scene, follower)
     grid_point = PointValues(arrays.kin, arrays.force_N, arrays.torque_Nm, arrays.stress_coefficient)
     if model is None:
-        grid = jnp.stack([_curve(n, grid_point, consts, radius, scene.follower.type) for n in names])
-        hi, hi_deg, lo, lo_deg = extrema_mod.sampled_extremes(grid, arrays.theta_deg)
+        hi, hi_deg, lo, lo_deg = (np.asarray(a) for a in _sampled_extremes(
+            grid_point, arrays.theta_deg, consts, radius, tuple(names), scene.follower.type))
         rows = range(len(names))
     else:
         # the report's curves and the follower's sizing curves are refined in one program (a
@@ -233,9 +249,10 @@ def curve_extremes(scene: Scene, arrays: SceneArrays, names: tuple[str, ...],
         report = curve_names(scene, arrays)
         shared = tuple(names) == report or set(names) <= set(kind.sizing_curves)
         program_names = (*report, *kind.sizing_curves) if shared else names
-        grid = jnp.stack([_curve(n, grid_point, consts, radius, scene.follower.type) for n in program_names])
-        consts = jax.tree_util.tree_map(lambda x: jnp.asarray(x, grid.dtype), consts)
-        refined = _refined_extremes(model, consts, grid, radius, program_names, scene.follower.type)
+        dtype = arrays.kin.s.dtype
+        consts = jax.tree_util.tree_map(lambda x: jnp.asarray(x, dtype), consts)
+        refined = _refined_extremes(model, consts, grid_point, jnp.asarray(radius, dtype), program_names,
+                                    scene.follower.type)
         hi, hi_deg, lo, lo_deg = (np.asarray(a) for a in refined)
         rows = [program_names.index(n) for n in names]
     return {n: Extremes(float(hi[k]), float(hi_deg[k]), float(lo[k]), float(lo_deg[k]))

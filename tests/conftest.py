@@ -240,8 +240,8 @@ def pytest_terminal_summary(terminalreporter, config):
 
 # ------------------------------------------------------------------ compiled programs per test
 # ``--compile-ledger=DIR`` writes, per worker, one JSON line per test phase: the XLA programs it
-# compiled (name, seconds), the ones it loaded from the persistent compilation cache, and its
-# tracing seconds (JAX's own compile log, turned on for the run). The suite is bound by XLA
+# compiled (name, seconds), the ones it loaded from the persistent compilation cache, the cache keys
+# it missed (a key missed in two workers: a program both compiled), and its tracing seconds (JAX's own compile log, turned on for the run). The suite is bound by XLA
 # compiles; the ledger shows which tests compile which programs, and which programs several tests
 # compile again under another shape.
 
@@ -249,6 +249,7 @@ _LEDGER: dict = {"phase": None, "records": []}
 _COMPILED = re.compile(r"Finished XLA compilation of (.+) in ([0-9.e-]+) sec")
 _TRACED = re.compile(r"Finished tracing (.+) for jit in ([0-9.e-]+) sec")
 _HIT = re.compile(r"Persistent compilation cache hit for '([^']+)'")
+_MISS = re.compile(r"PERSISTENT COMPILATION CACHE MISS for '[^']+' with key '([^']+)'")
 
 
 class _LedgerHandler(logging.Handler):
@@ -256,10 +257,10 @@ class _LedgerHandler(logging.Handler):
         if _LEDGER["phase"] is None:
             return
         message = record.getMessage()
-        for kind, pattern in (("compile", _COMPILED), ("trace", _TRACED), ("hit", _HIT)):
+        for kind, pattern in (("compile", _COMPILED), ("trace", _TRACED), ("hit", _HIT), ("miss", _MISS)):
             match = pattern.search(message)
             if match:
-                seconds = float(match.group(2)) if kind != "hit" else 0.0
+                seconds = float(match.group(2)) if kind in ("compile", "trace") else 0.0
                 _LEDGER["records"].append((kind, match.group(1), seconds))
 
 
@@ -275,6 +276,7 @@ def _ledger_start(config) -> None:
     jax.config.update("jax_log_compiles", True)
     handler = _LedgerHandler(level=logging.DEBUG)
     logging.getLogger("jax").addHandler(handler)  # JAX's modules' records reach it by propagation
+    logging.getLogger("jax._src.compiler").setLevel(logging.DEBUG)  # the cache misses (and keys)
     worker = os.environ.get("PYTEST_XDIST_WORKER", "main")
     Path(folder).mkdir(parents=True, exist_ok=True)
     _LEDGER["file"] = open(Path(folder) / f"ledger-{worker}.jsonl", "a")  # noqa: SIM115

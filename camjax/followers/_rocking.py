@@ -26,8 +26,10 @@ from __future__ import annotations
 import abc
 import math
 from dataclasses import replace
+from functools import partial
 from typing import Any, NamedTuple
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 
@@ -235,18 +237,60 @@ class CurveScene(NamedTuple):
         return cls(follower, scene.contact, _Motion(scene.motion.rotation))
 
 
-@runtime.program_cache(static_argnames=("drawn", "names"))
-def _refined_curves(prog, speed, grid, numbers, base_radius_mm, drawn: CurveScene, names: tuple[str, ...]):
-    """Max and min of the named point curves of ``drawn``'s rocker at one base radius (mm), refined
-    off their grid values ``grid`` (Q, N) in one program (:func:`camjax.extrema.refine_curves`).
-    ``numbers``: the follower's dimensions a design varies (name -> scalar array,
-    :meth:`RockingFollower.design_numbers`), data like the base radius, so that one compiled program
-    (and a saved one, :func:`camjax.runtime.program_cache`) serves every design of a scene's
-    follower with the same curves."""
+def _grid_curves(kin: Kinematics, speed, numbers, base_radius_mm, drawn: CurveScene, names: tuple[str, ...]):
+    """(the rocker type, ``drawn`` with the design's ``numbers``, the named point curves on the grid
+    of ``kin``, shape (Q, N))."""
     from camjax import followers
 
     kind = followers.get(drawn.follower.type)
     drawn = drawn._replace(follower=replace(drawn.follower, **numbers))
+    curves = kind.point_curves(drawn, kin, speed, base_radius_mm)
+    return kind, drawn, jnp.stack([curves[n] for n in names])
+
+
+@partial(jax.jit, static_argnames=("drawn", "names"))
+def _sampled_curves(kin: Kinematics, theta_deg, speed, numbers, base_radius_mm, drawn: CurveScene,
+                    names: tuple[str, ...]):
+    """(max, max_deg, min, min_deg) of the named point curves' samples, in one compiled call (see
+    :func:`_refined_curves`; evaluated operation by operation, they compiled some fifty
+    one-operation programs)."""
+    grid = _grid_curves(kin, speed, numbers, base_radius_mm, drawn, names)[2]
+    return extrema_mod.sampled_extremes(grid, theta_deg)
+
+
+# RockerGeometry's scalar fields (floats in RockerCurves)
+_SCALARS = ("arm_length_mm", "roller_radius_mm", "face_offset_mm", "prime_radius_mm", "pressure_angle_limit_deg")
+
+
+@partial(jax.jit, static_argnames="drawn")
+def _drawing_arrays(kin: Kinematics, speed, numbers, base_radius_mm, drawn: CurveScene):
+    """(geometry, pivot torque, cam torque, contact force, stress) of
+    ``drawn``'s rocker with the design's ``numbers`` at one base radius, on the grid of ``kin``:
+    :meth:`RockingFollower.evaluate`'s arrays in one compiled call (operation by operation they
+    compiled some forty one-operation programs); None where the scene has no such curve."""
+    from camjax import followers
+
+    kind = followers.get(drawn.follower.type)
+    drawn = drawn._replace(follower=replace(drawn.follower, **numbers))
+    f = drawn.follower
+    g = kind.geometry(drawn, kin, base_radius_mm)
+    moment = force = torque = stress = None
+    if f.train is not None:
+        moment = loads.rocker_torque(f.train, kin, speed)
+        torque = loads.rocker_cam_torque(moment, kin.ds)
+        force, stress = kind.contact(drawn, moment, g)
+    return g, moment, torque, force, stress
+
+
+@runtime.program_cache(static_argnames=("drawn", "names"))
+def _refined_curves(prog, speed, kin, numbers, base_radius_mm, drawn: CurveScene, names: tuple[str, ...]):
+    """Max and min of the named point curves of ``drawn``'s rocker at one base radius (mm), refined
+    off their values on the grid of the kinematics ``kin`` (computed here too) in one program
+    (:func:`camjax.extrema.refine_curves`). ``numbers``: the follower's dimensions a design varies
+    (name -> scalar array, :meth:`RockingFollower.design_numbers`), data like the base radius, so
+    that one compiled program (and a saved one, :func:`camjax.runtime.program_cache`) serves every
+    design of a scene's follower with the same curves."""
+    kind, drawn, grid = _grid_curves(kin, speed, numbers, base_radius_mm, drawn, names)
 
     def stacked(segment, theta_deg, params):
         p, w = params
@@ -345,17 +389,20 @@ class RockingFollower(Follower):
         """
         drawn = scene if follower is None or follower is scene.follower else replace(scene, follower=follower)
         radius, speed = float(base_radius_mm), arrays.cam_speed_rad_s
-        curves = self.point_curves(drawn, arrays.kin, speed, radius)
-        names = tuple(curves) if names is None else tuple(names)
-        grid = jnp.stack([curves[n] for n in names])
+        if names is None:  # every curve: their names without computing them
+            names = tuple(jax.eval_shape(lambda k: self.point_curves(drawn, k, speed, radius), arrays.kin))
+        names = tuple(names)
+        as_ = lambda v: jnp.asarray(v, arrays.kin.s.dtype)  # noqa: E731
+        static, numbers = self.without_design_numbers(drawn.follower)
+        numbers = {k: as_(v) for k, v in numbers.items()}
+        curve_scene = CurveScene.of(drawn, static)
         if arrays.model is None:
-            hi, hi_deg, lo, lo_deg = extrema_mod.sampled_extremes(grid, arrays.theta_deg)
+            extremes = _sampled_curves(arrays.kin, arrays.theta_deg, as_(speed), numbers, as_(radius),
+                                       drawn=curve_scene, names=names)
         else:
-            as_ = lambda v: jnp.asarray(v, grid.dtype)  # noqa: E731
-            static, numbers = self.without_design_numbers(drawn.follower)
-            hi, hi_deg, lo, lo_deg = (np.asarray(a) for a in _refined_curves(
-                arrays.model.program, as_(speed), grid, {k: as_(v) for k, v in numbers.items()}, as_(radius),
-                drawn=CurveScene.of(drawn, static), names=names))
+            extremes = _refined_curves(arrays.model.program, as_(speed), arrays.kin, numbers, as_(radius),
+                                       drawn=curve_scene, names=names)
+        hi, hi_deg, lo, lo_deg = (np.asarray(a) for a in extremes)
         return {n: Extremes(float(hi[k]), float(hi_deg[k]), float(lo[k]), float(lo_deg[k]))
                 for k, n in enumerate(names)}
 
@@ -381,14 +428,14 @@ class RockingFollower(Follower):
     def evaluate(self, scene, kin: Kinematics, cam_speed_rad_s, base_radius_mm: float) -> RockerCurves:
         """Outline, pressure angle, curvature, loads and stress of the scene's rocker at one base radius."""
         f, rotation, w = scene.follower, scene.motion.rotation, cam_speed_rad_s
-        g = self.geometry(scene, kin, base_radius_mm)
-        moment = force = torque = stress = None
-        if f.train is not None:
-            moment = loads.rocker_torque(f.train, kin, w)
-            torque = loads.rocker_cam_torque(moment, kin.ds)
-            force, stress = self.contact(scene, moment, g)
+        as_ = lambda v: jnp.asarray(v, kin.s.dtype)  # noqa: E731
+        static, numbers = self.without_design_numbers(f)
+        g, moment, torque, force, stress = jax.device_get(_drawing_arrays(
+            kin, as_(w), {k: as_(v) for k, v in numbers.items()}, as_(base_radius_mm),
+            drawn=CurveScene.of(scene, static)))
+        g = g._replace(**{k: None if v is None else float(v) for k, v in g._asdict().items() if k in _SCALARS})
         own = None
-        if f.closure.positive:
+        if f.closure.positive:  # (NumPy inside: not traceable)
             own = {k: np.asarray(v) for k, v in self.closure_curves(scene, kin, base_radius_mm, g, moment).items()}
         arr = lambda v: None if v is None else np.asarray(v)  # noqa: E731
         num = lambda v: None if v is None else _f(v)  # noqa: E731
@@ -401,7 +448,7 @@ class RockingFollower(Follower):
             pivot_distance_mm=f.pivot_distance_mm, arm_length_mm=g.arm_length_mm,
             roller_radius_mm=g.roller_radius_mm, face_offset_mm=g.face_offset_mm,
             base_radius_mm=float(base_radius_mm), prime_radius_mm=num(g.prime_radius_mm),
-            arm_start_angle_deg=_f(jnp.degrees(g.arm_start_angle)),
+            arm_start_angle_deg=_f(np.degrees(g.arm_start_angle)),
             arm_angle_deg=np.degrees(np.asarray(g.arm_angle)), profile_x_mm=np.asarray(g.profile_x_mm),
             profile_y_mm=np.asarray(g.profile_y_mm), pitch_x_mm=arr(g.pitch_x_mm), pitch_y_mm=arr(g.pitch_y_mm),
             pressure_angle_deg=np.degrees(np.asarray(g.pressure_angle)), rho_mm=np.asarray(g.rho_mm),
