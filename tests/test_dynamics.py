@@ -301,7 +301,9 @@ def test_jump_speed_agrees_with_brentq(bench, bench_cam):
     spec = bench.dynamics
     closure = d.closure_of(spec)
     phi = d.cam_grid(720)
-    js = d.jump_speed(bench_cam, PLANT, closure, phi, 0.1 * W_BENCH, 10 * W_BENCH)
+    # the cam speed among the scanned speeds, as `camjax dynamics` scans them: the CLI test below
+    # then runs this program
+    js = d.jump_speed(bench_cam, PLANT, closure, phi, 0.1 * W_BENCH, 10 * W_BENCH, include_rad_s=jnp.asarray([W_BENCH]))
     assert bool(js.found)
     hz = float(js.speed_rad_s) / (2 * math.pi)
     phin = np.asarray(phi)
