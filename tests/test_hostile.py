@@ -786,7 +786,7 @@ def _scene_text(rpm: float, angles: tuple[float, float, float, float], lift: flo
                 samples: int) -> str:
     d1, rise, d2, ret = angles
     # the samples' own extrema: a program of its own per drawn scene (angles and law are compiled
-    # in) either way, but the refined extrema's were 3/4 of the compiles; the files are what is tested
+    # in) either way, but the refined extrema's were 3/4 of its compile time; the files are what is tested
     return f"""
 [motion]
 rpm = {rpm!r}
