@@ -301,7 +301,9 @@ def test_jump_speed_agrees_with_brentq(bench, bench_cam):
     spec = bench.dynamics
     closure = d.closure_of(spec)
     phi = d.cam_grid(720)
-    js = d.jump_speed(bench_cam, PLANT, closure, phi, 0.1 * W_BENCH, 10 * W_BENCH)
+    # the cam speed among the scanned speeds, as `camjax dynamics` scans them: the CLI test below
+    # then runs this program
+    js = d.jump_speed(bench_cam, PLANT, closure, phi, 0.1 * W_BENCH, 10 * W_BENCH, include_rad_s=jnp.asarray([W_BENCH]))
     assert bool(js.found)
     hz = float(js.speed_rad_s) / (2 * math.pi)
     phin = np.asarray(phi)
@@ -455,7 +457,9 @@ def test_nonlinear_feedforward_removes_the_ripple_error(bench, bench_cam):
     assert float(nl.fit_rms) < 1e-12
     errs = {}
     for name, c in (("nominal", cam), ("linear", lin), ("nonlinear", nl.cam)):
-        r = d.simulate_drive(c, drive, PLANT, W_BENCH, cycles, m)
+        # each cam trimmed as `camjax dynamics` trims it (harmonics below 1e-13 of the largest):
+        # the command's drive runs of the bench (the CLI test below) are then these programs
+        r = d.simulate_drive(d.trim_harmonics(c), drive, PLANT, W_BENCH, cycles, m)
         errs[name] = float(jnp.max(jnp.abs(r.load - target)))
         ripple = float(jnp.max(jnp.abs(r.cam_speed - W_BENCH)) / W_BENCH)
         assert 0.01 < ripple < 0.1  # the cam speed does ripple, by a few percent
@@ -495,7 +499,7 @@ def test_gradient_of_the_steady_state_error_matches_finite_differences(bench_cam
                                                         W_BENCH))
 
     x = jnp.array([3050.0, 0.205, 0.357])
-    g = jax.grad(ms)(x)
+    g = jax.jit(jax.grad(ms))(x)  # one program (eagerly: the forward and the backward pass)
     for i, h in enumerate((1e-2, 1e-6, 1e-6)):
         e = jnp.zeros(3).at[i].set(h)
         fd = (ms(x + e) - ms(x - e)) / (2 * h)
@@ -509,7 +513,7 @@ def test_gradient_through_rk4_scan_matches_finite_differences(bench_cam):
     def final(k23):
         return jnp.sum(d.integrate_train(d.Plant(0.357, 0.205, k23), u, W_BENCH, 3).angle ** 2)
 
-    g = float(jax.grad(final)(3050.0))
+    g = float(jax.jit(jax.grad(final))(3050.0))  # one program (eagerly: the forward and the backward pass)
     fd = float(_central(final, 3050.0, 1e-2))
     assert g == pytest.approx(fd, rel=1e-6)
 
@@ -523,7 +527,7 @@ def test_gradient_of_the_jump_force_and_band_objective(bench, bench_cam):
     def mean_force(w):
         return jnp.mean(d.contact_force(bench_cam, PLANT, closure, w, phi) ** 2)
 
-    assert float(jax.grad(mean_force)(W_BENCH)) == pytest.approx(
+    assert float(jax.jit(jax.grad(mean_force))(W_BENCH)) == pytest.approx(
         float(_central(mean_force, W_BENCH, 1e-5)), rel=1e-6)
     band = W_BENCH * jnp.linspace(0.9, 1.1, 5)
 
@@ -532,7 +536,7 @@ def test_gradient_of_the_jump_force_and_band_objective(bench, bench_cam):
         return d.band_tracking_ms(cam, PLANT, band)
 
     a5 = float(bench_cam.cos[5])
-    assert float(jax.grad(band_obj)(a5)) == pytest.approx(float(_central(band_obj, a5, 1e-7)), rel=1e-6)
+    assert float(jax.jit(jax.grad(band_obj))(a5)) == pytest.approx(float(_central(band_obj, a5, 1e-7)), rel=1e-6)
 
 
 @pytest.mark.slow
@@ -543,7 +547,7 @@ def test_gradient_through_the_drive_model_matches_finite_differences(bench, benc
         r = d.simulate_drive(cam, d.Drive(2.1, 0.126, k01, 10.0), PLANT, W_BENCH, 2, 90)
         return jnp.mean((r.cam_speed - W_BENCH) ** 2)
 
-    g = float(jax.grad(ripple)(3000.0))
+    g = float(jax.jit(jax.grad(ripple))(3000.0))  # one program (eagerly: the forward and the backward pass)
     assert g == pytest.approx(float(_central(ripple, 3000.0, 1e-2)), rel=1e-5)
 
 

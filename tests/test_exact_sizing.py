@@ -15,6 +15,7 @@ grid's must miss by more (so that the check can tell the two apart).
 
 import dataclasses
 import math
+from functools import partial
 
 import jax
 import jax.numpy as jnp
@@ -27,6 +28,7 @@ from camjax.followers.oscillating_curved_face import geometry as rocker_curved_g
 from camjax.followers.oscillating_flat import geometry as rocker_flat_geo
 from camjax.followers.oscillating_roller import geometry as rocker_roller_geo
 from camjax.pipeline import design_report
+from camjax.program import evaluate as evaluate_program
 
 DENSE = 1_000_000
 DENSE_TOL = 1e-9  # relative; the 10^6-sample grid's own error is ~1e-10 (module docstring)
@@ -51,34 +53,51 @@ def _scene(name, samples=N, extrema="exact"):
                                motion=dataclasses.replace(scene.motion, samples=samples, extrema=extrema))
 
 
+def _dense_kin(scene):
+    """The scene's kinematics on its grid: the program alone, so that scenes of one motion (the
+    oscillating roller's variants and its curved face) share one compiled program."""
+    return evaluate_program(scene.motion.program, scene.motion.samples)
+
+
+# The closed-form geometry's excess as programs of the design and the scene's numbers (arguments,
+# not constants): the rocking roller's scenes and the rocking curved face share one program.
+@partial(jax.jit, static_argnames="rotation")
+def _rocker_flat_excess(rb, kin, pivot, face_offset, min_rho, rotation):
+    g = rocker_flat_geo.oscillating_flat_geometry(pivot, face_offset, rb, kin, rotation)
+    return min_rho - jnp.min(g.radius_of_curvature)
+
+
+@partial(jax.jit, static_argnames="rotation")
+def _curved_face_excess(rb, kin, face_radius, offset, min_rho, lim, rotation):
+    g = curved_geo.geometry(rb, face_radius, offset, kin, rotation, min_rho)
+    return jnp.maximum(jnp.max(jnp.abs(g.pressure_angle)) - lim, -jnp.min(g.undercut_margin))
+
+
+@partial(jax.jit, static_argnames="rotation")
+def _rocker_roller_excess(rb, kin, pivot, arm, radius, min_rho, lim, rotation):
+    g = rocker_roller_geo.oscillating_roller_geometry(pivot, arm, radius, rb + radius, kin, rotation, min_rho)
+    return jnp.maximum(jnp.max(jnp.abs(g.pressure_angle)) - lim, -jnp.min(g.undercut_margin))
+
+
 def _excess(name, scene):
     """excess(R_b) on the scene's grid: the largest violation of the sizing's limits (<= 0:
     admissible), from the follower's closed-form geometry (jitted in R_b)."""
     f, rotation = scene.follower, scene.motion.rotation
-    kin = camjax.scene_arrays(scene).kin
+    kin = _dense_kin(scene)
     if name == "oscillating-flat":
-        def excess(rb):
-            g = rocker_flat_geo.oscillating_flat_geometry(f.pivot_distance_mm, f.face_offset_mm, rb, kin, rotation)
-            return f.min_curvature_radius_mm - jnp.min(g.radius_of_curvature)
-        return jax.jit(excess)
+        return partial(_rocker_flat_excess, kin=kin, pivot=f.pivot_distance_mm, face_offset=f.face_offset_mm,
+                       min_rho=f.min_curvature_radius_mm, rotation=rotation)
     if name == "curved-face":
         lim = min(math.radians(f.max_pressure_angle_deg),
                   float(curved_geo.face_travel_limit_rad(f.face_radius_mm, f.face_width_mm)))
-
-        def excess(rb):
-            g = curved_geo.geometry(rb, f.face_radius_mm, f.offset_mm, kin, rotation, f.min_curvature_radius_mm)
-            return jnp.maximum(jnp.max(jnp.abs(g.pressure_angle)) - lim, -jnp.min(g.undercut_margin))
-        return jax.jit(excess)
+        return partial(_curved_face_excess, kin=kin, face_radius=f.face_radius_mm, offset=f.offset_mm,
+                       min_rho=f.min_curvature_radius_mm, lim=lim, rotation=rotation)
     radius = f.roller_radius_mm if name.startswith("oscillating-roller") else f.face_radius_mm
     lim = math.radians(f.max_pressure_angle_deg)
     if name == "oscillating-curved-face":
         lim = min(lim, float(rocker_curved_geo.face_travel_limit_rad(f.face_radius_mm, f.face_width_mm)))
-
-    def excess(rb):
-        g = rocker_roller_geo.oscillating_roller_geometry(f.pivot_distance_mm, f.arm_length_mm, radius, rb + radius,
-                                                          kin, rotation, f.min_curvature_radius_mm)
-        return jnp.maximum(jnp.max(jnp.abs(g.pressure_angle)) - lim, -jnp.min(g.undercut_margin))
-    return jax.jit(excess)
+    return partial(_rocker_roller_excess, kin=kin, pivot=f.pivot_distance_mm, arm=f.arm_length_mm, radius=radius,
+                   min_rho=f.min_curvature_radius_mm, lim=lim, rotation=rotation)
 
 
 def _dense_boundary(excess, lo, hi, steps=36):
@@ -134,7 +153,7 @@ def test_roller_rocker_smallest_cam_radius_against_a_dense_grid(name):
     f = scene.follower
     radius = f.roller_radius_mm if name == "oscillating-roller" else f.face_radius_mm
     g = rocker_roller_geo.oscillating_roller_geometry(f.pivot_distance_mm, f.arm_length_mm, radius, rb + radius,
-                                                      camjax.scene_arrays(scene).kin, scene.motion.rotation)
+                                                      _dense_kin(scene), scene.motion.rotation)
     rho = np.asarray(g.cam_radius_of_curvature)
     assert np.all(np.asarray(g.pitch_curvature) > 0)  # convex everywhere: no pole of rho
     dense = float(np.min(rho))
@@ -157,7 +176,7 @@ def test_exact_boundary_of_a_known_limit():
     kin = arrays.kin
     grid_x = float(np.max(np.asarray(kin.ds)))
     dense = _scene("default", DENSE, "grid")
-    top = float(np.max(np.asarray(camjax.scene_arrays(dense).kin.ds)))
+    top = float(np.max(np.asarray(_dense_kin(dense).ds)))
     b = _sizing.exact_boundary(arrays.model.program, kin, jnp.asarray(grid_x), jnp.asarray(1e3), (),
                                limits=_velocity_limit)
     assert grid_x < top * (1 - 1e-6)  # the grid misses the peak

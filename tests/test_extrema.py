@@ -159,17 +159,23 @@ def test_refined_max_never_beaten_by_a_fine_grid(prog, name, samples):
     a grid of 2 samples per segment cannot say which half holds the peak.
     """
     q = QUANTITIES[name]
-    e = extrema.max_of(prog, q, q(evaluate(prog, samples), None))
-    fine = np.asarray(q(evaluate(prog, 100_000), None))
+
+    @jax.jit  # one program per drawn case (its angles and laws are compiled in), not op by op
+    def refined_fine_and_limits():
+        limits = [jnp.max(q(segment_motion(prog, j, jnp.asarray(b)), None))
+                  for j, b in enumerate(segment_bounds_deg(prog))]
+        return (extrema.max_of(prog, q, q(evaluate(prog, samples), None)),
+                q(evaluate(prog, 100_000), None), jnp.stack(limits))
+
+    e, fine, limits = refined_fine_and_limits()
+    fine = np.asarray(fine)
     scale = float(np.max(np.abs(fine)))
     # rounding of one evaluation of the closed form: a few ulps of the largest term
     assert float(e.value) >= fine.max() - 1e-12 * scale
     # and no more than the function reaches: the fine grid's max, or a one-sided limit at a
     # joint (which no sample need reach), up to the fine grid's own miss of a smooth max,
     # f'' dtheta^2 / 8 < 1e-5 of the scale for segments >= 6.9 deg (f'' / f < (2 pi / beta)^4)
-    limits = [float(jnp.max(q(segment_motion(prog, j, jnp.asarray(b)), None)))
-              for j, b in enumerate(segment_bounds_deg(prog))]
-    assert float(e.value) <= max(fine.max(), *limits) + 1e-5 * scale
+    assert float(e.value) <= max(fine.max(), *np.asarray(limits)) + 1e-5 * scale
 
 
 @pytest.mark.slow
@@ -186,8 +192,13 @@ def test_extremum_on_a_sample_keeps_the_grid_value(law, half_width, start):
         [Segment("dwell", start + 10), Segment("rise", rise, get_law(law), 3.0),
          Segment("dwell", 20), Segment("return", 330 - start - rise, CYC, 3.0)])
     v = lambda kin, _: kin.ds  # noqa: E731
-    grid = v(evaluate(prog, samples), None)
-    e = extrema.max_of(prog, v, grid)
+
+    @jax.jit  # one program per drawn case (its angles and law are compiled in), not op by op
+    def grid_and_refined():
+        grid = v(evaluate(prog, samples), None)
+        return grid, extrema.max_of(prog, v, grid)
+
+    grid, e = grid_and_refined()
     peak = float(jnp.max(grid))
     # the grid value is the continuous max here: the refinement may only move it by rounding
     assert float(e.value) == pytest.approx(peak, rel=1e-14)
@@ -208,7 +219,7 @@ def test_extremum_at_a_joint_is_the_one_sided_limit():
          Segment("dwell", 360 - 40 - 2 * beta_deg), Segment("return", beta_deg, get_law("harmonic"), 4.0)])
     d2s = lambda kin, _: kin.d2s  # noqa: E731
     grid = d2s(evaluate(prog, 360), None)
-    e = extrema.min_of(prog, d2s, grid)
+    e = jax.jit(lambda g: extrema.min_of(prog, d2s, g))(grid)  # one program, not op by op
     exact = -4.0 * math.pi**2 / (2 * math.radians(beta_deg) ** 2)
     assert float(e.value) == pytest.approx(exact, rel=1e-14)
     assert float(e.value) < float(jnp.min(grid))
@@ -228,8 +239,8 @@ def test_degenerate_segments_keep_the_grid_value(law):
         e = extrema.max_of(prog, q, grid)
         assert float(e.value) == float(jnp.max(grid))
         assert np.isfinite(float(e.angle_deg))
-        g = jax.grad(lambda lifts, q=q, grid=grid: extrema.max_of(
-            MotionProgram(prog.kinds, prog.angles_deg, prog.laws, lifts), q, grid).value)(prog.lifts)
+        g = jax.jit(jax.grad(lambda lifts, q=q, grid=grid: extrema.max_of(  # one program, not op by op
+            MotionProgram(prog.kinds, prog.angles_deg, prog.laws, lifts), q, grid).value))(prog.lifts)
         assert np.all(np.isfinite(np.asarray(g)))
 
 
@@ -247,7 +258,7 @@ def test_more_candidates_than_a_short_segment_has_points():
     theta = np.arange(samples) * (360.0 / samples)
     grid = jnp.concatenate([fn(j, jnp.asarray(theta[(theta >= lo) & (theta < hi)]), 1.0)
                             for j, (lo, hi) in enumerate(bounds)])
-    e = extrema.refine_max(fn, 1.0, bounds, grid, candidates=8)
+    e = jax.jit(lambda g: extrema.refine_max(fn, 1.0, bounds, g, candidates=8))(grid)  # one program, not op by op
     dense = [np.asarray(fn(j, jnp.linspace(lo, hi, 200_001), 1.0)) for j, (lo, hi) in enumerate(bounds)]
     # the dense grid (step <= 1e-3 deg) misses a smooth max by f'' h^2 / 8 < 0.04 * 1e-6 / 8 = 5e-9
     best = max(d.max() for d in dense)
@@ -257,7 +268,7 @@ def test_more_candidates_than_a_short_segment_has_points():
     # sine there (envelope theorem: the angle does not move the value to first order)
     j = next(j for j, (lo, hi) in enumerate(bounds) if lo <= float(e.angle_deg) <= hi)
     assert float(fn(j, e.angle_deg, 1.0)) == pytest.approx(float(e.value), abs=1e-12)
-    slope = jax.grad(lambda a: extrema.refine_max(fn, a, bounds, grid, candidates=8).value)(1.0)
+    slope = jax.jit(jax.grad(lambda a: extrema.refine_max(fn, a, bounds, grid, candidates=8).value))(1.0)
     assert float(slope) == pytest.approx(math.sin(float(e.angle_deg) * (j + 1) * math.pi / 50), abs=1e-12)
 
 
@@ -274,7 +285,8 @@ def test_envelope_gradient_matches_finite_differences():
         return extrema.max_of(prog, stress, stress(evaluate(prog, 360), base_radius), base_radius).value
 
     r, h = 26.0, H
-    g_r, g_h = jax.grad(peak_stress, argnums=(0, 1))(r, h)
+    g_r, g_h = jax.jit(jax.grad(peak_stress, argnums=(0, 1)))(r, h)
+    peak_stress = jax.jit(peak_stress)  # one program for the four differences, not op by op
     step = 1e-4
     fd_r = (peak_stress(r + step, h) - peak_stress(r - step, h)) / (2 * step)
     fd_h = (peak_stress(r, h + step) - peak_stress(r, h - step)) / (2 * step)

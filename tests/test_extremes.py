@@ -65,9 +65,9 @@ def test_programs_match_numpy_for_any_angle_lift_grid(rise_deg, lift, n):
 @pytest.mark.slow
 @settings(max_examples=40, deadline=None)
 @given(st.floats(-3.0, 1.0), st.floats(0.0, 20_000.0))
-def test_stress_force_and_gradients_finite_for_any_radius_and_speed(log_factor, rpm):
-    sc = camjax.load_scene()
-    arrays = camjax.scene_arrays(sc)
+def test_stress_force_and_gradients_finite_for_any_radius_and_speed(default_scene, default_arrays, log_factor, rpm):
+    # the default scene's arrays once (a fresh scene_arrays compiles its program again per example)
+    sc, arrays = default_scene, default_arrays
     rb_min = float(flat_geo.flat_min_base_radius(arrays.kin)[0])
     rb = rb_min * 10.0**log_factor  # 1e-3 x .. 10 x the minimum
     c, train = sc.contact, sc.follower.train
