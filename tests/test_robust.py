@@ -298,7 +298,7 @@ def test_scenes_without_tolerances_are_unchanged():
 @pytest.mark.parametrize("name", followers.names())
 def test_every_follower_type_through_the_contract(name, tmp_path):
     """Each type's example scene (on 90 samples) with rpm and every design variable toleranced: 8
-    samples in one batch, finite outputs; the zero-variate sample equals the family's evaluation of the scene
+    samples in one batch, finite outputs; the zero-variate sample (in the same batch) equals the family's evaluation of the scene
     read from a file with the nominal values (the design at the middle of the [design] box)."""
     kind = followers.get(name)
     scene = load_scene(kind.example_scene)
@@ -315,8 +315,13 @@ def test_every_follower_type_through_the_contract(name, tmp_path):
         pytest.skip(str(exc))
     nom = rev.nominal(scene, scene.tolerances, design)
     draws = draw(scene.tolerances, 8, 0)
-    assert np.all(np.isfinite(rev.batch(nom, draws.unit, draws.phases).outputs))
-    got = np.asarray(rev.sample(nom, np.asarray(nom.values), np.zeros(0)).outputs)
+    # the zero-variate sample (values = the nominal's) as the batch's first row: the batch's one
+    # program evaluates it with the 8 drawn ones, no sample evaluated on its own
+    unit = np.vstack([np.zeros((1, draws.unit.shape[1])), np.asarray(draws.unit)])
+    phases = np.vstack([np.zeros((1, draws.phases.shape[1])), np.asarray(draws.phases)])
+    outputs = rev.batch(nom, unit, phases).outputs
+    assert np.all(np.isfinite(outputs))
+    got = outputs[0]
     fam = kind.problem_module()
     d.pop("tolerances")
     plain = scene_from_dict(d, name)
