@@ -88,8 +88,10 @@ def design_start(scene, key: str) -> float:
     return high if key == "yoke_span_mm" else min(max(value, low), high)
 
 
+@jax.jit
 def reversed_coefficient(force_N, cam_width_mm, cam, follower):
-    """The Hertz coefficient of max(-F, 0): the second contact's (:func:`camjax.contact.stress_coefficient`)."""
+    """The Hertz coefficient of max(-F, 0): the second contact's (:func:`camjax.contact.stress_coefficient`);
+    one compiled call where it is evaluated on a grid outside a program."""
     from camjax import contact
 
     return contact.stress_coefficient(jnp.maximum(-force_N, 0.0), cam_width_mm, cam, follower)

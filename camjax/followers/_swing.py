@@ -107,10 +107,12 @@ def second_moment_coefficient_at(model: MomentModel, kin: Kinematics) -> jax.Arr
     return HERTZ_FACTOR * safe_sqrt(jnp.maximum(-moment, 0.0) / model.width_compliance)
 
 
+@jax.jit
 def moment_coefficient_at(model: MomentModel, kin: Kinematics) -> jax.Array:
     """C_M = 0.564 sqrt(M / (w K)) at the angles of ``kin`` (MPa mm^0.5 m^0.5), M (N m) the torque
     about the pivot (:func:`camjax.loads.rocker_torque`); divided by the root of the contact
-    force's lever arm (m) it is the Hertz coefficient C of :func:`camjax.contact.stress_coefficient`."""
+    force's lever arm (m) it is the Hertz coefficient C of :func:`camjax.contact.stress_coefficient`.
+    One compiled call where it is evaluated on a grid outside a program."""
     from camjax.contact import HERTZ_FACTOR
     from camjax.loads import rocker_torque
     from camjax.numerics import safe_sqrt

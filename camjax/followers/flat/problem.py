@@ -155,11 +155,15 @@ def _problem_curves(p, sigma_max_MPa) -> jax.Array:
 
 
 @runtime.program_cache
-def _exact_maxima(model, sigma_max_MPa, grid):
-    """max -q, max stress need, max s', max -s' refined off the grid (3, N): Extremum of shape (4,)."""
+def _exact_maxima(model, sigma_max_MPa, grid_point):
+    """max -q, max stress need, the face width 2 max |s'| and where each occurs, refined off their
+    values at the grid's point values ``grid_point`` (computed here too: one program, nothing
+    operation by operation)."""
     from camjax import extrema
     from camjax.evaluate import model_at
     from camjax.program import segment_bounds_deg
+
+    grid = _problem_curves(grid_point, sigma_max_MPa)
 
     def fn(segment, theta_deg, params):
         m, sigma, w = params
@@ -169,18 +173,18 @@ def _exact_maxima(model, sigma_max_MPa, grid):
     rows = jnp.concatenate([eye, -eye[2:]])
     segments, dwells = segment_bounds_deg(model.program), extrema.dwells(model.program)
     # mapped, not vmapped: traced once and not batched again (see evaluate._refined_extremes)
-    return jax.lax.map(lambda w: extrema.refine_max(fn, (model, sigma_max_MPa, w), segments, w @ grid,
-                                                    constant=dwells), rows)
+    e, at = jax.lax.map(lambda w: extrema.refine_max(fn, (model, sigma_max_MPa, w), segments, w @ grid,
+                                                     constant=dwells), rows)
+    width = 2.0 * jnp.maximum(jnp.maximum(e[2], e[3]), 0.0)
+    return -e[0], e[1], width, at[0], at[1], jnp.where(e[2] >= e[3], at[2], at[3])
 
 
 def _exact_extrema(arrays, sigma_max_MPa) -> ExactExtrema:
     """The design-independent maxima of the problem, refined off the grid (one jitted call)."""
     from camjax.evaluate import PointValues
 
-    grid = _problem_curves(PointValues(arrays.kin, None, None, arrays.stress_coefficient), sigma_max_MPa)
-    e, at = _exact_maxima(arrays.model, sigma_max_MPa, grid)
-    width = 2.0 * jnp.maximum(jnp.maximum(e[2], e[3]), 0.0)
-    return ExactExtrema(arrays.model, -e[0], e[1], width, at[0], at[1], jnp.where(e[2] >= e[3], at[2], at[3]))
+    grid_point = PointValues(arrays.kin, None, None, arrays.stress_coefficient)
+    return ExactExtrema(arrays.model, *_exact_maxima(arrays.model, sigma_max_MPa, grid_point))
 
 
 def per_angle(problem: Problem) -> Problem:

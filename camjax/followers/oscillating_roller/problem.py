@@ -161,8 +161,13 @@ def _second_moment_coefficient(scene, arrays) -> jax.Array:
     f, c, kin = scene.follower, scene.contact, arrays.kin
     if f.train is None or c is None:
         return jnp.zeros_like(kin.s)
-    moment = loads.rocker_torque(f.train, kin, arrays.cam_speed_rad_s)
-    return HERTZ_FACTOR * safe_sqrt(jnp.maximum(-moment, 0.0) / (c.cam_width_mm * compliance(c.cam, c.follower)))
+
+    @jax.jit  # one compiled call, not operation by operation
+    def reversed_coefficient(train, kin, speed, cam_width_mm, cam, follower):
+        moment = loads.rocker_torque(train, kin, speed)
+        return HERTZ_FACTOR * safe_sqrt(jnp.maximum(-moment, 0.0) / (cam_width_mm * compliance(cam, follower)))
+
+    return reversed_coefficient(f.train, kin, arrays.cam_speed_rad_s, c.cam_width_mm, c.cam, c.follower)
 
 
 # ---------------------------------------------------------------------------- physics
