@@ -190,12 +190,9 @@ def _curve_grid(grid_point: PointValues, consts: CurveConstants, base_radius_mm,
     return jnp.stack([_curve(n, grid_point, consts, base_radius_mm, follower) for n in names])
 
 
-@partial(jax.jit, static_argnames=("names", "follower"))
-def _sampled_extremes(grid_point: PointValues, theta_deg, consts: CurveConstants, base_radius_mm,
-                      names: tuple[str, ...], follower: str):
-    """(max, max_deg, min, min_deg) of the named curves' samples, in one compiled call (evaluated
-    operation by operation, a report's curves compiled some thirty one-operation programs)."""
-    return extrema_mod.sampled_extremes(_curve_grid(grid_point, consts, base_radius_mm, names, follower), theta_deg)
+# the grid's curves in one compiled call (operation by operation, a report's curves compiled some
+# thirty one-operation programs)
+_curve_grid_program = jax.jit(_curve_grid, static_argnames=("names", "follower"))
 
 
 @runtime.program_cache(static_argnames=("names", "follower"))
@@ -240,8 +237,8 @@ def curve_extremes(scene: Scene, arrays: SceneArrays, names: tuple[str, ...],
     model, consts = arrays.model, curve_constants(scene, follower)
     grid_point = PointValues(arrays.kin, arrays.force_N, arrays.torque_Nm, arrays.stress_coefficient)
     if model is None:
-        hi, hi_deg, lo, lo_deg = (np.asarray(a) for a in _sampled_extremes(
-            grid_point, arrays.theta_deg, consts, radius, tuple(names), scene.follower.type))
+        grid = _curve_grid_program(grid_point, consts, radius, tuple(names), scene.follower.type)
+        hi, hi_deg, lo, lo_deg = extrema_mod.sampled_extremes(grid, arrays.theta_deg)
         rows = range(len(names))
     else:
         # the report's curves and the follower's sizing curves are refined in one program (a

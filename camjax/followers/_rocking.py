@@ -249,13 +249,11 @@ def _grid_curves(kin: Kinematics, speed, numbers, base_radius_mm, drawn: CurveSc
 
 
 @partial(jax.jit, static_argnames=("drawn", "names"))
-def _sampled_curves(kin: Kinematics, theta_deg, speed, numbers, base_radius_mm, drawn: CurveScene,
-                    names: tuple[str, ...]):
-    """(max, max_deg, min, min_deg) of the named point curves' samples, in one compiled call (see
+def _curve_grid(kin: Kinematics, speed, numbers, base_radius_mm, drawn: CurveScene, names: tuple[str, ...]):
+    """The named point curves on the grid of ``kin`` (Q, N) in one compiled call (see
     :func:`_refined_curves`; evaluated operation by operation, they compiled some fifty
     one-operation programs)."""
-    grid = _grid_curves(kin, speed, numbers, base_radius_mm, drawn, names)[2]
-    return extrema_mod.sampled_extremes(grid, theta_deg)
+    return _grid_curves(kin, speed, numbers, base_radius_mm, drawn, names)[2]
 
 
 # RockerGeometry's scalar fields (floats in RockerCurves)
@@ -397,8 +395,8 @@ class RockingFollower(Follower):
         numbers = {k: as_(v) for k, v in numbers.items()}
         curve_scene = CurveScene.of(drawn, static)
         if arrays.model is None:
-            extremes = _sampled_curves(arrays.kin, arrays.theta_deg, as_(speed), numbers, as_(radius),
-                                       drawn=curve_scene, names=names)
+            grid = _curve_grid(arrays.kin, as_(speed), numbers, as_(radius), drawn=curve_scene, names=names)
+            extremes = extrema_mod.sampled_extremes(grid, arrays.theta_deg)
         else:
             extremes = _refined_curves(arrays.model.program, as_(speed), arrays.kin, numbers, as_(radius),
                                        drawn=curve_scene, names=names)
