@@ -470,7 +470,13 @@ def _block(problem, cert: Certificate, *, active_tol: float = 1e-6) -> dict:
     res = cert.result
     y = np.asarray(res.multipliers, float)
     scale = float(cert.scale)
-    fns = epigraph_form(problem, Weights(jnp.asarray(1.0), jnp.asarray(1.0)))
+    row_kinds = []  # the form's row blocks: static, read off a trace (nothing compiled or run)
+
+    def blocks(p):
+        row_kinds.append(epigraph_form(p, Weights(jnp.asarray(1.0), jnp.asarray(1.0))).kinds)
+        return jnp.zeros(())
+
+    jax.eval_shape(blocks, problem)
     theta = np.asarray(problem.theta_deg, float).reshape(-1)
     lower = family_of(problem).bounds(problem)[0]
     variables = list(lower._fields)
@@ -485,7 +491,7 @@ def _block(problem, cert: Certificate, *, active_tol: float = 1e-6) -> dict:
     active = []
     start = 0
     m = len(variables)
-    for kind, count in fns.kinds:
+    for kind, count in row_kinds[0]:
         for j in range(count):
             i = start + j
             if scale * y[i] <= active_tol:
