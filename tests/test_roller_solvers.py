@@ -2,6 +2,7 @@
 a dense scan over (R_b, R_f, e), the closed-form/bisection prime radius, and SciPy."""
 
 import dataclasses
+import functools
 import math
 
 import jax
@@ -59,27 +60,36 @@ def dense_scan_prime_radius(scene, zooms=3, grid=(41, 11, 41)):
     return float(c[k]), best
 
 
+@functools.partial(jax.jit, static_argnames="rotation")
+def _prime_radii(kin, roller_radius_mm, offsets_mm, max_pressure_angle_rad, min_curvature_radius_mm, rotation):
+    """The smallest admissible R_p (closed form + bisection) at each offset: one compiled program
+    per number of offsets, whatever the scene's values (the scans of every test here)."""
+    return jax.vmap(lambda e: roller_geo.roller_min_prime_radius(
+        kin, roller_radius_mm, e, max_pressure_angle_rad, min_curvature_radius_mm, rotation).prime_radius_mm)(offsets_mm)
+
+
+def prime_radii(scene, kin, roller_radius_mm, offsets_mm):
+    """_prime_radii of the scene's follower on the grid ``kin``."""
+    f = scene.follower
+    return np.asarray(_prime_radii(kin, roller_radius_mm, jnp.asarray(offsets_mm),
+                                   math.radians(f.max_pressure_angle_deg), f.min_curvature_radius_mm,
+                                   scene.motion.rotation))
+
+
 def exact_offset_scan(scene):
     """min over e of the smallest admissible R_p(e) (closed form + bisection), golden-refined in e."""
-    kin = camjax.scene_arrays(scene).kin
-    f, d = scene.follower, scene.design
+    kin, d = camjax.scene_arrays(scene).kin, scene.design
     rf = d.bounds("roller_radius_mm")[0]  # with gamma = 0 the smallest roller is best: undercut only gets easier
-
-    def rp(e):
-        return roller_geo.roller_min_prime_radius(kin, rf, e, math.radians(f.max_pressure_angle_deg),
-                                                f.min_curvature_radius_mm, scene.motion.rotation).prime_radius_mm
-
-    rp = jax.jit(jax.vmap(rp))
     es = np.linspace(*d.bounds("offset_mm"), 801)
-    k = int(np.argmin(np.asarray(rp(jnp.asarray(es)))))
+    k = int(np.argmin(prime_radii(scene, kin, rf, es)))
     a, b = es[max(k - 1, 0)], es[min(k + 1, len(es) - 1)]
     g = (math.sqrt(5) - 1) / 2
     for _ in range(80):
         x1, x2 = b - g * (b - a), a + g * (b - a)
-        r1, r2 = np.asarray(rp(jnp.asarray([x1, x2])))
+        r1, r2 = prime_radii(scene, kin, rf, [x1, x2])
         a, b = (a, x2) if r1 < r2 else (x1, b)
     e = 0.5 * (a + b)
-    return float(rp(jnp.asarray([e]))[0]), e
+    return float(prime_radii(scene, kin, rf, [e, e])[0]), e  # a pair: the golden section's program
 
 
 @pytest.mark.slow
@@ -110,13 +120,12 @@ def test_every_solver_and_mode_solves_the_roller_problem(scene, solver, mode):
     fixed = with_design(scene, roller_radius_mm=5.0, offset_mm=1.0, gamma=0.0).design
     problem = R.problem_from_scene(dataclasses.replace(scene, design=fixed), extrema="grid")
     sol = solve(problem, (1.0, 0.0), mode=mode, solver=solver)
-    f = scene.follower
-    ref = roller_geo.roller_min_prime_radius(camjax.scene_arrays(scene).kin, 5.0, 1.0,
-                                           math.radians(f.max_pressure_angle_deg), f.min_curvature_radius_mm)
+    # R_f = 5 mm, e = 1 mm as a pair: the program of exact_offset_scan's golden section
+    ref_rp = prime_radii(scene, camjax.scene_arrays(scene).kin, 5.0, [1.0, 1.0])[0]
     # gradient and hybrid to the feasibility tolerance; the GA (200 generations, decaying
     # mutation) to 1e-3 mm (measured ~1e-5)
     tol = 1e-3 if solver == "ga" else 1e-6
-    assert float(sol.base_radius_mm) == pytest.approx(float(ref.prime_radius_mm) - 5.0, abs=tol)
+    assert float(sol.base_radius_mm) == pytest.approx(float(ref_rp) - 5.0, abs=tol)
     assert bool(sol.feasible) or solver == "ga"
     assert float(sol.roller_radius_mm) == 5.0 and float(sol.offset_mm) == 1.0
     out = sol.to_json(problem)
