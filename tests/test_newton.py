@@ -337,7 +337,7 @@ def test_forward_derivatives_match_reverse_mode(name):
     of the solve with positive multipliers of O(1). Both are exact derivatives of the same
     function: they differ by rounding only (rtol 1e-9 of the largest entry, O(1) after the
     solver's normalization)."""
-    problem = _problem(followers.get(name).example_scene, samples=36)
+    problem = _problem(followers.get(name).example_scene)  # SAMPLES: its scene programs are compiled above
     w = weights_of(1.0, 1.0)
 
     @jax.jit
