@@ -27,7 +27,10 @@ WEIGHTINGS = ((1.0, 1.0), (0.9, 0.1), (0.1, 0.9))
 _certify_rows = jax.jit(jax.vmap(newton.certify))
 
 
+@functools.cache
 def _problem(scene_name, samples=SAMPLES):
+    """The built-in scene's problem on ``samples`` grid angles, built once (a build compiles its
+    program again)."""
     scene = camjax.load_scene(scene_name)
     scene = dataclasses.replace(scene, motion=dataclasses.replace(scene.motion, samples=samples, extrema="grid"))
     return problem_from_scene(scene)
@@ -337,7 +340,7 @@ def test_forward_derivatives_match_reverse_mode(name):
     of the solve with positive multipliers of O(1). Both are exact derivatives of the same
     function: they differ by rounding only (rtol 1e-9 of the largest entry, O(1) after the
     solver's normalization)."""
-    problem = _problem(followers.get(name).example_scene)  # SAMPLES: its scene programs are compiled above
+    problem = _problem(followers.get(name).example_scene)  # the example problem of the tests above
     w = weights_of(1.0, 1.0)
 
     @jax.jit
