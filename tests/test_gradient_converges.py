@@ -90,7 +90,7 @@ def test_gradient_reaches_scipy_slsqp_on_the_oscillating_curved_face():
                                  "jac": lambda x: np.asarray(jac(jnp.asarray(x)))}])
     assert ref.success, ref.message
     w = Weights(jnp.asarray(1.0), jnp.asarray(1.0))
-    ev = CP.evaluate(problem, w, design(jnp.asarray(ref.x)))
+    ev = jax.jit(CP.evaluate)(problem, w, design(jnp.asarray(ref.x)))  # one program, not op by op
     assert bool(ev.feasible)
     assert abs(float(grad.objective) - float(ev.objective)) <= 1e-6 * float(ev.objective)
 
@@ -113,7 +113,7 @@ def test_gradient_matches_the_hybrid_over_a_sweep_of_the_oscillating_flat_face()
     ratio = np.logspace(-2, 2, 10)
     w = weights_of(1.0 / (1.0 + ratio), ratio / (1.0 + ratio))
     keys = weighting_keys(0, 10)
-    judge = jax.vmap(FP.evaluate, in_axes=(None, 0, 0))
+    judge = jax.jit(jax.vmap(FP.evaluate, in_axes=(None, 0, 0)))  # one program for both, not op by op
     grad = judge(problem, w, solve_batch(problem, w, keys, solver="gradient").design)
     hybrid = judge(problem, w, solve_batch(problem, w, keys, solver="hybrid").design)
     assert bool(np.all(grad.feasible)) and bool(np.all(hybrid.feasible))

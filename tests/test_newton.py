@@ -27,7 +27,10 @@ WEIGHTINGS = ((1.0, 1.0), (0.9, 0.1), (0.1, 0.9))
 _certify_rows = jax.jit(jax.vmap(newton.certify))
 
 
+@functools.cache
 def _problem(scene_name, samples=SAMPLES):
+    """The built-in scene's problem on ``samples`` grid angles, built once (a build compiles its
+    program again)."""
     scene = camjax.load_scene(scene_name)
     scene = dataclasses.replace(scene, motion=dataclasses.replace(scene.motion, samples=samples, extrema="grid"))
     return problem_from_scene(scene)
@@ -91,14 +94,16 @@ def test_matches_slsqp(solved):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("scene_name", ["roller", "oscillating-roller"])
-def test_size_only_matches_slsqp(scene_name):
-    """alpha = 1, gamma = 0 (the built-in roller scene's weighting, its own 360 samples; the size
-    alone, every angle's objective row equal): converged within the issue's 40 iterations, feasible,
-    the objective within 1e-7 of SLSQP's (both stop at a KKT point of the same problem, as above),
-    and the one row that holds t carries the objective's unit multiplier."""
-    problem = _problem(scene_name, samples=360)
-    cert = jax.jit(newton.certify)(problem, weights_of(1.0, 0.0))
+@pytest.mark.parametrize("name", ["roller", "oscillating_roller"])
+def test_size_only_matches_slsqp(name):
+    """alpha = 1, gamma = 0 (the built-in roller scenes' weighting; the size alone, every angle's
+    objective row equal): converged within the issue's 40 iterations, feasible, the objective
+    within 1e-7 of SLSQP's (both stop at a KKT point of the same problem, as above), and the one
+    row that holds t carries the objective's unit multiplier. The example scene's problem of
+    test_matches_slsqp through its compiled program (SAMPLES grid angles: the degenerate objective,
+    equal on every row, is the same on any grid)."""
+    problem, _ = _example_certificates(name)
+    cert = _certify_all([problem], weights_of(1.0, 0.0))[0]
     ref = scipy_family.slsqp(problem, 1.0, 0.0)
     ev = family_of(problem).evaluate(problem, weights_of(1.0, 0.0), cert.result.design)
     assert bool(cert.result.converged) and bool(ev.feasible)
@@ -166,7 +171,7 @@ def test_certify_point_recovers_the_multipliers_at_the_optimum():
     hybrid's certificate) satisfy KKT to the solver's accuracy and give the same dF*/d sigma_max
     (the active set is the rows within 1e-6 of their limit; the solver's inactive rows carry
     multipliers ~mu / slack ~1e-6 that the fit leaves out: a relative 1e-4 between the two)."""
-    problem = _problem("default", samples=36)
+    problem = _problem("default")
     w = weights_of(1.0, 1.0)
     # newton.certify in the solve's program (test_solution_json_carries_the_certificate's)
     cert = solve(problem, (1.0, 1.0), mode="global", solver="newton").certificate
@@ -182,7 +187,7 @@ def test_certify_point_recovers_the_multipliers_at_the_optimum():
 def test_solution_json_carries_the_certificate(mode, solver):
     """solve(...).to_json: the certificate computed in the solve's own program, for newton in both
     modes (pointwise: the critical angle's one-angle problem) and for the GA's final point."""
-    problem = _problem("default", samples=36)
+    problem = _problem("default")
     out = solve(problem, (1.0, 1.0), mode=mode, solver=solver).to_json(problem)
     cert = out["certificate"]
     for key in ("stationarity", "primal_feasibility", "complementarity", "iterations", "active", "limited_by"):
@@ -199,12 +204,13 @@ def test_solution_json_carries_the_certificate(mode, solver):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("scene_name", ["roller", "oscillating-flat"])
+@pytest.mark.parametrize("scene_name", ["default", "oscillating-flat"])
 def test_design_with_newton_writes_the_certificate_and_names_what_limits(scene_name, tmp_path, capsys):
     """`camjax design --solver newton` (a translating and a rocking follower, the grid's 90
-    samples as above): result.json's design block holds the certificate of a converged solve, its
-    residuals within the stopping rule, every active row named with its scene key and angle, and
-    the summary says what limits the design."""
+    samples as above: the translating flat face's solve is then the compiled program of
+    test_solution_json_carries_the_certificate): result.json's design block holds the certificate
+    of a converged solve, its residuals within the stopping rule, every active row named with its
+    scene key and angle, and the summary says what limits the design."""
     import json
     import re
 
@@ -334,7 +340,7 @@ def test_forward_derivatives_match_reverse_mode(name):
     of the solve with positive multipliers of O(1). Both are exact derivatives of the same
     function: they differ by rounding only (rtol 1e-9 of the largest entry, O(1) after the
     solver's normalization)."""
-    problem = _problem(followers.get(name).example_scene, samples=36)
+    problem = _problem(followers.get(name).example_scene)  # the example problem of the tests above
     w = weights_of(1.0, 1.0)
 
     @jax.jit

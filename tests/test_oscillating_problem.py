@@ -2,6 +2,7 @@
 independent sizing (arm-angle scan + bisection) and a dense scan over the pivot distance, gradients
 against finite differences, refused bounds, sweeps."""
 
+import functools
 import math
 
 import jax
@@ -44,16 +45,34 @@ gamma = 0.0
 """
 
 
+def text_of(rotation="ccw", design=""):
+    return SCENE.replace("ROT", rotation).replace("DESIGN", design)
+
+
 def scene_of(rotation="ccw", design=""):
-    return parse_scene(SCENE.replace("ROT", rotation).replace("DESIGN", design))
+    return parse_scene(text_of(rotation, design))
+
+
+# A scene's arrays and problem built once per scene text: each build compiles its program again.
+@functools.cache
+def arrays_of(text, extrema=None):
+    scene = parse_scene(text)
+    return scene_arrays(scene) if extrema is None else scene_arrays(scene, extrema=extrema)
+
+
+@functools.cache
+def problem_of(text, extrema=None):
+    """The scene's problem; extrema "grid": on its samples."""
+    scene = parse_scene(text)
+    return problem_from_scene(scene) if extrema is None else problem_from_scene(scene, arrays_of(text, extrema))
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("rotation", ["ccw", "cw"])
 def test_smallest_cam_with_fixed_pivot_and_arm_is_the_sizing(rotation):
-    scene = scene_of(rotation)
-    grid = scene_arrays(scene, extrema="grid")
-    sol = solve(problem_from_scene(scene, grid), (1.0, 0.0), mode="global", solver="gradient")
+    text = text_of(rotation)
+    scene, grid = parse_scene(text), arrays_of(text, "grid")
+    sol = solve(problem_of(text, "grid"), (1.0, 0.0), mode="global", solver="gradient")
     assert bool(sol.evaluation.feasible)
     sizing = rocker_roller_geo.oscillating_roller_min_prime_radius(grid.kin, 80.0, 60.0, 8.0, math.radians(30.0),
                                                                    0.0, rotation)
@@ -63,17 +82,16 @@ def test_smallest_cam_with_fixed_pivot_and_arm_is_the_sizing(rotation):
     assert float(sol.design.base_radius_mm) == pytest.approx(float(sizing.base_radius_mm), abs=1e-5)
     # with exact extrema the polish moves the design onto the continuous limit: |phi| <= 30 deg
     # between the samples too (to the polish's margin), within the 2-deg grid's error of the above
-    exact = solve(problem_from_scene(scene), (1.0, 0.0), mode="global", solver="gradient")
+    exact = solve(problem_of(text), (1.0, 0.0), mode="global", solver="gradient")
     radius = float(exact.design.base_radius_mm)
-    phi = followers.get("oscillating_roller").curve_extremes(scene, scene_arrays(scene), ("pressure_angle",), radius)
+    phi = followers.get("oscillating_roller").curve_extremes(scene, arrays_of(text), ("pressure_angle",), radius)
     assert max(phi["pressure_angle"].max, -phi["pressure_angle"].min) <= math.radians(30.0) + 1e-12
     assert bool(exact.evaluation.feasible) and abs(radius - float(sizing.base_radius_mm)) < 1e-2
 
 
 @pytest.mark.slow
 def test_pointwise_mode_condenses_to_the_same_smallest_cam():
-    scene = scene_of()
-    problem = problem_from_scene(scene, scene_arrays(scene, extrema="grid"))  # both on the samples
+    problem = problem_of(text_of(), "grid")  # both on the samples
     glob = solve(problem, (1.0, 0.0), mode="global", solver="gradient")
     point = solve(problem, (1.0, 0.0), mode="pointwise", solver="gradient")
     # size only, one free variable: the largest per-angle need is the whole-cam need
@@ -113,15 +131,16 @@ def assert_gradients(family, scene, x0, far_points, sums):
 
     x0 = jnp.asarray(x0)
     jac = jax.jit(jax.jacfwd(f))(x0)
+    value, gradient = jax.jit(f), jax.jit(jax.grad(lambda x: jnp.sum(f(x))))  # one program each, not op by op
     for j in range(x0.size):
         step = jnp.zeros(x0.size).at[j].set(1e-6)
-        fd = (f(x0 + step) - f(x0 - step)) / 2e-6
+        fd = (value(x0 + step) - value(x0 - step)) / 2e-6
         # central differences, h = 1e-6 mm: truncation ~h^2 |f'''|, round-off ~eps |f| / h <= 1e-6 for
         # the sums over 180 angles (|f| <= 1e3); the objective's max keeps its argmax near x0
         np.testing.assert_allclose(jac[:, j], fd, rtol=1e-6, atol=1e-6)
     for x in far_points:
-        g = jax.grad(lambda x: jnp.sum(f(x)))(jnp.asarray(x))
-        assert np.all(np.isfinite(np.asarray(g))) and np.all(np.isfinite(np.asarray(f(jnp.asarray(x)))))
+        g = gradient(jnp.asarray(x))
+        assert np.all(np.isfinite(np.asarray(g))) and np.all(np.isfinite(np.asarray(value(jnp.asarray(x)))))
 
 
 @pytest.mark.slow
@@ -149,7 +168,10 @@ def test_sweep_of_an_oscillating_roller_scene():
 
     scene = parse_scene(SCENE.replace("ROT", "ccw").replace("gamma = 0.0", "gamma = 1.0").replace(
         "DESIGN", "roller_radius_mm = [4.0, 12.0]"))
-    result = sweep_scene(scene, [1.0, 0.1], [0.0, 1.0], mode="global", solver="gradient")
+    # one weighting per compiled call: the program of test_smallest_cam_with_fixed_pivot_and_arm_is_
+    # the_sizing's solve on this grid with exact extrema (the sweep's results do not depend on the
+    # chunk size; four chunks, each its own call)
+    result = sweep_scene(scene, [1.0, 0.1], [0.0, 1.0], mode="global", solver="gradient", chunk_size=1)
     records = result.records()
     assert len(records) == 4 and all({"size_mm", "stress_max_MPa", "pivot_distance_mm"} <= set(r) for r in records)
     assert all(r["feasible"] for r in records)
@@ -164,27 +186,30 @@ FLAT = (SCENE.replace('type = "oscillating_roller"', 'type = "oscillating_flat"'
         .replace("base_radius_mm = [5.0, 60.0]", "base_radius_mm = [5.0, 130.0]"))
 
 
+def flat_text(rotation, sigma_max):
+    """The flat-face rocker of FLAT with no more bounds and the allowed stress sigma_max (MPa)."""
+    return FLAT.replace("ROT", rotation).replace("DESIGN", "").replace("sigma_max_MPa = 2000.0",
+                                                                       f"sigma_max_MPa = {sigma_max!r}")
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("rotation", ["ccw", "cw"])
 def test_flat_face_smallest_cam_is_the_sizing_and_the_stress_limit_binds_as_the_curves_say(rotation):
     from camjax import followers
 
-    loose = parse_scene(FLAT.replace("ROT", rotation).replace("DESIGN", "").replace(
-        "sigma_max_MPa = 2000.0", "sigma_max_MPa = 1e6"))
+    loose = flat_text(rotation, 1e6)
     # on the samples, as the sizing is (the exact polish: test_the_polish_keeps_the_flat_face_...)
-    problem = problem_from_scene(loose, scene_arrays(loose, extrema="grid"))
+    problem = problem_of(loose, "grid")
     sol = solve(problem, (1.0, 0.0), mode="global", solver="gradient")
     assert bool(sol.evaluation.feasible)
-    arrays = scene_arrays(loose)
+    arrays = arrays_of(loose)
     sizing = rocker_flat_geo.oscillating_flat_min_base_radius(arrays.kin, 150.0, 10.0, 1e-3, rotation)
     # the same boundary rho = rho_min, by bisection in the arm angle and by the solver (1e-6 mm)
     assert float(sol.design.base_radius_mm) == pytest.approx(float(sizing.base_radius_mm), abs=1e-5)
     # a tight allowed stress binds instead: the peak of the report's stress curve (P = M / xi and
     # camjax.contact.hertz_line_stress, not the family's formula) sits on sigma_max
-    tight = parse_scene(FLAT.replace("ROT", rotation).replace("DESIGN", "").replace(
-        "sigma_max_MPa = 2000.0", "sigma_max_MPa = 1000.0"))
-    sol = solve(problem_from_scene(tight, scene_arrays(tight, extrema="grid")), (1.0, 0.0), mode="global",
-                solver="gradient")
+    tight = parse_scene(flat_text(rotation, 1000.0))
+    sol = solve(problem_of(flat_text(rotation, 1000.0), "grid"), (1.0, 0.0), mode="global", solver="gradient")
     assert bool(sol.evaluation.feasible)
     assert float(sol.design.base_radius_mm) > float(sizing.base_radius_mm) + 0.01
     curves = followers.of(tight).evaluate(tight, arrays.kin, arrays.cam_speed_rad_s, float(sol.design.base_radius_mm))
@@ -201,9 +226,7 @@ def test_flat_face_gradients_match_finite_differences_and_stay_finite():
     far = ([200.0, 120.0, 20.0], [1.0, 150.0, -10.0], [140.0, 150.0, 5.0])
     assert_gradients(FP, scene, [95.0, 150.0, 10.0], far, ("curvature", "stress", "swing"))
     # pointwise mode condenses to the whole-cam smallest radius (size only, R_b free)
-    scene = parse_scene(FLAT.replace("ROT", "ccw").replace("DESIGN", "").replace(
-        "sigma_max_MPa = 2000.0", "sigma_max_MPa = 1e6"))
-    problem = problem_from_scene(scene, scene_arrays(scene, extrema="grid"))  # both on the samples
+    problem = problem_of(flat_text("ccw", 1e6), "grid")  # both on the samples
     glob = solve(problem, (1.0, 0.0), mode="global", solver="gradient")
     point = solve(problem, (1.0, 0.0), mode="pointwise", solver="gradient")
     assert float(point.design.base_radius_mm) == pytest.approx(float(glob.design.base_radius_mm), abs=1e-5)
@@ -215,12 +238,12 @@ def test_the_polish_keeps_the_flat_face_limits_between_the_samples(sigma_max):
     """With exact extrema the solver's design keeps rho >= rho_min and sigma <= sigma_max at every
     angle (the report's own curves, refined off the grid), where the samples' design breaks one of
     them between two samples; it moves no more than the 2-deg grid's error."""
-    scene = parse_scene(FLAT.replace("ROT", "ccw").replace("DESIGN", "").replace(
-        "sigma_max_MPa = 2000.0", f"sigma_max_MPa = {sigma_max!r}"))
+    text = flat_text("ccw", sigma_max)
+    scene = parse_scene(text)
     follower = followers.of(scene)
-    grid = solve(problem_from_scene(scene, scene_arrays(scene, extrema="grid")), (1.0, 0.0))
-    exact = solve(problem_from_scene(scene), (1.0, 0.0))
-    arrays = scene_arrays(scene)
+    grid = solve(problem_of(text, "grid"), (1.0, 0.0))
+    exact = solve(problem_of(text), (1.0, 0.0))
+    arrays = arrays_of(text)
 
     def worst(design):  # how far the continuous curves pass the limits (mm of rho, MPa of stress)
         e = follower.curve_extremes(scene, arrays, ("rho", "stress"), float(design.base_radius_mm))

@@ -2,6 +2,7 @@
 a dense scan over (R_b, R_f, e), the closed-form/bisection prime radius, and SciPy."""
 
 import dataclasses
+import functools
 import math
 
 import jax
@@ -29,13 +30,26 @@ def size_only(scene):
     return R.problem_from_scene(scene, extrema="grid")
 
 
-def dense_scan_prime_radius(scene, zooms=3, grid=(41, 11, 41)):
+# The scene's arrays and problems built once: each build compiles its program again.
+@pytest.fixture(scope="module")
+def kin(scene):
+    return camjax.scene_arrays(scene).kin
+
+
+@pytest.fixture(scope="module")
+def fixed_roller_and_offset(scene):
+    """R_f = 5 mm and e = 1 mm fixed, size only: the pointwise design (largest R_b over the
+    angles) is then the global one."""
+    fixed = with_design(scene, roller_radius_mm=5.0, offset_mm=1.0, gamma=0.0).design
+    return R.problem_from_scene(dataclasses.replace(scene, design=fixed), extrema="grid")
+
+
+def dense_scan_prime_radius(scene, kin, zooms=3, grid=(41, 11, 41)):
     """Smallest feasible R_b + R_f over a grid of (R_b, R_f, e) in the [design] box, zoomed.
 
     Feasibility straight from the geometry (max |phi| <= limit, smallest convex cam radius >=
     min_curvature_radius_mm), not from the problem's constraint functions.
     """
-    kin = camjax.scene_arrays(scene).kin
     f, d = scene.follower, scene.design
     lim = math.radians(f.max_pressure_angle_deg)
 
@@ -59,36 +73,46 @@ def dense_scan_prime_radius(scene, zooms=3, grid=(41, 11, 41)):
     return float(c[k]), best
 
 
-def exact_offset_scan(scene):
-    """min over e of the smallest admissible R_p(e) (closed form + bisection), golden-refined in e."""
-    kin = camjax.scene_arrays(scene).kin
-    f, d = scene.follower, scene.design
+@functools.partial(jax.jit, static_argnames="rotation")
+def _prime_radii(kin, roller_radius_mm, offsets_mm, max_pressure_angle_rad, min_curvature_radius_mm, rotation):
+    """The smallest admissible R_p (closed form + bisection) at each offset: one compiled program
+    per number of offsets, whatever the scene's values (the scans of every test here)."""
+    return jax.vmap(lambda e: roller_geo.roller_min_prime_radius(
+        kin, roller_radius_mm, e, max_pressure_angle_rad, min_curvature_radius_mm, rotation).prime_radius_mm)(offsets_mm)
+
+
+def prime_radii(scene, kin, roller_radius_mm, offsets_mm):
+    """_prime_radii of the scene's follower on the grid ``kin``."""
+    f = scene.follower
+    return np.asarray(_prime_radii(kin, roller_radius_mm, jnp.asarray(offsets_mm),
+                                   math.radians(f.max_pressure_angle_deg), f.min_curvature_radius_mm,
+                                   scene.motion.rotation))
+
+
+def exact_offset_scan(scene, kin):
+    """min over e of the smallest admissible R_p(e) (closed form + bisection), golden-refined in e
+    (``kin``: the scene's kinematics on its grid)."""
+    d = scene.design
     rf = d.bounds("roller_radius_mm")[0]  # with gamma = 0 the smallest roller is best: undercut only gets easier
-
-    def rp(e):
-        return roller_geo.roller_min_prime_radius(kin, rf, e, math.radians(f.max_pressure_angle_deg),
-                                                f.min_curvature_radius_mm, scene.motion.rotation).prime_radius_mm
-
-    rp = jax.jit(jax.vmap(rp))
     es = np.linspace(*d.bounds("offset_mm"), 801)
-    k = int(np.argmin(np.asarray(rp(jnp.asarray(es)))))
+    k = int(np.argmin(prime_radii(scene, kin, rf, es)))
     a, b = es[max(k - 1, 0)], es[min(k + 1, len(es) - 1)]
     g = (math.sqrt(5) - 1) / 2
     for _ in range(80):
         x1, x2 = b - g * (b - a), a + g * (b - a)
-        r1, r2 = np.asarray(rp(jnp.asarray([x1, x2])))
+        r1, r2 = prime_radii(scene, kin, rf, [x1, x2])
         a, b = (a, x2) if r1 < r2 else (x1, b)
     e = 0.5 * (a + b)
-    return float(rp(jnp.asarray([e]))[0]), e
+    return float(prime_radii(scene, kin, rf, [e, e])[0]), e  # a pair: the golden section's program
 
 
 @pytest.mark.slow
-def test_gradient_finds_the_optimal_offset(scene, size_only):
+def test_gradient_finds_the_optimal_offset(scene, size_only, kin):
     sol = solve(size_only, (1.0, 0.0), solver="gradient")
     assert bool(sol.feasible) and sol.status_name == "converged"
     rp = float(sol.base_radius_mm + sol.roller_radius_mm)
-    exact_rp, exact_e = exact_offset_scan(scene)
-    scan_rp, scan_x = dense_scan_prime_radius(scene)
+    exact_rp, exact_e = exact_offset_scan(scene, kin)
+    scan_rp, scan_x = dense_scan_prime_radius(scene, kin)
     # the scan's best feasible point is feasible, so the optimum can only be smaller; the scan's
     # final cells (8e-4 mm in R_b, 1e-3 mm in e) bound how much smaller: a few um
     assert exact_rp <= scan_rp <= exact_rp + 5e-3
@@ -105,18 +129,15 @@ def test_gradient_finds_the_optimal_offset(scene, size_only):
 @pytest.mark.slow
 @pytest.mark.parametrize("solver", SOLVERS)
 @pytest.mark.parametrize("mode", MODES)
-def test_every_solver_and_mode_solves_the_roller_problem(scene, solver, mode):
-    # R_f and e fixed: then the pointwise design (largest R_b over the angles) is the global one
-    fixed = with_design(scene, roller_radius_mm=5.0, offset_mm=1.0, gamma=0.0).design
-    problem = R.problem_from_scene(dataclasses.replace(scene, design=fixed), extrema="grid")
+def test_every_solver_and_mode_solves_the_roller_problem(scene, kin, fixed_roller_and_offset, solver, mode):
+    problem = fixed_roller_and_offset
     sol = solve(problem, (1.0, 0.0), mode=mode, solver=solver)
-    f = scene.follower
-    ref = roller_geo.roller_min_prime_radius(camjax.scene_arrays(scene).kin, 5.0, 1.0,
-                                           math.radians(f.max_pressure_angle_deg), f.min_curvature_radius_mm)
+    # R_f = 5 mm, e = 1 mm as a pair: the program of exact_offset_scan's golden section
+    ref_rp = prime_radii(scene, kin, 5.0, [1.0, 1.0])[0]
     # gradient and hybrid to the feasibility tolerance; the GA (200 generations, decaying
     # mutation) to 1e-3 mm (measured ~1e-5)
     tol = 1e-3 if solver == "ga" else 1e-6
-    assert float(sol.base_radius_mm) == pytest.approx(float(ref.prime_radius_mm) - 5.0, abs=tol)
+    assert float(sol.base_radius_mm) == pytest.approx(float(ref_rp) - 5.0, abs=tol)
     assert bool(sol.feasible) or solver == "ga"
     assert float(sol.roller_radius_mm) == 5.0 and float(sol.offset_mm) == 1.0
     out = sol.to_json(problem)
@@ -124,11 +145,16 @@ def test_every_solver_and_mode_solves_the_roller_problem(scene, solver, mode):
     assert sol.record(problem)["offset_mm"] == 1.0
 
 
+@pytest.fixture(scope="module")
+def with_stress(scene):
+    return R.problem_from_scene(dataclasses.replace(scene, design=dataclasses.replace(scene.design, gamma=1.0)),
+                                extrema="grid")
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("weights", [(1.0, 1.0), (0.5, 1.0), (1.0, 0.1)])
-def test_gradient_matches_scipy_slsqp_with_stress(scene, weights):
-    problem = R.problem_from_scene(dataclasses.replace(scene, design=dataclasses.replace(scene.design, gamma=1.0)),
-                                   extrema="grid")
+def test_gradient_matches_scipy_slsqp_with_stress(with_stress, weights):
+    problem = with_stress
     ours = solve(problem, weights, solver="gradient")
     ref = scipy_roller.slsqp(problem, *weights)
     assert ref.success and ref.max_violation < 1e-9
@@ -165,14 +191,14 @@ def _dense_max_pressure_angle_deg(scene, design, samples: int = 720_001) -> floa
 
 
 @pytest.mark.slow
-def test_exact_extrema_keep_the_pressure_angle_between_the_samples(scene):
+def test_exact_extrema_keep_the_pressure_angle_between_the_samples(scene, size_only):
     """Solved on the 1 deg grid, the prime circle sits on the limit at the samples and passes it
     between them (the dense NumPy scan finds |phi| above 30 deg); with exact extrema (the scene's
     default) the polish moves the design until the dense max is the limit itself, to 1e-6 deg (the
     dense grid's own error at a smooth max is ~1e-9 deg; the polish keeps 1e-7 mm of margin, ~1e-7
     deg), never above it, moving no variable by more than 1e-4 mm."""
     limit = scene.follower.max_pressure_angle_deg
-    grid = solve(R.problem_from_scene(scene, extrema="grid"), (1.0, 0.0), solver="gradient")
+    grid = solve(size_only, (1.0, 0.0), solver="gradient")
     exact = solve(R.problem_from_scene(scene), (1.0, 0.0), solver="gradient")
     assert _dense_max_pressure_angle_deg(scene, grid.design) > limit + 1e-5
     assert _dense_max_pressure_angle_deg(scene, exact.design) == pytest.approx(limit, abs=1e-6)
@@ -192,7 +218,7 @@ def test_an_offset_box_that_never_cuts_the_prime_circle_is_refused(scene):
 
 @pytest.mark.slow
 @pytest.mark.parametrize("solver", ["gradient", "hybrid"])
-def test_a_box_with_offsets_past_some_prime_circles_is_solved_to_its_optimum(scene, solver):
+def test_a_box_with_offsets_past_some_prime_circles_is_solved_to_its_optimum(scene, kin, solver):
     """The issue's box, R_b in [1, 40] mm with e in [-5, 5] mm, holds designs with |e| >= R_p
     (R_b + R_f down to 4 mm): |e| < R_p is then a constraint (the pressure angle's, on the base
     circle's dwell), not a reason to refuse the box. The optimum lies inside the smaller box of
@@ -202,5 +228,5 @@ def test_a_box_with_offsets_past_some_prime_circles_is_solved_to_its_optimum(sce
     sol = solve(R.problem_from_scene(wide, extrema="grid"), (1.0, 0.0), solver=solver)
     rp = float(sol.base_radius_mm + sol.roller_radius_mm)
     assert bool(sol.feasible) and abs(float(sol.offset_mm)) < rp
-    exact_rp, _ = exact_offset_scan(wide)
+    exact_rp, _ = exact_offset_scan(wide, kin)  # the same motion: the scene's kinematics
     assert rp == pytest.approx(exact_rp, abs=1e-6)

@@ -20,6 +20,13 @@ REGISTRY_FILE = Path(base.__file__).with_name("registry.py")
 SMALL_GA = ga.GASettings(population=16, generations=60)
 
 
+def settings_of(solver):
+    """A short GA run for the solvers that run the GA; the defaults for the others (a static
+    argument of the compiled solve: the gradient solver's global solve of the grid problem is then
+    one program for every test here that runs it)."""
+    return base.Settings.of_solvers(ga=SMALL_GA) if solver in ("ga", "hybrid") else base.DEFAULT_SETTINGS
+
+
 @pytest.fixture(scope="module")
 def problem(default_scene):
     """The grid problem: the solvers are checked against references on the same grid."""
@@ -35,8 +42,7 @@ def coarse(default_scene):
 @pytest.mark.parametrize("solver", [s if s == "gradient" else pytest.param(s, marks=pytest.mark.slow)
                                     for s in registry.SOLVERS])  # the quick loop: the default solver
 def test_every_solver_returns_a_solution_near_the_exact_global_optimum(problem, solver):
-    settings = base.Settings.of_solvers(ga=SMALL_GA)
-    sol = solve(problem, (1.0, 1.0), solver=solver, settings=settings)
+    sol = solve(problem, (1.0, 1.0), solver=solver, settings=settings_of(solver))
     assert isinstance(sol, Solution) and sol.mode == "global" and sol.solver == solver
     exact = optimum.global_optimum(problem, weights_of(1.0, 1.0))  # bisection, independent of the solvers
     # the gradient-polished solvers reach the bisection's optimum to their stopping rule (1e-6 mm
@@ -54,8 +60,7 @@ def test_every_solver_returns_a_solution_near_the_exact_global_optimum(problem, 
 @pytest.mark.parametrize("solver", registry.SOLVERS)
 def test_every_solver_in_pointwise_mode_matches_the_closed_form(coarse, solver):
     w = weights_of(1.0, 1.0)
-    sol = solve(coarse, (1.0, 1.0), mode="pointwise", solver=solver,
-                settings=base.Settings.of_solvers(ga=SMALL_GA))
+    sol = solve(coarse, (1.0, 1.0), mode="pointwise", solver=solver, settings=settings_of(solver))
     closed = optimum.pointwise_optimum(coarse, w)  # closed form per angle (SPEC 5)
     # the design is the largest R_b over the angles; tolerance as in the global test
     tol = 0.5 if solver == "ga" else 1e-6
@@ -70,7 +75,7 @@ def test_every_solver_in_pointwise_mode_matches_the_closed_form(coarse, solver):
 def test_unreachable_bounds_give_status_infeasible(problem, solver):
     # R_b <= 20 mm while curvature and stress need >= 24.1 mm (the scene's min base radius)
     tight = P.with_bounds(problem, base_radius_mm=(5.0, 20.0))
-    sol = solve(tight, (1.0, 1.0), solver=solver, settings=base.Settings.of_solvers(ga=SMALL_GA))
+    sol = solve(tight, (1.0, 1.0), solver=solver, settings=settings_of(solver))
     assert int(sol.status) == Status.INFEASIBLE and not bool(sol.feasible)
     assert sol.status_name == "infeasible" and "stress" in sol.violated(tight)
 

@@ -13,6 +13,8 @@ about one for one with the base radius near the crest; the pressure angle and th
 
 from __future__ import annotations
 
+import functools
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -64,24 +66,31 @@ def solved():
             family = followers.get(scene.follower.type).problem_module()
             weights = (scene.design.alpha, scene.design.gamma)
             grid = solve(family.problem_from_scene(scene, extrema="grid"), weights, solver="gradient")
-            exact = solve(family.problem_from_scene(scene), weights, solver="gradient")
+            problem = family.problem_from_scene(scene)  # with exact extrema; built once (a build compiles)
+            exact = solve(problem, weights, solver="gradient")
             dense = family.problem_from_scene(scene, samples=DENSE, extrema="grid")
             # the grid's error: its design against the design solved on a grid 32 times finer
             # (whose own error is ~1000 times smaller: a limit passed between samples by the
             # constraint's curvature over half a sample, or its slope beside a joint)
             fine = solve(family.problem_from_scene(scene, samples=FINE, extrema="grid"), weights, solver="gradient")
-            out[case] = (family, grid, exact, dense, family.problem_from_scene(scene), fine)
+            out[case] = (family, grid, exact, dense, problem, fine)
         return out[case]
 
     return get
 
 
+@functools.partial(jax.jit, static_argnums=0)
+def _segment_peaks(family, problem, design):
+    """segment_peaks of the family's polished constraints: one compiled program per family and
+    grid, for the samples' design and the polished one, and for the cases of one family."""
+    return segment_peaks(problem, design, family.constraints, family.exact_constraints(problem),
+                         program=problem.model.program, at=lambda j, t: family.problem_at(problem, j, t))
+
+
 def _refined_maxima(family, problem, design) -> dict[str, float]:
     """Each polished constraint's exact max (mm): the largest of its refined segment peaks."""
-    names = family.exact_constraints(problem)
-    peaks = segment_peaks(problem, jax.tree.map(jnp.asarray, design), family.constraints, names,
-                          program=problem.model.program, at=lambda j, t: family.problem_at(problem, j, t))
-    return dict(zip(names, (float(v) for v in jnp.max(peaks, axis=1)), strict=True))
+    peaks = _segment_peaks(family, problem, jax.tree.map(jnp.asarray, design))
+    return dict(zip(family.exact_constraints(problem), (float(v) for v in jnp.max(peaks, axis=1)), strict=True))
 
 
 def _dense_maxima(family, dense, design) -> dict[str, tuple[float, float]]:
