@@ -241,9 +241,10 @@ def pytest_terminal_summary(terminalreporter, config):
 # ------------------------------------------------------------------ compiled programs per test
 # ``--compile-ledger=DIR`` writes, per worker, one JSON line per test phase: the XLA programs it
 # compiled (name, seconds), the ones it loaded from the persistent compilation cache, the cache keys
-# it missed (a key missed in two workers: a program both compiled), and its tracing seconds (JAX's own compile log, turned on for the run). The suite is bound by XLA
-# compiles; the ledger shows which tests compile which programs, and which programs several tests
-# compile again under another shape.
+# it missed (a key missed in two workers: a program both compiled), and its tracing seconds (JAX's
+# own compile log, turned on for the run). The suite is bound by XLA compiles; the ledger shows
+# which tests compile which programs, and which programs several tests compile again under another
+# shape.
 
 _LEDGER: dict = {"phase": None, "records": []}
 _COMPILED = re.compile(r"Finished XLA compilation of (.+) in ([0-9.e-]+) sec")
