@@ -237,19 +237,24 @@ class CurveScene(NamedTuple):
         return cls(follower, scene.contact, _Motion(scene.motion.rotation))
 
 
+def _designed(drawn: CurveScene, numbers):
+    """(the rocker type, ``drawn`` with the design's ``numbers`` (name -> value, traced or not))."""
+    from camjax import followers
+
+    return followers.get(drawn.follower.type), drawn._replace(follower=replace(drawn.follower, **numbers))
+
+
 def _grid_curves(kin: Kinematics, speed, numbers, base_radius_mm, drawn: CurveScene, names: tuple[str, ...]):
     """(the rocker type, ``drawn`` with the design's ``numbers``, the named point curves on the grid
     of ``kin``, shape (Q, N))."""
-    from camjax import followers
-
-    kind = followers.get(drawn.follower.type)
-    drawn = drawn._replace(follower=replace(drawn.follower, **numbers))
+    kind, drawn = _designed(drawn, numbers)
     curves = kind.point_curves(drawn, kin, speed, base_radius_mm)
     return kind, drawn, jnp.stack([curves[n] for n in names])
 
 
 @partial(jax.jit, static_argnames=("drawn", "names"))
-def _curve_grid(kin: Kinematics, speed, numbers, base_radius_mm, drawn: CurveScene, names: tuple[str, ...]):
+def _curve_grid_program(kin: Kinematics, speed, numbers, base_radius_mm, drawn: CurveScene,
+                        names: tuple[str, ...]):
     """The named point curves on the grid of ``kin`` (Q, N) in one compiled call (see
     :func:`_refined_curves`; evaluated operation by operation, they compiled some fifty
     one-operation programs)."""
@@ -257,19 +262,17 @@ def _curve_grid(kin: Kinematics, speed, numbers, base_radius_mm, drawn: CurveSce
 
 
 # RockerGeometry's scalar fields (floats in RockerCurves)
-_SCALARS = ("arm_length_mm", "roller_radius_mm", "face_offset_mm", "prime_radius_mm", "pressure_angle_limit_deg")
+_SCALARS = ("arm_length_mm", "roller_radius_mm", "face_offset_mm", "prime_radius_mm",
+            "pressure_angle_limit_deg")
 
 
 @partial(jax.jit, static_argnames="drawn")
 def _drawing_arrays(kin: Kinematics, speed, numbers, base_radius_mm, drawn: CurveScene):
-    """(geometry, pivot torque, cam torque, contact force, stress) of
-    ``drawn``'s rocker with the design's ``numbers`` at one base radius, on the grid of ``kin``:
+    """(geometry, pivot torque, cam torque, contact force, stress) of ``drawn``'s rocker with the
+    design's ``numbers`` at one base radius, on the grid of ``kin``:
     :meth:`RockingFollower.evaluate`'s arrays in one compiled call (operation by operation they
     compiled some forty one-operation programs); None where the scene has no such curve."""
-    from camjax import followers
-
-    kind = followers.get(drawn.follower.type)
-    drawn = drawn._replace(follower=replace(drawn.follower, **numbers))
+    kind, drawn = _designed(drawn, numbers)
     f = drawn.follower
     g = kind.geometry(drawn, kin, base_radius_mm)
     moment = force = torque = stress = None
@@ -395,7 +398,7 @@ class RockingFollower(Follower):
         numbers = {k: as_(v) for k, v in numbers.items()}
         curve_scene = CurveScene.of(drawn, static)
         if arrays.model is None:
-            grid = _curve_grid(arrays.kin, as_(speed), numbers, as_(radius), drawn=curve_scene, names=names)
+            grid = _curve_grid_program(arrays.kin, as_(speed), numbers, as_(radius), drawn=curve_scene, names=names)
             extremes = extrema_mod.sampled_extremes(grid, arrays.theta_deg)
         else:
             extremes = _refined_curves(arrays.model.program, as_(speed), arrays.kin, numbers, as_(radius),
