@@ -213,6 +213,7 @@ def _refine_segments(fn, segments, bounds_deg, ranges, grid_values, params, cand
     starts = jnp.asarray([lo for lo, _ in bounds], dtype)[:, None]
     ends = jnp.asarray(bounds, dtype)
     frac = jnp.linspace(0.0, 1.0, points + 1, dtype=dtype)  # as _scan_angles has it
+    segment_index = jnp.asarray(segments)
 
     def pad(t):  # unused lanes hold the segment's start: f stays finite there
         return jnp.concatenate([t, jnp.broadcast_to(starts, (count, width - t.shape[1]))], axis=1)
@@ -223,8 +224,7 @@ def _refine_segments(fn, segments, bounds_deg, ranges, grid_values, params, cand
         finalists = jnp.stack([s.c, s.best, s.x], axis=1)
         t = jax.lax.switch(stage, [lambda: pad(ends), lambda: pad(s.a0 + (s.b0 - s.a0) * frac[column]),
                                    lambda: pad(s.x), lambda: pad(finalists[:, row])])
-        f, g, h = (jnp.stack(v) for v in zip(*(_value_slope_curvature(fn, j, t[r], params)
-                                                for r, j in enumerate(segments)), strict=True))
+        f, g, h = jax.vmap(lambda j, tj: _value_slope_curvature(fn, j, tj, params))(segment_index, t)
         f_ends, f, g, h = f[:, :2], f[:, :k], g[:, :k], h[:, :k]
 
         def after_ends():
@@ -304,12 +304,11 @@ def refine_max_segments(fn: SegmentFunction, params: Any, bounds_deg, grid_value
         refined = jax.lax.stop_gradient(_refine_segments(fn, active, bounds_deg, ranges,
                                                          jax.lax.stop_gradient(grid_values), frozen,
                                                          candidates, iterations, SCAN_POINTS))
-    angles, values = [], []
-    for j, (lo, _) in enumerate(bounds_deg):
-        best = jnp.asarray(lo, grid_values.dtype) if constant[j] else refined[active.index(j)]
-        angles.append(best)
-        values.append(fn(j, best, params))  # envelope theorem: live params, frozen angle
-    return Extremum(jnp.stack(values), jnp.stack(angles))
+    angles = jnp.stack([jnp.asarray(lo, grid_values.dtype) if constant[j] else refined[active.index(j)]
+                        for j, (lo, _) in enumerate(bounds_deg)])
+    # envelope theorem: live params, frozen angle; fn traced once for every segment
+    values = jax.vmap(lambda j, at: fn(j, at, params))(jnp.arange(len(bounds_deg)), angles)
+    return Extremum(values, angles)
 
 
 def refine_min(fn: SegmentFunction, params: Any, bounds_deg, grid_values: jax.Array, **kwargs) -> Extremum:

@@ -187,19 +187,31 @@ def motion_at(program: MotionProgram, theta_deg: jax.Array) -> Kinematics:
     return Kinematics(jnp.deg2rad(theta_deg), *outs)
 
 
-def segment_motion(program: MotionProgram, segment: int, theta_deg: jax.Array) -> Kinematics:
-    """Segment ``segment`` (a Python int) of the program at cam angles ``theta_deg`` (deg, any shape).
+def segment_motion(program: MotionProgram, segment, theta_deg: jax.Array) -> Kinematics:
+    """Segment ``segment`` of the program at cam angles ``theta_deg`` (deg, any shape).
 
     Unlike :func:`motion_at` nothing is selected by angle: the segment's closed form is used for
     every angle, so at its ends (theta = start or start + angle) this gives the exact one-sided
     limits from inside the segment, and ``jax.jvp`` in ``theta_deg`` differentiates the closed
     form (the derivative of s''' included). Angles are meant to lie in the segment; outside it
     the formulas are continued as written. Inside a segment the values equal :func:`motion_at`'s.
+
+    ``segment`` is a Python int, or an integer array of shape () that picks the closed form by
+    ``lax.switch``: a function of the motion is then traced once for every segment, e.g. mapped
+    over the segments with ``vmap`` (as :mod:`camjax.extrema` does).
     """
     theta_deg = jnp.asarray(theta_deg, dtype=program.lifts.dtype)
-    lo, width = program.start_deg[segment], program.angles_deg[segment]
-    x = (theta_deg - lo) / width  # motion_at's expression, so interior values agree bitwise
-    vals = _segment_values(program, segment, x, _levels(program)[segment])
+    levels = _levels(program)
+
+    def closed_form(i, t):
+        # motion_at's expression for x, so interior values agree bitwise
+        x = (t - program.start_deg[i]) / program.angles_deg[i]
+        return _segment_values(program, i, x, levels[i])
+
+    if isinstance(segment, (int, np.integer)):
+        vals = closed_form(int(segment), theta_deg)
+    else:
+        vals = jax.lax.switch(segment, [partial(closed_form, i) for i in range(len(program.kinds))], theta_deg)
     return Kinematics(jnp.deg2rad(theta_deg), *vals)
 
 
