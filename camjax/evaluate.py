@@ -64,9 +64,10 @@ def scene_model(scene: Scene, dtype=None) -> SceneModel:
         None if c is None or train is None else as_(c.follower))
 
 
-def model_at(model: SceneModel, segment: int, theta_deg: jax.Array) -> PointValues:
-    """Kinematics, force, torque and stress coefficient on segment ``segment`` (Python int) at
-    cam angles ``theta_deg`` (deg, inside the segment; its ends give one-sided limits)."""
+def model_at(model: SceneModel, segment, theta_deg: jax.Array) -> PointValues:
+    """Kinematics, force, torque and stress coefficient on segment ``segment`` (an int, or an
+    integer array of shape (): :func:`camjax.program.segment_motion`) at cam angles ``theta_deg``
+    (deg, inside the segment; its ends give one-sided limits)."""
     kin = program.segment_motion(model.program, segment, theta_deg)
     force = torque = coeff = None
     if model.train is not None:

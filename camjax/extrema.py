@@ -47,9 +47,11 @@ SCAN_POINTS = 8
 # Local maxima refined per segment: the best and the runner-up.
 CANDIDATES = 2
 
-# fn(segment, theta_deg, params) -> values: segment is a Python int (the closed form to use),
-# theta_deg an array of angles inside that segment (deg), values of the same shape; elementwise.
-SegmentFunction = Callable[[int, jax.Array, Any], jax.Array]
+# fn(segment, theta_deg, params) -> values: segment is an integer array of shape () (the closed
+# form to use; mapped over the segments with vmap, so fn is traced once for all of them:
+# camjax.program.segment_motion takes it as it is), theta_deg an array of angles inside that
+# segment (deg), values of the same shape; elementwise.
+SegmentFunction = Callable[[jax.Array, jax.Array, Any], jax.Array]
 # quantity(kin, params) -> values, elementwise over the angles of ``kin``.
 Quantity = Callable[[Kinematics, Any], jax.Array]
 
@@ -195,8 +197,8 @@ def _refine_segments(fn, segments, bounds_deg, ranges, grid_values, params, cand
     scan's best point, the refined root) over each segment's ``candidates`` brackets.
 
     One loop over all the segments, whose every pass evaluates f, f', f'' of each segment at k
-    angles, so each segment's closed form is traced once and the search around it once for
-    all; what a pass does with them is switched on its number (only that stage runs). Pass 0:
+    angles (``fn`` mapped over the segment index, so traced once for all the segments, as is the
+    search around it); what a pass does with them is switched on its number (only that stage runs). Pass 0:
     the segments' one-sided end values, which pick the brackets; the next ``points`` + 1: the
     scan of the brackets, a column of angles each; then ``iterations`` Newton steps; the last
     three: f at the candidates' samples, the scan's best points and the Newton iterates.
@@ -266,8 +268,8 @@ def refine_max(fn: SegmentFunction, params: Any, bounds_deg, grid_values: jax.Ar
     """The continuous max over the cam angle of a function known in closed form per segment.
 
     Args:
-      fn: ``fn(segment, theta_deg, params)``: the function on segment ``segment`` (Python int)
-        at angles ``theta_deg`` (deg, inside that segment; its ends give the one-sided limits),
+      fn: ``fn(segment, theta_deg, params)``: the function on segment ``segment`` (an integer
+        array of shape (): :data:`SegmentFunction`) at angles ``theta_deg`` (deg, inside that segment; its ends give the one-sided limits),
         elementwise, differentiable in ``theta_deg`` (twice) and in ``params``.
       params: pytree the function depends on (the design, the program); gradients flow to it.
       bounds_deg: static ((start, end), ...) of the segments, deg, covering [0, 360) in order.
