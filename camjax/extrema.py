@@ -269,8 +269,9 @@ def refine_max(fn: SegmentFunction, params: Any, bounds_deg, grid_values: jax.Ar
 
     Args:
       fn: ``fn(segment, theta_deg, params)``: the function on segment ``segment`` (an integer
-        array of shape (): :data:`SegmentFunction`) at angles ``theta_deg`` (deg, inside that segment; its ends give the one-sided limits),
-        elementwise, differentiable in ``theta_deg`` (twice) and in ``params``.
+        array of shape (): :data:`SegmentFunction`) at angles ``theta_deg`` (deg, inside that
+        segment; its ends give the one-sided limits), elementwise, differentiable in ``theta_deg``
+        (twice) and in ``params``.
       params: pytree the function depends on (the design, the program); gradients flow to it.
       bounds_deg: static ((start, end), ...) of the segments, deg, covering [0, 360) in order.
       grid_values: (N,) the function on the grid k 360 / N (N = grid_values.shape[0]), as the

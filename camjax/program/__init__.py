@@ -211,7 +211,8 @@ def segment_motion(program: MotionProgram, segment, theta_deg: jax.Array) -> Kin
     if isinstance(segment, (int, np.integer)):
         vals = closed_form(int(segment), theta_deg)
     else:
-        vals = jax.lax.switch(segment, [partial(closed_form, i) for i in range(len(program.kinds))], theta_deg)
+        branches = [partial(closed_form, i) for i in range(len(program.kinds))]
+        vals = jax.lax.switch(segment, branches, theta_deg)
     return Kinematics(jnp.deg2rad(theta_deg), *vals)
 
 
