@@ -38,6 +38,7 @@ PROGRAM = MotionProgram.from_segments([Segment("rise", 120, get_law("poly_3_4_5"
                                        Segment("return", 100, get_law("cycloidal"), 10.0), Segment("dwell", 80)])
 CASES = [("ccw", 4.0), ("cw", 4.0), ("ccw", -3.0), ("cw", 0.0)]
 RB, RC = 30.0, 60.0  # a convex cam: no undercut, single contact everywhere
+MATRIX_SAMPLES = 90  # the sample count of tests/cache_matrix.py's runs of the built-in scene
 
 
 def centres(rb, rc, e, kin, rotation):
@@ -416,7 +417,11 @@ def test_the_scene_refuses_a_face_wider_than_its_circle():
 def test_every_solver_designs_a_feasible_cam_whose_face_is_just_wide_enough(solver, mode):
     from camjax.solvers.base import solve
 
-    scene = parse_scene(_scene_text(face_radius=100.0, face_width=20.0, design="face_radius_mm = [40.0, 200.0]"))
+    # the built-in scene at 90 samples, as tests/cache_matrix.py designs it (with the tests'
+    # compilation cache the gradient solver's programs compile once in the suite), R_c in [40, 200]
+    text = builtin_scene_text("curved-face").replace("face_radius_mm = [30.0, 300.0]",
+                                                      "face_radius_mm = [40.0, 200.0]")
+    scene = with_samples(parse_scene(text), MATRIX_SAMPLES)
     problem = P.problem_from_scene(scene)
     sol = solve(problem, (1.0, 0.0), mode=mode, solver=solver, seed=0)
     d = sol.design
@@ -426,7 +431,8 @@ def test_every_solver_designs_a_feasible_cam_whose_face_is_just_wide_enough(solv
         # positions (exact extrema: the need off the grid)
         need = 2 * _max_travel_from_positions(float(d.base_radius_mm), float(d.face_radius_mm), 0.0,
                                               scene.motion.program)
-        assert abs(float(d.face_width_mm) - max(need, 2.0)) < 1e-5, (solver, float(d.face_width_mm), need)
+        low = scene.design.bounds("face_width_mm")[0]
+        assert abs(float(d.face_width_mm) - max(need, low)) < 1e-5, (solver, float(d.face_width_mm), need)
 
 
 @pytest.mark.slow
@@ -454,8 +460,11 @@ def test_sweep_and_check_extremes_run_on_the_curved_face(tmp_path):
 
     from camjax import cli
 
+    # one weighting per compiled call at 90 samples: the program of the built-in scene's design that
+    # tests/cache_matrix.py runs (with the tests' compilation cache it compiles once in the suite)
     assert cli.main(["sweep", "curved-face", "--out", str(tmp_path / "sweep"), "--alpha", "1",
-                     "--gamma", "0.1,1,10", "--samples", "90"]) in (0, 3)
+                     "--gamma", "0.1,1,10", "--samples", str(MATRIX_SAMPLES), "--chunk-size", "1"]) in (0, 3)
     front = json.loads((tmp_path / "sweep" / "pareto.json").read_text())
     assert front
-    assert cli.main(["check-extremes", "curved-face", "--out", str(tmp_path / "ext"), "--samples", "90"]) == 0
+    assert cli.main(["check-extremes", "curved-face", "--out", str(tmp_path / "ext"), "--samples",
+                     str(MATRIX_SAMPLES)]) == 0

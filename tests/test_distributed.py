@@ -61,7 +61,9 @@ def test_block_sweep_equals_the_in_process_sweep(reference):
     recs = pareto_records([r for i in sorted(reference) for r in reference[i]])
     assert [r["weighting"] for r in recs] == list(range(len(WEIGHTINGS)))
     problem = problem_from_scene(load_scene("default"))
-    whole = sweep(problem, [a for a, _ in WEIGHTINGS], [1.0], chunk_size=3).records()
+    # chunks of the blocks' size: the sweep runs the fixture's compiled program (that the records
+    # do not depend on the chunk size is tests/test_sweep.py's test_chunking_does_not_change_results)
+    whole = sweep(problem, [a for a, _ in WEIGHTINGS], [1.0], chunk_size=BLOCK_SIZE).records()
     for mine, ref in zip(recs, whole, strict=True):
         assert mine["pareto"] == ref["pareto"] and mine["feasible"] == ref["feasible"]
         for key in ("alpha", "gamma", "base_radius_mm", "face_width_mm", "size_mm", "stress_max_MPa",
@@ -132,7 +134,10 @@ def test_ray_sweep_matches_sequential_and_survives_a_killed_worker(reference, tm
 
         # the local instance stays on loopback (Ray would otherwise use the host's interface)
         assert {node["NodeManagerAddress"] for node in ray.nodes()} == {"127.0.0.1"}
-        run = run_blocks(_blocks(cache_dir=str(tmp_path / "jax-cache")), tmp_path / "sweep", backend,
+        # the tests' compilation cache where there is one: the workers load the block program the
+        # reference sweep compiled (the process pool's test above checks that workers write one)
+        cache = jax.config.jax_compilation_cache_dir or tmp_path / "jax-cache"
+        run = run_blocks(_blocks(cache_dir=str(cache)), tmp_path / "sweep", backend,
                          block_size=BLOCK_SIZE,
                          block_fn=partial(crash_once, victim=1, marker=str(marker)))
     finally:
@@ -224,10 +229,13 @@ def test_failing_block_is_retried_then_recorded_and_finished_on_resume(reference
 def test_cli_block_sweep_equals_in_process_sweep_and_resumes(tmp_path, capsys):
     from camjax.cli import main
 
+    # chunks and blocks of BLOCK_SIZE weightings of the default scene: the command runs the
+    # compiled program of the module's reference sweep (6 weightings: 3 blocks)
     args = ["sweep", "--alpha", "0.1,1,10", "--gamma", "1,2"]
-    assert main(args + ["--out", str(tmp_path / "plain")]) == 0
+    blocks = ["--backend", "sequential", "--block-size", str(BLOCK_SIZE)]
+    assert main(args + ["--out", str(tmp_path / "plain"), "--chunk-size", str(BLOCK_SIZE)]) == 0
     out = tmp_path / "blocks"
-    assert main(args + ["--out", str(out), "--backend", "sequential", "--block-size", "4"]) == 0
+    assert main(args + ["--out", str(out)] + blocks) == 0
     plain = json.loads((tmp_path / "plain" / "pareto.json").read_text())["records"]
     assert json.loads((out / "pareto.json").read_text())["records"] == plain
 
@@ -235,9 +243,10 @@ def test_cli_block_sweep_equals_in_process_sweep_and_resumes(tmp_path, capsys):
     kept = store.block_path(0).stat().st_mtime_ns, store.block_path(0).read_bytes()
     store.block_path(1).unlink()  # as if the sweep had been interrupted before block 1
     capsys.readouterr()
-    assert main(args + ["--out", str(out), "--backend", "sequential", "--block-size", "4", "--resume"]) == 0
+    assert main(args + ["--out", str(out)] + blocks + ["--resume"]) == 0
     err = capsys.readouterr().err
-    assert "resumed: 1 blocks read" in err and "block 1:" in err and "block 0:" not in err
+    assert "resumed: 2 blocks read" in err and "block 1:" in err
+    assert "block 0:" not in err and "block 2:" not in err
     assert (store.block_path(0).stat().st_mtime_ns, store.block_path(0).read_bytes()) == kept
     assert json.loads((out / "pareto.json").read_text())["records"] == plain
 

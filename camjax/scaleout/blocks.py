@@ -133,7 +133,7 @@ def solve_block(task: BlockTask) -> list[dict]:
 
     import camjax  # noqa: F401  (x64)
     from camjax.family import Weights
-    from camjax.solvers.base import Settings, solve_batch, weighting_keys
+    from camjax.solvers.base import solve_batch, weighting_keys
     from camjax.solvers.sweep import records_of
 
     spec = task.spec
@@ -149,14 +149,24 @@ def solve_block(task: BlockTask) -> list[dict]:
         from camjax.scaleout.sharding import spread_weightings
 
         weights, keys = spread_weightings((weights, keys))[0]
-    result = solve_batch(problem, weights, keys, spec.mode, spec.solver,
-                         Settings.of_solvers(ga=ga_settings(spec)))
+    result = solve_batch(problem, weights, keys, spec.mode, spec.solver, solver_settings(spec))
     result = jax.tree.map(lambda x: np.asarray(x)[:count], result)
     records = records_of(problem, result)
     for i, rec in enumerate(records):
         rec.update(scene=task.scene_name, weighting=task.first_weighting + i, solver=spec.solver,
                    mode=spec.mode)
     return records
+
+
+def solver_settings(spec: SweepSpec):
+    """The solvers' settings of a sweep's blocks: the GA's as an override unless they are its defaults,
+    so that a block's program (settings are a static argument) is the one an in-process sweep of the
+    same weightings compiles (:func:`camjax.solvers.sweep.sweep` passes no override)."""
+    from camjax.solvers import ga
+    from camjax.solvers.base import Settings
+
+    settings = ga_settings(spec)
+    return Settings.of_solvers(ga=None if settings == ga.DEFAULT_SETTINGS else settings)
 
 
 def ga_settings(spec: SweepSpec):
