@@ -1,9 +1,10 @@
 """B-spline laws: de Boor in JAX vs SciPy and exact rational evaluation, 3-4-5 as a Bezier,
 gradients with respect to the control values, scene keys, and a B-spline segment in the design
-run of every registered follower."""
+of every registered follower."""
 
 from __future__ import annotations
 
+import functools
 import math
 import tomllib
 from fractions import Fraction
@@ -16,6 +17,7 @@ from scipy.interpolate import BSpline
 
 import camjax
 from camjax import followers
+from camjax.followers._design import design_block
 from camjax.laws import LAWS
 from camjax.laws import bspline as B
 from camjax.program import evaluate as program_evaluate
@@ -30,13 +32,26 @@ def _random_spline(k, n, seed, repeat=False):
     return np.concatenate([np.zeros(k + 1), inner, np.ones(k + 1)]), rng.normal(size=n)
 
 
+DEGREES = range(1, B.MAX_DEGREE + 1)
+DE_BOOR_X = np.linspace(0.0, 1.0, 2001)
+
+
+@functools.cache
+def _de_boor_of_every_degree():
+    """degree -> (knots, control values, JAX's values and derivatives at DE_BOOR_X): every degree
+    in one compiled program (eagerly each of de Boor's operations compiles alone; one program per
+    degree took ~10 % more CPU seconds in all), computed once for the test of each degree."""
+    splines = {k: _random_spline(k, k + 9, seed=k, repeat=k >= 3) for k in DEGREES}
+    program = jax.jit(lambda cs, xx: {k: B.evaluate_derivatives(splines[k][0], cs[k], k, xx) for k in DEGREES})
+    got = program({k: jnp.asarray(c) for k, (_, c) in splines.items()}, jnp.asarray(DE_BOOR_X))
+    return {k: (t, c, got[k]) for k, (t, c) in splines.items()}
+
+
 @pytest.mark.slow
-@pytest.mark.parametrize("k", range(1, B.MAX_DEGREE + 1))
+@pytest.mark.parametrize("k", DEGREES)
 def test_de_boor_matches_scipy_with_derivatives(k):
-    t, c = _random_spline(k, k + 9, seed=k, repeat=k >= 3)
-    x = np.linspace(0.0, 1.0, 2001)
-    # jitted: one compiled program per degree (eagerly each of de Boor's operations compiles alone)
-    got = jax.jit(lambda cc, xx: B.evaluate_derivatives(t, cc, k, xx))(jnp.asarray(c), jnp.asarray(x))
+    t, c, got = _de_boor_of_every_degree()[k]
+    x = DE_BOOR_X
     ref = BSpline(t, c, k)
     for nu, g in enumerate(got):
         want = ref(x, nu=nu)
@@ -80,12 +95,16 @@ def _bernstein_coefficients(power: dict[int, Fraction], n: int) -> list[Fraction
                 Fraction(0)) for i in range(n + 1)]
 
 
+# 3-4-5 on one grid: one compiled program for the two tests that compare a B-spline with it
+POLY_345 = jax.jit(LAWS["poly_3_4_5"])
+LAW_X = jnp.linspace(0.0, 1.0, 1001)
+
+
 @pytest.mark.slow
 def test_degree_five_bspline_is_the_345_polynomial():
     control = _bernstein_coefficients({3: Fraction(10), 4: Fraction(-15), 5: Fraction(6)}, 5)
     law = B.bspline_law(5, [float(v) for v in control])
-    x = jnp.linspace(0.0, 1.0, 1001)
-    got, ref = jax.jit(law)(x), jax.jit(LAWS["poly_3_4_5"])(x)
+    got, ref = jax.jit(law)(LAW_X), POLY_345(LAW_X)
     for g, r in zip(got, ref, strict=True):
         # exact control values (0,0,0,1,1,1); p''' peaks at 60: 1e-12 absolute on every derivative
         np.testing.assert_allclose(np.asarray(g), np.asarray(r), rtol=0, atol=1e-12)
@@ -96,12 +115,18 @@ def test_gradient_with_respect_to_control_values_matches_finite_differences():
     t, c = _random_spline(5, 12, seed=3)
     x = jnp.linspace(0.0, 1.0, 301)
 
-    @jax.jit  # one program for the 24 differences (eagerly, every operation compiles alone)
-    def objective(cc):  # a smooth scalar of values and derivatives, like a peak acceleration
+    def scalar(cc):  # a smooth scalar of values and derivatives, like a peak acceleration
         v = B.evaluate_derivatives(t, cc, 5, x)
         return jnp.sum(v[0] ** 2) + 1e-3 * jnp.sum(v[2] ** 2) + 1e-6 * jnp.sum(jnp.sin(v[3] * 1e-2))
 
-    g = jax.jit(jax.grad(objective))(jnp.asarray(c))
+    # one program for the gradient and the 24 differences' values (eagerly, every operation
+    # compiles alone; a second program for the values alone would compile the scalar again)
+    value_and_grad = jax.jit(jax.value_and_grad(scalar))
+
+    def objective(cc):
+        return value_and_grad(cc)[0]
+
+    g = value_and_grad(jnp.asarray(c))[1]
     h = 1e-5
     fd = np.array([(objective(jnp.asarray(c + h * e)) - objective(jnp.asarray(c - h * e))) / (2 * h)
                    for e in np.eye(c.size)])
@@ -122,8 +147,7 @@ def test_derivative_in_x_by_jvp_is_the_derivative_spline():
 @pytest.mark.slow
 def test_return_control_runs_backwards():
     law = B.bspline_law(5, [1, 1, 1, 0, 0, 0], falling=True)
-    x = jnp.linspace(0, 1, 101)
-    for g, r in zip(jax.jit(law)(x), jax.jit(LAWS["poly_3_4_5"])(x), strict=True):
+    for g, r in zip(jax.jit(law)(LAW_X), POLY_345(LAW_X), strict=True):
         np.testing.assert_allclose(np.asarray(g), np.asarray(r), atol=1e-12)
 
 
@@ -185,19 +209,31 @@ def _with_law(name: str, law: dict) -> tuple[dict, bool]:
     return data, False
 
 
-def _objective(run) -> float:
-    """The design's objective (a translating run holds the solver's JSON in ``design.result``)."""
-    design = run.design
-    return (design.result if hasattr(design, "result") else design)["objective"]
+def _design(data: dict, name: str) -> dict:
+    """The solver's JSON of the scene's [design]: the design block a run of the scene solves first
+    (:func:`camjax.followers._design.design_block`, as both follower families' ``run`` call it) and
+    the source of its objective and base radius, without the run's drawing at the design (its
+    smallest cam, refined report curves and outline: compiled programs of their own, none of them
+    checked here)."""
+    scene = scene_from_dict(data, name)
+    return design_block(scene, camjax.problem_from_scene(scene))[0]
 
 
-EXACT_BSPLINE_FOLLOWERS = ("flat", "oscillating_roller")
+# the translating and the rocking follower whose exact-extrema designs compile fastest (each of
+# the two scenes' designs compiles its own program here: in exact mode the laws are the program's
+# static structure; measured 11 and 17 CPU s for the pair, 18 and 21 for the flat face and the
+# oscillating roller). The knife edge is the roller's problem with R_f = 0: its exact extrema are
+# the roller's and the curved face's code; the flat face's exact extrema with B-spline segments
+# are tests/test_codesign.py's (the designed laws fed back as fixed segments).
+EXACT_BSPLINE_FOLLOWERS = ("knife_edge", "oscillating_flat")
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("name", followers.names())
 def test_a_bspline_rise_designs_as_its_polynomial_with_every_follower(name):
-    """The Bezier form of 3-4-5 in the example scene of every follower gives the design of 3-4-5.
+    """The Bezier form of 3-4-5 in the example scene of every follower gives the design of 3-4-5
+    (the solver's objective and base radius; a whole run with B-spline segments, drawing included,
+    is tests/test_codesign.py's designed laws fed back as fixed segments).
 
     The exact extrema (the laws evaluated between the samples, inside the design's program) for one
     translating and one rocking follower, which share that code with their kind; the others on
@@ -210,11 +246,11 @@ def test_a_bspline_rise_designs_as_its_polynomial_with_every_follower(name):
             data["design"]["solver"] = "gradient"
         if name not in EXACT_BSPLINE_FOLLOWERS:
             data["motion"]["extrema"] = "grid"
-    got = camjax.run_design(scene_from_dict(spline, name))
-    ref = camjax.run_design(scene_from_dict(poly, name))
+    got, ref = _design(spline, name), _design(poly, name)
     # the laws agree to 1e-15, so both designs solve the same problem: the same optimum to the
     # solver's stopping rule (objective within 1e-9 relative; measured 4e-11 on the oscillating
     # curved face, whose BFGS refinement takes other line-search steps on the other last bits), and
-    # where the objective is flat the same design to 1e-4 mm (measured 2e-5 mm there, 0 elsewhere)
-    assert _objective(got) == pytest.approx(_objective(ref), rel=1e-9)
-    assert got.base_radius_mm == pytest.approx(ref.base_radius_mm, rel=0, abs=1e-4)
+    # where the objective is flat the same design to 1e-4 mm (measured 2e-5 mm there, 3e-10 mm on
+    # the oscillating roller, 0 elsewhere)
+    assert got["objective"] == pytest.approx(ref["objective"], rel=1e-9)
+    assert got["base_radius_mm"] == pytest.approx(ref["base_radius_mm"], rel=0, abs=1e-4)

@@ -321,8 +321,8 @@ def test_the_drawing_geometry_is_one_program_for_every_design(name):
     from camjax.followers._translating import _geometry_program
 
     kind, scene = followers.get(name), camjax.load_scene(followers.get(name).example_scene)
-    scene = with_samples(scene, 180)
-    arrays = scene_arrays(scene, extrema="grid")
+    # the example's own arrays (samples, exact extrema): the program the design's drawing ran
+    arrays = scene_arrays(scene)
     other = replace(scene.follower, **{k: 1.05 * v + 0.5 for k, v in kind.design_numbers(scene.follower).items()})
     kind.curves(scene, arrays, 30.0)
     # counted from here: an earlier test of this process may have compiled it for other grids
