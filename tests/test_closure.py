@@ -284,14 +284,28 @@ def test_spring_scenes_parse_to_the_spring_closure():
         parse_scene(builtin_scene_text("roller").replace('type = "roller"', 'type = "roller"\nclosure = "box"'))
 
 
+@pytest.fixture
+def no_figures(monkeypatch):
+    """The design and sweep commands' figures not drawn (~0.7 CPU s a design): no figure is checked
+    here (tests/test_followers.py checks they are drawn); profile.csv, profile.dxf and the JSON are
+    written as the command writes them."""
+    from camjax.solvers import sweep
+
+    class NoFigure:
+        def savefig(self, *args, **kwargs):
+            pass
+
+    monkeypatch.setattr(export, "write_figures", lambda *args, **kwargs: [])
+    monkeypatch.setattr(sweep, "plot_pareto", lambda *args, **kwargs: NoFigure())
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("scene", ["groove", "conjugate", "wide_groove"])
-def test_design_and_sweep_run_on_both_closures(scene, tmp_path, capsys):
+def test_design_and_sweep_run_on_both_closures(scene, tmp_path, capsys, no_figures):
     wide = scene == "wide_groove"
     if wide:  # the outer flank binds the design
         (tmp_path / "wide.toml").write_text(WIDE)
         scene = str(tmp_path / "wide.toml")
-    # figures at 40 dpi: no figure is checked here (tests/test_followers.py checks they are drawn)
     assert cli.main(["design", scene, "--out", str(tmp_path / "design"), "--dpi", "40"]) == 0
     data = json.loads((tmp_path / "design" / "result.json").read_text())
     assert data["closure"]["positive_drive"] and data["design"]["feasible"]
@@ -540,25 +554,31 @@ def _slsqp_objectives(scene, key, starts=(0.25, 0.5, 0.75)):
     def split(z):
         return fam.Design(*z[:-1]), z[-1]
 
-    objective = jax.jit(lambda z: fam.objective(problem, weights, split(z)[0]))
-    rows = jax.jit(lambda z: -jnp.concatenate(fam.constraints(with_dimension(problem, key, split(z)[1]),
-                                                              split(z)[0])))
-    jac_f, jac_g = jax.jit(jax.grad(objective)), jax.jit(jax.jacfwd(rows))
+    def objective(z):
+        return fam.objective(problem, weights, split(z)[0])
+
+    def rows(z):
+        return -jnp.concatenate(fam.constraints(with_dimension(problem, key, split(z)[1]), split(z)[0]))
+
+    # two compiled programs: the objective with its gradient, the rows with their jacobian (SLSQP
+    # asks for each half at the same points; the other half costs little at 360 samples)
+    f_and_grad = jax.jit(jax.value_and_grad(objective))
+    g_and_jac = jax.jit(lambda z: (rows(z), jax.jacfwd(rows)(z)))
     out = []
     for t in starts:
         z0 = np.array([a + t * (b - a) for a, b in zip(lo, hi, strict=True)])
-        r = minimize(lambda z: float(objective(z)), z0, jac=lambda z: np.asarray(jac_f(z)), method="SLSQP",
-                     bounds=list(zip(lo, hi, strict=True)), options={"maxiter": 500, "ftol": 1e-12},
-                     constraints=[{"type": "ineq", "fun": lambda z: np.asarray(rows(z)),
-                                   "jac": lambda z: np.asarray(jac_g(z))}])
-        if r.success and np.min(np.asarray(rows(r.x))) > -1e-7:
+        r = minimize(lambda z: float(f_and_grad(z)[0]), z0, jac=lambda z: np.asarray(f_and_grad(z)[1]),
+                     method="SLSQP", bounds=list(zip(lo, hi, strict=True)), options={"maxiter": 500, "ftol": 1e-12},
+                     constraints=[{"type": "ineq", "fun": lambda z: np.asarray(g_and_jac(z)[0]),
+                                   "jac": lambda z: np.asarray(g_and_jac(z)[1])}])
+        if r.success and np.min(np.asarray(g_and_jac(r.x)[0])) > -1e-7:
             out.append(float(r.fun))
     return out
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("case", sorted(FREE))
-def test_a_free_span_or_arm_angle_is_the_smallest_the_second_cam_allows(case, tmp_path):
+def test_a_free_span_or_arm_angle_is_the_smallest_the_second_cam_allows(case, tmp_path, no_figures):
     """[design] frees the yoke span or the second arm angle: the CLI's design keeps the optimum
     (SciPy SLSQP over the same problem with the span or angle as one more variable finds none
     smaller) and reports the chosen value in its design and closure blocks; drawn at 7200 samples

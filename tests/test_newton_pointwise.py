@@ -35,7 +35,7 @@ def solved(request):
     scene = dataclasses.replace(scene, motion=dataclasses.replace(scene.motion, samples=SAMPLES))
     problem = problem_from_scene(scene)
     weighting = (scene.design.alpha, scene.design.gamma)
-    w = jax.tree.map(lambda x: x[0], weights_of([weighting[0]], [weighting[1]]))
+    w = weights_of(*weighting)  # scalar weights
     by_newton = solve(problem, weighting, mode="pointwise", solver="newton")
     by_gradient = solve(problem, weighting, mode="pointwise", solver="gradient")
     return name, problem, w, by_newton, by_gradient
@@ -61,9 +61,10 @@ def test_each_angle_optimum_is_the_gradient_solvers(solved):
     on the angles where both answers are feasible."""
     name, problem, w, by_newton, by_gradient = solved
     fam = family_of(problem)
-    per = fam.per_angle(problem)
-    evaluate = jax.vmap(lambda q, d: fam.evaluate(q, w, d))
-    mine, theirs = evaluate(per, by_newton.pointwise), evaluate(per, by_gradient.pointwise)
+    # every angle's evaluation in one compiled program per type, for both solvers' answers (op by op,
+    # the per-angle split and the vmapped evaluation compile each of their operations)
+    evaluate = jax.jit(lambda p, weights, d: jax.vmap(lambda q, x: fam.evaluate(q, weights, x))(fam.per_angle(p), d))
+    mine, theirs = evaluate(problem, w, by_newton.pointwise), evaluate(problem, w, by_gradient.pointwise)
     both = np.asarray(mine.feasible) & np.asarray(theirs.feasible)
     assert both.sum() >= SAMPLES // 2, name
     excess = np.asarray(mine.objective) - np.asarray(theirs.objective) * (1.0 + 1e-7)

@@ -100,11 +100,12 @@ def test_pointwise_mode_condenses_to_the_same_smallest_cam():
 
 @pytest.mark.slow
 def test_free_pivot_distance_beats_every_point_of_a_dense_scan():
-    scene = scene_of(design="pivot_distance_mm = [65.0, 110.0]")
-    problem = problem_from_scene(scene)
-    sol = solve(problem, (1.0, 0.0), mode="global", solver="hybrid", seed=0)
+    # on the samples, as the scan's sizing is: the solver and the scan judge the same admissible set
+    # (the polish onto the continuous limits: test_smallest_cam_with_fixed_pivot_and_arm_is_the_sizing)
+    text = text_of(design="pivot_distance_mm = [65.0, 110.0]")
+    sol = solve(problem_of(text, "grid"), (1.0, 0.0), mode="global", solver="hybrid", seed=0)
     assert bool(sol.evaluation.feasible)
-    kin = scene_arrays(scene).kin
+    kin = arrays_of(text, "grid").kin
     # brute force: the independent sizing at every pivot distance on a 0.25 mm grid
     # (every pivot distance through one compiled program: a loop of eager calls compiles the
     # search's while loop once per distance)
@@ -129,18 +130,22 @@ def assert_gradients(family, scene, x0, far_points, sums):
         return jnp.stack([family.objective(problem, w, design), *(jnp.sum(getattr(c, name)) for name in sums),
                           c.reach[0]])
 
-    x0 = jnp.asarray(x0)
-    jac = jax.jit(jax.jacfwd(f))(x0)
-    value, gradient = jax.jit(f), jax.jit(jax.grad(lambda x: jnp.sum(f(x))))  # one program each, not op by op
+    # the values, the jacobian (forward mode) and the summed gradient (reverse mode) in one compiled
+    # program; the steps and the differences in NumPy (float64, as in JAX): op by op, each JAX
+    # operation would compile a program of its own
+    program = jax.jit(lambda x: (f(x), jax.jacfwd(f)(x), jax.grad(lambda y: jnp.sum(f(y)))(x)))
+    x0 = np.asarray(x0, dtype=np.float64)
+    jac = np.asarray(program(x0)[1])
     for j in range(x0.size):
-        step = jnp.zeros(x0.size).at[j].set(1e-6)
-        fd = (value(x0 + step) - value(x0 - step)) / 2e-6
+        step = np.zeros(x0.size)
+        step[j] = 1e-6
+        fd = (np.asarray(program(x0 + step)[0]) - np.asarray(program(x0 - step)[0])) / 2e-6
         # central differences, h = 1e-6 mm: truncation ~h^2 |f'''|, round-off ~eps |f| / h <= 1e-6 for
         # the sums over 180 angles (|f| <= 1e3); the objective's max keeps its argmax near x0
         np.testing.assert_allclose(jac[:, j], fd, rtol=1e-6, atol=1e-6)
     for x in far_points:
-        g = gradient(jnp.asarray(x))
-        assert np.all(np.isfinite(np.asarray(g))) and np.all(np.isfinite(np.asarray(value(jnp.asarray(x)))))
+        value, _, gradient = program(np.asarray(x, dtype=np.float64))
+        assert np.all(np.isfinite(np.asarray(gradient))) and np.all(np.isfinite(np.asarray(value)))
 
 
 @pytest.mark.slow

@@ -93,11 +93,18 @@ def _refined_maxima(family, problem, design) -> dict[str, float]:
     return dict(zip(family.exact_constraints(problem), (float(v) for v in jnp.max(peaks, axis=1)), strict=True))
 
 
+@functools.partial(jax.jit, static_argnums=0)
+def _constraints(family, problem, design):
+    """The family's constraints at every angle of ``problem``: one compiled program per family and
+    grid (op by op, each operation compiles and runs unfused over the 2 000 001 samples)."""
+    return family.constraints(problem, design)
+
+
 def _dense_maxima(family, dense, design) -> dict[str, tuple[float, float]]:
     """Each constraint's max (mm) over the dense grid, and that max's resolution (mm): the change
     of the constraint over one sample beside the best one (the smaller of its two neighbours',
     as a peak at a joint, where s'' jumps, is a one-sided limit next to the jump)."""
-    g = family.constraints(dense, jax.tree.map(jnp.asarray, design))
+    g = _constraints(family, dense, jax.tree.map(jnp.asarray, design))
     out = {}
     for name, v in g._asdict().items():
         v = np.asarray(v)
