@@ -55,9 +55,13 @@ def test_min_base_radius_is_the_smallest_cam_for_the_designs_roller_and_offset()
     rf, e = data["design"]["roller_radius_mm"], data["design"]["offset_mm"]
     assert (rf, e) != (5.0, 0.0) and data["follower_scene"] == {"roller_radius_mm": 5.0, "offset_mm": 0.0}
     # independent sizing on a dense grid (harmonic rise 8 mm / 90 deg, return over 180 deg): the
-    # pressure-angle need f = |s' - e| / tan 30 - s (ccw), R_p = hypot(e, max f); the undercut
-    # does not bind for this scene (checked by the binding name). 2e6 samples: the grid max is
-    # below the continuous one by ~max|f''| (dtheta/2)^2 / 2 < 1e-10 mm
+    # pressure-angle need f = |s' - e| / tan 30 - s (ccw), R_p = hypot(e, max f). 2e6 samples: the
+    # grid max is below the continuous one by ~max|f''| (dtheta/2)^2 / 2 < 1e-10 mm. The reported
+    # size is the larger of this need and the undercut's, so its equality with this need (1e-8 mm)
+    # says the undercut needs no more. At this design the two needs tie: the size-only optimum
+    # with R_f and e free sits on both limits (the report's own rows: the pressure angle at its 30
+    # deg, the undercut's root at the same R_p), so the name of the binding limit is either,
+    # decided by round-off.
     theta = np.linspace(0.0, 2.0 * np.pi, 2_000_001)
     rise, ret = np.radians(90.0), np.radians(180.0)
     t2 = theta - np.radians(135.0)
@@ -66,7 +70,7 @@ def test_min_base_radius_is_the_smallest_cam_for_the_designs_roller_and_offset()
     ds = np.where(theta <= rise, 4.0 * np.pi / rise * np.sin(np.pi * theta / rise),
                   np.where((t2 >= 0) & (t2 <= ret), -4.0 * np.pi / ret * np.sin(np.pi * t2 / ret), 0.0))
     need = np.max(np.abs(ds - e) / np.tan(np.radians(30.0)) - s)
-    assert data["min_base_radius_binding"] == "pressure_angle"
+    assert data["min_base_radius_binding"] in ("pressure_angle", "undercut")
     assert data["min_prime_radius_mm"] == pytest.approx(math.hypot(e, need), abs=1e-8)
     assert data["min_base_radius_mm"] == pytest.approx(math.hypot(e, need) - rf, abs=1e-8)
     assert f"R_f = {rf:g} mm, offset {e:g} mm" in data["min_base_radius_rule"]
