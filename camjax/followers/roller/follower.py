@@ -90,6 +90,18 @@ def _second_prime_radius(kin, prime_radius_mm, high_mm, dims, kind: str):
     return rp, found, jnp.argmax(jnp.max(limits(rp), axis=0))
 
 
+@partial(jax.jit, static_argnames=("closure", "rotation"))
+def _groove_curves(closure, rotation: str, base_radius_mm, roller_radius_mm, offset_mm,
+                   min_curvature_radius_mm, kin, pitch_x, pitch_y, inner_x, inner_y, path_force_N, hertz):
+    """A groove's curves at one design (:func:`camjax.followers._closure.groove_curves` on the roller's
+    geometry), one compiled program: the follower's numbers and the [contact]'s are data."""
+    g = roller_geo.roller_geometry(base_radius_mm, roller_radius_mm, offset_mm, kin, rotation,
+                                   min_curvature_radius_mm)
+    return _closure.groove_curves(closure, pitch_x, pitch_y, inner_x, inner_y, g.pitch_curvature,
+                                  g.pressure_angle, roller_radius_mm, min_curvature_radius_mm, path_force_N,
+                                  hertz)
+
+
 @dataclass(frozen=True, kw_only=True)
 class RollerSpec(FollowerSpec):
     """[follower] of a roller: its radius, the axis' offset and the two limits."""
@@ -237,12 +249,13 @@ class Roller(TranslatingFollower):
     def closure_curves(self, scene, arrays, base_radius_mm, follower, geometry):
         """Both flanks of a groove (or the second cam of a conjugate pair), their margins and loads."""
         rf, e, rot = float(follower.roller_radius_mm), float(follower.offset_mm), scene.motion.rotation
-        g = roller_geo.roller_geometry(base_radius_mm, rf, e, arrays.kin, rot, follower.min_curvature_radius_mm)
         if follower.closure.kind == "groove":
-            return _closure.groove_curves(follower.closure, geometry.pitch_x_mm, geometry.pitch_y_mm,
-                                          geometry.profile_x_mm, geometry.profile_y_mm, g.pitch_curvature,
-                                          g.pressure_angle, rf, follower.min_curvature_radius_mm, arrays.force_N,
-                                          _closure.hertz_of(scene))
+            return _groove_curves(follower.closure, rot, base_radius_mm, rf, e,
+                                  follower.min_curvature_radius_mm, arrays.kin, geometry.pitch_x_mm,
+                                  geometry.pitch_y_mm, geometry.profile_x_mm, geometry.profile_y_mm,
+                                  arrays.force_N, _closure.hertz_of(scene))
+        min_rho = follower.min_curvature_radius_mm
+        g = roller_geo.roller_geometry(base_radius_mm, rf, e, arrays.kin, rot, min_rho)
         return _closure.yoke_curves(follower.closure, base_radius_mm, rf, e, arrays.kin, rot,
                                     follower.min_curvature_radius_mm, g, arrays.force_N, _closure.hertz_of(scene))
 
