@@ -256,8 +256,8 @@ class Roller(TranslatingFollower):
                                   arrays.force_N, _closure.hertz_of(scene))
         min_rho = follower.min_curvature_radius_mm
         g = roller_geo.roller_geometry(base_radius_mm, rf, e, arrays.kin, rot, min_rho)
-        return _closure.yoke_curves(follower.closure, base_radius_mm, rf, e, arrays.kin, rot,
-                                    follower.min_curvature_radius_mm, g, arrays.force_N, _closure.hertz_of(scene))
+        return _closure.yoke_curves(follower.closure, base_radius_mm, rf, e, arrays.kin, rot, min_rho, g,
+                                    arrays.force_N, _closure.hertz_of(scene))
 
     def curve_dimensions(self, follower):
         return (float(follower.roller_radius_mm), float(follower.offset_mm),
