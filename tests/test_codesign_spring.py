@@ -211,23 +211,34 @@ def test_the_contact_holds_at_the_overspeed_on_the_design_written_and_binds(free
     assert force_of(out.scene, scene.motion.rpm, SAMPLES).min() >= MARGIN - 1e-9
 
 
+# Two searches that stall on the piecewise-smooth F (each ends where no step along its direction
+# or the gradient decreases F by 1e-12 relative) end apart by where they stall: a free rate whose
+# search ends on the low rate bound against the same co-design with the rate fixed there, measured
+# 4.5e-8 relative on one 2-core EPYC and 1.07e-5 on another (AVX-512: XLA's code, and so the
+# searches' paths, differ). At 40 steps, before either search stopped, the gap was 2.5e-5.
+STALL_SCATTER = 5e-5
+
+
 @pytest.mark.slow
 def test_a_free_spring_never_loses_to_a_fixed_one(free):
     """(b) the same co-design with the spring fixed at values inside the box that keep contact: the
-    box's rate ends (preload still the least feasible) and the scene's own spring (3004 N/m, 39.05 N)."""
+    box's rate ends (preload still the least feasible) and the scene's own spring (3004 N/m, 39.05 N).
+
+    The free spring ends at the fixed rate with the least F (F is flat in the rate there), and its
+    F is no more than that case's to the scatter of two stalled searches (STALL_SCATTER), and no
+    more than every other case's to 1e-6 relative."""
     _, out = free
     fixed_cases = [dict(spring_N_per_m=RATE[0]), dict(spring_N_per_m=RATE[1]),
                    dict(spring_N_per_m=3004.0, preload_N=3004.0 * 0.013)]
-    for case in fixed_cases:
-        scene = scene_from_dict(spring_data(**case), "fixed")
-        other = codesign_scene(scene, SAMPLES, max_iterations=ITERATIONS)
-        # the searches end at no certified optimum but where a step decreases F by less than
-        # 1e-12 relative; on the piecewise-smooth F two such ends scatter: the free spring ends
-        # 4.5e-8 relative above the one fixed at the box's low rate (where its optimum lies: F is
-        # flat in the rate there), the scatter of where the search stops; 1e-6 relative allows
-        # that and would catch a free rate that misses the fixed one's optimum (at 40 steps,
-        # before either search stopped, the gap was 2.5e-5)
-        assert out.objective <= other.objective * (1 + 1e-6), (case, out.objective, other.objective)
+    others = [codesign_scene(scene_from_dict(spring_data(**case), "fixed"), SAMPLES, max_iterations=ITERATIONS)
+              for case in fixed_cases]
+    best = min(range(len(others)), key=lambda k: others[k].objective)
+    # the free rate on the best fixed rate: 3e-6 relative is where u's transform clips a start on a
+    # bound (camjax.codesign.spring.u_of: 1e-6 of log(k_hi / k_lo))
+    assert out.spring["rate_N_per_m"] == pytest.approx(fixed_cases[best]["spring_N_per_m"], rel=1e-5)
+    for k, (case, other) in enumerate(zip(fixed_cases, others, strict=True)):
+        tolerance = STALL_SCATTER if k == best else 1e-6
+        assert out.objective <= other.objective * (1 + tolerance), (case, out.objective, other.objective)
 
 
 @pytest.mark.slow
