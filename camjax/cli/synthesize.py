@@ -78,7 +78,7 @@ def law_curves(results, builtin_names, note: str):
     import numpy as np
 
     from camjax.laws import LAWS
-    from camjax.laws.bspline import evaluate_derivatives
+    from camjax.laws.bspline import evaluate_derivatives_numpy
     from camjax.output.synthesis import CURVE_POINTS
     from camjax.synthesis.segments import builtin_q
 
@@ -86,7 +86,7 @@ def law_curves(results, builtin_names, note: str):
     curves, panels = [], []
     for r, name in zip(results, builtin_names, strict=True):
         seg = r.segment
-        q = tuple(np.asarray(v) for v in evaluate_derivatives(r.knots, r.control, seg.degree, x, 3))
+        q = evaluate_derivatives_numpy(r.knots, np.asarray(r.control), seg.degree, x, 3)
         curves.append((seg.index, x, q))
         panels.append((f"segments[{seg.index}] {seg.kind}", x, q,
                        builtin_q(LAWS[name], seg.kind, x) if name else None,
