@@ -17,9 +17,10 @@ from pathlib import Path
 # so the tests' subprocesses (the CLI, process pools) inherit it; CAMJAX_XLA_FLAGS=0 runs with
 # XLA's defaults. (LLVM's -O0, --xla_backend_optimization_level=0, would halve the compiles again
 # but turns finite gradients of the oscillating flat face into NaN in this jaxlib: not used.)
-from camjax.runtime import use_cpu_xla_flags  # noqa: E402  (loads no JAX)
+from camjax.runtime import fewer_full_collections, use_cpu_xla_flags  # noqa: E402  (loads no JAX)
 
 use_cpu_xla_flags()
+fewer_full_collections()  # as the command line: a worker's heap makes each full collection costly
 
 import jax  # noqa: E402
 import pytest  # noqa: E402

@@ -39,13 +39,15 @@ def entry() -> None:
 
     The command line's own set-up happens here, not at ``import camjax``: until the commands'
     handlers are installed, Ctrl-C or SIGTERM ends the process with one line instead of a traceback
-    from inside ``import jax``; XLA's CPU flags are chosen (:func:`camjax.runtime.use_cpu_xla_flags`);
+    from inside ``import jax``; XLA's CPU flags are chosen (:func:`camjax.runtime.use_cpu_xla_flags`)
+    and full garbage collections made rarer (:func:`camjax.runtime.fewer_full_collections`);
     then :func:`camjax.cli.app.entry` runs the command.
     """
-    from camjax.runtime import quiet_startup_interrupts, use_cpu_xla_flags
+    from camjax.runtime import fewer_full_collections, quiet_startup_interrupts, use_cpu_xla_flags
 
     quiet_startup_interrupts()
     use_cpu_xla_flags()  # before JAX starts its backend
+    fewer_full_collections()
     from camjax.cli.app import entry as run
 
     run()
