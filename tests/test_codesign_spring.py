@@ -230,8 +230,8 @@ def test_a_free_spring_never_loses_to_a_fixed_one(free):
     _, out = free
     fixed_cases = [dict(spring_N_per_m=RATE[0]), dict(spring_N_per_m=RATE[1]),
                    dict(spring_N_per_m=3004.0, preload_N=3004.0 * 0.013)]
-    others = [codesign_scene(scene_from_dict(spring_data(**case), "fixed"), SAMPLES, max_iterations=ITERATIONS)
-              for case in fixed_cases]
+    others = [codesign_scene(scene_from_dict(spring_data(**case), "fixed"), SAMPLES,
+                             max_iterations=ITERATIONS) for case in fixed_cases]
     best = min(range(len(others)), key=lambda k: others[k].objective)
     # the free rate on the best fixed rate: 3e-6 relative is where u's transform clips a start on a
     # bound (camjax.codesign.spring.u_of: 1e-6 of log(k_hi / k_lo))
