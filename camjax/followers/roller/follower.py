@@ -249,12 +249,11 @@ class Roller(TranslatingFollower):
     def closure_curves(self, scene, arrays, base_radius_mm, follower, geometry):
         """Both flanks of a groove (or the second cam of a conjugate pair), their margins and loads."""
         rf, e, rot = float(follower.roller_radius_mm), float(follower.offset_mm), scene.motion.rotation
-        if follower.closure.kind == "groove":
-            return _groove_curves(follower.closure, rot, base_radius_mm, rf, e,
-                                  follower.min_curvature_radius_mm, arrays.kin, geometry.pitch_x_mm,
-                                  geometry.pitch_y_mm, geometry.profile_x_mm, geometry.profile_y_mm,
-                                  arrays.force_N, _closure.hertz_of(scene))
         min_rho = follower.min_curvature_radius_mm
+        if follower.closure.kind == "groove":
+            return _groove_curves(follower.closure, rot, base_radius_mm, rf, e, min_rho, arrays.kin,
+                                  geometry.pitch_x_mm, geometry.pitch_y_mm, geometry.profile_x_mm,
+                                  geometry.profile_y_mm, arrays.force_N, _closure.hertz_of(scene))
         g = roller_geo.roller_geometry(base_radius_mm, rf, e, arrays.kin, rot, min_rho)
         return _closure.yoke_curves(follower.closure, base_radius_mm, rf, e, arrays.kin, rot, min_rho, g,
                                     arrays.force_N, _closure.hertz_of(scene))
