@@ -336,6 +336,10 @@ def solve_batch(problem, weights: Weights, keys: jax.Array, mode: str = "global"
     check_choice("mode", mode, MODES)
     check_choice("solver", solver, SOLVERS)
     one = partial(solve_one, mode=mode, solver=solver, settings=settings)
+    if jnp.shape(weights.alpha)[0] == 1:
+        # one weighting (every design): traced without vmap, its axis added back. Tracing a solve
+        # under vmap takes twice as long (its loops batched), and the program compiles slower
+        return jax.tree.map(lambda x: x[None], one(problem, jax.tree.map(lambda a: a[0], weights), keys[0]))
     return jax.vmap(one, in_axes=(None, 0, 0))(problem, weights, keys)
 
 
