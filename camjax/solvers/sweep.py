@@ -97,7 +97,9 @@ def sweep(problem, alphas, gammas, *, mode: str = "global", solver: str = "gradi
     Every chunk has the same shape (the last is padded by repeating its final weighting), so the
     program compiles once; a tqdm progress bar (stderr) runs over the chunks when there is more
     than one (``progress`` forces it on or off). Weighting i uses the key fold_in(key(seed), i),
-    so results do not depend on the chunk size. Python (chunks, NumPy results): not traceable;
+    so results do not depend on the chunk size, but for a chunk of one weighting: that is a design's
+    own program (:func:`~camjax.solvers.base.solve_batch` traces it without vmap), whose last bits
+    may differ from a batch's. Python (chunks, NumPy results): not traceable;
     :func:`solve_batch` is the traceable core.
     """
     from tqdm.auto import tqdm
