@@ -122,7 +122,8 @@ def solve_block(task: BlockTask) -> list[dict]:
     :func:`camjax.solvers.base.solve_batch` for the block; weighting i of the sweep uses the key
     fold_in(key(seed), i), as :func:`camjax.solvers.sweep.sweep` does, so the records equal that
     sweep's whatever the block size (a block size of one runs the design's own program, traced
-    without vmap: the same numbers but in the last bits, see :func:`~camjax.solvers.base.solve_batch`). Returns one record per weighting: the fields of
+    without vmap: the same numbers but in the last bits, see
+    :func:`~camjax.solvers.base.solve_batch`). Returns one record per weighting: the fields of
     :meth:`camjax.solvers.sweep.SweepResult.records` except "pareto" (a property of the whole
     sweep, decided by :func:`pareto_records`), plus scene, weighting index, solver and mode.
     The solver and mode are checked against :mod:`camjax.solvers.registry` by :class:`SweepSpec`.
