@@ -215,7 +215,8 @@ def test_the_contact_holds_at_the_overspeed_on_the_design_written_and_binds(free
 # or the gradient decreases F by 1e-12 relative) end apart by where they stall: a free rate whose
 # search ends on the low rate bound against the same co-design with the rate fixed there, measured
 # 4.5e-8 relative on one 2-core EPYC and 1.07e-5 on another (a CPU with AVX-512, where XLA's code
-# differs in its last bits, and so do the searches' paths). At 40 steps, before either search stopped, the gap was 2.5e-5.
+# differs in its last bits, and so do the searches' paths). At 40 steps, before either search
+# stopped, the gap was 2.5e-5.
 STALL_SCATTER = 5e-5
 
 

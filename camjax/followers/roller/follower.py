@@ -85,8 +85,8 @@ def _second_prime_radius(kin, prime_radius_mm, high_mm, dims, kind: str):
         return _closure_problem.second_limits(closure, kin, prime_radius_mm=rp, signed_offset_mm=offset,
                                       roller_radius_mm=rf, min_curvature_radius_mm=rho_min, tan_limit=tan_lim)
 
-    rp, found = _closure_problem.first_admissible_size(lambda rp: jnp.any(limits(rp) > 0.0), prime_radius_mm, high_mm,
-                                               kin.s.shape[-1])
+    rp, found = _closure_problem.first_admissible_size(lambda rp: jnp.any(limits(rp) > 0.0), prime_radius_mm,
+                                                       high_mm, kin.s.shape[-1])
     return rp, found, jnp.argmax(jnp.max(limits(rp), axis=0))
 
 
@@ -215,7 +215,8 @@ class Roller(TranslatingFollower):
         if not bool(found) or rp <= first.prime_radius_mm:
             return first
         deg = _f(np.asarray(arrays.theta_deg)[int(worst)])
-        return MinBaseRadius(rp - f.roller_radius_mm, deg, "outer_flank" if c.kind == "groove" else "conjugate", rp)
+        binding = "outer_flank" if c.kind == "groove" else "conjugate"
+        return MinBaseRadius(rp - f.roller_radius_mm, deg, binding, rp)
 
     def design_solution(self, scene, arrays, result, problem) -> DesignSolution:
         """A roller design's figures: its peak stress as the stress curve computes it, and the
