@@ -245,19 +245,14 @@ def own_runs(follower: str, tmp: Path) -> list[list[str]]:
 
 def example_runs(follower: str, tmp: Path) -> list[list[str]]:
     """A follower type without a sequence of its own: its built-in example scene at 90 samples with
-    the gradient solver, each mode, another weighting (every program of the base run loaded), the
-    other rotation and the grid's extrema.
-
-    The solver is a generic entry-point argument (the comment above FULL_SEQUENCE): the full
-    sequence runs each solver once, so a type's own runs trace its problem through the smallest
-    solver program (the oscillating curved face's example scene names the hybrid, whose program,
-    a GA population and the gradient polish, compiled for 14.5 s and its exported module again for
-    15.7 s, measured)."""
+    the scene's own solver, each mode, another weighting (every program of the base run loaded), the
+    other rotation and the grid's extrema. The oscillating curved face's scene names newton: the
+    matrix's runs of that solver, its certificate saved and loaded with the program (the full
+    sequence runs the gradient solver, the GA and the hybrid)."""
     from camjax.scene import builtin_scene_text
 
     text = builtin_scene_text(followers.get(follower).example_scene)
     text = re.sub(r"(?m)^samples = \d+", "samples = 90", text)
-    text = re.sub(r'(?m)^solver = "\w+"', 'solver = "gradient"', text)
     base = tmp / f"{follower}.toml"
     base.write_text(text)
     runs = [["design", str(base), *opts] for opts in ([*OWN_OPTIONS, ["--alpha", "3"]])]
