@@ -219,35 +219,54 @@ def _refuse(key: str, value, problem: str, allowed: str):
 
 
 def yoke_curves(closure: ClosureSpec, base_radius_mm, roller_radius_mm, offset_mm, kin, rotation: str,
-                min_curvature_radius_mm, geometry, path_force_N=None, hertz=None) -> dict[str, jax.Array]:
-    """The second cam of a translating roller's yoke (Python: checks the span, a SceneError naming
-    ``follower.yoke_span_mm`` where the second roller would reach the shaft).
+                min_curvature_radius_mm, geometry, path_force_N=None,
+                hertz=None) -> tuple[dict[str, jax.Array], jax.Array]:
+    """The second cam of a translating roller's yoke, and the first roller's highest centre above
+    the cam centre (mm, for :func:`check_yoke`); traceable (jit it with ``closure`` and ``rotation``
+    static).
 
     The second roller's centre sits on the follower axis ``yoke_span_mm`` L below the first, at
     (e, w - L) in the follower frame (w = sqrt(R_p^2 - e^2) + s), on the far side of the shaft; its
     cam pushes it away from the shaft, along -y, which pulls the follower back. ``geometry``: the
     first cam's :class:`camjax.followers.roller.geometry.RollerGeometry`."""
-    import numpy as np
-
     from camjax.followers.roller.geometry import roller_pitch_height
 
     span, r2 = closure.yoke_span_mm, closure.second_roller_radius_mm
     w = roller_pitch_height(base_radius_mm, roller_radius_mm, offset_mm, kin)
-    y2 = w - span
-    reach = float(np.max(np.asarray(w))) + math.sqrt(max(r2**2 - offset_mm**2, 0.0))
-    if span <= reach:
-        _refuse("yoke_span_mm", span, f"puts the second roller on the shaft: at R_b = {base_radius_mm:g} mm the "
-                f"first roller rises to {float(np.max(np.asarray(w))):g} mm above the centre", f"> {reach:g}")
     zero = jnp.zeros_like(w)
-    out = conjugate_cam(offset_mm + zero, y2, zero, kin.ds, zero, kin.d2s, zero, -jnp.ones_like(w), r2,
+    out = conjugate_cam(offset_mm + zero, w - span, zero, kin.ds, zero, kin.d2s, zero, -jnp.ones_like(w), r2,
                         kin.theta, rotation, min_curvature_radius_mm)
-    return _with_loads(out, geometry.pressure_angle, geometry.pitch_curvature, roller_radius_mm, r2, path_force_N, hertz)
+    out = _with_loads(out, geometry.pressure_angle, geometry.pitch_curvature, roller_radius_mm, r2,
+                      path_force_N, hertz)
+    return out, jnp.max(w)
+
+
+def check_yoke(closure: ClosureSpec, base_radius_mm: float, offset_mm: float, top_mm: float) -> None:
+    """A SceneError naming ``follower.yoke_span_mm`` where the yoke's second roller would reach the
+    shaft: the span must exceed the first roller's highest centre ``top_mm`` (:func:`yoke_curves`)
+    plus the second roller's reach past the axis."""
+    span, r2 = closure.yoke_span_mm, closure.second_roller_radius_mm
+    reach = float(top_mm) + math.sqrt(max(r2**2 - offset_mm**2, 0.0))
+    if span <= reach:
+        _refuse("yoke_span_mm", span, f"puts the second roller on the shaft: at R_b = {base_radius_mm:g} mm "
+                f"the first roller rises to {float(top_mm):g} mm above the centre", f"> {reach:g}")
+
+
+class ArmReach(NamedTuple):
+    """Where a rocker's two arms go while it swings (:func:`arm_curves`, for :func:`check_arm`)."""
+
+    first_min: jax.Array  # rad: the first arm's angle psi, least and greatest
+    first_max: jax.Array
+    second_min: jax.Array  # rad: the second arm's, psi - beta
+    second_max: jax.Array
+    nearest_mm: jax.Array  # the second roller centre's closest approach to the cam centre
 
 
 def arm_curves(closure: ClosureSpec, pivot_distance_mm, arm_length_mm, roller_radius_mm, prime_radius_mm, kin,
-               rotation: str, min_curvature_radius_mm, moment_Nm=None, hertz=None) -> dict[str, jax.Array]:
-    """The second cam of a rocker's second arm (Python: checks the arm, SceneErrors naming
-    ``follower.second_arm_angle_deg`` or ``second_arm_length_mm``).
+               rotation: str, min_curvature_radius_mm, moment_Nm=None,
+               hertz=None) -> tuple[dict[str, jax.Array], ArmReach]:
+    """The second cam of a rocker's second arm and where the arms go (for :func:`check_arm`);
+    traceable (jit it with ``closure`` and ``rotation`` static).
 
     The second arm, ``second_arm_length_mm`` l2 long, sits ``second_arm_angle_deg`` beta from the
     first, across the line of centres: its roller's centre is C2 = (d - l2 cos(psi - beta),
@@ -255,39 +274,46 @@ def arm_curves(closure: ClosureSpec, pivot_distance_mm, arm_length_mm, roller_ra
     (-180, 0) deg, where pushing C2 away from the shaft swings the rocker back (|C2| falls as psi
     grows). Loads: the pivot torque M > 0 is the first cam's, M < 0 the second's, whose force along
     its roller's path is -M / l2."""
-    import numpy as np
-
     from camjax.followers._swing import arm_angle
     from camjax.followers.oscillating_roller import geometry as rocker_geo
 
-    l2, r2, beta = closure.second_arm_length_mm, closure.second_roller_radius_mm, math.radians(closure.second_arm_angle_deg)
+    l2, r2 = closure.second_arm_length_mm, closure.second_roller_radius_mm
+    beta = jnp.deg2rad(closure.second_arm_angle_deg)
     psi0 = rocker_geo.arm_start_angle(prime_radius_mm, pivot_distance_mm, arm_length_mm)
     psi = arm_angle(psi0, kin)
     a = psi - beta
-    lo, hi = float(np.min(np.asarray(a))), float(np.max(np.asarray(a)))
-    if not (-math.pi < lo and hi < 0.0):
-        first = (math.degrees(float(np.min(np.asarray(psi)))), math.degrees(float(np.max(np.asarray(psi)))))
-        _refuse("second_arm_angle_deg", closure.second_arm_angle_deg,
-                f"must put the second arm across the line of centres from the first while it swings (the first "
-                f"arm swings from {first[0]:.4g} to {first[1]:.4g} deg)",
-                f"between {first[1]:.4g} and {first[0] + 180.0:.4g}")
     c, sn = jnp.cos(a), jnp.sin(a)
     x, y = pivot_distance_mm - l2 * c, l2 * sn
     dcx, dcy = l2 * sn, l2 * c  # dC2/dpsi
     ddx, ddy = l2 * c, -l2 * sn
-    near = float(np.min(np.asarray(jnp.hypot(x, y))))
-    if near <= r2:
-        _refuse("second_arm_length_mm", l2, f"brings the second roller onto the shaft (its centre comes within "
-                f"{near:.4g} mm of the cam centre, its radius is {r2:g} mm)", "a longer or shorter second arm")
+    reach = ArmReach(jnp.min(psi), jnp.max(psi), jnp.min(a), jnp.max(a), jnp.min(jnp.hypot(x, y)))
     out = conjugate_cam(x, y, kin.ds * dcx, kin.ds * dcy, kin.d2s * dcx + kin.ds**2 * ddx,
                         kin.d2s * dcy + kin.ds**2 * ddy, -dcx, -dcy, r2, kin.theta, rotation, min_curvature_radius_mm)
     first = rocker_geo.oscillating_roller_geometry(pivot_distance_mm, arm_length_mm, roller_radius_mm,
                                                    prime_radius_mm, kin, rotation, min_curvature_radius_mm)
     force = None
     if moment_Nm is not None:  # along each roller's path: M / l for the first, -M / l2 for the second
-        split = jnp.where(moment_Nm >= 0, moment_Nm / (arm_length_mm * 1e-3), moment_Nm / (l2 * 1e-3))
-        force = split
-    return _with_loads(out, first.pressure_angle, first.pitch_curvature, roller_radius_mm, r2, force, hertz)
+        force = jnp.where(moment_Nm >= 0, moment_Nm / (arm_length_mm * 1e-3), moment_Nm / (l2 * 1e-3))
+    out = _with_loads(out, first.pressure_angle, first.pitch_curvature, roller_radius_mm, r2, force, hertz)
+    return out, reach
+
+
+def check_arm(closure: ClosureSpec, reach: ArmReach) -> None:
+    """SceneErrors naming ``follower.second_arm_angle_deg`` where the second arm does not stay across
+    the line of centres from the first while it swings, or ``follower.second_arm_length_mm`` where
+    its roller comes onto the shaft (``reach``: :func:`arm_curves`'s)."""
+    lo, hi = float(reach.second_min), float(reach.second_max)
+    if not (-math.pi < lo and hi < 0.0):
+        first = (math.degrees(float(reach.first_min)), math.degrees(float(reach.first_max)))
+        _refuse("second_arm_angle_deg", closure.second_arm_angle_deg,
+                f"must put the second arm across the line of centres from the first while it swings (the "
+                f"first arm swings from {first[0]:.4g} to {first[1]:.4g} deg)",
+                f"between {first[1]:.4g} and {first[0] + 180.0:.4g}")
+    near, l2, r2 = float(reach.nearest_mm), closure.second_arm_length_mm, closure.second_roller_radius_mm
+    if near <= r2:
+        _refuse("second_arm_length_mm", l2, f"brings the second roller onto the shaft (its centre comes "
+                f"within {near:.4g} mm of the cam centre, its radius is {r2:g} mm)",
+                "a longer or shorter second arm")
 
 
 # ------------------------------------------------------------------------------- loads

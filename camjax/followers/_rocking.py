@@ -440,11 +440,13 @@ class RockingFollower(Follower):
             own = {k: np.asarray(v) for k, v in self.closure_curves(scene, kin, base_radius_mm, g, moment).items()}
         arr = lambda v: None if v is None else np.asarray(v)  # noqa: E731
         num = lambda v: None if v is None else _f(v)  # noqa: E731
+        wf = float(w)  # the rates in NumPy (w^2, w^3 multiplied out as XLA's integer powers are)
         return RockerCurves(
             theta_deg=np.degrees(np.asarray(kin.theta)), swing_deg=np.degrees(np.asarray(kin.s)),
             ds=np.asarray(kin.ds), d2s=np.asarray(kin.d2s),
-            angular_velocity_rad_s=np.asarray(kin.ds * w), angular_accel_rad_s2=np.asarray(kin.d2s * w**2),
-            angular_jerk_rad_s3=np.asarray(kin.d3s * w**3),
+            angular_velocity_rad_s=np.asarray(kin.ds) * wf,
+            angular_accel_rad_s2=np.asarray(kin.d2s) * (wf * wf),
+            angular_jerk_rad_s3=np.asarray(kin.d3s) * (wf * (wf * wf)),
             segment_starts_deg=scene.motion.program.start_deg, follower_type=self.name, rotation=rotation,
             pivot_distance_mm=f.pivot_distance_mm, arm_length_mm=g.arm_length_mm,
             roller_radius_mm=g.roller_radius_mm, face_offset_mm=g.face_offset_mm,

@@ -12,6 +12,7 @@ import math
 from dataclasses import dataclass
 from functools import partial
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 
@@ -35,10 +36,12 @@ from camjax.scene.spec import ClosureSpec, FollowerSpec
 
 
 @partial(runtime.program_cache, static_argnames=("kind",))
-def _second_start_angle(kin, psi_first, sizing, second, kind: str):
-    """The smallest arm start angle psi0 >= ``psi_first`` (rad) at which both contacts of a positive
-    drive hold their limits at every sample (:func:`camjax.followers._closure_problem.first_admissible_size`),
-    whether one does, and the sample where the limits are tightest there. ``sizing``: (d, l, rotation
+def _second_start_angle(kin, prime_first, sizing, second, kind: str):
+    """The smallest arm start angle psi0 (rad) at which both contacts of a positive drive hold their
+    limits at every sample (:func:`camjax.followers._closure_problem.first_admissible_size`), no
+    smaller than the first contact's smallest cam's (prime radius ``prime_first``, mm), whether one
+    does, the sample where the limits are tightest there, and its prime radius (mm).
+    ``sizing``: (d, l, rotation
     sign, tan(limit), R_f + rho_min); ``second``: (groove clearance, second arm length, its angle (deg),
     second roller radius, R_f, rho_min), arrays: one compiled program for every scene of a closure
     kind and grid (the scene's values are its data)."""
@@ -53,9 +56,34 @@ def _second_start_angle(kin, psi_first, sizing, second, kind: str):
         return jnp.concatenate([rocker_roller_geo.sizing_limits(kin, psi0, sizing), g])
 
     hi = jnp.pi - jnp.max(kin.s)
+    psi_first = rocker_roller_geo.arm_start_angle(prime_first, d, l)
     psi0, found = _closure_problem.first_admissible_size(lambda p: jnp.any(limits(p) > 0.0), psi_first, hi,
                                                  kin.s.shape[-1])
-    return psi0, found, jnp.argmax(jnp.max(limits(psi0), axis=0))
+    return (psi0, found, jnp.argmax(jnp.max(limits(psi0), axis=0)),
+            rocker_roller_geo.roller_centre_distance(d, l, psi0))
+
+
+@jax.jit
+def _groove_curves(clearance_mm, pitch_x, pitch_y, inner_x, inner_y, pitch_curvature, pressure_angle_rad,
+                   roller_radius_mm, min_curvature_radius_mm, path_force_N, hertz):
+    """A rocker groove's curves at one design (:func:`camjax.followers._closure.groove_curves`), one
+    compiled program per grid: the clearance and the follower's numbers are data."""
+    return _closure.groove_curves(ClosureSpec("groove", clearance_mm=clearance_mm), pitch_x, pitch_y, inner_x,
+                                  inner_y, pitch_curvature, pressure_angle_rad, roller_radius_mm,
+                                  min_curvature_radius_mm, path_force_N, hertz)
+
+
+@partial(jax.jit, static_argnames=("rotation",))
+def _arm_curves(second, pivot_distance_mm, arm_length_mm, roller_radius_mm, prime_radius_mm, kin,
+                rotation: str, min_curvature_radius_mm, moment_Nm, hertz):
+    """A conjugate rocker's second cam and where its arms go (:func:`camjax.followers._closure.arm_curves`),
+    one compiled program per grid and rotation. ``second``: (second arm length mm, its angle from the
+    first deg, second roller radius mm), data like the follower's other numbers."""
+    length, angle, radius = second
+    closure = ClosureSpec("conjugate", second_arm_length_mm=length, second_arm_angle_deg=angle,
+                          second_roller_radius_mm=radius)
+    return _closure.arm_curves(closure, pivot_distance_mm, arm_length_mm, roller_radius_mm, prime_radius_mm,
+                               kin, rotation, min_curvature_radius_mm, moment_Nm, hertz)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -232,9 +260,10 @@ class OscillatingRoller(RockingFollower):
         sizing = as_(d, l, rotation_sign(scene.motion.rotation), tan_lim, rf + f.min_curvature_radius_mm)
         arm = (c.second_arm_length_mm, c.second_arm_angle_deg, c.second_roller_radius_mm)
         second = as_(c.clearance_mm, *(arm if c.kind == "conjugate" else (0.0,) * 3), rf, f.min_curvature_radius_mm)
-        psi_first = rocker_roller_geo.arm_start_angle(jnp.asarray(first.min_prime_radius_mm, dt), d, l)
-        psi0, found, worst = _second_start_angle(kin, psi_first, sizing, second, kind=c.kind)
-        rp = _f(rocker_roller_geo.roller_centre_distance(d, l, psi0))
+        prime_first = jnp.asarray(first.min_prime_radius_mm, dt)
+        sized = _second_start_angle(kin, prime_first, sizing, second, kind=c.kind)
+        _, found, worst, rp = jax.device_get(sized)
+        rp = _f(rp)
         if not bool(found) or rp <= first.min_prime_radius_mm * (1.0 + 1e-12):
             return first
         deg = float(np.degrees(np.asarray(kin.theta))[int(worst)])
@@ -260,12 +289,16 @@ class OscillatingRoller(RockingFollower):
         f = scene.follower
         path_force = None if moment is None else moment / (g.arm_length_mm * 1e-3)  # N along the path
         if f.closure.kind == "groove":
-            return _closure.groove_curves(f.closure, g.pitch_x_mm, g.pitch_y_mm, g.profile_x_mm, g.profile_y_mm,
-                                          g.pitch_curvature, g.pressure_angle, f.roller_radius_mm,
-                                          f.min_curvature_radius_mm, path_force, _closure.hertz_of(scene))
-        return _closure.arm_curves(f.closure, f.pivot_distance_mm, f.arm_length_mm, f.roller_radius_mm,
-                                   base_radius_mm + f.roller_radius_mm, kin, scene.motion.rotation,
-                                   f.min_curvature_radius_mm, moment, _closure.hertz_of(scene))
+            return _groove_curves(f.closure.clearance_mm, g.pitch_x_mm, g.pitch_y_mm, g.profile_x_mm,
+                                  g.profile_y_mm, g.pitch_curvature, g.pressure_angle, f.roller_radius_mm,
+                                  f.min_curvature_radius_mm, path_force, _closure.hertz_of(scene))
+        c = f.closure
+        second = (c.second_arm_length_mm, c.second_arm_angle_deg, c.second_roller_radius_mm)
+        out, reach = _arm_curves(second, f.pivot_distance_mm, f.arm_length_mm, f.roller_radius_mm,
+                                 base_radius_mm + f.roller_radius_mm, kin, scene.motion.rotation,
+                                 f.min_curvature_radius_mm, moment, _closure.hertz_of(scene))
+        _closure.check_arm(f.closure, jax.device_get(reach))
+        return out
 
     def summary(self, design) -> str:
         return (f"R_f = {design['roller_radius_mm']:.4f} mm, pivot {design['pivot_distance_mm']:.4f} mm, "

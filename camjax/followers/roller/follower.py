@@ -102,6 +102,21 @@ def _groove_curves(closure, rotation: str, base_radius_mm, roller_radius_mm, off
                                   hertz)
 
 
+@partial(jax.jit, static_argnames=("rotation",))
+def _yoke_curves(second, rotation: str, base_radius_mm, roller_radius_mm, offset_mm, min_curvature_radius_mm,
+                 kin, path_force_N, hertz):
+    """A yoke's second cam at one design and the first roller's highest centre
+    (:func:`camjax.followers._closure.yoke_curves` on the roller's geometry), one compiled program per
+    grid and rotation. ``second``: (yoke span mm, second roller radius mm), data like the follower's
+    other numbers."""
+    span, radius = second
+    closure = ClosureSpec("conjugate", yoke_span_mm=span, second_roller_radius_mm=radius)
+    g = roller_geo.roller_geometry(base_radius_mm, roller_radius_mm, offset_mm, kin, rotation,
+                                   min_curvature_radius_mm)
+    return _closure.yoke_curves(closure, base_radius_mm, roller_radius_mm, offset_mm, kin, rotation,
+                                min_curvature_radius_mm, g, path_force_N, hertz)
+
+
 @dataclass(frozen=True, kw_only=True)
 class RollerSpec(FollowerSpec):
     """[follower] of a roller: its radius, the axis' offset and the two limits."""
@@ -255,9 +270,12 @@ class Roller(TranslatingFollower):
             return _groove_curves(follower.closure, rot, base_radius_mm, rf, e, min_rho, arrays.kin,
                                   geometry.pitch_x_mm, geometry.pitch_y_mm, geometry.profile_x_mm,
                                   geometry.profile_y_mm, arrays.force_N, _closure.hertz_of(scene))
-        g = roller_geo.roller_geometry(base_radius_mm, rf, e, arrays.kin, rot, min_rho)
-        return _closure.yoke_curves(follower.closure, base_radius_mm, rf, e, arrays.kin, rot, min_rho, g,
-                                    arrays.force_N, _closure.hertz_of(scene))
+        c = follower.closure
+        second = (c.yoke_span_mm, c.second_roller_radius_mm)
+        out, top = _yoke_curves(second, rot, base_radius_mm, rf, e, min_rho, arrays.kin, arrays.force_N,
+                                _closure.hertz_of(scene))
+        _closure.check_yoke(follower.closure, base_radius_mm, e, top)
+        return out
 
     def curve_dimensions(self, follower):
         return (float(follower.roller_radius_mm), float(follower.offset_mm),
