@@ -69,13 +69,19 @@ def model_at(model: SceneModel, segment, theta_deg: jax.Array) -> PointValues:
     integer array of shape (): :func:`camjax.program.segment_motion`) at cam angles ``theta_deg``
     (deg, inside the segment; its ends give one-sided limits)."""
     kin = program.segment_motion(model.program, segment, theta_deg)
+    return PointValues(kin, *_loads(model, kin, program.time_kinematics(kin, model.cam_speed_rad_s)))
+
+
+def _loads(model: SceneModel, kin: Kinematics, motion: TimeKinematics):
+    """(force N, cam torque N m, stress coefficient) of the model's train and [contact] at the
+    kinematics ``kin`` (any shape; ``motion``: at the model's speed), None where not declared."""
     force = torque = coeff = None
     if model.train is not None:
-        force = loads.kinetostatic_force(model.train, program.time_kinematics(kin, model.cam_speed_rad_s))
+        force = loads.kinetostatic_force(model.train, motion)
         torque = loads.cam_torque(force, kin.ds)
         if model.cam_width_mm is not None:
             coeff = contact.stress_coefficient(force, model.cam_width_mm, model.cam, model.follower)
-    return PointValues(kin, force, torque, coeff)
+    return force, torque, coeff
 
 
 class SceneArrays(NamedTuple):
@@ -108,36 +114,30 @@ def scene_arrays(scene: Scene, samples: int | None = None, dtype=None, extrema: 
         raise ValueError(f"extrema: '{mode}' is not allowed; use {', '.join(extrema_mod.EXTREMA_MODES)}")
     dtype = dtype or jnp.result_type(float)
     n = scene.motion.samples if samples is None else int(samples)
-    # one compiled call for the whole scene (the scene is closed over: its numbers are constants
-    # of the program, so a fresh process finds it in the compilation cache) instead of a dozen
-    # eager operations, each traced and looked up on its own
-    arrays = jax.jit(lambda: _scene_arrays(scene, n, dtype))()
-    model = scene_model(scene, dtype) if mode == "exact" else None
-    return arrays._replace(model=model)
+    # one compiled call for the whole grid, the scene's numbers its data (:func:`scene_model`): one
+    # program for every scene of the same laws, declared models and grid size
+    model = scene_model(scene, dtype)
+    arrays = _grid_arrays(model, n)
+    return arrays._replace(model=model if mode == "exact" else None)
 
 
-def _scene_arrays(scene: Scene, n: int, dtype) -> SceneArrays:
-    prog = jax.tree_util.tree_map(lambda x: jnp.asarray(x, dtype), scene.motion.program)
-    return arrays_from_kinematics(scene, program.evaluate(prog, n))
+@partial(jax.jit, static_argnames="n")
+def _grid_arrays(model: SceneModel, n: int) -> SceneArrays:
+    return _arrays_of(model, program.evaluate(model.program, n))
 
 
 def arrays_from_kinematics(scene: Scene, kin: Kinematics) -> SceneArrays:
     """The scene's arrays (loads, contact coefficient) for the kinematics ``kin`` on the grid of
     ``len(kin.s)`` samples instead of its program's: traceable in ``kin`` (law co-design builds
     them from kinematics linear in a law's control values). Extrema on the grid (no model)."""
-    n, dtype = kin.s.shape[-1], kin.s.dtype
-    omega = jnp.asarray(program.rpm_to_rad_s(scene.motion.rpm), dtype)
-    motion = program.time_kinematics(kin, omega)
-    force = torque = coeff = None
-    train = scene.follower.train
-    if train is not None and not followers.of(scene).rocking:  # a rocker's loads: camjax.followers._rocking
-        force = loads.kinetostatic_force(train, motion)
-        torque = loads.cam_torque(force, kin.ds)
-        if scene.contact is not None:
-            c = scene.contact
-            coeff = contact.stress_coefficient(force, c.cam_width_mm, c.cam, c.follower)
-    theta_deg = program.sample_angles_deg(n, dtype)
-    return SceneArrays(theta_deg, kin, motion, omega, force, torque, coeff)
+    return _arrays_of(scene_model(scene, kin.s.dtype), kin)
+
+
+def _arrays_of(model: SceneModel, kin: Kinematics) -> SceneArrays:
+    """The grid arrays of the model's loads and contact at the kinematics ``kin`` (shape (N,))."""
+    motion = program.time_kinematics(kin, model.cam_speed_rad_s)
+    theta_deg = program.sample_angles_deg(kin.s.shape[-1], kin.s.dtype)
+    return SceneArrays(theta_deg, kin, motion, model.cam_speed_rad_s, *_loads(model, kin, motion))
 
 
 # ------------------------------------------------------------------------------ extrema
