@@ -32,6 +32,7 @@ from camjax.dynamics.plant import (
 # ------------------------------------------------------------------------ scene -> models
 
 
+
 def plant_of(spec) -> Plant:
     """The follower train of a :class:`~camjax.scene.DynamicsSpec`."""
     return Plant(jnp.asarray(spec.I3), jnp.asarray(spec.c3), jnp.asarray(spec.k23))
@@ -68,7 +69,7 @@ def synthesis_train(scene):
     segments = {}
     for ds in scene.motion.designed:
         lo = program.start_deg[ds.index]
-        ends = prog.motion_at(program, jnp.asarray([lo, lo + ds.angle_deg])).s
+        ends = prog.motion_at_compiled(program, jnp.asarray([lo, lo + ds.angle_deg])).s
         s0, s1 = (float(v) * spec.motion_scale for v in np.asarray(ends))
         segments[ds.index] = (s0, s1 - s0)
     return Train(as_float(natural_frequency_rad_s(plant)), as_float(damping_ratio(plant)),
@@ -101,7 +102,7 @@ def shaping_constraints(scene) -> tuple[np.ndarray, np.ndarray]:
         angles.extend(np.linspace(start, start + width, max(2, int(width // 5) + 1)) if kind == "dwell"
                       else [start])
     angles_deg = np.mod(np.asarray(angles), 360.0)
-    levels = np.asarray(prog.motion_at(p, angles_deg).s) * scene.dynamics.motion_scale
+    levels = np.asarray(prog.motion_at_compiled(p, angles_deg).s) * scene.dynamics.motion_scale
     return np.deg2rad(angles_deg), levels
 
 

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import json
 import math
+from functools import partial
 from pathlib import Path
 from typing import NamedTuple
 
@@ -51,7 +52,7 @@ class Law:
             lk = unit_scale(units)
             k = (lk, lk * rad, lk * rad * rad)
         self._scale = k
-        self._f = jax.jit(lambda t: program.motion_at(prog, t))
+        self._f = partial(program.motion_at_compiled, prog)
 
     def __call__(self, master_deg: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(position, velocity, acceleration) at ``master_deg`` (any length; batches of BATCH)."""

@@ -187,6 +187,11 @@ def motion_at(program: MotionProgram, theta_deg: jax.Array) -> Kinematics:
     return Kinematics(jnp.deg2rad(theta_deg), *outs)
 
 
+# :func:`motion_at` called from Python: one compiled call per program's laws and shape of the angles
+# (the program's numbers are its data), not the program's operations one by one
+motion_at_compiled = jax.jit(motion_at)
+
+
 def segment_motion(program: MotionProgram, segment, theta_deg: jax.Array) -> Kinematics:
     """Segment ``segment`` of the program at cam angles ``theta_deg`` (deg, any shape).
 
