@@ -36,6 +36,7 @@ def pytest_configure(config):
     _persistent_compilation_cache(config)
     _ledger_start(config)
     _keep_file_order(config)
+    _worker_leaves_without_finalizing(config)
 
 
 def _no_forced_collection_at_exit(config) -> None:
@@ -48,6 +49,27 @@ def _no_forced_collection_at_exit(config) -> None:
     except ImportError:  # another pytest: its own behaviour
         return
     config.stash[gc_collect_iterations_key] = 0
+
+
+def _worker_leaves_without_finalizing(config) -> None:
+    """An xdist worker's process ends at once when its session is over (``os._exit`` as its last
+    exit handler), without Python's finalization: with the heap of hundreds of compiled programs
+    that took ~2 s after the last test, which the whole run waited for (the quick loop's last
+    worker ended 2.0 s before the run did; 0.1 s with this). The worker has sent every report by
+    then, and the persistent compilation cache writes each entry when it compiles it."""
+    if not hasattr(config, "workerinput"):  # the controller (or a run without xdist) finalizes
+        return
+    import atexit
+    import sys
+
+    def leave() -> None:
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(0)
+
+    # handlers registered later (by what the tests import) still run before it; JAX's and the
+    # earlier imports' (clearing backends and caches) are skipped with the rest of the finalization
+    atexit.register(leave)
 
 
 def _persistent_compilation_cache(config) -> None:

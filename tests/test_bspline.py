@@ -13,7 +13,6 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
-from scipy.interpolate import BSpline
 
 import camjax
 from camjax import followers
@@ -50,6 +49,8 @@ def _de_boor_of_every_degree():
 @pytest.mark.slow
 @pytest.mark.parametrize("k", DEGREES)
 def test_de_boor_matches_scipy_with_derivatives(k):
+    from scipy.interpolate import BSpline  # imported by the tests that use it: not at every collection
+
     t, c, got = _de_boor_of_every_degree()[k]
     x = DE_BOOR_X
     ref = BSpline(t, c, k)
@@ -136,6 +137,8 @@ def test_gradient_with_respect_to_control_values_matches_finite_differences():
 
 @pytest.mark.slow
 def test_derivative_in_x_by_jvp_is_the_derivative_spline():
+    from scipy.interpolate import BSpline
+
     t, c = _random_spline(5, 10, seed=4)
     x = jnp.linspace(0.01, 0.99, 57)
     _, tangent = jax.jit(lambda xx: jax.jvp(lambda u: B.evaluate(t, jnp.asarray(c), 5, u), (xx,),

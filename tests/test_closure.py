@@ -262,7 +262,12 @@ BAD = {
 }
 
 
-@pytest.mark.parametrize("case", sorted(BAD))
+# refused after the sizing, where the cam's size is known (a run up to the drawing): the full suite's;
+# the rest are refused as the scene is read
+AFTER_SIZING = ("arm_on_the_same_side", "span_inside_shaft")
+
+
+@pytest.mark.parametrize("case", [pytest.param(c, marks=SLOW) if c in AFTER_SIZING else c for c in sorted(BAD)])
 def test_bad_closures_exit_2_naming_the_field(case, tmp_path, capsys):
     name, old, new, field = BAD[case]
     text = builtin_scene_text(name) if "\n" not in name else name

@@ -10,7 +10,6 @@ import warnings
 import jax.numpy as jnp
 import numpy as np
 import pytest
-from scipy.interpolate import BSpline, make_smoothing_spline
 
 from camjax import cli
 from camjax.laws.fit import smoothing_spline
@@ -53,6 +52,8 @@ def _scene(tmp_path, angles, lifts, extra="", header="angle_deg,lift_mm"):
 
 
 def test_cubic_fit_is_scipys_smoothing_spline_at_equal_lam():
+    from scipy.interpolate import BSpline, make_smoothing_spline  # here: not at every collection
+
     rng = np.random.default_rng(1)
     x = np.linspace(0.0, 1.0, 81)
     y = np.sin(3 * x) + 0.01 * rng.normal(size=x.size)
