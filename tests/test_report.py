@@ -228,6 +228,23 @@ def test_no_mass_means_no_loads():
     assert data["models"] == ["geometry", "kinematics"]
 
 
+def test_scenes_that_differ_in_values_only_share_the_arrays_program():
+    """The grid arrays take the scene's numbers as data (camjax.evaluate.scene_arrays): a scene with
+    another spring and cam width runs the first one's compiled program again (its jit cache does
+    not grow), and its force is still its own (the reference's closed form at that spring, rtol
+    1e-12: the same formula in float64)."""
+    from camjax.evaluate import _grid_arrays
+
+    camjax.scene_arrays(camjax.load_scene("default"))
+    size = _grid_arrays._cache_size()
+    other = scene_with(("spring_N_per_m = 3004.0", "spring_N_per_m = 100.0"),
+                       ("cam_width_mm = 10.0", "cam_width_mm = 12.0"))
+    arrays = camjax.scene_arrays(other)
+    assert _grid_arrays._cache_size() == size
+    want = reference_force(np.asarray(arrays.theta_deg), spring_N_per_m=100.0)
+    np.testing.assert_allclose(np.asarray(arrays.force_N), want, rtol=1e-12, atol=1e-9)
+
+
 def test_loss_of_contact_located():
     scene = scene_with(("spring_N_per_m = 3004.0", "spring_N_per_m = 100.0"))
     data = camjax.design_report(scene)
