@@ -366,7 +366,7 @@ def test_scenes_that_differ_in_values_only_share_the_closure_programs(name):
     """A positive drive's values (clearance, second arm, second roller, limits) are data: another
     scene of the same shape has the design program's key (camjax.runtime.program_key: the tree
     structure and shapes of its arguments) and runs the sizing's compiled second-contact program
-    again (its jit cache does not grow)."""
+    again (its jit cache does not grow), and a rocker's drawing its second cam's program."""
     from camjax import runtime
     from camjax.evaluate import scene_arrays
     from camjax.followers.oscillating_roller.follower import _second_start_angle
@@ -381,11 +381,25 @@ def test_scenes_that_differ_in_values_only_share_the_closure_programs(name):
     assert len(keys) == 1
     follower = followers.of(scenes[0])
     program = (_second_start_angle if follower.rocking else _second_prime_radius).jitted
-    sizes = []
+    sizes, sized = [], []
     for scene, a in zip(scenes, arrays, strict=True):
-        follower.sizing(scene, a.kin) if follower.rocking else follower.min_base_radius(scene, a)
+        sized.append(follower.sizing(scene, a.kin) if follower.rocking else follower.min_base_radius(scene, a))
         sizes.append(program._cache_size())
     assert sizes[0] >= 1 and sizes[1] == sizes[0]  # compiled for the first scene, run again for the other
+    if follower.rocking:  # the second arm's cam (the drawing's): its arm and roller are the program's data
+        from camjax.followers.oscillating_roller.follower import _arm_curves
+
+        cams = []
+        for scene, a, size in zip(scenes, arrays, sized, strict=True):
+            f, c = scene.follower, scene.follower.closure
+            second = (c.second_arm_length_mm, c.second_arm_angle_deg, c.second_roller_radius_mm)
+            out, _ = _arm_curves(second, f.pivot_distance_mm, f.arm_length_mm, f.roller_radius_mm,
+                                 size.min_prime_radius_mm + 1.0, a.kin, scene.motion.rotation,
+                                 f.min_curvature_radius_mm, None, None)
+            cams.append(np.asarray(out["conjugate_x_mm"]))
+            sizes.append(_arm_curves._cache_size())
+        assert sizes[2] >= 1 and sizes[3] == sizes[2]
+        assert not np.allclose(cams[0], cams[1])  # each scene its own second cam
 
 
 def _turning_radii(x, y):
