@@ -32,7 +32,6 @@ from camjax.dynamics.plant import (
 # ------------------------------------------------------------------------ scene -> models
 
 
-
 def plant_of(spec) -> Plant:
     """The follower train of a :class:`~camjax.scene.DynamicsSpec`."""
     return Plant(jnp.asarray(spec.I3), jnp.asarray(spec.c3), jnp.asarray(spec.k23))

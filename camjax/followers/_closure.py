@@ -222,8 +222,8 @@ def yoke_curves(closure: ClosureSpec, base_radius_mm, roller_radius_mm, offset_m
                 min_curvature_radius_mm, geometry, path_force_N=None,
                 hertz=None) -> tuple[dict[str, jax.Array], jax.Array]:
     """The second cam of a translating roller's yoke, and the first roller's highest centre above
-    the cam centre (mm, for :func:`check_yoke`); traceable (jit it with ``closure`` and ``rotation``
-    static).
+    the cam centre (mm, for :func:`check_yoke`); traceable, the closure's numbers included
+    (``rotation`` is static).
 
     The second roller's centre sits on the follower axis ``yoke_span_mm`` L below the first, at
     (e, w - L) in the follower frame (w = sqrt(R_p^2 - e^2) + s), on the far side of the shaft; its
@@ -266,7 +266,7 @@ def arm_curves(closure: ClosureSpec, pivot_distance_mm, arm_length_mm, roller_ra
                rotation: str, min_curvature_radius_mm, moment_Nm=None,
                hertz=None) -> tuple[dict[str, jax.Array], ArmReach]:
     """The second cam of a rocker's second arm and where the arms go (for :func:`check_arm`);
-    traceable (jit it with ``closure`` and ``rotation`` static).
+    traceable, the closure's numbers included (``rotation`` is static).
 
     The second arm, ``second_arm_length_mm`` l2 long, sits ``second_arm_angle_deg`` beta from the
     first, across the line of centres: its roller's centre is C2 = (d - l2 cos(psi - beta),

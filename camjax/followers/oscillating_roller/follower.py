@@ -40,11 +40,10 @@ def _second_start_angle(kin, prime_first, sizing, second, kind: str):
     """The smallest arm start angle psi0 (rad) at which both contacts of a positive drive hold their
     limits at every sample (:func:`camjax.followers._closure_problem.first_admissible_size`), no
     smaller than the first contact's smallest cam's (prime radius ``prime_first``, mm), whether one
-    does, the sample where the limits are tightest there, and its prime radius (mm).
-    ``sizing``: (d, l, rotation
-    sign, tan(limit), R_f + rho_min); ``second``: (groove clearance, second arm length, its angle (deg),
-    second roller radius, R_f, rho_min), arrays: one compiled program for every scene of a closure
-    kind and grid (the scene's values are its data)."""
+    does, the sample where the limits are tightest there, and its prime radius (mm). ``sizing``:
+    (d, l, rotation sign, tan(limit), R_f + rho_min); ``second``: (groove clearance, second arm
+    length, its angle (deg), second roller radius, R_f, rho_min), arrays: one compiled program for
+    every scene of a closure kind and grid (the scene's values are its data)."""
     d, l, sign, tan_lim, _ = sizing
     clearance, arm, angle, radius, rf, rho_min = second
     closure = ClosureSpec(kind, clearance_mm=clearance, second_roller_radius_mm=radius,
@@ -76,9 +75,10 @@ def _groove_curves(clearance_mm, pitch_x, pitch_y, inner_x, inner_y, pitch_curva
 @partial(jax.jit, static_argnames=("rotation",))
 def _arm_curves(second, pivot_distance_mm, arm_length_mm, roller_radius_mm, prime_radius_mm, kin,
                 rotation: str, min_curvature_radius_mm, moment_Nm, hertz):
-    """A conjugate rocker's second cam and where its arms go (:func:`camjax.followers._closure.arm_curves`),
-    one compiled program per grid and rotation. ``second``: (second arm length mm, its angle from the
-    first deg, second roller radius mm), data like the follower's other numbers."""
+    """A conjugate rocker's second cam and where its arms go
+    (:func:`camjax.followers._closure.arm_curves`), one compiled program per grid and rotation.
+    ``second``: (second arm length mm, its angle from the first deg, second roller radius mm), data
+    like the follower's other numbers."""
     length, angle, radius = second
     closure = ClosureSpec("conjugate", second_arm_length_mm=length, second_arm_angle_deg=angle,
                           second_roller_radius_mm=radius)
