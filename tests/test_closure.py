@@ -613,6 +613,11 @@ def test_a_free_span_or_arm_angle_is_the_smallest_the_second_cam_allows(case, tm
     design, chosen = data["design"], data["design"][key]
     low, high = parse_scene(text).design.bounds(key)
     assert design["feasible"] and data["closure"][key] == chosen and low < chosen < high, (chosen, design)
+    # the scene's newton certifies the solve it made (the first contact's rows, whose optimum the
+    # chosen value keeps): converged, within 1e-8 on each scaled KKT residual
+    cert = design["certificate"]
+    assert cert["converged"] and max(cert["stationarity"], cert["primal_feasibility"],
+                                     cert["complementarity"]) <= 1e-8, cert
     best = _slsqp_objectives(parse_scene(text), key)
     assert best and design["objective"] <= min(best) + 1e-6, (design["objective"], best)
 

@@ -155,7 +155,7 @@ def test_design_is_the_optimum_of_an_independent_dense_scan(reference_1deg):
     """
     data = camjax.design_report(scene_with(("samples = 360", 'samples = 360\nextrema = "grid"')))
     d = data["design"]
-    assert d["solver"] == "gradient" and d["mode"] == "global"
+    assert d["solver"] == "newton" and d["mode"] == "global"  # the scene's solver
     assert d["feasible"] is True and d["violations"] == []
     s, ds, d2s = reference_1deg.s_mm, reference_1deg.ds_mm, reference_1deg.d2s_mm
     force = reference_1deg.force_N
@@ -170,11 +170,14 @@ def test_design_is_the_optimum_of_an_independent_dense_scan(reference_1deg):
     best = fine[np.argmin(objective)]
     # a 1e-6 mm scan of a smooth convex function: the minimizer is within a few grid steps
     assert d["base_radius_mm"] == pytest.approx(best, abs=1e-5)
-    assert d["face_width_mm"] == pytest.approx(width, rel=1e-12)
+    # newton (the scene's solver) ends at an interior point within its KKT tolerance (1e-9 scaled):
+    # a binding row keeps a slack of ~ complementarity / multiplier, here the face 1.3e-9 mm wider
+    # than 2 max|s'| (the gradient solver's lands on it to rounding)
+    assert d["face_width_mm"] == pytest.approx(width, rel=1e-9)
     at = hertz_stress_MPa(force, d["base_radius_mm"] + s + d2s)
     assert data["stress_MPa"]["max"] == pytest.approx(at.max(), rel=1e-9)
     assert d["objective"] == pytest.approx((d["base_radius_mm"] + width) / 65.0 + at.max() / SIGMA_MAX_MPA, rel=1e-9)
-    assert d["objective"] <= objective.min() + 1e-12
+    assert d["objective"] <= objective.min() + 1e-9  # that slack costs 2e-11 of objective
 
 
 def test_design_beyond_bounds_is_reported_infeasible():

@@ -98,9 +98,19 @@ def test_camjax_design_gives_these_designs():
     (1e-6 mm: the gradient solver stops at 1e-10 on the projected gradient and 1e-12 on the
     constraints, far tighter; the margin is for another CPU's rounding), the size increase it
     reports is under 5 %, and on its own fresh check (seed 1, 100000 samples) the robust design
-    keeps every limit in at least 99.9 % and the nominal breaks the stress limit in at least 5 %."""
+    keeps every limit in at least 99.9 % and the nominal breaks the stress limit in at least 5 %.
+    The gradient solver's answer comes with the certificate of its final point (the rows of the last
+    round's subset, multipliers fitted on the active ones): within 1e-8 on every scaled KKT
+    residual, and it names the rows that bind, each at a cam angle, with a positive multiplier."""
     scene = load_scene("robust")
-    block = rd.design_json(scene, problem_from_scene(scene))["robust"]
+    out = rd.design_json(scene, problem_from_scene(scene))
+    block = out["robust"]
+    cert = out["certificate"]
+    assert cert["converged"] and cert["active"], cert
+    assert max(cert["stationarity"], cert["primal_feasibility"], cert["complementarity"]) <= 1e-8, cert
+    for row in cert["active"]:
+        assert row["limit"] and row["multiplier"] > 0.0 and 0.0 <= row["theta_deg"] < 360.0, row
+    assert cert["limited_by"].startswith("limited by the ")
     for name, want in (("nominal", NOMINAL), ("robust", ROBUST)):
         got = block[name]["design"]
         for key, value in want.items():

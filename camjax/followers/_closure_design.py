@@ -24,7 +24,9 @@ solved with both contacts at the most permissive value (:func:`camjax.followers.
 a yoke's largest span, a rocker's [follower] angle clipped into the bounds) and step 2 is taken at
 that design; the objective is then that value's optimum, which another value may better.
 
-result.json's design block holds the chosen value under its key, and the cam is drawn with it.
+result.json's design block holds the chosen value under its key, and the cam is drawn with it. A
+solver's certificate (newton's) is that of the problem it solved: in the first case the first
+contact's rows, whose optimum the chosen value keeps.
 """
 
 from __future__ import annotations
@@ -36,7 +38,6 @@ from functools import partial
 import jax
 import jax.numpy as jnp
 
-from camjax.errors import SceneError
 from camjax.followers._closure_problem import design_start, second_excess
 from camjax.scene.reader import TableReader, fixed_or_free
 
@@ -156,7 +157,8 @@ def smallest_admissible(problem, design, key: str, low: float, high: float) -> f
 def evaluated_with(problem, solution):
     """A :class:`camjax.solvers.base.Solution` judged again on ``problem`` (the same design, its
     evaluation, violations and feasibility there; the objective does not depend on the conjugate
-    pair's span or angle, the solver's iterations and certificate are those of its own solve)."""
+    pair's span or angle, the solver's iterations are those of its own solve; a certificate is
+    rendered against the problem that solve had, see :func:`solve_with_dimension`)."""
     from camjax.family import weights_of
 
     weights = weights_of(solution.alpha, solution.gamma, problem.lower[0].dtype)
@@ -189,13 +191,17 @@ def solve_with_dimension(scene, problem, free: tuple) -> tuple[dict, object]:
         out[key] = value
         return out, problem
     # the first contact alone: no value of the span or angle gives a smaller objective
-    solution = solve_as_scene(problem._replace(closure=None))
+    solved = problem._replace(closure=None)
+    solution = solve_as_scene(solved)
     smallest = smallest_admissible(problem, solution.design, key, low, high)
     if smallest is None:  # the second cam binds there: solved at the most permissive value
+        solved = problem
         solution = solve_as_scene(problem)
         smallest = smallest_admissible(problem, solution.design, key, low, high)
     value = value if smallest is None else smallest
     problem = with_dimension(problem, key, value)
-    out = evaluated_with(problem, solution).to_json(problem)
+    out = evaluated_with(problem, replace(solution, certificate=None)).to_json(problem)
+    if solution.certificate is not None:  # a certificate is of the rows its own solve had
+        out["certificate"] = solution.certificate_json(solved)
     out[key] = value
     return out, problem

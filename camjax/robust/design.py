@@ -424,6 +424,7 @@ def design_json(scene, nominal_problem) -> dict:
     and the robust-optimal designs side by side, with each limit's probability kept measured on a
     fresh sample set (seed + 1)."""
     from camjax.solvers.base import solve
+    from camjax.solvers.newton import point_certificate_json
 
     d = scene.design
     spec = d.robust
@@ -438,6 +439,8 @@ def design_json(scene, nominal_problem) -> dict:
     out = robust.to_json(problem)
     if robust.certificate is not None:  # its multipliers are the rows of the last round's subset
         out["certificate"] = robust.certificate_json(solved)
+    elif d.mode == "global":  # the gradient solver's answer, certified as the GA's final point is
+        out["certificate"] = point_certificate_json(solved, robust)
     fresh, fresh_seed = check_samples(spec.samples), (spec.seed + 1) % 2**32
     variables = family_of(nominal_problem).Design._fields
     side = {}

@@ -76,7 +76,7 @@ import jax.numpy as jnp
 import numpy as np
 from jax.flatten_util import ravel_pytree
 
-from camjax.family import Design, Problem, Weights
+from camjax.family import Design, Problem, Weights, weights_of
 from camjax.solvers.base import Raw, family_of
 from camjax.solvers.epigraph import EpigraphForm, epigraph_form
 from camjax.solvers.gradient import from_unit, midpoint, to_unit, u_max_of
@@ -465,6 +465,18 @@ def certify_point(problem: Problem, weights: Weights, design: Design, iterations
     return _certificate(problem, weights, res)
 
 
+def point_certificate_json(problem: Problem, solution) -> dict:
+    """result.json's certificate block of a :class:`camjax.solvers.base.Solution` that came without
+    one (the gradient solver's): its final point certified on ``problem`` by :func:`certify_point`
+    (one compiled program per problem form)."""
+    w = weights_of(solution.alpha, solution.gamma, problem.lower[0].dtype)
+    cert = _certify_point(problem, w, jax.tree.map(jnp.asarray, solution.design), solution.iterations)
+    return certificate_json(problem, cert, mode="global", solver=solution.solver)
+
+
+_certify_point = jax.jit(certify_point)
+
+
 def _block(problem, cert: Certificate, *, active_tol: float = 1e-6) -> dict:
     """The residuals, sensitivities and merged active rows of :func:`certificate_json` (one answer)."""
     res = cert.result
@@ -549,9 +561,9 @@ def limited_by(certificate: dict, top: int = 3) -> str:
     return "limited by " + (" and ".join(parts) if parts else "nothing (an interior optimum)")
 
 
+_POINT = "the final point's KKT residuals, multipliers fitted on its active rows (least squares)"
 METHODS = {"newton": "primal-dual interior point on the epigraph form (scaled KKT residuals)",
-           "ga": "the final point's KKT residuals, multipliers fitted on its active rows (least squares)",
-           "hybrid": "the final point's KKT residuals, multipliers fitted on its active rows (least squares)"}
+           "ga": _POINT, "hybrid": _POINT, "gradient": _POINT}
 
 
 def certificate_json(problem, cert: Certificate, *, mode: str = "global", solver: str = "newton",
