@@ -246,9 +246,10 @@ def own_runs(follower: str, tmp: Path) -> list[list[str]]:
 def example_runs(follower: str, tmp: Path) -> list[list[str]]:
     """A follower type without a sequence of its own: its built-in example scene at 90 samples with
     the scene's own solver, each mode, another weighting (every program of the base run loaded), the
-    other rotation and the grid's extrema. The oscillating curved face's scene names newton: the
-    matrix's runs of that solver, its certificate saved and loaded with the program (the full
-    sequence runs the gradient solver, the GA and the hybrid)."""
+    other rotation and the grid's extrema. The built-in scenes name newton, so these runs and the
+    full sequence's own (the roller's scene; with the GA and the hybrid) are that solver's, its
+    certificate saved and loaded with the program; the gradient solver runs in the rockers'
+    sequences (:data:`SCENES`: their scene texts name no solver)."""
     from camjax.scene import builtin_scene_text
 
     text = builtin_scene_text(followers.get(follower).example_scene)
