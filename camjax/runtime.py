@@ -396,7 +396,7 @@ class _NotCacheable(Exception):
 class _Entry(NamedTuple):
     compiled: Any  # the compiled flat program: leaves -> output leaves
     out_tree: Any  # the output's tree structure
-    module_sha256: str  # digest of the program's StableHLO text (verify mode compares it)
+    module_sha256: str | None  # digest of the program's StableHLO text (verify mode's; else None)
 
 
 def _is_key(x) -> bool:
@@ -521,7 +521,7 @@ def _compile(exported, arrays):
 
 
 def _read(path: Path, key: str):
-    """(exported program, output skeleton, module digest) saved at ``path`` for ``key``, or None
+    """(exported program, output skeleton, module digest or None) saved at ``path`` for ``key``, or None
     when the file is missing, unreadable, truncated, of another format or key, or corrupted."""
     import pickle
 
@@ -538,15 +538,17 @@ def _read(path: Path, key: str):
         return None
 
 
-def _write(path: Path, key: str, exported, out_tree) -> str:
+def _write(path: Path, key: str, exported, out_tree) -> str | None:
     """Save the program for ``key`` (atomically: a reader sees the old file or the whole new one;
-    two writers each replace the file whole); returns its module digest. A read-only or full
-    folder leaves the cache as it was (the program still runs)."""
+    two writers each replace the file whole); returns its module digest in verify mode, else
+    None. A read-only or full folder leaves the cache as it was (the program still runs)."""
     import pickle
 
     import jax
 
-    module = _sha256(module_text(exported))
+    # the module's digest only where a later run may verify against it (computing it prints the
+    # whole StableHLO: ~0.1 s for a design program); a file without it is digested when verified
+    module = _sha256(module_text(exported)) if _VERIFY[0] else None
     program = bytes(exported.serialize())
     skeleton = jax.tree.unflatten(out_tree, [0] * out_tree.num_leaves)
     blob = pickle.dumps({"format": PROGRAM_FORMAT, "key": key, "program": program,
@@ -583,17 +585,20 @@ def _program(folder: Path, name: str, fn, static: dict, dynamic: dict) -> _Entry
     else:
         exported, skeleton, module = saved
         if _VERIFY[0]:
-            _verify(name, key, fn, static, dynamic, module)
+            _verify(name, key, fn, static, dynamic, exported, module)
         arrays = [jax.random.key_data(x) if _is_key(x) else x for x in jax.tree.leaves(dynamic)]
         entry = _Entry(_compile(exported, arrays), jax.tree.structure(skeleton), module)
     _LOADED[key] = entry
     return entry
 
 
-def _verify(name: str, key: str, fn, static: dict, dynamic: dict, module_sha256: str) -> None:
+def _verify(name: str, key: str, fn, static: dict, dynamic: dict, saved, module_sha256: str | None) -> None:
     """Raise :class:`StaleProgramError` unless a fresh trace of ``fn`` for these arguments has the
-    module digest ``module_sha256`` (that of the program saved for ``key``)."""
+    module digest ``module_sha256`` of the program ``saved`` for ``key`` (None: a file written
+    outside verify mode; the saved program's own text is digested here)."""
     exported, _, _ = _export(name, fn, static, dynamic)
+    if module_sha256 is None:
+        module_sha256 = _sha256(module_text(saved))
     if _sha256(module_text(exported)) != module_sha256:
         raise StaleProgramError(
             f"{name}: the saved program for key {key[:12]} differs from a fresh trace; its key "

@@ -251,6 +251,28 @@ def test_verify_mode_catches_a_trace_that_reads_state_outside_its_key(tmp_path, 
         runtime.use_program_cache(None)
 
 
+def test_verify_mode_checks_a_program_the_command_line_saved_without_its_digest(tmp_path, monkeypatch):
+    """A program saved outside verify mode (as the command line saves it) carries no module digest;
+    verify mode digests the saved program itself when it reads it: the same trace passes, a trace
+    that reads a changed global fails."""
+    import pickle
+
+    runtime.use_program_cache(tmp_path, verify=False)
+    try:
+        pair = _args()[0]
+        assert float(leaky(pair)) == pytest.approx(float(jnp.sum(pair.a ** 2)), rel=1e-15)
+        (saved,) = tmp_path.glob(f"*{runtime.PROGRAM_SUFFIX}")
+        assert pickle.loads(saved.read_bytes())["module_sha256"] is None
+        runtime.use_program_cache(tmp_path, verify=True)  # clears this process's programs
+        assert float(leaky(pair)) == pytest.approx(float(jnp.sum(pair.a ** 2)), rel=1e-15)
+        monkeypatch.setitem(LEAK, "power", 3)
+        runtime._LOADED.clear()
+        with pytest.raises(runtime.StaleProgramError, match="_leaky"):
+            leaky(pair)
+    finally:
+        runtime.use_program_cache(None)
+
+
 TRACES: list = []  # one entry per trace of _counted
 
 
