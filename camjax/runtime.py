@@ -225,7 +225,7 @@ def quiet_startup_interrupts() -> None:
 # it reads from the folder again and compares its StableHLO with the saved program's, so a leak
 # fails loudly. (A program already traced or compared in this process is reused as it is, as
 # ``jax.jit`` reuses its trace: a leak between two calls of one process is no saved program's.)
-PROGRAM_FORMAT = 2  # layout of a saved program's file; another layout is exported again
+PROGRAM_FORMAT = 3  # layout of a saved program's file (and of its module text); another is exported again
 _PROGRAM_DIR: list = [None]  # folder of the program cache; None: off (the library default)
 _VERIFY: list = [False]  # trace every program read from the folder and compare (tests)
 _LOADED: dict = {}  # key -> _Entry, loaded or exported in this process
@@ -415,42 +415,14 @@ def module_text(exported) -> str:
     """An exported program's StableHLO text without its source locations.
 
     Locations name the Python frames that created each operation (the call stack of the trace),
-    which differ between two traces of the same program; what the program computes does not. Lines
-    defining locations (``#loc...``) and every ``loc(...)`` annotation are dropped.
+    which differ between two traces of the same program; what the program computes does not. The
+    module is printed without them (MLIR's printer without debug info).
     """
-    return "\n".join(_without_loc(line) for line in exported.mlir_module().splitlines()
-                     if not line.startswith("#loc"))
+    from jax.extend.mlir import deserialize_portable_artifact, ir
 
-
-def _without_loc(line: str) -> str:
-    """``line`` with each ``loc(...)`` annotation (balanced parentheses, quoted strings) removed."""
-    out, i = [], 0
-    while (j := line.find("loc(", i)) >= 0:
-        if j > 0 and (line[j - 1].isalnum() or line[j - 1] in "_.#"):  # part of another word
-            out.append(line[i:j + 4])
-            i = j + 4
-            continue
-        out.append(line[i:j].rstrip(" "))
-        depth, k, quoted = 0, j + 3, False
-        while k < len(line):
-            c = line[k]
-            if quoted:
-                if c == "\\":
-                    k += 1
-                elif c == '"':
-                    quoted = False
-            elif c == '"':
-                quoted = True
-            elif c == "(":
-                depth += 1
-            elif c == ")":
-                depth -= 1
-                if depth == 0:
-                    break
-            k += 1
-        i = k + 1
-    out.append(line[i:])
-    return "".join(out)
+    with ir.Context():
+        module = deserialize_portable_artifact(exported.mlir_module_serialized)
+        return module.operation.get_asm(enable_debug_info=False)
 
 
 def _sha256(data: bytes | str) -> str:

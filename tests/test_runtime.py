@@ -284,6 +284,23 @@ def _counted(pair: Pair):
 counted = runtime.program_cache(_counted)
 
 
+def test_module_text_is_the_same_from_two_call_sites_and_holds_no_location():
+    """What verify mode compares: two traces of one program from different call sites differ in
+    their source locations only; the text without them is the same, with no ``loc(`` left."""
+    pair = _args()[0]
+
+    def from_here():
+        return runtime._export("m", _counted, {}, {"pair": pair})[0]
+
+    def from_there():
+        return runtime._export("m", _counted, {}, {"pair": pair})[0]
+
+    here, there = from_here(), from_there()
+    assert here.mlir_module() != there.mlir_module()  # the locations name the two callers
+    text = runtime.module_text(here)
+    assert text == runtime.module_text(there) and "loc(" not in text and "stablehlo.multiply" in text
+
+
 def test_verify_mode_traces_each_program_read_from_the_folder_once(tmp_path):
     """Verify mode traces a program again when it is read from the folder (to compare it), not at
     every call: a program this process exported or compared already runs as it is."""
