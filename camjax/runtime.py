@@ -396,7 +396,6 @@ class _NotCacheable(Exception):
 class _Entry(NamedTuple):
     compiled: Any  # the compiled flat program: leaves -> output leaves
     out_tree: Any  # the output's tree structure
-    module_sha256: str | None  # digest of the program's StableHLO text (verify mode's; else None)
 
 
 def _is_key(x) -> bool:
@@ -510,10 +509,10 @@ def _read(path: Path, key: str):
         return None
 
 
-def _write(path: Path, key: str, exported, out_tree) -> str | None:
+def _write(path: Path, key: str, exported, out_tree) -> None:
     """Save the program for ``key`` (atomically: a reader sees the old file or the whole new one;
-    two writers each replace the file whole); returns its module digest in verify mode, else
-    None. A read-only or full folder leaves the cache as it was (the program still runs)."""
+    two writers each replace the file whole). A read-only or full folder leaves the cache as it
+    was (the program still runs)."""
     import pickle
 
     import jax
@@ -534,7 +533,6 @@ def _write(path: Path, key: str, exported, out_tree) -> str | None:
             tmp.unlink(missing_ok=True)
         except OSError:
             pass
-    return module
 
 
 def _program(folder: Path, name: str, fn, static: dict, dynamic: dict) -> _Entry:
@@ -552,14 +550,14 @@ def _program(folder: Path, name: str, fn, static: dict, dynamic: dict) -> _Entry
     saved = _read(path, key)
     if saved is None:  # traced just now: nothing to verify
         exported, out_tree, arrays = _export(name, fn, static, dynamic)
-        module = _write(path, key, exported, out_tree)
-        entry = _Entry(_compile(exported, arrays), out_tree, module)
+        _write(path, key, exported, out_tree)
+        entry = _Entry(_compile(exported, arrays), out_tree)
     else:
         exported, skeleton, module = saved
         if _VERIFY[0]:
             _verify(name, key, fn, static, dynamic, exported, module)
         arrays = [jax.random.key_data(x) if _is_key(x) else x for x in jax.tree.leaves(dynamic)]
-        entry = _Entry(_compile(exported, arrays), jax.tree.structure(skeleton), module)
+        entry = _Entry(_compile(exported, arrays), jax.tree.structure(skeleton))
     _LOADED[key] = entry
     return entry
 
