@@ -11,8 +11,10 @@ so this model-layer module imports nothing of the scene layer.
 
 from __future__ import annotations
 
+import functools
 from typing import NamedTuple
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 
@@ -49,11 +51,31 @@ class SegmentSynthesis(NamedTuple):
 
 def builtin_q(law, kind: str, x: np.ndarray) -> tuple[np.ndarray, ...]:
     """q, q', q'', q''' of a built-in law played as the segment's normalized motion (a return
-    runs the law backwards: q(x) = 1 - p(1 - x))."""
+    runs the law backwards: q(x) = 1 - p(1 - x)); NumPy arrays of the shape of ``x``."""
     if kind == "rise":
-        return tuple(np.asarray(v) for v in law(jnp.asarray(x)))
-    p = law(jnp.asarray(1.0 - x))
-    return (1.0 - np.asarray(p[0]), np.asarray(p[1]), -np.asarray(p[2]), np.asarray(p[3]))
+        return _law_values(law, x)
+    p = _law_values(law, 1.0 - np.asarray(x))
+    return (1.0 - p[0], p[1], -p[2], p[3])
+
+
+def _law_values(law, x) -> tuple[np.ndarray, ...]:
+    """``law`` at the points ``x`` (NumPy in and out) through one compiled program per law and
+    size class: ``x`` is padded with zeros to the next power of two (64 at least), so that the few
+    sizes a co-design asks for (a segment's samples, the conditions, the measures' grids) share a
+    program. Op by op, each of a law's tens of operations compiled for every new shape: 0.3-0.7 s
+    a law and shape, against ~0.1 s for the whole law compiled."""
+    x = np.asarray(x)
+    flat = x.reshape(-1)
+    size = max(64, 1 << max(flat.size - 1, 0).bit_length())
+    padded = np.zeros(size, dtype=flat.dtype)
+    padded[: flat.size] = flat
+    values = _compiled_law(law, jnp.asarray(padded))
+    return tuple(np.asarray(v)[: flat.size].reshape(x.shape) for v in values)
+
+
+@functools.partial(jax.jit, static_argnums=0)
+def _compiled_law(law, x: jax.Array) -> tuple[jax.Array, ...]:
+    return tuple(law(x))
 
 
 def builtin_measures(law, kind: str) -> dict:
