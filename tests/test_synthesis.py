@@ -218,10 +218,11 @@ def test_a_peak_synthesis_is_right_in_every_fresh_compile():
 def test_a_built_in_law_played_as_a_segment_is_the_law_evaluated_op_by_op(kind):
     """camjax.synthesis.segments.builtin_q (each law compiled once per size class: x padded to a
     power of two, at least 64) against the law called op by op on 65 points, for a polynomial, a
-    trigonometric and a piecewise law (the padding is the same for every law): q = p(x) for a rise; q = 1 - p(1 - x), q' = p'(1 - x), q'' = -p''(1 - x), q''' = p'''(1 - x)
-    for a return. The first 1, 64 (both sides of a class's edge) and 65 points, and the first 21 as
-    a (3, 7) grid, which keeps its shape. Equal to 1e-14 of each derivative's largest magnitude
-    (measured: 8.7e-16; one compiled program may round a law's arithmetic differently from op-by-op
+    trigonometric and a piecewise law (the padding is the same for every law). A rise: q = p(x); a
+    return: q = 1 - p(1 - x), q' = p'(1 - x), q'' = -p''(1 - x), q''' = p'''(1 - x). The first 1,
+    64 (both sides of a class's edge) and 65 points, and the first 21 as a (3, 7) grid, which keeps
+    its shape. Equal to 1e-14 of each derivative's largest magnitude (measured over all 13 built-in
+    laws: 8.7e-16; one compiled program may round a law's arithmetic differently from op-by-op
     calls, by a few ulp), where a padding or slicing slip is off by O(1)."""
     import jax.numpy as jnp
 
