@@ -15,6 +15,7 @@ import math
 from dataclasses import dataclass
 from typing import NamedTuple
 
+import jax
 import numpy as np
 
 from camjax.family import FEASIBILITY_TOL_MM
@@ -68,6 +69,20 @@ OscillatingCurvedCurves = NamedTuple("OscillatingCurvedCurves", [
 
 def _f(x) -> float:
     return float(np.asarray(x))
+
+
+def _face_curves(pivot_distance_mm, arm_length_mm, face_radius_mm, kin, cam_speed_rad_s, psi,
+                 rotation) -> dict:
+    rate = relative_rate(kin, rotation)
+    legs = curved_geo.legs(pivot_distance_mm, arm_length_mm, psi, rate)
+    return {"face_travel": curved_geo.face_travel_of(legs, face_radius_mm),
+            "sliding_speed": curved_geo.sliding_speed_of(legs, rate, face_radius_mm, cam_speed_rad_s)}
+
+
+# the drawn curves' (concrete values) in one compiled program: op by op its dozen operations would
+# each compile on their own, and in the drawing compiled beside the solver (camjax.runtime.ahead)
+# each could wait behind the solver's compile (measured: one multiply waited 1.8 s)
+_face_curves_program = jax.jit(_face_curves, static_argnames="rotation")
 
 
 class OscillatingCurvedFace(RockingFollower):
@@ -137,10 +152,8 @@ class OscillatingCurvedFace(RockingFollower):
         """The face's own curves at arm angles psi (rad): ``face_travel`` (mm, R_c sin phi) and
         ``sliding_speed`` (m/s); pointwise in the motion."""
         f = scene.follower
-        rate = relative_rate(kin, scene.motion.rotation)
-        legs = curved_geo.legs(f.pivot_distance_mm, f.arm_length_mm, psi, rate)
-        return {"face_travel": curved_geo.face_travel_of(legs, f.face_radius_mm),
-                "sliding_speed": curved_geo.sliding_speed_of(legs, rate, f.face_radius_mm, cam_speed_rad_s)}
+        return _face_curves(f.pivot_distance_mm, f.arm_length_mm, f.face_radius_mm, kin, cam_speed_rad_s, psi,
+                            scene.motion.rotation)
 
     def point_curves(self, scene, kin, cam_speed_rad_s, base_radius_mm) -> dict:
         """The rocking family's curves and the face's (:meth:`face_curves`)."""
@@ -150,7 +163,9 @@ class OscillatingCurvedFace(RockingFollower):
     def evaluate(self, scene, kin, cam_speed_rad_s, base_radius_mm) -> OscillatingCurvedCurves:
         """The rocker's curves with the face's width, the contact's travel on it and the sliding speed."""
         curves = super().evaluate(scene, kin, cam_speed_rad_s, base_radius_mm)
-        face = self.face_curves(scene, kin, cam_speed_rad_s, np.radians(curves.arm_angle_deg))
+        f, psi = scene.follower, np.radians(curves.arm_angle_deg)
+        face = _face_curves_program(f.pivot_distance_mm, f.arm_length_mm, f.face_radius_mm, kin,
+                                    cam_speed_rad_s, psi, scene.motion.rotation)
         return OscillatingCurvedCurves(
             **curves._asdict(), face_width_mm=float(scene.follower.face_width_mm),
             face_travel_mm=np.asarray(face["face_travel"]),
