@@ -144,6 +144,15 @@ def arm_sizing(kin, program, pivot_distance_mm, arm_length_mm, roller_radius_mm,
                                      limits=rocker_roller_geo.sizing_limits)
 
 
+def _centre_distance(d: float, l: float, psi: float) -> float:
+    """:func:`camjax.followers.oscillating_roller.geometry.roller_centre_distance` (mm) in Python
+    floats, operation for operation, so the same number as its evaluation op by op (XLA's cosine on
+    the CPU is the C library's): no small compiles in the drawing compiled beside the solver
+    (:func:`camjax.runtime.ahead`), where each could wait behind the solver's compile."""
+    q = d**2 + l**2 - 2.0 * d * l * math.cos(psi)
+    return math.sqrt(q) if q > 0 else 0.0
+
+
 def arm_sizing_result(kin, sampled, boundary, follower, max_pressure_angle_deg: float,
                       roller_radius_mm: float, angle_binding: str, what: str) -> RockerSizing:
     """The :class:`RockerSizing` of :func:`arm_sizing`'s result (the follower's [follower] spec;
@@ -163,7 +172,7 @@ def arm_sizing_result(kin, sampled, boundary, follower, max_pressure_angle_deg: 
         binding = "undercut" if bool(sampled.undercut_binds) else angle_binding
         return RockerSizing(_f(sampled.base_radius_mm), _f(sampled.prime_radius_mm),
                             _f(t[int(sampled.index)]), binding)
-    rp = _f(rocker_roller_geo.roller_centre_distance(f.pivot_distance_mm, f.arm_length_mm, boundary.x))
+    rp = _centre_distance(f.pivot_distance_mm, f.arm_length_mm, _f(boundary.x))
     binding = "undercut" if int(boundary.row) == 1 else angle_binding
     return RockerSizing(rp - roller_radius_mm, rp, _f(boundary.angle_deg), binding)
 
