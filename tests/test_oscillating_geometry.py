@@ -411,3 +411,16 @@ def test_finite_for_infeasible_designs():
               (80.0, 60.0, 8.0, 139.9), (20.0, 60.0, 30.0, 50.0)]:
         v, gr = grad(jnp.asarray(x))
         assert np.isfinite(float(v)) and np.all(np.isfinite(np.asarray(gr))), x
+
+
+def test_the_sizings_prime_radius_in_floats_is_the_centre_distance_op_by_op():
+    """The rocker sizing's R_p at the exact boundary (oscillating_roller.follower._centre_distance,
+    Python floats) is :func:`roller_centre_distance` evaluated op by op on a 0-d array, bit for bit:
+    the reported smallest cam did not move when it left JAX (it holds while XLA's CPU cosine is the
+    C library's). 400 arm angles over (0, pi) and three pivot and arm pairs (d > l, d ~ l, d < l)."""
+    from camjax.followers.oscillating_roller.follower import _centre_distance
+
+    for d, l in [(90.0, 60.0), (50.0, 48.5), (40.0, 75.0)]:
+        for psi in np.linspace(0.01, math.pi - 0.01, 400):
+            eager = float(rocker_roller_geo.roller_centre_distance(d, l, jnp.asarray(psi)))
+            assert _centre_distance(d, l, float(psi)) == eager, (d, l, psi)
