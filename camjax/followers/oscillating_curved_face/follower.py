@@ -81,7 +81,8 @@ def _face_curves(pivot_distance_mm, arm_length_mm, face_radius_mm, kin, cam_spee
 
 # the drawn curves' (concrete values) in one compiled program: op by op its dozen operations would
 # each compile on their own, and in the drawing compiled beside the solver (camjax.runtime.ahead)
-# each could wait behind the solver's compile (measured: one multiply waited 1.8 s)
+# each could wait while the solver's program is exported and compiled (measured: one multiply
+# waited 1.8 s)
 _face_curves_program = jax.jit(_face_curves, static_argnames="rotation")
 
 

@@ -148,7 +148,8 @@ def _centre_distance(d: float, l: float, psi: float) -> float:
     """:func:`camjax.followers.oscillating_roller.geometry.roller_centre_distance` (mm) in Python
     floats, operation for operation, so the same number as its evaluation op by op (XLA's cosine on
     the CPU is the C library's): no small compiles in the drawing compiled beside the solver
-    (:func:`camjax.runtime.ahead`), where each could wait behind the solver's compile."""
+    (:func:`camjax.runtime.ahead`), where each could wait while the solver's program is exported and
+    compiled."""
     q = d**2 + l**2 - 2.0 * d * l * math.cos(psi)
     return math.sqrt(q) if q > 0 else 0.0
 
