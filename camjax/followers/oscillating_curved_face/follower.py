@@ -168,7 +168,7 @@ class OscillatingCurvedFace(RockingFollower):
         face = _face_curves_program(f.pivot_distance_mm, f.arm_length_mm, f.face_radius_mm, kin,
                                     cam_speed_rad_s, psi, scene.motion.rotation)
         return OscillatingCurvedCurves(
-            **curves._asdict(), face_width_mm=float(scene.follower.face_width_mm),
+            **curves._asdict(), face_width_mm=float(f.face_width_mm),
             face_travel_mm=np.asarray(face["face_travel"]),
             sliding_speed_m_s=np.asarray(face["sliding_speed"]))
 
