@@ -1,6 +1,7 @@
-"""The saved-program cache against the cache off (tests/cache_matrix.py says how): the full
-sequence of one follower type, the quick sequence of another (its own runs among them), and the
-dynamics command. Every other follower type's own runs: tests/test_cache_matrix_types_*.py."""
+"""The saved-program cache against the same programs traced afresh (tests/cache_matrix.py says
+how): the full sequence of one follower type, the quick sequence of another (its own runs among
+them), and the dynamics command. Every other follower type's own runs:
+tests/test_cache_matrix_types_*.py."""
 
 from __future__ import annotations
 
@@ -18,7 +19,7 @@ def test_flat_face_mode_solver_and_seed_never_reuse_another_runs_program(tmp_pat
 
 
 @pytest.mark.slow
-def test_every_option_scene_edit_and_sweep_gives_the_cache_off_result(tmp_path, quiet_files, monkeypatch):
+def test_every_option_scene_edit_and_sweep_gives_the_freshly_traced_result(tmp_path, quiet_files, monkeypatch):
     # one pass in order: every program saved by an earlier run of the sequence is loaded by the
     # later runs that share its key (the flat face's test above adds the reverse, all-warm pass;
     # cache_matrix.full_runs: the runs of the sequence left out, and why)
@@ -26,7 +27,7 @@ def test_every_option_scene_edit_and_sweep_gives_the_cache_off_result(tmp_path, 
 
 
 @pytest.mark.slow
-def test_dynamics_with_its_scene_edited_gives_the_cache_off_result(tmp_path, monkeypatch):
+def test_dynamics_with_its_scene_edited_gives_the_freshly_traced_result(tmp_path, monkeypatch):
     from camjax.scene import builtin_scene_text
 
     text = builtin_scene_text("thesis-bench")

@@ -303,8 +303,8 @@ def test_the_figures_profile_and_dxf_are_written(name, runs, written):
     assert table.shape == (data["samples"], len(names)) and np.all(np.isfinite(table))
 
 
-# The saved-program cache against the cache off, for every follower type: tests/test_cache_matrix.py
-# (each type's sequence of runs, cold and warm, in verify mode).
+# The saved-program cache against the same programs traced afresh, for every follower type:
+# tests/test_cache_matrix.py (each type's sequence of runs, cold and warm, in verify mode).
 
 
 @pytest.mark.slow

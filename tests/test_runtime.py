@@ -14,6 +14,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
+import camjax
 from camjax import runtime
 
 
@@ -130,22 +131,27 @@ def test_an_uncacheable_tree_is_traced_with_the_static_arguments_given(cache):
 
 
 @pytest.mark.slow
-def test_design_solve_through_a_saved_program_matches(cache, default_scene, default_arrays):
+@pytest.mark.parametrize("scene_name", ["default", "oscillating-roller"])
+def test_design_solve_through_a_saved_program_matches(cache, scene_name):
     """The design's solver through its saved program (as the command line runs it) against the
-    same solve traced: the same design to the last bit."""
+    same solve traced with plain ``jax.jit``, on a translating and a rocking follower's problem (each
+    family's own tree of arrays), with the scene's solver: the same solution to the last bit
+    (every array it holds). tests/cache_matrix.py compares the command line with saved programs
+    against the same programs traced afresh, and relies on this for plain ``jax.jit``."""
     from camjax.pipeline import design_problem
     from camjax.solvers import base
 
-    problem = design_problem(default_scene, default_arrays)
+    scene = camjax.load_scene(scene_name)
+    problem = design_problem(scene)
+    weights, solver = (scene.design.alpha, scene.design.gamma), scene.design.solver
     runtime._PROGRAM_DIR[0] = None
     base._COMPILED.clear()
-    traced = base.solve(problem, (1.0, 1.0))
+    traced = base.solve(problem, weights, solver=solver)
     runtime.use_program_cache(cache)
     base._COMPILED.clear()
-    saved = base.solve(problem, (1.0, 1.0))
+    saved = base.solve(problem, weights, solver=solver)
     base._COMPILED.clear()
-    _same(saved.design, traced.design)
-    _same(saved.evaluation, traced.evaluation)
+    _same(saved, traced)  # design, evaluation, certificate, ...
 
 
 @pytest.mark.slow
@@ -155,8 +161,9 @@ def test_cli_with_saved_programs_writes_what_it_writes_without(command, scene, n
     second loads) against the same command with the cache off: the same JSON, value for value.
 
     One command here: ``camjax design`` of every follower type, cold and loading saved programs,
-    against the cache off is tests/test_cache_matrix.py's (in verify mode, which runs the same
-    path and only adds the comparison with a fresh trace)."""
+    against the same programs traced afresh is tests/test_cache_matrix.py's (in verify mode, which
+    runs the same path and only adds the comparison with a fresh trace); the design's solve against
+    plain ``jax.jit``, :func:`test_design_solve_through_a_saved_program_matches`."""
     import json
 
     from camjax import cli
