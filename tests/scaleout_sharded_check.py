@@ -13,6 +13,7 @@ import jax
 jax.config.update("jax_num_cpu_devices", 4)
 
 import jax.numpy as jnp  # noqa: E402
+import numpy as np  # noqa: E402
 
 import camjax  # noqa: E402, F401  (x64)
 from camjax.family import weights_of  # noqa: E402
@@ -20,7 +21,8 @@ from camjax.followers.flat.problem import problem_from_scene  # noqa: E402
 from camjax.scaleout import sharding  # noqa: E402
 from camjax.scaleout.blocks import BlockTask, SweepSpec, solve_block  # noqa: E402
 from camjax.scene import builtin_scene_text  # noqa: E402
-from camjax.solvers import ga, gradient  # noqa: E402
+from camjax.solvers import ga  # noqa: E402
+from camjax.solvers.base import solve_batch, weighting_keys  # noqa: E402
 
 
 def _numbers_differ(a: list[dict], b: list[dict]) -> float:
@@ -35,6 +37,23 @@ def _numbers_differ(a: list[dict], b: list[dict]) -> float:
                 worst = max(worst, abs(va - vb) / max(1.0, abs(va)))
             elif va != vb:
                 return float("inf")
+    return worst
+
+
+def _leaves_differ(a, b) -> float:
+    """Largest difference of two solutions' floating-point leaves relative to max(1, |a|) (inf if
+    shapes, NaNs or other leaves differ)."""
+    worst = 0.0
+    for x, y in zip(jax.tree.leaves(a), jax.tree.leaves(b), strict=True):
+        x, y = np.asarray(x), np.asarray(y)
+        if x.shape != y.shape:
+            return float("inf")
+        if np.issubdtype(x.dtype, np.floating):
+            worst = max(worst, float(np.nanmax(np.abs(x - y) / np.maximum(1.0, np.abs(x)), initial=0.0)))
+            if not np.array_equal(np.isnan(x), np.isnan(y)):
+                return float("inf")
+        elif not np.array_equal(x, y):
+            return float("inf")
     return worst
 
 
@@ -57,30 +76,24 @@ def main() -> dict:
     settings = ga.GASettings(population=32, generations=30)
     keys = ga.weighting_keys(0, w)
     ref = ga.solve(keys, problem, weights, "global", settings)
-    got = sharding.sharded_ga_solve(sharding.device_mesh(2), keys, problem, weights, "global", settings)
+    got = sharding.sharded_ga_solve(sharding.device_mesh(2), keys, problem, weights, settings)
     out["ga_population_sharded_max_diff_mm"] = max(
         float(jnp.max(jnp.abs(a - b))) for a, b in zip(ref.design, got.design, strict=True))
 
-    lap("ga")
+    lap("ga population")
+    # pointwise mode through sharded_solve (any registered solver: the gradient solver here; the
+    # GA and the gradient solver in global mode through solve_block below): 2 weightings padded
+    # to the 4 devices
     coarse = problem_from_scene(camjax.load_scene(), samples=90)  # pointwise: 90 problems per weighting
     two = weights_of(jnp.asarray([0.3, 3.0]), jnp.ones(2))
-    ref = gradient.solve_sweep(coarse, two, "pointwise")
-    got = sharding.sharded_gradient_sweep(sharding.device_mesh(2), coarse, two, "pointwise")
-    out["gradient_pointwise_sharded_max_diff_mm"] = max(
-        float(jnp.max(jnp.abs(a - b))) for a, b in zip(ref.design, got.design, strict=True))
-    out["gradient_pointwise_shape"] = list(got.design.base_radius_mm.shape)
+    keys = weighting_keys(0, 2)
+    ref = solve_batch(coarse, two, keys, "pointwise", "gradient")
+    got = sharding.sharded_solve(coarse, two, keys, "pointwise", "gradient", mesh=sharding.device_mesh(2))
+    out["gradient_pointwise_sharded_max_diff"] = _leaves_differ(ref, got)
+    out["gradient_pointwise_per_angle_shape"] = list(got.pointwise.base_radius_mm.shape)
+    placed, _ = sharding.spread_weightings((two, keys), sharding.device_mesh(2))
+    out["gradient_pointwise_devices"] = len(placed[0].alpha.sharding.device_set)
     lap("gradient pointwise")
-    ref = gradient.solve_sweep(problem, weights, "global")
-    got = sharding.sharded_gradient_sweep(sharding.device_mesh(2), problem, weights, "global")
-    out["gradient_global_sharded_max_diff_mm"] = max(
-        float(jnp.max(jnp.abs(a - b))) for a, b in zip(ref.design, got.design, strict=True))
-    small = ga.GASettings(population=16, generations=10)
-    ref = ga.solve(ga.weighting_keys(0, 2), coarse, two, "pointwise", small)
-    got = sharding.sharded_ga_solve(sharding.device_mesh(2), ga.weighting_keys(0, 2), coarse, two, "pointwise",
-                                    small)
-    out["ga_pointwise_sharded_max_diff_mm"] = max(
-        float(jnp.max(jnp.abs(a - b))) for a, b in zip(ref.design, got.design, strict=True))
-    lap("gradient global, ga pointwise")
     text = builtin_scene_text("default")
     pairs = tuple((float(a), 1.0) for a in jnp.logspace(-1, 1.5, w).tolist())
     for solver, mode in (("gradient", "global"), ("ga", "global")):

@@ -3,7 +3,7 @@
 Two independent layers, both on engines the user already runs:
 
 - :mod:`camjax.scaleout.sharding` -- one host, several devices (CPU cores as XLA host devices, or
-  GPUs): the weighting, angle and population axes of the solvers' batched arrays are laid out
+  GPUs): the weighting and (for the GA) population axes of the solvers' batched arrays are laid out
   over a :class:`jax.sharding.Mesh` with ``NamedSharding``; XLA partitions the same jitted
   solvers. Results equal the unsharded ones.
 - :mod:`camjax.scaleout.blocks` / :mod:`~camjax.scaleout.backends` / :mod:`~camjax.scaleout.driver`

@@ -147,11 +147,10 @@ def solve_block(task: BlockTask) -> list[dict]:
     pairs = np.asarray(task.weightings, float).reshape(-1, 2)[idx]
     weights = Weights(jnp.asarray(pairs[:, 0], dtype), jnp.asarray(pairs[:, 1], dtype))
     keys = weighting_keys(spec.seed, count, task.first_weighting)[idx]
-    if task.shard and jax.local_device_count() > 1:
-        from camjax.scaleout.sharding import spread_weightings
-
-        weights, keys = spread_weightings((weights, keys))[0]
-    result = solve_batch(problem, weights, keys, spec.mode, spec.solver, solver_settings(spec))
+    solve = solve_batch
+    if task.shard and jax.local_device_count() > 1:  # the weightings over every local device
+        from camjax.scaleout.sharding import sharded_solve as solve
+    result = solve(problem, weights, keys, spec.mode, spec.solver, solver_settings(spec))
     result = jax.tree.map(lambda x: np.asarray(x)[:count], result)
     records = records_of(problem, result)
     for i, rec in enumerate(records):

@@ -1,19 +1,22 @@
 """The solvers' batch axes laid out over the devices of one host (CPU cores or GPUs).
 
 A sweep's arrays have a **weighting** axis (one independent problem per (alpha, gamma)) and,
-inside it, a **population** axis (GA members; in pointwise mode, the per-angle problems of the
-gradient solver). :func:`device_mesh` arranges the local devices as a 2-D
-:class:`jax.sharding.Mesh` with those two axis names; the functions here place their inputs with
-``NamedSharding`` and call the same jitted solvers, and XLA's SPMD partitioner splits the work.
-Nothing in the solvers changes, so the results equal the unsharded ones: the fitness bit for
-bit (each device runs the single-device program on its block, see :func:`sharded_fitness`),
-the solvers to rounding (1e-12 in float64; a partitioned program may round a few operations
-differently; measured: identical records).
+inside it for the GA, a **population** axis. :func:`device_mesh` arranges the local devices as
+a 2-D :class:`jax.sharding.Mesh` with those two axis names; the functions here place their
+inputs with ``NamedSharding`` and call the same jitted solvers, and XLA's SPMD partitioner
+splits the work. Nothing in the solvers changes, so the results equal the unsharded ones: the
+fitness bit for bit (each device runs the single-device program on its block, see
+:func:`sharded_fitness`), the solvers to rounding (1e-12 in float64; a partitioned program may
+round a few operations differently; measured: identical records).
 
-The weighting axis needs no communication at all. Sharding the GA's population costs one
-all-gather of the (population,) objective and violation per generation (selection ranks the
-whole population) and pays off for populations of thousands. Axes that do not divide by the
-mesh are padded by repeating the last weighting (results trimmed); a population must divide.
+- :func:`sharded_solve`: any registered solver and mode (the registry's
+  :func:`~camjax.solvers.base.solve_batch`), the weightings over every device. No communication.
+- :func:`sharded_ga_solve`: the GA's own layout, each population over the "population" axis
+  too: one all-gather of the (population,) objective and violation per generation (selection
+  ranks the whole population); pays off for populations of thousands.
+
+Axes that do not divide by the mesh are padded by repeating the last weighting (results
+trimmed); a population must divide.
 
 On CPU, XLA gives one device per process unless told otherwise: set
 ``jax.config.update("jax_num_cpu_devices", N)`` (or
@@ -30,9 +33,8 @@ from jax.sharding import AxisType, Mesh, NamedSharding
 from jax.sharding import PartitionSpec as PS
 
 from camjax.family import Problem, Weights
-from camjax.solvers import ga, gradient
-from camjax.solvers.base import family_of
-from camjax.solvers.registry import MODES, check_choice
+from camjax.solvers import ga
+from camjax.solvers.base import DEFAULT_SETTINGS, Settings, Solution, solve_batch
 
 WEIGHTINGS = "weightings"
 POPULATION = "population"
@@ -129,35 +131,21 @@ def sharded_fitness(mesh: Mesh, problem: Problem, weights: Weights, genes: jax.A
     return _trim(out, w)
 
 
-# ----------------------------------------------------------------------- gradient sweep
+# ------------------------------------------------------------------------- any solver
 
 
-@partial(jax.jit, static_argnames=("settings",))
-def _pointwise_sweep(per: Problem, weights: Weights, settings: gradient.GradientSettings):
-    """(w, n) solves: the per-angle problems ``per`` (leading axis n) for every weighting."""
-    over_angles = jax.vmap(gradient.minimize, in_axes=(0, None, None, None))
-    return jax.vmap(over_angles, in_axes=(None, 0, None, None))(per, weights, None, settings)
+def sharded_solve(problem, weights: Weights, keys: jax.Array, mode: str = "global", solver: str = "gradient",
+                  settings: Settings = DEFAULT_SETTINGS, mesh: Mesh | None = None) -> Solution:
+    """:func:`camjax.solvers.base.solve_batch` with its weightings spread over the devices.
 
-
-def sharded_gradient_sweep(mesh: Mesh, problem: Problem, weights: Weights, mode: str = "global",
-                           settings: gradient.GradientSettings = gradient.DEFAULT_SETTINGS
-                           ) -> gradient.GradientResult:
-    """:func:`camjax.solvers.gradient.solve_sweep` with the weightings (and angles) over the mesh.
-
-    Global mode: weightings over every device of the mesh. Pointwise mode: weightings over
-    "weightings", the per-angle problems over "population" (the angle count need not divide:
-    it is padded by repeating the last angle's problem). Leaves (w,) / (w, n) as unsharded.
+    Any registered solver and mode, through the registry: the same jitted solve, its (w,) weights
+    and keys placed over every device of ``mesh`` (default: :func:`device_mesh` over every local
+    device; padded by repeating the last weighting, trimmed again). A weighting's problem never
+    crosses a device, so no device waits for another. Returns the unsharded :class:`Solution`
+    (leading axis w) to rounding (tested: the same records).
     """
-    check_choice("mode", mode, MODES)
-    if mode == "global":
-        (weights,), w = _pad_leading((weights,), mesh.size)
-        weights = _place(mesh, weights, (WEIGHTINGS, POPULATION))
-        return _trim(gradient.solve_sweep(problem, weights, "global", None, settings), w)
-    # pointwise: the per-angle problems get their own mesh axis (a layout, not another solver)
-    (weights,), w = _pad_leading((weights,), mesh.shape[WEIGHTINGS])
-    per, n = _pad_leading(family_of(problem).per_angle(problem), mesh.shape[POPULATION])
-    out = _pointwise_sweep(_place(mesh, per, POPULATION), _place(mesh, weights, WEIGHTINGS), settings)
-    return jax.tree.map(lambda x: x[:w, :n], out)
+    (weights, keys), w = spread_weightings((weights, keys), mesh)
+    return _trim(solve_batch(problem, weights, keys, mode, solver, settings), w)
 
 
 # -------------------------------------------------------------------------------- GA
@@ -186,22 +174,16 @@ def _ga_on_mesh(keys, problem: Problem, weights: Weights, settings: ga.GASetting
     return jax.vmap(one, in_axes=(0, None, 0), spmd_axis_name=WEIGHTINGS)(keys, problem, weights)
 
 
-def sharded_ga_solve(mesh: Mesh, keys: jax.Array, problem: Problem, weights: Weights, mode: str = "global",
+def sharded_ga_solve(mesh: Mesh, keys: jax.Array, problem: Problem, weights: Weights,
                      settings: ga.GASettings = ga.DEFAULT_SETTINGS) -> ga.GAResult:
-    """:func:`camjax.solvers.ga.solve` with weightings and population over the mesh.
+    """The GA (global mode) with each population split over the mesh's "population" axis.
 
-    Global mode: ``keys`` and ``weights`` (w,) over "weightings", each population over
-    "population" (``settings.population`` must divide by its size; a population axis of size 1
-    is plain weighting sharding). Pointwise mode: the weightings over every device (the per-angle
-    populations are small). Leaves (w,) / (w, n) as unsharded; equal to :func:`ga.solve` to
-    rounding.
+    The one layout that is a solver's own: only the GA has a population. ``keys`` and ``weights``
+    (w,) go over "weightings", each population over "population" (``settings.population`` must
+    divide by its size; a population axis of size 1 is :func:`sharded_solve`'s layout). Leaves
+    (w,) as :func:`camjax.solvers.ga.solve`'s, equal to them to rounding. Pays off for
+    populations of thousands: one all-gather of the objective and violation per generation.
     """
-    check_choice("mode", mode, MODES)
-    if mode == "pointwise":
-        (keys, weights), w = _pad_leading((keys, weights), mesh.size)
-        spread = (WEIGHTINGS, POPULATION)
-        return _trim(ga.solve(_place(mesh, keys, spread), problem, _place(mesh, weights, spread),
-                              "pointwise", settings), w)
     if settings.population % mesh.shape[POPULATION]:
         raise ValueError(f"population {settings.population} must divide by the mesh's "
                          f"{mesh.shape[POPULATION]} population devices")
