@@ -49,12 +49,16 @@ from camjax.family import FEASIBILITY_TOL_MM, all_within, violated
 from camjax.numerics import finite_float, positive_part
 from camjax.robust import evaluate as ev
 from camjax.robust.tolerances import Tolerances, draw
-from camjax.solvers import gradient
-from camjax.solvers.base import Settings, family_of, register_family
+from camjax.solvers.base import family_of, register_family
 
 CHECK_SAMPLES_MIN = 20_000  # the fresh sample set: at least this many, and 10 x the design's
 CHECK_SAMPLES_MAX = 200_000
 LOAD_FLOOR = 1e-12  # N or N m: the contact row's scale when the nominal load is 0
+# the family protocol's declaration (camjax.solvers.base): a row's max over its kept samples is not
+# one design variable minus a fixed term, as a follower family's max over the grid is, so the
+# gradient solver (and the hybrid's polish) price every row (angle and kept sample) by its own
+# multiplier
+ONE_MULTIPLIER_PER_CONSTRAINT = False
 
 
 class Problem(NamedTuple):
@@ -506,12 +510,6 @@ def _rows_of(nominal: np.ndarray, g: np.ndarray, rank: int, keep: np.ndarray | N
     return np.maximum(q, nominal)
 
 
-# the gradient solver (and the hybrid's polish) with one multiplier per row (per kept sample): its
-# max over rows is not one variable minus a fixed term, as a family's max over the grid is
-_SETTINGS = Settings.of_solvers(gradient=dataclasses.replace(gradient.DEFAULT_SETTINGS,
-                                                             aggregate_constraints=False))
-
-
 def solve_robust(problem: Problem, weights, *, mode: str, solver: str, seed: int, subset: int = SUBSET,
                  rounds: int = 8):
     """The robust design of ``problem`` and the rounds it took (:func:`solve_rounds`)."""
@@ -559,7 +557,7 @@ def solve_rounds(problem: Problem, weights, *, mode: str, solver: str, seed: int
             index = order[:subset] if index is None else _merge(index, order, subset)
         at = np.sort(index)
         sub = take(problem._replace(keep=jnp.asarray(keep)), jnp.asarray(at))
-        sol = solve(sub, weights, mode=mode, solver=solver, seed=seed, settings=_SETTINGS)
+        sol = solve(sub, weights, mode=mode, solver=solver, seed=seed)
         design = sol.design
         nominal, g = jax.device_get(_maxima(problem, design))  # the full set's rows against the kept
         full, kept_rows = _rows_of(nominal, g, m), _rows_of(nominal, g[:, at], m, keep[:, at])

@@ -42,7 +42,10 @@ flat-face one is :mod:`camjax.followers.flat.problem`). It provides:
 - optionally ``polish(problem, weights, design) -> Design``: the exact optimum near a solver's
   global-mode design (the solvers may search on the sample grid; :func:`_solution` polishes),
   and ``polish_pointwise(problem, weights, design, extras) -> (Design, dict)``: the condensed
-  pointwise design taken as a continuous max over the angle.
+  pointwise design taken as a continuous max over the angle; and
+  ``ONE_MULTIPLIER_PER_CONSTRAINT = False`` where a constraint's max over the angles is not one
+  design variable minus a fixed term (the gradient solver then prices every angle's row by its
+  own multiplier; the robust problem, :mod:`camjax.robust.design`).
 
 Weights (:class:`camjax.followers.flat.Weights`: alpha for size, gamma for stress) are shared by every
 family, and so are the pieces of the protocol that do not depend on a family's physics (the box,

@@ -76,7 +76,9 @@ class GradientSettings:
     ctol: float = 1e-12  # AL residual (constraints / N)
     inner_rtol: float = 0.1  # inexact inner solves: stop when steps <= inner_rtol * AL residual
     secant: bool = True  # secant-Newton steps inside Rprop's trust region (False: plain Rprop)
-    aggregate_constraints: bool = True  # one multiplier per constraint (max over angles; exact here)
+    # one multiplier per constraint (its max over angles; exact here), where the problem's family
+    # allows it (:func:`_aggregate`); False: one per angle and constraint
+    aggregate_constraints: bool = True
     # the BFGS refinement after an Rprop stall (:func:`refine_bfgs`): cap on its rounds (multiplier
     # updates); 0 turns it off (Rprop alone)
     refine_rounds: int = 30
@@ -246,6 +248,14 @@ def scaled_constraints(problem: Problem, design: Design, aggregate: bool = False
     return jax.tree.map(lambda g: g / norm, c)
 
 
+def _aggregate(problem: Problem, settings: GradientSettings) -> bool:
+    """One multiplier per constraint: the setting, unless the problem's family declares
+    ``ONE_MULTIPLIER_PER_CONSTRAINT = False`` (its rows' max is not one design variable minus a
+    fixed term, e.g. a robust problem's max over samples: :mod:`camjax.robust.design`)."""
+    declared = getattr(family_of(problem), "ONE_MULTIPLIER_PER_CONSTRAINT", True)
+    return settings.aggregate_constraints and declared
+
+
 def augmented_lagrangian(u: Design, problem: Problem, weights: Weights, multipliers: Constraints,
                          penalty: float, aggregate: bool = False) -> tuple[jax.Array, Constraints]:
     """L_A at unit-box point ``u``, and the scaled constraints there (aux).
@@ -285,7 +295,7 @@ def init(problem: Problem, design: Design | None = None,
     u = _clip_unit(problem, jax.tree.map(lambda x: jnp.asarray(x, dtype), to_unit(problem, design)))
     rprop = _transform(settings).init(u)
     shapes = jax.eval_shape(
-        lambda v: scaled_constraints(problem, from_unit(problem, v), settings.aggregate_constraints), u)
+        lambda v: scaled_constraints(problem, from_unit(problem, v), _aggregate(problem, settings)), u)
     zeros = jax.tree.map(lambda a: jnp.zeros(a.shape, a.dtype), shapes)
     inf = jnp.asarray(jnp.inf, dtype)
     return GradientState(u, rprop, zeros, jnp.asarray(0), jnp.asarray(0), inf, inf, jnp.asarray(False))
@@ -296,7 +306,7 @@ def step(state: GradientState, problem: Problem, weights: Weights,
     """One projected Rprop step on L_A, a multiplier update when the inner problem has converged."""
     mu = settings.penalty
     (_, g), grad = jax.value_and_grad(augmented_lagrangian, has_aux=True)(
-        state.u, problem, weights, state.multipliers, mu, settings.aggregate_constraints)
+        state.u, problem, weights, state.multipliers, mu, _aggregate(problem, settings))
     pg = _projected_gradient(problem, state.u, grad)
     pg_norm = _tree_max_abs(pg)
     residual = _tree_max_abs(jax.tree.map(lambda gi, lam: jnp.minimum(-gi, lam / mu), g, state.multipliers))
