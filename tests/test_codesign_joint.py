@@ -146,3 +146,28 @@ def test_the_ga_and_the_hybrid_search_the_laws_too(cases, solved):
     grad_f = float(solved[0].objective[0])
     assert bool(hybrid.feasible) and abs(float(hybrid.objective) - grad_f) <= 1e-6 * grad_f
     assert int(hybrid.iterations) > generations
+
+
+def test_the_search_solver_names_what_runs():
+    """pareto.json's ``search_solver`` is the solver the laws' search runs: the joint program runs
+    the GA and the hybrid as named and its gradient solver's BFGS for ``gradient`` and ``newton``
+    (the built-in scenes' solver; the interior point's epigraph form takes no smooth objective),
+    and the bilevel search (a designed spring) runs the gradient solver whatever the scene's."""
+    import dataclasses
+
+    from camjax.scene import builtin_scene_text, parse_scene
+
+    scene = parse_scene(builtin_scene_text("codesign"), "codesign", "<codesign>")
+    assert joint.takes(scene) and scene.design.solver == "newton"
+
+    def with_solver(sc, name):
+        return dataclasses.replace(sc, design=dataclasses.replace(sc.design, solver=name))
+
+    expected = {"newton": "gradient", "gradient": "gradient", "ga": "ga", "hybrid": "hybrid"}
+    assert {name: joint.search_solver(with_solver(scene, name)) for name in expected} == expected
+    assert {name: joint.joint_solver(name) for name in expected} == expected
+    text = builtin_scene_text("codesign") + "\n"
+    spring = parse_scene(text.replace("[synthesis]", "[synthesis]\nspring_N_per_m = [1000.0, 20000.0]", 1),
+                         "spring", "<spring>")
+    assert not joint.takes(spring)
+    assert {joint.search_solver(with_solver(spring, name)) for name in expected} == {"gradient"}

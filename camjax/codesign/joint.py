@@ -126,10 +126,19 @@ def takes(scene) -> bool:
     return not peaks and spring_mod.spring_box(scene, ValueError) is None
 
 
+def joint_solver(solver: str) -> str:
+    """The solver the joint program runs for a [design] ``solver``: the GA and the hybrid as named;
+    the gradient solver's augmented-Lagrangian BFGS for ``gradient`` and ``newton`` (the interior
+    point's epigraph form takes a family whose objective is a max over one-angle problems; this
+    program's objective, t + law(z), is smooth already)."""
+    return solver if solver in ("ga", "hybrid") else "gradient"
+
+
 def search_solver(scene) -> str:
-    """The solver of a co-design scene's laws: its [design] solver where the joint program
-    :func:`takes` it, else the bilevel search's gradient solver."""
-    return scene.design.solver if takes(scene) else "gradient"
+    """The solver that searches a co-design scene's laws: the joint program's
+    (:func:`joint_solver` of its [design] solver) where it :func:`takes` the scene, else the
+    bilevel search's gradient solver."""
+    return joint_solver(scene.design.solver) if takes(scene) else "gradient"
 
 
 # ------------------------------------------------------------------------------ construction
@@ -261,13 +270,15 @@ def solve(problem: JointProblem, start: JointDesign, settings=SETTINGS, solver: 
     what :meth:`camjax.codesign.Codesign.value` gives), so that F(z) is the co-design's own value
     of those laws and the geometry meets the family's tolerances. Traceable; vmap it over a stack.
 
-    ``solver``: ``gradient`` (the gradient solver's augmented-Lagrangian BFGS with ``settings``),
+    ``solver`` (:func:`joint_solver` of it): ``gradient`` (the gradient solver's augmented-Lagrangian
+    BFGS with ``settings``; ``newton`` runs it too),
     ``ga`` (the GA, ``ga_settings`` (default its own), PRNG ``key``, its population seeded with the
     start: by elitism never worse than it) or ``hybrid`` (that GA, then the gradient solver from its
     best). Iterations: the GA's generations plus the gradient solver's evaluations."""
     from camjax.codesign.problem import JOINT_INNER_SOLVER, inner_solve
     from camjax.solvers import ga
 
+    solver = joint_solver(solver)
     steps = jnp.asarray(0)
     if solver in ("ga", "hybrid"):
         found = ga.run(jax.random.key(0) if key is None else key, problem, problem.weights,
@@ -312,7 +323,7 @@ def search(cd, z0, f0: float, inner0, settings=SETTINGS):
 
     problem, start = joint_problem(cd, z0, inner0.design)
     design = cd.scene.design
-    res = jax.device_get(_solve_one(problem, start, settings, design.solver,
+    res = jax.device_get(_solve_one(problem, start, settings, joint_solver(design.solver),
                                     weighting_keys(design.seed, 1)[0]))
     z = np.asarray(res.laws, dtype=np.float64)
     if bool(res.at_box):
