@@ -31,6 +31,7 @@ from camjax.codesign.builtin import (
 from camjax.codesign.problem import INNER_SOLVER, Codesign, CodesignError, Inner
 from camjax.laws import LAWS
 from camjax.program import MotionProgram
+from camjax.solvers import quasi_newton as qn
 
 MAX_ITERATIONS = 400  # BFGS steps of the outer search (the built-in scene stops by itself after ~200)
 
@@ -70,7 +71,7 @@ def bfgs(cd: Codesign, z0, f0: float, inner0: Inner, max_iterations: int = MAX_I
         while step >= least:
             zn = z + step * p
             fn, innern = cd.value(zn, inner.design)  # warm: from z's inner optimum
-            if fn <= f + 1e-4 * step * slope:
+            if fn <= f + qn.ARMIJO * step * slope:
                 accepted = True
                 break
             step = backtrack(step, slope, f, fn) if smooth else 0.5 * step
@@ -82,12 +83,11 @@ def bfgs(cd: Codesign, z0, f0: float, inner0: Inner, max_iterations: int = MAX_I
         gn = cd.gradient(zn, innern)
         s_, y_ = zn - z, gn - g
         sy = float(s_ @ y_)
-        if sy > 1e-12 * np.linalg.norm(s_) * np.linalg.norm(y_):
+        if qn.curvature_ok(sy, np.linalg.norm(s_), np.linalg.norm(y_)):
+            eye = np.eye(z.size)
             if H is None:
-                H = (sy / float(y_ @ y_)) * np.eye(z.size)
-            rho = 1.0 / sy
-            V = np.eye(z.size) - rho * np.outer(s_, y_)
-            H = V @ H @ V.T + rho * np.outer(s_, s_)
+                H = qn.first_scaling(sy, float(y_ @ y_), eye)
+            H = qn.inverse_hessian_update(H, s_, y_, sy, eye, np)
         decrease = f - fn
         z, f, g, inner = zn, fn, gn, innern
         history.append(f)
@@ -97,15 +97,12 @@ def bfgs(cd: Codesign, z0, f0: float, inner0: Inner, max_iterations: int = MAX_I
 
 
 def backtrack(step: float, slope: float, f: float, f_step: float) -> float:
-    """The next step length after ``step`` failed the Armijo test: the minimizer of the quadratic
-    through F (``f``), the slope along the direction and F at the step (``f_step``), kept within
+    """The next step length after ``step`` failed the Armijo test
+    (:func:`camjax.solvers.quasi_newton.backtrack`): the minimizer of the quadratic through F
+    (``f``), the slope along the direction and F at the step (``f_step``), kept within
     [0.1, 0.5] x ``step``; half the step where F there is +inf (an infeasible inner problem) or the
-    quadratic has no minimum. Where a step overshoots by far (a kink of F: the inner optimum's
-    binding angle changes), it shrinks by 10 at once instead of by 2 per trial."""
-    curvature = f_step - f - step * slope
-    if not (np.isfinite(f_step) and curvature > 0.0):
-        return 0.5 * step
-    return min(max(-slope * step**2 / (2.0 * curvature), 0.1 * step), 0.5 * step)
+    quadratic has no minimum."""
+    return float(qn.backtrack(step, slope, f, f_step, 0.5, np))
 
 
 def search(cd: Codesign, x0, f0: float, inner0: Inner, max_iterations: int = MAX_ITERATIONS):

@@ -47,6 +47,7 @@ import optax
 from jax.flatten_util import ravel_pytree
 
 from camjax.family import Constraints, Design, Problem, Violation, Weights
+from camjax.solvers import quasi_newton as qn
 from camjax.solvers.base import Raw, family_of, in_mode
 
 LAM_MAX = 1e12  # cap on the multipliers (an infeasible problem would let them grow without end)
@@ -446,16 +447,15 @@ def refine_bfgs(problem: Problem, weights: Weights, u: Design,
         (f_try, g_try), grad_try = value_and_grad(x_try, s.lam, mu)
         f_try = f_try.astype(dtype)  # (the weights may be wider than the problem)
         slope = s.grad @ s.p
-        ok = s.fresh | (jnp.isfinite(f_try) & (f_try <= s.f + 1e-4 * s.t * slope))
+        ok = s.fresh | (jnp.isfinite(f_try) & (f_try <= s.f + qn.ARMIJO * s.t * slope))
         # BFGS update of the inverse Hessian on an accepted step with positive curvature
         dx, dg = x_try - s.x, grad_try - s.grad
         sy = dx @ dg
-        curved = ok & ~s.fresh & (sy > 1e-12 * jnp.linalg.norm(dx) * jnp.linalg.norm(dg))
-        first = jnp.all(s.h == eye)  # Shanno's scaling before the first update
-        h = jnp.where(first, sy / jnp.where(curved, dg @ dg, 1.0) * eye, s.h)
-        rho = 1.0 / jnp.where(curved, sy, 1.0)
-        v = eye - rho * jnp.outer(dx, dg)
-        h = jnp.where(curved, v @ h @ v.T + rho * jnp.outer(dx, dx), jnp.where(s.fresh, eye, s.h))
+        curved = ok & ~s.fresh & qn.curvature_ok(sy, jnp.linalg.norm(dx), jnp.linalg.norm(dg))
+        first = jnp.all(s.h == eye)  # the first update starts from the scaled identity
+        h = jnp.where(first, qn.first_scaling(sy, jnp.where(curved, dg @ dg, 1.0), eye), s.h)
+        h = jnp.where(curved, qn.inverse_hessian_update(h, dx, dg, jnp.where(curved, sy, 1.0), eye, jnp),
+                      jnp.where(s.fresh, eye, s.h))
         x = jnp.where(ok, x_try, s.x)
         f = jnp.where(ok, f_try, s.f)
         grad = jnp.where(ok, grad_try, s.grad)
@@ -465,11 +465,8 @@ def refine_bfgs(problem: Problem, weights: Weights, u: Design,
         # first step of a round: 0.1 in the largest angle; else the full quasi-Newton step
         t_new = jnp.where(s.fresh, 0.1 / jnp.maximum(jnp.max(jnp.abs(p)), 1e-300), 1.0)
         # a rejected trial: the minimizer of the quadratic through f, the slope and f_try,
-        # within [0.1, 0.5] of the step
-        curv = f_try - s.f - s.t * slope
-        t_quad = -slope * s.t**2 / (2.0 * jnp.where(curv > 0, curv, 1.0))
-        quad = jnp.isfinite(f_try) & (curv > 0)
-        t_back = jnp.where(quad, jnp.clip(t_quad, 0.1 * s.t, 0.5 * s.t), 0.1 * s.t)
+        # within [0.1, 0.5] of the step (a tenth of it where that quadratic has no minimum)
+        t_back = qn.backtrack(s.t, slope, s.f, f_try, 0.1, jnp)
         t = jnp.where(ok, t_new, t_back).astype(dtype)
         p = jnp.where(ok, p, s.p)
         # end of a round: gradient small, line search exhausted (a kink: no decrease along p
