@@ -12,9 +12,13 @@ variable t are the design of one problem,
 f_i the family's objective on the one-angle problem i (alpha size / N + gamma sigma_i / sigma_max),
 P(z) its problem on the kinematics of z (:meth:`camjax.codesign.Codesign.problem`), law(z) the
 [synthesis] terms that are quadratics in z. The epigraph makes every function smooth, so the
-registered gradient solver's augmented-Lagrangian BFGS (:func:`camjax.solvers.gradient.refine_bfgs`,
-one multiplier per row) solves it in one jitted loop, and a batch of co-designs (weightings,
-lifts, durations: problems of one follower family on one grid) in one ``vmap``.
+interior-point solver (:func:`camjax.solvers.newton.minimize`, exact second derivatives, stopping
+on its scaled KKT residual; the family declares ``SMOOTH_OBJECTIVE``) or the gradient solver's
+augmented-Lagrangian BFGS (:func:`camjax.solvers.gradient.refine_bfgs`, one multiplier per row)
+solves it in one jitted loop, and a batch of co-designs (weightings, lifts, durations: problems of
+one follower family on one grid) in one ``vmap``. On the built-in `codesign` scene (360 samples,
+23 variables) the interior point ends in 42 Newton steps at F = 0.418834; the BFGS runs to its cap
+of 24,000 evaluations and ends at 0.419483 from the same start.
 
 This module is that problem family (the protocol of :mod:`camjax.solvers.base`): ``bounds``,
 ``size_norm``, ``objective`` (t + law(z): what the solver minimizes), ``size_term``,
@@ -37,7 +41,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from camjax.family import Weights
-from camjax.solvers import gradient
+from camjax.solvers import gradient, newton
 from camjax.solvers.base import family_of, register_family
 
 # half-width of the laws' box around the start, at least (each coordinate; normalized control
@@ -104,6 +108,9 @@ class JointProblem:
 
 
 register_family(JointProblem, sys.modules[__name__])
+# the objective t + law(z) is smooth (this family holds its own epigraph variable): the interior
+# point takes it as it is (:func:`camjax.solvers.epigraph.smooth_form`), not split over angles
+SMOOTH_OBJECTIVE = True
 
 
 def supports(cd) -> bool:
@@ -127,11 +134,10 @@ def takes(scene) -> bool:
 
 
 def joint_solver(solver: str) -> str:
-    """The solver the joint program runs for a [design] ``solver``: the GA and the hybrid as named;
-    the gradient solver's augmented-Lagrangian BFGS for ``gradient`` and ``newton`` (the interior
-    point's epigraph form takes a family whose objective is a max over one-angle problems; this
-    program's objective, t + law(z), is smooth already)."""
-    return solver if solver in ("ga", "hybrid") else "gradient"
+    """The solver the joint program runs for a [design] ``solver``: each registered one as named
+    (``gradient``: its augmented-Lagrangian BFGS alone, the epigraph being smooth); any other name
+    the gradient solver's BFGS."""
+    return solver if solver in ("ga", "hybrid", "newton") else "gradient"
 
 
 def search_solver(scene) -> str:
@@ -270,11 +276,13 @@ def solve(problem: JointProblem, start: JointDesign, settings=SETTINGS, solver: 
     what :meth:`camjax.codesign.Codesign.value` gives), so that F(z) is the co-design's own value
     of those laws and the geometry meets the family's tolerances. Traceable; vmap it over a stack.
 
-    ``solver`` (:func:`joint_solver` of it): ``gradient`` (the gradient solver's augmented-Lagrangian
-    BFGS with ``settings``; ``newton`` runs it too),
+    ``solver`` (:func:`joint_solver` of it): ``newton`` (the interior point with its default
+    settings, :func:`camjax.solvers.epigraph.smooth_form`), ``gradient`` (the gradient solver's
+    augmented-Lagrangian BFGS with ``settings``),
     ``ga`` (the GA, ``ga_settings`` (default its own), PRNG ``key``, its population seeded with the
     start: by elitism never worse than it) or ``hybrid`` (that GA, then the gradient solver from its
-    best). Iterations: the GA's generations plus the gradient solver's evaluations."""
+    best). Iterations: the GA's generations plus the gradient solver's evaluations, or the
+    interior point's Newton steps."""
     from camjax.codesign.problem import JOINT_INNER_SOLVER, inner_solve
     from camjax.solvers import ga
 
@@ -286,6 +294,9 @@ def solve(problem: JointProblem, start: JointDesign, settings=SETTINGS, solver: 
         start, steps = found.design, found.iterations
     if solver == "ga":
         design = start
+    elif solver == "newton":
+        found = newton.minimize(problem, problem.weights, start)
+        design, steps = found.design, found.iterations
     else:
         u = gradient.to_unit(problem, start)
         design, refine_steps, _ = gradient.refine_bfgs(problem, problem.weights, u, settings)
@@ -299,10 +310,12 @@ def solve(problem: JointProblem, start: JointDesign, settings=SETTINGS, solver: 
     return JointResult(design.laws, at_box, geometry, f, feasible, steps)
 
 
-@partial(jax.jit, static_argnames="settings")
-def solve_batch(problems: JointProblem, starts: JointDesign, settings=SETTINGS) -> JointResult:
-    """A stack of joint co-designs (:func:`stack`) in one vmapped, jitted solve."""
-    return jax.vmap(lambda p, s: solve(p, s, settings))(problems, starts)
+@partial(jax.jit, static_argnames=("settings", "solver"))
+def solve_batch(problems: JointProblem, starts: JointDesign, settings=SETTINGS, solver: str = "gradient"
+                ) -> JointResult:
+    """A stack of joint co-designs (:func:`stack`) in one vmapped, jitted solve (``gradient`` or
+    ``newton``, see :func:`solve`)."""
+    return jax.vmap(lambda p, s: solve(p, s, settings, solver))(problems, starts)
 
 
 _solve_one = jax.jit(solve, static_argnames=("settings", "solver", "ga_settings"))

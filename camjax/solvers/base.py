@@ -45,7 +45,10 @@ flat-face one is :mod:`camjax.followers.flat.problem`). It provides:
   pointwise design taken as a continuous max over the angle; and
   ``ONE_MULTIPLIER_PER_CONSTRAINT = False`` where a constraint's max over the angles is not one
   design variable minus a fixed term (the gradient solver then prices every angle's row by its
-  own multiplier; the robust problem, :mod:`camjax.robust.design`).
+  own multiplier; the robust problem, :mod:`camjax.robust.design`); and
+  ``SMOOTH_OBJECTIVE = True`` where ``objective`` is smooth already, not a max over one-angle
+  problems (the interior point then takes it as one row, :func:`camjax.solvers.epigraph.smooth_form`,
+  and needs no ``per_angle``; the co-design's joint program, :mod:`camjax.codesign.joint`).
 
 Weights (:class:`camjax.followers.flat.Weights`: alpha for size, gamma for stress) are shared by every
 family, and so are the pieces of the protocol that do not depend on a family's physics (the box,

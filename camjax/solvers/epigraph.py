@@ -12,11 +12,14 @@ For one problem and weighting (every registered problem family, through its prot
 certificate labels its multipliers by). With gamma = 0 the first objective row alone holds t (n
 equal rows would leave the multipliers' split free); a constraint block that is not one row per
 angle (a robust problem's row per sample, a max over the grid) is taken from the n one-angle
-problems, one row per angle and sample; rows below -ROW_FLOOR are floored there.
+problems, one row per angle and sample; rows below -ROW_FLOOR are floored there. A family whose
+objective is smooth already (it declares ``SMOOTH_OBJECTIVE = True``) takes :func:`smooth_form`:
+one objective row, objective(u) - t.
 """
 
 from __future__ import annotations
 
+import math
 from typing import Any, NamedTuple
 
 import jax
@@ -47,8 +50,11 @@ class EpigraphForm(NamedTuple):
 
 
 def epigraph_form(problem, weights: Weights) -> EpigraphForm:
-    """The epigraph form of ``problem`` for one weighting (traceable; the functions close over it)."""
+    """The epigraph form of ``problem`` for one weighting (traceable; the functions close over it).
+    A family that declares ``SMOOTH_OBJECTIVE = True`` gets :func:`smooth_form`."""
     family = family_of(problem)
+    if getattr(family, "SMOOTH_OBJECTIVE", False):
+        return smooth_form(problem, weights)
     u_max_tree = u_max_of(problem)
     u_max, unravel = ravel_pytree(u_max_tree)
     m = u_max.shape[0]
@@ -108,3 +114,44 @@ def epigraph_form(problem, weights: Weights) -> EpigraphForm:
     # objective as on a grid problem; with mu0 the barrier pushed the design to the box's far side)
     mu_scale = 1.0 / max([c // n for c, cut in zip(counts, split, strict=True) if cut] or [1])
     return EpigraphForm(phi, rows, unravel, free, u_max, n, kinds, epigraph, mu_scale, any(split))
+
+
+def smooth_form(problem, weights: Weights) -> EpigraphForm:
+    """The form of a family whose objective is smooth already (it declares ``SMOOTH_OBJECTIVE =
+    True``: the co-design's joint program, :mod:`camjax.codesign.joint`, which holds its own
+    epigraph variable). There is no max over angles to take apart: one objective row,
+    objective(u) - t <= 0, the constraint rows g / N of every leaf of ``family.constraints`` (a
+    nested tuple of blocks: ``kinds`` names each by its path), and the unit box."""
+    family = family_of(problem)
+    u_max_tree = u_max_of(problem)
+    u_max, unravel = ravel_pytree(u_max_tree)
+    m = u_max.shape[0]
+    dtype = u_max.dtype
+    free_u = (u_max > 0).astype(dtype)
+    free = jnp.concatenate([free_u, jnp.ones(1, dtype)])
+    norm = family.size_norm(problem)
+
+    def design_of(z):
+        return from_unit(problem, unravel(z[:m]), own=False)
+
+    def phi(z):
+        return z[m]
+
+    def constraint_rows(design):
+        return [jnp.ravel(v) for v in jax.tree.leaves(family.constraints(problem, design))]
+
+    def rows(z):
+        design = design_of(z)
+        f = jnp.reshape(family.objective(problem, weights, design), (1,)) - z[m]
+        g = jnp.maximum(jnp.concatenate(constraint_rows(design)) / norm, -ROW_FLOOR)
+        u = z[:m]
+        box_lo = jnp.where(free_u > 0, -u, -1.0)
+        box_hi = jnp.where(free_u > 0, u - u_max, -1.0)
+        return jnp.concatenate([f.astype(dtype), g, box_lo, box_hi])
+
+    shapes = jax.eval_shape(lambda: family.constraints(problem, design_of(jnp.zeros(m + 1, dtype))))
+    paths = jax.tree_util.tree_flatten_with_path(shapes)[0]
+    blocks = tuple((jax.tree_util.keystr(path, simple=True, separator="."), int(math.prod(leaf.shape)))
+                   for path, leaf in paths)
+    kinds = (("objective", 1), *blocks, ("lower_bound", m), ("upper_bound", m))
+    return EpigraphForm(phi, rows, unravel, free, u_max, 1, kinds, jnp.ones(1, bool), 1.0, False)

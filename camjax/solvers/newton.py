@@ -372,8 +372,10 @@ def minimize(problem: Problem, weights: Weights, init_design: Design | None = No
     # at a dwell) that can hold a filter's iterates. Measured on the seven follower types: no one
     # of the four reaches the optimum on all. The loop ends when one path has converged; of the
     # converged ones the lowest objective is kept.
-    mu0s = jnp.asarray([settings.mu0, settings.mu0 / fns.n_angles] * 2) * fns.mu_scale
-    filters = jnp.asarray([True, True, False, False])
+    # (one objective row, a smooth family's form: mu0 / n is mu0, so two paths, with and without the filter)
+    first = [settings.mu0] if fns.n_angles == 1 else [settings.mu0, settings.mu0 / fns.n_angles]
+    mu0s = jnp.asarray(first * 2) * fns.mu_scale
+    filters = jnp.asarray([True] * len(first) + [False] * len(first))
     states = jax.vmap(start)(mu0s, filters)
     step = jax.vmap(partial(_step, fns=fns, settings=settings))
     ends = jax.lax.while_loop(
