@@ -47,7 +47,8 @@ inside is feasible whatever its slack) or when the line search accepts no trial 
 a row's kink at the barrier problem's minimizer, a dwell's |e|, holds a stationarity ~ mu that
 only a lower mu removes). The box rows are linear and start with s = -c, so every iterate stays
 strictly inside the box, where the families' physics is defined. Four central paths run in one loop (mu0 and
-mu0 / n, each with and without the filter, :func:`minimize`); the loop ends when one converges.
+mu0 / n, each with and without the filter, :func:`minimize`; a one-angle problem two, mu0 / n being
+mu0; a smooth family's form mu0 and mu0 * :data:`SMOOTH_SECOND_MU`); the loop ends when one converges.
 
 Stopping rule: the scaled KKT residual (IPOPT's: stationarity ||grad phi + J^T y||_inf / s_d,
 primal infeasibility max(c, 0), complementarity max |c_i| y_i / s_d with s_d = max(100,
@@ -105,6 +106,13 @@ class NewtonSettings:
 
 DEFAULT_SETTINGS = NewtonSettings()
 FILTER = 32  # entries of the line search's filter (a ring: the oldest is replaced)
+SMOOTH_SECOND_MU = 1e-3
+"""A smooth family's form (one objective row: the co-design's joint program) starts its second pair
+of central paths at mu0 times this (the first at mu0): no mu0 / n there. Measured from the best
+built-in laws' start (Newton steps to the 1e-9 KKT residual): the roller co-design of
+tests/test_codesign.py 354 at mu0 = 0.1 alone (past the cap of 200), 121 at 1e-2, 90 at 1e-3;
+with both pairs, second at 1e-2 / 1e-3 / 1e-4 of mu0: roller 90 / 23 / 27, the codesign scene on
+360 angles 38 / 28 / 29, on 90 angles 22 / 18 / 21."""
 S_MAX = 100.0  # IPOPT's s_max: multipliers larger than this on average scale the dual residuals
 
 
@@ -372,8 +380,12 @@ def minimize(problem: Problem, weights: Weights, init_design: Design | None = No
     # at a dwell) that can hold a filter's iterates. Measured on the seven follower types: no one
     # of the four reaches the optimum on all. The loop ends when one path has converged; of the
     # converged ones the lowest objective is kept.
-    # (one objective row, a smooth family's form: mu0 / n is mu0, so two paths, with and without the filter)
-    first = [settings.mu0] if fns.n_angles == 1 else [settings.mu0, settings.mu0 / fns.n_angles]
+    # (one objective row, a smooth family's form: mu0 and mu0 * SMOOTH_SECOND_MU instead; a
+    # one-angle problem's mu0 / n is mu0: two paths, with and without the filter)
+    if getattr(family_of(problem), "SMOOTH_OBJECTIVE", False):
+        first = [settings.mu0, settings.mu0 * SMOOTH_SECOND_MU]
+    else:
+        first = [settings.mu0] if fns.n_angles == 1 else [settings.mu0, settings.mu0 / fns.n_angles]
     mu0s = jnp.asarray(first * 2) * fns.mu_scale
     filters = jnp.asarray([True] * len(first) + [False] * len(first))
     states = jax.vmap(start)(mu0s, filters)
