@@ -46,9 +46,9 @@ to 10 mu (its infeasibility c + s counted on the rows at or beyond their limit: 
 inside is feasible whatever its slack) or when the line search accepts no trial (IPOPT's tiny step:
 a row's kink at the barrier problem's minimizer, a dwell's |e|, holds a stationarity ~ mu that
 only a lower mu removes). The box rows are linear and start with s = -c, so every iterate stays
-strictly inside the box, where the families' physics is defined. Four central paths run in one loop (mu0 and
-mu0 / n, each with and without the filter, :func:`minimize`; a one-angle problem two, mu0 / n being
-mu0; a smooth family's form mu0 and mu0 * :data:`SMOOTH_SECOND_MU`); the loop ends when one converges.
+strictly inside the box, where the families' physics is defined. Four central paths run in one
+loop (mu0 and mu0 / n, or mu0 * :data:`SMOOTH_SECOND_MU` for a smooth family's form, each with and
+without the filter; one angle: two); the loop ends when one converges.
 
 Stopping rule: the scaled KKT residual (IPOPT's: stationarity ||grad phi + J^T y||_inf / s_d,
 primal infeasibility max(c, 0), complementarity max |c_i| y_i / s_d with s_d = max(100,
@@ -107,12 +107,8 @@ class NewtonSettings:
 DEFAULT_SETTINGS = NewtonSettings()
 FILTER = 32  # entries of the line search's filter (a ring: the oldest is replaced)
 SMOOTH_SECOND_MU = 1e-3
-"""A smooth family's form (one objective row: the co-design's joint program) starts its second pair
-of central paths at mu0 times this (the first at mu0): no mu0 / n there. Measured from the best
-built-in laws' start (Newton steps to the 1e-9 KKT residual): the roller co-design of
-tests/test_codesign.py 354 at mu0 = 0.1 alone (past the cap of 200), 121 at 1e-2, 90 at 1e-3;
-with both pairs, second at 1e-2 / 1e-3 / 1e-4 of mu0: roller 90 / 23 / 27, the codesign scene on
-360 angles 38 / 28 / 29, on 90 angles 22 / 18 / 21."""
+"""A smooth form's second pair of paths starts at mu0 times this. Newton steps at 1e-2/1e-3/1e-4: the
+roller co-design of tests/test_codesign.py 90/23/27 (mu0 alone: 354), the codesign scene 38/28/29."""
 S_MAX = 100.0  # IPOPT's s_max: multipliers larger than this on average scale the dual residuals
 
 
@@ -373,19 +369,16 @@ def minimize(problem: Problem, weights: Weights, init_design: Design | None = No
         return NewtonState(z0, s0, y0, mu0, jnp.asarray(0), KKT(inf, inf, inf, inf), jnp.asarray(False),
                            jnp.full((FILTER, 2), jnp.inf, z0.dtype), jnp.asarray(0), use_filter)
 
-    # PATHS central paths at once, one loop over all (each step vmapped): mu0 and mu0 / n, each
-    # with the filter line search and with the memoryless one. The path keeps t - f_i ~ n mu on
+    # Central paths at once, one loop (each step vmapped): mu0 and mu0 / n, each with the
+    # filter line search and with the memoryless one. The path keeps t - f_i ~ n mu on
     # the n epigraph rows, so mu0 starts far above the objective and mu0 / n close to it; the
     # filter cannot cycle, the memoryless search crosses the kinks of a family's rows (|s' - e|
     # at a dwell) that can hold a filter's iterates. Measured on the seven follower types: no one
     # of the four reaches the optimum on all. The loop ends when one path has converged; of the
     # converged ones the lowest objective is kept.
-    # (one objective row, a smooth family's form: mu0 and mu0 * SMOOTH_SECOND_MU instead; a
-    # one-angle problem's mu0 / n is mu0: two paths, with and without the filter)
-    if getattr(family_of(problem), "SMOOTH_OBJECTIVE", False):
-        first = [settings.mu0, settings.mu0 * SMOOTH_SECOND_MU]
-    else:
-        first = [settings.mu0] if fns.n_angles == 1 else [settings.mu0, settings.mu0 / fns.n_angles]
+    smooth = getattr(family_of(problem), "SMOOTH_OBJECTIVE", False)
+    first = [settings.mu0, settings.mu0 * (SMOOTH_SECOND_MU if smooth else 1.0 / fns.n_angles)]
+    first = first[:1] if fns.n_angles == 1 and not smooth else first
     mu0s = jnp.asarray(first * 2) * fns.mu_scale
     filters = jnp.asarray([True] * len(first) + [False] * len(first))
     states = jax.vmap(start)(mu0s, filters)
