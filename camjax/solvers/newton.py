@@ -40,7 +40,7 @@ tiny). Steps keep s, y > 0 by the fraction-to-boundary rule (tau = max(0.99, 1 -
 step length is found by a backtracking search (Armijo on the barrier objective once nearly
 feasible, else progress in it or in the infeasibility ||c + s||_1, and, on the paths that keep
 one, a filter of earlier (infeasibility, barrier objective) pairs that forbids cycling), its 30
-trial lengths evaluated at once (one ``vmap``: no inner loop). The barrier parameter falls
+trial lengths tried 6 at a time (a ``vmap``) until one is accepted. The barrier parameter falls
 superlinearly, mu <- max(tol / 100, min(0.2 mu, mu^1.5)), each time the barrier problem is solved
 to 10 mu (its infeasibility c + s counted on the rows at or beyond their limit: a row strictly
 inside is feasible whatever its slack) or when the line search accepts no trial (IPOPT's tiny step:
@@ -100,15 +100,15 @@ class NewtonSettings:
     theta_mu: float = 1.5
     kappa_eps: float = 10.0  # ... once the barrier problem is solved to kappa_eps mu
     interior: float = 1e-2  # the start's distance from the box's faces (unit box) and least slack
-    line_search_trials: int = 30  # step lengths alpha_max 2^-k, k < trials, tried at once
+    line_search_trials: int = 30  # step lengths alpha_max 2^-k, k < trials ...
+    line_search_chunk: int = 6  # ... tried this many at once, until one is accepted
     armijo: float = 1e-4
 
 
 DEFAULT_SETTINGS = NewtonSettings()
 FILTER = 32  # entries of the line search's filter (a ring: the oldest is replaced)
 SMOOTH_SECOND_MU = 1e-3
-"""A smooth form's second pair of paths starts at mu0 times this. Newton steps at 1e-2/1e-3/1e-4: the
-roller co-design of tests/test_codesign.py 90/23/27 (mu0 alone: 354), the codesign scene 38/28/29."""
+"""A smooth form's second paths start at mu0 x this (roller co-design steps at 1e-2/1e-3/1e-4: 90/23/27)."""
 S_MAX = 100.0  # IPOPT's s_max: multipliers larger than this on average scale the dual residuals
 
 
@@ -248,16 +248,11 @@ def _step(state: NewtonState, fns: EpigraphForm, settings: NewtonSettings) -> Ne
     done = kkt.error <= settings.tol
     # barrier update (IPOPT's E_mu of the barrier problem: c + s = 0, S y = mu)
     sd = _scaled(y, y.shape[0])
-    # Its infeasibility counts the rows at or beyond their limit only: a row strictly inside (c < 0)
-    # whose slack exceeds -c is feasible all the same (the reset ``_slacks`` only raises s to -c).
-    # Counted, such a gap could hold mu for good: at a dwell the pressure-angle row is |e| / r - limit
-    # in the offset e, the barrier problem's minimizer sits on that kink (the row's and the box's
-    # barrier terms are even in e), every Newton step that would close c + s crosses it and opens
-    # the gap wider, the line search accepts only tiny steps, and a one-angle problem stalled at
-    # mu ~ 1e-4 with c + s ~ 2e-2. The stopping rule is unchanged (its residuals take c, not s).
+    # Its infeasibility counts the rows at or beyond their limit only (a row inside with s > -c is
+    # feasible): counted, such a gap on a row's kink (|e| / r at a dwell) held a one-angle problem at
+    # mu ~ 1e-4, c + s ~ 2e-2, each step across the kink widening it. The stopping rule takes c, not s.
     infeasibility = jnp.max(jnp.where(c < 0, 0.0, jnp.abs(c + s)))
-    e_mu = jnp.maximum(jnp.maximum(kkt.stationarity, infeasibility),
-                       jnp.max(jnp.abs(s * y - mu)) / sd)
+    e_mu = jnp.maximum(jnp.maximum(kkt.stationarity, infeasibility), jnp.max(jnp.abs(s * y - mu)) / sd)
     lower_mu = (e_mu <= settings.kappa_eps * mu) & (state.iteration > 0)
     mu = jnp.where(lower_mu, _next_mu(mu, fns, settings), mu)
     # the filter holds (theta, psi) of the barrier problem at one mu: emptied when mu changes
@@ -290,11 +285,9 @@ def _step(state: NewtonState, fns: EpigraphForm, settings: NewtonSettings) -> Ne
         return jnp.minimum(1.0, jnp.min(ratio))
 
     alpha_s, alpha_y = max_step(s, ds), max_step(y, dy)
-    # filter line search (Waechter & Biegler 2006: the switching rule and a filter of the
-    # (theta, psi) pairs of earlier iterates, so that no pair of steps can cycle): barrier
-    # objective psi = phi - mu sum log s, infeasibility theta = ||c + s||_1, the slacks reset to
-    # s >= -c (a row more feasible than its slack says). An l1 merit would stall where a family's
-    # rows have kinks (|s' - e| at a dwell).
+    # filter line search (Waechter & Biegler 2006: the switching rule, a filter of earlier
+    # (theta, psi) against cycling): psi = phi - mu sum log s, theta = ||c + s||_1, s reset to >= -c
+    # (an l1 merit stalled on the rows' kinks, |s' - e| at a dwell).
 
     def measures(zv, sv, cv):
         sv = _slacks(fns, sv, cv)
@@ -302,35 +295,44 @@ def _step(state: NewtonState, fns: EpigraphForm, settings: NewtonSettings) -> Ne
 
     psi0, theta0, _ = measures(z, s, c)  # the rows at z are the derivatives' primal
     slope = grad @ dz - mu * jnp.sum(ds / s)
-    lengths = alpha_s * 0.5 ** jnp.arange(settings.line_search_trials, dtype=dtype)
-    psi_t, theta_t, c_t = jax.vmap(
-        lambda al: measures(z + al * dz, s + al * ds, fns.rows(z + al * dz)))(lengths)
     theta_max = 1e4 * jnp.maximum(1.0, theta0)
     switching = (slope < 0) & (theta0 <= 1e-4)
-    # Armijo's decrease, relaxed by the rounding of psi (IPOPT's 10 eps |psi|)
-    armijo = psi_t <= psi0 + settings.armijo * lengths * slope + 10.0 * jnp.finfo(dtype).eps * jnp.abs(psi0)
-    progress = (theta_t <= (1.0 - 1e-5) * theta0) | (psi_t <= psi0 - 1e-5 * theta0)
-    in_filter = jnp.all((theta_t[:, None] <= (1.0 - 1e-5) * filt[None, :, 0])
-                        | (psi_t[:, None] <= filt[None, :, 1] - 1e-5 * filt[None, :, 0]), axis=1)
-    ok = jnp.isfinite(psi_t) & jnp.isfinite(theta_t) & (theta_t <= theta_max) & jnp.where(
-        state.use_filter, in_filter & jnp.where(switching, armijo, progress),
-        jnp.where(switching, armijo, progress | armijo))
-    if fns.split:  # the feasible-slack path: a row inside its limit stays inside (see ``_slacks``)
-        ok = ok & jnp.all((c_t < 0) | (c[None, :] >= 0), axis=1)
-    first = jnp.where(jnp.any(ok), jnp.argmax(ok), settings.line_search_trials - 1)
-    # no trial accepted (IPOPT's tiny step): the barrier problem is solved as far as its Newton
-    # model reaches, so mu falls. Where a family's row has a kink (|e| at a dwell, a face's travel)
-    # at the barrier problem's minimizer, the stationarity there is y_i times the jump of the row's
-    # slope, y_i ~ mu / s_i: it falls with mu only, and the step across the kink, which the linear
-    # model cannot foresee, is rejected at every length.
-    stalled = ~jnp.any(ok) & ~done
+    rounding = 10.0 * jnp.finfo(dtype).eps * jnp.abs(psi0)
+    trials, chunk = settings.line_search_trials, min(settings.line_search_chunk, settings.line_search_trials)
+
+    def judge(j):
+        """Chunk j: any accepted; the first accepted's (else the last's) Armijo, length, rows."""
+        k = j * chunk + jnp.arange(chunk)
+        lengths = alpha_s * 0.5 ** k.astype(dtype)
+        psi_t, theta_t, c_t = jax.vmap(
+            lambda al: measures(z + al * dz, s + al * ds, fns.rows(z + al * dz)))(lengths)
+        # Armijo's decrease, relaxed by the rounding of psi (IPOPT's 10 eps |psi|)
+        armijo = psi_t <= psi0 + settings.armijo * lengths * slope + rounding
+        progress = (theta_t <= (1.0 - 1e-5) * theta0) | (psi_t <= psi0 - 1e-5 * theta0)
+        in_filter = jnp.all((theta_t[:, None] <= (1.0 - 1e-5) * filt[None, :, 0])
+                            | (psi_t[:, None] <= filt[None, :, 1] - 1e-5 * filt[None, :, 0]), axis=1)
+        ok = (k < trials) & jnp.isfinite(psi_t) & jnp.isfinite(theta_t) & (theta_t <= theta_max) & jnp.where(
+            state.use_filter, in_filter & jnp.where(switching, armijo, progress),
+            jnp.where(switching, armijo, progress | armijo))
+        if fns.split:  # the feasible-slack path: a row inside its limit stays inside (see ``_slacks``)
+            ok = ok & jnp.all((c_t < 0) | (c[None, :] >= 0), axis=1)
+        i = jnp.where(jnp.any(ok), jnp.argmax(ok), jnp.minimum(trials - 1 - j * chunk, chunk - 1))
+        return jnp.any(ok), armijo[i], lengths[i], c_t[i]
+
+    # chunks until one is accepted: the first accepted trial of all, in order (usually in chunk 0)
+    found, armijo_first, length, c_new = jax.lax.while_loop(
+        lambda st: ~st[1] & (st[0] < -(-trials // chunk)),
+        lambda st: (st[0] + 1, *judge(st[0])),
+        (jnp.asarray(0), jnp.asarray(False), jnp.asarray(False), jnp.zeros((), dtype), c))[1:]
+    # no trial accepted (IPOPT's tiny step): mu falls. At a row's kink (|e| at a dwell) the
+    # stationarity is y_i ~ mu / s_i times the slope's jump: it falls with mu only.
+    stalled = ~found & ~done
     # a step that is not Armijo's on psi (an h-type step) adds the current pair to the filter
-    add = ~(switching & armijo[first]) & ~done
+    add = ~(switching & armijo_first) & ~done
     entry = jnp.stack([(1.0 - 1e-5) * theta0, psi0 - 1e-5 * theta0])
     filt = jnp.where(add, filt.at[count % FILTER].set(entry), filt)
     count = jnp.where(stalled, 0, count + add)
     filt = jnp.where(stalled, jnp.inf, filt)
-    length, c_new = lengths[first], c_t[first]
     z_new = z + length * dz
     s_new = _slacks(fns, s + length * ds, c_new)
     y_new = y + alpha_y * dy
@@ -369,13 +371,11 @@ def minimize(problem: Problem, weights: Weights, init_design: Design | None = No
         return NewtonState(z0, s0, y0, mu0, jnp.asarray(0), KKT(inf, inf, inf, inf), jnp.asarray(False),
                            jnp.full((FILTER, 2), jnp.inf, z0.dtype), jnp.asarray(0), use_filter)
 
-    # Central paths at once, one loop (each step vmapped): mu0 and mu0 / n, each with the
-    # filter line search and with the memoryless one. The path keeps t - f_i ~ n mu on
-    # the n epigraph rows, so mu0 starts far above the objective and mu0 / n close to it; the
-    # filter cannot cycle, the memoryless search crosses the kinks of a family's rows (|s' - e|
-    # at a dwell) that can hold a filter's iterates. Measured on the seven follower types: no one
-    # of the four reaches the optimum on all. The loop ends when one path has converged; of the
-    # converged ones the lowest objective is kept.
+    # Central paths in one loop (each step vmapped): mu0 and mu0 / n (t - f_i ~ n mu on the n
+    # epigraph rows: far above the objective, and close to it), each with the filter (no cycling)
+    # and without (it crosses the rows' kinks, |s' - e| at a dwell, that can hold a filter's
+    # iterates); on the seven types no one of the four reached every optimum. The loop ends when
+    # one converges; of the converged, the lowest objective is kept.
     smooth = getattr(family_of(problem), "SMOOTH_OBJECTIVE", False)
     first = [settings.mu0, settings.mu0 * (SMOOTH_SECOND_MU if smooth else 1.0 / fns.n_angles)]
     first = first[:1] if fns.n_angles == 1 and not smooth else first
