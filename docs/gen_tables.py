@@ -26,7 +26,9 @@ The sources, all committed (:data:`SOURCES`):
 - ``robust``, ``benchmarks/results/robust.json``: ``python -m benchmarks.robust --samples 100000
   --out benchmarks/results/robust.json``;
 - ``newton``, ``benchmarks/results/newton.json``: ``python -m benchmarks.newton --out
-  benchmarks/results/newton.json``.
+  benchmarks/results/newton.json``;
+- ``line_search``, ``benchmarks/results/line_search.json``: ``python -m benchmarks.line_search
+  --out benchmarks/results/line_search.json``.
 
 ``{{ table: performance }}`` is every target of every benchmark in one table (:func:`targets`:
 goal, measured, machine, status); ``{{ status: KEY }}`` writes one target's status (``met`` or
@@ -67,6 +69,7 @@ SOURCES = {
     "synthesis_device": ROOT / "benchmarks" / "results" / "synthesis_device.json",
     "robust": ROOT / "benchmarks" / "results" / "robust.json",
     "newton": ROOT / "benchmarks" / "results" / "newton.json",
+    "line_search": ROOT / "benchmarks" / "results" / "line_search.json",
 }
 
 
