@@ -49,6 +49,15 @@ class EpigraphForm(NamedTuple):
     split: bool  # a block was split by angle and sample (a robust problem): the feasible-slack path
 
 
+def _unit_box(u_max_tree):
+    """The unit box's flat upper corner, its unravel, its size m and dtype, which variables are
+    free (u_max > 0) and the same with t (always free) appended."""
+    u_max, unravel = ravel_pytree(u_max_tree)
+    dtype = u_max.dtype
+    free_u = (u_max > 0).astype(dtype)
+    return u_max, unravel, u_max.shape[0], dtype, free_u, jnp.concatenate([free_u, jnp.ones(1, dtype)])
+
+
 def epigraph_form(problem, weights: Weights) -> EpigraphForm:
     """The epigraph form of ``problem`` for one weighting (traceable; the functions close over it).
     A family that declares ``SMOOTH_OBJECTIVE = True`` gets :func:`smooth_form`."""
@@ -56,11 +65,7 @@ def epigraph_form(problem, weights: Weights) -> EpigraphForm:
     if getattr(family, "SMOOTH_OBJECTIVE", False):
         return smooth_form(problem, weights)
     u_max_tree = u_max_of(problem)
-    u_max, unravel = ravel_pytree(u_max_tree)
-    m = u_max.shape[0]
-    dtype = u_max.dtype
-    free_u = (u_max > 0).astype(dtype)
-    free = jnp.concatenate([free_u, jnp.ones(1, dtype)])
+    u_max, unravel, m, dtype, free_u, free = _unit_box(u_max_tree)
     per = family.per_angle(problem)
     total = weights.alpha + weights.gamma
     scale = jnp.where(total > 0, total, 1.0)
@@ -123,12 +128,7 @@ def smooth_form(problem, weights: Weights) -> EpigraphForm:
     objective(u) - t <= 0, the constraint rows g / N of every leaf of ``family.constraints`` (a
     nested tuple of blocks: ``kinds`` names each by its path), and the unit box."""
     family = family_of(problem)
-    u_max_tree = u_max_of(problem)
-    u_max, unravel = ravel_pytree(u_max_tree)
-    m = u_max.shape[0]
-    dtype = u_max.dtype
-    free_u = (u_max > 0).astype(dtype)
-    free = jnp.concatenate([free_u, jnp.ones(1, dtype)])
+    u_max, unravel, m, dtype, free_u, free = _unit_box(u_max_of(problem))
     norm = family.size_norm(problem)
 
     def design_of(z):
