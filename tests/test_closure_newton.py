@@ -13,7 +13,7 @@ import pytest
 import camjax
 from camjax.family import weights_of
 from camjax.followers import _closure_problem
-from camjax.solvers import newton, scipy_family
+from camjax.solvers import certificate, limits, newton, scipy_family
 from camjax.solvers.base import family_of, problem_from_scene
 
 pytest.importorskip("scipy")
@@ -42,8 +42,8 @@ def solved(request):
     key, step, _ = CASES[name]
     scene, problem = _problem(name)
     w = weights_of(scene.design.alpha, scene.design.gamma)
-    value = float(newton.limit_values(problem)[key])
-    setter = newton._limits(problem)[key]
+    value = float(limits.limit_values(problem)[key])
+    setter = limits.limit_setters(problem)[key]
     batch = [problem] + [setter(problem, jnp.asarray(value + sign * step, problem.theta_deg.dtype))
                          for sign in (1.0, -1.0)]
     certs = _certify_problems(jax.tree.map(lambda *x: jnp.stack(x), *batch), w)
@@ -91,7 +91,7 @@ def test_certificate_names_the_binding_flank_or_cam(solved):
     normal; the conjugate rocker's first cam binds on its stress and pressure angle, the second cam
     on its pressure angle); the summary names them ("the pressure angle of the second cam at ...")."""
     name, problem, _, _, certs, _ = solved
-    block = newton.certificate_json(problem, jax.tree.map(lambda x: x[0], certs))
+    block = certificate.certificate_json(problem, jax.tree.map(lambda x: x[0], certs))
     keys = {"pressure_angle": "max_pressure_angle_deg", "stress": "sigma_max_MPa",
             "undercut": "min_curvature_radius_mm"}
     rows = [e for e in block["active"] if e["kind"] != "bound"]
@@ -118,6 +118,6 @@ def test_sensitivity_matches_finite_differences(solved):
     objective = [float(family_of(p).objective(p, w, jax.tree.map(lambda x, i=i: x[i], certs.result.design)))
                  for i, p in enumerate(batch)]
     fd = (objective[1] - objective[2]) / (2 * step)
-    reported = newton.certificate_json(problem, jax.tree.map(lambda x: x[0], certs))["dF_dlimit"][key]
+    reported = certificate.certificate_json(problem, jax.tree.map(lambda x: x[0], certs))["dF_dlimit"][key]
     assert reported < 0.0, (name, reported)
     np.testing.assert_allclose(reported, fd, rtol=1e-4, atol=1e-7, err_msg=name)

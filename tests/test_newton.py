@@ -15,7 +15,7 @@ import pytest
 import camjax
 from camjax import followers
 from camjax.family import weights_of
-from camjax.solvers import epigraph, newton, scipy_family
+from camjax.solvers import certificate, epigraph, limits, newton, scipy_family
 from camjax.solvers.base import family_of, problem_from_scene, solve
 
 pytest.importorskip("scipy")
@@ -120,7 +120,7 @@ def _moved(problem, key, value):
         side, field = key.split(".", 1)
         box = getattr(problem, side)
         return problem._replace(**{side: box._replace(**{field: jnp.asarray(value, problem.theta_deg.dtype)})})
-    return newton._limits(problem)[key](problem, jnp.asarray(value, problem.theta_deg.dtype))
+    return limits.limit_setters(problem)[key](problem, jnp.asarray(value, problem.theta_deg.dtype))
 
 
 @pytest.mark.slow
@@ -146,7 +146,7 @@ def test_sensitivities_match_finite_differences(name, alpha, gamma):
     side, field = ("lower", "upper")[index // len(fields)], fields[index % len(fields)]
     bound_key = f"{side}.{field}"
     steps = {"sigma_max_MPa": 1.0, "max_pressure_angle_deg": 0.05, bound_key: 0.01}
-    values = {**{k: float(v) for k, v in newton.limit_values(problem).items()},
+    values = {**{k: float(v) for k, v in limits.limit_values(problem).items()},
               bound_key: float(getattr(getattr(problem, side), field))}
     keys = [k for k in steps if k in values]
     batch = [_moved(problem, k, values[k] + sign * steps[k]) for k in keys for sign in (1, -1)]
@@ -155,7 +155,7 @@ def test_sensitivities_match_finite_differences(name, alpha, gamma):
     objective = [float(family_of(p).objective(p, w, c.result.design))
                  for p, c in zip([problem, *batch], certs, strict=True)]
     base = first
-    block = newton.certificate_json(problem, base)
+    block = certificate.certificate_json(problem, base)
     for j, key in enumerate(keys):
         fd = (objective[1 + 2 * j] - objective[2 + 2 * j]) / (2 * steps[key])
         if key == bound_key:
@@ -175,10 +175,10 @@ def test_certify_point_recovers_the_multipliers_at_the_optimum():
     w = weights_of(1.0, 1.0)
     # newton.certify in the solve's program (test_solution_json_carries_the_certificate's)
     cert = solve(problem, (1.0, 1.0), mode="global", solver="newton").certificate
-    point = jax.jit(newton.certify_point)(problem, w, cert.result.design)
+    point = jax.jit(certificate.certify_point)(problem, w, cert.result.design)
     assert float(point.result.kkt.error) < 1e-6
-    a = newton.certificate_json(problem, cert)["dF_dlimit"]["sigma_max_MPa"]
-    b = newton.certificate_json(problem, point, solver="ga")["dF_dlimit"]["sigma_max_MPa"]
+    a = certificate.certificate_json(problem, cert)["dF_dlimit"]["sigma_max_MPa"]
+    b = certificate.certificate_json(problem, point, solver="ga")["dF_dlimit"]["sigma_max_MPa"]
     np.testing.assert_allclose(b, a, rtol=1e-4)
 
 

@@ -428,7 +428,7 @@ def design_json(scene, nominal_problem) -> dict:
     and the robust-optimal designs side by side, with each limit's probability kept measured on a
     fresh sample set (seed + 1)."""
     from camjax.solvers.base import solve
-    from camjax.solvers.newton import point_certificate_json
+    from camjax.solvers.certificate import point_certificate_json
 
     d = scene.design
     spec = d.robust

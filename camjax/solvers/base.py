@@ -15,7 +15,7 @@ Solver protocol (a module named in :data:`camjax.solvers.registry.SOLVER_MODULES
   ``init`` an optional start design. It must reach the problem only through its family module
   (:func:`family_of`) and treat the design as a pytree (``jax.tree.map``);
 - where ``run_one`` gives a ``Raw.certificate``: ``certificate_json(problem, certificate, mode=,
-  solver=) -> dict``, result.json's ``certificate`` block (:mod:`camjax.solvers.newton`'s).
+  solver=) -> dict``, result.json's ``certificate`` block (:mod:`camjax.solvers.certificate`'s).
 
 Problem-family protocol (a follower folder's ``problem.py``, :mod:`camjax.followers`; the
 flat-face one is :mod:`camjax.followers.flat.problem`). It provides:
@@ -163,7 +163,7 @@ class Raw(NamedTuple):
     design: Any  # the family's Design, mm
     iterations: jax.Array  # int: steps or generations
     converged: jax.Array | None  # bool: the stopping rule was met; None for a fixed-budget solver
-    certificate: Any = None  # the answer's KKT certificate (camjax.solvers.newton.Certificate), if any
+    certificate: Any = None  # the answer's KKT certificate (camjax.solvers.certificate.Certificate), if any
 
 
 # ------------------------------------------------------------------------------ result

@@ -42,9 +42,11 @@ import jax.numpy as jnp
 from camjax.family import Design, Problem, Violation, Weights
 from camjax.solvers.base import Raw, family_of, in_mode
 from camjax.solvers.base import weighting_keys as weighting_keys
+from camjax.solvers.certificate import (
+    certificate_json as certificate_json,  # the final point's, in result.json
+)
+from camjax.solvers.certificate import certify_point
 from camjax.solvers.gradient import from_unit, problem_dtype, solver_objective, to_unit
-from camjax.solvers.newton import certificate_json as certificate_json  # the final point's, in result.json
-from camjax.solvers.newton import certify_point
 
 
 @dataclass(frozen=True)
@@ -327,7 +329,7 @@ def run_one(problem: Problem, weights: Weights, key: jax.Array, settings, init: 
 
     ``init`` (optional) seeds member 0 of the population. A fixed budget of generations: no
     convergence flag (status max_steps when feasible). The final point's KKT certificate
-    (:func:`camjax.solvers.newton.certify_point`) comes with it.
+    (:func:`camjax.solvers.certificate.certify_point`) comes with it.
     """
     res = run(key, problem, weights, settings.of("ga"), seed_design=init)
     return Raw(res.design, res.iterations, None, certify_point(problem, weights, res.design, res.iterations))

@@ -50,20 +50,15 @@ strictly inside the box, where the families' physics is defined. Four central pa
 loop (mu0 and mu0 / n, or mu0 * :data:`SMOOTH_SECOND_MU` for a smooth family's form, each with and
 without the filter; one angle: two); the loop ends when one converges.
 
-Stopping rule: the scaled KKT residual (IPOPT's: stationarity ||grad phi + J^T y||_inf / s_d,
-primal infeasibility max(c, 0), complementarity max |c_i| y_i / s_d with s_d = max(100,
-||y||_1 / rows) / 100, :func:`kkt_residuals`) <= ``tol`` (1e-9), evaluated at the top of each
-iteration from the rows, Jacobian and gradient the step uses; ``max_iterations`` is a safeguard
-only. Gradients stay finite from infeasible starts: the families' functions are written with safe
-square roots and divisions, and a trial step with a non-finite merit is rejected.
+Stopping rule: the scaled KKT residual (IPOPT's: stationarity, primal infeasibility and
+complementarity, :func:`camjax.solvers.certificate.kkt_residuals`) <= ``tol`` (1e-9), evaluated at
+the top of each iteration from the rows, Jacobian and gradient the step uses; ``max_iterations`` is
+a safeguard only. Gradients stay finite from infeasible starts: the families' functions are written
+with safe square roots and divisions, and a trial step with a non-finite merit is rejected.
 
-:func:`run_one` returns with the answer its :class:`Certificate`, computed in the same program
-(no second solve): the KKT residuals, the iterations and the multipliers, and the sensitivity
-dF*/d(limit) of the optimal objective to the limits of the scene (envelope theorem: the
-derivative of the Lagrangian in the problem's limit fields); :func:`certificate_json` writes
-result.json's ``certificate`` block from it (pointwise mode: the critical angle's problem).
-:func:`certify_point` certifies any design (the GA's and the hybrid's final points): the same
-residuals with multipliers fitted on the active rows by least squares.
+:func:`run_one` returns with the answer its certificate (:mod:`camjax.solvers.certificate`: the
+KKT residuals, the iterations, the multipliers and the sensitivity dF*/d(limit) of the optimal
+objective to the limits of the scene), computed in the same program (no second solve).
 """
 
 from __future__ import annotations
@@ -74,15 +69,23 @@ from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
-import numpy as np
 from jax.flatten_util import ravel_pytree
 
-from camjax.family import Design, Problem, Weights, weights_of
+from camjax.family import Design, Problem, Weights
 from camjax.solvers.base import Raw, family_of
+from camjax.solvers.certificate import (
+    KKT,
+    TOL,
+    Certificate,
+    KKTPoint,
+    certificate_of,
+    dual_scale,
+    residuals,
+    rows_and_jacobian,
+)
+from camjax.solvers.certificate import certificate_json as certificate_json  # in result.json
 from camjax.solvers.epigraph import EpigraphForm, epigraph_form
-from camjax.solvers.gradient import from_unit, midpoint, to_unit, u_max_of
-from camjax.solvers.limits import limit_setters as _limits
-from camjax.solvers.limits import limit_values
+from camjax.solvers.gradient import from_unit, midpoint, to_unit
 
 
 @dataclass(frozen=True)
@@ -93,7 +96,7 @@ class NewtonSettings:
     variables to the unit box: the tolerances are dimensionless.
     """
 
-    tol: float = 1e-9  # scaled KKT residual ending the solve
+    tol: float = TOL  # scaled KKT residual ending the solve
     max_iterations: int = 200  # a safeguard only: the solve stops on ``tol``
     mu0: float = 0.1  # first barrier parameter
     kappa_mu: float = 0.2  # mu <- min(kappa_mu mu, mu^theta_mu) ...
@@ -109,16 +112,6 @@ DEFAULT_SETTINGS = NewtonSettings()
 FILTER = 32  # entries of the line search's filter (a ring: the oldest is replaced)
 SMOOTH_SECOND_MU = 1e-3
 """A smooth form's second paths start at mu0 x this (roller co-design steps at 1e-2/1e-3/1e-4: 90/23/27)."""
-S_MAX = 100.0  # IPOPT's s_max: multipliers larger than this on average scale the dual residuals
-
-
-class KKT(NamedTuple):
-    """Scaled KKT residuals (dimensionless; the solver's normalized objective and rows)."""
-
-    stationarity: jax.Array  # ||grad phi + J^T y||_inf / s_d (free variables)
-    primal: jax.Array  # max(max_i c_i, 0): the largest violated row (g / N, f_i - t)
-    complementarity: jax.Array  # max_i |c_i| y_i / s_d at the answer (slack-free: c, not s)
-    error: jax.Array  # the largest of the three
 
 
 class NewtonState(NamedTuple):
@@ -136,30 +129,6 @@ class NewtonState(NamedTuple):
     use_filter: jax.Array  # () bool: this path's line search keeps the filter (else memoryless)
 
 
-def _scaled(y, count):
-    return jnp.maximum(S_MAX, jnp.sum(y) / count) / S_MAX
-
-
-def _residuals(grad, c, jac, y, free) -> KKT:
-    """:class:`KKT` from the objective's gradient, the rows c and their Jacobian at one point."""
-    sd = _scaled(y, y.shape[0])
-    stat = jnp.max(jnp.abs((grad + jac.T @ y) * free)) / sd
-    primal = jnp.maximum(jnp.max(c), 0.0)
-    comp = jnp.max(jnp.abs(jnp.minimum(c, 0.0)) * y) / sd
-    return KKT(stat, primal, comp, jnp.maximum(jnp.maximum(stat, primal), comp))
-
-
-def _rows_and_jacobian(fns: EpigraphForm, z):
-    """c(z) and its Jacobian from one forward-mode pass (the rows traced once: c is its primal)."""
-
-    def rows(v):
-        c = fns.rows(v)
-        return c, c
-
-    jac, c = jax.jacfwd(rows, has_aux=True)(z)
-    return c, jac
-
-
 class _Derivatives(NamedTuple):
     c: jax.Array  # (M,) the rows
     jac: jax.Array  # (M, m + 1) their Jacobian
@@ -174,18 +143,12 @@ def _derivatives(fns: EpigraphForm, z, y) -> _Derivatives:
     rows, J and grad phi are its primal values."""
 
     def lagrangian_gradient(v):
-        c, jac = _rows_and_jacobian(fns, v)
+        c, jac = rows_and_jacobian(fns, v)
         grad = jax.jacfwd(fns.phi)(v)
         return grad + jac.T @ y, (c, jac, grad)
 
     hess, (c, jac, grad) = jax.jacfwd(lagrangian_gradient, has_aux=True)(z)
     return _Derivatives(c, jac, grad, hess)
-
-
-def kkt_residuals(fns: EpigraphForm, z, y) -> KKT:
-    """The scaled KKT residuals of the epigraph form at z = (u, t) with multipliers y (one per row)."""
-    c, jac = _rows_and_jacobian(fns, z)
-    return _residuals(jax.grad(fns.phi)(z), c, jac, y, fns.free)
 
 
 def _start(problem, fns: EpigraphForm, design, settings: NewtonSettings, mu0):
@@ -244,10 +207,10 @@ def _step(state: NewtonState, fns: EpigraphForm, settings: NewtonSettings) -> Ne
     dtype = z.dtype
     free = fns.free
     c, jac, grad, hess = _derivatives(fns, z, y)
-    kkt = _residuals(grad, c, jac, y, free)
+    kkt = residuals(grad, c, jac, y, free)
     done = kkt.error <= settings.tol
     # barrier update (IPOPT's E_mu of the barrier problem: c + s = 0, S y = mu)
-    sd = _scaled(y, y.shape[0])
+    sd = dual_scale(y, y.shape[0])
     # Its infeasibility counts the rows at or beyond their limit only (a row inside with s > -c is
     # feasible): counted, such a gap on a row's kink (|e| / r at a dwell) held a one-angle problem at
     # mu ~ 1e-4, c + s ~ 2e-2, each step across the kink widening it. The stopping rule takes c, not s.
@@ -345,19 +308,8 @@ def _step(state: NewtonState, fns: EpigraphForm, settings: NewtonSettings) -> Ne
                        pick(state.filter_count, count), state.use_filter)
 
 
-class NewtonResult(NamedTuple):
-    """Outcome of one solve (shape () each for one problem, except the arrays noted)."""
-
-    design: Design  # mm
-    iterations: jax.Array  # int: Newton steps
-    converged: jax.Array  # bool: the KKT residual reached ``tol``
-    z: jax.Array  # (m + 1,) unit-box variables and t at the answer
-    multipliers: jax.Array  # (M,) y, one per row of the epigraph form
-    kkt: KKT  # scaled residuals at the answer
-
-
 def minimize(problem: Problem, weights: Weights, init_design: Design | None = None,
-             settings: NewtonSettings = DEFAULT_SETTINGS) -> NewtonResult:
+             settings: NewtonSettings = DEFAULT_SETTINGS) -> KKTPoint:
     """Solve one problem (global over its angle grid) for one weighting; traceable, vmappable.
 
     ``init_design``: the start (mm); default the family's ``start(problem)`` where it has one,
@@ -390,7 +342,7 @@ def minimize(problem: Problem, weights: Weights, init_design: Design | None = No
     end = jax.tree.map(lambda x: x[best], ends)
     m = fns.u_max.shape[0]
     design = from_unit(problem, fns.unravel(end.z[:m]), own=False)
-    return NewtonResult(design, end.iteration, end.done, end.z, end.y, end.kkt)
+    return KKTPoint(design, end.iteration, end.done, end.z, end.y, end.kkt)
 
 
 def run_one(problem: Problem, weights: Weights, key: jax.Array, settings, init: Design | None = None) -> Raw:
@@ -399,202 +351,10 @@ def run_one(problem: Problem, weights: Weights, key: jax.Array, settings, init: 
     ``key`` is unused (deterministic). Converged when the scaled KKT residual reached ``tol``.
     """
     res = minimize(problem, weights, init, settings.of("newton"))
-    return Raw(res.design, res.iterations, res.converged, _certificate(problem, weights, res))
-
-
-# --------------------------------------------------------------------------- certificate
-
-
-class Certificate(NamedTuple):
-    """The KKT certificate of one answer (traceable; arrays): what ``run_one`` hands to result.json."""
-
-    result: NewtonResult  # the answer, its multipliers and scaled residuals
-    scale: jax.Array  # () alpha + gamma: F = scale * (solver objective)
-    sensitivity: dict  # limit key -> (M,) per-row dF*/d limit (scene units); the sum is the total
-    bound_sensitivity: jax.Array  # (2m,) dF*/d bound (mm) of each bound row (lower, then upper)
-    gamma: jax.Array  # () the stress weight (0: the epigraph rows carry the size only)
-
-
-def _certificate(problem: Problem, weights: Weights, res: NewtonResult) -> Certificate:
-    """The sensitivities of the optimal objective F* to each limit of the scene at an answer with
-    its multipliers, by the envelope theorem, dF*/dp = (alpha + gamma) sum_i y_i dc_i/dp at the
-    answer (u, t fixed), split by row. Bounds: dF*/d lo_j = (alpha + gamma) y_j du_j/dx_j (and
-    minus that for an upper bound), with the normalization N fixed. No solve: traceable, vmappable."""
-    total = weights.alpha + weights.gamma
-    scale = jnp.where(total > 0, total, 1.0)
-    setters = _limits(problem)
-
-    def rows_at(values):  # the rows at the answer with every limit set to ``values`` (one trace)
-        moved = problem
-        for key, setter in setters.items():
-            moved = setter(moved, values[key])
-        return epigraph_form(moved, weights).rows(res.z)
-
-    # limit key -> (M,) dc/d limit (a problem without limits, e.g. a robust one: none)
-    moved = jax.jacfwd(rows_at)(limit_values(problem)) if setters else {}
-    sens = {key: scale * res.multipliers * moved[key] for key in setters}
-    m = ravel_pytree(u_max_of(problem))[0].shape[0]
-    x, unravel = ravel_pytree(res.design)
-    diag = jnp.diagonal(jax.jacfwd(lambda v: ravel_pytree(to_unit(problem, unravel(v), own=False))[0])(x))
-    y_box = res.multipliers[-2 * m:]
-    bound = scale * y_box * jnp.concatenate([diag, -diag])
-    return Certificate(res, scale, sens, bound, weights.gamma)
+    return Raw(res.design, res.iterations, res.converged, certificate_of(problem, weights, res))
 
 
 def certify(problem: Problem, weights: Weights, init_design: Design | None = None,
             settings: NewtonSettings = DEFAULT_SETTINGS) -> Certificate:
-    """Solve (:func:`minimize`) and certify the answer (:func:`_certificate`); traceable, vmappable."""
-    return _certificate(problem, weights, minimize(problem, weights, init_design, settings))
-
-
-def certify_point(problem: Problem, weights: Weights, design: Design, iterations=0, *,
-                  active_tol: float = 1e-6, tol: float = DEFAULT_SETTINGS.tol) -> Certificate:
-    """The certificate of any design (a GA's or a hybrid's final point): the epigraph form at
-    t = max_i f_i, the rows within ``active_tol`` of their limit taken as active, their multipliers
-    the least-squares fit of stationarity grad phi + J_A^T y_A = 0 (negative ones set to 0, which
-    leaves their share in the stationarity residual), the KKT residuals and sensitivities from
-    those. ``converged``: the residuals are within ``tol``. Traceable, vmappable."""
-    fns = epigraph_form(problem, weights)
-    dtype = fns.u_max.dtype
-    u = ravel_pytree(jax.tree.map(lambda x: jnp.asarray(x, dtype), to_unit(problem, design, own=False)))[0]
-    u = jnp.where(fns.u_max > 0, u, 0.0)
-    n = fns.n_angles
-    rows0 = fns.rows(jnp.concatenate([u, jnp.zeros(1, dtype)]))
-    t = jnp.max(jnp.where(fns.epigraph, rows0[:n], -jnp.inf))
-    z = jnp.concatenate([u, t[None]])
-    c, jac = _rows_and_jacobian(fns, z)
-    grad = jax.grad(fns.phi)(z)
-    active = (c >= -active_tol).astype(dtype)
-    fit = jnp.linalg.lstsq((jac * fns.free).T * active, -grad * fns.free)[0]
-    y = jnp.maximum(fit, 0.0) * active
-    kkt = _residuals(grad, c, jac, y, fns.free)
-    res = NewtonResult(design, jnp.asarray(iterations), kkt.error <= tol, z, y, kkt)
-    return _certificate(problem, weights, res)
-
-
-def point_certificate_json(problem: Problem, solution) -> dict:
-    """result.json's certificate block of a :class:`camjax.solvers.base.Solution` that came without
-    one (the gradient solver's): its final point certified on ``problem`` by :func:`certify_point`
-    (one compiled program per problem form)."""
-    w = weights_of(solution.alpha, solution.gamma, problem.lower[0].dtype)
-    cert = _certify_point(problem, w, jax.tree.map(jnp.asarray, solution.design), solution.iterations)
-    return certificate_json(problem, cert, mode="global", solver=solution.solver)
-
-
-_certify_point = jax.jit(certify_point)
-
-
-def _block(problem, cert: Certificate, *, active_tol: float = 1e-6) -> dict:
-    """The residuals, sensitivities and merged active rows of :func:`certificate_json` (one answer)."""
-    res = cert.result
-    y = np.asarray(res.multipliers, float)
-    scale = float(cert.scale)
-    row_kinds = []  # the form's row blocks: static, read off a trace (nothing compiled or run)
-
-    def blocks(p):
-        row_kinds.append(epigraph_form(p, Weights(jnp.asarray(1.0), jnp.asarray(1.0))).kinds)
-        return jnp.zeros(())
-
-    jax.eval_shape(blocks, problem)
-    theta = np.asarray(problem.theta_deg, float).reshape(-1)
-    lower = family_of(problem).bounds(problem)[0]
-    variables = list(lower._fields)
-    keys = {"pressure_angle": "max_pressure_angle_deg", "stress": "sigma_max_MPa",
-            "undercut": "min_curvature_radius_mm", "curvature": "min_curvature_radius_mm",
-            # the face's own width (a design variable) is what these rows bind against
-            "face_width": "face_width_mm (design)", "face_travel": "face_width_mm (design)"}
-    # a problem with two contacts (a positive drive) names each row's kind and contact
-    labels = getattr(family_of(problem), "row_labels", lambda p: {})(problem)
-    sens = {k: np.asarray(v, float) for k, v in cert.sensitivity.items()}
-    bound_sens = np.asarray(cert.bound_sensitivity, float)
-    active = []
-    start = 0
-    m = len(variables)
-    for kind, count in row_kinds[0]:
-        for j in range(count):
-            i = start + j
-            if scale * y[i] <= active_tol:
-                continue
-            if kind in ("lower_bound", "upper_bound"):
-                k = j + (m if kind == "upper_bound" else 0)
-                side = "lower" if kind == "lower_bound" else "upper"
-                active.append({"kind": "bound", "limit": f"{variables[j][:-3]}_bounds_mm ({side})",
-                               "variable": variables[j], "theta_deg": None,
-                               "multiplier": float(scale * y[i]), "dF_dlimit": float(bound_sens[k])})
-                continue
-            if kind == "objective" and float(cert.gamma) == 0.0:
-                continue  # without a stress weight the epigraph rows are the size term's, not a limit
-            name, contact = labels.get("stress" if kind == "objective" else kind,
-                                       ("stress" if kind == "objective" else kind, None))
-            key = keys.get(name)
-            entry = {"kind": name, "limit": key, "theta_deg": float(theta[j % theta.size]),
-                     "multiplier": float(scale * y[i])}
-            if contact is not None:
-                entry["contact"] = contact
-            if key in sens:
-                entry["dF_dlimit"] = float(sens[key][i])
-            active.append(entry)
-        start += count
-    # merge the rows of one kind and contact at one angle (the stress in the objective and as a
-    # constraint; a pressure angle's two rows, + and - the limit)
-    merged: dict = {}
-    for e in active:
-        k = (e["kind"], e["theta_deg"], e.get("variable"), e.get("contact"))
-        if k in merged:
-            merged[k]["multiplier"] += e["multiplier"]
-            if "dF_dlimit" in e:
-                merged[k]["dF_dlimit"] = merged[k].get("dF_dlimit", 0.0) + e["dF_dlimit"]
-        else:
-            merged[k] = dict(e)
-    kkt = res.kkt
-    return {
-        "stationarity": float(kkt.stationarity), "primal_feasibility": float(kkt.primal),
-        "complementarity": float(kkt.complementarity), "iterations": int(res.iterations),
-        "converged": bool(res.converged),
-        "dF_dlimit": {k: float(np.sum(v)) for k, v in sens.items()},
-        "active": sorted(merged.values(), key=lambda e: -e["multiplier"]),
-    }
-
-
-def limited_by(certificate: dict, top: int = 3) -> str:
-    """The text summary's "limited by ..." line of a certificate block (its largest multipliers)."""
-    parts = []
-    for e in certificate["active"][:top]:
-        if e["kind"] == "bound":
-            parts.append(f"the {e['limit']}")
-        else:
-            of = f" of the {e['contact']}" if "contact" in e else ""
-            parts.append(f"the {e['kind'].replace('_', ' ')}{of} at {e['theta_deg']:.1f} deg")
-    return "limited by " + (" and ".join(parts) if parts else "nothing (an interior optimum)")
-
-
-_POINT = "the final point's KKT residuals, multipliers fitted on its active rows (least squares)"
-METHODS = {"newton": "primal-dual interior point on the epigraph form (scaled KKT residuals)",
-           "ga": _POINT, "hybrid": _POINT, "gradient": _POINT}
-
-
-def certificate_json(problem, cert: Certificate, *, mode: str = "global", solver: str = "newton",
-                     active_tol: float = 1e-6) -> dict:
-    """result.json's ``certificate`` block (Python, concrete values) of a solution's certificate.
-
-    ``kkt``: the scaled residuals (``stationarity``, ``primal_feasibility``, ``complementarity``);
-    ``iterations``, ``converged`` (the residuals within the stopping rule); ``dF_dlimit``: the
-    optimal objective's sensitivity to each scene limit; ``active``: every row whose multiplier
-    times (alpha + gamma) exceeds ``active_tol`` (the rows of one kind and angle merged), each with
-    its kind (a constraint's field name, ``stress`` for the objective's stress rows, ``bound``; a
-    positive drive's rows by the family's ``row_labels``: the kind of the limit and, under
-    ``contact``, the flank or cam, e.g. "outer flank"), the scene key of its limit, the cam angle
-    (deg; None for a bound), the variable (bounds), its multiplier and dF*/d limit (scene units);
-    ``limited_by``: the summary's line. Pointwise mode: the certificate of the critical angle's
-    one-angle problem (the one whose optimum is the largest), its angle under ``critical_angle_deg``.
-    """
-    extra = {}
-    if mode == "pointwise":
-        i = int(np.argmax(np.asarray(cert.result.z)[:, -1]))
-        cert = jax.tree.map(lambda x: np.asarray(x)[i], cert)
-        problem = jax.tree.map(lambda x: x[i], family_of(problem).per_angle(problem))
-        extra["critical_angle_deg"] = float(np.reshape(np.asarray(problem.theta_deg), -1)[0])
-    block = {"method": METHODS.get(solver, solver), **extra, **_block(problem, cert, active_tol=active_tol)}
-    block["limited_by"] = limited_by(block)
-    return block
-
+    """Solve (:func:`minimize`) and certify the answer (:func:`camjax.solvers.certificate.certificate_of`); traceable, vmappable."""
+    return certificate_of(problem, weights, minimize(problem, weights, init_design, settings))
