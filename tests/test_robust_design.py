@@ -157,8 +157,10 @@ def test_sweep_refuses_a_robust_design(tmp_path, capsys):
     assert not out.exists()
 
 
-PF, SF = 0.9, 200  # every follower's robust set: m = floor(0.1 x 201) - d = 20 - d samples may exceed a row
-FRESH_SETS = 5  # fresh sets of SF samples each (seeds 1..5): the same shapes, so nothing compiles again
+PF, SF = 0.9, 100  # every follower's robust set: m = floor(0.1 x 101) - d = 10 - d samples may exceed a row
+# (the solves' rows grow with SF: 100 samples, not 200, halve the file's robust solves; the fresh sets
+# below are doubled to keep their count, and the margin grows from 0.069 to 0.093)
+FRESH_SETS = 10  # fresh sets of SF samples each (seeds 1..10): the same shapes, so nothing compiles again
 FOLLOWER_SPREAD_MM = 0.05  # sd of every toleranced design variable but the base radius
 
 
@@ -232,9 +234,9 @@ def test_every_follower_type_keeps_each_constraint_on_fresh_samples(name, follow
     """Every registered follower type through its family protocol.
 
     - The robust design is feasible and no smaller than the nominal optimum, and each of its
-      constraint rows is kept on 5 x 200 fresh samples (seeds 1..5, the same models) in at least
+      constraint rows is kept on 10 x 100 fresh samples (seeds 1..10, the same models) in at least
       p minus the margin of :func:`_margin` (3 sd of the scenario approach's Beta and of the fresh
-      count's binomial: 0.9 - 0.069).
+      count's binomial: 0.9 - 0.093).
     - With every spread 0, each sample is the nominal scene: the robust rows equal the nominal's
       maxima over the grid (1e-9 mm: the same models, built batched) at the nominal optimum and at
       the zero-spread robust optimum, both designs keep them, and the robust optimum's objective is
@@ -265,7 +267,7 @@ def test_every_follower_type_keeps_each_constraint_on_fresh_samples(name, follow
     free = rd.free_variables(scene.design.variables)
     fresh = FRESH_SETS * SF
     margin = _margin(PF, SF, free, fresh)
-    assert margin < 0.07
+    assert margin < 0.095
     over: dict[str, int] = {}
     for seed in range(1, FRESH_SETS + 1):
         # each sample's max over the grid of each row (rd.sample_maxima, stacked by rd._maxima: the
