@@ -164,8 +164,8 @@ def test_the_ga_and_the_hybrid_search_the_laws_too(cases, solved):
     assert bool(ga.feasible) and float(ga.objective) <= c["f0"] * (1 + 1e-12)
     generations = GA_DEFAULTS.generations
     assert int(ga.iterations) == generations  # the GA's generations (its default settings)
-    # the hybrid ends at the gradient solve's optimum after the GA's generations and the gradient's
-    # evaluations: measured equal to 1e-9 on this problem; 1e-6 leaves room for the other path's
+    # the hybrid ends at the gradient solve's optimum after the GA's generations and the interior
+    # point's Newton steps (its polish); 1e-6 leaves room for the other path's
     # rounding, and a hybrid stuck elsewhere (another local optimum, the GA's point) fails it
     grad_f = float(solved[0].objective[0])
     assert bool(hybrid.feasible) and abs(float(hybrid.objective) - grad_f) <= 1e-6 * grad_f

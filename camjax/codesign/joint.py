@@ -280,9 +280,9 @@ def solve(problem: JointProblem, start: JointDesign, settings=SETTINGS, solver: 
     settings, :func:`camjax.solvers.epigraph.smooth_form`), ``gradient`` (the gradient solver's
     augmented-Lagrangian BFGS with ``settings``),
     ``ga`` (the GA, ``ga_settings`` (default its own), PRNG ``key``, its population seeded with the
-    start: by elitism never worse than it) or ``hybrid`` (that GA, then the gradient solver from its
-    best). Iterations: the GA's generations plus the gradient solver's evaluations, or the
-    interior point's Newton steps."""
+    start: by elitism never worse than it) or ``hybrid`` (that GA, then the interior point from its
+    best, as the hybrid solver polishes). Iterations: the GA's generations plus the interior point's
+    Newton steps or the gradient solver's evaluations."""
     from camjax.codesign.problem import JOINT_INNER_SOLVER, inner_solve
     from camjax.solvers import ga
 
@@ -294,9 +294,9 @@ def solve(problem: JointProblem, start: JointDesign, settings=SETTINGS, solver: 
         start, steps = found.design, found.iterations
     if solver == "ga":
         design = start
-    elif solver == "newton":
+    elif solver in ("newton", "hybrid"):
         found = newton.minimize(problem, problem.weights, start)
-        design, steps = found.design, found.iterations
+        design, steps = found.design, steps + found.iterations
     else:
         u = gradient.to_unit(problem, start)
         design, refine_steps, _ = gradient.refine_bfgs(problem, problem.weights, u, settings)

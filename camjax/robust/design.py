@@ -56,8 +56,7 @@ CHECK_SAMPLES_MAX = 200_000
 LOAD_FLOOR = 1e-12  # N or N m: the contact row's scale when the nominal load is 0
 # the family protocol's declaration (camjax.solvers.base): a row's max over its kept samples is not
 # one design variable minus a fixed term, as a follower family's max over the grid is, so the
-# gradient solver (and the hybrid's polish) price every row (angle and kept sample) by its own
-# multiplier
+# gradient solver prices every row (angle and kept sample) by its own multiplier
 ONE_MULTIPLIER_PER_CONSTRAINT = False
 
 

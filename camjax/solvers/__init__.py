@@ -8,7 +8,7 @@
 - :mod:`~camjax.solvers.gradient`: augmented Lagrangian over optax Rprop, projected on the box,
   the whole loop in one ``jit``;
 - :mod:`~camjax.solvers.ga`: a real-coded GA whose population is evaluated in one vectorized call;
-- :mod:`~camjax.solvers.hybrid`: the GA, then a gradient polish;
+- :mod:`~camjax.solvers.hybrid`: the GA, then the interior point's polish (:mod:`~camjax.solvers.newton`);
 - :mod:`~camjax.solvers.sweep`: many weightings in chunks and their Pareto front
   (``sweep.sweep``, also ``run_sweep``), :func:`~camjax.solvers.sweep.plot_pareto`;
 - :mod:`~camjax.solvers.scipy_baseline`: the same problems with ``scipy.optimize`` (SLSQP per

@@ -19,7 +19,7 @@ MODES = ("global", "pointwise")
 SOLVER_MODULES = {
     "gradient": "camjax.solvers.gradient",  # augmented Lagrangian over secant Rprop
     "ga": "camjax.solvers.ga",  # vectorized real-coded GA
-    "hybrid": "camjax.solvers.hybrid",  # GA, then a gradient polish from its best design
+    "hybrid": "camjax.solvers.hybrid",  # GA, then newton from its best design
     "newton": "camjax.solvers.newton",  # primal-dual interior point on the epigraph form
 }
 SOLVERS = tuple(SOLVER_MODULES)
