@@ -94,7 +94,7 @@ def test_the_interior_point_reaches_slsqps_optimum(cases):
     """``newton`` on the joint program (its smooth form: one objective row, t + law(z), and every
     constraint row) ends at SLSQP's optimum of the same program on each co-design: F within 1e-7
     relative (the issue's accuracy target; measured 5e-11 on the first), feasible, inside the laws'
-    box, and stopped by its scaled KKT residual (1e-9) after at most 60 Newton steps (measured 29;
+    box, and stopped by its scaled KKT residual (1e-9) after at most 60 Newton steps (measured 16 and 17;
     the solver's only other stop is its cap of 200) where the gradient solver's BFGS takes ~1,300
     evaluations. The joint solve by ``newton`` is compiled once for both (the same shapes)."""
     from camjax.solvers.newton import DEFAULT_SETTINGS
