@@ -75,7 +75,7 @@ def add_design_options(p: argparse.ArgumentParser, weights: bool = True) -> None
     p.add_argument("--mode", choices=MODES, default=None,
                    help="one R_b, L for the whole cam, or the source's per-angle method" + tail)
     p.add_argument("--solver", choices=SOLVERS, default=None,
-                   help="augmented-Lagrangian gradient solver, vectorized GA, GA + gradient polish, "
+                   help="augmented-Lagrangian gradient solver, vectorized GA, GA + interior-point polish, "
                    "or primal-dual interior point (newton)" + tail)
     p.add_argument("--seed", type=int, default=None, help="seed of the GA and hybrid solvers" + tail)
     if weights:

@@ -16,7 +16,7 @@ import hashlib
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field
 
-from camjax.solvers.registry import MODES, SOLVERS, check_choice
+from camjax.solvers.registry import DEFAULT_SOLVER, MODES, SOLVERS, check_choice
 
 
 @dataclass(frozen=True)
@@ -26,7 +26,7 @@ class SweepSpec:
     ``ga_population`` / ``ga_generations`` of 0 keep the preset's.
     """
 
-    solver: str = "gradient"  # "gradient", "ga" or "hybrid"
+    solver: str = DEFAULT_SOLVER  # a name of camjax.solvers.registry.SOLVERS
     mode: str = "global"  # "global" or "pointwise"
     seed: int = 0  # GA seed; weighting i of the sweep uses fold_in(key(seed), i)
     samples: int = 0  # angle grid override; 0 keeps the scene's

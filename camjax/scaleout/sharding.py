@@ -35,6 +35,7 @@ from jax.sharding import PartitionSpec as PS
 from camjax.family import Problem, Weights
 from camjax.solvers import ga
 from camjax.solvers.base import DEFAULT_SETTINGS, Settings, Solution, solve_batch
+from camjax.solvers.registry import DEFAULT_SOLVER
 
 WEIGHTINGS = "weightings"
 POPULATION = "population"
@@ -134,7 +135,7 @@ def sharded_fitness(mesh: Mesh, problem: Problem, weights: Weights, genes: jax.A
 # ------------------------------------------------------------------------- any solver
 
 
-def sharded_solve(problem, weights: Weights, keys: jax.Array, mode: str = "global", solver: str = "gradient",
+def sharded_solve(problem, weights: Weights, keys: jax.Array, mode: str = "global", solver: str = DEFAULT_SOLVER,
                   settings: Settings = DEFAULT_SETTINGS, mesh: Mesh | None = None) -> Solution:
     """:func:`camjax.solvers.base.solve_batch` with its weightings spread over the devices.
 

@@ -12,6 +12,7 @@ from typing import Any
 from camjax.contact import Material
 from camjax.loads import FollowerTrain, Guide, RockerTrain
 from camjax.program import MotionProgram
+from camjax.solvers.registry import DEFAULT_SOLVER
 
 RPM_MAX = 1e6  # cam speed, rev/min: far above any machine, low enough that every load stays finite
 SAMPLES_MAX = 1_000_000  # cam-angle grid: measured to run (design, CSV, DXF) in the README's limits
@@ -126,7 +127,7 @@ class DesignSpec:
     mode: str = "global"  # or "pointwise"
     alpha: float = 1.0  # weight of the size term
     gamma: float = 1.0  # weight of the stress term
-    solver: str = "gradient"
+    solver: str = DEFAULT_SOLVER  # a scene with [design] robust and no solver: ROBUST_DEFAULT_SOLVER
     seed: int = 0
     robust: RobustSpec | None = None  # a robust design (needs [tolerances]); None: the nominal one
 

@@ -76,6 +76,7 @@ from camjax.family import Weights, weights_of
 from camjax.numerics import finite_float
 from camjax.results import Status
 from camjax.solvers.registry import (
+    DEFAULT_SOLVER,
     MODES,
     SOLVER_MODULES,
     SOLVERS,
@@ -316,7 +317,7 @@ def _solution(problem, weights: Weights, raw: Raw, mode: str, solver: str) -> So
                     extras, raw.certificate)
 
 
-def solve_one(problem, weights: Weights, key: jax.Array, *, mode: str = "global", solver: str = "gradient",
+def solve_one(problem, weights: Weights, key: jax.Array, *, mode: str = "global", solver: str = DEFAULT_SOLVER,
               settings: Settings = DEFAULT_SETTINGS) -> Solution:
     """One weighting (scalar alpha, gamma), any registered solver and mode; traceable, vmappable."""
     module = solver_module(solver)
@@ -325,7 +326,7 @@ def solve_one(problem, weights: Weights, key: jax.Array, *, mode: str = "global"
 
 
 @partial(jax.jit, static_argnames=("mode", "solver", "settings"))
-def solve_batch(problem, weights: Weights, keys: jax.Array, mode: str = "global", solver: str = "gradient",
+def solve_batch(problem, weights: Weights, keys: jax.Array, mode: str = "global", solver: str = DEFAULT_SOLVER,
                 settings: Settings = DEFAULT_SETTINGS) -> Solution:
     """Every weighting of a batch in one compiled program.
 
@@ -376,7 +377,7 @@ def _signature(tree):
 
 
 def solve(problem, weights: Weights | tuple[float, float] = (1.0, 1.0), *, mode: str = "global",
-          solver: str = "gradient", seed: int = 0, settings: Settings = DEFAULT_SETTINGS) -> Solution:
+          solver: str = DEFAULT_SOLVER, seed: int = 0, settings: Settings = DEFAULT_SETTINGS) -> Solution:
     """Solve one weighting; returns a single :class:`Solution` with its :class:`Timings`.
 
     ``weights``: a scalar :class:`~camjax.followers.flat.Weights` or an (alpha, gamma) pair. A Python

@@ -19,7 +19,7 @@ import numpy as np
 from camjax.family import weights_of
 from camjax.solvers.base import Settings, Solution, family_of, solve_batch, weighting_keys
 from camjax.solvers.base import solve as solve_weights
-from camjax.solvers.registry import MODES, SOLVERS, check_choice, check_weights
+from camjax.solvers.registry import DEFAULT_SOLVER, MODES, SOLVERS, check_choice, check_weights
 
 __all__ = ["DEFAULT_CHUNK", "MODES", "SOLVERS", "SweepResult", "pareto_mask", "plot_pareto", "solve",
            "solve_batch", "sweep", "weight_grid"]
@@ -31,7 +31,7 @@ def _settings(ga_settings=None, gradient_settings=None) -> Settings:
     return Settings.of_solvers(ga=ga_settings, gradient=gradient_settings)
 
 
-def solve(problem, alpha: float = 1.0, gamma: float = 1.0, *, mode: str = "global", solver: str = "gradient",
+def solve(problem, alpha: float = 1.0, gamma: float = 1.0, *, mode: str = "global", solver: str = DEFAULT_SOLVER,
           seed: int = 0, ga_settings=None, gradient_settings=None) -> Solution:
     """:func:`camjax.solvers.base.solve` of the weighting (alpha, gamma): one :class:`Solution`."""
     return solve_weights(problem, (alpha, gamma), mode=mode, solver=solver, seed=seed,
@@ -89,7 +89,7 @@ def pareto_mask(size, stress, feasible=None) -> np.ndarray:
     return ok & ~dominated
 
 
-def sweep(problem, alphas, gammas, *, mode: str = "global", solver: str = "gradient",
+def sweep(problem, alphas, gammas, *, mode: str = "global", solver: str = DEFAULT_SOLVER,
           seed: int = 0, chunk_size: int = DEFAULT_CHUNK, progress: bool | None = None,
           ga_settings=None, gradient_settings=None) -> SweepResult:
     """Solve every (alpha, gamma) pair of two lists, ``chunk_size`` weightings per compiled call.
