@@ -76,6 +76,7 @@ pivot_distance_mm = [65.0, 110.0]
 sigma_max_MPa = 2000.0
 alpha = 1.0
 gamma = 0.5
+solver = "gradient"   # the matrix's runs of the gradient solver (every built-in scene names newton)
 """
 
 ROCKER_FLAT = (ROCKER.replace('type = "oscillating_roller"', 'type = "oscillating_flat"')
@@ -277,7 +278,7 @@ def example_runs(follower: str, tmp: Path) -> list[list[str]]:
     other rotation and the grid's extrema. The built-in scenes name newton, so these runs and the
     full sequence's own (the roller's scene; with the GA and the hybrid) are that solver's, its
     certificate saved and loaded with the program; the gradient solver runs in the rockers'
-    sequences (:data:`SCENES`: their scene texts name no solver)."""
+    sequences (:data:`SCENES`: their scene texts name it)."""
     from camjax.scene import builtin_scene_text
 
     text = builtin_scene_text(followers.get(follower).example_scene)

@@ -39,7 +39,7 @@ def coarse(default_scene):
     return P.problem_from_scene(default_scene, samples=24, extrema="grid")
 
 
-@pytest.mark.parametrize("solver", [s if s == "gradient" else pytest.param(s, marks=pytest.mark.slow)
+@pytest.mark.parametrize("solver", [s if s == registry.DEFAULT_SOLVER else pytest.param(s, marks=pytest.mark.slow)
                                     for s in registry.SOLVERS])  # the quick loop: the default solver
 def test_every_solver_returns_a_solution_near_the_exact_global_optimum(problem, solver):
     sol = solve(problem, (1.0, 1.0), solver=solver, settings=settings_of(solver))
