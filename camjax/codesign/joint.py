@@ -280,27 +280,26 @@ def solve(problem: JointProblem, start: JointDesign, settings=SETTINGS, solver: 
     settings, :func:`camjax.solvers.epigraph.smooth_form`), ``gradient`` (the gradient solver's
     augmented-Lagrangian BFGS with ``settings``),
     ``ga`` (the GA, ``ga_settings`` (default its own), PRNG ``key``, its population seeded with the
-    start: by elitism never worse than it) or ``hybrid`` (that GA, then the interior point from its
-    best, as the hybrid solver polishes). Iterations: the GA's generations plus the interior point's
-    Newton steps or the gradient solver's evaluations."""
+    start: by elitism never worse than it) or ``hybrid`` (that GA, then
+    :func:`camjax.solvers.hybrid.polish` from its best: the hybrid solver's polish). Iterations: the
+    GA's generations plus the interior point's Newton steps or the gradient solver's evaluations."""
     from camjax.codesign.problem import JOINT_INNER_SOLVER, inner_solve
-    from camjax.solvers import ga
+    from camjax.solvers import ga, hybrid
 
     solver = joint_solver(solver)
-    steps = jnp.asarray(0)
     if solver in ("ga", "hybrid"):
         found = ga.run(jax.random.key(0) if key is None else key, problem, problem.weights,
                        ga.DEFAULT_SETTINGS if ga_settings is None else ga_settings, seed_design=start)
-        start, steps = found.design, found.iterations
-    if solver == "ga":
-        design = start
-    elif solver in ("newton", "hybrid"):
+        design, steps = found.design, found.iterations
+    if solver == "hybrid":
+        design, polish_steps, _ = hybrid.polish(problem, problem.weights, found)
+        steps = steps + polish_steps
+    elif solver == "newton":
         found = newton.minimize(problem, problem.weights, start)
-        design, steps = found.design, steps + found.iterations
-    else:
+        design, steps = found.design, found.iterations
+    elif solver == "gradient":
         u = gradient.to_unit(problem, start)
-        design, refine_steps, _ = gradient.refine_bfgs(problem, problem.weights, u, settings)
-        steps = steps + refine_steps
+        design, steps, _ = gradient.refine_bfgs(problem, problem.weights, u, settings)
     base = base_problem(problem, design)
     objective, geometry, feasible = inner_solve(base, problem.weights, solver=JOINT_INNER_SOLVER)
     f = objective + law_value(problem, design.laws)

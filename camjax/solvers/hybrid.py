@@ -26,24 +26,30 @@ optimum, where a barrier started high only walks back to it (the seven types' 10
 the knife edge's polish 30 steps at the median, 200 at most, with mu0 0.1; 9 and 10 with 1e-3)."""
 
 
-def run_one(problem, weights: Weights, key: jax.Array, settings, init: Design | None = None) -> Raw:
-    """GA from ``init`` (if given), then Newton steps (:func:`camjax.solvers.newton.minimize`, its
-    barrier started at ``mu0`` x :data:`POLISH_MU`) from the GA's best design.
+def polish(problem, weights: Weights, found: ga.GAResult, settings: newton.NewtonSettings = newton.DEFAULT_SETTINGS):
+    """The interior point from the GA's answer ``found``: (design, Newton steps, kept & converged).
 
-    The polished design is kept where it is feasible and its objective no larger than the GA's,
-    or where it repairs an infeasible GA design; elsewhere the GA's design is the answer (a polish
-    that ends elsewhere, on another local optimum or at its safeguard, never makes the answer
-    worse). Iterations: generations + Newton steps; converged: the polished design was kept and
-    its scaled KKT residual reached the stopping rule. The final point's KKT certificate
-    (:func:`camjax.solvers.certificate.certify_point`) comes with it.
-    """
-    found = ga.run(key, problem, weights, settings.of("ga"), seed_design=init)
-    own = settings.of("newton")
-    polish = dataclasses.replace(own, mu0=own.mu0 * POLISH_MU)
-    polished = newton.minimize(problem, weights, found.design, polish)
+    :func:`camjax.solvers.newton.minimize` from ``found.design`` with its barrier started at
+    ``settings.mu0`` x :data:`POLISH_MU`; the polished design is kept where it is feasible and its
+    objective no larger than the GA's, or where it repairs an infeasible GA design; elsewhere the
+    GA's design is the answer (a polish that ends elsewhere, on another local optimum or at its
+    safeguard, never makes the answer worse). The hybrid solver and the joint co-design's hybrid
+    (:mod:`camjax.codesign.joint`) both polish here. Traceable, vmappable."""
+    polished = newton.minimize(problem, weights, found.design, dataclasses.replace(settings, mu0=settings.mu0 * POLISH_MU))
     ev = family_of(problem).evaluate(problem, weights, polished.design)
     keep = ev.feasible & (~found.feasible | (ev.objective <= found.objective))
     design = jax.tree.map(lambda a, b: jnp.where(keep, a, b), polished.design, found.design)
-    iterations = found.iterations + polished.iterations
-    return Raw(design, iterations, keep & polished.converged,
-               certify_point(problem, weights, design, iterations))
+    return design, polished.iterations, keep & polished.converged
+
+
+def run_one(problem, weights: Weights, key: jax.Array, settings, init: Design | None = None) -> Raw:
+    """GA from ``init`` (if given), then :func:`polish` from the GA's best design.
+
+    Iterations: generations + Newton steps; converged: the polished design was kept and its scaled
+    KKT residual reached the stopping rule. The final point's KKT certificate
+    (:func:`camjax.solvers.certificate.certify_point`) comes with it.
+    """
+    found = ga.run(key, problem, weights, settings.of("ga"), seed_design=init)
+    design, steps, converged = polish(problem, weights, found, settings.of("newton"))
+    iterations = found.iterations + steps
+    return Raw(design, iterations, converged, certify_point(problem, weights, design, iterations))
