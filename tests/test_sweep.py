@@ -10,6 +10,7 @@ from camjax.family import weights_of
 from camjax.followers.flat import optimum
 from camjax.followers.flat import problem as P
 from camjax.solvers import sweep as S
+from camjax.solvers.registry import DEFAULT_SOLVER
 
 
 @pytest.fixture(scope="module")
@@ -20,7 +21,7 @@ def problem(default_scene):
 
 @pytest.fixture(scope="module")
 def big_sweep(problem):
-    """11 x 11 = 121 weightings, alpha and gamma from 0.01 to 100, global gradient, one chunk."""
+    """11 x 11 = 121 weightings, alpha and gamma from 0.01 to 100, global, the default solver, one chunk."""
     grid = np.logspace(-2, 2, 11)
     S.solve_batch.clear_cache()
     result = S.sweep(problem, grid, grid, chunk_size=128)
@@ -41,7 +42,10 @@ def test_sweep_shows_the_size_stress_trade(big_sweep):
     order = np.argsort(ratio, kind="stable")
     size = np.asarray(r.base_radius_mm + r.face_width_mm)[order]
     stress = np.asarray(r.stress_max_MPa)[order]
-    assert np.all(np.diff(size) <= 1e-6) and np.all(np.diff(stress) >= -1e-6)
+    # the default solver (newton) stops on its scaled KKT residual (1e-9): an active stress row
+    # may end inside its limit by up to ~2e-7 of it (measured 1.2e-4 MPa at 1230 MPa), so the
+    # stress is monotone to 1e-6 of its size; the size to 1e-6 mm (measured 3e-8)
+    assert np.all(np.diff(size) <= 1e-6) and np.all(np.diff(stress) >= -1e-6 * stress[1:])
     assert size[0] - size[-1] > 10.0 and stress[-1] > 5 * stress[0]
     # the face width is the same for every weighting
     np.testing.assert_allclose(np.asarray(r.face_width_mm), numpy_reference_optimum()[2], atol=1e-6)
@@ -82,7 +86,7 @@ def test_records_json_and_plot(big_sweep, tmp_path):
 def test_reference_pointwise_design_json(problem):
     res = S.solve(problem, 1.0, 1.0, mode="pointwise")
     d = res.to_json(problem)
-    assert d["mode"] == "pointwise" and d["solver"] == "gradient" and d["feasible"] and d["converged"]
+    assert d["mode"] == "pointwise" and d["solver"] == DEFAULT_SOLVER and d["feasible"] and d["converged"]
     ref = numpy_reference_optimum(1.0, 1.0)  # independent NumPy closed form (tests/reference.py)
     assert d["base_radius_mm"] == pytest.approx(ref[0], abs=1e-6) and d["base_radius_deg"] == ref[1]
     assert d["face_width_mm"] == pytest.approx(ref[2], abs=1e-6) and d["face_width_deg"] == ref[3]
@@ -110,6 +114,9 @@ def test_hybrid_polishes_the_ga(problem):
 
 
 def test_infeasible_design_names_the_constraint(problem):
+    # no face in the box is wide enough (10 mm against the 19.1 mm the lift needs at any R_b), while
+    # R_b can meet the curvature and the stress: the answer names the face width alone (the
+    # default solver, newton, ends such a problem on its least-violation restoration)
     tight = P.with_bounds(problem, face_width_mm=(5.0, 10.0))
     d = S.solve(tight, 1.0, 1.0).to_json(tight)
     assert d["feasible"] is False and d["violated"] == ["face_width"]

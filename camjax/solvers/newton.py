@@ -308,6 +308,60 @@ def _step(state: NewtonState, fns: EpigraphForm, settings: NewtonSettings) -> Ne
                        pick(state.filter_count, count), state.use_filter)
 
 
+RESTORATION_STEPS = 60  # Levenberg-Marquardt steps of :func:`_restore` (an infeasible end only)
+
+
+def _restore(fns: EpigraphForm, z, active):
+    """An end that did not converge and breaks a limit: the design moved to a least-squares
+    minimizer of its constraint rows' violations, 1/2 sum_i max(g_i / N, 0)^2, in the box
+    (Levenberg-Marquardt on the violated rows, the variables at a face the step would leave
+    held there), t set to the max of the epigraph rows. Unreachable bounds (a face width no face
+    in the box can have) leave the interior point's path where the barrier of the other rows
+    had put it: the default scene with its face width bounded at 10 mm ended at R_b 23.1 mm,
+    below the smallest admissible 24.1 mm, breaking the curvature and the stress (1.1e10 MPa)
+    limits too. Here those are met again, and the answer names the limit no design can meet.
+    Runs no step where ``active`` is False (a converged or feasible end: z is returned as it is;
+    one ``lax.while_loop``, so that under ``vmap`` such weightings run no step either)."""
+    m = fns.u_max.shape[0]
+    count = sum(k for _, k in fns.kinds)
+    start = fns.kinds[0][1]
+    constraint = (jnp.arange(count) >= start) & (jnp.arange(count) < count - 2 * m)
+    free = fns.free[:m] > 0
+
+    def residual(u):
+        c = fns.rows(jnp.concatenate([u, z[m:]]))
+        return jnp.where(constraint & (c > 0), c, 0.0)
+
+    def value(u):
+        r = residual(u)
+        return 0.5 * r @ r
+
+    def body(st):
+        k, u, v, lam = st
+        r, jac = residual(u), jax.jacfwd(residual)(u)
+        g = jac.T @ r
+        # a variable at a face the descent would leave is held there (the box: a projection)
+        held = ~free | ((u <= 0.0) & (g > 0)) | ((u >= fns.u_max) & (g < 0))
+        keep = (~held).astype(u.dtype)
+        a = (jac.T @ jac) * jnp.outer(keep, keep)
+        a = a + jnp.diag(lam * (jnp.diag(a) + 1e-12) + (1.0 - keep))
+        du = -jnp.linalg.solve(a, g * keep) * keep
+        trial = jnp.where(free, jnp.clip(u + du, 0.0, fns.u_max), 0.0)
+        v_trial = value(trial)
+        better = jnp.isfinite(v_trial) & (v_trial < v)
+        return (k + 1, jnp.where(better, trial, u), jnp.where(better, v_trial, v),
+                jnp.where(better, lam / 3.0, lam * 10.0))
+
+    u0 = z[:m]
+    v0 = value(u0)
+    _, u, _, _ = jax.lax.while_loop(
+        lambda st: active & (st[0] < RESTORATION_STEPS) & (st[2] > 0.0) & (st[3] < 1e12), body,
+        (jnp.asarray(0), u0, v0, jnp.asarray(1e-3, z.dtype)))
+    rows = fns.rows(jnp.concatenate([u, jnp.zeros(1, z.dtype)]))
+    t = jnp.max(jnp.where(fns.epigraph, rows[:fns.n_angles], -jnp.inf))
+    return jnp.where(active, jnp.concatenate([u, t[None]]), z)
+
+
 def minimize(problem: Problem, weights: Weights, init_design: Design | None = None,
              settings: NewtonSettings = DEFAULT_SETTINGS) -> KKTPoint:
     """Solve one problem (global over its angle grid) for one weighting; traceable, vmappable.
@@ -341,8 +395,11 @@ def minimize(problem: Problem, weights: Weights, init_design: Design | None = No
     best = jnp.where(jnp.any(ends.done), jnp.argmin(objective), jnp.argmin(ends.kkt.error))
     end = jax.tree.map(lambda x: x[best], ends)
     m = fns.u_max.shape[0]
-    design = from_unit(problem, fns.unravel(end.z[:m]), own=False)
-    return KKTPoint(design, end.iteration, end.done, end.z, end.y, end.kkt)
+    # an end that breaks a limit without converging: its design moved to the least violation
+    infeasible = ~end.done & (end.kkt.primal > settings.tol)
+    z = _restore(fns, end.z, infeasible)
+    design = from_unit(problem, fns.unravel(z[:m]), own=False)
+    return KKTPoint(design, end.iteration, end.done, z, end.y, end.kkt)
 
 
 def run_one(problem: Problem, weights: Weights, key: jax.Array, settings, init: Design | None = None) -> Raw:
