@@ -308,58 +308,50 @@ def _step(state: NewtonState, fns: EpigraphForm, settings: NewtonSettings) -> Ne
                        pick(state.filter_count, count), state.use_filter)
 
 
-RESTORATION_STEPS = 60  # Levenberg-Marquardt steps of :func:`_restore` (an infeasible end only)
+RESTORATION_STEPS = 200  # compass-search steps of :func:`_restore` (an infeasible end only)
 
 
 def _restore(fns: EpigraphForm, z, active):
-    """An end that did not converge and breaks a limit: the design moved to a least-squares
-    minimizer of its constraint rows' violations, 1/2 sum_i max(g_i / N, 0)^2, in the box
-    (Levenberg-Marquardt on the violated rows, the variables at a face the step would leave
-    held there), t set to the max of the epigraph rows. Unreachable bounds (a face width no face
-    in the box can have) leave the interior point's path where the barrier of the other rows
-    had put it: the default scene with its face width bounded at 10 mm ended at R_b 23.1 mm,
-    below the smallest admissible 24.1 mm, breaking the curvature and the stress (1.1e10 MPa)
-    limits too. Here those are met again, and the answer names the limit no design can meet.
+    """An end that did not converge and breaks a limit: the design moved to a minimizer of its
+    constraint rows' squared violations, 1/2 sum_i max(g_i / N, 0)^2, in the box (t is kept), by
+    a compass search: each free variable moved by +-h (the 2m trials at once), the best trial
+    taken where it lowers the violation and h doubled, else h halved, from h = 1/4 of the unit box
+    down to 1e-12 or RESTORATION_STEPS steps. Unreachable bounds (a face width no face in the box
+    can have) leave the interior point's path where the barrier of the other rows had put it: the
+    default scene with its face width bounded at 10 mm ended at R_b 23.1 mm, below the smallest
+    admissible 24.1 mm, breaking the curvature and the stress (1.1e10 MPa) limits too. Here those
+    are met again, and the answer names the limit no design can meet. The rows alone, traced once
+    (no derivatives): the smallest program that does it.
+
     Runs no step where ``active`` is False (a converged or feasible end: z is returned as it is;
     one ``lax.while_loop``, so that under ``vmap`` such weightings run no step either)."""
     m = fns.u_max.shape[0]
     count = sum(k for _, k in fns.kinds)
-    start = fns.kinds[0][1]
-    constraint = (jnp.arange(count) >= start) & (jnp.arange(count) < count - 2 * m)
+    constraint = (jnp.arange(count) >= fns.kinds[0][1]) & (jnp.arange(count) < count - 2 * m)
     free = fns.free[:m] > 0
+    # the point itself (its violation at the first step), then +-h along each free variable
+    moves = jnp.concatenate([jnp.zeros((1, m)), jnp.eye(m), -jnp.eye(m)]) * jnp.concatenate([jnp.ones(1, bool), free, free])[:, None]
 
-    def residual(u):
+    def violation(u):
         c = fns.rows(jnp.concatenate([u, z[m:]]))
-        return jnp.where(constraint & (c > 0), c, 0.0)
-
-    def value(u):
-        r = residual(u)
+        r = jnp.where(constraint & (c > 0), c, 0.0)
         return 0.5 * r @ r
 
     def body(st):
-        k, u, v, lam = st
-        r, jac = residual(u), jax.jacfwd(residual)(u)
-        g = jac.T @ r
-        # a variable at a face the descent would leave is held there (the box: a projection)
-        held = ~free | ((u <= 0.0) & (g > 0)) | ((u >= fns.u_max) & (g < 0))
-        keep = (~held).astype(u.dtype)
-        a = (jac.T @ jac) * jnp.outer(keep, keep)
-        a = a + jnp.diag(lam * (jnp.diag(a) + 1e-12) + (1.0 - keep))
-        du = -jnp.linalg.solve(a, g * keep) * keep
-        trial = jnp.where(free, jnp.clip(u + du, 0.0, fns.u_max), 0.0)
-        v_trial = value(trial)
-        better = jnp.isfinite(v_trial) & (v_trial < v)
-        return (k + 1, jnp.where(better, trial, u), jnp.where(better, v_trial, v),
-                jnp.where(better, lam / 3.0, lam * 10.0))
+        k, u, v, h = st
+        trials = jnp.clip(u + h * moves * fns.u_max, 0.0, fns.u_max)
+        values = jax.vmap(violation)(trials)
+        values = jnp.where(jnp.isfinite(values), values, jnp.inf)
+        best = jnp.argmin(values)
+        better = values[best] < v
+        return (k + 1, jnp.where(better, trials[best], u), jnp.where(better, values[best], v),
+                jnp.where(better, jnp.minimum(2.0 * h, 0.5), 0.5 * h))
 
-    u0 = z[:m]
-    v0 = value(u0)
-    _, u, _, _ = jax.lax.while_loop(
-        lambda st: active & (st[0] < RESTORATION_STEPS) & (st[2] > 0.0) & (st[3] < 1e12), body,
-        (jnp.asarray(0), u0, v0, jnp.asarray(1e-3, z.dtype)))
-    rows = fns.rows(jnp.concatenate([u, jnp.zeros(1, z.dtype)]))
-    t = jnp.max(jnp.where(fns.epigraph, rows[:fns.n_angles], -jnp.inf))
-    return jnp.where(active, jnp.concatenate([u, t[None]]), z)
+    dtype = z.dtype
+    st = (jnp.asarray(0), z[:m], jnp.asarray(jnp.inf, dtype), jnp.asarray(0.25, dtype))
+    u = jax.lax.while_loop(
+        lambda st: active & (st[0] < RESTORATION_STEPS) & (st[2] > 0.0) & (st[3] > 1e-12), body, st)[1]
+    return jnp.where(active, jnp.concatenate([u, z[m:]]), z)
 
 
 def minimize(problem: Problem, weights: Weights, init_design: Design | None = None,
