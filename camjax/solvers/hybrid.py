@@ -26,7 +26,8 @@ optimum, where a barrier started high only walks back to it (the seven types' 10
 the knife edge's polish 30 steps at the median, 200 at most, with mu0 0.1; 9 and 10 with 1e-3)."""
 
 
-def polish(problem, weights: Weights, found: ga.GAResult, settings: newton.NewtonSettings = newton.DEFAULT_SETTINGS):
+def polish(problem, weights: Weights, found: ga.GAResult,
+           settings: newton.NewtonSettings = newton.DEFAULT_SETTINGS):
     """The interior point from the GA's answer ``found``: (design, Newton steps, kept & converged).
 
     :func:`camjax.solvers.newton.minimize` from ``found.design`` with its barrier started at
@@ -35,7 +36,8 @@ def polish(problem, weights: Weights, found: ga.GAResult, settings: newton.Newto
     GA's design is the answer (a polish that ends elsewhere, on another local optimum or at its
     safeguard, never makes the answer worse). The hybrid solver and the joint co-design's hybrid
     (:mod:`camjax.codesign.joint`) both polish here. Traceable, vmappable."""
-    polished = newton.minimize(problem, weights, found.design, dataclasses.replace(settings, mu0=settings.mu0 * POLISH_MU))
+    low_barrier = dataclasses.replace(settings, mu0=settings.mu0 * POLISH_MU)
+    polished = newton.minimize(problem, weights, found.design, low_barrier)
     ev = family_of(problem).evaluate(problem, weights, polished.design)
     keep = ev.feasible & (~found.feasible | (ev.objective <= found.objective))
     design = jax.tree.map(lambda a, b: jnp.where(keep, a, b), polished.design, found.design)

@@ -330,7 +330,8 @@ def _restore(fns: EpigraphForm, z, active):
     constraint = (jnp.arange(count) >= fns.kinds[0][1]) & (jnp.arange(count) < count - 2 * m)
     free = fns.free[:m] > 0
     # the point itself (its violation at the first step), then +-h along each free variable
-    moves = jnp.concatenate([jnp.zeros((1, m)), jnp.eye(m), -jnp.eye(m)]) * jnp.concatenate([jnp.ones(1, bool), free, free])[:, None]
+    moves = jnp.concatenate([jnp.zeros((1, m)), jnp.eye(m), -jnp.eye(m)])
+    moves = moves * jnp.concatenate([jnp.ones(1, bool), free, free])[:, None]
 
     def violation(u):
         c = fns.rows(jnp.concatenate([u, z[m:]]))
