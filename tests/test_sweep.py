@@ -35,7 +35,7 @@ def test_sweep_of_121_weightings_is_one_compiled_program(big_sweep):
     assert bool(np.all(big_sweep.results.feasible))
 
 
-def test_sweep_shows_the_size_stress_trade(big_sweep):
+def test_sweep_shows_the_size_stress_trade(problem, big_sweep):
     """Larger alpha / gamma -> smaller cam and higher peak stress (SPEC 7, the source's trade)."""
     r = big_sweep.results
     ratio = np.asarray(r.alpha) / np.asarray(r.gamma)
@@ -47,8 +47,16 @@ def test_sweep_shows_the_size_stress_trade(big_sweep):
     # stress is monotone to 1e-6 of its size; the size to 1e-6 mm (measured 3e-8)
     assert np.all(np.diff(size) <= 1e-6) and np.all(np.diff(stress) >= -1e-6 * stress[1:])
     assert size[0] - size[-1] > 10.0 and stress[-1] > 5 * stress[0]
-    # the face width is the same for every weighting
-    np.testing.assert_allclose(np.asarray(r.face_width_mm), numpy_reference_optimum()[2], atol=1e-6)
+    # the face width is the same for every weighting: never below the lift's need (a limit: to
+    # 1e-6 mm), and above it by 1e-6 mm or by what the stopping rule leaves free, whichever is
+    # larger: an excess dw raises the normalized objective by alpha / (alpha + gamma) dw / N,
+    # which newton's KKT tolerance holds to ~1e-9. Measured on two machines: 6.5e-6 mm at a
+    # stress-dominated weighting (alpha / (alpha + gamma) = 1e-4: 1e-11 of objective) on one,
+    # within 1e-6 mm everywhere on the other.
+    excess = np.asarray(r.face_width_mm) - numpy_reference_optimum()[2]
+    size_weight = np.asarray(r.alpha) / (np.asarray(r.alpha) + np.asarray(r.gamma))
+    assert np.all(excess >= -1e-6)
+    assert np.all(excess <= np.maximum(1e-6, 1e-9 * float(problem.size_norm_mm) / size_weight))
 
 
 def test_sweep_matches_single_solves(problem, big_sweep):
