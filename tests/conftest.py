@@ -3,6 +3,7 @@
 Shared fixtures: the default scene, its arrays, and the reference case in NumPy (tests/reference.py).
 """
 
+import collections
 import gc
 import json
 import logging
@@ -264,8 +265,9 @@ def pytest_terminal_summary(terminalreporter, config):
 # ------------------------------------------------------------------ compiled programs per test
 # ``--compile-ledger=DIR`` writes, per worker, one JSON line per test phase: the XLA programs it
 # compiled (name, seconds), the ones it loaded from the persistent compilation cache, the cache keys
-# it missed (a key missed in two workers: a program both compiled), and its tracing seconds (JAX's
-# own compile log, turned on for the run). The suite is bound by XLA compiles; the ledger shows
+# it missed (a key missed in two workers: a program both compiled), its tracing seconds, and each
+# program it lowered with its arguments' shapes ("lower": name, {shape: count}) (JAX's own compile
+# log, turned on for the run). The suite is bound by XLA compiles; the ledger shows
 # which tests compile which programs, and which programs several tests compile again under another
 # shape.
 
@@ -279,6 +281,13 @@ _MISS = re.compile(r"PERSISTENT COMPILATION CACHE MISS for '[^']+' with key '([^
 class _LedgerHandler(logging.Handler):
     def emit(self, record):
         if _LEDGER["phase"] is None:
+            return
+        if isinstance(record.msg, str) and record.msg.startswith("Compiling %s with global shapes"):
+            # a program lowered: its name and its arguments' shapes (each shape and dtype with its
+            # count), to tell programs that differ only by a shape (a grid size, a batch) apart
+            name, avals = record.args[0], record.args[1]
+            shapes = collections.Counter(getattr(a, "str_short", lambda a=a: str(a))() for a in avals)
+            _LEDGER["records"].append(("lower", str(name), dict(sorted(shapes.items()))))
             return
         message = record.getMessage()
         for kind, pattern in (("compile", _COMPILED), ("trace", _TRACED), ("hit", _HIT), ("miss", _MISS)):

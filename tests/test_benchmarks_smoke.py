@@ -43,3 +43,23 @@ def test_targets_table_reads_json_keys():
     assert status["pointwise.speedup"] == "pass"
     assert status["fitness.numpy_ratio"] == "MISS"
     assert status["sweep.ga_speedup"] == "not run"
+
+
+def test_compile_ledger_summary_counts_by_file_program_and_shape(tmp_path):
+    """Two workers' ledgers written by hand: the totals, the ranking and the programs lowered under
+    two grid sizes (the shape that differs named, the shared one not)."""
+    from benchmarks import compile_ledger
+
+    (tmp_path / "ledger-gw0.jsonl").write_text("\n".join([
+        '{"test": "tests/test_a.py::t1", "records": [["lower", "jit(solve_batch)", {"float64[90]": 4, "float64[]": 3}],'
+        ' ["compile", "jit(solve_batch)", 4.0], ["trace", "jit(solve_batch)", 1.0]]}',
+        '{"test": "tests/test_a.py::t2", "records": [["hit", "jit_f", 0.0], ["compile", "jit(add)", 0.5]]}']) + "\n")
+    (tmp_path / "ledger-gw1.jsonl").write_text(
+        '{"test": "tests/test_b.py::t", "records": [["lower", "jit(solve_batch)", {"float64[360]": 4, "float64[]": 3}],'
+        ' ["compile", "jit(solve_batch)", 6.0], ["lower", "jit(add)", {"float64[]": 3}]]}\n')
+    result = compile_ledger.summary(compile_ledger.read(tmp_path))
+    assert result["compile_s"] == 10.5 and result["trace_s"] == 1.0
+    assert list(result["files"]) == ["tests/test_b.py", "tests/test_a.py"]
+    assert result["files"]["tests/test_a.py"] == {"compile_s": 4.5, "compiles": 2, "trace_s": 1.0}
+    assert result["programs"]["jit(solve_batch)"] == {"compile_s": 10.0, "compiles": 2}
+    assert result["shapes"] == {"jit(solve_batch)": {"signatures": 2, "varying": ["float64[360]", "float64[90]"]}}

@@ -1,0 +1,80 @@
+"""Where a test run's compiles go, from the ledger ``pytest --compile-ledger=DIR`` writes.
+
+``python benchmarks/compile_ledger.py DIR [--top 25] [--out FILE.json]`` prints (and writes) JSON:
+the run's XLA compile and tracing seconds, per test file and per program name (compile seconds,
+compiles), and, per program name lowered under more than one set of argument shapes, how many
+shape sets (``signatures``) and which shapes tell them apart (``varying``): the programs that a
+shared grid size or batch would make one. Reads the ledger only (no JAX).
+"""
+
+from __future__ import annotations
+
+import argparse
+import collections
+import json
+from pathlib import Path
+
+
+def read(folder: str | Path) -> list[dict]:
+    """Every ledger line of every worker in ``folder``: {"test": nodeid, "records": [...]}."""
+    lines = []
+    for path in sorted(Path(folder).glob("ledger-*.jsonl")):
+        lines += [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
+    return lines
+
+
+def summary(lines: list[dict], top: int = 25) -> dict:
+    """The ledger's totals, the ``top`` files and programs by compile seconds, and the programs
+    lowered under several argument shapes (see the module's docstring)."""
+    compile_s = trace_s = 0.0
+    by_file: dict = collections.defaultdict(lambda: {"compile_s": 0.0, "compiles": 0, "trace_s": 0.0})
+    by_program: dict = collections.defaultdict(lambda: {"compile_s": 0.0, "compiles": 0})
+    signatures: dict = collections.defaultdict(set)
+    for line in lines:
+        file = line["test"].split("::")[0]
+        for kind, name, value in line["records"]:
+            if kind == "compile":
+                compile_s += value
+                by_file[file]["compile_s"] += value
+                by_file[file]["compiles"] += 1
+                by_program[name]["compile_s"] += value
+                by_program[name]["compiles"] += 1
+            elif kind == "trace":
+                trace_s += value
+                by_file[file]["trace_s"] += value
+            elif kind == "lower":
+                signatures[name].add(tuple(sorted(value.items())))
+
+    def ranked(table):
+        rows = sorted(table.items(), key=lambda kv: -kv[1]["compile_s"])[:top]
+        return {k: {f: round(v, 2) if isinstance(v, float) else v for f, v in row.items()} for k, row in rows}
+
+    shaped = {}
+    for name, sigs in signatures.items():
+        if len(sigs) < 2:
+            continue
+        counts = [dict(sig) for sig in sigs]
+        every = set().union(*counts)
+        varying = sorted(s for s in every if len({c.get(s, 0) for c in counts}) > 1)
+        shaped[name] = {"signatures": len(sigs), "varying": varying}
+    shaped = dict(sorted(shaped.items(), key=lambda kv: -kv[1]["signatures"])[:top])
+    return {"compile_s": round(compile_s, 1), "trace_s": round(trace_s, 1), "files": ranked(by_file),
+            "programs": ranked(by_program), "shapes": shaped}
+
+
+def main(argv: list[str] | None = None) -> dict:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("folder", help="the folder --compile-ledger wrote")
+    parser.add_argument("--top", type=int, default=25)
+    parser.add_argument("--out", default=None, help="write the JSON here too")
+    args = parser.parse_args(argv)
+    result = summary(read(args.folder), args.top)
+    text = json.dumps(result, indent=1)
+    print(text)
+    if args.out:
+        Path(args.out).write_text(text + "\n")
+    return result
+
+
+if __name__ == "__main__":
+    main()
