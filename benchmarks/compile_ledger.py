@@ -3,8 +3,11 @@
 ``python benchmarks/compile_ledger.py DIR [--top 25] [--out FILE.json]`` prints (and writes) JSON:
 the run's XLA compile and tracing seconds, per test file and per program name (compile seconds,
 compiles), and, per program name lowered under more than one set of argument shapes, how many
-shape sets (``signatures``) and which shapes tell them apart (``varying``): the programs that a
-shared grid size or batch would make one. Reads the ledger only (no JAX).
+shape sets (``signatures``) and which shapes occur in some sets and not others (``varying``). That
+names candidates only: two sets of one name may differ in structure (another follower type, other
+free variables) as well as in sizes, and static settings (solver, mode) are not in the shapes; those
+that differ in a grid size or a batch alone are the programs a shared shape would make one. Reads
+the ledger only (no JAX).
 """
 
 from __future__ import annotations
