@@ -6,8 +6,10 @@ compiles), and, per program name lowered under more than one set of argument sha
 shape sets (``signatures``) and which shapes occur in some sets and not others (``varying``). That
 names candidates only: two sets of one name may differ in structure (another follower type, other
 free variables) as well as in sizes, and static settings (solver, mode) are not in the shapes; those
-that differ in a grid size or a batch alone are the programs a shared shape would make one. Reads
-the ledger only (no JAX).
+that differ in a grid size or a batch alone are the programs a shared shape would make one.
+``sizes_only`` bounds what shared sizes could save: per program name, the compile seconds of every
+compiled program whose argument shapes, sizes left out, are another compiled program's, all but the
+costliest of each such set (an upper bound, for the same reason). Reads the ledger only (no JAX).
 """
 
 from __future__ import annotations
@@ -15,6 +17,7 @@ from __future__ import annotations
 import argparse
 import collections
 import json
+import re
 from pathlib import Path
 
 
@@ -62,7 +65,41 @@ def summary(lines: list[dict], top: int = 25) -> dict:
         shaped[name] = {"signatures": len(sigs), "varying": varying}
     shaped = dict(sorted(shaped.items(), key=lambda kv: -kv[1]["signatures"])[:top])
     return {"compile_s": round(compile_s, 1), "trace_s": round(trace_s, 1), "files": ranked(by_file),
-            "programs": ranked(by_program), "shapes": shaped}
+            "programs": ranked(by_program), "shapes": shaped, "sizes_only": sizes_only(lines, top)}
+
+
+def _sizeless(signature: dict) -> tuple:
+    """A set of argument shapes with every size written N (counts of equal shapes added up)."""
+    counts: collections.Counter = collections.Counter()
+    for shape, count in signature.items():
+        counts[re.sub(r"\d+", "N", shape)] += count
+    return tuple(sorted(counts.items()))
+
+
+def sizes_only(lines: list[dict], top: int = 25) -> dict:
+    """Per program name, the compile seconds a shared size could at most save: each compile is paired
+    with the shapes its name was last lowered with; of the compiled shape sets that are equal with
+    their sizes left out, all but the costliest count. {"compile_s": total, "programs": {name:
+    {"compile_s", "structures"}}} (structures: the sets of more than one size), the top names."""
+    seconds: dict = collections.defaultdict(lambda: collections.defaultdict(float))  # (name, sizeless) -> shapes -> s
+    for line in lines:
+        lowered: dict = {}
+        for kind, name, value in line["records"]:
+            if kind == "lower":
+                lowered[name] = value
+            elif kind == "compile" and name in lowered:
+                shapes = lowered.pop(name)
+                seconds[(name, _sizeless(shapes))][tuple(sorted(shapes.items()))] += value
+    by_name: dict = collections.defaultdict(lambda: {"compile_s": 0.0, "structures": 0})
+    for (name, _), per_shapes in seconds.items():
+        if len(per_shapes) > 1:
+            costs = sorted(per_shapes.values(), reverse=True)
+            by_name[name]["compile_s"] += sum(costs[1:])
+            by_name[name]["structures"] += 1
+    rows = sorted(by_name.items(), key=lambda kv: -kv[1]["compile_s"])
+    return {"compile_s": round(sum(v["compile_s"] for _, v in rows), 1),
+            "programs": {k: {"compile_s": round(v["compile_s"], 2), "structures": v["structures"]}
+                         for k, v in rows[:top]}}
 
 
 def main(argv: list[str] | None = None) -> dict:

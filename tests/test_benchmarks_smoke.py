@@ -63,3 +63,7 @@ def test_compile_ledger_summary_counts_by_file_program_and_shape(tmp_path):
     assert result["files"]["tests/test_a.py"] == {"compile_s": 4.5, "compiles": 2, "trace_s": 1.0}
     assert result["programs"]["jit(solve_batch)"] == {"compile_s": 10.0, "compiles": 2}
     assert result["shapes"] == {"jit(solve_batch)": {"signatures": 2, "varying": ["float64[360]", "float64[90]"]}}
+    # the two solve programs differ in the grid's size alone: the cheaper (4 s) is what one size saves;
+    # jit(add)'s lowering has no compile after it, so it is not counted
+    assert result["sizes_only"] == {"compile_s": 4.0,
+                                    "programs": {"jit(solve_batch)": {"compile_s": 4.0, "structures": 1}}}

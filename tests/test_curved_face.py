@@ -417,8 +417,10 @@ def test_the_scene_refuses_a_face_wider_than_its_circle():
 def test_every_solver_designs_a_feasible_cam_whose_face_is_just_wide_enough(solver, mode):
     from camjax.solvers.base import solve
 
-    # the built-in scene at 90 samples, as tests/cache_matrix.py designs it (with the tests'
-    # compilation cache the gradient solver's programs compile once in the suite), R_c in [40, 200]
+    # the built-in scene at 90 samples, as tests/cache_matrix.py designs it, R_c in [40, 200]; the
+    # programs are this test's own: the matrix's runs compile the same computations as exported
+    # modules (`jit(call)`), which XLA's compilation cache keys apart (a compile ledger of the whole
+    # suite: this test's four solve programs compiled here, none loaded)
     text = builtin_scene_text("curved-face").replace("face_radius_mm = [30.0, 300.0]",
                                                       "face_radius_mm = [40.0, 200.0]")
     scene = with_samples(parse_scene(text), MATRIX_SAMPLES)

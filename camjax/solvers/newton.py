@@ -406,5 +406,6 @@ def run_one(problem: Problem, weights: Weights, key: jax.Array, settings, init: 
 
 def certify(problem: Problem, weights: Weights, init_design: Design | None = None,
             settings: NewtonSettings = DEFAULT_SETTINGS) -> Certificate:
-    """Solve (:func:`minimize`) and certify the answer (:func:`camjax.solvers.certificate.certificate_of`); traceable, vmappable."""
+    """Solve (:func:`minimize`) and certify the answer
+    (:func:`camjax.solvers.certificate.certificate_of`); traceable, vmappable."""
     return certificate_of(problem, weights, minimize(problem, weights, init_design, settings))
