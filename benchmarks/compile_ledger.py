@@ -9,7 +9,12 @@ free variables) as well as in sizes, and static settings (solver, mode) are not 
 that differ in a grid size or a batch alone are the programs a shared shape would make one.
 ``sizes_only`` bounds what shared sizes could save: per program name, the compile seconds of every
 compiled program whose argument shapes, sizes left out, are another compiled program's, all but the
-costliest of each such set (an upper bound, for the same reason). Reads the ledger only (no JAX).
+costliest of each such set (an upper bound, for the same reason). ``solves`` does the same for the
+design programs with what the shapes do not show: each compile of ``jit(solve_batch)`` is paired
+with the solve the test traced before it (its problem type, mode, solver and settings: the
+ledger's "solve" records), and the sets of one such label and equal sizeless shapes that were
+compiled under several grid sizes or batches are listed with their tests: the programs a shared
+size would make one. Reads the ledger only (no JAX).
 """
 
 from __future__ import annotations
@@ -65,7 +70,8 @@ def summary(lines: list[dict], top: int = 25) -> dict:
         shaped[name] = {"signatures": len(sigs), "varying": varying}
     shaped = dict(sorted(shaped.items(), key=lambda kv: -kv[1]["signatures"])[:top])
     return {"compile_s": round(compile_s, 1), "trace_s": round(trace_s, 1), "files": ranked(by_file),
-            "programs": ranked(by_program), "shapes": shaped, "sizes_only": sizes_only(lines, top)}
+            "programs": ranked(by_program), "shapes": shaped, "sizes_only": sizes_only(lines, top),
+            "solves": solves(lines, top)}
 
 
 def _sizeless(signature: dict) -> tuple:
@@ -100,6 +106,38 @@ def sizes_only(lines: list[dict], top: int = 25) -> dict:
     return {"compile_s": round(sum(v["compile_s"] for _, v in rows), 1),
             "programs": {k: {"compile_s": round(v["compile_s"], 2), "structures": v["structures"]}
                          for k, v in rows[:top]}}
+
+
+
+def solves(lines: list[dict], top: int = 25) -> dict:
+    """The design programs compiled under several sizes for one solve (see the module's docstring):
+    {"compile_s": what shared sizes would save, "sets": [{"solve", "compile_s", "programs": [{"n",
+    "shapes", "compile_s", "tests"}]}]}, the ``top`` sets by that saving."""
+    seconds: dict = collections.defaultdict(dict)  # (label, sizeless) -> shapes -> [n, s, tests]
+    for line in lines:
+        solve = lowered = None
+        for kind, name, value in line["records"]:
+            if kind == "solve":
+                solve = (name, value["n"])
+            elif kind == "lower" and name == "jit(solve_batch)":
+                lowered = value
+            elif kind == "compile" and name == "jit(solve_batch)" and solve is not None and lowered is not None:
+                key = (solve[0], _sizeless(lowered))
+                row = seconds[key].setdefault(tuple(sorted(lowered.items())), [solve[1], 0.0, []])
+                row[1] += value
+                row[2].append(line["test"])
+                solve = lowered = None
+    sets = []
+    for (label, _), programs in seconds.items():
+        if len(programs) < 2:
+            continue
+        rows = sorted(programs.items(), key=lambda kv: -kv[1][1])
+        saving = sum(row[1] for _, row in rows[1:])
+        sets.append({"solve": label, "compile_s": round(saving, 2), "programs": [
+            {"n": n, "shapes": dict(shapes), "compile_s": round(s, 2), "tests": sorted(set(tests))}
+            for shapes, (n, s, tests) in rows]})
+    sets.sort(key=lambda row: -row["compile_s"])
+    return {"compile_s": round(sum(row["compile_s"] for row in sets), 1), "sets": sets[:top]}
 
 
 def main(argv: list[str] | None = None) -> dict:

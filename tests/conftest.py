@@ -267,7 +267,9 @@ def pytest_terminal_summary(terminalreporter, config):
 # compiled (name, seconds), the ones it loaded from the persistent compilation cache, the cache keys
 # it missed (a key missed in two workers: a program both compiled), its tracing seconds, and each
 # program it lowered with its arguments' shapes ("lower": name, {shape: count}) (JAX's own compile
-# log, turned on for the run). The suite is bound by XLA compiles; the ledger shows
+# log, turned on for the run), and each solve it traced ("solve": the problem's type, mode, solver
+# and settings, which the shapes do not show, with the grid's size). The suite is bound by XLA
+# compiles; the ledger shows
 # which tests compile which programs, and which programs several tests compile again under another
 # shape.
 
@@ -313,6 +315,29 @@ def _ledger_start(config) -> None:
     worker = os.environ.get("PYTEST_XDIST_WORKER", "main")
     Path(folder).mkdir(parents=True, exist_ok=True)
     _LEDGER["file"] = open(Path(folder) / f"ledger-{worker}.jsonl", "a")  # noqa: SIM115
+    _ledger_solves()
+
+
+def _ledger_solves() -> None:
+    """Record each trace of :func:`camjax.solvers.base.solve_one` (every solve program traces it
+    once, under ``vmap`` or not) as ("solve", "<problem type> <mode> <solver> <settings digest>",
+    {"n": the grid's size}): two solve programs of one label differ in sizes alone."""
+    import hashlib
+
+    from camjax.solvers import base
+
+    original = base.solve_one
+
+    def solve_one(problem, weights, key, **kwargs):
+        if _LEDGER["phase"] is not None:
+            settings = hashlib.sha256(repr(kwargs.get("settings")).encode()).hexdigest()[:8]
+            label = f"{type(problem).__module__}.{type(problem).__name__} {kwargs.get('mode')} " \
+                    f"{kwargs.get('solver')} {settings}"
+            n = max((int(x.shape[-1]) for x in jax.tree.leaves(problem) if getattr(x, "shape", ())), default=0)
+            _LEDGER["records"].append(("solve", label, {"n": n}))
+        return original(problem, weights, key, **kwargs)
+
+    base.solve_one = solve_one  # solve_batch looks it up when it traces
 
 
 @pytest.hookimpl(hookwrapper=True)

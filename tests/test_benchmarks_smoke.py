@@ -1,5 +1,6 @@
 """Smoke test of the benchmark harness: tiny cases run and agree; nothing about speed."""
 
+import json
 import sys
 from pathlib import Path
 
@@ -67,3 +68,28 @@ def test_compile_ledger_summary_counts_by_file_program_and_shape(tmp_path):
     # jit(add)'s lowering has no compile after it, so it is not counted
     assert result["sizes_only"] == {"compile_s": 4.0,
                                     "programs": {"jit(solve_batch)": {"compile_s": 4.0, "structures": 1}}}
+    # no "solve" records: nothing to pair the design programs with
+    assert result["solves"] == {"compile_s": 0, "sets": []}
+
+
+def test_compile_ledger_pairs_each_design_program_with_its_solve(tmp_path):
+    """Three design programs: one solve (type, mode, solver) at two grid sizes and another solver at
+    the first size; only the first two are one program under a shared size, and the cheaper (2 s)
+    is what it saves."""
+    from benchmarks import compile_ledger
+
+    def line(test, label, n, seconds):
+        return json.dumps({"test": test, "records": [
+            ["solve", label, {"n": n}], ["lower", "jit(solve_batch)", {f"float64[{n}]": 5, "float64[]": 3}],
+            ["compile", "jit(solve_batch)", seconds]]})
+
+    (tmp_path / "ledger-gw0.jsonl").write_text("\n".join([
+        line("tests/test_a.py::t1", "Roller global newton s1", 90, 3.0),
+        line("tests/test_b.py::t2", "Roller global newton s1", 360, 2.0),
+        line("tests/test_c.py::t3", "Roller global ga s1", 90, 5.0)]) + "\n")
+    result = compile_ledger.summary(compile_ledger.read(tmp_path))["solves"]
+    assert result["compile_s"] == 2.0
+    (only,) = result["sets"]
+    assert only["solve"] == "Roller global newton s1" and only["compile_s"] == 2.0
+    assert [(p["n"], p["compile_s"], p["tests"]) for p in only["programs"]] == [
+        (90, 3.0, ["tests/test_a.py::t1"]), (360, 2.0, ["tests/test_b.py::t2"])]
