@@ -82,25 +82,40 @@ def _sizeless(signature: dict) -> tuple:
     return tuple(sorted(counts.items()))
 
 
-def sizes_only(lines: list[dict], top: int = 25) -> dict:
-    """Per program name, the compile seconds a shared size could at most save: each compile is paired
-    with the shapes its name was last lowered with; of the compiled shape sets that are equal with
-    their sizes left out, all but the costliest count. {"compile_s": total, "programs": {name:
-    {"compile_s", "structures"}}} (structures: the sets of more than one size), the top names."""
-    seconds: dict = collections.defaultdict(lambda: collections.defaultdict(float))  # (name, sizeless) -> shapes -> s
+def _compiles(lines: list[dict]):
+    """Each compile paired with the shapes its program was last lowered with and the solve traced
+    before it (None where the ledger has none): (test, name, shapes, seconds, solve)."""
     for line in lines:
         lowered: dict = {}
+        solve = None
         for kind, name, value in line["records"]:
-            if kind == "lower":
+            if kind == "solve":
+                solve = (name, value["n"])
+            elif kind == "lower":
                 lowered[name] = value
             elif kind == "compile" and name in lowered:
-                shapes = lowered.pop(name)
-                seconds[(name, _sizeless(shapes))][tuple(sorted(shapes.items()))] += value
+                yield line["test"], name, lowered.pop(name), value, solve
+                solve = None
+
+
+def _saving(seconds) -> float:
+    """What one program instead of these would save: all but the costliest."""
+    return sum(sorted(seconds, reverse=True)[1:])
+
+
+def sizes_only(lines: list[dict], top: int = 25) -> dict:
+    """Per program name, the compile seconds a shared size could at most save: of the compiled shape
+    sets that are equal with their sizes left out, all but the costliest count. {"compile_s": total,
+    "programs": {name: {"compile_s", "structures"}}} (structures: the sets of more than one size),
+    the top names."""
+    # (name, sizeless shapes) -> shapes -> seconds
+    seconds: dict = collections.defaultdict(lambda: collections.defaultdict(float))
+    for _, name, shapes, value, _ in _compiles(lines):
+        seconds[(name, _sizeless(shapes))][tuple(sorted(shapes.items()))] += value
     by_name: dict = collections.defaultdict(lambda: {"compile_s": 0.0, "structures": 0})
     for (name, _), per_shapes in seconds.items():
         if len(per_shapes) > 1:
-            costs = sorted(per_shapes.values(), reverse=True)
-            by_name[name]["compile_s"] += sum(costs[1:])
+            by_name[name]["compile_s"] += _saving(per_shapes.values())
             by_name[name]["structures"] += 1
     rows = sorted(by_name.items(), key=lambda kv: -kv[1]["compile_s"])
     return {"compile_s": round(sum(v["compile_s"] for _, v in rows), 1),
@@ -108,32 +123,24 @@ def sizes_only(lines: list[dict], top: int = 25) -> dict:
                          for k, v in rows[:top]}}
 
 
-
 def solves(lines: list[dict], top: int = 25) -> dict:
     """The design programs compiled under several sizes for one solve (see the module's docstring):
     {"compile_s": what shared sizes would save, "sets": [{"solve", "compile_s", "programs": [{"n",
     "shapes", "compile_s", "tests"}]}]}, the ``top`` sets by that saving."""
     seconds: dict = collections.defaultdict(dict)  # (label, sizeless) -> shapes -> [n, s, tests]
-    for line in lines:
-        solve = lowered = None
-        for kind, name, value in line["records"]:
-            if kind == "solve":
-                solve = (name, value["n"])
-            elif kind == "lower" and name == "jit(solve_batch)":
-                lowered = value
-            elif kind == "compile" and name == "jit(solve_batch)" and solve is not None and lowered is not None:
-                key = (solve[0], _sizeless(lowered))
-                row = seconds[key].setdefault(tuple(sorted(lowered.items())), [solve[1], 0.0, []])
-                row[1] += value
-                row[2].append(line["test"])
-                solve = lowered = None
+    for test, name, shapes, value, solve in _compiles(lines):
+        if name != "jit(solve_batch)" or solve is None:
+            continue
+        same_solve = seconds[(solve[0], _sizeless(shapes))]
+        row = same_solve.setdefault(tuple(sorted(shapes.items())), [solve[1], 0.0, []])
+        row[1] += value
+        row[2].append(test)
     sets = []
     for (label, _), programs in seconds.items():
         if len(programs) < 2:
             continue
         rows = sorted(programs.items(), key=lambda kv: -kv[1][1])
-        saving = sum(row[1] for _, row in rows[1:])
-        sets.append({"solve": label, "compile_s": round(saving, 2), "programs": [
+        sets.append({"solve": label, "compile_s": round(_saving(row[1] for _, row in rows), 2), "programs": [
             {"n": n, "shapes": dict(shapes), "compile_s": round(s, 2), "tests": sorted(set(tests))}
             for shapes, (n, s, tests) in rows]})
     sets.sort(key=lambda row: -row["compile_s"])
