@@ -10,7 +10,7 @@ that differ in a grid size or a batch alone are the programs a shared shape woul
 ``sizes_only`` bounds what shared sizes could save: per program name, the compile seconds of every
 compiled program whose argument shapes, sizes left out, are another compiled program's, all but the
 costliest of each such set (an upper bound, for the same reason). ``solves`` does the same for the
-design programs with what the shapes do not show: each compile of ``jit(solve_batch)`` is paired
+design programs with what the shapes do not show: each compile of ``jit(search_batch)`` is paired
 with the solve the test traced before it (its problem type, mode, solver and settings: the
 ledger's "solve" records), and the sets of one such label and equal sizeless shapes that were
 compiled under several grid sizes or batches are listed with their tests: the programs a shared
@@ -129,7 +129,7 @@ def solves(lines: list[dict], top: int = 25) -> dict:
     "shapes", "compile_s", "tests"}]}]}, the ``top`` sets by that saving."""
     seconds: dict = collections.defaultdict(dict)  # (label, sizeless) -> shapes -> [n, s, tests]
     for test, name, shapes, value, solve in _compiles(lines):
-        if name != "jit(solve_batch)" or solve is None:
+        if name != "jit(search_batch)" or solve is None:
             continue
         same_solve = seconds[(solve[0], _sizeless(shapes))]
         row = same_solve.setdefault(tuple(sorted(shapes.items())), [solve[1], 0.0, []])

@@ -1,4 +1,5 @@
-"""Size and compile cost of the design program (:func:`camjax.solvers.base.solve_batch`) per solver.
+"""Size and compile cost of the design program (:func:`camjax.solvers.base.solve_batch` jitted as one
+program; ``camjax design`` compiles its search and judgement apart) per solver.
 
 For each registered follower type (its example scene as ``camjax design`` loads it, one weighting
 (1, 1), global mode) and each solver of ``--solvers``: the equations of the traced program
@@ -51,7 +52,8 @@ def measure(problem, solver: str) -> dict:
 
     weights, keys = weights_of([1.0], [1.0]), weighting_keys(0, 1)
     cpu0, t0 = time.process_time(), time.perf_counter()
-    traced = solve_batch.trace(problem, weights, keys, "global", solver)
+    traced = jax.jit(solve_batch, static_argnames=("mode", "solver", "settings")).trace(
+        problem, weights, keys, "global", solver)
     t1 = time.perf_counter()
     lowered = traced.lower()
     t2 = time.perf_counter()

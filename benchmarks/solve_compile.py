@@ -1,7 +1,9 @@
 """Compile cost of the gradient solver's design program, per follower type's example scene.
 
 The program is :func:`camjax.solvers.base.solve_batch` in global mode with the default
-``gradient`` solver and one weighting (alpha = gamma = 1), as ``camjax design`` compiles it.
+``gradient`` solver and one weighting (alpha = gamma = 1), jitted as one program (``camjax design``
+compiles it as two, the search and its judgement: :func:`~camjax.solvers.base.search_batch`,
+:func:`~camjax.solvers.base.judge_batch`).
 Each scene is measured in a fresh process (no compilation cache, no program cache) with:
 
 * ``eqns``: equations of its jaxpr, nested ones (loop bodies, conds, custom rules) included;
@@ -74,7 +76,8 @@ def measure(scene_name: str) -> dict:
     args = (problem, weights_of([1.0], [1.0], jax.numpy.float64), weighting_keys(0, 1))
     jax.block_until_ready(args)
     cpu0, t0 = time.process_time(), time.perf_counter()
-    traced = solve_batch.trace(*args, "global", "gradient", Settings())
+    traced = jax.jit(solve_batch, static_argnames=("mode", "solver", "settings")).trace(
+        *args, "global", "gradient", Settings())
     t1 = time.perf_counter()
     lowered = traced.lower()
     t2 = time.perf_counter()

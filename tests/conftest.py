@@ -319,16 +319,16 @@ def _ledger_start(config) -> None:
 
 
 def _ledger_solves() -> None:
-    """Record each trace of :func:`camjax.solvers.base.solve_one` (every solve program traces it
+    """Record each trace of :func:`camjax.solvers.base.search_one` (every solve program traces it
     once, under ``vmap`` or not) as ("solve", "<problem type> <mode> <solver> <settings digest>",
     {"n": the grid's size}): two solve programs of one label differ in sizes alone."""
     import hashlib
 
     from camjax.solvers import base
 
-    original = base.solve_one
+    original = base.search_one
 
-    def solve_one(problem, weights, key, **kwargs):
+    def search_one(problem, weights, key, **kwargs):
         if _LEDGER["phase"] is not None:
             settings = hashlib.sha256(repr(kwargs.get("settings")).encode()).hexdigest()[:8]
             label = f"{type(problem).__module__}.{type(problem).__name__} {kwargs.get('mode')} " \
@@ -337,7 +337,7 @@ def _ledger_solves() -> None:
             _LEDGER["records"].append(("solve", label, {"n": n}))
         return original(problem, weights, key, **kwargs)
 
-    base.solve_one = solve_one  # solve_batch looks it up when it traces
+    base.search_one = search_one  # search_batch looks it up when it traces
 
 
 @pytest.hookimpl(hookwrapper=True)

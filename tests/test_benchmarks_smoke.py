@@ -80,8 +80,8 @@ def test_compile_ledger_pairs_each_design_program_with_its_solve(tmp_path):
 
     def line(test, label, n, seconds):
         return json.dumps({"test": test, "records": [
-            ["solve", label, {"n": n}], ["lower", "jit(solve_batch)", {f"float64[{n}]": 5, "float64[]": 3}],
-            ["compile", "jit(solve_batch)", seconds]]})
+            ["solve", label, {"n": n}], ["lower", "jit(search_batch)", {f"float64[{n}]": 5, "float64[]": 3}],
+            ["compile", "jit(search_batch)", seconds]]})
 
     (tmp_path / "ledger-gw0.jsonl").write_text("\n".join([
         line("tests/test_a.py::t1", "Roller global newton s1", 90, 3.0),

@@ -159,3 +159,22 @@ def test_the_hybrid_is_never_worse_than_the_ga_it_starts_from():
     hybrid = base.solve_batch(problem, weights, keys, "global", "hybrid")
     assert np.all(np.asarray(found.feasible)) and np.all(np.asarray(hybrid.feasible))
     np.testing.assert_array_less(np.asarray(hybrid.objective), np.asarray(found.objective) * (1 + 1e-12))
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("mode", registry.MODES)
+def test_every_solvers_search_hands_the_judgement_one_form(coarse, mode):
+    """The judgement program (polish and evaluation) is shared by the solvers of a problem only if
+    each search gives it arguments of one form: the design's tree, shapes and dtypes, int32
+    iterations and a bool ``done`` (False for the GA's fixed budget). Each solver's search, traced
+    for shapes alone (no compile), against the form :func:`solve` compiles the judgement for
+    before any search has run."""
+    w, keys = weights_of([1.0, 2.0], [1.0, 0.5]), base.weighting_keys(0, 2)
+    expected = base._judge_specs(coarse, mode, 2)
+    for solver in registry.SOLVERS:
+        raw, done = jax.eval_shape(lambda p, w, k, s=solver: base.search_batch(p, w, k, mode, s, settings_of(s)),
+                                   coarse, w, keys)
+        got = (raw.design, raw.iterations, done)
+        assert jax.tree.structure(got) == jax.tree.structure(expected), solver
+        assert [(x.shape, x.dtype) for x in jax.tree.leaves(got)] == \
+            [(x.shape, x.dtype) for x in jax.tree.leaves(expected)], solver

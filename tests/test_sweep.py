@@ -9,6 +9,7 @@ from reference import numpy_reference_optimum
 from camjax.family import weights_of
 from camjax.followers.flat import optimum
 from camjax.followers.flat import problem as P
+from camjax.solvers import base
 from camjax.solvers import sweep as S
 from camjax.solvers.registry import DEFAULT_SOLVER
 
@@ -23,15 +24,16 @@ def problem(default_scene):
 def big_sweep(problem):
     """11 x 11 = 121 weightings, alpha and gamma from 0.01 to 100, global, the default solver, one chunk."""
     grid = np.logspace(-2, 2, 11)
-    S.solve_batch.clear_cache()
+    base.search_batch.clear_cache()
+    base.judge_batch.clear_cache()
     result = S.sweep(problem, grid, grid, chunk_size=128)
     return result
 
 
 @pytest.mark.slow
-def test_sweep_of_121_weightings_is_one_compiled_program(big_sweep):
+def test_sweep_of_121_weightings_is_one_search_and_one_judgement(big_sweep):
     assert big_sweep.results.batch_size == 121
-    assert S.solve_batch._cache_size() == 1
+    assert (base.search_batch._cache_size(), base.judge_batch._cache_size()) == (1, 1)  # the search, its judgement
     assert bool(np.all(big_sweep.results.feasible))
 
 

@@ -1,10 +1,10 @@
 """One result type and one entry point for every solver, mode and problem family.
 
-:func:`solve` (one weighting, Python) and :func:`solve_batch` (a batch of weightings, one jitted
-program) run any registered solver (:data:`camjax.solvers.registry.SOLVERS`) in either mode
+:func:`solve` (one weighting, Python) and :func:`solve_batch` (a batch of weightings: one compiled
+search, one compiled judgement shared by every solver) run any registered solver (:data:`camjax.solvers.registry.SOLVERS`) in either mode
 (:data:`~camjax.solvers.registry.MODES`) on any registered problem family and return a
 :class:`Solution`. The choice between the global and the pointwise problem is made here only
-(:func:`in_mode`, :func:`_solution`): a solver is written for one problem on its angle grid.
+(:func:`in_mode`, :func:`judge`): a solver is written for one problem on its angle grid.
 
 Solver protocol (a module named in :data:`camjax.solvers.registry.SOLVER_MODULES`):
 
@@ -40,7 +40,7 @@ flat-face one is :mod:`camjax.followers.flat.problem`). It provides:
 - ``record(solution) -> dict`` (Python) the family's keys of a pareto.json row; it must contain
   ``size_mm`` and ``stress_max_MPa`` (the two objectives of the Pareto front).
 - optionally ``polish(problem, weights, design) -> Design``: the exact optimum near a solver's
-  global-mode design (the solvers may search on the sample grid; :func:`_solution` polishes),
+  global-mode design (the solvers may search on the sample grid; :func:`judge` polishes),
   and ``polish_pointwise(problem, weights, design, extras) -> (Design, dict)``: the condensed
   pointwise design taken as a continuous max over the angle; and
   ``ONE_MULTIPLIER_PER_CONSTRAINT = False`` where a constraint's max over the angles is not one
@@ -290,45 +290,111 @@ def in_mode(run_one, mode: str):
     return pointwise
 
 
-def _status(feasible, converged) -> jax.Array:
-    done = jnp.asarray(False) if converged is None else converged
+def _status(feasible, done) -> jax.Array:
     return jnp.where(~feasible, int(Status.INFEASIBLE),
                      jnp.where(done, int(Status.CONVERGED), int(Status.MAX_STEPS))).astype(jnp.int32)
 
 
-def _solution(problem, weights: Weights, raw: Raw, mode: str, solver: str) -> Solution:
-    """Judge a raw result on the whole grid (a pointwise one condensed first); traceable."""
+class Judged(NamedTuple):
+    """What :func:`judge` makes of a solver's raw result (one weighting): the design on the whole
+    grid and its evaluation."""
+
+    design: Any  # the family's Design, mm (pointwise: the condensed, polished whole-cam design)
+    pointwise: Any  # pointwise mode: the per-angle designs, (n,) each; None in global mode
+    extras: dict | None  # pointwise mode: the family's extra arrays; None in global mode
+    evaluation: Any  # the family's Evaluation of ``design``
+    status: jax.Array  # int32 Status code
+    iterations: jax.Array  # int32 (pointwise: the max over the angles)
+    converged: jax.Array  # bool (pointwise: every angle)
+
+
+def search_one(problem, weights: Weights, key: jax.Array, *, mode: str, solver: str,
+               settings: Settings) -> tuple[Raw, jax.Array]:
+    """The solver's search in ``mode`` for one weighting: its :class:`Raw` result, with the
+    iterations as int32, the design in the bounds' dtype and ``done`` (bool: the stopping rule was
+    met; False for a fixed-budget solver), so that :func:`judge`'s arguments have one form
+    whatever the solver. Traceable, vmappable."""
+    module = solver_module(solver)
+    run = in_mode(lambda p, w, k, init=None: module.run_one(p, w, k, settings, init), mode)
+    raw = run(problem, weights, key)
+    lo = family_of(problem).bounds(problem)[0]
+    design = jax.tree.map(lambda x, b: jnp.asarray(x, jnp.result_type(b)), raw.design, lo)
+    iterations = jnp.asarray(raw.iterations, jnp.int32)
+    done = jnp.zeros(iterations.shape, bool) if raw.converged is None else jnp.asarray(raw.converged, bool)
+    return raw._replace(design=design, iterations=iterations), done
+
+
+def judge(problem, weights: Weights, design, iterations: jax.Array, done: jax.Array, mode: str) -> Judged:
+    """Judge a solver's raw design on the whole grid (a pointwise one condensed first, the family's
+    polish onto its exact extrema where it has one); traceable, vmappable. It depends on the mode
+    but not on the solver: one program serves every solver of a problem."""
     family = family_of(problem)
-    design, per_angle, extras = raw.design, None, None
-    iterations, converged = raw.iterations, raw.converged
+    per_angle, extras = None, None
     if mode == "pointwise":
-        per_angle = raw.design
+        per_angle = design
         design, extras = family.condense_pointwise(problem, per_angle)
         polish_pointwise = getattr(family, "polish_pointwise", None)  # optional hook (flat face)
         if polish_pointwise is not None:  # exact extrema: the continuous max over angles
             design, extras = polish_pointwise(problem, weights, design, extras)
-        iterations = jnp.max(iterations)
-        converged = None if converged is None else jnp.all(converged)
+        iterations, done = jnp.max(iterations), jnp.all(done)
     elif (polish := getattr(family, "polish", None)) is not None:  # optional hook (flat face)
         design = polish(problem, weights, design)  # exact extrema: the continuous optimum
     ev = family.evaluate(problem, weights, design)
-    return Solution(mode, solver, weights.alpha, weights.gamma, design, ev.objective, ev.violation,
-                    ev.feasible, _status(ev.feasible, converged), iterations, converged, ev, per_angle,
-                    extras, raw.certificate)
+    return Judged(design, per_angle, extras, ev, _status(ev.feasible, done), iterations, done)
+
+
+def _solution(weights: Weights, raw: Raw, judged: Judged, mode: str, solver: str) -> Solution:
+    """The :class:`Solution` of a search's raw result and its judgement (any leading axes)."""
+    converged = None if raw.converged is None else judged.converged
+    return Solution(mode, solver, weights.alpha, weights.gamma, judged.design, judged.evaluation.objective,
+                    judged.evaluation.violation, judged.evaluation.feasible, judged.status, judged.iterations,
+                    converged, judged.evaluation, judged.pointwise, judged.extras, raw.certificate)
 
 
 def solve_one(problem, weights: Weights, key: jax.Array, *, mode: str = "global", solver: str = DEFAULT_SOLVER,
               settings: Settings = DEFAULT_SETTINGS) -> Solution:
     """One weighting (scalar alpha, gamma), any registered solver and mode; traceable, vmappable."""
-    module = solver_module(solver)
-    run = in_mode(lambda p, w, k, init=None: module.run_one(p, w, k, settings, init), mode)
-    return _solution(problem, weights, run(problem, weights, key), mode, solver)
+    raw, done = search_one(problem, weights, key, mode=mode, solver=solver, settings=settings)
+    judged = judge(problem, weights, raw.design, raw.iterations, done, mode)
+    return _solution(weights, raw, judged, mode, solver)
+
+
+def _per_weighting(one, problem, weights: Weights, *rest):
+    """``one(problem, weights, *rest)`` for each weighting of a batch (leading axis w on weights
+    and ``rest``). A batch of one weighting is traced without ``vmap``, its axis added back: a
+    solve traced under ``vmap`` takes twice as long to trace (its loops batched) and ~10 % longer
+    to compile."""
+    if jnp.shape(weights.alpha)[0] == 1:
+        first = jax.tree.map(lambda a: a[0], (weights, *rest))
+        return jax.tree.map(lambda x: x[None], one(problem, *first))
+    return jax.vmap(one, in_axes=(None, 0, *[0] * len(rest)))(problem, weights, *rest)
 
 
 @partial(jax.jit, static_argnames=("mode", "solver", "settings"))
+def search_batch(problem, weights: Weights, keys: jax.Array, mode: str = "global",
+                 solver: str = DEFAULT_SOLVER, settings: Settings = DEFAULT_SETTINGS) -> tuple[Raw, jax.Array]:
+    """The solver's search of every weighting of a batch in one compiled program: :func:`search_one`
+    with leading axis w (see :func:`solve_batch`)."""
+    # search_one is looked up when traced (the suite's compile ledger records each solve by it)
+    return _per_weighting(lambda p, w, k: search_one(p, w, k, mode=mode, solver=solver, settings=settings),
+                          problem, weights, keys)
+
+
+@partial(jax.jit, static_argnames="mode")
+def judge_batch(problem, weights: Weights, design, iterations: jax.Array, done: jax.Array,
+                mode: str = "global") -> Judged:
+    """The judgement of every weighting of a batch in one compiled program, the same for every
+    solver: :func:`judge` with leading axis w (see :func:`solve_batch`)."""
+    return _per_weighting(lambda p, w, d, i, c: judge(p, w, d, i, c, mode), problem, weights, design,
+                          iterations, done)
+
+
 def solve_batch(problem, weights: Weights, keys: jax.Array, mode: str = "global", solver: str = DEFAULT_SOLVER,
                 settings: Settings = DEFAULT_SETTINGS) -> Solution:
-    """Every weighting of a batch in one compiled program.
+    """Every weighting of a batch in two compiled programs: the solver's search
+    (:data:`search_batch`) and the judgement of its answers on the whole grid (:data:`judge_batch`:
+    the family's polish and evaluation, one program whatever the solver, so that the solvers of one
+    problem share it).
 
     Args:
       problem: a registered family's problem (grid arrays (n,)).
@@ -340,22 +406,22 @@ def solve_batch(problem, weights: Weights, keys: jax.Array, mode: str = "global"
     Returns:
       a :class:`Solution` with leading axis w.
 
-    A batch of one weighting (every design) is traced without ``vmap``, its axis added back: a
-    solve traced under ``vmap`` takes twice as long to trace (its loops batched) and ~10 % longer
-    to compile. Its numbers are the batched program's but in the last bits where XLA's code for
-    the two differs (measured on the built-in scenes' designs: the same for six of the seven
-    follower types; the oscillating curved face's optimum, on a ridge, moved 1e-5 mm along it).
-    A sweep in chunks of one weighting therefore runs the design's own program.
+    Traceable (under ``jit`` the two programs are one). A batch of one weighting is traced without
+    ``vmap``, its axis added back (:func:`_per_weighting`); its numbers are the batched program's
+    but in the last bits where XLA's code for the two differs (measured on the built-in scenes'
+    designs: the same for six of the seven follower types; the oscillating curved face's optimum,
+    on a ridge, moved 1e-5 mm along it). A sweep in chunks of one weighting therefore runs the
+    design's own programs.
     """
     check_choice("mode", mode, MODES)
     check_choice("solver", solver, SOLVERS)
-    one = partial(solve_one, mode=mode, solver=solver, settings=settings)
-    if jnp.shape(weights.alpha)[0] == 1:
-        return jax.tree.map(lambda x: x[None], one(problem, jax.tree.map(lambda a: a[0], weights), keys[0]))
-    return jax.vmap(one, in_axes=(None, 0, 0))(problem, weights, keys)
+    raw, done = search_batch(problem, weights, keys, mode, solver, settings)
+    return _solution(weights, raw, judge_batch(problem, weights, raw.design, raw.iterations, done, mode),
+                     mode, solver)
 
 
-_solve_program = runtime.program_cache(solve_batch, static_argnames=("mode", "solver", "settings"))
+_search_program = runtime.program_cache(search_batch, static_argnames=("mode", "solver", "settings"))
+_judge_program = runtime.program_cache(judge_batch, static_argnames="mode")
 
 
 @partial(jax.jit, static_argnames="count")
@@ -394,13 +460,47 @@ def solve(problem, weights: Weights | tuple[float, float] = (1.0, 1.0), *, mode:
     compiled, compile_s = _COMPILED.get(cache_key), 0.0
     if compiled is None:
         t0 = time.perf_counter()
-        if runtime.program_cache_on():  # a saved program: no tracing (the command line)
-            compiled = _solve_program.load(*args, mode=mode, solver=solver, settings=settings)
-        else:
-            compiled = solve_batch.lower(*args, mode, solver, settings).compile()
+        compiled = _compiled_solve(args, mode, solver, settings)
         compile_s = time.perf_counter() - t0
         _COMPILED[cache_key] = compiled
     t1 = time.perf_counter()
     res = jax.device_get(compiled(*args))  # NumPy leaves: indexing them dispatches nothing
     t2 = time.perf_counter()
     return dataclasses.replace(res[0], timings=Timings(compile_s, t2 - t1))
+
+
+def _judge_specs(problem, mode: str, batch: int):
+    """The shapes and dtypes of :data:`judge_batch`'s design, iterations and done for a batch of
+    ``batch`` weightings (what :func:`search_one` gives, known without tracing the search)."""
+    family = family_of(problem)
+    lo = jax.eval_shape(lambda p: family.bounds(p)[0], problem)
+    lead = (batch,)
+    if mode == "pointwise":
+        lead += (jax.tree.leaves(jax.eval_shape(family.per_angle, problem))[0].shape[0],)
+    design = jax.tree.map(lambda b: jax.ShapeDtypeStruct(lead + b.shape, b.dtype), lo)
+    return design, jax.ShapeDtypeStruct(lead, jnp.int32), jax.ShapeDtypeStruct(lead, jnp.bool_)
+
+
+def _compiled_solve(args, mode: str, solver: str, settings: Settings):
+    """``args -> Solution``: the search and judgement programs compiled for these arguments (with
+    the program cache on, saved programs, no tracing: the command line; the judgement then
+    compiles beside the search where compiling ahead is on, its arguments' shapes known first)."""
+    problem, weights, _ = args
+    specs = _judge_specs(problem, mode, int(jnp.shape(weights.alpha)[0]))
+    if runtime.program_cache_on():
+        def load_judge():
+            return _judge_program.load(problem, weights, *specs, mode=mode)
+
+        with runtime.ahead(load_judge):
+            search = _search_program.load(*args, mode=mode, solver=solver, settings=settings)
+        judged = load_judge()  # compiled by now where compiling ahead is on
+    else:
+        search = search_batch.lower(*args, mode, solver, settings).compile()
+        judged = judge_batch.lower(problem, weights, *specs, mode).compile()
+
+    def run(problem, weights, keys):
+        raw, done = search(problem, weights, keys)
+        judgement = judged(problem, weights, raw.design, raw.iterations, done)
+        return _solution(weights, raw, judgement, mode, solver)
+
+    return run

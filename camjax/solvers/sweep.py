@@ -1,7 +1,7 @@
 """Many weightings: ``camjax sweep``'s chunked batch solve, its Pareto analysis and plot.
 
 :func:`sweep` takes every (alpha, gamma) pair of two lists and solves them with
-:func:`camjax.solvers.base.solve_batch` in fixed-size chunks (one compiled program, reused; a
+:func:`camjax.solvers.base.solve_batch` in fixed-size chunks (one compiled search and judgement, reused; a
 progress bar when there is more than one), then marks the non-dominated designs in (size, peak
 stress). :func:`plot_pareto` draws cam size against peak contact stress. :func:`solve` (one
 weighting given as alpha, gamma) and :func:`solve_batch` are kept here for the callers that
