@@ -308,6 +308,12 @@ class Judged(NamedTuple):
     converged: jax.Array  # bool (pointwise: every angle)
 
 
+def _design_form(problem):
+    """The family's design as shapes and dtypes (its lower bounds', ``jax.eval_shape``: nothing is
+    computed or compiled, traced or not)."""
+    return jax.eval_shape(lambda p: family_of(p).bounds(p)[0], problem)
+
+
 def search_one(problem, weights: Weights, key: jax.Array, *, mode: str, solver: str,
                settings: Settings) -> tuple[Raw, jax.Array]:
     """The solver's search in ``mode`` for one weighting: its :class:`Raw` result, with the
@@ -317,8 +323,7 @@ def search_one(problem, weights: Weights, key: jax.Array, *, mode: str, solver: 
     module = solver_module(solver)
     run = in_mode(lambda p, w, k, init=None: module.run_one(p, w, k, settings, init), mode)
     raw = run(problem, weights, key)
-    lo = family_of(problem).bounds(problem)[0]
-    design = jax.tree.map(lambda x, b: jnp.asarray(x, jnp.result_type(b)), raw.design, lo)
+    design = jax.tree.map(lambda x, b: jnp.asarray(x, b.dtype), raw.design, _design_form(problem))
     iterations = jnp.asarray(raw.iterations, jnp.int32)
     done = jnp.zeros(iterations.shape, bool) if raw.converged is None else jnp.asarray(raw.converged, bool)
     return raw._replace(design=design, iterations=iterations), done
@@ -454,7 +459,7 @@ def solve(problem, weights: Weights | tuple[float, float] = (1.0, 1.0), *, mode:
     check_choice("solver", solver, SOLVERS)
     alpha, gamma = (float(weights[0]), float(weights[1]))
     check_weights([alpha], [gamma])
-    dtype = jax.tree.leaves(family_of(problem).bounds(problem)[0])[0].dtype
+    dtype = jax.tree.leaves(_design_form(problem))[0].dtype
     args = (problem, weights_of([alpha], [gamma], dtype), weighting_keys(seed, 1))
     cache_key = (_signature(args), mode, solver, settings)
     compiled, compile_s = _COMPILED.get(cache_key), 0.0
@@ -472,12 +477,10 @@ def solve(problem, weights: Weights | tuple[float, float] = (1.0, 1.0), *, mode:
 def _judge_specs(problem, mode: str, batch: int):
     """The shapes and dtypes of :data:`judge_batch`'s design, iterations and done for a batch of
     ``batch`` weightings (what :func:`search_one` gives, known without tracing the search)."""
-    family = family_of(problem)
-    lo = jax.eval_shape(lambda p: family.bounds(p)[0], problem)
     lead = (batch,)
     if mode == "pointwise":
-        lead += (jax.tree.leaves(jax.eval_shape(family.per_angle, problem))[0].shape[0],)
-    design = jax.tree.map(lambda b: jax.ShapeDtypeStruct(lead + b.shape, b.dtype), lo)
+        lead += (jax.tree.leaves(jax.eval_shape(family_of(problem).per_angle, problem))[0].shape[0],)
+    design = jax.tree.map(lambda b: jax.ShapeDtypeStruct(lead + b.shape, b.dtype), _design_form(problem))
     return design, jax.ShapeDtypeStruct(lead, jnp.int32), jax.ShapeDtypeStruct(lead, jnp.bool_)
 
 
