@@ -22,7 +22,7 @@ from camjax.scene.spec import (
     MotionSpec,
     RobustSpec,
 )
-from camjax.solvers.registry import MODES, ROBUST_DEFAULT_SOLVER, SOLVERS
+from camjax.solvers.registry import MODES, SOLVERS
 
 SEED_MAX = 2**63 - 1  # design.seed / --seed: JAX takes the seed of a PRNG key as a 64-bit integer
 
@@ -71,7 +71,7 @@ def parse_design(r: TableReader, follower, spec: FollowerSpec, has_contact: bool
         alpha=r.number("alpha", DEFAULT, low=0.0),
         # no stress term without [contact] (a roller may be sized without it)
         gamma=r.number("gamma", DEFAULT if has_contact else 0.0, low=0.0),
-        solver=r.choice("solver", SOLVERS, ROBUST_DEFAULT_SOLVER if r.has("robust") else DEFAULT),
+        solver=r.choice("solver", SOLVERS, DEFAULT),
         seed=r.number("seed", DEFAULT, low=0, high=SEED_MAX, integer=True),
     )
     bounds = follower.design_bounds(r, spec)

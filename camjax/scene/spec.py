@@ -127,7 +127,7 @@ class DesignSpec:
     mode: str = "global"  # or "pointwise"
     alpha: float = 1.0  # weight of the size term
     gamma: float = 1.0  # weight of the stress term
-    solver: str = DEFAULT_SOLVER  # a scene with [design] robust and no solver: ROBUST_DEFAULT_SOLVER
+    solver: str = DEFAULT_SOLVER
     seed: int = 0
     robust: RobustSpec | None = None  # a robust design (needs [tolerances]); None: the nominal one
 

@@ -25,14 +25,9 @@ SOLVER_MODULES = {
 SOLVERS = tuple(SOLVER_MODULES)
 # the solver a problem gets when none is named (a scene's [design] without ``solver``, the library's
 # solve and sweep functions): the interior point, which stops on its KKT residual and certifies
-# its answer. A robust design's scene without ``solver`` gets ROBUST_DEFAULT_SOLVER instead
-# (:mod:`camjax.scene.sections`)
+# its answer; a robust design's too (:mod:`camjax.robust.design` solves its rounds on the samples
+# nearest to breaking a limit, few enough for the interior point's path: SOLVER_SUBSET)
 DEFAULT_SOLVER = "newton"
-# the robust problem's rows are maxima over the kept samples, which switch sample as the design
-# moves: the interior point's Newton steps stall on them (the built-in `robust` scene: 200 steps,
-# its cap, in 171 s, stationarity 2.6e-4), where the gradient solver converges in 1,682 Rprop/BFGS
-# steps in 23 s to an objective 2e-4 (relative) lower
-ROBUST_DEFAULT_SOLVER = "gradient"
 
 def check_choice(field: str, value, allowed) -> None:
     """Raise ValueError naming ``field`` when ``value`` is not one of ``allowed``."""
