@@ -21,7 +21,8 @@ from camjax.solvers.base import problem_from_scene
 
 # ``camjax design robust``'s result.json (design.robust.nominal and .robust; the interior point, the
 # scene's solver, on its 360-sample grid; the gradient solver's robust offset, 0.0488236519 mm,
-# differs by 7e-7 mm on a ridge where the size hardly depends on it), fixed here so that the quick checks solve nothing;
+# differs by 7e-7 mm on a ridge where the size hardly depends on it), fixed here so that the quick
+# checks solve nothing;
 # test_camjax_design_gives_these_designs holds them against a solve
 NOMINAL = {"base_radius_mm": 2.1893435041906506, "roller_radius_mm": 8.0, "offset_mm": 0.1349588479738215}
 ROBUST = {"base_radius_mm": 2.468712248974696, "roller_radius_mm": 8.0, "offset_mm": 0.04882438545912482}

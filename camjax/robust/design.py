@@ -538,7 +538,8 @@ def solve_rounds(problem: Problem, weights, *, mode: str, solver: str, seed: int
     the others (a max over fixed samples, as smooth as each family's max over the grid, where the
     order statistic switches samples); a set larger than ``subset`` is solved on its ``subset``
     samples nearest to breaking a limit (``subset`` None: the solver's :data:`SOLVER_SUBSET`, else
-    :data:`SUBSET`; at least 4 (m + 1) + subset / 4). The design is solved, and the rounds end when every row's
+    :data:`SUBSET`; at least 4 (m + 1) + subset / 4). The design is solved, and the rounds end
+    when every row's
     order statistic over the full set equals the row the solver kept (the discarded samples are
     the m largest at the design, and the subset holds the rest of the top). The solution is judged
     on the full set's order statistics. Pointwise mode solves the order statistics of the full set
