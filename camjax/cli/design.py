@@ -225,9 +225,9 @@ def _write_design(args, out, scene, result, workers, progress, extra=None) -> in
             print(f"{c['limited_by']} (KKT residuals {c['stationarity']:.1e}, {c['primal_feasibility']:.1e}, "
                   f"{c['complementarity']:.1e} after {c['iterations']} iterations)")
         if "robust" in g:  # [design] robust: the nominal and the robust optimum on fresh samples
-            from camjax.robust.design import summary
+            from camjax.robust.report import design_summary
 
-            print(summary(g["robust"]))
+            print(design_summary(g["robust"]))
     if "synthesis" in d:
         c = d["synthesis"]["codesign"]
         b = c["best_builtin"]

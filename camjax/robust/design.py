@@ -478,16 +478,9 @@ def design_json(scene, nominal_problem) -> dict:
 
 
 SUBSET = 256  # samples a solve of a larger set works on: those nearest to breaking a limit
-# ... and the interior point's (newton): its split rows are (1 + S) x n per constraint, near-parallel
-# where samples differ little, and its path lengthens with them. The built-in `robust` scene's
-# critical samples (4 per row, 16 in all) converged in 76 Newton steps, 64 in 122, and the 256 of
-# SUBSET stalled at the 200-step safeguard (stationarity 2.6e-4, R_b 2.4708 mm against 2.4687 mm);
-# the rounds add the samples that become critical at each new design, and end only when the full
-# set's order statistics are the rows the round kept. With m = 0 (the built-in scene) the answer is
-# the subset's whatever its size; with m >= 1 the samples discarded are the largest at a round's
-# design, so a path of more rounds may discard others (tests/test_newton.py's robust roller, m = 1:
-# objective 0.144513 in two rounds of 16 samples, 0.144731 in one of 256, by either solver; both
-# keep every robust row on the full set)
+# ... and the interior point's: its path lengthens with the near-parallel split rows of many samples
+# (the `robust` scene: 16 samples 76 Newton steps, 64 122, 256 its 200-step safeguard). With m >= 1
+# the rounds' path decides which samples are discarded (docs/robust.md#robust-design)
 SOLVER_SUBSET = {"newton": 16}
 
 
@@ -537,9 +530,8 @@ def solve_rounds(problem: Problem, weights, *, mode: str, solver: str, seed: int
     or the family's start) each row's m largest samples are discarded and the row is the max over
     the others (a max over fixed samples, as smooth as each family's max over the grid, where the
     order statistic switches samples); a set larger than ``subset`` is solved on its ``subset``
-    samples nearest to breaking a limit (``subset`` None: the solver's :data:`SOLVER_SUBSET`, else
-    :data:`SUBSET`; at least 4 (m + 1) + subset / 4). The design is solved, and the rounds end
-    when every row's
+    samples nearest to breaking a limit (None: :data:`SOLVER_SUBSET` or :data:`SUBSET`; at least
+    4 (m + 1) + subset / 4). The design is solved, and the rounds end when every row's
     order statistic over the full set equals the row the solver kept (the discarded samples are
     the m largest at the design, and the subset holds the rest of the top). The solution is judged
     on the full set's order statistics. Pointwise mode solves the order statistics of the full set
@@ -593,19 +585,3 @@ def _merge(previous: np.ndarray, order: np.ndarray, subset: int) -> np.ndarray:
 
 _evaluate = jax.jit(evaluate)
 
-
-def summary(block: dict) -> str:
-    """The text summary's lines of a ``robust`` block."""
-    n, r = block["nominal"], block["robust"]
-    p = block["probability"]
-
-    def line(name, side):
-        worst = min(side["probability_kept"]["limits"].items(), key=lambda kv: kv[1], default=("-", 1.0))
-        return (f"  {name:8s} size {side['size_mm']:.4f} mm, all limits kept in "
-                f"{side['probability_kept']['all']:.4%} (least: {worst[0]} {worst[1]:.4%})")
-    inc = block["size_increase_percent"]
-    return "\n".join([
-        f"robust design: each limit kept over {p:g} of {block['samples']} samples (seed {block['seed']}); "
-        f"measured on {block['check']['samples']} fresh samples (seed {block['check']['seed']}):",
-        line("nominal", n), line("robust", r),
-        "  size +" + (f"{inc:.2f} %" if inc is not None else "n/a") + " for the robust design"])

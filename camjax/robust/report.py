@@ -157,3 +157,21 @@ def text(data: dict[str, Any]) -> str:
             lines.append(f"    {r['value']:24s} effect {r['effect']:>+12.4g}   "
                          f"d/dvalue {r['derivative']:>+12.4g}   sd {r['sd']:.4g}")
     return "\n".join(lines) + "\n"
+
+
+def design_summary(block: dict) -> str:
+    """The text summary's lines of a robust design's ``robust`` block
+    (:func:`camjax.robust.design.design_json`)."""
+    n, r = block["nominal"], block["robust"]
+    p = block["probability"]
+
+    def line(name, side):
+        worst = min(side["probability_kept"]["limits"].items(), key=lambda kv: kv[1], default=("-", 1.0))
+        return (f"  {name:8s} size {side['size_mm']:.4f} mm, all limits kept in "
+                f"{side['probability_kept']['all']:.4%} (least: {worst[0]} {worst[1]:.4%})")
+    inc = block["size_increase_percent"]
+    return "\n".join([
+        f"robust design: each limit kept over {p:g} of {block['samples']} samples (seed {block['seed']}); "
+        f"measured on {block['check']['samples']} fresh samples (seed {block['check']['seed']}):",
+        line("nominal", n), line("robust", r),
+        "  size +" + (f"{inc:.2f} %" if inc is not None else "n/a") + " for the robust design"])
