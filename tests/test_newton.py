@@ -360,13 +360,15 @@ def test_forward_derivatives_match_reverse_mode(name):
         np.testing.assert_allclose(np.asarray(got), np.asarray(want), rtol=0, atol=1e-9 * scale, err_msg=what)
 
 
-@pytest.mark.parametrize("name", followers.names())
+@pytest.mark.parametrize("name", [*followers.names(), "groove", "conjugate"])
 def test_take_angles_keeps_every_row_of_its_angles(name):
     """The exchange rounds solve on a subset of the grid (newton.take_angles): at a design away from
     the optimum every objective and constraint row of the subset's epigraph form equals the whole
     grid's row at the same angle (the same functions of the same grid values: rtol 1e-12), and the
-    bound rows are the same. The angles are uneven and out of the grid's order on purpose."""
-    problem = _problem(followers.get(name).example_scene)
+    bound rows are the same. The angles are uneven and out of the grid's order on purpose. Every
+    follower type's example scene and the positive drives (whose second contact's coefficient is a
+    grid array inside the closure)."""
+    problem = _problem(followers.get(name).example_scene if name in followers.names() else name)
     w = weights_of(0.3, 0.7)
     n = problem.theta_deg.shape[-1]
     index = jnp.asarray([n - 1, 0, 7, 8, 31, n // 2, n // 2 + 1, 60])

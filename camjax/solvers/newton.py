@@ -408,11 +408,20 @@ def _angle_blocks(fns: EpigraphForm) -> int | None:
 
 
 def take_angles(problem: Problem, index: jax.Array) -> Problem:
-    """The problem on the grid angles ``index`` (k,): each grid leaf taken there, its scalars kept,
-    from the family's one-angle problems (``per_angle``: no model). Every constraint row and every
+    """The problem on the grid angles ``index`` (k,), from the family's one-angle problems
+    (``per_angle``, so without what one angle's problem leaves out, such as a model): each grid
+    leaf ((n, 1) there) and each leaf that is (n,) in the problem itself (a positive drive's second
+    contact's coefficient) taken at ``index``, each scalar kept. Every constraint row and every
     objective row at those angles is the whole problem's (tests/test_newton.py)."""
     per = family_of(problem).per_angle(problem)
-    return jax.tree.map(lambda x: x[index, 0] if x.ndim == 2 else x[0], per)
+    shapes = {path: jnp.shape(x) for path, x in jax.tree_util.tree_flatten_with_path(problem)[0]}
+
+    def take(path, x):
+        if x.ndim == 2:
+            return x[index, 0]
+        return x[index] if len(shapes[path]) == 1 else x[0]
+
+    return jax.tree_util.tree_map_with_path(take, per)
 
 
 def _exchange(problem: Problem, weights: Weights, fns: EpigraphForm, blocks: int, init_design,
