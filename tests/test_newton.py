@@ -391,18 +391,18 @@ def test_take_angles_keeps_every_row_of_its_angles(name):
 
 
 @pytest.mark.slow
-def test_exchange_rounds_reach_the_whole_grids_optimum(monkeypatch):
+def test_exchange_rounds_reach_the_whole_grids_optimum():
     """The knife edge's example scene at 360 angles and the three weightings: the exchange rounds
-    (32 angles a round) and the interior point on the whole grid (EXCHANGE_ANGLES raised past the
-    grid) both converge, and to the same objective within 1e-7 relative (two KKT points of the same
+    (32 angles a round) and the interior point on the whole grid (``exchange_angles`` = 0) both
+    converge, and to the same objective within 1e-7 relative (two KKT points of the same
     problem, each within the barrier's ~rows x mu ~ 1e-9 of F). The exchange's certificate is taken
     on the whole grid: its multipliers' epigraph sum is the objective's unit weight."""
     problem = _problem(followers.get("knife_edge").example_scene, 360)
     w = weights_of([a for a, _ in WEIGHTINGS], [g for _, g in WEIGHTINGS])
-    solve_all = lambda p, w: jax.vmap(newton.minimize, in_axes=(None, 0))(p, w)  # noqa: E731
-    rounds = jax.jit(solve_all)(problem, w)
-    monkeypatch.setattr(newton, "EXCHANGE_ANGLES", 10**6)
-    whole = jax.jit(solve_all)(problem, w)
+    whole_grid = dataclasses.replace(newton.DEFAULT_SETTINGS, exchange_angles=0)
+    solve_all = jax.jit(jax.vmap(newton.minimize, in_axes=(None, 0, None, None)), static_argnums=3)
+    rounds = solve_all(problem, w, None, newton.DEFAULT_SETTINGS)
+    whole = solve_all(problem, w, None, whole_grid)
     assert np.all(np.asarray(rounds.converged)) and np.all(np.asarray(whole.converged))
     ev = jax.vmap(family_of(problem).evaluate, in_axes=(None, 0, 0))
     a, b = ev(problem, w, rounds.design), ev(problem, w, whole.design)

@@ -56,8 +56,8 @@ the top of each iteration from the rows, Jacobian and gradient the step uses; ``
 a safeguard only. Gradients stay finite from infeasible starts: the families' functions are written
 with safe square roots and divisions, and a trial step with a non-finite merit is rejected.
 
-Exchange rounds (:func:`_exchange`): a grid of more than 2 :data:`EXCHANGE_ANGLES` angles is solved
-:data:`EXCHANGE_ANGLES` angles at a time and each answer checked on the whole grid; the whole grid's
+Exchange rounds (:func:`_exchange`): a grid of more than 2 ``exchange_angles`` (32) angles is solved
+that many angles at a time and each answer checked on the whole grid; the whole grid's
 KKT residual ends the rounds, so the answer and its certificate are the whole problem's.
 
 :func:`run_one` returns with the answer its certificate (:mod:`camjax.solvers.certificate`: the
@@ -111,6 +111,8 @@ class NewtonSettings:
     line_search_trials: int = 30  # step lengths alpha_max 2^-k, k < trials ...
     line_search_chunk: int = 6  # ... tried this many at once, until one is accepted
     armijo: float = 1e-4
+    exchange_angles: int = 32  # a grid of more angles than twice this is solved in exchange rounds
+    # of this many angles (:func:`_exchange`); 0: every grid whole
 
 
 DEFAULT_SETTINGS = NewtonSettings()
@@ -360,11 +362,8 @@ def _restore(fns: EpigraphForm, z, active):
     return jnp.where(active, jnp.concatenate([u, z[m:]]), z)
 
 
-EXCHANGE_ANGLES = 32
-"""Angles a grid problem's interior point solves on at once (:func:`_exchange`); a grid of at most
-twice as many is solved whole."""
 WARM_MU = 1e-3  # a later round's first barrier parameters, x mu0 (it starts from the last answer)
-EXCHANGE_ROUNDS = 5  # the most exchange rounds (each one interior-point solve on EXCHANGE_ANGLES angles)
+EXCHANGE_ROUNDS = 5  # the most exchange rounds (each one interior-point solve on ``exchange_angles`` angles)
 
 
 def _paths(problem: Problem, fns: EpigraphForm, init_design, settings: NewtonSettings,
@@ -397,12 +396,13 @@ def _paths(problem: Problem, fns: EpigraphForm, init_design, settings: NewtonSet
     return jax.tree.map(lambda x: x[best], ends)
 
 
-def _angle_blocks(fns: EpigraphForm) -> int | None:
+def _angle_blocks(fns: EpigraphForm, settings: NewtonSettings) -> int | None:
     """The number of row blocks with one row per angle (the objective's and every constraint's) when
     the form is a grid problem the exchange rounds can take apart (:func:`_exchange`), else None."""
     n = fns.n_angles
     blocks = fns.kinds[:-2]
-    if fns.split or n <= 2 * EXCHANGE_ANGLES or any(count != n for _, count in blocks):
+    k = settings.exchange_angles
+    if fns.split or k <= 0 or n <= 2 * k or any(count != n for _, count in blocks):
         return None
     return len(blocks)
 
@@ -427,20 +427,20 @@ def take_angles(problem: Problem, index: jax.Array) -> Problem:
 def _exchange(problem: Problem, weights: Weights, fns: EpigraphForm, blocks: int, init_design,
               settings: NewtonSettings):
     """A grid problem solved by exchange rounds (a semi-infinite program's exchange method, e.g.
-    Reemtsen & Goerner 1998): each round solves the interior point on EXCHANGE_ANGLES angles of the
+    Reemtsen & Goerner 1998): each round solves the interior point on ``exchange_angles`` angles of the
     grid (:func:`take_angles`), then checks the answer on the whole grid with the multipliers of the
     angles left out set to 0. The whole grid's scaled KKT residual <= ``tol`` ends the rounds: the
     answer is then the whole problem's, certified on its every row. Else the next round's angles are
-    up to EXCHANGE_ANGLES / 2 that the last answer held active (the largest multipliers > 1e-8),
+    up to half of them that the last answer held active (the largest multipliers > 1e-8),
     then those whose largest row (the epigraph rows f_i - t, the constraints g / N) is largest at
-    the answer, so a violated angle comes in. The first round takes EXCHANGE_ANGLES / 2 evenly
+    the answer, so a violated angle comes in. The first round takes half of them evenly
     spaced angles (a coarse grid) and the largest rows at the start; a later round starts from the
     last answer, its barrier at :data:`WARM_MU` x mu0. Measured on the oscillating roller's
     100-weighting sweep (360 angles): 2 to 3 rounds, 36 Newton steps in all at the median (36 on
     the whole grid), each ~1/11 of the cost of a whole grid's step.
 
     Returns (z, y, iterations summed over the rounds, converged, KKT) on the whole grid."""
-    n, k = fns.n_angles, EXCHANGE_ANGLES
+    n, k = fns.n_angles, settings.exchange_angles
     dtype = fns.u_max.dtype
     m = fns.u_max.shape[0]
     total = fns.rows(jnp.zeros(m + 1, dtype)).shape[0]
@@ -491,10 +491,10 @@ def minimize(problem: Problem, weights: Weights, init_design: Design | None = No
 
     ``init_design``: the start (mm); default the family's ``start(problem)`` where it has one,
     else the centre of the box (pulled ``settings.interior`` inside the box's faces). A grid of more
-    than 2 EXCHANGE_ANGLES angles is solved in exchange rounds (:func:`_exchange`).
+    than 2 ``settings.exchange_angles`` angles is solved in exchange rounds (:func:`_exchange`).
     """
     fns = epigraph_form(problem, weights)
-    blocks = _angle_blocks(fns)
+    blocks = _angle_blocks(fns, settings)
     if blocks is None:
         end = _paths(problem, fns, init_design, settings)
         z, y, iterations, converged, kkt = end.z, end.y, end.iteration, end.done, end.kkt
