@@ -84,7 +84,6 @@ from camjax.solvers.certificate import (
     KKTPoint,
     certificate_of,
     dual_scale,
-    kkt_residuals,
     residuals,
     rows_and_jacobian,
 )
@@ -446,8 +445,8 @@ def _exchange(problem: Problem, weights: Weights, fns: EpigraphForm, blocks: int
     total = fns.rows(jnp.zeros(m + 1, dtype)).shape[0]
     spaced = jnp.zeros(n, bool).at[jnp.round(jnp.linspace(0, n - 1, k // 2)).astype(int)].set(True)
 
-    def largest_rows(z):  # (n,) the largest of each angle's rows
-        return jnp.max(fns.rows(z)[: blocks * n].reshape(blocks, n), axis=0)
+    def largest_rows(c):  # (n,) the largest of each angle's rows c
+        return jnp.max(c[: blocks * n].reshape(blocks, n), axis=0)
 
     def full_multipliers(index, y_sub):
         y = jnp.zeros(total, dtype)
@@ -459,29 +458,38 @@ def _exchange(problem: Problem, weights: Weights, fns: EpigraphForm, blocks: int
         return y.at[total - 2 * m:].set(y_sub[-2 * m:])
 
     def round_(st):
-        r, z, y, keep, iterations, _, _ = st
-        t = jnp.max(jnp.where(fns.epigraph, fns.rows(z.at[-1].set(0.0))[:n], -jnp.inf))
+        r, z, y, keep, score, iterations, _, _ = st
         held = jnp.zeros(n, bool).at[jax.lax.top_k(keep, k // 2)[1]].set(True) & (keep > 0)
-        score = jnp.where(held, jnp.inf, largest_rows(z.at[-1].set(jnp.where(r == 0, t, z[-1]))))
-        index = jnp.sort(jax.lax.top_k(score, k)[1])
+        index = jnp.sort(jax.lax.top_k(jnp.where(held, jnp.inf, score), k)[1])
         sub = take_angles(problem, index)
         warm = r > 0
         last = from_unit(problem, fns.unravel(z[:m]), own=False)
         start = jax.tree.map(lambda a, b: jnp.where(warm, a, b), last, design0)
         end = _paths(sub, epigraph_form(sub, weights), start, settings, jnp.where(warm, WARM_MU, 1.0))
         y = full_multipliers(index, end.y)
-        kkt = kkt_residuals(fns, end.z, y)
-        held = jnp.max(y[: blocks * n].reshape(blocks, n), axis=0)
-        return (r + 1, end.z, y, jnp.where(held > 1e-8, held, 0.0), iterations + end.iteration,
-                kkt.error <= settings.tol, kkt)
+        # the whole grid's KKT residuals (:func:`camjax.solvers.certificate.residuals`) from the
+        # subset's: the rows left out carry no multiplier, so stationarity and complementarity are
+        # the subset's but for the dual scale (its mean multiplier over every row); the primal
+        # infeasibility is every row's
+        c = fns.rows(end.z)
+        ratio = dual_scale(end.y, end.y.shape[0]) / dual_scale(y, total)
+        stat, comp = end.kkt.stationarity * ratio, end.kkt.complementarity * ratio
+        primal = jnp.maximum(jnp.max(c), 0.0)
+        kkt = KKT(stat, primal, comp, jnp.maximum(jnp.maximum(stat, primal), comp))
+        held = largest_rows(y)
+        return (r + 1, end.z, y, jnp.where(held > 1e-8, held, 0.0), largest_rows(c),
+                iterations + end.iteration, kkt.error <= settings.tol, kkt)
 
     design0 = getattr(family_of(problem), "start", midpoint)(problem) if init_design is None else init_design
     z0 = _start(problem, fns, design0, settings, settings.mu0)[0]
+    c0 = fns.rows(z0.at[-1].set(0.0))  # t = 0: the epigraph rows are f_i; scored at t = max f_i
+    t0 = jnp.max(jnp.where(fns.epigraph, c0[:n], -jnp.inf))
+    score0 = largest_rows(c0.at[:n].add(-t0))
     inf = jnp.asarray(jnp.inf, dtype)
-    st = (jnp.asarray(0), z0, jnp.zeros(total, dtype), spaced.astype(dtype), jnp.asarray(0),
+    st = (jnp.asarray(0), z0, jnp.zeros(total, dtype), spaced.astype(dtype), score0, jnp.asarray(0),
           jnp.asarray(False), KKT(inf, inf, inf, inf))
-    _, z, y, _, iterations, converged, kkt = jax.lax.while_loop(
-        lambda st: ~st[5] & (st[0] < EXCHANGE_ROUNDS), round_, st)
+    _, z, y, _, _, iterations, converged, kkt = jax.lax.while_loop(
+        lambda st: ~st[6] & (st[0] < EXCHANGE_ROUNDS), round_, st)
     return z, y, iterations, converged, kkt
 
 
