@@ -411,7 +411,9 @@ def test_exchange_rounds_reach_the_whole_grids_optimum():
     np.testing.assert_allclose(np.asarray(rounds.multipliers)[:, :360].sum(axis=1), 1.0, rtol=1e-8)
     # the residuals the rounds report (from the subset's) are the whole grid's, recomputed here from
     # every row and its Jacobian: the same numbers but for rounding (1e-15 absolute; each <= 1e-9)
-    recomputed = jax.vmap(lambda w, z, y: certificate.kkt_residuals(epigraph.epigraph_form(problem, w), z, y))(
-        w, rounds.z, rounds.multipliers)
+    def residuals(w, z, y):
+        return certificate.kkt_residuals(epigraph.epigraph_form(problem, w), z, y)
+
+    recomputed = jax.vmap(residuals)(w, rounds.z, rounds.multipliers)
     for got, want in zip(rounds.kkt, recomputed, strict=True):
         np.testing.assert_allclose(np.asarray(got), np.asarray(want), rtol=1e-6, atol=1e-15)

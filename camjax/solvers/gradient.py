@@ -220,8 +220,14 @@ def _clip_unit(problem: Problem, u: Design) -> Design:
 
 
 def midpoint(problem: Problem) -> Design:
-    """Centre of the box, the default start."""
+    """Centre of the box."""
     return jax.tree.map(lambda lo, hi: 0.5 * (lo + hi), *family_of(problem).bounds(problem))
+
+
+def default_start(problem: Problem) -> Design:
+    """The solvers' default start (mm): the family's ``start(problem)`` where it has one, else
+    :func:`midpoint`."""
+    return getattr(family_of(problem), "start", midpoint)(problem)
 
 
 # ------------------------------------------------------------------------- Lagrangian
@@ -291,7 +297,7 @@ def init(problem: Problem, design: Design | None = None,
     """Start at ``design`` (mm; default: the family's ``start(problem)`` where it has one, else the
     centre of the box), multipliers 0."""
     if design is None:
-        design = getattr(family_of(problem), "start", midpoint)(problem)
+        design = default_start(problem)
     dtype = problem_dtype(problem)
     u = _clip_unit(problem, jax.tree.map(lambda x: jnp.asarray(x, dtype), to_unit(problem, design)))
     rprop = _transform(settings).init(u)

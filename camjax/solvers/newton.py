@@ -89,7 +89,7 @@ from camjax.solvers.certificate import (
 )
 from camjax.solvers.certificate import certificate_json as certificate_json  # in result.json
 from camjax.solvers.epigraph import EpigraphForm, epigraph_form
-from camjax.solvers.gradient import from_unit, midpoint, to_unit
+from camjax.solvers.gradient import default_start, from_unit, to_unit
 
 
 @dataclass(frozen=True)
@@ -159,7 +159,7 @@ def _derivatives(fns: EpigraphForm, z, y) -> _Derivatives:
 
 def _start(problem, fns: EpigraphForm, design, settings: NewtonSettings, mu0):
     if design is None:
-        design = getattr(family_of(problem), "start", midpoint)(problem)
+        design = default_start(problem)
     dtype = fns.u_max.dtype
     u = ravel_pytree(jax.tree.map(lambda x: jnp.asarray(x, dtype), to_unit(problem, design, own=False)))[0]
     a = settings.interior
@@ -412,15 +412,23 @@ def take_angles(problem: Problem, index: jax.Array) -> Problem:
     leaf ((n, 1) there) and each leaf that is (n,) in the problem itself (a positive drive's second
     contact's coefficient) taken at ``index``, each scalar kept. Every constraint row and every
     objective row at those angles is the whole problem's (tests/test_newton.py)."""
+    return _angle_taker(problem)(index)
+
+
+def _angle_taker(problem: Problem):
+    """:func:`take_angles` as ``index -> problem``, the one-angle problems built once."""
     per = family_of(problem).per_angle(problem)
     shapes = {path: jnp.shape(x) for path, x in jax.tree_util.tree_flatten_with_path(problem)[0]}
 
-    def take(path, x):
-        if x.ndim == 2:
-            return x[index, 0]
-        return x[index] if len(shapes[path]) == 1 else x[0]
+    def take(index):
+        def leaf(path, x):
+            if x.ndim == 2:
+                return x[index, 0]
+            return x[index] if len(shapes[path]) == 1 else x[0]
 
-    return jax.tree_util.tree_map_with_path(take, per)
+        return jax.tree_util.tree_map_with_path(leaf, per)
+
+    return take
 
 
 def _exchange(problem: Problem, weights: Weights, fns: EpigraphForm, blocks: int, init_design,
@@ -442,7 +450,8 @@ def _exchange(problem: Problem, weights: Weights, fns: EpigraphForm, blocks: int
     n, k = fns.n_angles, settings.exchange_angles
     dtype = fns.u_max.dtype
     m = fns.u_max.shape[0]
-    total = fns.rows(jnp.zeros(m + 1, dtype)).shape[0]
+    total = sum(count for _, count in fns.kinds)
+    take = _angle_taker(problem)  # the one-angle problems built once, outside the rounds
 
     def largest_rows(c):  # (n,) the largest of each angle's rows c
         return jnp.max(c[: blocks * n].reshape(blocks, n), axis=0)
@@ -460,7 +469,7 @@ def _exchange(problem: Problem, weights: Weights, fns: EpigraphForm, blocks: int
         r, z, y, keep, score, iterations, _, _ = st
         held = jnp.zeros(n, bool).at[jax.lax.top_k(keep, k // 2)[1]].set(True) & (keep > 0)
         index = jnp.sort(jax.lax.top_k(jnp.where(held, jnp.inf, score), k)[1])
-        sub = take_angles(problem, index)
+        sub = take(index)
         warm = r > 0
         last = from_unit(problem, fns.unravel(z[:m]), own=False)
         start = jax.tree.map(lambda a, b: jnp.where(warm, a, b), last, design0)
@@ -479,7 +488,7 @@ def _exchange(problem: Problem, weights: Weights, fns: EpigraphForm, blocks: int
         return (r + 1, end.z, y, jnp.where(held > 1e-8, held, 0.0), largest_rows(c),
                 iterations + end.iteration, kkt.error <= settings.tol, kkt)
 
-    design0 = getattr(family_of(problem), "start", midpoint)(problem) if init_design is None else init_design
+    design0 = default_start(problem) if init_design is None else init_design
     # the first round: the coarse grid of k evenly spaced angles (scored 1, every other 0; no angle
     # held), from design0 (the state's z is read from the second round on)
     spaced = jnp.zeros(n, dtype).at[jnp.round(jnp.linspace(0, n - 1, k)).astype(int)].set(1.0)
