@@ -1,6 +1,7 @@
 """One solver interface: every registered solver and mode returns a Solution with a status;
 the registry is the one list of names and needs no JAX."""
 
+import dataclasses
 import subprocess
 import sys
 from pathlib import Path
@@ -139,6 +140,22 @@ def test_weighting_keys_do_not_depend_on_chunking():
     # a chunk starting at weighting 2 draws the same keys as rows 2..5 of the whole batch
     np.testing.assert_array_equal(jax.random.key_data(weighting_keys(7, 4, 2)), whole[2:])
     assert len({tuple(k) for k in np.asarray(whole)}) == 6  # distinct keys
+
+
+def test_the_hybrids_ga_stage_shortens_only_the_default_ga():
+    """hybrid.ga_stage: the GA's default settings run HybridSettings.ga_generations generations;
+    GA settings of one's own, or ga_generations None, run as given; 0 generations are refused."""
+    default = hybrid_solver.ga_stage(base.DEFAULT_SETTINGS)
+    assert default == dataclasses.replace(ga.DEFAULT_SETTINGS, generations=100)
+    own = dataclasses.replace(ga.DEFAULT_SETTINGS, generations=300)
+    assert hybrid_solver.ga_stage(base.Settings.of_solvers(ga=own)) == own
+    assert hybrid_solver.ga_stage(base.Settings.of_solvers(ga=SMALL_GA)) == SMALL_GA
+    whole = base.Settings.of_solvers(hybrid=hybrid_solver.HybridSettings(ga_generations=None))
+    assert hybrid_solver.ga_stage(whole) == ga.DEFAULT_SETTINGS
+    fifty = base.Settings.of_solvers(hybrid=hybrid_solver.HybridSettings(ga_generations=50))
+    assert hybrid_solver.ga_stage(fifty).generations == 50
+    with pytest.raises(ValueError, match="ga_generations: 0 must be >= 1"):
+        hybrid_solver.HybridSettings(ga_generations=0)
 
 
 @pytest.mark.slow

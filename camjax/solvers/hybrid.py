@@ -31,8 +31,8 @@ class HybridSettings:
     interior point reaches the optimum of its basin from a coarser answer in a few more steps, where
     the GA's last generations cost as much as its first. On the seven types' 100-weighting sweeps
     (benchmarks/follower_sweep.py's problems) 100 generations gave the hybrid the same answers as 200
-    (0 infeasible, every objective within 1e-8 of the best any method found) in 0.6-0.7 of the time
-    on the rocking followers (docs/optimization.md).
+    (0 infeasible, every objective within 1e-8 of the best any method found), on the oscillating
+    flat face and roller in 0.67 and 0.64 of the time (docs/optimization.md).
     """
 
     ga_generations: int | None = 100
@@ -52,6 +52,8 @@ def ga_stage(settings) -> ga.GASettings:
     if own.ga_generations is None or found != ga.DEFAULT_SETTINGS:
         return found
     return dataclasses.replace(found, generations=own.ga_generations)
+
+
 POLISH_MU = 1e-2
 """The polish's first barrier parameter is newton's ``mu0`` times this: the GA's design is near an
 optimum, where a barrier started high only walks back to it (the seven types' 100-weighting sweeps:
