@@ -20,12 +20,13 @@ from camjax.scene import load_scene
 from camjax.solvers.base import problem_from_scene
 
 # ``camjax design robust``'s result.json (design.robust.nominal and .robust; the interior point, the
-# scene's solver, on its 360-sample grid; the gradient solver's robust offset, 0.0488236519 mm,
-# differs by 7e-7 mm on a ridge where the size hardly depends on it), fixed here so that the quick
-# checks solve nothing;
+# scene's solver, on its 360-sample grid; the offset lies on a ridge where the size hardly depends on
+# it: the gradient solver's robust offset, 0.0488236519 mm, differs by 1.7e-6 mm, and the interior
+# point's before its central paths ran one at a time (be3f4f1), 0.0488243855 mm, by 1.1e-6 mm at an
+# objective 3.2e-9 (relative) lower), fixed here so that the quick checks solve nothing;
 # test_camjax_design_gives_these_designs holds them against a solve
-NOMINAL = {"base_radius_mm": 2.1893435041906506, "roller_radius_mm": 8.0, "offset_mm": 0.1349588479738215}
-ROBUST = {"base_radius_mm": 2.468712248974696, "roller_radius_mm": 8.0, "offset_mm": 0.04882438545912482}
+NOMINAL = {"base_radius_mm": 2.189343504190654, "roller_radius_mm": 8.0, "offset_mm": 0.1349588479738192}
+ROBUST = {"base_radius_mm": 2.4687122826208467, "roller_radius_mm": 8.0, "offset_mm": 0.048825500730631965}
 CONFIDENCE = 0.999
 FRESH_SEED = 2
 NOMINAL_SAMPLES = 400  # ~200 broken expected: the lower bound is ~0.41, far above 0.05

@@ -46,8 +46,14 @@ def test_sweep_shows_the_size_stress_trade(problem, big_sweep):
     stress = np.asarray(r.stress_max_MPa)[order]
     # the default solver (newton) stops on its scaled KKT residual (1e-9): an active stress row
     # may end inside its limit by up to ~2e-7 of it (measured 1.2e-4 MPa at 1230 MPa), so the
-    # stress is monotone to 1e-6 of its size; the size to 1e-6 mm (measured 3e-8)
-    assert np.all(np.diff(size) <= 1e-6) and np.all(np.diff(stress) >= -1e-6 * stress[1:])
+    # stress is monotone to 1e-6 of its size; the size to 1e-6 mm or to what the stopping rule
+    # leaves free at the looser of two neighbouring weightings, whichever is larger (a size excess
+    # ds costs alpha / (alpha + gamma) ds / N of the normalized objective, as the face width below;
+    # measured 2.4e-6 mm at alpha / (alpha + gamma) = 1e-4, 3e-8 mm elsewhere)
+    size_weight = (np.asarray(r.alpha) / (np.asarray(r.alpha) + np.asarray(r.gamma)))[order]
+    free = np.maximum(1e-6, 1e-9 * float(problem.size_norm_mm) / size_weight)
+    assert np.all(np.diff(size) <= np.maximum(free[:-1], free[1:]))
+    assert np.all(np.diff(stress) >= -1e-6 * stress[1:])
     assert size[0] - size[-1] > 10.0 and stress[-1] > 5 * stress[0]
     # the face width is the same for every weighting: never below the lift's need (a limit: to
     # 1e-6 mm), and above it by 1e-6 mm or by what the stopping rule leaves free, whichever is
