@@ -46,10 +46,11 @@ to 10 mu (its infeasibility c + s counted on the rows at or beyond their limit: 
 inside is feasible whatever its slack) or when the line search accepts no trial (IPOPT's tiny step:
 a row's kink at the barrier problem's minimizer, a dwell's |e|, holds a stationarity ~ mu that
 only a lower mu removes). The box rows are linear and start with s = -c, so every iterate stays
-strictly inside the box, where the families' physics is defined. Up to four central paths run
-one after the other in one loop (mu0 with the filter first; then mu0 / n, or mu0 *
-:data:`SMOOTH_SECOND_MU` for a smooth family's form, and both without the filter; one angle: two),
-each handing over to the next after ``max_iterations`` steps without converging (:func:`_paths`).
+strictly inside the box, where the families' physics is defined. Up to four central paths take
+turns in one loop (mu0 with the filter first; then mu0 / n, or mu0 *
+:data:`SMOOTH_SECOND_MU` for a smooth family's form, and both without the filter; one angle: two):
+the first steps alone for :data:`FIRST_SEGMENT` (80) steps, then each in turn resumes for
+:data:`PATH_SEGMENT` (40), until one converges or each has taken ``max_iterations`` (:func:`_paths`).
 
 Stopping rule: the scaled KKT residual (IPOPT's: stationarity, primal infeasibility and
 complementarity, :func:`camjax.solvers.certificate.kkt_residuals`) <= ``tol`` (1e-9), evaluated at
@@ -69,7 +70,6 @@ objective to the limits of the scene), computed in the same program (no second s
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import partial
 from typing import NamedTuple
 
 import jax
@@ -118,6 +118,8 @@ class NewtonSettings:
 DEFAULT_SETTINGS = NewtonSettings()
 FILTER = 32  # entries of the line search's filter (a ring: the oldest is replaced)
 SMOOTH_SECOND_MU = 1e-3
+FIRST_SEGMENT = 80  # steps of a central path before the next starts or resumes (:func:`_paths`) ...
+PATH_SEGMENT = 40  # ... and after that, each time a path resumes
 """A smooth form's second paths start at mu0 x this (roller co-design steps at 1e-2/1e-3/1e-4: 90/23/27)."""
 
 
@@ -368,8 +370,8 @@ EXCHANGE_ROUNDS = 5  # the most exchange rounds (each one interior-point solve o
 
 def _paths(problem: Problem, fns: EpigraphForm, init_design, settings: NewtonSettings,
            mu_factor=1.0) -> NewtonState:
-    """The central paths of one solve, one after the other in one loop, their first barrier
-    parameters times ``mu_factor``: the first converged end, else the end of least KKT residual."""
+    """The central paths of one solve, taking turns in one loop, their first barrier parameters
+    times ``mu_factor``: the first converged end, else the end of least KKT residual."""
 
     def start(mu0, use_filter):
         z0, s0, y0, mu0 = _start(problem, fns, init_design, settings, mu0)
@@ -380,37 +382,44 @@ def _paths(problem: Problem, fns: EpigraphForm, init_design, settings: NewtonSet
     # Central paths: mu0 and mu0 / n (t - f_i ~ n mu on the n epigraph rows: far above the
     # objective, and close to it), each with the filter (no cycling) and without (it crosses the
     # rows' kinks, |s' - e| at a dwell, that can hold a filter's iterates). The first (mu0, filter)
-    # converged on every weighting of every type's 100-weighting sweep and on the knife edge's
-    # whole 360-angle grid (in up to 135 steps there, where the others stalled); a path that has
-    # not converged after ``max_iterations`` steps hands over to the next. One path at a time: a
-    # step costs a quarter of the four paths stepped side by side (the loop before, which ran to
-    # the first converged of the four).
+    # converged on all but one weighting of every type's 100-weighting sweep (in up to 87 steps)
+    # and on the knife edge's whole 360-angle grid (in 135 steps, where the others stalled). One
+    # path steps at a time (a step costs a quarter of four paths stepped side by side), in turns:
+    # the first for FIRST_SEGMENT steps, then the next, each path resuming where it stopped for
+    # PATH_SEGMENT steps, until one converges or each has taken ``max_iterations``. Measured on
+    # the oscillating curved face's sweep: the weighting whose first path had not converged in 200
+    # steps ended after 111 in all (231 when each path ran its 200 before the next started).
     smooth = getattr(family_of(problem), "SMOOTH_OBJECTIVE", False)
     first = [settings.mu0, settings.mu0 * (SMOOTH_SECOND_MU if smooth else 1.0 / fns.n_angles)]
     first = first[:1] if fns.n_angles == 1 and not smooth else first
     mu0s = jnp.asarray(first * 2) * fns.mu_scale * mu_factor
     filters = jnp.asarray([True] * len(first) + [False] * len(first))
-    starts = jax.vmap(start)(mu0s, filters)
-    last = len(first) * 2 - 1
+    states = jax.vmap(start)(mu0s, filters)
+    n_paths = len(first) * 2
+
+    def left(states):  # (n_paths,) bool: the paths with steps left
+        return states.iteration < settings.max_iterations
 
     def body(carry):
-        state, path, steps, best = carry
-        state = _step(state, fns, settings)
+        states, path, steps = carry
+        state = _step(jax.tree.map(lambda x: x[path], states), fns, settings)
         steps = steps + jnp.where(state.done, 0, 1)
-        hand_over = ~state.done & (state.iteration >= settings.max_iterations) & (path < last)
-        pick = lambda a, b: jax.tree.map(lambda x, y: jnp.where(hand_over, x, y), a, b)  # noqa: E731
-        best = jax.tree.map(lambda x, y: jnp.where(hand_over & (state.kkt.error < best.kkt.error), x, y),
-                            state, best)
-        following = jax.tree.map(lambda x: x[jnp.minimum(path + 1, last)], starts)
-        return pick(following, state), path + hand_over, steps, best
+        states = jax.tree.map(lambda xs, x: xs.at[path].set(x), states, state)
+        # a path hands over after FIRST_SEGMENT steps, then each PATH_SEGMENT more, to the next
+        # path with steps left (round robin: a path resumes where it stopped)
+        past = state.iteration - FIRST_SEGMENT
+        segment_over = ~state.done & (((past >= 0) & (past % PATH_SEGMENT == 0)) | ~left(states)[path])
+        order = (path + 1 + jnp.arange(n_paths)) % n_paths
+        nxt = order[jnp.argmax(left(states)[order])]
+        return states, jnp.where(segment_over, nxt, path), steps
 
-    first_state = jax.tree.map(lambda x: x[0], starts)
-    end, _, steps, best = jax.lax.while_loop(
-        lambda c: ~c[0].done & ((c[1] < last) | (c[0].iteration < settings.max_iterations)), body,
-        (first_state, jnp.asarray(0), jnp.asarray(0), first_state))
-    keep_best = ~end.done & (best.kkt.error < end.kkt.error)
-    end = jax.tree.map(lambda x, y: jnp.where(keep_best, x, y), best, end)
-    return end._replace(iteration=steps)
+    def going(carry):
+        states, path, _ = carry
+        return ~states.done[path] & jnp.any(left(states))
+
+    states, path, steps = jax.lax.while_loop(going, body, (states, jnp.asarray(0), jnp.asarray(0)))
+    pick = jnp.where(states.done[path], path, jnp.argmin(states.kkt.error))
+    return jax.tree.map(lambda x: x[pick], states)._replace(iteration=steps)
 
 
 def _angle_blocks(fns: EpigraphForm, settings: NewtonSettings) -> int | None:
