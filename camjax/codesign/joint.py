@@ -41,7 +41,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from camjax.family import Weights
-from camjax.solvers import gradient, newton
+from camjax.solvers import gradient
 from camjax.solvers.base import family_of, register_family
 
 # half-width of the laws' box around the start, at least (each coordinate; normalized control
@@ -276,30 +276,23 @@ def solve(problem: JointProblem, start: JointDesign, settings=SETTINGS, solver: 
     what :meth:`camjax.codesign.Codesign.value` gives), so that F(z) is the co-design's own value
     of those laws and the geometry meets the family's tolerances. Traceable; vmap it over a stack.
 
-    ``solver`` (:func:`joint_solver` of it): ``newton`` (the interior point with its default
-    settings, :func:`camjax.solvers.epigraph.smooth_form`), ``gradient`` (the gradient solver's
-    augmented-Lagrangian BFGS with ``settings``),
-    ``ga`` (the GA, ``ga_settings`` (default its own), PRNG ``key``, its population seeded with the
-    start: by elitism never worse than it) or ``hybrid`` (that GA, then
-    :func:`camjax.solvers.hybrid.polish` from its best: the hybrid solver's polish). Iterations: the
-    GA's generations plus the interior point's Newton steps or the gradient solver's evaluations."""
+    ``solver`` (:func:`joint_solver` of it) runs as the registry's ``run_one`` runs it
+    (:func:`camjax.solvers.base.solver_module`), from ``start``: ``newton`` (the interior point
+    with its default settings, :func:`camjax.solvers.epigraph.smooth_form`), ``gradient`` (the
+    gradient solver with ``settings``: :data:`SETTINGS`, its augmented-Lagrangian BFGS alone,
+    the start kept where the BFGS ends no better), ``ga`` (the GA, ``ga_settings`` (default its
+    own), PRNG ``key``, its population seeded with the start: by elitism never worse than it) or
+    ``hybrid`` (the hybrid solver: its GA stage so seeded, then its interior-point polish).
+    Iterations: the solver's own count (the GA's generations plus the polish's Newton steps; the
+    gradient solver's evaluations)."""
     from camjax.codesign.problem import JOINT_INNER_SOLVER, inner_solve
-    from camjax.solvers import ga, hybrid
+    from camjax.solvers.base import Settings, solver_module
 
     solver = joint_solver(solver)
-    if solver in ("ga", "hybrid"):
-        found = ga.run(jax.random.key(0) if key is None else key, problem, problem.weights,
-                       ga.DEFAULT_SETTINGS if ga_settings is None else ga_settings, seed_design=start)
-        design, steps = found.design, found.iterations
-    if solver == "hybrid":
-        design, polish_steps, _ = hybrid.polish(problem, problem.weights, found)
-        steps = steps + polish_steps
-    elif solver == "newton":
-        found = newton.minimize(problem, problem.weights, start)
-        design, steps = found.design, found.iterations
-    elif solver == "gradient":
-        u = gradient.to_unit(problem, start)
-        design, steps, _ = gradient.refine_bfgs(problem, problem.weights, u, settings)
+    settings_of = Settings.of_solvers(gradient=settings, ga=ga_settings)
+    raw = solver_module(solver).run_one(problem, problem.weights, jax.random.key(0) if key is None else key,
+                                        settings_of, init=start)
+    design, steps = raw.design, raw.iterations
     base = base_problem(problem, design)
     objective, geometry, feasible = inner_solve(base, problem.weights, solver=JOINT_INNER_SOLVER)
     f = objective + law_value(problem, design.laws)

@@ -11,8 +11,12 @@ from camjax.solvers.base import family_of
 
 def limit_setters(problem) -> dict:
     """The scene's limits a problem carries: scene key -> (problem, value) -> problem with that
-    limit set to ``value`` (in the scene's units), every field derived from it moved with it."""
-    fields = set(problem._fields)
+    limit set to ``value`` (in the scene's units), every field derived from it moved with it. A
+    problem that is not a NamedTuple of such fields (the co-design's joint program, whose limits
+    live in the problems it builds) carries none here."""
+    fields = set(getattr(problem, "_fields", ()))
+    if not fields:
+        return {}
     has_stress = "stress" in jax.eval_shape(
         lambda: family_of(problem).constraints(problem, family_of(problem).bounds(problem)[0]))._fields
     out = {}
