@@ -361,7 +361,8 @@ VALUE_EDITS = {
 }
 
 
-@pytest.mark.parametrize("name", ["groove", "conjugate"])
+# the conjugate pair in the full suite only (1.2 s): the groove's case runs the same check in the quick loop
+@pytest.mark.parametrize("name", ["groove", pytest.param("conjugate", marks=SLOW)])
 def test_scenes_that_differ_in_values_only_share_the_closure_programs(name):
     """A positive drive's values (clearance, second arm, second roller, limits) are data: another
     scene of the same shape has the design program's key (camjax.runtime.program_key: the tree

@@ -98,6 +98,7 @@ def test_float32_problem_runs(default_scene):
     assert float(res.design.base_radius_mm) == pytest.approx(numpy_reference_optimum()[0], abs=1e-3)
 
 
+@pytest.mark.slow  # full suite only: the variant's own compile (1.2-1.4 s)
 def test_plain_rprop_variant_agrees(problem):
     """secant=False is the plain iRprop- rule (camjax's own, not optax's): slower, same optimum."""
     w = weights_of(1.0, 1.0)
@@ -139,6 +140,7 @@ def test_transform_without_secant_is_irprop_minus():
         x = x + u
 
 
+@pytest.mark.slow  # full suite only: the variant's own compile (1.2-1.4 s)
 def test_per_angle_multipliers_agree(problem):
     """aggregate_constraints=False (one multiplier per angle and constraint): same optimum."""
     w = weights_of(10.0, 1.0)
