@@ -49,8 +49,9 @@ only a lower mu removes). The box rows are linear and start with s = -c, so ever
 strictly inside the box, where the families' physics is defined. Up to four central paths take
 turns in one loop (mu0 with the filter first; then mu0 / n, or mu0 *
 :data:`SMOOTH_SECOND_MU` for a smooth family's form, and both without the filter; one angle: two):
-the first steps alone for :data:`FIRST_SEGMENT` (80) steps, then each in turn resumes for
-:data:`PATH_SEGMENT` (40), until one converges or each has taken ``max_iterations`` (:func:`_paths`).
+each path's first turn is :data:`FIRST_SEGMENT` (80) steps and each later one :data:`PATH_SEGMENT`
+(40), a path resuming where it stopped, until one converges or each has taken ``max_iterations``
+(:func:`_paths`).
 
 Stopping rule: the scaled KKT residual (IPOPT's: stationarity, primal infeasibility and
 complementarity, :func:`camjax.solvers.certificate.kkt_residuals`) <= ``tol`` (1e-9), evaluated at
@@ -118,8 +119,8 @@ class NewtonSettings:
 DEFAULT_SETTINGS = NewtonSettings()
 FILTER = 32  # entries of the line search's filter (a ring: the oldest is replaced)
 SMOOTH_SECOND_MU = 1e-3
-FIRST_SEGMENT = 80  # steps of a central path before the next starts or resumes (:func:`_paths`) ...
-PATH_SEGMENT = 40  # ... and after that, each time a path resumes
+FIRST_SEGMENT = 80  # steps of a central path's first turn before the next path's (:func:`_paths`) ...
+PATH_SEGMENT = 40  # ... and of each later turn, the path resuming where it stopped
 """A smooth form's second paths start at mu0 x this (roller co-design steps at 1e-2/1e-3/1e-4: 90/23/27)."""
 
 
@@ -385,8 +386,8 @@ def _paths(problem: Problem, fns: EpigraphForm, init_design, settings: NewtonSet
     # converged on all but one weighting of every type's 100-weighting sweep (in up to 87 steps)
     # and on the knife edge's whole 360-angle grid (in 135 steps, where the others stalled). One
     # path steps at a time (a step costs a quarter of four paths stepped side by side), in turns:
-    # the first for FIRST_SEGMENT steps, then the next, each path resuming where it stopped for
-    # PATH_SEGMENT steps, until one converges or each has taken ``max_iterations``. Measured on
+    # FIRST_SEGMENT steps on a path's first turn, PATH_SEGMENT on each later one (resuming where it
+    # stopped), until one converges or each has taken ``max_iterations``. Measured on
     # the oscillating curved face's sweep: the weighting whose first path had not converged in 200
     # steps ended after 111 in all (231 when each path ran its 200 before the next started).
     smooth = getattr(family_of(problem), "SMOOTH_OBJECTIVE", False)
@@ -400,24 +401,35 @@ def _paths(problem: Problem, fns: EpigraphForm, init_design, settings: NewtonSet
     def left(states):  # (n_paths,) bool: the paths with steps left
         return states.iteration < settings.max_iterations
 
-    def body(carry):
+    def turn(carry):
+        # one path's turn: it resumes where it stopped and steps until it converges or reaches the
+        # end of its turn (FIRST_SEGMENT steps on its first, PATH_SEGMENT more on each later one,
+        # at most max_iterations in all); then the next path with steps left takes over. The paths
+        # are gathered and stored once a turn, so a step costs what one path's step costs
         states, path, steps = carry
-        state = _step(jax.tree.map(lambda x: x[path], states), fns, settings)
-        steps = steps + jnp.where(state.done, 0, 1)
+        state = jax.tree.map(lambda x: x[path], states)
+        stop_at = jnp.minimum(jnp.where(state.iteration < FIRST_SEGMENT, FIRST_SEGMENT,
+                                        state.iteration + PATH_SEGMENT), settings.max_iterations)
+
+        def stepping(c):
+            return ~c[0].done & (c[0].iteration < stop_at)
+
+        def step(c):
+            state, steps = c
+            state = _step(state, fns, settings)
+            return state, steps + jnp.where(state.done, 0, 1)
+
+        state, steps = jax.lax.while_loop(stepping, step, (state, steps))
         states = jax.tree.map(lambda xs, x: xs.at[path].set(x), states, state)
-        # a path hands over after FIRST_SEGMENT steps, then each PATH_SEGMENT more, to the next
-        # path with steps left (round robin: a path resumes where it stopped)
-        past = state.iteration - FIRST_SEGMENT
-        segment_over = ~state.done & (((past >= 0) & (past % PATH_SEGMENT == 0)) | ~left(states)[path])
         order = (path + 1 + jnp.arange(n_paths)) % n_paths
         nxt = order[jnp.argmax(left(states)[order])]
-        return states, jnp.where(segment_over, nxt, path), steps
+        return states, jnp.where(state.done, path, nxt), steps
 
     def going(carry):
         states, path, _ = carry
         return ~states.done[path] & jnp.any(left(states))
 
-    states, path, steps = jax.lax.while_loop(going, body, (states, jnp.asarray(0), jnp.asarray(0)))
+    states, path, steps = jax.lax.while_loop(going, turn, (states, jnp.asarray(0), jnp.asarray(0)))
     pick = jnp.where(states.done[path], path, jnp.argmin(states.kkt.error))
     return jax.tree.map(lambda x: x[pick], states)._replace(iteration=steps)
 
