@@ -119,9 +119,9 @@ class NewtonSettings:
 DEFAULT_SETTINGS = NewtonSettings()
 FILTER = 32  # entries of the line search's filter (a ring: the oldest is replaced)
 SMOOTH_SECOND_MU = 1e-3
+"""A smooth form's second paths start at mu0 x this (roller co-design steps at 1e-2/1e-3/1e-4: 90/23/27)."""
 FIRST_SEGMENT = 80  # steps of a central path's first turn before the next path's (:func:`_paths`) ...
 PATH_SEGMENT = 40  # ... and of each later turn, the path resuming where it stopped
-"""A smooth form's second paths start at mu0 x this (roller co-design steps at 1e-2/1e-3/1e-4: 90/23/27)."""
 
 
 class NewtonState(NamedTuple):
@@ -402,10 +402,8 @@ def _paths(problem: Problem, fns: EpigraphForm, init_design, settings: NewtonSet
         return states.iteration < settings.max_iterations
 
     def turn(carry):
-        # one path's turn: it resumes where it stopped and steps until it converges or reaches the
-        # end of its turn (FIRST_SEGMENT steps on its first, PATH_SEGMENT more on each later one,
-        # at most max_iterations in all); then the next path with steps left takes over. The paths
-        # are gathered and stored once a turn, so a step costs what one path's step costs
+        # one path's turn, then the next path with steps left; the paths are gathered and stored
+        # once a turn, so a step costs what one path's step costs
         states, path, steps = carry
         state = jax.tree.map(lambda x: x[path], states)
         stop_at = jnp.minimum(jnp.where(state.iteration < FIRST_SEGMENT, FIRST_SEGMENT,
