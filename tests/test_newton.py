@@ -175,7 +175,8 @@ def test_certify_point_recovers_the_multipliers_at_the_optimum():
     hybrid's certificate) satisfy KKT to the solver's accuracy and give the same dF*/d sigma_max
     (the active set is the rows within 1e-6 of their limit; the solver's inactive rows carry
     multipliers ~mu / slack ~1e-6 that the fit leaves out: a relative 1e-4 between the two)."""
-    problem = _problem("default")
+    # the grid the sweep tests solve on (tests/test_sweep.py): its design program is compiled once
+    problem = _problem("default", samples=360)
     w = weights_of(1.0, 1.0)
     # newton.certify in the solve's program (test_solution_json_carries_the_certificate's)
     cert = solve(problem, (1.0, 1.0), mode="global", solver="newton").certificate
