@@ -2,8 +2,10 @@
 
 import json
 import os
+import re
 import subprocess
 import sys
+import time
 
 import pytest
 
@@ -141,6 +143,53 @@ def test_console_entry_point_reports_without_traceback(tmp_path):
     assert proc.returncode == 2
     assert proc.stderr.count("\n") == 1 and "lift_mm" in proc.stderr
     assert not (tmp_path / "out").exists()
+
+
+_PHASES = re.compile(r"^camjax design: timings \(wall s\): (?P<phases>.*); total (?P<total>[0-9.]+)$", re.M)
+_JAX = re.compile(r"^camjax design: JAX \(s, summed over threads\): tracing (?P<trace>[0-9.]+), lowering "
+                  r"(?P<lower>[0-9.]+), XLA (?P<xla>[0-9.]+) for (?P<programs>\d+) programs \((?P<compiled>\d+) "
+                  r"compiled, (?P<loaded>\d+) loaded from the compilation cache\)$", re.M)
+
+
+def _timed_design(folder, caches):
+    """`camjax design --timings` in a fresh process with the caches in ``caches``: (process wall
+    s measured here, the phases [(name, s)], their printed total, JAX's figures, result.json)."""
+    env = {**os.environ, "CAMJAX_COMPILATION_CACHE": str(caches / "xla"),
+           "CAMJAX_PROGRAM_CACHE": str(caches / "programs")}
+    start = time.perf_counter()
+    proc = subprocess.run([sys.executable, "-m", "camjax.cli", "design", "--out", str(folder), "--dpi", "40",
+                           "--timings"], capture_output=True, text=True, env=env, timeout=300)
+    wall = time.perf_counter() - start
+    assert proc.returncode == 0, proc.stderr
+    phases, jax_line = _PHASES.search(proc.stderr), _JAX.search(proc.stderr)
+    assert phases and jax_line, proc.stderr
+    named = [(p.rsplit(" ", 1)[0], float(p.rsplit(" ", 1)[1])) for p in phases["phases"].split(", ")]
+    figures = {k: float(v) if "." in v else int(v) for k, v in jax_line.groupdict().items()}
+    return wall, named, float(phases["total"]), figures, _strict_json(folder / "result.json")
+
+
+@pytest.mark.slow
+def test_timings_add_up_to_the_run_and_tell_a_first_run_from_a_later_one(design_run, tmp_path):
+    """`--timings`' phases come in the order the command runs them, each >= 0, and add up to the
+    total printed (to its 2 decimals per phase), which is the process's wall time measured here
+    but for Python's start and exit (bounded at 0.5 s: they take ~0.1 s on 2 cores); JAX's line counts programs
+    compiled in the first run of a scene (empty caches) and loaded in the second (the same
+    caches), which compiles fewer; the result.json is the one a run without --timings writes."""
+    cold = _timed_design(tmp_path / "cold", tmp_path / "caches")
+    warm = _timed_design(tmp_path / "warm", tmp_path / "caches")
+    for wall, named, total, _, _ in (cold, warm):
+        # the figures before the files where they are drawn in this process (the tests' default),
+        # after them where drawing processes draw them while the files are written
+        names = [n for n, _ in named]
+        assert names[:3] == ["start-up", "scene", "computing"] and sorted(names[3:]) == ["figures", "files"]
+        assert all(s >= 0 for _, s in named)
+        assert abs(sum(s for _, s in named) - total) <= 0.005 * len(named) + 1e-9
+        assert wall - 0.5 <= total <= wall  # a clock started after the imports would miss ~1 s
+    assert cold[3]["compiled"] >= 3 and cold[3]["xla"] > 0 and cold[3]["trace"] > 0
+    assert warm[3]["loaded"] >= 3 and warm[3]["compiled"] < cold[3]["compiled"]
+    assert cold[3]["compiled"] + cold[3]["loaded"] == cold[3]["programs"]
+    _, out = design_run
+    assert cold[4] == warm[4] == _strict_json(out / "result.json")
 
 
 def test_design_refuses_rad_lifts_on_a_translating_follower(tmp_path, capsys):

@@ -43,8 +43,10 @@ def entry() -> None:
     and full garbage collections made rarer (:func:`camjax.runtime.fewer_full_collections`);
     then :func:`camjax.cli.app.entry` runs the command.
     """
+    from camjax.cli.timings import mark_entry
     from camjax.runtime import fewer_full_collections, quiet_startup_interrupts, use_cpu_xla_flags
 
+    mark_entry()  # the start of ``--timings``' first phase
     quiet_startup_interrupts()
     use_cpu_xla_flags()  # before JAX starts its backend
     fewer_full_collections()

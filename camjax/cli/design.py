@@ -42,12 +42,31 @@ def _setup_design(p: argparse.ArgumentParser):
     p.add_argument("--animate", action="store_true",
                    help="also write motion.gif: one turn of the cam with the follower, the contact "
                         "point and the pressure angle (a broken constraint is named and drawn red)")
+    p.add_argument("--timings", action="store_true",
+                   help="after the run, print on stderr each phase's wall seconds (start-up, scene, "
+                        "computing, files, figures) and the seconds JAX spent tracing and compiling")
     p.add_argument("--cam-table-points", type=int, default=None, metavar="N",
                    help="also write cam_table.csv and cam_table.json: the motion at N equally spaced master "
                         "angles for a servo drive (overrides [export] cam_table_points)")
     add_design_options(p)
 
     def run(args) -> int:
+        from camjax.cli.timings import PhaseClock, entry_time
+
+        # --timings: the phases from the command's entry (or from this call, as a function)
+        clock = PhaseClock(entry_time())
+        clock.mark("scene")
+        try:
+            code = _run(args, clock)
+        finally:
+            clock.stop()
+        if args.timings:
+            for line in clock.lines("camjax design"):
+                sys.stderr.write(line + "\n")
+            sys.stderr.flush()
+        return code
+
+    def _run(args, clock) -> int:
         from camjax import followers
         from camjax.pipeline import analyse
         from camjax.scene import load_scene
@@ -83,6 +102,7 @@ def _setup_design(p: argparse.ArgumentParser):
         show = show_progress()
 
         def progress(phase: str) -> None:
+            clock.mark(phase)
             if show:
                 sys.stderr.write(f"camjax design: {phase}\n")
                 sys.stderr.flush()
