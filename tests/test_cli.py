@@ -187,7 +187,6 @@ def test_timings_add_up_to_the_run_and_tell_a_first_run_from_a_later_one(design_
         assert wall - 0.5 <= total <= wall  # a clock started after the imports would miss ~1 s
     assert cold[3]["compiled"] >= 3 and cold[3]["xla"] > 0 and cold[3]["trace"] > 0
     assert warm[3]["loaded"] >= 3 and warm[3]["compiled"] < cold[3]["compiled"]
-    assert cold[3]["compiled"] + cold[3]["loaded"] == cold[3]["programs"]
     _, out = design_run
     assert cold[4] == warm[4] == _strict_json(out / "result.json")
 
