@@ -171,7 +171,8 @@ def _timed_design(folder, caches):
 @pytest.mark.slow
 def test_timings_add_up_to_the_run_and_tell_a_first_run_from_a_later_one(design_run, tmp_path):
     """`--timings`' phases come in the order the command runs them, each >= 0, and add up to the
-    total printed (to its 2 decimals per phase), which is the process's wall time measured here
+    run's total printed (its clock from start to stop, to 2 decimals a phase: no gap between the
+    phases, none left out), which is the process's wall time measured here
     but for Python's start and exit (bounded at 0.5 s: they take ~0.1 s on 2 cores); JAX's line counts programs
     compiled in the first run of a scene (empty caches) and loaded in the second (the same
     caches), which compiles fewer; the result.json is the one a run without --timings writes."""

@@ -54,7 +54,7 @@ def _setup_design(p: argparse.ArgumentParser):
         from camjax.cli.timings import PhaseClock, entry_time
 
         # --timings: the phases from the command's entry (or from this call, as a function)
-        clock = PhaseClock(entry_time())
+        clock = PhaseClock(entry_time(), count_jax=args.timings)
         clock.mark("scene")
         try:
             code = _run(args, clock)

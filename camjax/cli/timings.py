@@ -44,14 +44,16 @@ def entry_time() -> float | None:
 
 class PhaseClock:
     """The phases of one command run (see the module docstring); ``start``: perf_counter() of the
-    first phase's start (default: now)."""
+    first phase's start (default: now); ``count_jax``: count JAX's tracing and compiling too (its
+    listeners are registered, and called on every compile, only when asked)."""
 
-    def __init__(self, start: float | None = None, first: str = "start-up"):
-        self.marks: list[tuple[str, float]] = [(first, time.perf_counter() if start is None else start)]
+    def __init__(self, start: float | None = None, count_jax: bool = False):
+        self.marks: list[tuple[str, float]] = [("start-up", time.perf_counter() if start is None else start)]
         self.jax = {"trace": 0.0, "lower": 0.0, "compile": 0.0, "compiles": 0, "loaded": 0}
         self.end: float | None = None
-        _listen()
-        _ACTIVE[:] = [self]
+        if count_jax:
+            _listen()
+            _ACTIVE[:] = [self]
 
     def mark(self, phase: str) -> None:
         """Phase ``phase`` starts now (the one before ends)."""
@@ -63,25 +65,13 @@ class PhaseClock:
         if _ACTIVE and _ACTIVE[0] is self:
             _ACTIVE.clear()
 
-    def phases(self) -> list[tuple[str, float]]:
-        """(phase, wall s) in order; a phase marked twice in a row is one phase."""
-        end = self.end if self.end is not None else time.perf_counter()
-        times = [t for _, t in self.marks[1:]] + [end]
-        out: list[tuple[str, float]] = []
-        for (name, t0), t1 in zip(self.marks, times, strict=True):
-            if out and out[-1][0] == name:
-                out[-1] = (name, out[-1][1] + t1 - t0)
-            else:
-                out.append((name, t1 - t0))
-        return out
-
     def lines(self, prog: str) -> list[str]:
-        """Two lines for stderr: the phases' wall seconds with their total, and JAX's work."""
-        phases = self.phases()
-        total = sum(s for _, s in phases)
-        wall = ", ".join(f"{name} {s:.2f}" for name, s in phases)
+        """Two lines for stderr, once :meth:`stop` was called: each phase's wall seconds with the
+        run's (from the first phase's start to the stop), and JAX's work."""
+        ends = [t for _, t in self.marks[1:]] + [self.end]
+        wall = ", ".join(f"{name} {t1 - t0:.2f}" for (name, t0), t1 in zip(self.marks, ends, strict=True))
         j = self.jax
-        return [f"{prog}: timings (wall s): {wall}; total {total:.2f}",
+        return [f"{prog}: timings (wall s): {wall}; total {self.end - self.marks[0][1]:.2f}",
                 f"{prog}: JAX (s, summed over threads): tracing {j['trace']:.2f}, lowering {j['lower']:.2f}, "
                 f"XLA {j['compile']:.2f} for {j['compiles']} programs "
                 f"({j['compiles'] - j['loaded']} compiled, {j['loaded']} loaded from the compilation cache)"]
