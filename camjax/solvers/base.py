@@ -375,14 +375,59 @@ def _per_weighting(one, problem, weights: Weights, *rest):
     return jax.vmap(one, in_axes=(None, 0, *[0] * len(rest)))(problem, weights, *rest)
 
 
-@partial(jax.jit, static_argnames=("mode", "solver", "settings"))
+SEARCH_CHUNK = 10
+"""Weightings searched side by side on the CPU (:func:`search_batch`'s ``chunk``). A ``vmap``'d
+while loop runs every weighting to the step count of the slowest, and on the CPU a weighting costs
+nearly its full price whether it is still moving or done: chunks of this many, one after another,
+keep one slow weighting from holding up the whole batch. Measured on the seven types'
+100-weighting sweeps (benchmarks/follower_sweep.py's problems, 2 cores, best of 3, chunked time
+over whole-batch time): the interior point 0.40 (oscillating curved face, where one weighting
+of 100 takes 111 steps and the median 38), 0.63 to 0.92 for five types and 1.09 to 1.17 for the
+curved face (its steps are few and even); the hybrid 0.86 (oscillating roller) and 0.93
+(oscillating flat); chunks of 5 or 25 were no faster. The designs are the same to the bit where
+compared. On an accelerator the lanes of a ``vmap`` cost little: the whole batch is one chunk
+there."""
+
+
+def search_chunk(weights: Weights) -> int:
+    """The ``chunk`` :func:`solve_batch` searches ``weights`` in: :data:`SEARCH_CHUNK` on the CPU,
+    0 (the whole batch in one ``vmap``) on an accelerator or where the weightings are spread over
+    several devices (:mod:`camjax.scaleout.sharding`: a ``vmap`` axis the partitioner can split)."""
+    sharding = getattr(weights.alpha, "sharding", None)
+    if sharding is not None and len(sharding.device_set) > 1:
+        return 0
+    return SEARCH_CHUNK if jax.default_backend() == "cpu" else 0
+
+
+def _in_chunks(one, problem, weights: Weights, keys: jax.Array, chunk: int):
+    """:func:`_per_weighting` in chunks of at most ``chunk`` weightings, one ``vmap`` each, the
+    chunks one after another (``lax.map``); the batch is padded by repeating its last weighting to
+    equal chunks and cut back. ``chunk`` 0, or a batch no larger: the whole batch at once."""
+    count = int(jnp.shape(weights.alpha)[0])
+    if chunk <= 0 or count <= chunk:
+        return _per_weighting(one, problem, weights, keys)
+    chunks = -(-count // chunk)
+    size = -(-count // chunks)  # equal chunks, the least padding
+
+    def split(x):
+        x = jnp.concatenate([x, jnp.repeat(x[-1:], chunks * size - count, axis=0)])
+        return x.reshape(chunks, size, *x.shape[1:])
+
+    out = jax.lax.map(lambda wk: jax.vmap(one, in_axes=(None, 0, 0))(problem, *wk),
+                      jax.tree.map(split, (weights, keys)))
+    return jax.tree.map(lambda x: x.reshape(chunks * size, *x.shape[2:])[:count], out)
+
+
+@partial(jax.jit, static_argnames=("mode", "solver", "settings", "chunk"))
 def search_batch(problem, weights: Weights, keys: jax.Array, mode: str = "global",
-                 solver: str = DEFAULT_SOLVER, settings: Settings = DEFAULT_SETTINGS) -> tuple[Raw, jax.Array]:
+                 solver: str = DEFAULT_SOLVER, settings: Settings = DEFAULT_SETTINGS,
+                 chunk: int = 0) -> tuple[Raw, jax.Array]:
     """The solver's search of every weighting of a batch in one compiled program: :func:`search_one`
-    with leading axis w (see :func:`solve_batch`)."""
+    with leading axis w (see :func:`solve_batch`), in chunks of ``chunk`` weightings
+    (:func:`search_chunk`; 0: all at once)."""
     # search_one is looked up when traced (the suite's compile ledger records each solve by it)
-    return _per_weighting(lambda p, w, k: search_one(p, w, k, mode=mode, solver=solver, settings=settings),
-                          problem, weights, keys)
+    return _in_chunks(lambda p, w, k: search_one(p, w, k, mode=mode, solver=solver, settings=settings),
+                      problem, weights, keys, chunk)
 
 
 @partial(jax.jit, static_argnames="mode")
@@ -416,11 +461,12 @@ def solve_batch(problem, weights: Weights, keys: jax.Array, mode: str = "global"
     but in the last bits where XLA's code for the two differs (measured on the built-in scenes'
     designs: the same for six of the seven follower types; the oscillating curved face's optimum,
     on a ridge, moved 1e-5 mm along it). A sweep in chunks of one weighting therefore runs the
-    design's own programs.
+    design's own programs. On the CPU a larger batch is searched :data:`SEARCH_CHUNK` weightings at
+    a time (:func:`search_chunk`), each weighting's numbers those of its chunk's ``vmap``.
     """
     check_choice("mode", mode, MODES)
     check_choice("solver", solver, SOLVERS)
-    raw, done = search_batch(problem, weights, keys, mode, solver, settings)
+    raw, done = search_batch(problem, weights, keys, mode, solver, settings, search_chunk(weights))
     return _solution(weights, raw, judge_batch(problem, weights, raw.design, raw.iterations, done, mode),
                      mode, solver)
 
