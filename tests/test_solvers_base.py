@@ -146,7 +146,9 @@ def test_the_hybrids_ga_stage_shortens_only_the_default_ga():
     """hybrid.ga_stage: the GA's default settings run HybridSettings.ga_generations generations;
     GA settings of one's own, or ga_generations None, run as given; 0 generations are refused."""
     default = hybrid_solver.ga_stage(base.DEFAULT_SETTINGS)
-    assert default == dataclasses.replace(ga.DEFAULT_SETTINGS, generations=100)
+    generations = hybrid_solver.DEFAULT_SETTINGS.ga_generations
+    assert default == dataclasses.replace(ga.DEFAULT_SETTINGS, generations=generations)
+    assert generations < ga.DEFAULT_SETTINGS.generations
     own = dataclasses.replace(ga.DEFAULT_SETTINGS, generations=300)
     assert hybrid_solver.ga_stage(base.Settings.of_solvers(ga=own)) == own
     assert hybrid_solver.ga_stage(base.Settings.of_solvers(ga=SMALL_GA)) == SMALL_GA

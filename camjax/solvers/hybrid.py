@@ -30,12 +30,13 @@ class HybridSettings:
     and None runs the GA's settings always. The GA stage's answer is only the polish's start: the
     interior point reaches the optimum of its basin from a coarser answer in a few more steps, where
     the GA's last generations cost as much as its first. On the seven types' 100-weighting sweeps
-    (benchmarks/follower_sweep.py's problems) 100 generations gave the hybrid the same answers as 200
-    (0 infeasible, every objective within 1e-8 of the best any method found), on the oscillating
-    flat face and roller in 0.67 and 0.64 of the time (docs/optimization.md).
+    (benchmarks/follower_sweep.py's problems) 50 generations gave the hybrid the same answers as 200
+    (0 infeasible, every objective within 1.3e-8 of the best any method found) in 0.5 to 0.7 of the
+    time of 100 (docs/optimization.md); 40 did not (the knife edge: 4 weightings of 100 up to 2.3e-6
+    above the best).
     """
 
-    ga_generations: int | None = 100
+    ga_generations: int | None = 50
 
     def __post_init__(self):
         if self.ga_generations is not None and self.ga_generations < 1:
