@@ -40,7 +40,8 @@ tiny). Steps keep s, y > 0 by the fraction-to-boundary rule (tau = max(0.99, 1 -
 step length is found by a backtracking search (Armijo on the barrier objective once nearly
 feasible, else progress in it or in the infeasibility ||c + s||_1, and, on the paths that keep
 one, a filter of earlier (infeasibility, barrier objective) pairs that forbids cycling), its 30
-trial lengths tried 6 at a time (a ``vmap``) until one is accepted. The barrier parameter falls
+trial lengths tried one at a time until one is accepted (``line_search_chunk``: that many at once,
+a ``vmap``). The barrier parameter falls
 superlinearly, mu <- max(tol / 100, min(0.2 mu, mu^1.5)), each time the barrier problem is solved
 to 10 mu (its infeasibility c + s counted on the rows at or beyond their limit: a row strictly
 inside is feasible whatever its slack) or when the line search accepts no trial (IPOPT's tiny step:
@@ -110,7 +111,10 @@ class NewtonSettings:
     kappa_eps: float = 10.0  # ... once the barrier problem is solved to kappa_eps mu
     interior: float = 1e-2  # the start's distance from the box's faces (unit box) and least slack
     line_search_trials: int = 30  # step lengths alpha_max 2^-k, k < trials ...
-    line_search_chunk: int = 6  # ... tried this many at once, until one is accepted
+    line_search_chunk: int = 1  # ... tried this many at once, until one is accepted (the same
+    # steps whatever the number; one at a time ran the seven types' 100-weighting sweeps, searched
+    # 10 weightings at a time on the CPU, in 0.73 to 1.09 of the time of six at a time, median
+    # 0.85: benchmarks/line_search.py)
     armijo: float = 1e-4
     exchange_angles: int = 32  # a grid of more angles than twice this is solved in exchange rounds
     # of this many angles (:func:`_exchange`); 0: every grid whole
