@@ -113,8 +113,8 @@ class NewtonSettings:
     line_search_trials: int = 30  # step lengths alpha_max 2^-k, k < trials ...
     line_search_chunk: int = 1  # ... tried this many at once, until one is accepted (the same
     # steps whatever the number; one at a time ran the seven types' 100-weighting sweeps, searched
-    # 10 weightings at a time on the CPU, in 0.73 to 1.09 of the time of six at a time, median
-    # 0.85: benchmarks/line_search.py)
+    # 10 weightings at a time on the CPU, in 0.75 to 1.13 of the time of six at a time, median
+    # 0.88, in benchmarks/results/line_search.json; 0.73 to 1.09 in a run before it)
     armijo: float = 1e-4
     exchange_angles: int = 32  # a grid of more angles than twice this is solved in exchange rounds
     # of this many angles (:func:`_exchange`); 0: every grid whole
