@@ -200,3 +200,26 @@ def test_every_solvers_search_hands_the_judgement_one_form(coarse, mode):
         assert jax.tree.structure(got) == jax.tree.structure(expected), solver
         assert [(x.shape, x.dtype) for x in jax.tree.leaves(got)] == \
             [(x.shape, x.dtype) for x in jax.tree.leaves(expected)], solver
+
+
+@pytest.mark.slow
+def test_a_batch_searched_in_chunks_is_the_batch_searched_at_once(coarse):
+    """search_batch in chunks (a lax.map of vmaps, the batch padded with its last weighting to equal
+    chunks, cut back) gives each weighting what one vmap of the whole batch gives: 13 weightings in
+    chunks of 5 (3 chunks of 5, 2 padded) and 13 at once, the same iterations and designs to 1e-12
+    relative (the same steps; XLA's code for a vmap of 5 and of 13 may round differently). On the
+    CPU solve_batch searches in chunks of SEARCH_CHUNK."""
+    assert base.search_chunk(weights_of(np.ones(13), np.ones(13))) == (
+        base.SEARCH_CHUNK if jax.default_backend() == "cpu" else 0)
+    alpha = np.linspace(0.05, 1.0, 13)
+    w = weights_of(alpha, 1.0 - alpha + 0.05)
+    keys = base.weighting_keys(0, 13)
+    args = (coarse, w, keys, "global", registry.DEFAULT_SOLVER, base.DEFAULT_SETTINGS)
+    (chunked, done_c), (whole, done_w) = base.search_batch(*args, 5), base.search_batch(*args, 0)
+    assert np.asarray(chunked.iterations).shape == (13,)
+    np.testing.assert_array_equal(np.asarray(chunked.iterations), np.asarray(whole.iterations))
+    np.testing.assert_array_equal(np.asarray(done_c), np.asarray(done_w))
+    assert np.all(np.asarray(done_w))
+    for got, want in zip(jax.tree.leaves(chunked.design), jax.tree.leaves(whole.design), strict=True):
+        np.testing.assert_allclose(np.asarray(got), np.asarray(want), rtol=1e-12)
+    assert len(set(np.asarray(whole.iterations).tolist())) > 1  # weightings of unequal paths
