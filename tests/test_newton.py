@@ -398,7 +398,7 @@ def test_take_angles_keeps_every_row_of_its_angles(name):
 @pytest.mark.slow
 def test_exchange_rounds_reach_the_whole_grids_optimum():
     """The knife edge's example scene at 360 angles and the three weightings: the exchange rounds
-    (32 angles a round) and the interior point on the whole grid (``exchange_angles`` = 0) both
+    (16 angles a round, the default's :data:`newton.EXCHANGE_ANGLES`) and the interior point on the whole grid (``exchange_angles`` = 0) both
     converge, and to the same objective within 1e-7 relative (two KKT points of the same
     problem, each within the barrier's ~rows x mu ~ 1e-9 of F). The exchange's certificate is taken
     on the whole grid: its multipliers' epigraph sum is the objective's unit weight."""

@@ -48,7 +48,9 @@ flat-face one is :mod:`camjax.followers.flat.problem`). It provides:
   own multiplier; the robust problem, :mod:`camjax.robust.design`); and
   ``SMOOTH_OBJECTIVE = True`` where ``objective`` is smooth already, not a max over one-angle
   problems (the interior point then takes it as one row, :func:`camjax.solvers.epigraph.smooth_form`,
-  and needs no ``per_angle``; the co-design's joint program, :mod:`camjax.codesign.joint`).
+  and needs no ``per_angle``; the co-design's joint program, :mod:`camjax.codesign.joint`); and
+  ``EXCHANGE_ANGLES = k``: the angles of each of the interior point's exchange rounds where the
+  default's 16 take more rounds (:func:`camjax.solvers.newton.exchange_angles`).
 
 Weights (:class:`camjax.followers.flat.Weights`: alpha for size, gamma for stress) are shared by every
 family, and so are the pieces of the protocol that do not depend on a family's physics (the box,
