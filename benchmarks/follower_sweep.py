@@ -55,7 +55,14 @@ import numpy as np
 import camjax
 from benchmarks.harness import environment, time_jit
 from camjax.family import Weights, weights_of
-from camjax.solvers.base import family_of, problem_from_scene, solve_batch, weighting_keys
+from camjax.solvers.base import (
+    DEFAULT_SETTINGS,
+    family_of,
+    for_problem,
+    problem_from_scene,
+    solve_batch,
+    weighting_keys,
+)
 
 GAP_TOLERANCE = 1e-7  # relative objective gaps below this count as equal
 # follower -> (built-in scene, SciPy baseline module)
@@ -118,8 +125,11 @@ def run_follower(follower: str, quick: bool = False, solvers: tuple[str, ...] = 
 
     results = {}
     for solver in solvers:
-        t, sol = time_jit(lambda p, w, k, solver=solver: solve_batch(p, w, k, "global", solver),
-                          problem, weights, keys, repeats=3, slow_s=SLOW_S)
+        # the settings solve_batch gives itself from a concrete problem (the interior point's count
+        # of free variables: a static of its program), which a traced problem cannot give
+        settings = for_problem(problem, solver, DEFAULT_SETTINGS)
+        t, sol = time_jit(lambda p, w, k, solver=solver, settings=settings: solve_batch(
+            p, w, k, "global", solver, settings), problem, weights, keys, repeats=3, slow_s=SLOW_S)
         its = np.asarray(sol.iterations)
         results["camjax_" + solver] = (t.median_s, t.compile_s, count, sol.design,
                                        {"iterations_max": int(np.max(its)),

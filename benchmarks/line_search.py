@@ -48,7 +48,8 @@ def run_follower(name: str) -> dict:
     out, ends = {}, {}
     for label, trials_at_once in (("all_at_once", default.line_search_trials), ("six_at_a_time", 6),
                                   ("default", default.line_search_chunk)):
-        own = dataclasses.replace(default, line_search_chunk=trials_at_once)
+        # with the count of free variables solve_batch gives itself from the concrete problem
+        own = dataclasses.replace(newton.for_problem(problem, default), line_search_chunk=trials_at_once)
         settings = base.Settings.of_solvers(newton=own)
 
         def search(p, w, k, settings=settings):

@@ -345,9 +345,12 @@ def test_forward_derivatives_match_reverse_mode(name):
     (jacrev) and the Hessian of phi + y . c by forward-over-reverse (jax.hessian), at the start
     of the solve with positive multipliers of O(1). Both are exact derivatives of the same
     function: they differ by rounding only (rtol 1e-9 of the largest entry, O(1) after the
-    solver's normalization)."""
+    solver's normalization). The same pass along the free variables only (``free_variables``, as
+    solve_batch counts them: 2 of 4 on the oscillating roller's and oscillating flat face's scenes)
+    gives the same numbers in the free rows and columns and 0 in a fixed variable's."""
     problem = _problem(followers.get(name).example_scene)  # the example problem of the tests above
     w = weights_of(1.0, 1.0)
+    free_count = newton.for_problem(problem, newton.DEFAULT_SETTINGS).free_variables
 
     @jax.jit
     def both(y_raw):
@@ -355,12 +358,18 @@ def test_forward_derivatives_match_reverse_mode(name):
         z, _, _, _ = newton._start(problem, fns, None, newton.DEFAULT_SETTINGS, 0.1)
         y = 0.5 + y_raw[: fns.rows(z).shape[0]]
         ours = newton._derivatives(fns, z, y)
+        reduced = newton._derivatives(fns, z, y, free_count)
         ref = (fns.rows(z), jax.jacrev(fns.rows)(z), jax.grad(fns.phi)(z),
                jax.hessian(lambda v: fns.phi(v) + y @ fns.rows(v))(z))
-        return ours, ref
+        f = fns.free
+        masked = (ref[0], ref[1] * f, ref[2] * f, ref[3] * jnp.outer(f, f))
+        return ours, reduced, ref, masked, f
 
-    ours, ref = both(jax.random.uniform(jax.random.key(0), (4096,)))
-    for got, want, what in zip(ours, ref, ("rows", "jacobian", "gradient", "hessian"), strict=True):
+    ours, reduced, ref, masked, free = both(jax.random.uniform(jax.random.key(0), (4096,)))
+    assert int(np.sum(np.asarray(free))) == free_count + 1  # and t
+    for got, want, what in [*zip(ours, ref, ("rows", "jacobian", "gradient", "hessian"), strict=True),
+                            *zip(reduced, masked, ("free rows", "free jacobian", "free gradient",
+                                                   "free hessian"), strict=True)]:
         scale = max(float(jnp.max(jnp.abs(want))), 1.0)
         np.testing.assert_allclose(np.asarray(got), np.asarray(want), rtol=0, atol=1e-9 * scale, err_msg=what)
 
@@ -398,8 +407,8 @@ def test_take_angles_keeps_every_row_of_its_angles(name):
 @pytest.mark.slow
 def test_exchange_rounds_reach_the_whole_grids_optimum():
     """The knife edge's example scene at 360 angles and the three weightings: the exchange rounds
-    (16 angles a round, the default's :data:`newton.EXCHANGE_ANGLES`) and the interior point on the whole grid (``exchange_angles`` = 0) both
-    converge, and to the same objective within 1e-7 relative (two KKT points of the same
+    (16 angles a round, the default's :data:`camjax.solvers.exchange.EXCHANGE_ANGLES`) and the
+    interior point on the whole grid (``exchange_angles`` = 0) both converge, and to the same objective within 1e-7 relative (two KKT points of the same
     problem, each within the barrier's ~rows x mu ~ 1e-9 of F). The exchange's certificate is taken
     on the whole grid: its multipliers' epigraph sum is the objective's unit weight."""
     problem = _problem(followers.get("knife_edge").example_scene, 360)

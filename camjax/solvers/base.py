@@ -50,7 +50,7 @@ flat-face one is :mod:`camjax.followers.flat.problem`). It provides:
   problems (the interior point then takes it as one row, :func:`camjax.solvers.epigraph.smooth_form`,
   and needs no ``per_angle``; the co-design's joint program, :mod:`camjax.codesign.joint`); and
   ``EXCHANGE_ANGLES = k``: the angles of each of the interior point's exchange rounds where the
-  default's 16 take more rounds (:func:`camjax.solvers.newton.exchange_angles`).
+  default's 16 take more rounds (:func:`camjax.solvers.exchange.exchange_angles`).
 
 Weights (:class:`camjax.followers.flat.Weights`: alpha for size, gamma for stress) are shared by every
 family, and so are the pieces of the protocol that do not depend on a family's physics (the box,
@@ -158,6 +158,25 @@ class Settings:
 
 
 DEFAULT_SETTINGS = Settings()
+
+
+INTERIOR_POINT_SOLVERS = ("newton", "hybrid")  # the solvers that run the interior point (its settings)
+
+
+def for_problem(problem, solver: str, settings: Settings) -> Settings:
+    """``settings`` with what the interior point (the newton solver, the hybrid's polish) takes from
+    a problem whose box is concrete: the count of its free variables
+    (:func:`camjax.solvers.newton.for_problem`), a static of the search program, so that its
+    derivatives take only the free variables' directions. Under a trace, and for the solvers that
+    do not run the interior point (their programs then serve every box), ``settings`` as given."""
+    if solver not in INTERIOR_POINT_SOLVERS:
+        return settings
+    newton = solver_module("newton")
+    own = settings.of("newton")
+    fitted = newton.for_problem(problem, own)
+    if fitted == own:
+        return settings
+    return Settings(tuple(sorted({**dict(settings.overrides), "newton": fitted}.items())))
 
 
 class Raw(NamedTuple):
@@ -468,6 +487,7 @@ def solve_batch(problem, weights: Weights, keys: jax.Array, mode: str = "global"
     """
     check_choice("mode", mode, MODES)
     check_choice("solver", solver, SOLVERS)
+    settings = for_problem(problem, solver, settings)
     raw, done = search_batch(problem, weights, keys, mode, solver, settings, search_chunk(weights))
     return _solution(weights, raw, judge_batch(problem, weights, raw.design, raw.iterations, done, mode),
                      mode, solver)
@@ -507,6 +527,7 @@ def solve(problem, weights: Weights | tuple[float, float] = (1.0, 1.0), *, mode:
     check_choice("solver", solver, SOLVERS)
     alpha, gamma = (float(weights[0]), float(weights[1]))
     check_weights([alpha], [gamma])
+    settings = for_problem(problem, solver, settings)
     dtype = jax.tree.leaves(_design_form(problem))[0].dtype
     args = (problem, weights_of([alpha], [gamma], dtype), weighting_keys(seed, 1))
     cache_key = (_signature(args), mode, solver, settings)

@@ -58,11 +58,12 @@ def residuals(grad, c, jac, y, free) -> KKT:
     return KKT(stat, primal, comp, jnp.maximum(jnp.maximum(stat, primal), comp))
 
 
-def rows_and_jacobian(fns: EpigraphForm, z):
-    """c(z) and its Jacobian from one forward-mode pass (the rows traced once: c is its primal)."""
+def rows_and_jacobian(fns: EpigraphForm, z, point=None):
+    """c(z) and its Jacobian from one forward-mode pass (the rows traced once: c is its primal);
+    with ``point``, c(point(z)) and its Jacobian in z."""
 
     def rows(v):
-        c = fns.rows(v)
+        c = fns.rows(v if point is None else point(v))
         return c, c
 
     jac, c = jax.jacfwd(rows, has_aux=True)(z)

@@ -60,10 +60,10 @@ the top of each iteration from the rows, Jacobian and gradient the step uses; ``
 a safeguard only. Gradients stay finite from infeasible starts: the families' functions are written
 with safe square roots and divisions, and a trial step with a non-finite merit is rejected.
 
-Exchange rounds (:func:`_exchange`): a grid of more than 2 ``exchange_angles`` angles (the family's
-``EXCHANGE_ANGLES``, else :data:`EXCHANGE_ANGLES`, 16) is solved that many angles at a time and each
-answer checked on the whole grid; the whole grid's KKT residual ends the rounds, so the answer and
-its certificate are the whole problem's.
+Exchange rounds (:mod:`camjax.solvers.exchange`): a grid of more than 2 ``exchange_angles`` angles
+(the family's ``EXCHANGE_ANGLES``, else 16: :func:`camjax.solvers.exchange.exchange_angles`) is
+solved that many angles at a time and each answer checked on the whole grid; the whole grid's KKT
+residual ends the rounds, so the answer and its certificate are the whole problem's.
 
 :func:`run_one` returns with the answer its certificate (:mod:`camjax.solvers.certificate`: the
 KKT residuals, the iterations, the multipliers and the sensitivity dF*/d(limit) of the optimal
@@ -77,9 +77,11 @@ from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 from jax.flatten_util import ravel_pytree
 
 from camjax.family import Design, Problem, Weights
+from camjax.solvers import exchange
 from camjax.solvers.base import Raw, family_of
 from camjax.solvers.certificate import (
     KKT,
@@ -93,6 +95,7 @@ from camjax.solvers.certificate import (
 )
 from camjax.solvers.certificate import certificate_json as certificate_json  # in result.json
 from camjax.solvers.epigraph import EpigraphForm, epigraph_form
+from camjax.solvers.exchange import take_angles as take_angles  # the exchange rounds' subproblem
 from camjax.solvers.gradient import default_start, from_unit, to_unit
 
 
@@ -118,27 +121,27 @@ class NewtonSettings:
     # 0.88, in benchmarks/results/line_search.json; 0.73 to 1.09 in a run before it)
     armijo: float = 1e-4
     exchange_angles: int | None = None  # a grid of more angles than twice this is solved in exchange
-    # rounds of this many angles (:func:`_exchange`); 0: every grid whole; None: the family's
-    # (:func:`exchange_angles`)
+    # rounds of this many angles (:mod:`camjax.solvers.exchange`); 0: every grid whole; None: the
+    # family's (:func:`camjax.solvers.exchange.exchange_angles`)
+    free_variables: int | None = None  # the design variables the problem's box leaves free, where
+    # known when the program is traced (:func:`for_problem`; solve_batch sets it): the derivatives
+    # then take that many directions (and t's), not one per variable; None: one per variable
 
 
 DEFAULT_SETTINGS = NewtonSettings()
-# Angles of an exchange round where neither the settings nor the family name a number. Measured on
-# each type's 100-weighting sweep (360 angles, 2 cores, the same optima and 0 infeasible at 16, 24
-# and 32): 16 angles a round against 32 ran the knife edge 2.2x faster (its slowest weighting 25
-# steps, not 71), the flat face 1.8x, the curved face and the oscillating flat face 1.3x, the
-# oscillating curved face within 2 %, and compiled 8-15 % faster; the roller and the oscillating
-# roller, whose answers bind at more angles (more rounds at 16), declare EXCHANGE_ANGLES = 32, the
-# oscillating curved face 24 (50 Newton steps at the median at 16, 37 at 24).
-EXCHANGE_ANGLES = 16
+def for_problem(problem: Problem, settings: NewtonSettings) -> NewtonSettings:
+    """``settings`` with ``free_variables`` counted from the problem's box (the variables with upper
+    > lower, as :func:`camjax.solvers.gradient.u_max_of`) where its bounds are concrete numbers; under
+    a trace (the box unknown until the program runs), or where already set, ``settings`` as given."""
+    if settings.free_variables is not None:
+        return settings
+    lower, upper = family_of(problem).bounds(problem)
+    leaves = jax.tree.leaves((lower, upper))
+    if any(isinstance(x, jax.core.Tracer) for x in leaves):
+        return settings
+    free = jax.tree.map(lambda lo, hi: np.asarray(hi) > np.asarray(lo), lower, upper)
+    return replace(settings, free_variables=int(sum(np.sum(x) for x in jax.tree.leaves(free))))
 
-
-def exchange_angles(problem: Problem, settings: NewtonSettings) -> int:
-    """The angles of an exchange round: ``settings.exchange_angles`` where set, else the family's
-    ``EXCHANGE_ANGLES`` (an optional family constant), else :data:`EXCHANGE_ANGLES`."""
-    if settings.exchange_angles is not None:
-        return settings.exchange_angles
-    return getattr(family_of(problem), "EXCHANGE_ANGLES", EXCHANGE_ANGLES)
 
 FILTER = 32  # entries of the line search's filter (a ring: the oldest is replaced)
 SMOOTH_SECOND_MU = 1e-3
@@ -169,18 +172,36 @@ class _Derivatives(NamedTuple):
     hess: jax.Array  # (m + 1, m + 1) the Lagrangian's Hessian, phi + y . c
 
 
-def _derivatives(fns: EpigraphForm, z, y) -> _Derivatives:
+def _derivatives(fns: EpigraphForm, z, y, free_variables: int | None = None) -> _Derivatives:
     """The rows, their Jacobian, the objective's gradient and the Hessian of the Lagrangian
     phi + y . c at z, from one forward-over-forward pass: the Hessian is the forward derivative of
     grad phi + J^T y, J itself a forward pass (m + 1 <= 7 directions each; no reverse pass), and the
-    rows, J and grad phi are its primal values."""
+    rows, J and grad phi are its primal values.
 
-    def lagrangian_gradient(v):
-        c, jac = rows_and_jacobian(fns, v)
-        grad = jax.jacfwd(fns.phi)(v)
+    ``free_variables`` (k < m, static): the derivatives along the k free variables and t only
+    (the columns of a fixed variable are 0, as the step takes them: it moves no fixed variable),
+    (k + 1)^2 second-order directions instead of (m + 1)^2: the oscillating roller's scene, 2 of
+    its 4 variables free, 9 instead of 25."""
+    m1 = z.shape[0]
+    if free_variables is None or free_variables + 1 >= m1:
+        basis = None
+        at = z
+    else:  # (m + 1, k + 1): the free variables' and t's unit vectors, picked by the data
+        index = jnp.nonzero(fns.free > 0, size=free_variables + 1, fill_value=m1 - 1)[0]
+        basis = jnp.eye(m1, dtype=z.dtype)[:, index]
+        at = jnp.zeros(free_variables + 1, z.dtype)
+
+    def point(w):
+        return w if basis is None else z + basis @ w
+
+    def lagrangian_gradient(w):
+        c, jac = rows_and_jacobian(fns, w, point)
+        grad = jax.jacfwd(lambda v: fns.phi(point(v)))(w)
         return grad + jac.T @ y, (c, jac, grad)
 
-    hess, (c, jac, grad) = jax.jacfwd(lagrangian_gradient, has_aux=True)(z)
+    hess, (c, jac, grad) = jax.jacfwd(lagrangian_gradient, has_aux=True)(at)
+    if basis is not None:  # back to every variable's coordinates
+        jac, grad, hess = jac @ basis.T, grad @ basis.T, basis @ hess @ basis.T
     return _Derivatives(c, jac, grad, hess)
 
 
@@ -239,7 +260,7 @@ def _step(state: NewtonState, fns: EpigraphForm, settings: NewtonSettings) -> Ne
     z, s, y, mu = state.z, state.s, state.y, state.mu
     dtype = z.dtype
     free = fns.free
-    c, jac, grad, hess = _derivatives(fns, z, y)
+    c, jac, grad, hess = _derivatives(fns, z, y, settings.free_variables)
     kkt = residuals(grad, c, jac, y, free)
     done = kkt.error <= settings.tol
     # barrier update (IPOPT's E_mu of the barrier problem: c + s = 0, S y = mu)
@@ -388,10 +409,6 @@ def _restore(fns: EpigraphForm, z, active):
     return jnp.where(active, jnp.concatenate([u, z[m:]]), z)
 
 
-WARM_MU = 1e-3  # a later round's first barrier parameters, x mu0 (it starts from the last answer)
-EXCHANGE_ROUNDS = 5  # the most exchange rounds (each one interior-point solve on ``exchange_angles`` angles)
-
-
 def _paths(problem: Problem, fns: EpigraphForm, init_design, settings: NewtonSettings,
            mu_factor=1.0) -> NewtonState:
     """The central paths of one solve, taking turns in one loop, their first barrier parameters
@@ -455,141 +472,24 @@ def _paths(problem: Problem, fns: EpigraphForm, init_design, settings: NewtonSet
     return jax.tree.map(lambda x: x[pick], states)._replace(iteration=steps)
 
 
-def _angle_blocks(fns: EpigraphForm, settings: NewtonSettings) -> int | None:
-    """The number of row blocks with one row per angle (the objective's and every constraint's) when
-    the form is a grid problem the exchange rounds can take apart (:func:`_exchange`), else None."""
-    n = fns.n_angles
-    blocks = fns.kinds[:-2]
-    k = settings.exchange_angles
-    if fns.split or k <= 0 or n <= 2 * k or any(count != n for _, count in blocks):
-        return None
-    return len(blocks)
-
-
-def take_angles(problem: Problem, index: jax.Array) -> Problem:
-    """The problem on the grid angles ``index`` (k,), from the family's one-angle problems
-    (``per_angle``, so without what one angle's problem leaves out, such as a model): each grid
-    leaf ((n, 1) there) and each leaf that is (n,) in the problem itself (a positive drive's second
-    contact's coefficient) taken at ``index``, each scalar kept. Every constraint row and every
-    objective row at those angles is the whole problem's (tests/test_newton.py)."""
-    return _angle_taker(problem)(index)
-
-
-def _angle_taker(problem: Problem):
-    """:func:`take_angles` as ``index -> problem``, the one-angle problems built once."""
-    per = family_of(problem).per_angle(problem)
-    shapes = {path: jnp.shape(x) for path, x in jax.tree_util.tree_flatten_with_path(problem)[0]}
-
-    def take(index):
-        def leaf(path, x):
-            if x.ndim == 2:
-                return x[index, 0]
-            return x[index] if len(shapes[path]) == 1 else x[0]
-
-        return jax.tree_util.tree_map_with_path(leaf, per)
-
-    return take
-
-
-def _exchange(problem: Problem, weights: Weights, fns: EpigraphForm, blocks: int, init_design,
-              settings: NewtonSettings):
-    """A grid problem solved by exchange rounds (a semi-infinite program's exchange method, e.g.
-    Reemtsen & Goerner 1998): each round solves the interior point on ``exchange_angles`` angles of
-    the grid (:func:`take_angles`), then checks the answer on the whole grid with the multipliers of the
-    angles left out set to 0. The whole grid's scaled KKT residual <= ``tol`` ends the rounds: the
-    answer is then the whole problem's, certified on its every row. Else the next round's angles are
-    up to half of them that the last answer held active (the largest multipliers > 1e-8),
-    then those whose largest row (the epigraph rows f_i - t, the constraints g / N) is largest at
-    the answer, so a violated angle comes in. The first round takes them evenly spaced (a coarse
-    grid) from the default start, or half of them evenly spaced and half where the rows are largest
-    from a given start (``init_design``); a later round starts from the last answer, its barrier at
-    :data:`WARM_MU` x mu0. Measured on the oscillating roller's 100-weighting sweep (360 angles):
-    30 Newton steps in all at the median (36 on the whole grid), each ~1/11 of the cost of a whole
-    grid's step.
-
-    Returns (z, y, iterations summed over the rounds, converged, KKT) on the whole grid."""
-    n, k = fns.n_angles, settings.exchange_angles
-    dtype = fns.u_max.dtype
-    m = fns.u_max.shape[0]
-    total = sum(count for _, count in fns.kinds)
-    take = _angle_taker(problem)  # the one-angle problems built once, outside the rounds
-
-    def largest_rows(c):  # (n,) the largest of each angle's rows c
-        return jnp.max(c[: blocks * n].reshape(blocks, n), axis=0)
-
-    def full_multipliers(index, y_sub):
-        y = jnp.zeros(total, dtype)
-        per_angle = y_sub[: blocks * k].reshape(blocks, k)
-        y = y.at[(jnp.arange(blocks)[:, None] * n + index[None, :]).ravel()].set(per_angle.ravel())
-        # gamma = 0: the first objective row alone holds t, in the subset and on the grid
-        first_alone = jnp.zeros(n, dtype).at[0].set(per_angle[0].sum())
-        y = y.at[:n].set(jnp.where(weights.gamma != 0, y[:n], first_alone))
-        return y.at[total - 2 * m:].set(y_sub[-2 * m:])
-
-    def round_(st):
-        r, z, y, keep, score, iterations, _, _ = st
-        held = jnp.zeros(n, bool).at[jax.lax.top_k(keep, k // 2)[1]].set(True) & (keep > 0)
-        index = jnp.sort(jax.lax.top_k(jnp.where(held, jnp.inf, score), k)[1])
-        sub = take(index)
-        warm = r > 0
-        last = from_unit(problem, fns.unravel(z[:m]), own=False)
-        start = jax.tree.map(lambda a, b: jnp.where(warm, a, b), last, design0)
-        end = _paths(sub, epigraph_form(sub, weights), start, settings, jnp.where(warm, WARM_MU, 1.0))
-        y = full_multipliers(index, end.y)
-        # the whole grid's KKT residuals (:func:`camjax.solvers.certificate.residuals`) from the
-        # subset's: the rows left out carry no multiplier, so stationarity and complementarity are
-        # the subset's but for the dual scale (its mean multiplier over every row); the primal
-        # infeasibility is every row's
-        c = fns.rows(end.z)
-        ratio = dual_scale(end.y, end.y.shape[0]) / dual_scale(y, total)
-        stat, comp = end.kkt.stationarity * ratio, end.kkt.complementarity * ratio
-        primal = jnp.maximum(jnp.max(c), 0.0)
-        kkt = KKT(stat, primal, comp, jnp.maximum(jnp.maximum(stat, primal), comp))
-        held = largest_rows(y)
-        return (r + 1, end.z, y, jnp.where(held > 1e-8, held, 0.0), largest_rows(c),
-                iterations + end.iteration, kkt.error <= settings.tol, kkt)
-
-    inf = jnp.asarray(jnp.inf, dtype)
-    if init_design is None:
-        # the first round from the default start: the coarse grid of k evenly spaced angles (scored
-        # 1, every other 0; no angle held); the state's z is read from the second round on
-        design0 = default_start(problem)
-        keep0 = jnp.zeros(n, dtype)
-        score0 = jnp.zeros(n, dtype).at[jnp.round(jnp.linspace(0, n - 1, k)).astype(int)].set(1.0)
-    else:
-        # from a given start (the hybrid's polish from the GA's answer, near an optimum): k / 2
-        # evenly spaced angles (held) and the k / 2 whose largest row is largest there, the rows
-        # that start near their limits; the flat face's 100-weighting polish took up to 152 steps
-        # with k evenly spaced, its angles where the GA's design binds found only in a later round
-        design0 = init_design
-        z0 = _start(problem, fns, design0, settings, settings.mu0)[0]
-        c0 = fns.rows(z0.at[-1].set(0.0))  # t = 0: the epigraph rows are f_i; scored at t = max f_i
-        t0 = jnp.max(jnp.where(fns.epigraph, c0[:n], -jnp.inf))
-        keep0 = jnp.zeros(n, dtype).at[jnp.round(jnp.linspace(0, n - 1, k // 2)).astype(int)].set(1.0)
-        score0 = largest_rows(c0.at[:n].add(-t0))
-    st = (jnp.asarray(0), jnp.zeros(m + 1, dtype), jnp.zeros(total, dtype), keep0, score0,
-          jnp.asarray(0), jnp.asarray(False), KKT(inf, inf, inf, inf))
-    _, z, y, _, _, iterations, converged, kkt = jax.lax.while_loop(
-        lambda st: ~st[6] & (st[0] < EXCHANGE_ROUNDS), round_, st)
-    return z, y, iterations, converged, kkt
-
-
 def minimize(problem: Problem, weights: Weights, init_design: Design | None = None,
              settings: NewtonSettings = DEFAULT_SETTINGS) -> KKTPoint:
     """Solve one problem (global over its angle grid) for one weighting; traceable, vmappable.
 
     ``init_design``: the start (mm); default the family's ``start(problem)`` where it has one,
     else the centre of the box (pulled ``settings.interior`` inside the box's faces). A grid of more
-    than 2 :func:`exchange_angles` angles is solved in exchange rounds (:func:`_exchange`).
+    than 2 :func:`camjax.solvers.exchange.exchange_angles` angles is solved in exchange rounds
+    (:func:`camjax.solvers.exchange.solve_in_rounds`).
     """
-    settings = replace(settings, exchange_angles=exchange_angles(problem, settings))
+    settings = replace(settings, exchange_angles=exchange.exchange_angles(problem, settings))
     fns = epigraph_form(problem, weights)
-    blocks = _angle_blocks(fns, settings)
+    blocks = exchange.angle_blocks(fns, settings)
     if blocks is None:
         end = _paths(problem, fns, init_design, settings)
         z, y, iterations, converged, kkt = end.z, end.y, end.iteration, end.done, end.kkt
     else:
-        z, y, iterations, converged, kkt = _exchange(problem, weights, fns, blocks, init_design, settings)
+        z, y, iterations, converged, kkt = exchange.solve_in_rounds(
+            problem, weights, fns, blocks, init_design, settings, _paths, _start)
     m = fns.u_max.shape[0]
     # an end that breaks a limit without converging: its design moved to the least violation
     infeasible = ~converged & (kkt.primal > settings.tol)

@@ -70,7 +70,7 @@ from camjax.numerics import RHO_FLOOR_MM, floor_positive, positive_part, safe_sq
 
 CONSTRAINT_NAMES = ("reach", "pressure_angle", "undercut", "face_travel", "stress", "bounds")
 VARIABLES = ("base_radius_mm", "face_radius_mm", "face_width_mm", "pivot_distance_mm", "arm_length_mm")
-# angles of the interior point's exchange rounds (camjax.solvers.newton.exchange_angles): 24, its
+# angles of the interior point's exchange rounds (camjax.solvers.exchange.exchange_angles): 24, its
 # fastest 100-weighting sweep (0.92 of the time at 32; at the default 16, 0.98 of it but 50 Newton
 # steps at the median, not 37: more rounds)
 EXCHANGE_ANGLES = 24

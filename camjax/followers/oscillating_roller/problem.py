@@ -60,7 +60,7 @@ from camjax.numerics import COS_FLOOR, RHO_FLOOR_MM, floor_positive, positive_pa
 
 CONSTRAINT_NAMES = ("reach", "pressure_angle", "undercut", "stress", "bounds")
 VARIABLES = ("base_radius_mm", "roller_radius_mm", "pivot_distance_mm", "arm_length_mm")
-# angles of the interior point's exchange rounds (camjax.solvers.newton.exchange_angles): as the
+# angles of the interior point's exchange rounds (camjax.solvers.exchange.exchange_angles): as the
 # translating roller's, 32 (its 100-weighting sweep ran 1.1x slower at 16, the same optima)
 EXCHANGE_ANGLES = 32
 

@@ -57,7 +57,7 @@ from camjax.followers.roller import geometry as roller_geo
 from camjax.numerics import COS_FLOOR, RHO_FLOOR_MM, floor_positive, positive_part, safe_sqrt
 
 CONSTRAINT_NAMES = ("pressure_angle", "undercut", "stress", "bounds")
-# angles of the interior point's exchange rounds (camjax.solvers.newton.exchange_angles): the
+# angles of the interior point's exchange rounds (camjax.solvers.exchange.exchange_angles): the
 # roller's answers bind at more angles than the default's 16 take in one round (its 100-weighting
 # sweep ran 1.4x slower at 16 than at 32, the same optima)
 EXCHANGE_ANGLES = 32
