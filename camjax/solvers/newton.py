@@ -129,6 +129,8 @@ class NewtonSettings:
 
 
 DEFAULT_SETTINGS = NewtonSettings()
+
+
 def for_problem(problem: Problem, settings: NewtonSettings) -> NewtonSettings:
     """``settings`` with ``free_variables`` counted from the problem's box (the variables with upper
     > lower, as :func:`camjax.solvers.gradient.u_max_of`) where its bounds are concrete numbers; under
