@@ -408,8 +408,9 @@ def test_take_angles_keeps_every_row_of_its_angles(name):
 def test_exchange_rounds_reach_the_whole_grids_optimum():
     """The knife edge's example scene at 360 angles and the three weightings: the exchange rounds
     (16 angles a round, the default's :data:`camjax.solvers.exchange.EXCHANGE_ANGLES`) and the
-    interior point on the whole grid (``exchange_angles`` = 0) both converge, and to the same objective within 1e-7 relative (two KKT points of the same
-    problem, each within the barrier's ~rows x mu ~ 1e-9 of F). The exchange's certificate is taken
+    interior point on the whole grid (``exchange_angles`` = 0) both converge, and to the same
+    objective within 1e-7 relative (two KKT points of the same problem, each within the
+    barrier's ~rows x mu ~ 1e-9 of F). The exchange's certificate is taken
     on the whole grid: its multipliers' epigraph sum is the objective's unit weight."""
     problem = _problem(followers.get("knife_edge").example_scene, 360)
     w = weights_of([a for a, _ in WEIGHTINGS], [g for _, g in WEIGHTINGS])

@@ -1,8 +1,8 @@
 """Robust design ([design] robust, camjax.robust.design): the design keeps each limit over the asked
 fraction of its samples, measured on fresh samples of another seed by camjax robust's evaluator;
 every follower type keeps each of its constraints on fresh samples and, with zero tolerances, gives
-its nominal design; the interior-point solver (the default), the gradient solver and the GA run it; bad keys exit
-2 naming the key; camjax sweep refuses a robust [design]."""
+its nominal design; the interior-point solver (the default), the gradient solver and the GA run it;
+bad keys exit 2 naming the key; camjax sweep refuses a robust [design]."""
 
 from __future__ import annotations
 
@@ -210,8 +210,8 @@ def test_a_rocking_follower_with_the_gradient_solver(follower_designs):
     """An oscillating roller (its example scene with the robust set and tolerances of
     :func:`follower_scene`: rpm, the roller's radius, the pivot distance and the arm length
     toleranced) solved by the gradient solver on the robust problem the interior-point solver solved
-    in :func:`follower_designs` (the design test_every_follower_type_keeps_each_constraint_on_fresh_samples
-    checks on fresh samples): converged, feasible, robust rows <= 0 on the full set, an objective no
+    in :func:`follower_designs` (the design that
+    test_every_follower_type_keeps_each_constraint_on_fresh_samples checks on fresh samples): converged, feasible, robust rows <= 0 on the full set, an objective no
     better than the nominal optimum's (the robust problem's feasible set is inside the nominal's),
     and the two robust optima agree: the objective within 1e-7 relative (the solvers' accuracy
     target; each stops far tighter, newton on a scaled KKT residual of 1e-9, measured apart by
