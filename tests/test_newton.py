@@ -287,34 +287,28 @@ profile_error_mm = { amplitude = 0.005, harmonics = [2, 3, 5] }
 
 
 @pytest.mark.slow
-def test_robust_optimum_matches_the_gradient_solver():
+def test_robust_rounds_converge_and_the_certificate_names_binding_rows():
     """A robust roller (size only, each limit kept over all but the worst of 400 samples of eight
     tolerances, p = 0.99, 64 angles; a round solves newton's 16 samples nearest to breaking a
     limit, rows split by angle and sample, many of them near-parallel): newton converges within its
-    200-iteration safeguard and its robust optimum is the gradient solver's on the same rounds
-    (the same subset: with m = 1 the sample discarded is the largest at a round's design, so the
-    rounds' path decides which; measured 0.144513 in two rounds of 16 samples, 0.144731 in one
-    of 256, by either solver): the objective within 1e-7 relative (the solvers' accuracy target;
-    measured 3e-9 apart) and the offset within 1e-6 mm (measured 2e-9 mm; the size is R_b + R_f,
-    so their split is free and is not compared), every robust row kept."""
+    200-iteration safeguard, feasible, every robust row kept. Its robust optimum is checked against
+    the gradient solver's in tests/test_robust_design.py (the oscillating roller; measured 1.2e-9
+    apart), and with every spread 0 against the nominal optimum for every follower type."""
     from camjax.robust import design as rd
     from camjax.scene import scene_from_dict
 
     scene = scene_from_dict(tomllib.loads(ROBUST_SCENE), "robust-newton")
     base = problem_from_scene(scene)
     weights = (scene.design.alpha, scene.design.gamma)
-    # both solvers start from newton's nominal optimum: the same robust problem, one nominal solve
     nominal = solve(base, weights, solver="newton")
     problem = rd.robust_problem(scene, base, origin=nominal.design)
     subset = rd.SOLVER_SUBSET["newton"]
-    out = {solver: rd.solve_rounds(problem, weights, mode="global", solver=solver, seed=0, subset=subset)
-           for solver in ("newton", "gradient")}
-    (robust, _, solved), (reference, _, _) = out["newton"], out["gradient"]
+    robust, _, solved = rd.solve_rounds(problem, weights, mode="global", solver="newton", seed=0, subset=subset)
     assert robust.status_name == "converged"
-    assert bool(robust.feasible) and bool(reference.feasible)
+    assert bool(robust.feasible)
     assert all(float(v) <= 1e-6 for v in robust.evaluation.rows)
-    assert float(robust.objective) == pytest.approx(float(reference.objective), rel=1e-7)
-    assert float(robust.design.offset_mm) == pytest.approx(float(reference.design.offset_mm), abs=1e-6)
+    # the robust feasible set is inside the nominal one: no smaller than the nominal optimum
+    assert float(robust.objective) >= float(nominal.objective) - 1e-9
     # the certificate names rows that bind: each row carrying 1 % of the largest multiplier or
     # more, its constraint at its cam angle over the round's kept samples, is at its limit (within
     # 1e-6 mm: the KKT tolerance of ~1e-8 scaled by the size norm), and every active row's
