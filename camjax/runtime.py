@@ -47,11 +47,8 @@ def enable_compilation_cache() -> None:
 # XLA's CPU fusion emitters (on by default in this jaxlib) compile camjax's programs slower and
 # run them no faster: measured on 2 cores, the default scene's first design compiles in 13 s
 # instead of 19 s, and a warm 8-weighting sweep runs in 0.19 s instead of 0.43 s (gradient) and
-# 0.24 s instead of 0.46 s (GA). LLVM's -O1 instead of -O2 (--xla_backend_optimization_level=1)
-# compiles 8-13 % faster and runs a warm 100-weighting sweep as fast (docs/development.md); -O0
-# would halve the compiles but turns the oscillating flat face's finite gradients into NaN in this
-# jaxlib. The flags are read once, when JAX starts its backend.
-CPU_XLA_FLAGS = ("--xla_cpu_use_fusion_emitters=false", "--xla_backend_optimization_level=1")
+# 0.24 s instead of 0.46 s (GA). The flag is read once, when JAX starts its backend.
+CPU_XLA_FLAGS = ("--xla_cpu_use_fusion_emitters=false",)
 
 
 def use_cpu_xla_flags(flags: tuple[str, ...] = CPU_XLA_FLAGS) -> None:
