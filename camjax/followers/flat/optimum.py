@@ -10,6 +10,8 @@ the continuous optimum (the problem's protocol hooks of the same names call them
 
 from __future__ import annotations
 
+import functools
+
 import jax
 import jax.numpy as jnp
 
@@ -158,6 +160,7 @@ def pointwise_optimum(problem: Problem, weights: Weights) -> Design:
     return Design(r, length)
 
 
+@functools.partial(jax.jit, static_argnames="bisections")
 def global_optimum(problem: Problem, weights: Weights, bisections: int = 200) -> Design:
     """Exact optimum of the global problem (one R_b, L), by bisection on a convex 1-D function.
 
@@ -170,7 +173,8 @@ def global_optimum(problem: Problem, weights: Weights, bisections: int = 200) ->
     is nondecreasing, and bisection on its sign converges to the minimizer (a kink where two
     angles share the max included). ``bisections`` halvings of [R_need, R_hi] (200: to the last
     bit in float64). A problem with :class:`ExactExtrema` gets the continuous optimum
-    (:func:`polish` from the grid's). Returns scalars.
+    (:func:`polish` from the grid's). Returns scalars. Compiled once per problem shape (the
+    weights and the scene's values are data: a reference over many weightings compiles once).
     """
     lo_r = jnp.maximum(problem.lower.base_radius_mm, required_base_radius(problem))
     hi_r = problem.upper.base_radius_mm
