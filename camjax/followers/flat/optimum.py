@@ -173,8 +173,9 @@ def global_optimum(problem: Problem, weights: Weights, bisections: int = 200) ->
     is nondecreasing, and bisection on its sign converges to the minimizer (a kink where two
     angles share the max included). ``bisections`` halvings of [R_need, R_hi] (200: to the last
     bit in float64). A problem with :class:`ExactExtrema` gets the continuous optimum
-    (:func:`polish` from the grid's). Returns scalars. Compiled once per problem shape (the
-    weights and the scene's values are data: a reference over many weightings compiles once).
+    (:func:`polish` from the grid's). Returns scalars. Compiled once per problem form (its grid's
+    shape and, with exact extrema, its laws); the weights and the scene's values are data, so a
+    reference over many weightings compiles once.
     """
     lo_r = jnp.maximum(problem.lower.base_radius_mm, required_base_radius(problem))
     hi_r = problem.upper.base_radius_mm
