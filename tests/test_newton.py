@@ -432,7 +432,7 @@ def test_exchange_rounds_reach_the_whole_grids_optimum():
 # weighting 90 of 100 (alpha, gamma) and the hybrid's GA answer there (mm). From it the first round
 # converged on its angles at a worse point (R_b 25.3 mm) and the later rounds ended unconverged
 # (41 steps; before the rounds started again from the default start, the hybrid kept its GA answer,
-# 3.9e-6 above the optimum).
+# 3.9e-6 above the optimum, and this test failed on ``converged``).
 KNIFE_ROUNDS_FAIL = {"weighting": (0.022579677172291576, 0.9774203228277084),
                      "start": (12.7155322, 1.58025218)}
 
