@@ -493,7 +493,7 @@ def solve_batch(problem, weights: Weights, keys: jax.Array, mode: str = "global"
                      mode, solver)
 
 
-_search_program = runtime.program_cache(search_batch, static_argnames=("mode", "solver", "settings"))
+_search_program = runtime.program_cache(search_batch, static_argnames=("mode", "solver", "settings", "chunk"))
 _judge_program = runtime.program_cache(judge_batch, static_argnames="mode")
 
 
