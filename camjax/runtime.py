@@ -229,7 +229,7 @@ PROGRAM_FORMAT = 3  # layout of a saved program's file (and of its module text);
 _PROGRAM_DIR: list = [None]  # folder of the program cache; None: off (the library default)
 _VERIFY: list = [False]  # trace every program read from the folder and compare (tests)
 _LOADED: dict = {}  # key -> _Entry, loaded or exported in this process
-_UNEXPORTABLE: set = set()  # qualified names whose export failed here: called directly from then on
+_UNEXPORTABLE: dict = {}  # qualified name -> why its export failed here: called directly from then on
 PROGRAM_SUFFIX = ".jaxprog"
 # JAX options that cannot change a trace (where compiled code is kept, what is logged or dumped):
 # left out of the key so that the command line and a test that configure them differently share
@@ -479,7 +479,7 @@ def _export(name: str, fn, static: dict, dynamic: dict):
     try:
         exported = jax.export.export(jax.jit(flat))(*specs)
     except Exception as exc:  # noqa: BLE001  (not exportable, e.g. a host callback: trace it every time)
-        _UNEXPORTABLE.add(name)
+        _UNEXPORTABLE[name] = f"{type(exc).__name__}: {exc}"[:500]
         raise _NotCacheable from exc
     return exported, out_tree[0], arrays
 
