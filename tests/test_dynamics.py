@@ -22,7 +22,7 @@ from hypothesis import strategies as st
 import camjax
 import camjax.cli
 from camjax import dynamics as d
-from camjax.dynamics import budget
+from camjax.dynamics import budget, integrate
 from camjax.laws import THESIS_NOMINAL
 from camjax.scene import DynamicsSpec, SceneError, builtin_scene_text, parse_scene
 
@@ -244,6 +244,28 @@ def test_rk4_matches_solve_ivp_on_a_transient(bench_cam):
     sol = scipy.integrate.solve_ivp(rhs, (0, t_eval[-1]), [float(u[0]), 0.0], method="DOP853",
                                     t_eval=t_eval, rtol=1e-12, atol=1e-14)
     np.testing.assert_allclose(np.asarray(last.angle), sol.y[0], rtol=0, atol=2e-8)
+
+
+def test_the_cycle_count_is_data_under_its_bound(bench_cam):
+    """A program bounded by max_cycles runs every count up to it: 2 and 4 cycles through one
+    compiled program (the second count adds nothing to the jit's cache), each equal to the program compiled for its
+    own count (no bound: the count is the loop's length) to the last bit (the same RK4 steps in
+    the same order; skipped cycles change nothing), and 2 cycles differ from 4 (the transient
+    from rest has not decayed: e^{-zeta wn t} ~ 0.8 per cycle here). A traced count needs the
+    bound; one below 1 is refused."""
+    u = d.evaluate_cam(bench_cam, d.cam_grid(2 * 90)).f
+    program = integrate._integrate_train
+    bounded = [np.asarray(d.integrate_train(PLANT, u, W_BENCH, 2, max_cycles=6).angle)]
+    compiled = program._cache_size()
+    bounded.append(np.asarray(d.integrate_train(PLANT, u, W_BENCH, 4, max_cycles=6).angle))
+    assert program._cache_size() == compiled
+    for c, got in zip((2, 4), bounded, strict=True):
+        np.testing.assert_array_equal(got, np.asarray(d.integrate_train(PLANT, u, W_BENCH, c).angle))
+    assert np.max(np.abs(bounded[0] - bounded[1])) > 1e-4
+    with pytest.raises(TypeError, match="n_cycles"):
+        jax.jit(lambda c: d.integrate_train(PLANT, u, W_BENCH, c))(3)
+    with pytest.raises(ValueError, match="max_cycles"):
+        d.integrate_train(PLANT, u, W_BENCH, 1, max_cycles=0)
 
 
 @pytest.mark.slow

@@ -23,7 +23,7 @@ from camjax.dynamics.harmonics import (
     from_complex,
     max_abs,
 )
-from camjax.dynamics.integrate import Drive, periodic_rk4
+from camjax.dynamics.integrate import Drive, cycle_bound, cycles_data, periodic_rk4
 from camjax.dynamics.plant import Plant, perturbed_plant, tracking_error_harmonics, transfer
 
 
@@ -75,9 +75,8 @@ class NonlinearCompensation(NamedTuple):
     fit_rms: jax.Array  # RMS of f_nl(theta1(t_k)) - theta2bar(t_k), motion units
 
 
-@runtime.program_cache(static_argnames=("n_harmonics", "n_cycles", "steps_per_cycle"))
 def compensate_nonlinear(cam: CamHarmonics, drive: Drive, plant: Plant, cam_speed_rad_s,
-                         n_harmonics: int, n_cycles: int, steps_per_cycle: int = 720
+                         n_harmonics: int, n_cycles, steps_per_cycle: int = 720, max_cycles: int | None = None
                          ) -> NonlinearCompensation:
     """Nonlinear feedforward with drive flexibility (SPEC 6), fitted to a limited Fourier law.
 
@@ -85,10 +84,18 @@ def compensate_nonlinear(cam: CamHarmonics, drive: Drive, plant: Plant, cam_spee
        theta3(t) = f(Omega t).
     2. The torque it demands, T2 = I2 theta2bar'' + k23 (theta2bar - theta3), enters the drive
        equation through the power balance T1 = T2 theta2bar' / theta1'; integrate it (RK4,
-       ``n_cycles`` motor revolutions) to the periodic theta1(t).
+       ``n_cycles`` motor revolutions: data, bounded by the static ``max_cycles``, None:
+       ``n_cycles``; see :func:`~camjax.dynamics.integrate.periodic_rk4`) to the periodic theta1(t).
     3. Cut the cam so that f_nl(theta1(t)) = theta2bar(t): least squares in ``n_harmonics``
        cosine and sine harmonics over the last revolution.
     """
+    return _compensate_nonlinear(cam, drive, plant, cam_speed_rad_s, n_harmonics, cycles_data(n_cycles),
+                                 steps_per_cycle, cycle_bound(n_cycles, max_cycles))
+
+
+@runtime.program_cache(static_argnames=("n_harmonics", "steps_per_cycle", "max_cycles"))
+def _compensate_nonlinear(cam: CamHarmonics, drive: Drive, plant: Plant, cam_speed_rad_s, n_harmonics: int,
+                          n_cycles, steps_per_cycle: int, max_cycles: int) -> NonlinearCompensation:
     omega = cam_speed_rad_s
     m = steps_per_cycle
     dt = TWO_PI / (omega * m)
@@ -108,7 +115,7 @@ def compensate_nonlinear(cam: CamHarmonics, drive: Drive, plant: Plant, cam_spee
         return rhs(TWO_PI * j / m + omega * t, y)
 
     y0 = jnp.stack([jnp.zeros_like(lin.cos[0]), jnp.zeros_like(lin.cos[0]) + omega])
-    last = periodic_rk4(rhs_cycle, y0, dt, m, n_cycles)
+    last = periodic_rk4(rhs_cycle, y0, dt, m, n_cycles, max_cycles=max_cycles)
     motor = cam_grid(m, y0.dtype)
     theta1 = motor + last[:, 0]
     target = evaluate_cam(lin, motor).f

@@ -14,6 +14,7 @@ from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 from camjax import runtime
 from camjax.dynamics.harmonics import TWO_PI, CamHarmonics, cam_grid, evaluate_cam
@@ -33,10 +34,16 @@ def rk4_step(rhs, y, t, dt, u0, uh, u1):
                                   y, k1, k2, k3, k4)
 
 
-def periodic_rk4(rhs, initial, dt, steps_per_cycle: int, n_cycles: int, half_step_inputs=None):
+def periodic_rk4(rhs, initial, dt, steps_per_cycle: int, n_cycles, half_step_inputs=None,
+                 max_cycles: int | None = None):
     """Settle, then record the last cycle: ``n_cycles`` cycles of M fixed RK4 steps of length dt.
 
-    Traceable (``n_cycles`` and ``steps_per_cycle`` are Python ints: they set scan lengths).
+    Traceable. ``steps_per_cycle`` and ``max_cycles`` are Python ints (they set loop lengths);
+    ``n_cycles`` is data: the settling loop runs ``max_cycles - 1`` times and skips (``lax.cond``)
+    the cycles past ``n_cycles - 1``, so one compiled program runs every count up to the bound
+    (a scene whose inertia or speed changes its settling count compiles nothing again). Skipped
+    cycles cost a comparison each; ``jax.grad`` works (reverse mode stores every bounded cycle),
+    and under ``vmap`` over ``n_cycles`` every cycle up to the bound is computed.
 
     Args:
       rhs: ``rhs(step, t, y, u) -> dy/dt``, with ``step`` the index j (traced int, 0..M-1) of the
@@ -45,9 +52,11 @@ def periodic_rk4(rhs, initial, dt, steps_per_cycle: int, n_cycles: int, half_ste
       initial: state at t = 0 (a pytree of arrays).
       dt: step length, s (one cycle lasts M dt).
       steps_per_cycle: M.
-      n_cycles: cycles to run (>= 1); the first n_cycles - 1 only settle the transient.
+      n_cycles: cycles to run (an integer >= 1, Python or array); the first n_cycles - 1 only
+        settle the transient. Counts above ``max_cycles`` run ``max_cycles``.
       half_step_inputs: None or (2M,) periodic input at every step and half step of a cycle,
         u[2j] at the start of step j, u[2j+1] at its middle.
+      max_cycles: the largest count this program runs; None: ``n_cycles`` itself (a Python int).
 
     Returns:
       The state at the start of each step of the last cycle: ``initial``'s pytree with a leading
@@ -64,13 +73,38 @@ def periodic_rk4(rhs, initial, dt, steps_per_cycle: int, n_cycles: int, half_ste
         y_next = rk4_step(lambda t, yy, uu: rhs(j, t, yy, uu), y, 0.0, dt, u0, uh, u1)
         return y_next, y
 
-    def cycle(y, _):
+    def cycle(y):
         y, _ = jax.lax.scan(step, y, jnp.arange(m))
-        return y, None
+        return y
 
-    y, _ = jax.lax.scan(cycle, initial, None, length=n_cycles - 1)
+    def settle(y, k):
+        return jax.lax.cond(k < n_cycles - 1, cycle, lambda y: y, y), None
+
+    bound = cycle_bound(n_cycles, max_cycles)
+    y, _ = jax.lax.scan(settle, initial, jnp.arange(bound - 1))
     _, last = jax.lax.scan(step, y, jnp.arange(m))
     return last
+
+
+def cycle_bound(n_cycles, max_cycles: int | None) -> int:
+    """The settling loop's bound: ``max_cycles``, else ``n_cycles`` as a Python int (>= 1)."""
+    if max_cycles is None:
+        try:
+            max_cycles = int(n_cycles)
+        except (TypeError, jax.errors.ConcretizationTypeError):
+            raise TypeError("n_cycles: a traced cycle count needs max_cycles (a Python int) to bound "
+                            "the settling loop") from None
+    if int(max_cycles) < 1:
+        raise ValueError(f"max_cycles: {max_cycles} must be >= 1")
+    return int(max_cycles)
+
+
+def cycles_data(n_cycles):
+    """A cycle count as program data: an int32 scalar (NumPy where it is concrete: no device call),
+    so that a program compiled for one count runs another."""
+    if isinstance(n_cycles, jax.core.Tracer):
+        return n_cycles.astype(jnp.int32)
+    return np.int32(n_cycles)
 
 
 class Settling(NamedTuple):
@@ -114,9 +148,8 @@ class TrainState(NamedTuple):
     rate: jax.Array  # theta3', m/s or rad/s
 
 
-@partial(jax.jit, static_argnames=("n_cycles",))
-def integrate_train(plant: Plant, follower_half_steps: jax.Array, cam_speed_rad_s,
-                    n_cycles: int, initial: TrainState | None = None) -> TrainState:
+def integrate_train(plant: Plant, follower_half_steps: jax.Array, cam_speed_rad_s, n_cycles,
+                    initial: TrainState | None = None, max_cycles: int | None = None) -> TrainState:
     """RK4 of the follower train driven by a periodic follower motion, from rest (or ``initial``).
 
     Args:
@@ -124,12 +157,20 @@ def integrate_train(plant: Plant, follower_half_steps: jax.Array, cam_speed_rad_
       follower_half_steps: (2M,) theta2 at cam angles phi_j = pi j / M: the values at every step
         and half step of one cycle of M steps (dt = 2 pi / (Omega M)).
       cam_speed_rad_s: Omega.
-      n_cycles: cycles to integrate (static); the last one is returned.
+      n_cycles: cycles to integrate (an integer, data: see :func:`periodic_rk4`); the last one is
+        returned.
       initial: state at t = 0; default theta3 = theta2(0), theta3' = 0.
+      max_cycles: the largest ``n_cycles`` the compiled program runs (static); None: ``n_cycles``.
 
     Returns:
       TrainState of shape (M,) each: the load over the last cycle at phi_k = 2 pi k / M.
     """
+    return _integrate_train(plant, follower_half_steps, cam_speed_rad_s, cycles_data(n_cycles), initial,
+                            cycle_bound(n_cycles, max_cycles))
+
+
+@partial(jax.jit, static_argnames=("max_cycles",))
+def _integrate_train(plant, follower_half_steps, cam_speed_rad_s, n_cycles, initial, max_cycles: int):
     u = jnp.asarray(follower_half_steps)
     m = u.shape[0] // 2
     dt = TWO_PI / (cam_speed_rad_s * m)
@@ -140,7 +181,7 @@ def integrate_train(plant: Plant, follower_half_steps: jax.Array, cam_speed_rad_
         accel = (plant.stiffness * (theta2 - y.angle) - plant.damping * y.rate) / plant.inertia
         return TrainState(y.rate, accel)
 
-    return periodic_rk4(rhs, initial, dt, m, n_cycles, u)
+    return periodic_rk4(rhs, initial, dt, m, n_cycles, u, max_cycles)
 
 
 # ------------------------------------------------------------------------- drive flexibility
@@ -191,16 +232,24 @@ def _drive_rhs(cam, drive, plant, omega):
     return rhs
 
 
-@runtime.program_cache(static_argnames=("n_cycles", "steps_per_cycle"))
 def simulate_drive(cam: CamHarmonics, drive: Drive, plant: Plant, cam_speed_rad_s,
-                   n_cycles: int, steps_per_cycle: int = 720) -> DriveResponse:
+                   n_cycles, steps_per_cycle: int = 720, max_cycles: int | None = None) -> DriveResponse:
     """RK4 of the full model (SPEC 6, drive flexibility) from theta1 = Omega t, rest load.
 
     I1 theta1'' = k01 (theta0 - theta1) + c01 (theta0' - theta1') - T1,  T1 theta1' = T2 theta2',
     T2 = I2 theta2'' + k23 (theta2 - theta3),  theta2 = f(theta1),
     I3 theta3'' = k23 (theta2 - theta3) - c3 theta3',  theta0 = Omega t.
-    Returns the last of ``n_cycles`` motor revolutions (static), M = ``steps_per_cycle``.
+    Returns the last of ``n_cycles`` motor revolutions (data: see :func:`periodic_rk4`),
+    M = ``steps_per_cycle``; ``max_cycles`` (static) bounds the count one compiled program runs
+    (None: ``n_cycles``).
     """
+    return _simulate_drive(cam, drive, plant, cam_speed_rad_s, cycles_data(n_cycles), steps_per_cycle,
+                           cycle_bound(n_cycles, max_cycles))
+
+
+@runtime.program_cache(static_argnames=("steps_per_cycle", "max_cycles"))
+def _simulate_drive(cam: CamHarmonics, drive: Drive, plant: Plant, cam_speed_rad_s, n_cycles,
+                    steps_per_cycle: int, max_cycles: int) -> DriveResponse:
     omega = cam_speed_rad_s
     m = steps_per_cycle
     dt = TWO_PI / (omega * m)
@@ -213,7 +262,7 @@ def simulate_drive(cam: CamHarmonics, drive: Drive, plant: Plant, cam_speed_rad_
         # motor angle: the step's start (the cam law is 2 pi periodic) plus Omega t
         return rhs(TWO_PI * j / m + omega * t, y, None)
 
-    last = periodic_rk4(rhs_cycle, y0, dt, m, n_cycles)
+    last = periodic_rk4(rhs_cycle, y0, dt, m, n_cycles, max_cycles=max_cycles)
     motor = cam_grid(m, zero.dtype)
     theta1 = motor + last.cam_lag
     v = evaluate_cam(cam, theta1)

@@ -126,12 +126,14 @@ def robustness(ctx: Context) -> Robustness:
 def time_domain(ctx: Context, settle: Settling) -> TimeDomain:
     """RK4 from rest under the exact program law, nominal and linearly compensated."""
     plant, omega, cam, m = ctx.plant, ctx.omega, ctx.cam, ctx.spec.steps_per_cycle
-    cycles = settle.cycles
+    # the count is data, bounded by the scene's cap: another inertia or speed compiles nothing again
+    cycles, bound = settle.cycles, ctx.spec.max_cycles
     exact = program_values(ctx.scene, cam_grid(2 * m))
-    load = integrate_train(plant, exact.f, omega, cycles).angle
+    load = integrate_train(plant, exact.f, omega, cycles, max_cycles=bound).angle
     grid_m = cam_grid(m)
     harm = evaluate_cam(steady_state(cam, plant, omega), grid_m).f
-    load_c = integrate_train(plant, compensate_time(exact, plant, omega), omega, cycles).angle
+    compensated = compensate_time(exact, plant, omega)
+    load_c = integrate_train(plant, compensated, omega, cycles, max_cycles=bound).angle
     target = program_values(ctx.scene, grid_m).f
     decay = as_float(damping_ratio(plant) * natural_frequency_rad_s(plant))
     return TimeDomain(cycles, m, float(math.exp(-decay * cycles * TWO_PI / omega)),
@@ -143,7 +145,7 @@ def nonlinear(ctx: Context, settle: Settling) -> Nonlinear:
     """Nonlinear compensation with drive flexibility, fitted to the scene's harmonics."""
     spec = ctx.spec
     nl = compensate_nonlinear(trim_harmonics(ctx.cam), drive_of(spec), ctx.plant, ctx.omega,
-                              spec.harmonics, settle.cycles, spec.steps_per_cycle)
+                              spec.harmonics, settle.cycles, spec.steps_per_cycle, spec.max_cycles)
     return Nonlinear(as_float(nl.fit_rms), spec.harmonics, nl.cam)
 
 
@@ -163,7 +165,7 @@ def drive(ctx: Context, settle: Settling,
         cams["nonlinear"] = nonlinear_cam
     runs = {}
     for name, get_cam in cams.items():
-        r = simulate_drive(trim_harmonics(get_cam()), dr, plant, omega, settle.cycles, m)
+        r = simulate_drive(trim_harmonics(get_cam()), dr, plant, omega, settle.cycles, m, spec.max_cycles)
         runs[name] = DriveRun(as_float(jnp.max(jnp.abs(r.cam_speed - omega)) / omega),
                               as_float(jnp.max(jnp.abs(r.load - target))), as_float(jnp.max(jnp.abs(r.cam_torque))),
                               np.asarray(r.cam_speed) / TWO_PI, np.asarray(r.load))
