@@ -251,8 +251,8 @@ def test_the_cycle_count_is_data_under_its_bound(bench_cam):
     compiled program (the second count adds nothing to the jit's cache), each equal to the program compiled for its
     own count (no bound: the count is the loop's length) to the last bit (the same RK4 steps in
     the same order; skipped cycles change nothing), and 2 cycles differ from 4 (the transient
-    from rest has not decayed: e^{-zeta wn t} ~ 0.8 per cycle here). A traced count needs the
-    bound; one below 1 is refused."""
+    from rest has not decayed: e^{-zeta wn t} ~ 0.8 per cycle here). A count traced under ``jit``
+    runs with the bound (the same numbers) and fails without it; a bound below 1 is refused."""
     u = d.evaluate_cam(bench_cam, d.cam_grid(2 * 90)).f
     program = integrate._integrate_train
     bounded = [np.asarray(d.integrate_train(PLANT, u, W_BENCH, 2, max_cycles=6).angle)]
@@ -262,6 +262,9 @@ def test_the_cycle_count_is_data_under_its_bound(bench_cam):
     for c, got in zip((2, 4), bounded, strict=True):
         np.testing.assert_array_equal(got, np.asarray(d.integrate_train(PLANT, u, W_BENCH, c).angle))
     assert np.max(np.abs(bounded[0] - bounded[1])) > 1e-4
+    # everything an argument (captured arrays would be folded in as constants: other last bits)
+    traced = jax.jit(lambda p, uu, w, c: d.integrate_train(p, uu, w, c, max_cycles=6).angle)(PLANT, u, W_BENCH, 4)
+    np.testing.assert_array_equal(np.asarray(traced), bounded[1])
     with pytest.raises(TypeError, match="n_cycles"):
         jax.jit(lambda c: d.integrate_train(PLANT, u, W_BENCH, c))(3)
     with pytest.raises(ValueError, match="max_cycles"):
