@@ -73,7 +73,7 @@ def design_report(scene: Scene, arrays: SceneArrays | None = None, *,
 
 
 def sweep_scene(scene: Scene, alphas, gammas, *, mode: str, solver: str, seed: int = 0,
-                chunk_size: int = 128):
+                chunk_size: int | None = None):
     """Solve the scene's [design] problem for every (alpha, gamma) pair of two lists, in this process.
 
     A scene with designed segments (``design = true``) co-designs its laws with the geometry at

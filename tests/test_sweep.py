@@ -22,11 +22,12 @@ def problem(default_scene):
 
 @pytest.fixture(scope="module")
 def big_sweep(problem):
-    """11 x 11 = 121 weightings, alpha and gamma from 0.01 to 100, global, the default solver, one chunk."""
+    """11 x 11 = 121 weightings, alpha and gamma from 0.01 to 100, global, the default solver, in the
+    default chunks (on the CPU 13 of 10, the last padded: the program of any sweep of this problem)."""
     grid = np.logspace(-2, 2, 11)
     base.search_batch.clear_cache()
     base.judge_batch.clear_cache()
-    result = S.sweep(problem, grid, grid, chunk_size=128)
+    result = S.sweep(problem, grid, grid, progress=False)
     return result
 
 
@@ -35,6 +36,20 @@ def test_sweep_of_121_weightings_is_one_search_and_one_judgement(big_sweep):
     assert big_sweep.results.batch_size == 121
     assert (base.search_batch._cache_size(), base.judge_batch._cache_size()) == (1, 1)  # the search, its judgement
     assert bool(np.all(big_sweep.results.feasible))
+
+
+def test_a_sweep_of_another_size_runs_the_same_programs_and_designs(problem, big_sweep):
+    """6 of the 121 weightings swept alone (one chunk, padded from 6 to the default's size): no
+    program compiled again, and each design equal to the big sweep's, to the bit (a weighting's
+    lanes compute the same whatever the chunk holds)."""
+    grid = np.logspace(-2, 2, 11)
+    sizes = (base.search_batch._cache_size(), base.judge_batch._cache_size())
+    small = S.sweep(problem, grid[[2, 5]], grid[[3, 7, 9]], progress=False)
+    assert (base.search_batch._cache_size(), base.judge_batch._cache_size()) == sizes
+    picked = [i * 11 + j for i in (2, 5) for j in (3, 7, 9)]
+    for name in ("base_radius_mm", "face_width_mm", "objective"):
+        np.testing.assert_array_equal(np.asarray(getattr(small.results, name)),
+                                      np.asarray(getattr(big_sweep.results, name))[picked], err_msg=name)
 
 
 def test_sweep_shows_the_size_stress_trade(problem, big_sweep):

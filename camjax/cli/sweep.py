@@ -22,9 +22,6 @@ from camjax.output.folder import check_output_dir, replaced_folder
 from camjax.scene import cut
 from camjax.scene.ranges import allowed_text, outside
 
-DEFAULT_CHUNK = 128  # weightings per compiled call (camjax.solvers.sweep.DEFAULT_CHUNK: not imported here)
-
-
 @command("sweep", "solve every (alpha, gamma) pair of two lists: pareto.json and pareto.png")
 def _setup_sweep(p: argparse.ArgumentParser):
     p.add_argument("scene", nargs="?", default=None,
@@ -35,8 +32,9 @@ def _setup_sweep(p: argparse.ArgumentParser):
     p.add_argument("--out", required=True, metavar="DIR", help=OUT_HELP)
     add_design_options(p, weights=False)
     p.add_argument("--chunk-size", type=int, default=None, metavar="W",
-                   help=f"weightings per compiled call (default {DEFAULT_CHUNK}; a progress bar when there "
-                   "are more); a scene with designed laws co-designs one weighting at a time")
+                   help="weightings per compiled call, a smaller sweep padded to it (default: 10 on the CPU, "
+                   "128 on an accelerator; a progress bar when there are more); a scene with designed laws "
+                   "co-designs one weighting at a time")
     p.add_argument("--dpi", type=int, default=120, help="resolution of pareto.png (default 120)")
     add_samples_option(p)
     from camjax.scaleout import command as scaleout
@@ -103,7 +101,7 @@ def _setup_sweep(p: argparse.ArgumentParser):
                                         cache_dir=jax.config.jax_compilation_cache_dir)
         else:
             result = runtime.interruptible(sweep_scene, scene, alphas, gammas, mode=mode, solver=solver,
-                                           seed=seed, chunk_size=args.chunk_size or DEFAULT_CHUNK)
+                                           seed=seed, chunk_size=args.chunk_size)
         seconds = time.perf_counter() - start
         data = {"scene": scene.name, "mode": mode, "solver": solver, "seed": seed,
                 "alphas": alphas, "gammas": gammas, "seconds": seconds, "records": result.records()}

@@ -17,14 +17,24 @@ import jax
 import numpy as np
 
 from camjax.family import weights_of
-from camjax.solvers.base import Settings, Solution, family_of, solve_batch, weighting_keys
+from camjax.solvers.base import SEARCH_CHUNK, Settings, Solution, family_of, solve_batch, weighting_keys
 from camjax.solvers.base import solve as solve_weights
 from camjax.solvers.registry import DEFAULT_SOLVER, MODES, SOLVERS, check_choice, check_weights
 
-__all__ = ["DEFAULT_CHUNK", "MODES", "SOLVERS", "SweepResult", "pareto_mask", "plot_pareto", "solve",
-           "solve_batch", "sweep", "weight_grid"]
+__all__ = ["DEFAULT_CHUNK", "MODES", "SOLVERS", "SweepResult", "default_chunk", "pareto_mask", "plot_pareto",
+           "solve", "solve_batch", "sweep", "weight_grid"]
 
-DEFAULT_CHUNK = 128  # weightings per compiled call of a sweep
+DEFAULT_CHUNK = 128  # weightings per compiled call of a sweep on an accelerator
+
+
+def default_chunk() -> int:
+    """A sweep's weightings per compiled call: the search's own chunk on the CPU
+    (:data:`~camjax.solvers.base.SEARCH_CHUNK`, which a larger batch is searched in anyway), else
+    :data:`DEFAULT_CHUNK`. Every chunk is padded to this size, so sweeps of any size run one
+    compiled program: measured on the built-in scenes (newton, gradient, GA and hybrid), a
+    weighting's design is the same to the bit whether its chunk holds 6 weightings or 10, or 121
+    in one call."""
+    return SEARCH_CHUNK if jax.default_backend() == "cpu" else DEFAULT_CHUNK
 
 
 def _settings(ga_settings=None, gradient_settings=None) -> Settings:
@@ -90,13 +100,15 @@ def pareto_mask(size, stress, feasible=None) -> np.ndarray:
 
 
 def sweep(problem, alphas, gammas, *, mode: str = "global", solver: str = DEFAULT_SOLVER,
-          seed: int = 0, chunk_size: int = DEFAULT_CHUNK, progress: bool | None = None,
+          seed: int = 0, chunk_size: int | None = None, progress: bool | None = None,
           ga_settings=None, gradient_settings=None) -> SweepResult:
-    """Solve every (alpha, gamma) pair of two lists, ``chunk_size`` weightings per compiled call.
+    """Solve every (alpha, gamma) pair of two lists, ``chunk_size`` weightings per compiled call
+    (None: :func:`default_chunk`).
 
-    Every chunk has the same shape (the last is padded by repeating its final weighting), so the
-    program compiles once; a tqdm progress bar (stderr) runs over the chunks when there is more
-    than one (``progress`` forces it on or off). Weighting i uses the key fold_in(key(seed), i),
+    Every chunk has the same shape (a sweep smaller than a chunk, and the last chunk, are padded by
+    repeating the final weighting), so the program compiles once for sweeps of any size; a tqdm
+    progress bar (stderr) runs over the chunks when there is more than one (``progress`` forces it
+    on or off). Weighting i uses the key fold_in(key(seed), i),
     so results do not depend on the chunk size, but for a chunk of one weighting: that is a design's
     own program (:func:`~camjax.solvers.base.solve_batch` traces it without vmap), whose last bits
     may differ from a batch's. Python (chunks, NumPy results): not traceable;
@@ -112,7 +124,8 @@ def sweep(problem, alphas, gammas, *, mode: str = "global", solver: str = DEFAUL
     check_weights(a, g)
     settings = _settings(ga_settings, gradient_settings)
     total = a.size
-    chunk = max(1, min(int(chunk_size), total))
+    # a single weighting is a design's own program (unbatched); more fill chunks of one shape
+    chunk = 1 if total == 1 else max(1, int(default_chunk() if chunk_size is None else chunk_size))
     n_chunks = -(-total // chunk)
     dtype = jax.tree.leaves(family_of(problem).bounds(problem)[0])[0].dtype
     parts = []
