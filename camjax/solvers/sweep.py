@@ -129,15 +129,19 @@ def sweep(problem, alphas, gammas, *, mode: str = "global", solver: str = DEFAUL
     n_chunks = -(-total // chunk)
     dtype = jax.tree.leaves(family_of(problem).bounds(problem)[0])[0].dtype
     parts = []
-    keys_all = weighting_keys(seed, total)  # one key per weighting: independent of chunking
     show = n_chunks > 1 if progress is None else progress
     for c in tqdm(range(n_chunks), desc=f"sweep ({solver}, {mode})", unit="chunk", disable=not show):
         lo, hi = c * chunk, min((c + 1) * chunk, total)
         idx = np.minimum(np.arange(lo, lo + chunk), hi - 1)  # pad by repeating the last weighting
         weights = weights_of(a[idx], g[idx], dtype)
-        res = solve_batch(problem, weights, keys_all[idx], mode, solver, settings)
-        parts.append(jax.tree.map(lambda x, n=hi - lo: np.asarray(x)[:n], res))
-    results = jax.tree.map(lambda *xs: np.concatenate(xs, axis=0), *parts)
+        # weighting i's key is fold_in(key(seed), i) whatever its chunk (one program for every
+        # chunk; a padded lane's key is its own index's, dropped with the lane)
+        parts.append((solve_batch(problem, weights, weighting_keys(seed, chunk, lo), mode, solver, settings),
+                      hi - lo))
+        if c:  # the chunk before done (this one already dispatched): the bar counts finished chunks
+            jax.block_until_ready(parts[-2][0])
+    results = jax.tree.map(lambda *xs: np.concatenate(xs, axis=0),
+                           *[jax.tree.map(lambda x, n=n: np.asarray(x)[:n], res) for res, n in parts])
     rows = records_of(problem, results)
     column = SweepResult(mode, solver, rows, np.zeros(len(rows), bool)).column
     mask = pareto_mask(column("size_mm"), column("stress_max_MPa"), column("feasible", bool))
