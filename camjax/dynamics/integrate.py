@@ -91,7 +91,7 @@ def cycle_bound(n_cycles, max_cycles: int | None) -> int:
     if max_cycles is None:
         try:
             max_cycles = int(n_cycles)
-        except (TypeError, jax.errors.ConcretizationTypeError):
+        except TypeError:  # a tracer (jax's ConcretizationTypeError is one) or no number at all
             raise TypeError("n_cycles: a traced cycle count needs max_cycles (a Python int) to bound "
                             "the settling loop") from None
     if int(max_cycles) < 1:
