@@ -255,8 +255,9 @@ def full_runs(tmp: Path) -> list[list[str]]:
     and the digests of the arguments each program ran on):
     - the [design] block's own mode: the same programs on the same argument values as
       ``--mode pointwise`` (the scene's common code reads the mode);
-    - the sweeps: ``camjax sweep`` runs its solves through ``jax.jit`` (camjax.solvers.sweep),
-      no saved program, so with the cache on it computes what it computes with the cache off."""
+    - the sweeps: ``camjax sweep`` runs the design's two entry points (the search and its
+      judgement, camjax.solvers.base.compiled_batch) at a batch of one chunk, on the same key; a
+      sweep with saved programs against the same command without is tests/test_runtime.py's."""
     text, options, _ = SCENES[FULL_SEQUENCE]
     base = tmp / f"{FULL_SEQUENCE}.toml"
     base.write_text(text)

@@ -159,37 +159,55 @@ def test_design_solve_through_a_saved_program_matches(cache, scene_name):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("command, scene, name", [("dynamics", "thesis-bench", "dynamics.json")])
-def test_cli_with_saved_programs_writes_what_it_writes_without(command, scene, name, tmp_path, monkeypatch):
+@pytest.mark.parametrize("argv, name, entry_points", [
+    (["dynamics", "thesis-bench"], "dynamics.json", ()),
+    # two weightings in one chunk of the CPU's size: the search and judgement programs of a batch
+    (["sweep", "default", "--alpha", "0.5,2", "--gamma", "1"], "pareto.json",
+     ("camjax.solvers.base.search_batch", "camjax.solvers.base.judge_batch")),
+], ids=["dynamics", "sweep"])
+def test_cli_with_saved_programs_writes_what_it_writes_without(argv, name, entry_points, tmp_path, monkeypatch):
     """The command line as users run it (program cache on, verify mode off: first run exports,
-    second loads) against the same command with the cache off: the same JSON, value for value.
+    second loads) against the same command with the cache off: the same JSON, value for value
+    (a sweep's but for its seconds); the warm run exports nothing again, and the entry points named
+    were saved (a program whose export fails runs as plain ``jax.jit``, and the comparison would
+    then hold trivially).
 
-    One command here: ``camjax design`` of every follower type, cold and loading saved programs,
-    against the same programs traced afresh is tests/test_cache_matrix.py's (in verify mode, which
-    runs the same path and only adds the comparison with a fresh trace); the design's solve against
-    plain ``jax.jit``, :func:`test_design_solve_through_a_saved_program_matches`."""
+    ``camjax design`` of every follower type, cold and loading saved programs, against the same
+    programs traced afresh is tests/test_cache_matrix.py's (in verify mode, which runs the same path
+    and only adds the comparison with a fresh trace); the design's solve against plain ``jax.jit``,
+    :func:`test_design_solve_through_a_saved_program_matches`."""
     import json
 
     from camjax import cli
+    from camjax.solvers import base
 
+    def written(run):
+        data = json.loads((tmp_path / run / name).read_text())
+        data.pop("seconds", None)  # a sweep's wall time
+        return data
+
+    programs = tmp_path / "programs"
     monkeypatch.setenv("CAMJAX_PROGRAM_CACHE", "0")
-    assert cli.main([command, scene, "--out", str(tmp_path / "off")]) == 0
+    assert cli.main([*argv, "--out", str(tmp_path / "off")]) == 0
     before = runtime._PROGRAM_DIR[0]
-    monkeypatch.setenv("CAMJAX_PROGRAM_CACHE", str(tmp_path / "programs"))
+    monkeypatch.setenv("CAMJAX_PROGRAM_CACHE", str(programs))
     try:
-        assert cli.main([command, scene, "--out", str(tmp_path / "cold")]) == 0
-        assert list((tmp_path / "programs").glob(f"*{runtime.PROGRAM_SUFFIX}"))
+        base._COMPILED.clear()  # the off run's programs are plain jax.jit ones
+        assert cli.main([*argv, "--out", str(tmp_path / "cold")]) == 0
+        saved = {path.name: path.stat().st_mtime_ns for path in programs.glob(f"*{runtime.PROGRAM_SUFFIX}")}
+        assert saved
+        assert set(entry_points) <= {name.split("-")[0] for name in saved}, sorted(saved)
         runtime._LOADED.clear()  # as a fresh process: read the saved programs back
-        from camjax.solvers import base
-
         base._COMPILED.clear()
-        assert cli.main([command, scene, "--out", str(tmp_path / "warm")]) == 0
+        assert cli.main([*argv, "--out", str(tmp_path / "warm")]) == 0
+        assert {path.name: path.stat().st_mtime_ns for path in programs.glob(f"*{runtime.PROGRAM_SUFFIX}")} == saved
     finally:
         runtime._PROGRAM_DIR[0] = before
         runtime._LOADED.clear()
-    off = json.loads((tmp_path / "off" / name).read_text())
+        base._COMPILED.clear()
+    off = written("off")
     for run in ("cold", "warm"):
-        assert json.loads((tmp_path / run / name).read_text()) == off, run
+        assert written(run) == off, run
 
 
 @pytest.mark.slow

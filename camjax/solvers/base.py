@@ -527,20 +527,31 @@ def solve(problem, weights: Weights | tuple[float, float] = (1.0, 1.0), *, mode:
     check_choice("solver", solver, SOLVERS)
     alpha, gamma = (float(weights[0]), float(weights[1]))
     check_weights([alpha], [gamma])
-    settings = for_problem(problem, solver, settings)
     dtype = jax.tree.leaves(_design_form(problem))[0].dtype
     args = (problem, weights_of([alpha], [gamma], dtype), weighting_keys(seed, 1))
-    cache_key = (_signature(args), mode, solver, settings)
-    compiled, compile_s = _COMPILED.get(cache_key), 0.0
-    if compiled is None:
-        t0 = time.perf_counter()
-        compiled = _compiled_solve(args, mode, solver, settings)
-        compile_s = time.perf_counter() - t0
-        _COMPILED[cache_key] = compiled
+    t0 = time.perf_counter()
+    compiled, fresh = compiled_batch(*args, mode=mode, solver=solver, settings=settings)
     t1 = time.perf_counter()
     res = jax.device_get(compiled(*args))  # NumPy leaves: indexing them dispatches nothing
     t2 = time.perf_counter()
-    return dataclasses.replace(res[0], timings=Timings(compile_s, t2 - t1))
+    return dataclasses.replace(res[0], timings=Timings(t1 - t0 if fresh else 0.0, t2 - t1))
+
+
+def compiled_batch(problem, weights: Weights, keys: jax.Array, *, mode: str = "global",
+                   solver: str = DEFAULT_SOLVER, settings: Settings = DEFAULT_SETTINGS):
+    """``(run, fresh)``: ``run(problem, weights, keys) -> Solution`` for arguments of the shapes and
+    dtypes of these (a batch of ``w`` weightings: :func:`solve_batch`'s numbers), compiled once per
+    process and kept (``fresh``: compiled by this call). With the program cache on (the command
+    line) its search and judgement are saved programs, loaded without tracing; else the two jitted
+    programs compiled ahead of time. Python: not traceable (call :func:`solve_batch` under a trace)."""
+    settings = for_problem(problem, solver, settings)
+    args = (problem, weights, keys)
+    cache_key = (_signature(args), mode, solver, settings)
+    compiled = _COMPILED.get(cache_key)
+    if compiled is not None:
+        return compiled, False
+    compiled = _COMPILED[cache_key] = _compiled_solve(args, mode, solver, settings)
+    return compiled, True
 
 
 def _judge_specs(problem, mode: str, batch: int):

@@ -16,8 +16,17 @@ from typing import Any
 import jax
 import numpy as np
 
+from camjax import runtime
 from camjax.family import weights_of
-from camjax.solvers.base import SEARCH_CHUNK, Settings, Solution, family_of, solve_batch, weighting_keys
+from camjax.solvers.base import (
+    SEARCH_CHUNK,
+    Settings,
+    Solution,
+    compiled_batch,
+    family_of,
+    solve_batch,
+    weighting_keys,
+)
 from camjax.solvers.base import solve as solve_weights
 from camjax.solvers.registry import DEFAULT_SOLVER, MODES, SOLVERS, check_choice, check_weights
 
@@ -136,8 +145,12 @@ def sweep(problem, alphas, gammas, *, mode: str = "global", solver: str = DEFAUL
         weights = weights_of(a[idx], g[idx], dtype)
         # weighting i's key is fold_in(key(seed), i) whatever its chunk (one program for every
         # chunk; a padded lane's key is its own index's, dropped with the lane)
-        parts.append((solve_batch(problem, weights, weighting_keys(seed, chunk, lo), mode, solver, settings),
-                      hi - lo))
+        keys = weighting_keys(seed, chunk, lo)
+        if runtime.program_cache_on():  # the command line: the chunk's saved programs, no tracing
+            run = compiled_batch(problem, weights, keys, mode=mode, solver=solver, settings=settings)[0]
+            parts.append((run(problem, weights, keys), hi - lo))
+        else:
+            parts.append((solve_batch(problem, weights, keys, mode, solver, settings), hi - lo))
         if c:  # the chunk before done (this one already dispatched): the bar counts finished chunks
             jax.block_until_ready(parts[-2][0])
     results = jax.tree.map(lambda *xs: np.concatenate(xs, axis=0),
