@@ -10,7 +10,8 @@ command runs once untimed first so that the compilation cache is warm; ``cold`` 
 the child) is reported beside the wall time (``cli.<name>_cpu_s``): on a shared machine the wall
 time also measures the other processes.
 
-One function per command (:func:`dynamics`, :func:`design`, :func:`laws`); add another the same way.
+One function per command (:func:`dynamics`, :func:`design`, :func:`laws`, :func:`sweep`); add another
+the same way.
 """
 
 from __future__ import annotations
@@ -110,6 +111,20 @@ def laws(runs: int, reference: dict) -> dict:
             "cli.laws_cpu_over_import": r["cpu_s"] / reference["cli.import_jax_cpu_s"]}
 
 
+SWEEP_ARGS = ["--alpha", "0.1,1,10", "--gamma", "1,2"]  # 6 weightings: one chunk of the CPU's 10
+
+
+def sweep(runs: int, reference: dict) -> dict:
+    """``camjax sweep`` of the default scene, 6 weightings (:data:`SWEEP_ARGS`), warm (its programs
+    saved and compiled by the untimed first run)."""
+    with tempfile.TemporaryDirectory(prefix="camjax-cli-timing-") as tmp:
+        r = _median_runs([sys.executable, "-m", "camjax.cli", "sweep", *SWEEP_ARGS, "--out",
+                          str(Path(tmp) / "out")], runs)
+    return {"cli.sweep_s": r["wall_s"], "cli.sweep_walls_s": r["walls_s"], "cli.sweep_cpu_s": r["cpu_s"],
+            "cli.sweep_over_import": r["wall_s"] / reference["cli.import_jax_s"],
+            "cli.sweep_cpu_over_import": r["cpu_s"] / reference["cli.import_jax_cpu_s"]}
+
+
 def _builtin_scenes() -> list[str]:
     return sorted(p.stem for p in (ROOT / "camjax" / "scenes").glob("*.toml"))
 
@@ -145,7 +160,7 @@ def cold(runs: int, reference: dict, scenes: list[str] | None = None) -> dict:
     return out
 
 
-COMMANDS = {"dynamics": dynamics, "design": design, "laws": laws, "cold": cold}
+COMMANDS = {"dynamics": dynamics, "design": design, "laws": laws, "sweep": sweep, "cold": cold}
 
 
 def main(argv: list[str] | None = None) -> int:
