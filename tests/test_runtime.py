@@ -187,6 +187,10 @@ def test_cli_with_saved_programs_writes_what_it_writes_without(argv, name, entry
         return data
 
     programs = tmp_path / "programs"
+
+    def saved_programs():  # file name -> modification time of every saved program
+        return {path.name: path.stat().st_mtime_ns for path in programs.glob(f"*{runtime.PROGRAM_SUFFIX}")}
+
     monkeypatch.setenv("CAMJAX_PROGRAM_CACHE", "0")
     assert cli.main([*argv, "--out", str(tmp_path / "off")]) == 0
     before = runtime._PROGRAM_DIR[0]
@@ -194,13 +198,13 @@ def test_cli_with_saved_programs_writes_what_it_writes_without(argv, name, entry
     try:
         base._COMPILED.clear()  # the off run's programs are plain jax.jit ones
         assert cli.main([*argv, "--out", str(tmp_path / "cold")]) == 0
-        saved = {path.name: path.stat().st_mtime_ns for path in programs.glob(f"*{runtime.PROGRAM_SUFFIX}")}
+        saved = saved_programs()
         assert saved
-        assert set(entry_points) <= {name.split("-")[0] for name in saved}, sorted(saved)
+        assert set(entry_points) <= {file.split("-")[0] for file in saved}, sorted(saved)
         runtime._LOADED.clear()  # as a fresh process: read the saved programs back
         base._COMPILED.clear()
         assert cli.main([*argv, "--out", str(tmp_path / "warm")]) == 0
-        assert {path.name: path.stat().st_mtime_ns for path in programs.glob(f"*{runtime.PROGRAM_SUFFIX}")} == saved
+        assert saved_programs() == saved  # nothing exported again
     finally:
         runtime._PROGRAM_DIR[0] = before
         runtime._LOADED.clear()
