@@ -14,7 +14,6 @@ here, the convex-radius margin rho - rho_min, named ``curvature`` in what the kn
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, replace
 
 import jax.numpy as jnp
@@ -94,9 +93,9 @@ class KnifeEdge(Roller):
     def design_solution(self, scene, arrays, result, problem) -> DesignSolution:
         """A knife-edge design's figures: the smallest R_b its offset admits and the limit there."""
         f, t = scene.follower, np.asarray(arrays.theta_deg)
-        sizing = knife_geo.knife_edge_min_base_radius(arrays.kin, result["offset_mm"],
-                                                      math.radians(f.max_pressure_angle_deg),
-                                                      f.min_curvature_radius_mm, scene.motion.rotation)
+        # knife_geo.knife_edge_min_base_radius through the roller's compiled program (R_f = 0), the
+        # one min_base_radius ran: evaluated operation by operation it compiled ~40 small programs
+        sizing = self.sampled_sizing(scene, arrays, 0.0, result["offset_mm"])
         return DesignSolution(result, None, _f(sizing.prime_radius_mm), _f(t[int(sizing.index)]),
                               "curvature" if bool(sizing.undercut_binds) else "pressure_angle", None,
                               f.min_curvature_radius_mm)

@@ -195,11 +195,17 @@ class Roller(TranslatingFollower):
             return first
         return self._second_min_base_radius(scene, arrays, first)
 
+    def sampled_sizing(self, scene, arrays, roller_radius_mm, offset_mm) -> roller_geo.RollerSizing:
+        """The smallest prime radius on the samples (:func:`camjax.followers.roller.geometry.
+        roller_min_prime_radius`) for roller radius and offset (mm), the scene's limits and rotation:
+        one compiled (and saved) program for every call, the design's check included."""
+        f = scene.follower
+        return _grid_sizing(arrays.kin, roller_radius_mm, offset_mm, math.radians(f.max_pressure_angle_deg),
+                            f.min_curvature_radius_mm, scene.motion.rotation)
+
     def _first_min_base_radius(self, scene, arrays) -> MinBaseRadius:
         f, t = scene.follower, np.asarray(arrays.theta_deg)
-        sizing = _grid_sizing(arrays.kin, f.roller_radius_mm, f.offset_mm,
-                              math.radians(f.max_pressure_angle_deg), f.min_curvature_radius_mm,
-                              scene.motion.rotation)
+        sizing = self.sampled_sizing(scene, arrays, f.roller_radius_mm, f.offset_mm)
         rp = _f(sizing.prime_radius_mm)
         if arrays.model is not None:
             # exact: the pressure angle's closed form at its refined max (>= the samples' max) and
@@ -240,8 +246,7 @@ class Roller(TranslatingFollower):
         rf, e = result["roller_radius_mm"], result["offset_mm"]
         drawn = self.drawn_follower(scene, result)
         curves = self.curves(scene, arrays, result["base_radius_mm"], drawn)
-        sizing = _grid_sizing(arrays.kin, rf, e, math.radians(f.max_pressure_angle_deg),
-                              f.min_curvature_radius_mm, scene.motion.rotation)
+        sizing = self.sampled_sizing(scene, arrays, rf, e)
         peak_stress = None if curves.stress_MPa is None else _f(np.max(curves.stress_MPa))
         rp, deg, undercut = _f(sizing.prime_radius_mm), _f(t[int(sizing.index)]), bool(sizing.undercut_binds)
         if arrays.model is not None:  # exact, as min_base_radius
