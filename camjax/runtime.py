@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import threading
 from pathlib import Path
 from typing import Any, NamedTuple
 
@@ -117,16 +118,16 @@ def compiling_ahead() -> bool:
 def ahead(fn):
     """Run ``fn()`` in a thread of its own while the ``with`` body runs, for the programs it
     compiles: its result and any exception it raises are dropped, and the body's end waits for it
-    (a program both compile is then compiled once). Nothing happens when compiling ahead is off.
+    (a program both compile is then compiled once). Nothing happens when compiling ahead is off,
+    when ``fn`` is None, or inside a thread that runs ahead already (one such thread at a time:
+    the machines the command line runs on have few cores).
 
     ``fn`` must be a pure computation (no output, no warnings): it runs on provisional inputs.
     If the body raises, the thread is left to end on its own (a daemon; :func:`computing` counts it).
     """
-    if not _AHEAD[0]:
+    if not _AHEAD[0] or fn is None or threading.current_thread().name == AHEAD_THREAD:
         yield
         return
-    import threading
-
     done = threading.Event()
 
     def work():
@@ -159,8 +160,6 @@ def interruptible(fn, *args, **kwargs):
     shuts down under a running computation). Exceptions of ``fn`` are re-raised here. Called from
     any other thread, ``fn`` simply runs.
     """
-    import threading
-
     if threading.current_thread() is not threading.main_thread():
         return fn(*args, **kwargs)
     box: dict = {}
@@ -229,6 +228,8 @@ PROGRAM_FORMAT = 3  # layout of a saved program's file (and of its module text);
 _PROGRAM_DIR: list = [None]  # folder of the program cache; None: off (the library default)
 _VERIFY: list = [False]  # trace every program read from the folder and compare (tests)
 _LOADED: dict = {}  # key -> _Entry, loaded or exported in this process
+_KEY_LOCKS: dict = {}  # key -> threading.Lock held while its entry is made
+_KEY_LOCKS_LOCK = threading.Lock()
 _UNEXPORTABLE: dict = {}  # qualified name -> why its export failed here: called directly from then on
 PROGRAM_SUFFIX = ".jaxprog"
 # JAX options that cannot change a trace (where compiled code is kept, what is logged or dumped):
@@ -540,12 +541,25 @@ def _program(folder: Path, name: str, fn, static: dict, dynamic: dict) -> _Entry
     exported now and saved there. In verify mode a program read from ``folder`` is traced again
     and compared before it runs; one this process holds already was traced or compared here (as
     ``jax.jit`` reuses its own trace within a process) and runs as it is."""
+    key = program_key(name, static, dynamic)
+    with _key_lock(key):  # a program asked for by two threads at once (:func:`ahead`) is made once
+        entry = _LOADED.get(key)
+        if entry is None:
+            entry = _LOADED[key] = _made(folder, name, key, fn, static, dynamic)
+    return entry
+
+
+def _key_lock(key: str) -> threading.Lock:
+    """The lock of one program key (created on first use)."""
+    with _KEY_LOCKS_LOCK:
+        return _KEY_LOCKS.setdefault(key, threading.Lock())
+
+
+def _made(folder: Path, name: str, key: str, fn, static: dict, dynamic: dict) -> _Entry:
+    """:func:`_program`'s entry for ``key``, read from ``folder`` (verified in verify mode) or
+    exported now and saved there, and compiled."""
     import jax
 
-    key = program_key(name, static, dynamic)
-    entry = _LOADED.get(key)
-    if entry is not None:
-        return entry
     path = folder / f"{name}-{key[:40]}{PROGRAM_SUFFIX}"
     saved = _read(path, key)
     if saved is None:  # traced just now: nothing to verify
@@ -558,7 +572,6 @@ def _program(folder: Path, name: str, fn, static: dict, dynamic: dict) -> _Entry
             _verify(name, key, fn, static, dynamic, exported, module)
         arrays = [jax.random.key_data(x) if _is_key(x) else x for x in jax.tree.leaves(dynamic)]
         entry = _Entry(_compile(exported, arrays), jax.tree.structure(skeleton))
-    _LOADED[key] = entry
     return entry
 
 

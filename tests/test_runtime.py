@@ -255,6 +255,100 @@ def test_compiling_ahead_draws_the_same_design(tmp_path, monkeypatch, scene):
     assert not diff, diff[:10]
 
 
+@pytest.mark.slow
+@pytest.mark.parametrize("scene", ["thesis-bench", "constant-velocity"])
+def test_without_a_design_the_drawing_compiles_beside_the_sizing(tmp_path, monkeypatch, scene):
+    """A scene without [design]: the drawing at a provisional base radius runs in a second thread
+    while the smallest cam is sized (runtime.ahead), then at the radius drawn: the same result.json,
+    number for number, as without. A rocker and a translating follower."""
+    import json
+    import threading
+
+    from camjax import cli, followers
+    from camjax.followers._rocking import RockingFollower
+    from camjax.followers._translating import TranslatingFollower
+    from camjax.scene import load_scene
+    from validation.compare_results import differences
+
+    assert load_scene(scene).design is None
+    family = RockingFollower if followers.get(load_scene(scene).follower.type).rocking else TranslatingFollower
+    threads = []
+    at_radius = family._at_radius
+
+    def spy(self, *args, **kwargs):
+        threads.append(threading.current_thread().name)
+        return at_radius(self, *args, **kwargs)
+
+    monkeypatch.setattr(family, "_at_radius", spy)
+    results = {}
+    try:
+        for setting in ("1", "0"):
+            monkeypatch.setenv("CAMJAX_COMPILE_AHEAD", setting)
+            threads.clear()
+            assert cli.main(["design", scene, "--out", str(tmp_path / setting), "--dpi", "30"]) == 0
+            results[setting] = (json.loads((tmp_path / setting / "result.json").read_text()), sorted(threads))
+    finally:
+        runtime._AHEAD[0] = False
+    assert results["1"][1] == sorted([runtime.AHEAD_THREAD, runtime.COMPUTE_THREAD])  # provisional, drawn
+    assert results["0"][1] == [runtime.COMPUTE_THREAD]
+    diff = differences(results["1"][0], results["0"][0],
+                       ignore=frozenset({"seconds", "compile_s", "run_s", "timings", "elapsed_s"}))
+    assert not diff, diff[:10]
+
+
+def test_ahead_of_nothing_or_inside_ahead_runs_nothing():
+    """One thread runs ahead at a time: an ``ahead`` inside one (or of None) starts none."""
+    ran = []
+
+    def inner():
+        ran.append("inner")
+
+    def outer():
+        with runtime.ahead(inner):
+            ran.append("outer body")
+
+    before = runtime._AHEAD[0]
+    runtime._AHEAD[0] = True
+    try:
+        with runtime.ahead(outer):
+            pass
+        with runtime.ahead(None):
+            ran.append("body")
+    finally:
+        runtime._AHEAD[0] = before
+    assert ran == ["outer body", "body"]
+
+
+def test_two_threads_asking_for_one_program_make_it_once(cache, monkeypatch):
+    """The drawing compiled ahead and the sizing may ask for one saved program at once (a roller's
+    refined extrema): it is exported (and compiled) once, and both get its result."""
+    import threading
+    import time
+
+    exports = []
+    export = runtime._export
+
+    def slow_export(*args, **kwargs):
+        exports.append(threading.current_thread().name)
+        time.sleep(0.3)  # the other thread asks meanwhile
+        return export(*args, **kwargs)
+
+    monkeypatch.setattr(runtime, "_export", slow_export)
+    results = {}
+
+    def ask(i):
+        results[i] = model(*_args(), power=4)
+
+    threads = [threading.Thread(target=ask, args=(i,)) for i in range(2)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert len(exports) == 1, exports
+    _same(results[0], results[1])
+    _same(results[0], jax.jit(_model, static_argnames="power")(*_args(), power=4))
+
+
 # ------------------------------------------------------------------ what the key must hold
 
 LEAK = {"power": 2}  # a module global read while tracing: what an entry point must never do

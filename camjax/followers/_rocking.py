@@ -46,6 +46,9 @@ from camjax.results import Extremes, GeometryViolation
 from camjax.scene.reader import DEFAULT, TableReader, build
 
 DRAWING_MARGIN_MM = 1.0  # drawn at the smallest admissible base radius + this, rounded up
+# Without a [design], the drawing's programs (the base radius is data) compile beside the sizing's,
+# run at this base radius (mm) before the smallest is known: any radius compiles them.
+PROVISIONAL_RADIUS_MM = 50.0
 TRAIN_KEYS = ("inertia_kg_m2", "spring_N_m_per_rad", "preload_rad", "damping_N_m_s_per_rad")
 
 
@@ -482,7 +485,7 @@ class RockingFollower(Follower):
         """The run's sizing, drawing radius, curves and violations for a solved ``design`` (the
         solver's JSON), or None: the scene's follower, drawn at ``base_radius_mm`` or its smallest
         cam + 1 mm."""
-        kin, w, drawn = arrays.kin, arrays.cam_speed_rad_s, scene
+        kin, drawn = arrays.kin, scene
         program = None if arrays.model is None else arrays.model.program
         if design is not None:
             # the cam is sized and drawn with the design's pivot, arm (or face) and roller
@@ -496,9 +499,16 @@ class RockingFollower(Follower):
             else:
                 radius, source = self.drawing_radius(drawn, kin, sizing, base_radius_mm)
         else:
-            sizing = self.sizing(scene, kin, program)
+            # the drawing's programs compiled beside the sizing's (:func:`camjax.runtime.ahead`)
+            with runtime.ahead(lambda: self._at_radius(scene, arrays, PROVISIONAL_RADIUS_MM)):
+                sizing = self.sizing(scene, kin, program)
             radius, source = self.drawing_radius(scene, kin, sizing, base_radius_mm)
-        curves = self.evaluate(drawn, kin, w, radius)
-        extremes = self.curve_extremes(drawn, arrays, None, radius)
+        curves, extremes = self._at_radius(drawn, arrays, radius)
         return RockerRun(sizing, radius, source, curves, arrays, design,
                          tuple(rocker_violations(curves, scene, extremes)), extremes)
+
+    def _at_radius(self, drawn, arrays: SceneArrays, radius: float):
+        """(curves, extremes) of the cam of the scene ``drawn`` (its follower the one the cam is
+        drawn with) at base radius ``radius`` (mm)."""
+        return (self.evaluate(drawn, arrays.kin, arrays.cam_speed_rad_s, radius),
+                self.curve_extremes(drawn, arrays, None, radius))

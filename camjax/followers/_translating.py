@@ -38,6 +38,9 @@ from camjax.results import Extremes, GeometryViolation, MinBaseRadius
 from camjax.scene.reader import DEFAULT, TableReader, build
 
 DRAWING_MARGIN_MM = 1.0  # without a [design], draw at the smallest admissible R_b + this, rounded up
+# Without a [design], the drawing's programs (the base radius is data) compile beside the smallest
+# cam's, run at this base radius (mm) before the smallest is known: any radius compiles them.
+PROVISIONAL_RADIUS_MM = 50.0
 TRAIN_KEYS = ("mass_kg", "spring_N_per_m", "preload_mm", "damping_Ns_per_m", "gravity_m_s2")
 
 
@@ -365,15 +368,24 @@ class TranslatingFollower(Follower):
         (or None: the scene's follower, drawn at ``base_radius_mm`` or its smallest cam + 1 mm)."""
         result = design.result if design is not None else {}
         drawn = self.drawn_follower(scene, result)
-        # the smallest cam for the follower the cam is drawn with (a design's dimensions)
-        minimum = self.min_base_radius(scene if drawn is scene.follower else replace(scene, follower=drawn), arrays)
+        # the smallest cam for the follower the cam is drawn with (a design's dimensions); without a
+        # design, the drawing's programs compiled beside it (:func:`camjax.runtime.ahead`)
+        sized = scene if drawn is scene.follower else replace(scene, follower=drawn)
+        with runtime.ahead(None if design is not None else
+                           lambda: self._at_radius(scene, arrays, drawn, result, PROVISIONAL_RADIUS_MM)):
+            minimum = self.min_base_radius(sized, arrays)
         radius, source = drawing_base_radius(design, minimum.radius_mm, base_radius_mm)
-        extremes = curve_extremes(scene, arrays, curve_names(scene, arrays), radius, follower=drawn)
-        width = self.design_face_width(result, extremes)
-        curves = self.curves(scene, arrays, radius, drawn, width)
+        extremes, curves = self._at_radius(scene, arrays, drawn, result, radius)
         return DesignRun(arrays, minimum, design, radius, source, curves,
                          tuple(geometry_violations(curves, scene.follower.min_curvature_radius_mm, extremes)),
                          extremes)
+
+    def _at_radius(self, scene, arrays: SceneArrays, drawn, result: dict, radius: float):
+        """(extremes, curves) of the cam drawn at base radius ``radius`` (mm) with the follower
+        ``drawn`` and a design's ``result`` (its JSON; {} without one)."""
+        extremes = curve_extremes(scene, arrays, curve_names(scene, arrays), radius, follower=drawn)
+        width = self.design_face_width(result, extremes)
+        return extremes, self.curves(scene, arrays, radius, drawn, width)
 
 
 @functools.lru_cache(maxsize=32)
