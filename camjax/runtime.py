@@ -118,9 +118,9 @@ def compiling_ahead() -> bool:
 def ahead(fn):
     """Run ``fn()`` in a thread of its own while the ``with`` body runs, for the programs it
     compiles: its result and any exception it raises are dropped, and the body's end waits for it
-    (a program both compile is then compiled once). Nothing happens when compiling ahead is off,
-    when ``fn`` is None, or inside a thread that runs ahead already (one such thread at a time:
-    the machines the command line runs on have few cores).
+    (a program both compile is then compiled once: :func:`program_cache`'s lock per key). Nothing
+    happens when compiling ahead is off, when ``fn`` is None, or inside a thread that runs ahead
+    itself (what it runs is ahead of the body already; the machines have few cores).
 
     ``fn`` must be a pure computation (no output, no warnings): it runs on provisional inputs.
     If the body raises, the thread is left to end on its own (a daemon; :func:`computing` counts it).

@@ -297,7 +297,7 @@ def test_without_a_design_the_drawing_compiles_beside_the_sizing(tmp_path, monke
 
 
 def test_ahead_of_nothing_or_inside_ahead_runs_nothing():
-    """One thread runs ahead at a time: an ``ahead`` inside one (or of None) starts none."""
+    """An ``ahead`` inside a thread that runs ahead (or of None) starts no thread of its own."""
     ran = []
 
     def inner():
