@@ -125,7 +125,9 @@ class CurvedFace(TranslatingFollower):
                                     scene.motion.rotation)
         angle = "face_travel" if bool(face) else "pressure_angle"
         if arrays.model is not None:  # exact: the pressure angle's and the undercut's limits refined
-            need = curve_extremes(scene, arrays, (PRESSURE_NEED,), follower=follower)[PRESSURE_NEED]
+            def need():
+                return curve_extremes(scene, arrays, (PRESSURE_NEED,), follower=follower)[PRESSURE_NEED]
+
             rp, deg, undercut = exact_prime_radius(arrays, sizing.prime_radius_mm, need, f.face_radius_mm,
                                                    f.offset_mm, f.min_curvature_radius_mm,
                                                    scene.motion.rotation)

@@ -51,24 +51,28 @@ _grid_sizing = runtime.program_cache(roller_geo.roller_min_prime_radius, static_
 def exact_prime_radius(arrays, grid_prime_radius_mm, pressure_need, roller_radius_mm, offset_mm,
                        min_curvature_radius_mm, rotation) -> tuple[float, float, bool]:
     """The smallest prime radius with the pressure angle and the undercut held at every cam angle
-    (exact extrema): the larger of the pressure angle's (closed form at the refined max of
-    ``pressure_need``, an :class:`camjax.results.Extremes`) and the undercut's, the latter moved up
-    from the grid's ``grid_prime_radius_mm`` to the root of the refined undercut peak
-    (:func:`camjax.followers._sizing.exact_boundary`). Returns (R_p mm, angle deg, undercut binds)."""
+    (exact extrema): the larger of the pressure angle's (closed form at the refined max of the
+    pressure-angle need, the :class:`camjax.results.Extremes` that ``pressure_need()`` returns) and
+    the undercut's, the latter moved up from the grid's ``grid_prime_radius_mm`` to the root of the
+    refined undercut peak (:func:`camjax.followers._sizing.exact_boundary`). Returns (R_p mm, angle
+    deg, undercut binds).
+
+    The need is asked for after the root: its program is the drawing's refined extrema, which a
+    cold command compiles meanwhile in the thread ahead (:func:`camjax.runtime.ahead`)."""
     from camjax.followers import _sizing
 
     dtype = arrays.kin.s.dtype
-    rp_phi = math.hypot(offset_mm, max(pressure_need.max, 0.0))
     x0 = float(grid_prime_radius_mm)
     params = (jnp.asarray(rotation_sign(rotation) * offset_mm, dtype),
               jnp.asarray(roller_radius_mm + min_curvature_radius_mm, dtype))
     b = _sizing.exact_boundary(arrays.model.program, arrays.kin, jnp.asarray(x0, dtype),
                                jnp.asarray(1e6 * (1.0 + x0), dtype), params,
                                limits=roller_geo.undercut_limits)
-    rp_uc = _f(b.x)
+    rp_uc, need = _f(b.x), pressure_need()
+    rp_phi = math.hypot(offset_mm, max(need.max, 0.0))
     if rp_uc > rp_phi:
         return rp_uc, _f(b.angle_deg), True
-    return rp_phi, pressure_need.max_deg, False
+    return rp_phi, need.max_deg, False
 
 
 @partial(runtime.program_cache, static_argnames=("kind",))
@@ -210,7 +214,9 @@ class Roller(TranslatingFollower):
         if arrays.model is not None:
             # exact: the pressure angle's closed form at its refined max (>= the samples' max) and
             # the undercut's root of its refined peak, the larger of the two
-            need = curve_extremes(scene, arrays, (PRESSURE_NEED,))[PRESSURE_NEED]
+            def need():
+                return curve_extremes(scene, arrays, (PRESSURE_NEED,))[PRESSURE_NEED]
+
             rp, deg, undercut = exact_prime_radius(arrays, rp, need, f.roller_radius_mm, f.offset_mm,
                                                    f.min_curvature_radius_mm, scene.motion.rotation)
             binding = "undercut" if undercut else "pressure_angle"
@@ -250,7 +256,9 @@ class Roller(TranslatingFollower):
         peak_stress = None if curves.stress_MPa is None else _f(np.max(curves.stress_MPa))
         rp, deg, undercut = _f(sizing.prime_radius_mm), _f(t[int(sizing.index)]), bool(sizing.undercut_binds)
         if arrays.model is not None:  # exact, as min_base_radius
-            need = curve_extremes(scene, arrays, (PRESSURE_NEED,), follower=drawn)[PRESSURE_NEED]
+            def need():
+                return curve_extremes(scene, arrays, (PRESSURE_NEED,), follower=drawn)[PRESSURE_NEED]
+
             rp, deg, undercut = exact_prime_radius(arrays, rp, need, rf, e, f.min_curvature_radius_mm,
                                                    scene.motion.rotation)
         return DesignSolution(result, peak_stress, rp - rf, deg, "undercut" if undercut else "pressure_angle",
