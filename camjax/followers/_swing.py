@@ -47,6 +47,28 @@ def arm_angle(psi0, kin: Kinematics) -> jax.Array:
     return psi0 + kin.s
 
 
+class ArmTrig(NamedTuple):
+    """cos psi and sin psi of the arm angle at every sample (shape (n,) each)."""
+
+    c: jax.Array  # cos psi
+    sn: jax.Array  # sin psi
+
+
+def arm_trig(cos_psi0, sin_psi0, s_rad) -> ArmTrig:
+    """cos and sin of psi = psi0 + s at every sample from psi0's (scalars) and the swing s (rad),
+    by the angle-addition formulas. A design problem's per-angle terms then take no trigonometric
+    function of the design: cos s and sin s are the scene's data. The oscillating roller's
+    100-weighting sweep with the interior point (benchmarks.follower_sweep's problem, 2 cores) took
+    0.12-0.16 s instead of 0.34-0.36 s with cos(psi0 + s) of the design."""
+    cs, ss = jnp.cos(s_rad), jnp.sin(s_rad)
+    return ArmTrig(cos_psi0 * cs - sin_psi0 * ss, sin_psi0 * cs + cos_psi0 * ss)
+
+
+def of_angle(psi) -> ArmTrig:
+    """:class:`ArmTrig` of the arm angles ``psi`` (rad)."""
+    return ArmTrig(jnp.cos(psi), jnp.sin(psi))
+
+
 
 def first_admissible(bad, lo, hi, samples: int, scan: int = SIZING_SCAN,
                       bisections: int = SIZING_BISECTIONS):

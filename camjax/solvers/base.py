@@ -50,7 +50,11 @@ flat-face one is :mod:`camjax.followers.flat.problem`). It provides:
   problems (the interior point then takes it as one row, :func:`camjax.solvers.epigraph.smooth_form`,
   and needs no ``per_angle``; the co-design's joint program, :mod:`camjax.codesign.joint`); and
   ``EXCHANGE_ANGLES = k``: the angles of each of the interior point's exchange rounds where the
-  default's 16 take more rounds (:func:`camjax.solvers.exchange.exchange_angles`).
+  default's 16 take more rounds (:func:`camjax.solvers.exchange.exchange_angles`); and
+  ``angle_stress(problem, design) -> (n,)``: the stress (MPa) per angle whose max is the
+  objective's peak stress, where ``objective`` is ``alpha size_term + gamma peak / sigma_max``
+  (the interior point's epigraph rows then come from the grid at once, sharing the constraint
+  rows' terms, instead of from the n one-angle problems: :func:`camjax.solvers.epigraph.epigraph_form`).
 
 Weights (:class:`camjax.followers.flat.Weights`: alpha for size, gamma for stress) are shared by every
 family, and so are the pieces of the protocol that do not depend on a family's physics (the box,

@@ -141,8 +141,8 @@ def _travel(x: roller.CircleTerms, design: Design) -> jax.Array:
 
 
 # the roller's at R_f = R_c: phi (rad) and sigma (MPa) per angle, and max_theta sigma (MPa)
-pressure_angle, stress, peak_stress = family.through_twin(_as_roller, roller.pressure_angle, roller.stress,
-                                                          roller.peak_stress)
+pressure_angle, stress, peak_stress, angle_stress = family.through_twin(
+    _as_roller, roller.pressure_angle, roller.stress, roller.peak_stress, roller.angle_stress)
 
 
 def face_width_need(problem: Problem, design: Design) -> jax.Array:

@@ -38,7 +38,7 @@ import jax
 import jax.numpy as jnp
 
 from camjax.followers._pitch import DEFAULT_ROTATION
-from camjax.followers._swing import arm_angle, relative_rate
+from camjax.followers._swing import ArmTrig, arm_angle, of_angle, relative_rate
 from camjax.followers.oscillating_roller import geometry as rocker_roller_geo
 from camjax.followers.roller import geometry as roller_geo
 from camjax.numerics import RHO_FLOOR_MM, floor_positive, safe_sqrt
@@ -59,8 +59,13 @@ class Legs(NamedTuple):
 def legs(pivot_distance_mm, arm_length_mm, psi, rate) -> Legs:
     """(d sin psi, l Q - d cos psi): tan phi = along / across, |T|^2 = across^2 + along^2
     (:func:`camjax.followers.oscillating_roller.geometry.oscillating_roller_pressure_angle`)."""
+    return arm_legs(pivot_distance_mm, arm_length_mm, of_angle(psi), rate)
+
+
+def arm_legs(pivot_distance_mm, arm_length_mm, arm: ArmTrig, rate) -> Legs:
+    """:func:`legs` in cos psi and sin psi (``arm``)."""
     d, l = pivot_distance_mm, arm_length_mm
-    return Legs(d * jnp.sin(psi), l * rate - d * jnp.cos(psi))
+    return Legs(d * arm.sn, l * rate - d * arm.c)
 
 
 def face_travel_of(g: Legs, face_radius_mm) -> jax.Array:

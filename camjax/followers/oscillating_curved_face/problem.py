@@ -159,10 +159,10 @@ def _terms(problem: Problem, design: Design) -> _Terms:
     rotation as data: it enters through Q = 1 + sigma s' only."""
     d, l = design.pivot_distance_mm, design.arm_length_mm
     rp = design.base_radius_mm + design.face_radius_mm
-    psi = rocker_roller_geo.arm_start_angle(rp, d, l) + problem.s_rad
+    arm = rocker_roller_geo.arm_trig_of(rp, d, l, problem.s_rad)
     q = 1.0 + problem.rotation_sign * problem.ds
-    kappa = rocker_roller_geo.swing_pitch_curvature(d, l, psi, q, problem.d2s)
-    return _Terms(curved_geo.legs(d, l, psi, q), kappa,
+    kappa = rocker_roller_geo.arm_pitch_curvature(d, l, arm, q, problem.d2s)
+    return _Terms(curved_geo.arm_legs(d, l, arm, q), kappa,
                   roller_geo.roller_equivalent_radius(kappa, design.face_radius_mm),
                   rocker_roller_geo.oscillating_roller_reach_constraint(rp, d, l))
 
@@ -192,12 +192,21 @@ def stress(problem: Problem, design: Design) -> jax.Array:
     return roller_stress(axial_coefficient(problem, design), phi, x.rho_eq)
 
 
-def peak_stress(problem: Problem, design: Design) -> jax.Array:
-    """max_theta sigma (MPa), shape ()."""
+def _stress_squared(problem: Problem, design: Design) -> jax.Array:
+    """sigma^2 (MPa^2) per angle as C^2 / (cos phi rho_eq), rho_eq floored: finite at an undercut."""
     x = _terms(problem, design)
     coefficient = axial_coefficient(problem, design)
-    ratio = coefficient**2 / (cos_phi(x.legs) * floor_positive(x.rho_eq, RHO_FLOOR_MM))
-    return safe_sqrt(jnp.max(ratio))
+    return coefficient**2 / (cos_phi(x.legs) * floor_positive(x.rho_eq, RHO_FLOOR_MM))
+
+
+def peak_stress(problem: Problem, design: Design) -> jax.Array:
+    """max_theta sigma (MPa), shape (): one root of the largest sigma^2."""
+    return safe_sqrt(jnp.max(_stress_squared(problem, design)))
+
+
+def angle_stress(problem: Problem, design: Design) -> jax.Array:
+    """sigma (MPa) per angle, shape (n,), whose max is :func:`peak_stress` (the epigraph's rows)."""
+    return safe_sqrt(_stress_squared(problem, design))
 
 
 def objective(problem: Problem, weights: Weights, design: Design) -> jax.Array:

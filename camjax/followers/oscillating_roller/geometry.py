@@ -29,7 +29,7 @@ import jax.numpy as jnp
 
 from camjax.followers import _pitch as pitch
 from camjax.followers._pitch import DEFAULT_ROTATION, rotation_sign
-from camjax.followers._swing import arm_angle, first_admissible, relative_rate
+from camjax.followers._swing import ArmTrig, arm_angle, arm_trig, first_admissible, of_angle, relative_rate
 from camjax.numerics import capped_divide, safe_sqrt
 from camjax.program import Kinematics
 
@@ -40,10 +40,23 @@ def arm_start_angle(prime_radius_mm, pivot_distance_mm, arm_length_mm) -> jax.Ar
     Clipped to [0, pi] where the geometry cannot close (|d - l| >= R_p or R_p >= d + l; the scene
     refuses such designs, :func:`oscillating_roller_reach_constraint` measures them).
     """
+    return jnp.arccos(arm_start_cosine(prime_radius_mm, pivot_distance_mm, arm_length_mm))
+
+
+def arm_start_cosine(prime_radius_mm, pivot_distance_mm, arm_length_mm) -> jax.Array:
+    """cos psi0 = (d^2 + l^2 - R_p^2)/(2dl), clipped strictly inside [-1, 1] (as :func:`arm_start_angle`)."""
     d, l = pivot_distance_mm, arm_length_mm
     c = (d**2 + l**2 - prime_radius_mm**2) / (2.0 * d * l)
-    # the clip is strict so that arccos keeps a finite gradient
-    return jnp.arccos(jnp.clip(c, -1.0 + 1e-15, 1.0 - 1e-15))
+    # the clip is strict so that arccos (and sin psi0 = sqrt(1 - c^2)) keeps a finite gradient
+    return jnp.clip(c, -1.0 + 1e-15, 1.0 - 1e-15)
+
+
+def arm_trig_of(prime_radius_mm, pivot_distance_mm, arm_length_mm, s_rad) -> ArmTrig:
+    """cos psi and sin psi at every sample (psi = psi0 + s, psi0 of :func:`arm_start_angle`: in
+    (0, pi), so sin psi0 = sqrt(1 - cos^2 psi0)), without a trigonometric function of the design
+    (:func:`camjax.followers._swing.arm_trig`)."""
+    c0 = arm_start_cosine(prime_radius_mm, pivot_distance_mm, arm_length_mm)
+    return arm_trig(c0, jnp.sqrt(1.0 - c0 * c0), s_rad)
 
 
 def roller_centre(pivot_distance_mm, arm_length_mm, psi) -> tuple[jax.Array, jax.Array]:
@@ -126,8 +139,13 @@ def oscillating_roller_pitch_curvature(pivot_distance_mm, arm_length_mm, psi0, k
 def swing_pitch_curvature(pivot_distance_mm, arm_length_mm, psi, rate, d2s) -> jax.Array:
     """The closed form of :func:`oscillating_roller_pitch_curvature` in the arm angle psi (rad), the
     relative rate Q = 1 + sigma s' and s'' (rad/rad^2): for callers that hold sigma as data."""
+    return arm_pitch_curvature(pivot_distance_mm, arm_length_mm, of_angle(psi), rate, d2s)
+
+
+def arm_pitch_curvature(pivot_distance_mm, arm_length_mm, arm: ArmTrig, rate, d2s) -> jax.Array:
+    """:func:`swing_pitch_curvature` in cos psi and sin psi (``arm``)."""
     d, l, q = pivot_distance_mm, arm_length_mm, rate
-    c, sn = jnp.cos(psi), jnp.sin(psi)
+    c, sn = arm
     num = l**2 * q**3 - d * l * c * q * (q + 1.0) + d**2 - d * l * sn * d2s
     den = (l**2 * q**2 - 2.0 * d * l * c * q + d**2) ** 1.5
     return capped_divide(num, den)

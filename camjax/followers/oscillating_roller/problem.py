@@ -187,15 +187,16 @@ def _geometry(problem: Problem, design: Design) -> _Geometry:
     """Pressure-angle legs, pitch curvature and closure of a design (formulas of geometry.oscillating).
 
     The rotation enters through Q = 1 + sigma s' only; sigma is data here (a rotation string
-    is static in camjax.geometry), so the closed forms are called with Q.
+    is static in camjax.geometry), so the closed forms are called with Q; cos psi and sin psi come
+    from psi0's by angle addition (:func:`camjax.followers._swing.arm_trig`).
     """
     d, l = design.pivot_distance_mm, design.arm_length_mm
     rp = design.base_radius_mm + design.roller_radius_mm
-    psi = rocker_roller_geo.arm_start_angle(rp, d, l) + problem.s_rad
+    arm = rocker_roller_geo.arm_trig_of(rp, d, l, problem.s_rad)
     q = 1.0 + problem.rotation_sign * problem.ds
-    kappa = rocker_roller_geo.swing_pitch_curvature(d, l, psi, q, problem.d2s)
+    kappa = rocker_roller_geo.arm_pitch_curvature(d, l, arm, q, problem.d2s)
     reach = rocker_roller_geo.oscillating_roller_reach_constraint(rp, d, l)
-    return _Geometry(l * q - d * jnp.cos(psi), d * jnp.sin(psi), kappa, reach)
+    return _Geometry(l * q - d * arm.c, d * arm.sn, kappa, reach)
 
 
 def cos_phi(g) -> jax.Array:
@@ -224,12 +225,21 @@ def stress(problem: Problem, design: Design) -> jax.Array:
     return roller_stress(axial_coefficient(problem, design), jnp.arctan2(g.along, g.across), rho_eq)
 
 
-def peak_stress(problem: Problem, design: Design) -> jax.Array:
-    """max_theta sigma (MPa), shape ()."""
+def _stress_squared(problem: Problem, design: Design) -> jax.Array:
+    """sigma^2 (MPa^2) per angle as C^2 / (cos phi rho_eq), rho_eq floored: finite at an undercut."""
     g = _geometry(problem, design)
     rho_eq = roller_geo.roller_equivalent_radius(g.kappa, design.roller_radius_mm)
-    ratio = axial_coefficient(problem, design) ** 2 / (cos_phi(g) * floor_positive(rho_eq, RHO_FLOOR_MM))
-    return safe_sqrt(jnp.max(ratio))
+    return axial_coefficient(problem, design) ** 2 / (cos_phi(g) * floor_positive(rho_eq, RHO_FLOOR_MM))
+
+
+def peak_stress(problem: Problem, design: Design) -> jax.Array:
+    """max_theta sigma (MPa), shape (): one root of the largest sigma^2."""
+    return safe_sqrt(jnp.max(_stress_squared(problem, design)))
+
+
+def angle_stress(problem: Problem, design: Design) -> jax.Array:
+    """sigma (MPa) per angle, shape (n,), whose max is :func:`peak_stress` (the epigraph's rows)."""
+    return safe_sqrt(_stress_squared(problem, design))
 
 
 def objective(problem: Problem, weights: Weights, design: Design) -> jax.Array:

@@ -247,11 +247,20 @@ def stress(problem: Problem, design: Design) -> jax.Array:
     return roller_stress(problem.stress_coefficient, jnp.arctan2(x.u, x.w), x.rho_eq)
 
 
+def _stress_squared(problem: Problem, design: Design) -> jax.Array:
+    """sigma^2 (MPa^2) per angle as C^2 / (cos phi rho_eq), rho_eq floored: finite at an undercut."""
+    x = circle_terms(problem, design)
+    return problem.stress_coefficient**2 * x.inv_cos / floor_positive(x.rho_eq, RHO_FLOOR_MM)
+
+
 def peak_stress(problem: Problem, design: Design) -> jax.Array:
     """max_theta sigma (MPa), shape (), as sqrt(max_theta C^2 / (cos phi rho_eq)): one root."""
-    x = circle_terms(problem, design)
-    ratio = problem.stress_coefficient**2 * x.inv_cos / floor_positive(x.rho_eq, RHO_FLOOR_MM)
-    return safe_sqrt(jnp.max(ratio))
+    return safe_sqrt(jnp.max(_stress_squared(problem, design)))
+
+
+def angle_stress(problem: Problem, design: Design) -> jax.Array:
+    """sigma (MPa) per angle, shape (n,), whose max is :func:`peak_stress` (the epigraph's rows)."""
+    return safe_sqrt(_stress_squared(problem, design))
 
 
 def size_term(problem: Problem, design: Design) -> jax.Array:
