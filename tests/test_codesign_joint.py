@@ -198,3 +198,24 @@ def test_the_search_solver_names_what_runs():
                          "spring", "<spring>")
     assert not joint.takes(spring)
     assert {joint.search_solver(with_solver(spring, name)) for name in expected} == {"gradient"}
+
+
+def test_the_smooth_forms_rows_are_affine_in_t_along_its_t_column(cases):
+    """The interior point takes t's column of the Jacobian from the form (``t_column``) and no
+    second derivative along t (camjax.solvers.newton._derivatives): on the joint program's smooth
+    form, the rows' forward derivative along t is that column, exactly, and the rows at t + 1 are
+    the rows at t plus it (affine), at the start and at an infeasible geometry."""
+    from camjax.solvers import epigraph
+
+    c = cases[0]
+    p = c["problem"]
+    fns = epigraph.epigraph_form(p, p.weights)
+    assert fns.kinds[0] == ("objective", 1)  # the smooth form: one objective row
+    m1 = fns.free.shape[0]
+    along_t = jnp.zeros(m1).at[-1].set(1.0)
+    for z in (jnp.full(m1, 0.3), jnp.full(m1, 0.01)):
+        tangent = jax.jvp(fns.rows, (z,), (along_t,))[1]
+        np.testing.assert_array_equal(np.asarray(tangent), np.asarray(fns.t_column))
+        moved = jax.jit(fns.rows)(z + along_t) - jax.jit(fns.rows)(z)
+        np.testing.assert_allclose(np.asarray(moved), np.asarray(fns.t_column), rtol=0, atol=1e-12)
+        assert float(jax.grad(fns.phi)(z)[-1]) == 1.0

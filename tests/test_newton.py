@@ -368,6 +368,25 @@ def test_forward_derivatives_match_reverse_mode(name):
         np.testing.assert_allclose(np.asarray(got), np.asarray(want), rtol=0, atol=1e-9 * scale, err_msg=what)
 
 
+@pytest.mark.parametrize("name", followers.names())
+def test_the_rows_are_affine_in_t_along_the_forms_t_column(name):
+    """The interior point takes t's column of the Jacobian from the form (``t_column``) and no
+    second derivative along t (newton._derivatives): for each follower type's epigraph form, with
+    the stress weighted and without (gamma = 0: the first objective row alone holds t), the rows'
+    forward derivative along t is that column, exactly, and phi's is 1."""
+    problem = _problem(followers.get(name).example_scene, 12)
+    for w in (weights_of(1.0, 1.0), weights_of(1.0, 0.0)):
+        fns = epigraph.epigraph_form(problem, w)
+        m1 = fns.free.shape[0]
+        along_t = jnp.zeros(m1).at[-1].set(1.0)
+        z = jnp.full(m1, 0.4)
+        tangent = jax.jvp(fns.rows, (z,), (along_t,))[1]
+        slope = jax.jvp(fns.phi, (z,), (along_t,))[1]
+        np.testing.assert_array_equal(np.asarray(tangent), np.asarray(fns.t_column))
+        assert float(slope) == 1.0
+        assert float(-jnp.sum(fns.t_column)) == (12 if float(w.gamma) else 1)
+
+
 @pytest.mark.parametrize("name", [*followers.names(), "groove", "conjugate"])
 def test_take_angles_keeps_every_row_of_its_angles(name):
     """The exchange rounds solve on a subset of the grid (newton.take_angles): at a design away from

@@ -177,34 +177,40 @@ class _Derivatives(NamedTuple):
 def _derivatives(fns: EpigraphForm, z, y, free_variables: int | None = None) -> _Derivatives:
     """The rows, their Jacobian, the objective's gradient and the Hessian of the Lagrangian
     phi + y . c at z, from one forward-over-forward pass: the Hessian is the forward derivative of
-    grad phi + J^T y, J itself a forward pass (m + 1 <= 7 directions each; no reverse pass), and the
-    rows, J and grad phi are its primal values.
+    grad phi + J^T y, J itself a forward pass (no reverse pass), and the rows, J and grad phi are
+    its primal values.
 
-    ``free_variables`` (k < m, static): the derivatives along the k free variables and t only
-    (the columns of a fixed variable are 0, as the step takes them: it moves no fixed variable),
-    (k + 1)^2 second-order directions instead of (m + 1)^2: the oscillating roller's scene, 2 of
-    its 4 variables free, 9 instead of 25."""
+    phi and every row are affine in the epigraph variable t (:class:`EpigraphForm`: t enters as
+    f_i - t and as phi = t + ...), so t's column of J is the form's ``t_column``, its entry of
+    grad phi is 1, and its row and column of the Hessian are 0: the second-order directions are
+    the design variables' only, k^2 instead of (k + 1)^2 (the oscillating roller's sweep, 2 free
+    variables: 4 instead of 9).
+
+    ``free_variables`` (k < m, static): the derivatives along the k free variables only (the
+    columns of a fixed variable are 0, as the step takes them: it moves no fixed variable); None:
+    along every variable."""
     m1 = z.shape[0]
-    if free_variables is None or free_variables + 1 >= m1:
-        basis = None
-        at = z
-    else:  # (m + 1, k + 1): the free variables' and t's unit vectors, picked by the data
-        index = jnp.nonzero(fns.free > 0, size=free_variables + 1, fill_value=m1 - 1)[0]
-        basis = jnp.eye(m1, dtype=z.dtype)[:, index]
-        at = jnp.zeros(free_variables + 1, z.dtype)
+    m = m1 - 1
+    if free_variables is None or free_variables >= m:
+        index = jnp.arange(m)
+    else:  # the free variables' unit vectors, picked by the data (at least one direction)
+        index = jnp.nonzero(fns.free[:m] > 0, size=max(free_variables, 1), fill_value=0)[0]
+    basis = jnp.eye(m1, dtype=z.dtype)[:, index]  # (m + 1, k)
 
     def point(w):
-        return w if basis is None else z + basis @ w
+        return z + basis @ w
 
     def lagrangian_gradient(w):
         c, jac = rows_and_jacobian(fns, w, point)
         grad = jax.jacfwd(lambda v: fns.phi(point(v)))(w)
         return grad + jac.T @ y, (c, jac, grad)
 
-    hess, (c, jac, grad) = jax.jacfwd(lagrangian_gradient, has_aux=True)(at)
-    if basis is not None:  # back to every variable's coordinates
-        jac, grad, hess = jac @ basis.T, grad @ basis.T, basis @ hess @ basis.T
-    return _Derivatives(c, jac, grad, hess)
+    hess, (c, jac, grad) = jax.jacfwd(lagrangian_gradient, has_aux=True)(jnp.zeros(basis.shape[1], z.dtype))
+    along_t = jnp.zeros(m1, z.dtype).at[m].set(1.0)
+    # back to every variable's coordinates, t's column added
+    jac = jac @ basis.T + fns.t_column[:, None] * along_t
+    grad = grad @ basis.T + along_t
+    return _Derivatives(c, jac, grad, basis @ hess @ basis.T)
 
 
 def _start(problem, fns: EpigraphForm, design, settings: NewtonSettings, mu0):
