@@ -368,25 +368,6 @@ def test_forward_derivatives_match_reverse_mode(name):
         np.testing.assert_allclose(np.asarray(got), np.asarray(want), rtol=0, atol=1e-9 * scale, err_msg=what)
 
 
-@pytest.mark.parametrize("name", followers.names())
-def test_the_rows_are_affine_in_t_along_the_forms_t_column(name):
-    """The interior point takes t's column of the Jacobian from the form (``t_column``) and no
-    second derivative along t (newton._derivatives): for each follower type's epigraph form, with
-    the stress weighted and without (gamma = 0: the first objective row alone holds t), the rows'
-    forward derivative along t is that column, exactly, and phi's is 1."""
-    problem = _problem(followers.get(name).example_scene, 12)
-    for w in (weights_of(1.0, 1.0), weights_of(1.0, 0.0)):
-        fns = epigraph.epigraph_form(problem, w)
-        m1 = fns.free.shape[0]
-        along_t = jnp.zeros(m1).at[-1].set(1.0)
-        z = jnp.full(m1, 0.4)
-        tangent = jax.jvp(fns.rows, (z,), (along_t,))[1]
-        slope = jax.jvp(fns.phi, (z,), (along_t,))[1]
-        np.testing.assert_array_equal(np.asarray(tangent), np.asarray(fns.t_column))
-        assert float(slope) == 1.0
-        assert float(-jnp.sum(fns.t_column)) == (12 if float(w.gamma) else 1)
-
-
 @pytest.mark.parametrize("name", [*followers.names(), "groove", "conjugate"])
 def test_take_angles_keeps_every_row_of_its_angles(name):
     """The exchange rounds solve on a subset of the grid (newton.take_angles): at a design away from
@@ -394,7 +375,12 @@ def test_take_angles_keeps_every_row_of_its_angles(name):
     grid's row at the same angle (the same functions of the same grid values: rtol 1e-12), and the
     bound rows are the same. The angles are uneven and out of the grid's order on purpose. Every
     follower type's example scene and the positive drives (whose second contact's coefficient is a
-    grid array inside the closure)."""
+    grid array inside the closure).
+
+    The same forms are affine in t along their ``t_column`` (the interior point takes t's Jacobian
+    column from it and no second derivative along t, newton._derivatives): the rows' forward
+    derivative along t is that column exactly, phi's is 1, on the whole grid and on the subset,
+    with the stress weighted and without (gamma = 0: the first objective row alone holds t)."""
     problem = _problem(followers.get(name).example_scene if name in followers.names() else name)
     w = weights_of(0.3, 0.7)
     n = problem.theta_deg.shape[-1]
@@ -405,9 +391,15 @@ def test_take_angles_keeps_every_row_of_its_angles(name):
         fns = epigraph.epigraph_form(problem, w)
         sub = epigraph.epigraph_form(newton.take_angles(problem, index), w)
         z = jnp.concatenate([0.37 * fns.u_max, jnp.asarray([0.25])])
-        return fns.rows(z), sub.rows(z)
+        along_t = jnp.zeros_like(z).at[-1].set(1.0)
+        slopes = [(jax.jvp(f.rows, (z,), (along_t,))[1], f.t_column, jax.jvp(f.phi, (z,), (along_t,))[1])
+                  for f in (fns, sub, epigraph.epigraph_form(problem, weights_of(1.0, 0.0)))]
+        return fns.rows(z), sub.rows(z), slopes
 
-    full, sub = both(problem, index)
+    full, sub, slopes = both(problem, index)
+    for (tangent, column, slope), holding in zip(slopes, (n, index.shape[0], 1), strict=True):
+        np.testing.assert_array_equal(np.asarray(tangent), np.asarray(column))
+        assert float(slope) == 1.0 and float(-np.sum(np.asarray(column))) == holding
     blocks = len(epigraph.epigraph_form(problem, w).kinds) - 2  # the objective's and each constraint's
     k = index.shape[0]
     full, sub = np.asarray(full), np.asarray(sub)
