@@ -19,7 +19,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from camjax.numerics import finite_float, positive_part
+from camjax.numerics import finite_float, positive_part, safe_sqrt
 
 # What the solvers see of a family (annotations): every family's own NamedTuple types, reached only
 # through the family module (camjax.solvers.base.family_of) and as pytrees.
@@ -153,6 +153,22 @@ def sized_objective(size_term, peak_stress, problem, weights, design) -> jax.Arr
     ``peak_stress(problem, design)`` (MPa), in that order."""
     return weighted_objective(weights, size_term(problem, design), peak_stress(problem, design),
                               problem.sigma_max_MPa)
+
+
+def stress_pair(stress_squared) -> tuple:
+    """(peak_stress, angle_stress) of a family whose stress is the root of ``stress_squared(problem,
+    design) -> (n,)`` (sigma^2 per angle, MPa^2): the peak as one root of the largest (shape ()),
+    and the stress per angle whose max it is (shape (n,): the optional ``angle_stress`` hook from
+    which the interior point's epigraph rows come, :func:`camjax.solvers.epigraph.epigraph_form`)."""
+    def peak_stress(problem, design) -> jax.Array:
+        """max_theta sigma (MPa), shape (): one root of the largest sigma^2."""
+        return safe_sqrt(jnp.max(stress_squared(problem, design)))
+
+    def angle_stress(problem, design) -> jax.Array:
+        """sigma (MPa) per angle, shape (n,), whose max is the peak stress (the epigraph's rows)."""
+        return safe_sqrt(stress_squared(problem, design))
+
+    return peak_stress, angle_stress
 
 
 def condense_at_largest(problem, per_angle_design, size_mm, angle_key: str):

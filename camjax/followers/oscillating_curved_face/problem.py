@@ -66,7 +66,7 @@ from camjax.followers.oscillating_roller import geometry as rocker_roller_geo
 from camjax.followers.oscillating_roller import problem as rocker
 from camjax.followers.oscillating_roller.problem import axial_coefficient, cos_phi
 from camjax.followers.roller import geometry as roller_geo
-from camjax.numerics import RHO_FLOOR_MM, floor_positive, positive_part, safe_sqrt
+from camjax.numerics import RHO_FLOOR_MM, floor_positive, positive_part
 
 CONSTRAINT_NAMES = ("reach", "pressure_angle", "undercut", "face_travel", "stress", "bounds")
 VARIABLES = ("base_radius_mm", "face_radius_mm", "face_width_mm", "pivot_distance_mm", "arm_length_mm")
@@ -199,14 +199,7 @@ def _stress_squared(problem: Problem, design: Design) -> jax.Array:
     return coefficient**2 / (cos_phi(x.legs) * floor_positive(x.rho_eq, RHO_FLOOR_MM))
 
 
-def peak_stress(problem: Problem, design: Design) -> jax.Array:
-    """max_theta sigma (MPa), shape (): one root of the largest sigma^2."""
-    return safe_sqrt(jnp.max(_stress_squared(problem, design)))
-
-
-def angle_stress(problem: Problem, design: Design) -> jax.Array:
-    """sigma (MPa) per angle, shape (n,), whose max is :func:`peak_stress` (the epigraph's rows)."""
-    return safe_sqrt(_stress_squared(problem, design))
+peak_stress, angle_stress = family.stress_pair(_stress_squared)
 
 
 def objective(problem: Problem, weights: Weights, design: Design) -> jax.Array:

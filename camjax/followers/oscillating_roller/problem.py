@@ -232,14 +232,7 @@ def _stress_squared(problem: Problem, design: Design) -> jax.Array:
     return axial_coefficient(problem, design) ** 2 / (cos_phi(g) * floor_positive(rho_eq, RHO_FLOOR_MM))
 
 
-def peak_stress(problem: Problem, design: Design) -> jax.Array:
-    """max_theta sigma (MPa), shape (): one root of the largest sigma^2."""
-    return safe_sqrt(jnp.max(_stress_squared(problem, design)))
-
-
-def angle_stress(problem: Problem, design: Design) -> jax.Array:
-    """sigma (MPa) per angle, shape (n,), whose max is :func:`peak_stress` (the epigraph's rows)."""
-    return safe_sqrt(_stress_squared(problem, design))
+peak_stress, angle_stress = family.stress_pair(_stress_squared)
 
 
 def objective(problem: Problem, weights: Weights, design: Design) -> jax.Array:

@@ -253,14 +253,7 @@ def _stress_squared(problem: Problem, design: Design) -> jax.Array:
     return problem.stress_coefficient**2 * x.inv_cos / floor_positive(x.rho_eq, RHO_FLOOR_MM)
 
 
-def peak_stress(problem: Problem, design: Design) -> jax.Array:
-    """max_theta sigma (MPa), shape (), as sqrt(max_theta C^2 / (cos phi rho_eq)): one root."""
-    return safe_sqrt(jnp.max(_stress_squared(problem, design)))
-
-
-def angle_stress(problem: Problem, design: Design) -> jax.Array:
-    """sigma (MPa) per angle, shape (n,), whose max is :func:`peak_stress` (the epigraph's rows)."""
-    return safe_sqrt(_stress_squared(problem, design))
+peak_stress, angle_stress = family.stress_pair(_stress_squared)
 
 
 def size_term(problem: Problem, design: Design) -> jax.Array:
