@@ -222,3 +222,27 @@ def test_twin_type_keeps_the_twins_fields_and_defaults_and_is_its_own_type():
     assert jax.tree.leaves(T(1.0, 2.0, 3.0)) == [1.0, 2.0, 3.0, 1.0]
     with pytest.raises(ValueError, match="defaults must come last"):
         family.twin_type("U", Twin, "", __name__, add=("y",))
+
+
+def test_the_smooth_excess_keeps_the_rows_sign_and_its_value_and_gradient_where_it_binds():
+    """family.excess(lean, reach, smooth=True) against |lean| - reach (independent: written here):
+    the same sign on a grid of lean and reach through 0 (both signs of reach), and where the row
+    binds (|lean| = reach > 0) the same value (0) and the same gradient (sign(lean), -1) by
+    reverse mode; smooth across lean = 0 inside the limit: its second derivative in lean there is
+    1 / reach (finite differences, where |lean| - reach has a kink); finite gradients at 0, 0."""
+    lean, reach = np.meshgrid(np.linspace(-3.0, 3.0, 61), np.linspace(-2.0, 2.0, 41))
+    smooth = np.asarray(family.excess(jnp.asarray(lean), jnp.asarray(reach), smooth=True))
+    plain = np.abs(lean) - reach
+    assert np.all(np.sign(smooth) == np.sign(plain))
+    for r in (0.5, 1.7, 12.0):
+        for sign in (1.0, -1.0):
+            grad = jax.grad(lambda a, b: family.excess(a, b, smooth=True), argnums=(0, 1))(sign * r, r)
+            assert float(family.excess(sign * r, r, smooth=True)) == pytest.approx(0.0, abs=1e-15)
+            np.testing.assert_allclose(np.asarray(grad), [sign, -1.0], rtol=1e-12)
+        h = 1e-4
+        second = (float(family.excess(h, r, True)) - 2 * float(family.excess(0.0, r, True))
+                  + float(family.excess(-h, r, True))) / h**2
+        assert second == pytest.approx(1.0 / r, rel=1e-6)
+    grad = jax.grad(lambda a, b: family.excess(a, b, smooth=True), argnums=(0, 1))(0.0, 0.0)
+    assert np.all(np.isfinite(np.asarray(grad)))
+    assert float(family.excess(-1.5, 1.0)) == pytest.approx(0.5)

@@ -368,6 +368,34 @@ def test_forward_derivatives_match_reverse_mode(name):
         np.testing.assert_allclose(np.asarray(got), np.asarray(want), rtol=0, atol=1e-9 * scale, err_msg=what)
 
 
+@pytest.mark.parametrize("name", ["roller", "oscillating_roller", "oscillating_curved_face", "groove"])
+def test_the_smooth_rows_are_the_rows_but_for_the_kink(name):
+    """A family's ``smooth_constraints`` (the interior point's rows, camjax.solvers.epigraph) against its
+    ``constraints`` at 64 designs spread over the box (a Halton-like lattice, several infeasible):
+    the pressure angle's row has the same sign at every angle (the same feasible set), is 0 where
+    it is, and every other row is the same number (exactly: the same code). The groove's rows (a
+    positive drive, its pressure angle already two rows) are its constraints unchanged."""
+    problem = _problem(followers.get(name).example_scene if name in followers.names() else name)
+    fam = family_of(problem)
+    lower, upper = fam.bounds(problem)
+    u = (np.arange(1, 65)[:, None] * np.asarray([0.618034, 0.754878, 0.569840, 0.535687, 0.523287])) % 1.0
+
+    @jax.jit
+    def both(u):
+        design = jax.tree.map(lambda lo, hi, v: lo + (hi - lo) * v, lower, upper,
+                              type(lower)(*u[: len(lower)]))
+        return fam.constraints(problem, design), fam.smooth_constraints(problem, design)
+
+    plain, smooth = jax.vmap(both)(jnp.asarray(u))
+    for field in plain._fields:
+        a, b = np.asarray(getattr(plain, field)), np.asarray(getattr(smooth, field))
+        if field == "pressure_angle":
+            assert np.all(np.sign(a) == np.sign(b)) and np.any(a > 0) and np.any(a < 0), field
+            assert not np.array_equal(a, b)
+        else:
+            np.testing.assert_array_equal(a, b, err_msg=field)
+
+
 @pytest.mark.parametrize("name", [*followers.names(), "groove", "conjugate"])
 def test_take_angles_keeps_every_row_of_its_angles(name):
     """The exchange rounds solve on a subset of the grid (newton.take_angles): at a design away from

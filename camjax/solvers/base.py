@@ -54,7 +54,11 @@ flat-face one is :mod:`camjax.followers.flat.problem`). It provides:
   ``angle_stress(problem, design) -> (n,)``: the stress (MPa) per angle whose max is the
   objective's peak stress, where ``objective`` is ``alpha size_term + gamma peak / sigma_max``
   (the interior point's epigraph rows then come from the grid at once, sharing the constraint
-  rows' terms, instead of from the n one-angle problems: :func:`camjax.solvers.epigraph.epigraph_form`).
+  rows' terms, instead of from the n one-angle problems: :func:`camjax.solvers.epigraph.epigraph_form`);
+  and ``smooth_constraints(problem, design) -> NamedTuple``: ``constraints`` with a row's kink
+  taken out (a pressure angle's |lean| - reach as :func:`camjax.family.excess` with ``smooth``:
+  the same sign at every design, and the same value and gradient where the row is 0), the rows
+  the interior point takes (its Newton steps zig-zagged across such a kink at a dwell).
 
 Weights (:class:`camjax.followers.flat.Weights`: alpha for size, gamma for stress) are shared by every
 family, and so are the pieces of the protocol that do not depend on a family's physics (the box,

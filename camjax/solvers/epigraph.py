@@ -17,7 +17,11 @@ objective is smooth already (it declares ``SMOOTH_OBJECTIVE = True``) takes :fun
 one objective row, objective(u) - t. A family with an ``angle_stress`` hook gives the f_i from its
 grid at once (alpha size_term + gamma sigma_i / sigma_max): the same numbers, with the terms the
 constraint rows compute shared (the oscillating curved face's 100-weighting sweep ran in 0.35 s
-instead of 0.44 s on 2 cores).
+instead of 0.44 s on 2 cores). A family with a ``smooth_constraints`` hook gives its constraint rows
+without their kinks (:func:`camjax.family.excess`: the same feasible set, and the same values and
+gradients where a row binds): the roller's 100-weighting sweep took at most 36 Newton steps with
+them and 64 with |s' - e~| - tan(phi_max) w, whose kink at a dwell (s' = 0, the offset near 0)
+held the steps zig-zagging across offset 0.
 """
 
 from __future__ import annotations
@@ -90,10 +94,13 @@ def epigraph_form(problem, weights: Weights) -> EpigraphForm:
     # sample: the same feasible set (max_i g_i <= 0 iff every g_i <= 0) without a kink in a row
     split = tuple(tuple(v.shape) != (n,) for v in shapes)
 
+    # the rows without the kinks of their |.| where the family gives them (the same zero sets)
+    constraints = getattr(family, "smooth_constraints", family.constraints)  # optional hook
+
     def constraint_rows(design):
-        g = family.constraints(problem, design)
+        g = constraints(problem, design)
         if any(split):
-            at = jax.vmap(lambda p: family.constraints(p, design))(per)  # (n, ...) each
+            at = jax.vmap(lambda p: constraints(p, design))(per)  # (n, ...) each
             g = [jnp.moveaxis(a, 0, -1) if cut else v for v, a, cut in zip(g, at, split, strict=True)]
         return [jnp.ravel(v) for v in g]
 

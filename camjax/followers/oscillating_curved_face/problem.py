@@ -209,12 +209,23 @@ def objective(problem: Problem, weights: Weights, design: Design) -> jax.Array:
 
 def constraints(problem: Problem, design: Design) -> Constraints:
     """Every angle's constraints as g <= 0 (mm), shape (n,) each; finite for every design."""
+    return _constraints(problem, design, smooth=False)
+
+
+def smooth_constraints(problem: Problem, design: Design) -> Constraints:
+    """:func:`constraints` as the interior point takes them: the pressure angle's row without the
+    kink of its |lean| (:func:`camjax.family.excess`; the same sign, and the same value and
+    gradient where the row is 0)."""
+    return _constraints(problem, design, smooth=True)
+
+
+def _constraints(problem: Problem, design: Design, smooth: bool) -> Constraints:
     x = _terms(problem, design)
     reach_r = design.face_radius_mm + problem.min_curvature_radius_mm
     need = axial_coefficient(problem, design) ** 2 / (problem.sigma_max_MPa**2 * cos_phi(x.legs))
     return Constraints(
         reach=jnp.broadcast_to(x.reach, x.kappa.shape),
-        pressure_angle=jnp.abs(x.legs.along) - problem.tan_max_pressure_angle * x.legs.across,
+        pressure_angle=family.excess(x.legs.along, problem.tan_max_pressure_angle * x.legs.across, smooth),
         undercut=reach_r * roller_geo.roller_undercut_constraint(x.kappa, design.face_radius_mm,
                                                                problem.min_curvature_radius_mm),
         face_travel=_travel(x, design) - 0.5 * design.face_width_mm,

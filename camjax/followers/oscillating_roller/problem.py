@@ -242,13 +242,25 @@ def objective(problem: Problem, weights: Weights, design: Design) -> jax.Array:
 
 def constraints(problem: Problem, design: Design) -> Constraints:
     """Every angle's constraints as g <= 0 (mm), shape (n,) each; finite for every design."""
+    return _constraints(problem, design, smooth=False)
+
+
+def smooth_constraints(problem: Problem, design: Design) -> Constraints:
+    """:func:`constraints` as the interior point takes them: the pressure angle's row without the
+    kink of its |lean| (:func:`camjax.family.excess`; the same sign, and the same value and
+    gradient where the row is 0). A positive drive's pressure angle is two rows already."""
+    return _constraints(problem, design, smooth=True)
+
+
+def _constraints(problem: Problem, design: Design, smooth: bool) -> Constraints:
     g = _geometry(problem, design)
     reach_r = design.roller_radius_mm + problem.min_curvature_radius_mm
     rho_eq = roller_geo.roller_equivalent_radius(g.kappa, design.roller_radius_mm)
     need = axial_coefficient(problem, design) ** 2 / (problem.sigma_max_MPa**2 * cos_phi(g))
     first = Constraints(
         reach=jnp.broadcast_to(g.reach, g.kappa.shape),
-        pressure_angle=jnp.abs(g.along) - problem.tan_max_pressure_angle * g.across,
+        pressure_angle=family.excess(g.along, problem.tan_max_pressure_angle * g.across,
+                                     smooth and problem.closure is None),
         undercut=reach_r * roller_geo.roller_undercut_constraint(g.kappa, design.roller_radius_mm,
                                                                problem.min_curvature_radius_mm),
         stress=need - rho_eq,

@@ -270,8 +270,20 @@ def constraints(problem: Problem, design: Design) -> Constraints:
     """Every angle's constraints as g <= 0 (mm), shape (n,) each; finite for every design. A positive
     drive's are a :data:`GrooveConstraints` or :data:`YokeConstraints`: the second contact's rows after
     the first's."""
+    return _constraints(problem, design, smooth=False)
+
+
+def smooth_constraints(problem: Problem, design: Design) -> Constraints:
+    """:func:`constraints` as the interior point takes them: the pressure angle's row without the
+    kink of |s' - e~| where s' = e~ (:func:`camjax.family.excess`; the same sign, and the same value
+    and gradient where the row is 0). A positive drive's rows have no such kink (its pressure angle
+    is two rows): :func:`constraints`."""
+    return _constraints(problem, design, smooth=True)
+
+
+def _constraints(problem: Problem, design: Design, smooth: bool) -> Constraints:
     x = circle_terms(problem, design)
-    first = circle_constraints(problem, design, x)
+    first = circle_constraints(problem, design, x, smooth and problem.closure is None)
     if problem.closure is None:
         return first
     return _closure_problem.with_second_contact(first, x.u, problem.tan_max_pressure_angle * x.w,
@@ -285,13 +297,14 @@ def row_labels(problem: Problem) -> dict:
     return _closure_problem.row_labels(problem.closure)
 
 
-def circle_constraints(problem: Problem, design: Design, x: CircleTerms) -> Constraints:
+def circle_constraints(problem: Problem, design: Design, x: CircleTerms, smooth: bool = False) -> Constraints:
     """The circle's own constraints as g <= 0 (mm), shape (n,) each, from its terms ``x``
-    (:func:`circle_terms`): the pressure angle, the undercut and the stress."""
+    (:func:`circle_terms`): the pressure angle (``smooth``: without its kink,
+    :func:`camjax.family.excess`), the undercut and the stress."""
     reach = design.roller_radius_mm + problem.min_curvature_radius_mm
     need = problem.stress_coefficient**2 * x.inv_cos / problem.sigma_max_MPa**2
     return Constraints(
-        pressure_angle=jnp.abs(x.u) - problem.tan_max_pressure_angle * x.w,
+        pressure_angle=family.excess(x.u, problem.tan_max_pressure_angle * x.w, smooth),
         undercut=reach * roller_geo.roller_undercut_constraint(x.kappa, design.roller_radius_mm,
                                                              problem.min_curvature_radius_mm),
         stress=need - x.rho_eq,
