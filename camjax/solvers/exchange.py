@@ -19,9 +19,10 @@ from camjax.solvers.gradient import default_start, from_unit
 # each type's 100-weighting sweep (360 angles, 2 cores, the same optima and 0 infeasible at 16, 24
 # and 32): 16 angles a round against 32 ran the knife edge 2.2x faster (its slowest weighting 25
 # steps, not 71), the flat face 1.8x, the curved face and the oscillating flat face 1.3x, the
-# oscillating curved face within 2 %, and compiled 8-15 % faster; the roller and the oscillating
-# roller, whose answers bind at more angles (more rounds at 16), declare EXCHANGE_ANGLES = 32, the
-# oscillating curved face 24 (50 Newton steps at the median at 16, 37 at 24).
+# oscillating curved face within 2 %, and compiled 8-15 % faster; the roller, the oscillating
+# roller and the oscillating curved face, whose answers bind at more angles (more rounds at 16),
+# declare EXCHANGE_ANGLES = 32 (the oscillating curved face 49 Newton steps at the median at 16,
+# 34.5 at 32).
 EXCHANGE_ANGLES = 16
 
 

@@ -70,10 +70,11 @@ from camjax.numerics import RHO_FLOOR_MM, floor_positive, positive_part
 
 CONSTRAINT_NAMES = ("reach", "pressure_angle", "undercut", "face_travel", "stress", "bounds")
 VARIABLES = ("base_radius_mm", "face_radius_mm", "face_width_mm", "pivot_distance_mm", "arm_length_mm")
-# angles of the interior point's exchange rounds (camjax.solvers.exchange.exchange_angles): 24, its
-# fastest 100-weighting sweep (0.92 of the time at 32; at the default 16, 0.98 of it but 50 Newton
-# steps at the median, not 37: more rounds)
-EXCHANGE_ANGLES = 24
+# angles of the interior point's exchange rounds (camjax.solvers.exchange.exchange_angles): 32, its
+# fastest 100-weighting sweep since its pressure angle's row is smooth (smooth_constraints): 0.19-0.26 s
+# against 0.31-0.43 s at 24 (its slowest weighting 43 Newton steps, not 56), 0.26-0.28 s at 40 or 48,
+# 0.30 s at the default 16 (49 steps at the median, not 34.5: more rounds)
+EXCHANGE_ANGLES = 32
 
 
 class Design(NamedTuple):
