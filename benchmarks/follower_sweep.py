@@ -237,8 +237,8 @@ def main(argv=None) -> int:
     if len(names) > 1:  # each follower in a fresh process (see the module docstring), in turn
         for follower in names:
             options = ["--solvers", args.solvers, *(["--quick"] if args.quick else [])]
-            subprocess.run([sys.executable, "-m", "benchmarks.follower_sweep", follower, "--out", str(args.out),
-                            *options], check=True)
+            command = [sys.executable, "-m", "benchmarks.follower_sweep", follower, "--out", str(args.out)]
+            subprocess.run([*command, *options], check=True)
         return 0
     data = json.loads(args.out.read_text()) if args.out.exists() else {}
     for follower in names:

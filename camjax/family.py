@@ -187,7 +187,8 @@ def excess(lean, reach, smooth: bool = False) -> jax.Array:
         return jnp.abs(lean) - reach
     scale = jnp.maximum(jnp.abs(lean), jnp.abs(reach))
     nonzero = scale > 0
-    return jnp.where(nonzero, (lean**2 - reach * jnp.abs(reach)) / (2.0 * jnp.where(nonzero, scale, 1.0)), 0.0)
+    safe_scale = jnp.where(nonzero, scale, 1.0)
+    return jnp.where(nonzero, (lean**2 - reach * jnp.abs(reach)) / (2.0 * safe_scale), 0.0)
 
 
 def condense_at_largest(problem, per_angle_design, size_mm, angle_key: str):
