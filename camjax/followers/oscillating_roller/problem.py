@@ -259,8 +259,7 @@ def _constraints(problem: Problem, design: Design, smooth: bool) -> Constraints:
     need = axial_coefficient(problem, design) ** 2 / (problem.sigma_max_MPa**2 * cos_phi(g))
     first = Constraints(
         reach=jnp.broadcast_to(g.reach, g.kappa.shape),
-        pressure_angle=family.excess(g.along, problem.tan_max_pressure_angle * g.across,
-                                     smooth and problem.closure is None),
+        pressure_angle=family.excess(g.along, problem.tan_max_pressure_angle * g.across, smooth),
         undercut=reach_r * roller_geo.roller_undercut_constraint(g.kappa, design.roller_radius_mm,
                                                                problem.min_curvature_radius_mm),
         stress=need - rho_eq,

@@ -283,7 +283,7 @@ def smooth_constraints(problem: Problem, design: Design) -> Constraints:
 
 def _constraints(problem: Problem, design: Design, smooth: bool) -> Constraints:
     x = circle_terms(problem, design)
-    first = circle_constraints(problem, design, x, smooth and problem.closure is None)
+    first = circle_constraints(problem, design, x, smooth)  # a positive drive drops its pressure row
     if problem.closure is None:
         return first
     return _closure_problem.with_second_contact(first, x.u, problem.tan_max_pressure_angle * x.w,
