@@ -23,20 +23,20 @@ from benchmarks import fitness as fz
 from benchmarks.harness import time_jit
 from camjax.family import weights_of
 from camjax.followers.flat import problem as P
-from camjax.solvers import gradient
+from camjax.solvers import box, gradient
 
 FD_STEP = 1e-6
 
 
 def _functions(problem, weights):
     """name -> f(design) -> scalar (closures over the problem's arrays, passed as arguments)."""
-    lam = jax.tree.map(lambda g: jnp.full_like(g, 1e-3), P.constraints(problem, gradient.midpoint(problem)))
+    lam = jax.tree.map(lambda g: jnp.full_like(g, 1e-3), P.constraints(problem, box.midpoint(problem)))
 
     def objective(prob, w, d):
         return P.objective(prob, w, d)
 
     def lagrangian(prob, w, d):
-        u = gradient.to_unit(prob, d)
+        u = box.to_unit(prob, d)
         return gradient.augmented_lagrangian(u, prob, w, lam, gradient.DEFAULT_SETTINGS.penalty)[0]
 
     return {"objective": objective, "lagrangian": lagrangian}

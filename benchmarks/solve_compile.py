@@ -96,14 +96,14 @@ def parts(scene_name: str) -> dict:
     from camjax.family import weights_of
     from camjax.pipeline import design_problem
     from camjax.scene import load_scene
-    from camjax.solvers import gradient
+    from camjax.solvers import box, gradient
     from camjax.solvers.base import family_of
 
     problem = design_problem(load_scene(scene_name))
     family, settings = family_of(problem), gradient.DEFAULT_SETTINGS
     weights = jax.tree.map(lambda x: x[0], weights_of([1.0], [1.0], jax.numpy.float64))
-    design = gradient.midpoint(problem)
-    u = gradient.to_unit(problem, design)
+    design = box.midpoint(problem)
+    u = box.to_unit(problem, design)
     zeros = jax.tree.map(jax.numpy.zeros_like, gradient.scaled_constraints(problem, design, True))
 
     def eqns(fn, *args) -> int:

@@ -29,7 +29,7 @@ pytestmark = pytest.mark.slow
 
 import camjax.codesign.joint as joint  # noqa: E402
 from benchmarks.codesign import ACCURACY_RTOL, prepare  # noqa: E402
-from camjax.solvers import gradient  # noqa: E402
+from camjax.solvers import box, gradient  # noqa: E402
 from camjax.solvers.ga import DEFAULT_SETTINGS as GA_DEFAULTS  # noqa: E402
 
 # the SLSQP test's co-design: a rise of 9 mm over 95 deg, a return over 85 deg, cubic B-splines of
@@ -146,8 +146,8 @@ def test_the_lagrangians_gradient_is_finite_at_an_infeasible_point(cases):
     bad = c["start"]._replace(geometry=c["start"].geometry._replace(base_radius_mm=p.lower.geometry.base_radius_mm))
     g = jax.jit(joint.constraints)(p, bad)
     assert float(jnp.max(jnp.concatenate([jnp.ravel(x) for x in jax.tree.leaves(g)]))) > 0.0
-    u = gradient.to_unit(p, bad)
-    shapes = jax.eval_shape(lambda v: gradient.scaled_constraints(p, gradient.from_unit(p, v)), u)
+    u = box.to_unit(p, bad)
+    shapes = jax.eval_shape(lambda v: gradient.scaled_constraints(p, box.from_unit(p, v)), u)
     lam = jax.tree.map(lambda a: jnp.ones(a.shape, a.dtype), shapes)
     grad = jax.jit(jax.grad(lambda v: gradient.augmented_lagrangian(v, p, p.weights, lam, 1e3)[0]))(u)
     assert all(bool(jnp.all(jnp.isfinite(x))) for x in jax.tree.leaves(grad))

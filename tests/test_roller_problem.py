@@ -98,7 +98,7 @@ def test_per_angle_problems_have_one_angle_each(roller_problem):
 
 @pytest.mark.slow
 def test_solver_coordinates_invert_and_cover_the_box(roller_problem):
-    from camjax.solvers.gradient import from_unit, to_unit
+    from camjax.solvers.box import from_unit, to_unit
 
     p = roller_problem
     rng = np.random.default_rng(1)
@@ -142,7 +142,7 @@ def test_solver_coordinates_invert_and_cover_the_box(roller_problem):
 
 
 def test_solver_coordinates_are_the_plain_box_scaling_with_a_fixed_radius(roller_problem):
-    from camjax.solvers.gradient import from_unit, to_unit
+    from camjax.solvers.box import from_unit, to_unit
 
     # with R_f fixed the prime radius is R_b plus a constant: each variable keeps its own scaling
     p = roller_problem._replace(lower=roller_problem.lower._replace(roller_radius_mm=jnp.asarray(5.0)),

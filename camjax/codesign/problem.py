@@ -68,7 +68,7 @@ from camjax.evaluate import arrays_from_kinematics, scene_arrays
 from camjax.family import weights_of
 from camjax.program import Kinematics
 from camjax.solvers.base import Settings, family_of, problem_from_scene, solver_module
-from camjax.solvers.gradient import midpoint
+from camjax.solvers.box import midpoint
 from camjax.solvers.newton import NewtonSettings
 from camjax.synthesis.linear import law_quadratics, linear_kinematics
 from camjax.synthesis.problem import ALL_OBJECTIVES, L2_OBJECTIVES

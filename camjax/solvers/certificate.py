@@ -28,7 +28,7 @@ from jax.flatten_util import ravel_pytree
 from camjax.family import Design, Problem, Weights, weights_of
 from camjax.solvers.base import family_of
 from camjax.solvers.epigraph import EpigraphForm, epigraph_form
-from camjax.solvers.gradient import to_unit, u_max_of
+from camjax.solvers.box import to_unit, u_max_of
 from camjax.solvers.limits import limit_setters as _limits
 from camjax.solvers.limits import limit_values
 

@@ -2,7 +2,7 @@
 
 For one problem and weighting (every registered problem family, through its protocol only,
 :mod:`camjax.solvers.base`), with the design mapped to the unit box u
-(:func:`camjax.solvers.gradient.to_unit` with ``own=False``: each variable over its bounds) and an epigraph variable t, z = (u, t):
+(:func:`camjax.solvers.box.to_unit` with ``own=False``: each variable over its bounds) and an epigraph variable t, z = (u, t):
 
     minimize    phi(z) = t  (+ 1e-9 size_term when alpha = 0, the gradient solver's tie-break)
     subject to  rows(z) <= 0: f_i(u) - t at every angle i (f_i the one-angle problem's objective
@@ -35,7 +35,7 @@ from jax.flatten_util import ravel_pytree
 
 from camjax.family import Weights, weighted_objective
 from camjax.solvers.base import family_of
-from camjax.solvers.gradient import TIE_BREAK, from_unit, u_max_of
+from camjax.solvers.box import TIE_BREAK, from_unit, u_max_of
 
 ROW_FLOOR = 1e3  # the normalized rows' floor (a row below it is inactive; see :func:`epigraph_form`)
 

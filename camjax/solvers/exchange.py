@@ -11,9 +11,9 @@ import jax.numpy as jnp
 
 from camjax.family import Problem, Weights
 from camjax.solvers.base import family_of
+from camjax.solvers.box import default_start, from_unit
 from camjax.solvers.certificate import KKT, dual_scale
 from camjax.solvers.epigraph import EpigraphForm, epigraph_form
-from camjax.solvers.gradient import default_start, from_unit
 
 # Angles of an exchange round where neither the settings nor the family name a number. Measured on
 # each type's 100-weighting sweep (360 angles, 2 cores, the same optima and 0 infeasible at 16, 24

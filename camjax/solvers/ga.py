@@ -42,9 +42,9 @@ import jax.numpy as jnp
 from camjax.family import Design, Problem, Violation, Weights
 from camjax.solvers.base import Raw, family_of, in_mode
 from camjax.solvers.base import weighting_keys as weighting_keys
+from camjax.solvers.box import from_unit, problem_dtype, solver_objective, to_unit
 from camjax.solvers.certificate import certificate_json as certificate_json  # the final point's
 from camjax.solvers.certificate import certify_point
-from camjax.solvers.gradient import from_unit, problem_dtype, solver_objective, to_unit
 
 
 @dataclass(frozen=True)

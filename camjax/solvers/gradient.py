@@ -49,9 +49,18 @@ from jax.flatten_util import ravel_pytree
 from camjax.family import Constraints, Design, Problem, Violation, Weights
 from camjax.solvers import quasi_newton as qn
 from camjax.solvers.base import Raw, family_of, in_mode
+from camjax.solvers.box import (
+    clip_unit,
+    default_start,
+    from_unit,
+    midpoint,
+    problem_dtype,
+    solver_objective,
+    to_unit,
+    u_max_of,
+)
 
 LAM_MAX = 1e12  # cap on the multipliers (an infeasible problem would let them grow without end)
-TIE_BREAK = 1e-9  # weight of the size term when alpha = 0 (see module docstring)
 
 
 @dataclass(frozen=True)
@@ -177,69 +186,7 @@ def scale_by_secant_rprop(initial_step: float, eta_minus: float = 0.5, eta_plus:
     return optax.GradientTransformation(init_fn, update_fn)
 
 
-# --------------------------------------------------------------------------- box maps
-
-
-def _span(problem: Problem) -> Design:
-    return jax.tree.map(lambda lo, hi: jnp.where(hi > lo, hi - lo, 1.0), *family_of(problem).bounds(problem))
-
-
-def u_max_of(problem: Problem) -> Design:
-    """1 for a variable with a proper range, 0 for one fixed by lo == hi."""
-    return jax.tree.map(lambda lo, hi: jnp.where(hi > lo, 1.0, 0.0).astype(lo.dtype),
-                        *family_of(problem).bounds(problem))
-
-
-def to_unit(problem: Problem, design: Design, own: bool = True) -> Design:
-    """Design (mm) -> unit box coordinates (not clipped).
-
-    A family may define its own ``to_unit``/``from_unit`` (a bijection of the same unit box onto
-    its bounds, one coordinate per variable, fixed where the variable is fixed) when the plain
-    per-variable scaling is badly conditioned for its optimum; the first-order solvers then work
-    in those (``own``). ``own=False``: the plain scaling, each variable over its bounds (what a
-    second-order solver takes: a family's map may clip, which it cannot see).
-    """
-    family = family_of(problem)
-    if own and hasattr(family, "to_unit"):
-        return family.to_unit(problem, design)
-    lower = family.bounds(problem)[0]
-    return jax.tree.map(lambda x, lo, w: (x - lo) / w, design, lower, _span(problem))
-
-
-def from_unit(problem: Problem, u: Design, own: bool = True) -> Design:
-    """Unit box coordinates -> design (mm) (a family's own ``from_unit`` if it has one and ``own``)."""
-    family = family_of(problem)
-    if own and hasattr(family, "from_unit"):
-        return family.from_unit(problem, u)
-    lower = family.bounds(problem)[0]
-    return jax.tree.map(lambda v, lo, w: lo + v * w, u, lower, _span(problem))
-
-
-def _clip_unit(problem: Problem, u: Design) -> Design:
-    return jax.tree.map(lambda v, top: jnp.clip(v, 0.0, top), u, u_max_of(problem))
-
-
-def midpoint(problem: Problem) -> Design:
-    """Centre of the box."""
-    return jax.tree.map(lambda lo, hi: 0.5 * (lo + hi), *family_of(problem).bounds(problem))
-
-
-def default_start(problem: Problem) -> Design:
-    """The solvers' default start (mm): the family's ``start(problem)`` where it has one, else
-    :func:`midpoint`."""
-    return getattr(family_of(problem), "start", midpoint)(problem)
-
-
 # ------------------------------------------------------------------------- Lagrangian
-
-
-def solver_objective(problem: Problem, weights: Weights, design: Design) -> jax.Array:
-    """F / (alpha + gamma) plus the alpha = 0 tie-break: what the solvers minimize (shape ())."""
-    total = weights.alpha + weights.gamma
-    scale = jnp.where(total > 0, total, 1.0)
-    tie = jnp.where(weights.alpha > 0, 0.0, TIE_BREAK)
-    family = family_of(problem)
-    return family.objective(problem, weights, design) / scale + tie * family.size_term(problem, design)
 
 
 def scaled_constraints(problem: Problem, design: Design, aggregate: bool = False) -> Constraints:
@@ -299,7 +246,7 @@ def init(problem: Problem, design: Design | None = None,
     if design is None:
         design = default_start(problem)
     dtype = problem_dtype(problem)
-    u = _clip_unit(problem, jax.tree.map(lambda x: jnp.asarray(x, dtype), to_unit(problem, design)))
+    u = clip_unit(problem, jax.tree.map(lambda x: jnp.asarray(x, dtype), to_unit(problem, design)))
     rprop = _transform(settings).init(u)
     shapes = jax.eval_shape(
         lambda v: scaled_constraints(problem, from_unit(problem, v), _aggregate(problem, settings)), u)
@@ -319,7 +266,7 @@ def step(state: GradientState, problem: Problem, weights: Weights,
     residual = _tree_max_abs(jax.tree.map(lambda gi, lam: jnp.minimum(-gi, lam / mu), g, state.multipliers))
 
     updates, rprop = _transform(settings).update(pg, state.rprop, state.u)
-    u_next = _clip_unit(problem, jax.tree.map(lambda v, d: v + d, state.u, updates))
+    u_next = clip_unit(problem, jax.tree.map(lambda v, d: v + d, state.u, updates))
     moving = jax.tree.map(lambda gr, s: jnp.where(gr != 0, s, 0.0), pg, rprop.step_sizes)
 
     # inexact inner solves while the multipliers are far off (steps to a fraction of the residual)
@@ -578,11 +525,6 @@ def solve_sweep(problem: Problem, weights: Weights, mode: str = "global", init_d
     if init_design is None:
         return jax.vmap(lambda w: inner(problem, w, key))(weights)
     return jax.vmap(lambda w, d: inner(problem, w, key, d))(weights, init_design)
-
-
-def problem_dtype(problem) -> jnp.dtype:
-    """Floating dtype of a problem (that of its bounds)."""
-    return jax.tree.leaves(family_of(problem).bounds(problem)[0])[0].dtype
 
 
 def run_one(problem: Problem, weights: Weights, key: jax.Array, settings, init: Design | None = None) -> Raw:

@@ -83,6 +83,7 @@ from jax.flatten_util import ravel_pytree
 from camjax.family import Design, Problem, Weights
 from camjax.solvers import exchange
 from camjax.solvers.base import Raw, family_of
+from camjax.solvers.box import default_start, from_unit, to_unit
 from camjax.solvers.certificate import (
     KKT,
     TOL,
@@ -96,7 +97,6 @@ from camjax.solvers.certificate import (
 from camjax.solvers.certificate import certificate_json as certificate_json  # in result.json
 from camjax.solvers.epigraph import EpigraphForm, epigraph_form
 from camjax.solvers.exchange import take_angles as take_angles  # the exchange rounds' subproblem
-from camjax.solvers.gradient import default_start, from_unit, to_unit
 
 
 @dataclass(frozen=True)
@@ -133,7 +133,7 @@ DEFAULT_SETTINGS = NewtonSettings()
 
 def for_problem(problem: Problem, settings: NewtonSettings) -> NewtonSettings:
     """``settings`` with ``free_variables`` counted from the problem's box (the variables with upper
-    > lower, as :func:`camjax.solvers.gradient.u_max_of`) where its bounds are concrete numbers; under
+    > lower, as :func:`camjax.solvers.box.u_max_of`) where its bounds are concrete numbers; under
     a trace (the box unknown until the program runs), or where already set, ``settings`` as given."""
     if settings.free_variables is not None:
         return settings
