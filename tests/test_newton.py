@@ -209,6 +209,29 @@ def test_solution_json_carries_the_certificate(mode, solver):
 
 
 @pytest.mark.slow
+@pytest.mark.parametrize("mode", ["global", "pointwise"])
+def test_a_gradient_design_carries_its_final_points_certificate(mode):
+    """The gradient solver certifies nothing itself: a design's JSON
+    (:func:`camjax.solvers.certificate.solution_json`, what ``camjax design`` writes) carries its final
+    point's certificate (multipliers fitted on the active rows). It names the rows newton's binds
+    (kind and angle) and prices the stress limit as newton's certificate does, within ten times the
+    stationarity residual it reports (the fitted multipliers are as good as the point is stationary;
+    measured: 8.5e-4 and a relative 1.1e-3 in global mode, 2e-14 and 2e-10 in pointwise mode, whose
+    one-angle problems the solver solves exactly), on the grid of
+    test_solution_json_carries_the_certificate (newton's program compiled there)."""
+    problem = _problem("default")
+    got = certificate.solution_json(problem, solve(problem, (1.0, 1.0), mode=mode, solver="gradient"))["certificate"]
+    ref = solve(problem, (1.0, 1.0), mode=mode, solver="newton").to_json(problem)["certificate"]
+    assert got["method"] == certificate.METHODS["gradient"]
+    assert {(r["kind"], r["theta_deg"]) for r in got["active"]} == {(r["kind"], r["theta_deg"]) for r in ref["active"]}
+    assert got["limited_by"] == ref["limited_by"]
+    tol = 10 * got["stationarity"] + 1e-8
+    a, b = got["dF_dlimit"]["sigma_max_MPa"], ref["dF_dlimit"]["sigma_max_MPa"]
+    assert abs(a / b - 1.0) <= tol, (a, b, tol)
+    assert got["primal_feasibility"] == 0.0
+
+
+@pytest.mark.slow
 @pytest.mark.parametrize("scene_name", ["default", "oscillating-flat"])
 def test_design_with_newton_writes_the_certificate_and_names_what_limits(scene_name, tmp_path, capsys):
     """`camjax design --solver newton` (a translating and a rocking follower, the grid's 90

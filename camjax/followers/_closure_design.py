@@ -181,13 +181,14 @@ def solve_with_dimension(scene, problem, free: tuple) -> tuple[dict, object]:
     and reported under its key. The scene's mode, weights, solver and seed
     (:func:`camjax.solvers.base.solve`); :func:`camjax.followers._design.design_block` dispatches here."""
     from camjax.solvers.base import solve
+    from camjax.solvers.certificate import solution_json
 
     d = scene.design
     key, low, high = free
     solve_as_scene = partial(solve, weights=(d.alpha, d.gamma), mode=d.mode, solver=d.solver, seed=d.seed)
     value = design_start(scene, key)  # the problem's own
     if low == high:
-        out = solve_as_scene(problem).to_json(problem)
+        out = solution_json(problem, solve_as_scene(problem))
         out[key] = value
         return out, problem
     # the first contact alone: no value of the span or angle gives a smaller objective
@@ -200,8 +201,7 @@ def solve_with_dimension(scene, problem, free: tuple) -> tuple[dict, object]:
         smallest = smallest_admissible(problem, solution.design, key, low, high)
     value = value if smallest is None else smallest
     problem = with_dimension(problem, key, value)
-    out = evaluated_with(problem, replace(solution, certificate=None)).to_json(problem)
-    if solution.certificate is not None:  # a certificate is of the rows its own solve had
-        out["certificate"] = solution.certificate_json(solved)
+    # a certificate is of the rows its own solve had
+    out = solution_json(problem, evaluated_with(problem, solution), solved)
     out[key] = value
     return out, problem

@@ -17,8 +17,8 @@ def design_block(scene, problem) -> tuple[dict, Any]:
     """result.json's design block of the scene's [design] for its ``problem``
     (:func:`camjax.solvers.base.problem_from_scene`), and the problem the design is judged on: a
     plain design, solved through the solver registry (:func:`camjax.solvers.base.solve` with the
-    section's alpha, gamma, mode, solver and seed; the solution's JSON, its certificate included
-    where the solver gives one), a robust one (``[design] robust``:
+    section's alpha, gamma, mode, solver and seed; the solution's JSON with its certificate,
+    :func:`camjax.solvers.certificate.solution_json`), a robust one (``[design] robust``:
     :func:`camjax.robust.design.design_json`, the nominal and robust optima side by side) or a
     conjugate pair's yoke span or second arm angle set or chosen in [design]
     (:func:`camjax.followers._closure_design.solve_with_dimension`, whose problem carries the value)."""
@@ -36,5 +36,8 @@ def design_block(scene, problem) -> tuple[dict, Any]:
     if free is not None:
         return solve_with_dimension(scene, problem, free)
     from camjax.solvers.base import solve
+    from camjax.solvers.certificate import solution_json
 
-    return solve(problem, (d.alpha, d.gamma), mode=d.mode, solver=d.solver, seed=d.seed).to_json(problem), problem
+    return solution_json(problem, solve(problem, (d.alpha, d.gamma), mode=d.mode, solver=d.solver,
+                                        seed=d.seed)), problem
+

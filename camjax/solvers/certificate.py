@@ -18,6 +18,7 @@ the binding constraints (:func:`limited_by`: the text summary's line).
 
 from __future__ import annotations
 
+import dataclasses
 from typing import NamedTuple
 
 import jax
@@ -27,8 +28,8 @@ from jax.flatten_util import ravel_pytree
 
 from camjax.family import Design, Problem, Weights, weights_of
 from camjax.solvers.base import family_of
-from camjax.solvers.epigraph import EpigraphForm, epigraph_form
 from camjax.solvers.box import to_unit, u_max_of
+from camjax.solvers.epigraph import EpigraphForm, epigraph_form
 from camjax.solvers.limits import limit_setters as _limits
 from camjax.solvers.limits import limit_values
 
@@ -153,13 +154,33 @@ def certify_point(problem: Problem, weights: Weights, design: Design, iterations
 def point_certificate_json(problem: Problem, solution) -> dict:
     """result.json's certificate block of a :class:`camjax.solvers.base.Solution` that came without
     one (the gradient solver's): its final point certified on ``problem`` by :func:`certify_point`
-    (one compiled program per problem form)."""
+    (one compiled program per problem form); in pointwise mode each angle's design on that angle's
+    problem (one program for every angle), the block the critical angle's (:func:`certificate_json`)."""
     w = weights_of(solution.alpha, solution.gamma, problem.lower[0].dtype)
-    cert = _certify_point(problem, w, jax.tree.map(jnp.asarray, solution.design), solution.iterations)
-    return certificate_json(problem, cert, mode="global", solver=solution.solver)
+    if solution.mode == "pointwise":  # the per-angle designs, each on its angle's problem
+        designs = jax.tree.map(jnp.asarray, solution.pointwise)
+        cert = _certify_angles(family_of(problem).per_angle(problem), w, designs, solution.iterations)
+    else:
+        cert = _certify_point(problem, w, jax.tree.map(jnp.asarray, solution.design), solution.iterations)
+    return certificate_json(problem, cert, mode=solution.mode, solver=solution.solver)
+
+
+def solution_json(problem, solution, solved=None) -> dict:
+    """A solution's JSON (:meth:`camjax.solvers.base.Solution.to_json` on ``problem``) with its
+    certificate: the solver's own, of the rows of ``solved`` (the problem it solved; ``problem``
+    when None), or, for a solver whose answer comes without one (the gradient solver's), its final
+    point certified (:func:`point_certificate_json`)."""
+    solved = problem if solved is None else solved
+    out = dataclasses.replace(solution, certificate=None).to_json(problem)
+    if solution.certificate is not None:
+        out["certificate"] = solution.certificate_json(solved)
+    else:
+        out["certificate"] = point_certificate_json(solved, solution)
+    return out
 
 
 _certify_point = jax.jit(certify_point)
+_certify_angles = jax.jit(jax.vmap(certify_point, in_axes=(0, None, 0, None)))
 
 
 def _block(problem, cert: Certificate, *, active_tol: float = 1e-6) -> dict:
