@@ -13,3 +13,17 @@ def crash_once(task: BlockTask, victim: int, marker: str) -> list[dict]:
         Path(marker).write_text(str(os.getpid()))
         os._exit(17)
     return solve_block(task)
+
+
+def compile_in_worker(cache_dir: str) -> str:
+    """In a worker: point JAX at ``cache_dir`` as every block function does
+    (:func:`camjax.scaleout.blocks.configure_worker`), then compile one small program; returns the
+    folder JAX now caches in."""
+    import jax
+    import jax.numpy as jnp
+
+    from camjax.scaleout.blocks import configure_worker
+
+    configure_worker(cache_dir)
+    jax.jit(lambda x: jnp.sin(x) * 3.0 + 1.0)(jnp.arange(7.0)).block_until_ready()
+    return jax.config.jax_compilation_cache_dir

@@ -13,7 +13,7 @@ import pytest
 
 # tests/ is on sys.path (pytest's default import mode); spawned workers inherit it, Ray workers
 # get it through PYTHONPATH, so the fault-injecting block function unpickles by reference.
-from scaleout_helpers import crash_once
+from scaleout_helpers import compile_in_worker, crash_once
 
 from camjax.followers.flat.problem import problem_from_scene
 from camjax.scaleout import (
@@ -107,8 +107,13 @@ def test_sharded_equals_unsharded_on_4_host_devices():
 def test_process_pool_survives_a_killed_worker(reference, tmp_path):
     marker = tmp_path / "crashed"
     backend = ProcessMap(workers=2)
+    # the tests' compilation cache where there is one: the workers (the one started after the
+    # crash too) load the block program the reference sweep compiled, where a fresh folder made
+    # each of them compile it (~30 CPU s; that a worker writes the folder it is given is the test
+    # below's)
+    cache = jax.config.jax_compilation_cache_dir or tmp_path / "jax-cache"
     try:
-        run = run_blocks(_blocks(cache_dir=str(tmp_path / "jax-cache")), tmp_path / "sweep", backend,
+        run = run_blocks(_blocks(cache_dir=str(cache)), tmp_path / "sweep", backend,
                          block_size=BLOCK_SIZE,
                          block_fn=partial(crash_once, victim=2, marker=str(marker)))
     finally:
@@ -117,7 +122,22 @@ def test_process_pool_survives_a_killed_worker(reference, tmp_path):
     assert run.complete and run.computed == [0, 1, 2, 3]
     assert 2 in run.retried
     assert _records_by_block(tmp_path / "sweep") == reference
-    assert any((tmp_path / "jax-cache").iterdir())  # workers wrote the shared compilation cache
+
+
+@pytest.mark.slow
+def test_a_pool_worker_compiles_into_the_cache_it_is_given(tmp_path):
+    """A spawned worker, configured as every block function configures it
+    (camjax.scaleout.blocks.configure_worker), writes what it compiles into the task's folder: the
+    folder the workers of a sweep share."""
+    folder = tmp_path / "jax-cache"
+    backend = ProcessMap(workers=1)
+    try:
+        [(_, outcome)] = list(backend.map_unordered(compile_in_worker, [str(folder)]))
+    finally:
+        backend.close()
+    assert outcome.ok, outcome.error
+    assert outcome.value == str(folder)
+    assert any(folder.iterdir())  # the worker wrote its compiled program there
 
 
 # Ray launches its processes with fork+exec; JAX's warning about os.fork does not apply to that
@@ -136,7 +156,7 @@ def test_ray_sweep_matches_sequential_and_survives_a_killed_worker(reference, tm
         # the local instance stays on loopback (Ray would otherwise use the host's interface)
         assert {node["NodeManagerAddress"] for node in ray.nodes()} == {"127.0.0.1"}
         # the tests' compilation cache where there is one: the workers load the block program the
-        # reference sweep compiled (the process pool's test above checks that workers write one)
+        # reference sweep compiled (test_a_pool_worker_compiles_into_the_cache_it_is_given: that a worker writes one)
         cache = jax.config.jax_compilation_cache_dir or tmp_path / "jax-cache"
         run = run_blocks(_blocks(cache_dir=str(cache)), tmp_path / "sweep", backend,
                          block_size=BLOCK_SIZE,
