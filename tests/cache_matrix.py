@@ -9,9 +9,9 @@ cache once got wrong added. Every run starts as a fresh process would (this proc
 loaded programs cleared), in the cache's verify mode (every program read from the folder traced
 again and its StableHLO compared with the saved one's: a key that misses a trace-time input
 raises). Each result.json (dynamics.json) must equal, number for number, the same run
-with every program traced afresh (its reference); the quick sequence's stale-cache runs and the
-dynamics runs then run again in reverse order, every program now loaded from the folder, with the
-same check.
+with every program traced afresh (its reference); the quick sequence's stale-cache runs then run again in
+reverse order, and the dynamics runs that saved a program again, every program now loaded from
+the folder, with the same check (a run that saved none loaded every one already).
 
 The reference (:func:`_references`) is the same command with each program traced and exported
 when the sequence first needs it, and never read back from a folder: equality is exact because a
@@ -215,23 +215,26 @@ def _references(runs: list[list[str]], tmp: Path, monkeypatch) -> list[dict]:
                 for k, argv in enumerate(runs)]
 
 
-def _check_sequence(runs: list[list[str]], tmp: Path, monkeypatch, warm: Sequence[int] = ()) -> None:
+def _check_sequence(runs: list[list[str]], tmp: Path, monkeypatch, warm: Sequence[int] = ()) -> list[int]:
     """Each run's reference (:func:`_references`), then each run with the cache on in one folder, in
     order (a run whose key an earlier run saved loads that program: the case a key that misses an
     input gets wrong, which verify mode then catches), then the runs numbered in ``warm`` again in
     reverse order, every program they run loaded from the folder (each compared with its
-    reference as well)."""
+    reference as well). Returns the number of programs in the folder after each run in order."""
     cache = tmp / "programs"
     runtime._UNEXPORTABLE.clear()
     reference = _references(runs, tmp, monkeypatch)
+    saved = []
     for k in [*range(len(runs)), *sorted(warm, reverse=True)]:
         on = _run(runs[k], tmp / f"on{k}", cache, monkeypatch)
         diff = differences(reference[k], on, ignore=TIMING_KEYS)
         assert not diff, f"{' '.join(runs[k])}: with the shared folder != traced afresh:\n" + "\n".join(diff[:20])
+        saved.append(len(list(cache.glob(f"*{runtime.PROGRAM_SUFFIX}"))))
     assert list(cache.glob(f"*{runtime.PROGRAM_SUFFIX}")), "the sequence saved no program"
     # a program whose export fails is traced by every command instead of loaded (silently: from
     # 2399a61 to d3c036d the search did so): every program of these commands exports
     assert not runtime._UNEXPORTABLE, f"programs the cache could not save: {runtime._UNEXPORTABLE}"
+    return saved[:len(runs)]
 
 
 # The full sequence above runs on one follower type (FULL_SEQUENCE); every other type runs OWN_RUNS,

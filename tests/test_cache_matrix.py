@@ -41,4 +41,8 @@ def test_dynamics_with_its_scene_edited_gives_the_freshly_traced_result(tmp_path
         path = tmp_path / f"bench{k}.toml"
         path.write_text(text if edit is None else _edit(text, edit))
         runs.append(["dynamics", str(path)])
-    _check_sequence(runs, tmp_path, monkeypatch, range(len(runs)))
+    # the inertia edit is a value: its run saves no program of its own, so it already ran with every
+    # program loaded from the folder; the scene's own run and the speed's (which saves one program
+    # of its own) then run again with every program loaded
+    saved = _check_sequence(runs, tmp_path, monkeypatch, warm=[0, 2])
+    assert saved[1] == saved[0], saved
