@@ -99,6 +99,9 @@ def _persistent_compilation_cache(config) -> None:
         return
     if not jax.config.jax_compilation_cache_dir:  # one set through JAX itself wins
         use_compilation_cache(cache.mkdir("jax-compilation"))
+    # the command run in a subprocess (camjax.runtime.enable_compilation_cache) loads what the
+    # tests compiled, not ~/.cache/camjax's; a test that needs a cold one sets its own folder or 0
+    os.environ.setdefault("CAMJAX_COMPILATION_CACHE", str(jax.config.jax_compilation_cache_dir))
 
 
 @pytest.fixture(scope="session")
