@@ -105,6 +105,17 @@ def _persistent_compilation_cache(config) -> None:
 
 
 @pytest.fixture(scope="session")
+def compilation_cache_env() -> dict:
+    """JAX's own variables pointing a Python subprocess at the tests' compilation cache (empty where
+    the cache is off): a subprocess that is not the command (which reads CAMJAX_COMPILATION_CACHE,
+    set above) loads what the tests compiled."""
+    cache = jax.config.jax_compilation_cache_dir
+    if not cache:
+        return {}
+    return {"JAX_COMPILATION_CACHE_DIR": str(cache), "JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS": "0"}
+
+
+@pytest.fixture(scope="session")
 def default_scene():
     return camjax.load_scene()
 

@@ -77,15 +77,11 @@ def test_block_sweep_equals_the_in_process_sweep(reference):
 
 
 @pytest.mark.slow
-def test_sharded_equals_unsharded_on_4_host_devices():
+def test_sharded_equals_unsharded_on_4_host_devices(compilation_cache_env):
     # a fresh interpreter: the device count is fixed when JAX starts its backend; it compiles into
     # the tests' compilation cache (JAX reads its settings from the environment)
-    env = dict(os.environ)
-    cache = jax.config.jax_compilation_cache_dir
-    if cache:
-        env.update(JAX_COMPILATION_CACHE_DIR=str(cache), JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS="0")
     proc = subprocess.run([sys.executable, str(TESTS / "scaleout_sharded_check.py")],
-                          capture_output=True, text=True, timeout=300, env=env)
+                          capture_output=True, text=True, timeout=300, env={**os.environ, **compilation_cache_env})
     assert proc.returncode == 0, proc.stderr[-3000:]
     res = json.loads(proc.stdout.strip().splitlines()[-1])
     assert res["devices"] == 4
@@ -156,7 +152,8 @@ def test_ray_sweep_matches_sequential_and_survives_a_killed_worker(reference, tm
         # the local instance stays on loopback (Ray would otherwise use the host's interface)
         assert {node["NodeManagerAddress"] for node in ray.nodes()} == {"127.0.0.1"}
         # the tests' compilation cache where there is one: the workers load the block program the
-        # reference sweep compiled (test_a_pool_worker_compiles_into_the_cache_it_is_given: that a worker writes one)
+        # reference sweep compiled (that a worker writes one:
+        # test_a_pool_worker_compiles_into_the_cache_it_is_given)
         cache = jax.config.jax_compilation_cache_dir or tmp_path / "jax-cache"
         run = run_blocks(_blocks(cache_dir=str(cache)), tmp_path / "sweep", backend,
                          block_size=BLOCK_SIZE,

@@ -12,7 +12,6 @@ import subprocess
 import sys
 from pathlib import Path
 
-import jax
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -50,14 +49,10 @@ def test_readme_is_short():
 
 
 @pytest.mark.slow
-def test_readme_python_quickstart_runs_as_written(tmp_path):
+def test_readme_python_quickstart_runs_as_written(tmp_path, compilation_cache_env):
     code = _code_blocks(README.read_text(), "python")[0]
-    env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    cache = jax.config.jax_compilation_cache_dir  # the tests' compilation cache: what they compiled loads
-    if cache:
-        env.update(JAX_COMPILATION_CACHE_DIR=str(cache), JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS="0")
     run = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True,
-                         timeout=300, env=env)
+                         timeout=300, env={**os.environ, "PYTHONPATH": str(ROOT), **compilation_cache_env})
     assert run.returncode == 0, run.stderr
     (min_rb, design_rb), (peak, dpeak) = [[float(v) for v in line.split()] for line in
                                           run.stdout.strip().splitlines()]
