@@ -145,9 +145,10 @@ def test_dxf_extents_and_centre_mark(written, csv_table):
 @pytest.mark.slow
 def test_drawing_workers_write_the_in_process_files_byte_for_byte(default_scene, default_arrays, tmp_path):
     """The worker processes (camjax.output.drawing) write what write_figures and write_profile_dxf
-    write here: the same PNG and DXF bytes (same matplotlib and ezdxf, same functions, same
-    inputs: any difference is a lost field or a different conversion on the way). An infeasible
-    design with its banner, and 3 workers for 5 files so that the order has to be restored."""
+    write here: the same PNG and CSV bytes and the same DXF drawing (same matplotlib and ezdxf, same
+    functions, same inputs: any difference is a lost field or a different conversion on the way).
+    An infeasible design with its banner, and 3 workers for 6 files so that the order has to be
+    restored."""
     from camjax.output.drawing import DrawingWorkers
     from camjax.output.titles import title_block
 
@@ -156,12 +157,13 @@ def test_drawing_workers_write_the_in_process_files_byte_for_byte(default_scene,
     (tmp_path / "here").mkdir()
     (tmp_path / "there").mkdir()
     here = export.write_figures(tmp_path / "here", run.curves, 40, banner, title)
+    here.append(export.write_profile_csv(tmp_path / "here" / "profile.csv", run.curves))
     here.append(export.write_profile_dxf(tmp_path / "here" / "profile.dxf", run.curves))
     with DrawingWorkers(3) as workers:
         workers.draw(tmp_path / "there", run.curves, 40, banner, title)
         there = workers.wait()
     assert [p.name for p in there] == [p.name for p in here] == ["svaj.png", "profile.png", "loads.png",
-                                                                 "stress.png", "profile.dxf"]
+                                                                 "stress.png", "profile.csv", "profile.dxf"]
     for a, b in zip(here[:-1], there[:-1], strict=True):
         assert a.read_bytes() == b.read_bytes(), a.name
     # a DXF carries its creation time and fresh GUIDs: compare what it draws

@@ -131,8 +131,8 @@ class Follower(abc.ABC):
         """The folder's ``drawing.py`` (NumPy and matplotlib only, no JAX): ``figure_builders(curves)``,
         ``profile_table(curves)``, ``mechanism(curves, title, violation)`` (the animation's
         :class:`camjax.output.animation.Mechanism`), ``follower_points(m, s)`` and
-        ``artists(ax, m, poses, r_max)`` (its pose and artists in the animation),
-        ``title_dimensions(data)``, and ``CONTACT_SHAPE`` ("face" or "circle": what touches the
+        ``artists(ax, m, poses, r_max)`` (its pose and artists in the animation)
+        and ``CONTACT_SHAPE`` ("face" or "circle": what touches the
         cam, which the riding check of tests/test_followers.py rides on the exported outline)."""
         return self.module("drawing")
 
@@ -145,6 +145,13 @@ class Follower(abc.ABC):
         """What the command line adds after "files drawn at R_b = ..." from result.json ``data``
         (e.g. ``, L = 19.0986 mm``); default nothing."""
         return ""
+
+    def title_dimensions(self, data: dict[str, Any]) -> list[str]:
+        """The words the figures' title block gives the follower's own dimensions, the ones the cam
+        was drawn with, from result.json ``data`` (e.g. ``["R_f = 8 mm, e = 0 mm"]``; the base radius
+        and a face width are in the shared line, :func:`camjax.output.titles.title_block`); default
+        none. Text only: the title is worded where the design ran, before its figures are drawn."""
+        return []
 
     # ---------------------------------------------------------------------------- folder
 

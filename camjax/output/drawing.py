@@ -1,13 +1,15 @@
-"""Figures and the DXF drawn in processes of their own, started before the computation they draw.
+"""Figures, the profile CSV and the DXF written by processes of their own, started before the
+computation they draw.
 
 Drawing a design's four PNG figures takes about as long on 2 CPU cores as computing the design
 when JAX's caches are warm, and importing matplotlib and ezdxf half of that again.
 :class:`DrawingWorkers` starts fresh Python processes that import NumPy, matplotlib and ezdxf (not
 JAX: they enter the camjax package without running its ``__init__``) while the caller computes;
 :meth:`DrawingWorkers.draw` then hands them the curves and each draws and writes its share of
-the figures of the follower's ``figure_builders`` (:func:`camjax.followers.drawing`) and
-profile.dxf. The files are the
-ones :func:`camjax.output.export.write_figures` and
+the figures of the follower's ``figure_builders`` (:func:`camjax.followers.drawing`); the last
+one also writes profile.csv (its ``profile_table``) and profile.dxf, so that the calling process
+never imports a drawing module, nor matplotlib with it. The files are the ones
+:func:`camjax.output.export.write_figures`, :func:`camjax.output.export.write_profile_csv` and
 :func:`camjax.output.export.write_profile_dxf` write in-process, byte for byte.
 
 A worker that cannot start, or fails, is reported as an exception from :meth:`DrawingWorkers.wait`
@@ -29,7 +31,8 @@ _BOOT = ("import sys; sys.path.insert(0, sys.argv[1]); from camjax.output.drawin
 PACKAGE_DIR = Path(__file__).resolve().parent.parent
 DEFAULT_PROCESSES = 2  # on 2 cores: two figures drawn at a time once the computation is done
 MAX_PROCESSES = 16
-DXF_NAME = "profile.dxf"  # written after the figures, as camjax.output.export.write_design_files does
+CSV_NAME = "profile.csv"  # written after the figures, then the DXF, as
+DXF_NAME = "profile.dxf"  # camjax.output.export.write_design_files writes them in-process
 
 
 class DrawingError(RuntimeError):
@@ -58,7 +61,7 @@ class DrawingWorkers:
     def draw(self, folder: str | Path, curves, dpi: int = 100, banner: str | None = None,
              title: str = "", units: str = "mm") -> None:
         """Send the job: worker k of n draws figures k, k + n, ... and the last one also writes
-        profile.dxf, of the curves into ``folder`` (``curves``: a follower family's curves, e.g. :class:`camjax.followers._translating.DesignCurves`; the
+        profile.csv and profile.dxf, of the curves into ``folder`` (``curves``: a follower family's curves, e.g. :class:`camjax.followers._translating.DesignCurves`; the
         rest as :func:`camjax.output.export.write_figures`; ``units``: the curves', which the
         figures and the DXF then name)."""
         fields = {k: _plain(v) for k, v in curves._asdict().items()}
@@ -72,8 +75,8 @@ class DrawingWorkers:
                 pass
 
     def wait(self) -> list[Path]:
-        """The written files: the figures in follower's ``figure_builders`` order,
-        then profile.dxf; :class:`DrawingError` if a worker failed."""
+        """The written files: the figures in the follower's ``figure_builders`` order, then
+        profile.csv and profile.dxf; :class:`DrawingError` if a worker failed."""
         written: dict[int, Path] = {}
         for proc in self._procs:
             out = proc.stdout.read()
@@ -119,9 +122,9 @@ def _plain(value):
 
 def serve(k: int = 0, n: int = 1) -> None:
     """Worker ``k`` of ``n``: import matplotlib (and ezdxf, the last worker, which writes the
-    DXF), read one job from stdin, draw figures k, k + n, ..., reply on stdout (pickled
-    ``{"written": [(index, path), ...]}`` or ``{"error": "one line"}``; the DXF's index follows
-    the figures')."""
+    CSV and the DXF), read one job from stdin, draw figures k, k + n, ..., reply on stdout (pickled
+    ``{"written": [(index, path), ...]}`` or ``{"error": "one line"}``; the CSV's and the DXF's
+    indices follow the figures')."""
     writes_dxf = k == n - 1
     if writes_dxf:
         import ezdxf  # noqa: F401  (imported before the job arrives, as matplotlib)
@@ -144,8 +147,9 @@ def serve(k: int = 0, n: int = 1) -> None:
                                       job["units"])
             written.append((i, str(path)))
         if writes_dxf:
+            csv = export.write_profile_csv(folder / CSV_NAME, curves, job["units"])
             dxf = export.write_profile_dxf(folder / DXF_NAME, curves, job["units"])
-            written.append((len(figures), str(dxf)))
+            written += [(len(figures), str(csv)), (len(figures) + 1, str(dxf))]
         reply = {"written": written}
     except BaseException as exc:  # reported to the caller as one line
         reply = {"error": f"{type(exc).__name__}: {exc}"[:300]}

@@ -16,8 +16,10 @@ TURNS = {"ccw": "counter-clockwise", "cw": "clockwise"}  # scene motion.rotation
 def title_block(data: Mapping) -> str:
     """Three lines naming a run, from a design report's dict: scene, speed, rotation and follower;
     the segments' laws and lifts; the radii the figures are drawn at and the follower's own
-    dimensions (its drawing module's ``title_dimensions``: a roller's R_f and offset, a rocker's
-    pivot distance d with its arm l and roller R_f, or its face offset f)."""
+    dimensions (its follower's ``title_dimensions``: a roller's R_f and offset, a rocker's pivot
+    distance d with its arm l and roller R_f, or its face offset f). The follower is imported to
+    word them (the design that wrote ``data`` has it loaded), not its drawing module: the command
+    line words the title before its drawing processes draw, without matplotlib."""
     segments = []
     for seg in data.get("segments", []):
         text = f"{seg['kind']} {seg['angle_deg']:g}°"
@@ -35,7 +37,7 @@ def title_block(data: Mapping) -> str:
     if at.get("face_width_mm") is not None:
         radii.append(f"L = {at['face_width_mm']:.3f} mm")
     if data.get("follower_type") in followers.names():  # the follower's own dimensions, as drawn
-        radii += followers.drawing(data["follower_type"]).title_dimensions(data)
+        radii += followers.get(data["follower_type"]).title_dimensions(data)
     design = data.get("design")
     tail = f" ({at['source']})" if "source" in at else ""
     if design is not None and at.get("source") == "design":

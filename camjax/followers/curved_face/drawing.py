@@ -16,7 +16,7 @@ from camjax.followers._translating_drawing import DrawnFollower, mechanism, prof
 from camjax.output.animation import FollowerArtists
 
 __all__ = ["CONTACT_SHAPE", "artists", "draw_follower", "face_outline", "figure_builders", "follower_points",
-           "mechanism", "profile_table", "title_dimensions"]
+           "mechanism", "profile_table"]
 
 
 # what touches the cam: a circle of radius ``roller_radius_mm`` (the Mechanism's; here R_c), of
@@ -106,11 +106,3 @@ def artists(ax, m, poses, r_max: float) -> FollowerArtists:
 
     return FollowerArtists({"follower": face}, [face, stem_line], update, normal, (-reach, reach),
                            (-r_max * 1.08, top + 0.05 * r_max))
-
-
-def title_dimensions(data) -> list[str]:
-    """The figures' title words for the face's radius, width and offset (the ones the cam was drawn with)."""
-    face = data.get("curved_face")
-    if not face:
-        return []
-    return [f"R_c = {face['face_radius_mm']:g} mm, e = {face['offset_mm']:g} mm"]  # W: the shared line (L)

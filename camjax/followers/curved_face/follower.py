@@ -214,6 +214,10 @@ class CurvedFace(TranslatingFollower):
         return (f"R_c = {design['face_radius_mm']:.4f} mm, W = {design['face_width_mm']:.4f} mm, "
                 f"offset {design['offset_mm']:.4f} mm, R_p = {design['prime_radius_mm']:.4f} mm")
 
+    def title_dimensions(self, data) -> list[str]:
+        face = data.get("curved_face")  # W: the shared line's L
+        return [f"R_c = {face['face_radius_mm']:g} mm, e = {face['offset_mm']:g} mm"] if face else []
+
     def drawn_summary(self, data) -> str:
         face = data["curved_face"]
         return (f", R_c = {face['face_radius_mm']:.4f} mm, W = {face['face_width_mm']:.4f} mm, "

@@ -12,8 +12,8 @@ import numpy as np
 from camjax.followers import _translating_drawing as drawing
 from camjax.followers._translating_drawing import DrawnFollower, mechanism, profile_table
 
-__all__ = ["CONTACT_SHAPE", "artists", "draw_follower", "figure_builders", "follower_points", "mechanism", "profile_table",
-           "title_dimensions"]
+__all__ = ["CONTACT_SHAPE", "artists", "draw_follower", "figure_builders", "follower_points", "mechanism",
+           "profile_table"]
 
 
 CONTACT_SHAPE = "face"  # what touches the cam: a straight face (a line in the follower frame)
@@ -56,8 +56,3 @@ def follower_points(m, s) -> tuple[np.ndarray, np.ndarray]:
 def artists(ax, m, poses, r_max: float):
     """The face on its stem, sliding along +Y."""
     return drawing.slider_artists(ax, m, poses, r_max, "face")
-
-
-def title_dimensions(data) -> list[str]:
-    """The figures' title words for the dimensions (the face width is in the shared line)."""
-    return []

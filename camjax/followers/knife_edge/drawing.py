@@ -14,7 +14,7 @@ from camjax.followers._translating_drawing import DrawnFollower, mechanism
 from camjax.output.animation import LENGTH_TOL_MM, FollowerArtists
 
 __all__ = ["CONTACT_SHAPE", "artists", "draw_follower", "figure_builders", "follower_points", "mechanism",
-           "profile_table", "title_dimensions"]
+           "profile_table"]
 
 
 # what touches the cam: a circle of radius 0 (the Mechanism's ``roller_radius_mm`` is 0), the tip
@@ -99,9 +99,3 @@ def artists(ax, m, poses, r_max: float) -> FollowerArtists:
 
     return FollowerArtists({"follower": edge}, [stem_line, edge], update, normal, (-reach, reach),
                            (-r_max * 1.08, top + 0.05 * r_max))
-
-
-def title_dimensions(data) -> list[str]:
-    """The figures' title words for the edge's offset (the one the cam was drawn with)."""
-    knife = data.get("knife_edge")
-    return [f"knife edge, e = {knife['offset_mm']:g} mm"] if knife else []

@@ -118,6 +118,10 @@ class KnifeEdge(Roller):
     def summary(self, design) -> str:
         return f"offset {design['offset_mm']:.4f} mm"
 
+    def title_dimensions(self, data) -> list[str]:
+        knife = data.get("knife_edge")
+        return [f"knife edge, e = {knife['offset_mm']:g} mm"] if knife else []
+
     def drawn_summary(self, data) -> str:
         return f", offset {data['knife_edge']['offset_mm']:.4f} mm"
 

@@ -18,7 +18,7 @@ from camjax.followers._rocking_drawing import to_cam_frame
 from camjax.output.animation import FollowerArtists
 
 __all__ = ["CONTACT_SHAPE", "artists", "draw_follower", "face_outline", "figure_builders", "follower_points",
-           "mechanism", "profile_table", "title_dimensions"]
+           "mechanism", "profile_table"]
 
 
 # what touches the cam: a circle of radius ``roller_radius_mm`` (the Mechanism's; here R_c), of
@@ -130,12 +130,3 @@ def artists(ax, m, poses, r_max: float) -> FollowerArtists:
     named = {"follower": face, "arm": arm_line, "face": face}
     return FollowerArtists(named, [face, arm_line], update, normal,
                            (xs.min() - pad, xs.max() + pad), (ys.min() - pad, ys.max() + pad))
-
-
-def title_dimensions(data) -> list[str]:
-    """The figures' title words for the pivot, arm and face the cam was computed with."""
-    rocker = data.get("oscillating_follower", {})
-    if not rocker:
-        return []
-    return [f"d = {rocker['pivot_distance_mm']:g} mm, l = {rocker['arm_length_mm']:g} mm, "
-            f"R_c = {rocker['face_radius_mm']:g} mm, W = {rocker['face_width_mm']:.4g} mm"]

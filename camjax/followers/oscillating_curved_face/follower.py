@@ -182,6 +182,13 @@ class OscillatingCurvedFace(RockingFollower):
                 f"pivot {design['pivot_distance_mm']:.4f} mm, arm {design['arm_length_mm']:.4f} mm, "
                 f"R_p = {design['prime_radius_mm']:.4f} mm")
 
+    def title_dimensions(self, data) -> list[str]:
+        rocker = data.get("oscillating_follower", {})
+        if not rocker:
+            return []
+        return [f"d = {rocker['pivot_distance_mm']:g} mm, l = {rocker['arm_length_mm']:g} mm, "
+                f"R_c = {rocker['face_radius_mm']:g} mm, W = {rocker['face_width_mm']:.4g} mm"]
+
 
 def face_violations(curves, extremes=None) -> list[GeometryViolation]:
     """The contact running off the face: max |R_c sin phi| > W / 2 (the solvers' tolerance), on the

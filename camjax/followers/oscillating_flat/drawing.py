@@ -13,8 +13,8 @@ import numpy as np
 from camjax.followers import _rocking_drawing as drawing
 from camjax.followers._rocking_drawing import mechanism, profile_table, to_cam_frame
 
-__all__ = ["CONTACT_SHAPE", "artists", "draw_follower", "figure_builders", "follower_points", "mechanism", "profile_table",
-           "title_dimensions"]
+__all__ = ["CONTACT_SHAPE", "artists", "draw_follower", "figure_builders", "follower_points", "mechanism",
+           "profile_table"]
 
 
 CONTACT_SHAPE = "face"  # what touches the cam: a straight face (a line in the follower frame)
@@ -55,9 +55,3 @@ def follower_points(m, psi) -> tuple[np.ndarray, np.ndarray]:
 def artists(ax, m, poses, r_max: float):
     """The pivot, the arm to the face's foot and the face, the path of the face point in contact."""
     return drawing.rocker_artists(ax, m, poses, r_max, "face", follower_points)
-
-
-def title_dimensions(data) -> list[str]:
-    """The figures' title words for the pivot and face offset the cam was computed with."""
-    rocker = data.get("oscillating_follower", {})
-    return [f"d = {rocker['pivot_distance_mm']:g} mm, f = {rocker['face_offset_mm']:g} mm"] if rocker else []

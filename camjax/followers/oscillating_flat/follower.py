@@ -139,5 +139,11 @@ class OscillatingFlat(RockingFollower):
         return (f"pivot {design['pivot_distance_mm']:.4f} mm, face offset {design['face_offset_mm']:.4f} mm, "
                 f"face {design['face_length_mm']:.4f} mm")
 
+    def title_dimensions(self, data) -> list[str]:
+        rocker = data.get("oscillating_follower", {})
+        if not rocker:
+            return []
+        return [f"d = {rocker['pivot_distance_mm']:g} mm, f = {rocker['face_offset_mm']:g} mm"]
+
 
 FOLLOWER = OscillatingFlat()

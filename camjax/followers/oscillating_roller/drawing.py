@@ -12,8 +12,8 @@ import numpy as np
 from camjax.followers import _rocking_drawing as drawing
 from camjax.followers._rocking_drawing import mechanism, profile_table, to_cam_frame
 
-__all__ = ["CONTACT_SHAPE", "artists", "draw_follower", "figure_builders", "follower_points", "mechanism", "profile_table",
-           "title_dimensions"]
+__all__ = ["CONTACT_SHAPE", "artists", "draw_follower", "figure_builders", "follower_points", "mechanism",
+           "profile_table"]
 
 
 CONTACT_SHAPE = "circle"  # what touches the cam: a circle of radius ``roller_radius_mm`` (the Mechanism's)
@@ -50,10 +50,3 @@ def follower_points(m, psi) -> tuple[np.ndarray, np.ndarray]:
 def artists(ax, m, poses, r_max: float):
     """The pivot, the arm and the roller at its end, the arc of the roller's centre."""
     return drawing.rocker_artists(ax, m, poses, r_max, "circle", follower_points)
-
-
-def title_dimensions(data) -> list[str]:
-    """The figures' title words for the pivot, arm and roller the cam was computed with."""
-    rocker = data.get("oscillating_follower", {})
-    return [f"d = {rocker['pivot_distance_mm']:g} mm, l = {rocker['arm_length_mm']:g} mm, "
-            f"R_f = {rocker['roller_radius_mm']:g} mm"] if rocker else []

@@ -314,5 +314,10 @@ class OscillatingRoller(RockingFollower):
         return (f"R_f = {design['roller_radius_mm']:.4f} mm, pivot {design['pivot_distance_mm']:.4f} mm, "
                 f"arm {design['arm_length_mm']:.4f} mm, R_p = {design['prime_radius_mm']:.4f} mm")
 
+    def title_dimensions(self, data) -> list[str]:
+        rocker = data.get("oscillating_follower", {})
+        return [f"d = {rocker['pivot_distance_mm']:g} mm, l = {rocker['arm_length_mm']:g} mm, "
+                f"R_f = {rocker['roller_radius_mm']:g} mm"] if rocker else []
+
 
 FOLLOWER = OscillatingRoller()

@@ -12,8 +12,8 @@ import numpy as np
 from camjax.followers import _translating_drawing as drawing
 from camjax.followers._translating_drawing import DrawnFollower, mechanism, profile_table
 
-__all__ = ["CONTACT_SHAPE", "artists", "draw_follower", "figure_builders", "follower_points", "mechanism", "profile_table",
-           "title_dimensions"]
+__all__ = ["CONTACT_SHAPE", "artists", "draw_follower", "figure_builders", "follower_points", "mechanism",
+           "profile_table"]
 
 
 CONTACT_SHAPE = "circle"  # what touches the cam: a circle of radius ``roller_radius_mm`` (the Mechanism's)
@@ -59,9 +59,3 @@ def follower_points(m, s) -> tuple[np.ndarray, np.ndarray]:
 def artists(ax, m, poses, r_max: float):
     """The roller on its stem, sliding along +Y at the offset e."""
     return drawing.slider_artists(ax, m, poses, r_max, "circle")
-
-
-def title_dimensions(data) -> list[str]:
-    """The figures' title words for the roller's radius and offset (the ones the cam was drawn with)."""
-    roller = data.get("roller")
-    return [f"R_f = {roller['roller_radius_mm']:g} mm, e = {roller['offset_mm']:g} mm"] if roller else []

@@ -323,6 +323,10 @@ class Roller(TranslatingFollower):
         return (f"R_f = {design['roller_radius_mm']:.4f} mm, offset {design['offset_mm']:.4f} mm, "
                 f"R_p = {design['prime_radius_mm']:.4f} mm")
 
+    def title_dimensions(self, data) -> list[str]:
+        roller = data.get("roller")
+        return [f"R_f = {roller['roller_radius_mm']:g} mm, e = {roller['offset_mm']:g} mm"] if roller else []
+
     def drawn_summary(self, data) -> str:
         roller = data["roller"]
         return f", R_f = {roller['roller_radius_mm']:.4f} mm, offset {roller['offset_mm']:.4f} mm"
