@@ -61,9 +61,10 @@ class DrawingWorkers:
     def draw(self, folder: str | Path, curves, dpi: int = 100, banner: str | None = None,
              title: str = "", units: str = "mm") -> None:
         """Send the job: worker k of n draws figures k, k + n, ... and the last one also writes
-        profile.csv and profile.dxf, of the curves into ``folder`` (``curves``: a follower family's curves, e.g. :class:`camjax.followers._translating.DesignCurves`; the
-        rest as :func:`camjax.output.export.write_figures`; ``units``: the curves', which the
-        figures and the DXF then name)."""
+        profile.csv and profile.dxf, of the curves into ``folder`` (``curves``: a follower
+        family's curves, e.g. :class:`camjax.followers._translating.DesignCurves`; the rest as
+        :func:`camjax.output.export.write_figures`; ``units``: the curves', which the figures, the
+        CSV and the DXF then name)."""
         fields = {k: _plain(v) for k, v in curves._asdict().items()}
         job = pickle.dumps({"folder": str(folder), "curves": fields, "dpi": dpi, "banner": banner,
                             "title": title, "units": units})
