@@ -82,11 +82,10 @@ def design(runs: int, reference: dict) -> dict:
     """``camjax design`` on the default scene (this checkout's package, a temporary output folder).
 
     Phases from the command's progress lines, each lasting until the next: import (until
-    "computing": Python, JAX, camjax and the scene), compute (the design run and its report),
-    files (result.json and profile.csv written here, while the drawing processes draw), plots
-    (waiting for the drawing processes: the PNG figures and profile.dxf, then the folder swap and
-    the exit).
-    """
+    "computing": Python, JAX, camjax and the scene), compute (the design run, its report and
+    result.json), plots (waiting for the drawing processes: the PNG figures, profile.csv and
+    profile.dxf, then the folder swap and the exit); files (~0: the job handed to the drawing
+    processes)."""
     with tempfile.TemporaryDirectory(prefix="camjax-cli-timing-") as tmp:
         argv = [sys.executable, "-m", "camjax.cli", "design", "--out", str(Path(tmp) / "out")]
         # piped, design prints its phases only when asked

@@ -263,8 +263,8 @@ def test_import_camjax_loads_no_jax():
 
 def test_the_title_block_is_worded_without_matplotlib():
     """The command line words the figures' title block where the design ran, before its drawing
-    processes draw: for every follower type that costs no matplotlib import (it took ~0.8 s of a
-    warm `camjax design` when the follower's words lived in its drawing module)."""
+    processes draw: for every follower type that costs no matplotlib import (~0.3 CPU s of a warm
+    `camjax design`'s own process when the follower's words lived in its drawing module)."""
     import subprocess
 
     from camjax import followers

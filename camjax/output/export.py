@@ -151,11 +151,13 @@ def write_design_files(folder: str | Path, curves, dpi: int = 100, banner: str |
                        units: str = "mm") -> list[Path]:
     """Figures, profile.csv and profile.dxf (and motion.gif when ``animate``) into ``folder``
     (created if needed); the written paths. ``banner`` and ``title`` as in :func:`write_figures`;
-    ``progress(phase)`` (optional) is told "figures", "files" and "animation" as each starts.
+    ``progress(phase)`` (optional) is told "figures", "files" and "animation" as each starts (with
+    ``workers``: "files" as the job is handed to them, "figures" while waiting for them, who write
+    every file; the phases the command's --timings lists either way).
 
     ``workers``: started :class:`camjax.output.drawing.DrawingWorkers` draw the figures and write
     the CSV and the DXF in their processes (the same files as without them; this process then
-    imports no drawing module, nor matplotlib: ~0.6 s of a warm design's wall on 2 cores).
+    imports no drawing module, nor matplotlib: ~0.3 CPU s of a warm design's own process).
 
     ``units``: the scene's ("mm" or "in", :mod:`camjax.units`); ``curves`` are always in mm and
     are converted here, so that every file speaks ``units`` (``banner`` and ``title`` come in them).
