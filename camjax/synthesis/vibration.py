@@ -119,6 +119,19 @@ def _input_response(r: float, zeta: float, tau: np.ndarray) -> np.ndarray:
     return r * e[..., :, 1]
 
 
+def _split(edges: np.ndarray, pieces: np.ndarray) -> np.ndarray:
+    """``edges`` with subinterval k split into ``pieces[k]`` equal parts: the points of
+    ``np.linspace(edges[k], edges[k + 1], pieces[k] + 1)`` for every k, each edge once, computed
+    as linspace computes them (``a + j * ((b - a) / p)``, the last point ``b`` itself) for all
+    subintervals at once (a co-design splits ~10^5 of them)."""
+    first = np.repeat(np.arange(len(pieces)), pieces)  # the subinterval of each new point
+    j = np.arange(1, len(first) + 1, dtype=np.float64) - np.repeat(np.cumsum(pieces) - pieces, pieces)
+    step = (edges[1:] - edges[:-1]) / pieces
+    inner = j * step[first] + edges[:-1][first]
+    inner[np.cumsum(pieces) - 1] = edges[1:]  # each subinterval's last point: its end, exactly
+    return np.concatenate([edges[:1], inner])
+
+
 def state_maps(r: float, zeta: float, edges: np.ndarray, values_at, degree: int) -> np.ndarray:
     """The state z = (y, y'/r) at every point of ``edges`` (sorted, edges[0] = 0, from rest there)
     as linear maps of the input's coefficients: (len(edges), 2, m), where ``values_at(x)`` gives
@@ -128,10 +141,7 @@ def state_maps(r: float, zeta: float, edges: np.ndarray, values_at, degree: int)
     edges = np.asarray(edges, dtype=np.float64)
     rate = r * max(1.0, 2.0 * zeta)
     pieces = np.maximum(1, np.ceil(np.diff(edges) * rate / STEP).astype(int))
-    fine = [edges[:1]]
-    for a, b, p in zip(edges[:-1], edges[1:], pieces, strict=True):
-        fine.append(np.linspace(a, b, p + 1)[1:])
-    fine = np.concatenate(fine)
+    fine = _split(edges, pieces)
     keep = np.searchsorted(fine, edges)  # each edge's index on the fine grid
     nodes, weights = np.polynomial.legendre.leggauss(degree + EXTRA_NODES)
     a, h = fine[:-1], np.diff(fine)
