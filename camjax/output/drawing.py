@@ -31,8 +31,6 @@ _BOOT = ("import sys; sys.path.insert(0, sys.argv[1]); from camjax.output.drawin
 PACKAGE_DIR = Path(__file__).resolve().parent.parent
 DEFAULT_PROCESSES = 2  # on 2 cores: two figures drawn at a time once the computation is done
 MAX_PROCESSES = 16
-CSV_NAME = "profile.csv"  # written after the figures, then the DXF, as
-DXF_NAME = "profile.dxf"  # camjax.output.export.write_design_files writes them in-process
 
 
 class DrawingError(RuntimeError):
@@ -148,8 +146,9 @@ def serve(k: int = 0, n: int = 1) -> None:
                                       job["units"])
             written.append((i, str(path)))
         if writes_dxf:
-            csv = export.write_profile_csv(folder / CSV_NAME, curves, job["units"])
-            dxf = export.write_profile_dxf(folder / DXF_NAME, curves, job["units"])
+            # after the figures, the CSV then the DXF, as write_design_files writes them in-process
+            csv = export.write_profile_csv(folder / export.PROFILE_CSV, curves, job["units"])
+            dxf = export.write_profile_dxf(folder / export.PROFILE_DXF, curves, job["units"])
             written += [(len(figures), str(csv)), (len(figures) + 1, str(dxf))]
         reply = {"written": written}
     except BaseException as exc:  # reported to the caller as one line

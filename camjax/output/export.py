@@ -19,6 +19,8 @@ from camjax import followers
 from camjax import units as scene_units
 
 CSV_FORMAT = "%.12f"  # 1e-12 mm: far below any machining tolerance, round-trips the geometry
+PROFILE_CSV = "profile.csv"  # a design's profile table and drawing, whoever writes them
+PROFILE_DXF = "profile.dxf"  # (this process or camjax.output.drawing's workers)
 
 
 def profile_columns(names: list[str], cols: list, optional, curves) -> tuple[list[str], np.ndarray]:
@@ -175,8 +177,8 @@ def write_design_files(folder: str | Path, curves, dpi: int = 100, banner: str |
         say("figures")
         paths = write_figures(folder, curves, dpi, banner, title, units)
         say("files")
-        paths += [write_profile_csv(folder / "profile.csv", curves, units),
-                  write_profile_dxf(folder / "profile.dxf", curves, units)]
+        paths += [write_profile_csv(folder / PROFILE_CSV, curves, units),
+                  write_profile_dxf(folder / PROFILE_DXF, curves, units)]
     if animate:
         say("animation")
         paths.append(write_animation(folder / "motion.gif", curves, title, banner, units))
